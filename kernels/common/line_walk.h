@@ -1,0 +1,188 @@
+/* SPDX-License-Identifier: BSD-3-Clause */
+/* Exact voxel traversal of a line segment (Amanatides & Woo), written once for the CPU, CUDA and
+ * OpenCL.
+ *
+ * Frame and units. Positions are in voxel units (metres / resolution) relative to the minimum
+ * corner of the walk's start voxel, so the start point lies in [0,1]^3 and voxel faces are at
+ * integers. Keeping coordinates local lets the walk run in float for maps thousands of metres
+ * across: only the host computes global keys (in double).
+ *
+ * Termination and endpoints come from integers, not from float comparisons. The caller supplies
+ * the integer offset of the end voxel (computed on the host from exact keys); the walk takes exactly
+ * |dx| + |dy| + |dz| steps, each to a face-adjacent voxel, and an axis whose steps are used up is
+ * never stepped again. Floats only choose the ORDER of the steps. So the walk ends on the end voxel
+ * and terminates for every input: rays starting or ending on faces, edges or corners, axis-aligned
+ * rays, zero-length rays (no step), rays whose float direction rounds to zero on an axis (that
+ * axis is stepped first, at t = 0), and rays of any length (the next crossing on an axis is
+ * recomputed as first + steps * inverse-extent each time, never accumulated, so rounding does not
+ * grow along a 1 km ray).
+ *
+ * The ray parameter t runs from 0 at the start point to 1 at the end point. A walk may cover only
+ * a span [t0, t1] of the ray clamped to a box of voxels (one region of the map): that is how the
+ * integrators split a ray into per-region pieces. */
+#ifndef RAYMAP_KERNELS_COMMON_LINE_WALK_H
+#define RAYMAP_KERNELS_COMMON_LINE_WALK_H
+
+#include "portable.h"
+
+/* Direction extents below this (voxel units) are treated as zero: the axis can still be stepped
+ * if the integer keys demand it, but at t = t0. */
+#define RM_WALK_MIN_EXTENT 1.0e-30f
+
+/* Walk state. Value type; one per ray (segment) in flight. */
+typedef struct rm_line_walk {
+  rm_i32 x; /* current voxel, relative to the start voxel of the whole ray */
+  rm_i32 y;
+  rm_i32 z;
+  rm_i32 step_x; /* -1, 0 or +1 */
+  rm_i32 step_y;
+  rm_i32 step_z;
+  rm_i32 left_x; /* steps still to take on each axis */
+  rm_i32 left_y;
+  rm_i32 left_z;
+  rm_i32 steps_left; /* left_x + left_y + left_z */
+  float next_x;      /* t of the next face crossing; RM_INF once the axis is used up */
+  float next_y;
+  float next_z;
+  float first_x; /* t of the first face crossing on each axis */
+  float first_y;
+  float first_z;
+  float taken_x; /* steps taken on each axis, as float (exact below 2^24) */
+  float taken_y;
+  float taken_z;
+  float inv_x; /* 1 / |extent| on each axis, 0 for a degenerate extent */
+  float inv_y;
+  float inv_z;
+  float t_enter; /* t at which the walk entered the current voxel */
+  float t_end;   /* t at which the walk ends (t1) */
+} rm_line_walk;
+
+/* Sets up one axis. p0: start point of the span on this axis; extent: end - start of the whole ray;
+ * k0, k1: first and last voxel of the span on this axis; t0: ray parameter of p0. */
+RAYMAP_FN void rm_line_walk_axis_init(float p0, float extent, rm_i32 k0, rm_i32 k1, float t0,
+                                      rm_i32* step, rm_i32* left, float* first, float* inv,
+                                      float* next) {
+  rm_i32 delta = k1 - k0;
+  float abs_extent = RM_FABSF(extent);
+  float inside = p0 - RM_F32(k0); /* position inside the first voxel, nominally in [0,1] */
+  float to_face;
+  *step = rm_sign_i32(delta);
+  *left = rm_abs_i32(delta);
+  *inv = (abs_extent > RM_WALK_MIN_EXTENT) ? 1.0f / abs_extent : 0.0f;
+  to_face = (*step > 0) ? (1.0f - inside) : inside;
+  to_face = RM_FMAXF(to_face, 0.0f);
+  *first = t0 + to_face * *inv;
+  *next = (*left > 0) ? RM_FMINF(*first, RM_FLT_MAX) : RM_INF;
+}
+
+/* First or last voxel of a span on one axis: the exact key at the ray's ends, otherwise the voxel
+ * holding the point, clamped into the box (a point on a box face belongs to the box). */
+RAYMAP_FN rm_i32 rm_line_walk_span_key(float p, rm_i32 exact_key, int use_exact, rm_i32 lo,
+                                       rm_i32 hi) {
+  return use_exact ? exact_key : rm_clamp_i32(RM_I32(RM_FLOORF(p)), lo, hi);
+}
+
+/* Starts a walk over the span [t0, t1] (0 <= t0 <= t1 <= 1) of the ray from `start` to `end`,
+ * restricted to the voxel box [box_lo, box_hi] (inclusive, relative to the start voxel).
+ * end_voxel is the exact offset of the end voxel from the start voxel. With t0 == 0 the walk starts
+ * on the start voxel (0,0,0) and with t1 == 1 it ends on end_voxel, whatever the box says; the
+ * caller makes sure those lie in the box. After init, (x, y, z) is the first voxel. */
+RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
+                                      rm_vec3i end_voxel, float t0, float t1, rm_vec3i box_lo,
+                                      rm_vec3i box_hi) {
+  rm_vec3f extent = rm_vec3f_make(end.x - start.x, end.y - start.y, end.z - start.z);
+  int start_exact = t0 <= 0.0f;
+  int end_exact = t1 >= 1.0f;
+  rm_vec3f p0 = rm_vec3f_make(start.x + t0 * extent.x, start.y + t0 * extent.y,
+                              start.z + t0 * extent.z);
+  rm_vec3f p1 = rm_vec3f_make(start.x + t1 * extent.x, start.y + t1 * extent.y,
+                              start.z + t1 * extent.z);
+  rm_vec3i k0;
+  rm_vec3i k1;
+  if (start_exact) {
+    p0 = start;
+    t0 = 0.0f;
+  }
+  k0.x = rm_line_walk_span_key(p0.x, 0, start_exact, box_lo.x, box_hi.x);
+  k0.y = rm_line_walk_span_key(p0.y, 0, start_exact, box_lo.y, box_hi.y);
+  k0.z = rm_line_walk_span_key(p0.z, 0, start_exact, box_lo.z, box_hi.z);
+  k1.x = rm_line_walk_span_key(p1.x, end_voxel.x, end_exact, box_lo.x, box_hi.x);
+  k1.y = rm_line_walk_span_key(p1.y, end_voxel.y, end_exact, box_lo.y, box_hi.y);
+  k1.z = rm_line_walk_span_key(p1.z, end_voxel.z, end_exact, box_lo.z, box_hi.z);
+  rm_line_walk_axis_init(p0.x, extent.x, k0.x, k1.x, t0, &w->step_x, &w->left_x, &w->first_x,
+                         &w->inv_x, &w->next_x);
+  rm_line_walk_axis_init(p0.y, extent.y, k0.y, k1.y, t0, &w->step_y, &w->left_y, &w->first_y,
+                         &w->inv_y, &w->next_y);
+  rm_line_walk_axis_init(p0.z, extent.z, k0.z, k1.z, t0, &w->step_z, &w->left_z, &w->first_z,
+                         &w->inv_z, &w->next_z);
+  w->x = k0.x;
+  w->y = k0.y;
+  w->z = k0.z;
+  w->taken_x = 0.0f;
+  w->taken_y = 0.0f;
+  w->taken_z = 0.0f;
+  w->steps_left = w->left_x + w->left_y + w->left_z;
+  w->t_enter = t0;
+  w->t_end = end_exact ? 1.0f : t1;
+}
+
+/* Starts a walk over the whole ray: from the start voxel (0,0,0) to end_voxel. */
+RAYMAP_FN void rm_line_walk_init(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
+                                 rm_vec3i end_voxel) {
+  rm_line_walk_init_span(w, start, end, end_voxel, 0.0f, 1.0f, end_voxel, end_voxel);
+}
+
+/* Next crossing time on an axis after one more step there. */
+RAYMAP_FN float rm_line_walk_next_crossing(rm_i32 left, float first, float taken, float inv) {
+  return (left > 0) ? RM_FMINF(first + taken * inv, RM_FLT_MAX) : RM_INF;
+}
+
+/* Advances to the next voxel. Returns the axis stepped (0 = x, 1 = y, 2 = z), or -1 when the
+ * current voxel is the last one (the walk is over). Ties step the lowest axis first, so a ray
+ * through a voxel edge or corner visits one of the voxels that touch it there. */
+RAYMAP_FN rm_i32 rm_line_walk_next(rm_line_walk* w) {
+  float nx = w->next_x;
+  float ny = w->next_y;
+  float nz = w->next_z;
+  rm_i32 axis;
+  float t;
+  if (w->steps_left <= 0) {
+    return -1;
+  }
+  axis = (nx <= ny) ? ((nx <= nz) ? 0 : 2) : ((ny <= nz) ? 1 : 2);
+  w->steps_left -= 1;
+  if (axis == 0) {
+    t = nx;
+    w->x += w->step_x;
+    w->left_x -= 1;
+    w->taken_x += 1.0f;
+    w->next_x = rm_line_walk_next_crossing(w->left_x, w->first_x, w->taken_x, w->inv_x);
+  } else if (axis == 1) {
+    t = ny;
+    w->y += w->step_y;
+    w->left_y -= 1;
+    w->taken_y += 1.0f;
+    w->next_y = rm_line_walk_next_crossing(w->left_y, w->first_y, w->taken_y, w->inv_y);
+  } else {
+    t = nz;
+    w->z += w->step_z;
+    w->left_z -= 1;
+    w->taken_z += 1.0f;
+    w->next_z = rm_line_walk_next_crossing(w->left_z, w->first_z, w->taken_z, w->inv_z);
+  }
+  /* Crossing times of degenerate axes are clamped so that enter/exit stay ordered in [t0, t1]. */
+  w->t_enter = RM_FMINF(RM_FMAXF(t, w->t_enter), w->t_end);
+  return axis;
+}
+
+/* Ray parameter at which the walk leaves the current voxel (t1 for the last voxel). */
+RAYMAP_FN float rm_line_walk_t_exit(const rm_line_walk* w) {
+  float t;
+  if (w->steps_left <= 0) {
+    return w->t_end;
+  }
+  t = RM_FMINF(RM_FMINF(w->next_x, w->next_y), w->next_z);
+  return RM_FMINF(RM_FMAXF(t, w->t_enter), w->t_end);
+}
+
+#endif /* RAYMAP_KERNELS_COMMON_LINE_WALK_H */

@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// PageBlock on Linux: anonymous private mappings.
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <utility>
+
+#include "platform/memory.hpp"
+
+namespace raymap::platform {
+
+Result<PageBlock> PageBlock::create(std::size_t bytes) {
+  if (bytes == 0) {
+    return PageBlock();
+  }
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const std::size_t rounded = (bytes + page - 1) / page * page;
+  void* p = mmap(nullptr, rounded, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE,
+                 -1, 0);
+  if (p == MAP_FAILED) {
+    return fail(ErrorCode::kCapacity, "cannot reserve " + std::to_string(rounded) +
+                                          " bytes of memory: " + std::strerror(errno));
+  }
+  return PageBlock(static_cast<std::byte*>(p), rounded);
+}
+
+PageBlock::PageBlock(PageBlock&& other) noexcept
+    : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
+
+PageBlock& PageBlock::operator=(PageBlock&& other) noexcept {
+  if (this != &other) {
+    reset();
+    data_ = std::exchange(other.data_, nullptr);
+    size_ = std::exchange(other.size_, 0);
+  }
+  return *this;
+}
+
+PageBlock::~PageBlock() { reset(); }
+
+void PageBlock::reset() noexcept {
+  if (data_ != nullptr) {
+    munmap(data_, size_);
+    data_ = nullptr;
+    size_ = 0;
+  }
+}
+
+void PageBlock::prefault() noexcept {
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  for (std::size_t offset = 0; offset < size_; offset += page) {
+    // A volatile write so the compiler keeps it; the page already holds zero.
+    *static_cast<volatile std::byte*>(data_ + offset) = std::byte{0};
+  }
+}
+
+}  // namespace raymap::platform

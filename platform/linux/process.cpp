@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Process facts on Linux.
+#include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include "platform/process.hpp"
+
+namespace raymap::platform {
+
+std::uint64_t peakResidentBytes() noexcept {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) {
+    return 0;
+  }
+  return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024u;  // Linux reports kibibytes
+}
+
+bool stderrIsTerminal() noexcept { return isatty(STDERR_FILENO) == 1; }
+
+unsigned availableCores() noexcept {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) {
+    const int count = CPU_COUNT(&set);
+    if (count > 0) {
+      return static_cast<unsigned>(count);
+    }
+  }
+  const long online = sysconf(_SC_NPROCESSORS_ONLN);
+  return online > 0 ? static_cast<unsigned>(online) : 1u;
+}
+
+}  // namespace raymap::platform

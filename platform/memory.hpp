@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Large page-backed memory blocks for fixed pools (the region store, later device staging).
+#pragma once
+
+#include <cstddef>
+
+#include "src/core/error.hpp"
+
+namespace raymap::platform {
+
+/// @brief A block of zero-filled, page-aligned memory obtained from the OS in one piece.
+/// Pages are only backed when first written (or when prefault() touches them), so a large pool
+/// costs resident memory in proportion to what is used. Move-only owner.
+/// Thread-safety: the object itself is not synchronised; the bytes are plain memory.
+class PageBlock {
+ public:
+  PageBlock() = default;
+  /// @brief Maps `bytes` (rounded up to whole pages). Fails with kCapacity when the OS refuses.
+  static Result<PageBlock> create(std::size_t bytes);
+  PageBlock(PageBlock&& other) noexcept;
+  PageBlock& operator=(PageBlock&& other) noexcept;
+  PageBlock(const PageBlock&) = delete;
+  PageBlock& operator=(const PageBlock&) = delete;
+  ~PageBlock();
+
+  std::byte* data() const noexcept { return data_; }
+  std::size_t size() const noexcept { return size_; }
+  /// @brief Writes every page once so later accesses never fault (for real-time users).
+  void prefault() noexcept;
+
+ private:
+  PageBlock(std::byte* data, std::size_t size) noexcept : data_(data), size_(size) {}
+  void reset() noexcept;
+
+  std::byte* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+}  // namespace raymap::platform

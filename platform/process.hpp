@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Facts about the running process and its terminal.
+#pragma once
+
+#include <cstdint>
+
+namespace raymap::platform {
+
+/// @brief Peak resident set size of this process so far, in bytes (0 if unknown).
+std::uint64_t peakResidentBytes() noexcept;
+
+/// @brief True when standard error is an interactive terminal (progress bars go there).
+bool stderrIsTerminal() noexcept;
+
+/// @brief Number of hardware threads the process may run on (at least 1).
+unsigned availableCores() noexcept;
+
+}  // namespace raymap::platform

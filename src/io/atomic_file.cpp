@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// AtomicFileWriter: temporary file, fsync, rename.
+#include "src/io/atomic_file.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <utility>
+
+namespace raymap::io {
+
+Result<AtomicFileWriter> AtomicFileWriter::open(const std::string& path) {
+  if (path.empty()) {
+    return fail(ErrorCode::kInvalidArgument, "output path is empty");
+  }
+  std::string temp = path + ".tmp-" + std::to_string(::getpid());
+  std::FILE* file = std::fopen(temp.c_str(), "wb");
+  if (file == nullptr) {
+    return fail(ErrorCode::kIo,
+                "cannot write '" + path + "': " + std::strerror(errno));
+  }
+  return AtomicFileWriter(path, std::move(temp), file);
+}
+
+AtomicFileWriter::AtomicFileWriter(std::string path, std::string temp_path, std::FILE* file) noexcept
+    : path_(std::move(path)), temp_path_(std::move(temp_path)), file_(file) {}
+
+AtomicFileWriter::AtomicFileWriter(AtomicFileWriter&& other) noexcept
+    : path_(std::move(other.path_)),
+      temp_path_(std::move(other.temp_path_)),
+      file_(std::exchange(other.file_, nullptr)),
+      written_(other.written_) {}
+
+AtomicFileWriter& AtomicFileWriter::operator=(AtomicFileWriter&& other) noexcept {
+  if (this != &other) {
+    abandon();
+    path_ = std::move(other.path_);
+    temp_path_ = std::move(other.temp_path_);
+    file_ = std::exchange(other.file_, nullptr);
+    written_ = other.written_;
+  }
+  return *this;
+}
+
+AtomicFileWriter::~AtomicFileWriter() { abandon(); }
+
+void AtomicFileWriter::abandon() noexcept {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+    file_ = nullptr;
+    std::remove(temp_path_.c_str());
+  }
+}
+
+Expected<void, Error> AtomicFileWriter::write(std::span<const std::byte> bytes) {
+  if (file_ == nullptr) {
+    return fail(ErrorCode::kIo, "cannot write '" + path_ + "': file already closed");
+  }
+  if (bytes.empty()) {
+    return {};
+  }
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) {
+    const std::string reason = std::strerror(errno);
+    abandon();
+    return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + reason);
+  }
+  written_ += bytes.size();
+  return {};
+}
+
+Expected<void, Error> AtomicFileWriter::write(const std::string& text) {
+  return write(std::as_bytes(std::span<const char>(text.data(), text.size())));
+}
+
+Expected<void, Error> AtomicFileWriter::commit() {
+  if (file_ == nullptr) {
+    return fail(ErrorCode::kIo, "cannot write '" + path_ + "': file already closed");
+  }
+  const bool flushed = std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
+  const std::string reason = std::strerror(errno);
+  if (!flushed) {
+    abandon();
+    return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + reason);
+  }
+  std::fclose(file_);
+  file_ = nullptr;
+  if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(temp_path_.c_str());
+    return fail(ErrorCode::kIo, "cannot replace '" + path_ + "': " + why);
+  }
+  return {};
+}
+
+}  // namespace raymap::io

@@ -1,0 +1,50 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Writing a file so that readers see either the old file or the complete new one.
+#pragma once
+
+#include <cstddef>
+#include <cstdio>
+#include <span>
+#include <string>
+
+#include "src/core/error.hpp"
+
+namespace raymap::io {
+
+/// @brief Writes to a temporary file next to the destination ("<path>.tmp-<pid>") and renames it
+/// over the destination on commit(), after flushing it to disk. If the writer is destroyed
+/// without commit() (an error, an exception), the temporary file is removed and the destination
+/// is untouched. Move-only; not thread-safe.
+class AtomicFileWriter {
+ public:
+  /// @brief Creates the temporary file. Fails (naming the path and the reason) when the directory
+  /// is missing or not writable.
+  static Result<AtomicFileWriter> open(const std::string& path);
+
+  AtomicFileWriter(AtomicFileWriter&& other) noexcept;
+  AtomicFileWriter& operator=(AtomicFileWriter&& other) noexcept;
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+  ~AtomicFileWriter();
+
+  /// @brief Appends bytes. Errors (disk full) are reported here or by commit().
+  Expected<void, Error> write(std::span<const std::byte> bytes);
+  Expected<void, Error> write(const std::string& text);
+  /// @brief Bytes written so far.
+  std::size_t size() const noexcept { return written_; }
+  /// @brief Flushes, fsyncs and renames onto the destination.
+  Expected<void, Error> commit();
+
+  const std::string& path() const noexcept { return path_; }
+
+ private:
+  AtomicFileWriter(std::string path, std::string temp_path, std::FILE* file) noexcept;
+  void abandon() noexcept;
+
+  std::string path_;
+  std::string temp_path_;
+  std::FILE* file_ = nullptr;
+  std::size_t written_ = 0;
+};
+
+}  // namespace raymap::io

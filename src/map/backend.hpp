@@ -1,0 +1,51 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The interface every integration backend (CPU, OpenCL, CUDA) implements.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "src/core/expected.hpp"
+#include "src/map/ray.hpp"
+
+namespace raymap {
+
+/// Why a batch could not be integrated (real-time path: a code, no message).
+enum class IntegrateError : std::uint8_t {
+  kStoreFull,      ///< a global map's region pool is exhausted; the batch is not (fully) integrated
+  kDeviceFailure,  ///< the device reported an error
+};
+
+const char* toString(IntegrateError error) noexcept;
+
+/// @brief Counters a backend keeps over its lifetime.
+struct BackendStats {
+  std::uint64_t batches = 0;
+  std::uint64_t rays = 0;            ///< prepared rays integrated
+  std::uint64_t voxels_visited = 0;  ///< voxel visits (updates plus skipped per-scan repeats)
+  std::uint64_t updates_dropped = 0;  ///< updates given up under contention (always 0 on the CPU)
+  std::uint64_t spans_outside_window = 0;  ///< ray pieces skipped: region outside a rolling window
+};
+
+/// @brief Integrates batches of prepared rays into the map it was created for.
+/// With per-scan semantics each call must hold exactly one scan ("occupied wins" applies within a
+/// call). Implementations document their thread-safety; none may be called concurrently.
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  Backend() = default;
+  Backend(const Backend&) = delete;
+  Backend& operator=(const Backend&) = delete;
+
+  /// @brief Short name: "cpu", "opencl", "cuda".
+  virtual const char* name() const noexcept = 0;
+  /// @brief Host threads used for integration.
+  virtual unsigned threads() const noexcept = 0;
+  /// @brief Integrates one batch. @rt allocates: no; throws: no.
+  virtual Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept = 0;
+  /// @brief Makes the host region store current (device backends download; CPU: no-op).
+  virtual Expected<void, IntegrateError> synchronise() noexcept = 0;
+  virtual BackendStats stats() const noexcept = 0;
+};
+
+}  // namespace raymap

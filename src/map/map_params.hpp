@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Parameters of a voxel map: geometry, occupancy probabilities and integration semantics.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "kernels/common/occupancy.h"
+#include "src/core/error.hpp"
+
+namespace raymap {
+
+/// @brief ln(p / (1 - p)).
+inline float logOdds(double probability) noexcept {
+  return static_cast<float>(std::log(probability / (1.0 - probability)));
+}
+
+/// @brief 1 - 1 / (1 + e^l); -inf maps to 0 and +inf to 1.
+inline double probability(float log_odds) noexcept {
+  return 1.0 - 1.0 / (1.0 + std::exp(static_cast<double>(log_odds)));
+}
+
+/// @brief Occupancy update parameters, all in log-odds.
+/// Defaults: hit 0.9, miss 0.45, clamps -2.0 / +3.511 log-odds (p = 0.1192 / 0.971, OctoMap's
+/// clamps), threshold 0.5. Value type; validated once with validate().
+struct OccupancyParams {
+  static constexpr double kDefaultHitProbability = 0.9;
+  static constexpr double kDefaultMissProbability = 0.45;
+  static constexpr float kDefaultClampMin = -2.0f;
+  static constexpr float kDefaultClampMax = 3.511f;
+  static constexpr double kDefaultThresholdProbability = 0.5;
+
+  float hit = logOdds(kDefaultHitProbability);
+  float miss = logOdds(kDefaultMissProbability);
+  float clamp_min = kDefaultClampMin;
+  float clamp_max = kDefaultClampMax;
+  float threshold = logOdds(kDefaultThresholdProbability);
+
+  /// @brief OctoMap's defaults (hit 0.7, miss 0.4, same clamps), for comparisons with OctoMap.
+  static OccupancyParams octomap() noexcept {
+    OccupancyParams p;
+    p.hit = logOdds(0.7);
+    p.miss = logOdds(0.4);
+    return p;
+  }
+
+  /// @brief Checks hit > 0 > miss, clamp_min < threshold <= clamp_max and finiteness.
+  Expected<void, Error> validate() const;
+
+  rm_occupancy_params toKernel() const noexcept {
+    return rm_occupancy_params{hit, miss, clamp_min, clamp_max, threshold};
+  }
+  friend bool operator==(const OccupancyParams&, const OccupancyParams&) = default;
+};
+
+/// @brief How rays of one scan combine.
+enum class Semantics : std::uint8_t {
+  kPerRay = 0,   ///< every ray updates every voxel it crosses (OHM, OctoMap insertRay)
+  kPerScan = 1,  ///< each voxel at most once per scan, occupied wins (OctoMap insertPointCloud)
+};
+
+const char* toString(Semantics semantics) noexcept;
+
+/// @brief Geometry of the voxel grid.
+/// Voxel v covers [v * resolution, (v + 1) * resolution) metres on each axis (world frame); a region
+/// is region_voxels^3 voxels.
+struct MapGeometry {
+  static constexpr double kDefaultResolution = 0.1;  // metres
+  static constexpr std::int32_t kDefaultRegionVoxels = 32;
+  static constexpr std::int32_t kMinRegionVoxels = 4;
+  static constexpr std::int32_t kMaxRegionVoxels = 128;
+
+  double resolution = kDefaultResolution;  ///< voxel edge, metres
+  std::int32_t region_voxels = kDefaultRegionVoxels;
+
+  double regionExtent() const noexcept { return resolution * region_voxels; }
+  std::uint32_t voxelsPerRegion() const noexcept {
+    const auto n = static_cast<std::uint32_t>(region_voxels);
+    return n * n * n;
+  }
+  /// @brief Checks 1 mm <= resolution <= 100 m and region_voxels in [4, 128].
+  Expected<void, Error> validate() const;
+  friend bool operator==(const MapGeometry&, const MapGeometry&) = default;
+};
+
+}  // namespace raymap

@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Ray preparation: validation, range limits, clipping to a rolling window, segmentation and the
+// conversion to exact voxel keys, with a counter for every ray that is dropped or changed.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "src/core/error.hpp"
+#include "src/map/ray.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap {
+
+/// @brief Per-source ray limits. Aggregate with defaults; check with validate().
+struct RayFilter {
+  static constexpr std::uint32_t kMaxPiecesPerRay = 1024;
+
+  double min_range_m = 0.0;       ///< rays shorter than this are dropped (returns from the robot)
+  double max_range_m = 0.0;       ///< 0 = none; longer rays are clipped: free up to here, no hit
+  double segment_length_m = 0.0;  ///< 0 = off; longer rays are cut into equal pieces
+  bool reverse = false;           ///< walk each ray from the sample back to the origin
+
+  Expected<void, Error> validate() const;
+};
+
+/// @brief What happened to the rays offered so far. Plain counters (not synchronised).
+struct RayCounters {
+  std::uint64_t rays_in = 0;              ///< offered to prepare()
+  std::uint64_t rays_invalid = 0;         ///< NaN or infinite coordinates (rejected)
+  std::uint64_t rays_too_short = 0;       ///< shorter than min range (rejected)
+  std::uint64_t rays_out_of_bounds = 0;   ///< beyond the map's key range or too long (rejected)
+  std::uint64_t rays_outside_window = 0;  ///< entirely outside a rolling window (rejected)
+  std::uint64_t rays_clipped = 0;         ///< shortened to max range or the window (integrated)
+  std::uint64_t rays_no_return = 0;       ///< flagged no-return (integrated, free only)
+  std::uint64_t rays_accepted = 0;        ///< integrated (possibly clipped)
+  std::uint64_t pieces_out = 0;           ///< prepared rays written (> accepted with segmentation)
+
+  std::uint64_t rejected() const noexcept {
+    return rays_invalid + rays_too_short + rays_out_of_bounds + rays_outside_window;
+  }
+};
+
+/// @brief Turns Rays into PreparedRays for one map.
+/// A clipped or no-return ray gets RM_RAY_END_MISS (its end voxel is traversed free space); a ray
+/// with a real return gets RM_RAY_END_HIT; the inner pieces of a segmented ray get neither (the next
+/// piece starts in that voxel, so it is updated once).
+/// Thread-safety: one preparer per thread. @rt prepare() allocates: no; throws: no.
+class RayPreparer {
+ public:
+  /// @pre filter.validate() succeeded; `map` outlives the preparer.
+  RayPreparer(const VoxelMap& map, const RayFilter& filter) noexcept;
+
+  struct Progress {
+    std::size_t consumed = 0;  ///< input rays handled (accepted or rejected)
+    std::size_t written = 0;   ///< prepared rays appended to `out`
+  };
+
+  /// @brief Prepares input rays in order until all are consumed or `out` has no room for the
+  /// pieces of the next ray.
+  Progress prepare(std::span<const Ray> in, std::span<PreparedRay> out) noexcept;
+
+  const RayCounters& counters() const noexcept { return counters_; }
+  void resetCounters() noexcept { counters_ = RayCounters{}; }
+  const RayFilter& filter() const noexcept { return filter_; }
+
+ private:
+  bool toKey(Vec3d p, rm_vec3i* voxel, rm_vec3f* local) const noexcept;
+
+  const VoxelMap* map_;
+  RayFilter filter_;
+  double inv_resolution_;
+  RayCounters counters_;
+};
+
+}  // namespace raymap

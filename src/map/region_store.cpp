@@ -1,0 +1,200 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Region pool and index.
+#include "src/map/region_store.hpp"
+
+#include <bit>
+#include <cstring>
+#include <string>
+
+namespace raymap {
+namespace {
+
+constexpr std::uint64_t kEmptyKey = ~std::uint64_t{0};
+constexpr std::int32_t kCoordBias = 1 << 20;
+constexpr std::uint64_t kCoordMask = (std::uint64_t{1} << 21) - 1;
+
+}  // namespace
+
+const char* toString(StoreError error) noexcept {
+  switch (error) {
+    case StoreError::kFull:
+      return "region store full";
+    case StoreError::kOutOfRange:
+      return "region coordinate out of range";
+    case StoreError::kOutsideWindow:
+      return "region outside the rolling window";
+  }
+  return "unknown store error";
+}
+
+Result<RegionStore> RegionStore::create(const Config& config) {
+  if (config.capacity == 0) {
+    return fail(ErrorCode::kInvalidArgument, "region store capacity must be at least one region");
+  }
+  if (config.schema.size() == 0) {
+    return fail(ErrorCode::kInvalidArgument, "a map needs at least one layer");
+  }
+  RegionStore store;
+  store.schema_ = config.schema;
+  store.region_voxels_ = config.region_voxels;
+  const auto n = static_cast<std::uint32_t>(config.region_voxels);
+  store.voxels_per_region_ = n * n * n;
+  store.capacity_ = config.capacity;
+
+  std::size_t total = 0;
+  for (int l = 0; l < config.schema.size(); ++l) {
+    const std::size_t region_bytes =
+        std::size_t{config.schema.at(l).bytes_per_voxel} * store.voxels_per_region_;
+    store.layer_offset_.push_back(total);
+    store.layer_region_bytes_.push_back(region_bytes);
+    total += region_bytes * config.capacity;
+  }
+  auto pool = platform::PageBlock::create(total);
+  if (!pool) {
+    return fail(pool.error().code, "region store of " + std::to_string(config.capacity) +
+                                       " regions: " + pool.error().message);
+  }
+  store.pool_ = std::move(pool).value();
+  if (config.prefault) {
+    store.pool_.prefault();
+  }
+  store.coords_.assign(config.capacity, Vec3i{});
+  store.used_.assign(config.capacity, 0);
+  store.free_slots_.reserve(config.capacity);
+  for (std::uint32_t s = config.capacity; s > 0; --s) {
+    store.free_slots_.push_back(s - 1);  // slot 0 is handed out first
+  }
+  const std::size_t buckets = std::bit_ceil(std::size_t{config.capacity} * 2u + 2u);
+  store.index_keys_.assign(buckets, kEmptyKey);
+  store.index_slots_.assign(buckets, kNoSlot);
+  store.index_mask_ = buckets - 1;
+  return store;
+}
+
+std::uint64_t RegionStore::packCoord(Vec3i region) noexcept {
+  const auto x = static_cast<std::uint64_t>(region.x + kCoordBias) & kCoordMask;
+  const auto y = static_cast<std::uint64_t>(region.y + kCoordBias) & kCoordMask;
+  const auto z = static_cast<std::uint64_t>(region.z + kCoordBias) & kCoordMask;
+  return x | (y << 21) | (z << 42);
+}
+
+Vec3i RegionStore::unpackCoord(std::uint64_t key) noexcept {
+  return Vec3i{static_cast<std::int32_t>(key & kCoordMask) - kCoordBias,
+               static_cast<std::int32_t>((key >> 21) & kCoordMask) - kCoordBias,
+               static_cast<std::int32_t>((key >> 42) & kCoordMask) - kCoordBias};
+}
+
+std::size_t RegionStore::bucketOf(std::uint64_t key) const noexcept {
+  // splitmix64 finaliser: neighbouring regions land in unrelated buckets.
+  key ^= key >> 30;
+  key *= 0xbf58476d1ce4e5b9ull;
+  key ^= key >> 27;
+  key *= 0x94d049bb133111ebull;
+  key ^= key >> 31;
+  return static_cast<std::size_t>(key) & index_mask_;
+}
+
+std::uint32_t RegionStore::find(Vec3i region) const noexcept {
+  if (!inRange(region) || capacity_ == 0) {
+    return kNoSlot;
+  }
+  const std::uint64_t key = packCoord(region);
+  for (std::size_t b = bucketOf(key);; b = (b + 1) & index_mask_) {
+    const std::uint64_t k = index_keys_[b];
+    if (k == key) {
+      return index_slots_[b];
+    }
+    if (k == kEmptyKey) {
+      return kNoSlot;
+    }
+  }
+}
+
+Expected<std::uint32_t, StoreError> RegionStore::findOrCreate(Vec3i region) noexcept {
+  if (!inRange(region)) {
+    return Unexpected(StoreError::kOutOfRange);
+  }
+  const std::uint64_t key = packCoord(region);
+  std::size_t b = bucketOf(key);
+  for (;; b = (b + 1) & index_mask_) {
+    const std::uint64_t k = index_keys_[b];
+    if (k == key) {
+      return index_slots_[b];
+    }
+    if (k == kEmptyKey) {
+      break;
+    }
+  }
+  if (free_slots_.empty()) {
+    return Unexpected(StoreError::kFull);
+  }
+  const std::uint32_t slot = free_slots_.back();
+  free_slots_.pop_back();
+  index_keys_[b] = key;
+  index_slots_[b] = slot;
+  coords_[slot] = region;
+  used_[slot] = 1;
+  ++size_;
+  for (int l = 0; l < schema_.size(); ++l) {
+    clearLayer(slot, l);
+  }
+  return slot;
+}
+
+void RegionStore::clearLayer(std::uint32_t slot, int layer) noexcept {
+  const LayerSpec& spec = schema_.at(layer);
+  std::byte* bytes = layerBytes(slot, layer);
+  const std::size_t words = spec.bytes_per_voxel / 4u;
+  bool all_zero = true;
+  for (std::size_t w = 0; w < words; ++w) {
+    all_zero = all_zero && spec.clear_words[w] == 0u;
+  }
+  if (all_zero) {
+    std::memset(bytes, 0, layerRegionBytes(layer));
+    return;
+  }
+  auto* out = reinterpret_cast<std::uint32_t*>(bytes);  // NOLINT: pool is page-aligned
+  for (std::uint32_t v = 0; v < voxels_per_region_; ++v) {
+    for (std::size_t w = 0; w < words; ++w) {
+      out[std::size_t{v} * words + w] = spec.clear_words[w];
+    }
+  }
+}
+
+void RegionStore::release(std::uint32_t slot) noexcept {
+  RAYMAP_EXPECTS(slot < capacity_ && used_[slot] != 0);
+  const std::uint64_t key = packCoord(coords_[slot]);
+  std::size_t b = bucketOf(key);
+  while (index_keys_[b] != key) {
+    b = (b + 1) & index_mask_;
+  }
+  // Backward-shift deletion: pull later members of the probe run into the hole.
+  std::size_t hole = b;
+  for (std::size_t next = (hole + 1) & index_mask_; index_keys_[next] != kEmptyKey;
+       next = (next + 1) & index_mask_) {
+    const std::size_t home = bucketOf(index_keys_[next]);
+    // Move `next` into the hole if its home is not cyclically within (hole, next].
+    const bool home_in_range =
+        hole <= next ? (home > hole && home <= next) : (home > hole || home <= next);
+    if (!home_in_range) {
+      index_keys_[hole] = index_keys_[next];
+      index_slots_[hole] = index_slots_[next];
+      hole = next;
+    }
+  }
+  index_keys_[hole] = kEmptyKey;
+  index_slots_[hole] = kNoSlot;
+  used_[slot] = 0;
+  free_slots_.push_back(slot);
+  --size_;
+}
+
+void RegionStore::clear() noexcept {
+  for (std::uint32_t slot = 0; slot < capacity_; ++slot) {
+    if (used_[slot] != 0) {
+      release(slot);
+    }
+  }
+}
+
+}  // namespace raymap

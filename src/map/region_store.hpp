@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Fixed pool of region memory plus an open-addressing index from region coordinate to pool slot.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "platform/memory.hpp"
+#include "src/core/error.hpp"
+#include "src/core/vec3.hpp"
+#include "src/map/layer_schema.hpp"
+
+namespace raymap {
+
+/// Why a region could not be stored (real-time path: a code, no message).
+enum class StoreError : std::uint8_t {
+  kFull,        ///< every slot holds a region
+  kOutOfRange,     ///< the region coordinate is beyond RegionStore::kMaxRegionCoord
+  kOutsideWindow,  ///< a rolling map was asked for a region outside its window
+};
+
+const char* toString(StoreError error) noexcept;
+
+/// @brief All region memory of a map: one page-backed pool cut into `capacity` slots, each slot
+/// holding one contiguous array per layer, and a linear-probing hash index from region coordinate to
+/// slot.
+///
+/// Design: memory is layer-major: layer L of slot S starts at
+/// `pool + layer_offset[L] + S * layer_region_bytes[L]`, so one layer of all regions is one array
+/// (what a device cache uploads). Everything is sized in create(); nothing is allocated afterwards.
+/// A newly created region has every voxel at its layer's clear value (e.g. "unobserved").
+/// The index uses linear probing with backward-shift deletion (no tombstones), at most half full.
+///
+/// Thread-safety: find(), coordOf() and the layer accessors may run concurrently with each other.
+/// findOrCreate(), release() and clear() need exclusive access (no concurrent readers).
+/// Real-time: every member except create() is allocation-free and noexcept; find/findOrCreate are
+/// O(1) expected.
+class RegionStore {
+ public:
+  static constexpr std::uint32_t kNoSlot = 0xFFFFFFFFu;
+  /// Largest |region coordinate| on any axis (coordinates are packed into 21 bits each).
+  static constexpr std::int32_t kMaxRegionCoord = (1 << 20) - 1;
+
+  struct Config {
+    LayerSchema schema;
+    std::int32_t region_voxels = 32;
+    std::uint32_t capacity = 0;  ///< regions
+    bool prefault = false;       ///< touch all pages now (real-time users)
+  };
+
+  RegionStore() = default;
+  static Result<RegionStore> create(const Config& config);
+  RegionStore(RegionStore&&) noexcept = default;
+  RegionStore& operator=(RegionStore&&) noexcept = default;
+  RegionStore(const RegionStore&) = delete;
+  RegionStore& operator=(const RegionStore&) = delete;
+
+  std::uint32_t capacity() const noexcept { return capacity_; }
+  std::uint32_t size() const noexcept { return size_; }
+  const LayerSchema& schema() const noexcept { return schema_; }
+  std::int32_t regionVoxels() const noexcept { return region_voxels_; }
+  std::uint32_t voxelsPerRegion() const noexcept { return voxels_per_region_; }
+  /// @brief Bytes of the pool (what the configuration asked for, rounded to pages).
+  std::size_t poolBytes() const noexcept { return pool_.size(); }
+
+  /// @brief Slot of a region, or kNoSlot. @rt wait-free; allocates: no.
+  std::uint32_t find(Vec3i region) const noexcept;
+  /// @brief Slot of a region, creating it (all voxels clear) if absent. @rt allocates: no.
+  Expected<std::uint32_t, StoreError> findOrCreate(Vec3i region) noexcept;
+  /// @brief Removes the region in `slot`; the slot becomes free for reuse. @rt allocates: no.
+  void release(std::uint32_t slot) noexcept;
+  /// @brief Removes every region.
+  void clear() noexcept;
+
+  bool inUse(std::uint32_t slot) const noexcept { return used_[slot] != 0; }
+  Vec3i coordOf(std::uint32_t slot) const noexcept { return coords_[slot]; }
+
+  /// @brief Start of layer `layer` (schema index) of the region in `slot`.
+  std::byte* layerBytes(std::uint32_t slot, int layer) const noexcept {
+    const auto l = static_cast<std::size_t>(layer);
+    return pool_.data() + layer_offset_[l] + std::size_t{slot} * layer_region_bytes_[l];
+  }
+  template <class T>
+  T* layerData(std::uint32_t slot, int layer) const noexcept {
+    return reinterpret_cast<T*>(layerBytes(slot, layer));  // NOLINT: pool holds trivially copyable voxels
+  }
+  std::size_t layerRegionBytes(int layer) const noexcept {
+    return layer_region_bytes_[static_cast<std::size_t>(layer)];
+  }
+  /// @brief Resets every voxel of one layer of a region to the layer's clear value.
+  void clearLayer(std::uint32_t slot, int layer) noexcept;
+
+  /// @brief Calls fn(slot, coord) for every region, in slot order.
+  template <class Fn>
+  void forEachRegion(Fn&& fn) const {
+    for (std::uint32_t slot = 0; slot < capacity_; ++slot) {
+      if (used_[slot] != 0) {
+        fn(slot, coords_[slot]);
+      }
+    }
+  }
+
+  /// @brief The 63-bit index key of an in-range region coordinate (never all ones).
+  static std::uint64_t packCoord(Vec3i region) noexcept;
+  /// @brief Inverse of packCoord().
+  static Vec3i unpackCoord(std::uint64_t key) noexcept;
+
+  /// @brief True when every component of `region` fits the index.
+  static bool inRange(Vec3i region) noexcept {
+    return region.x >= -kMaxRegionCoord && region.x <= kMaxRegionCoord &&
+           region.y >= -kMaxRegionCoord && region.y <= kMaxRegionCoord &&
+           region.z >= -kMaxRegionCoord && region.z <= kMaxRegionCoord;
+  }
+
+ private:
+  std::size_t bucketOf(std::uint64_t key) const noexcept;
+
+  LayerSchema schema_;
+  std::int32_t region_voxels_ = 0;
+  std::uint32_t voxels_per_region_ = 0;
+  std::uint32_t capacity_ = 0;
+  std::uint32_t size_ = 0;
+  platform::PageBlock pool_;
+  std::vector<std::size_t> layer_offset_;
+  std::vector<std::size_t> layer_region_bytes_;
+  std::vector<Vec3i> coords_;
+  std::vector<std::uint8_t> used_;
+  std::vector<std::uint32_t> free_slots_;  // stack
+  std::vector<std::uint64_t> index_keys_;  // kEmptyKey or packed coordinate
+  std::vector<std::uint32_t> index_slots_;
+  std::size_t index_mask_ = 0;
+};
+
+}  // namespace raymap

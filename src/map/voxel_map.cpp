@@ -1,0 +1,284 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// VoxelMap: keys, policies, queries.
+#include "src/map/voxel_map.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "kernels/common/key_math.h"
+#include "kernels/common/occupancy.h"
+#include "kernels/common/scan_mark.h"
+
+namespace raymap {
+namespace {
+
+rm_vec3i toKernel(Vec3i v) noexcept { return rm_vec3i{v.x, v.y, v.z}; }
+Vec3i fromKernel(rm_vec3i v) noexcept { return Vec3i{v.x, v.y, v.z}; }
+
+}  // namespace
+
+const char* toString(StorePolicy policy) noexcept {
+  return policy == StorePolicy::kRolling ? "rolling" : "global";
+}
+
+LayerSchema MapConfig::schema() const {
+  LayerSchema schema;
+  (void)schema.add(LayerKind::kOccupancy);
+  if (voxel_mean) {
+    (void)schema.add(LayerKind::kVoxelMean);
+  }
+  if (semantics == Semantics::kPerScan) {
+    (void)schema.add(LayerKind::kScanMark);
+  }
+  return schema;
+}
+
+std::uint64_t MapConfig::capacityRegions() const {
+  if (policy == StorePolicy::kRolling) {
+    return std::uint64_t(std::max(window_regions.x, 0)) * std::uint64_t(std::max(window_regions.y, 0)) *
+           std::uint64_t(std::max(window_regions.z, 0));
+  }
+  const std::uint64_t per_region = schema().bytesPerRegion(geometry.voxelsPerRegion());
+  return per_region == 0 ? 0 : memory_budget_bytes / per_region;
+}
+
+Expected<void, Error> MapConfig::validate() const {
+  if (auto ok = geometry.validate(); !ok) {
+    return ok;
+  }
+  if (auto ok = occupancy.validate(); !ok) {
+    return ok;
+  }
+  if (policy == StorePolicy::kRolling) {
+    if (window_regions.x < 1 || window_regions.y < 1 || window_regions.z < 1 ||
+        window_regions.x > 4096 || window_regions.y > 4096 || window_regions.z > 4096) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "rolling window must be 1 to 4096 regions on each axis");
+    }
+  }
+  const std::uint64_t capacity = capacityRegions();
+  if (capacity == 0) {
+    const std::uint64_t per_region = schema().bytesPerRegion(geometry.voxelsPerRegion());
+    return fail(ErrorCode::kInvalidArgument,
+                "memory budget of " + std::to_string(memory_budget_bytes) +
+                    " bytes holds no region (one region takes " + std::to_string(per_region) +
+                    " bytes)");
+  }
+  if (capacity > std::numeric_limits<std::uint32_t>::max() / 4u) {
+    return fail(ErrorCode::kInvalidArgument,
+                "the configuration asks for " + std::to_string(capacity) +
+                    " regions; at most " +
+                    std::to_string(std::numeric_limits<std::uint32_t>::max() / 4u) +
+                    " are supported");
+  }
+  return {};
+}
+
+Result<VoxelMap> VoxelMap::create(const MapConfig& config) {
+  if (auto ok = config.validate(); !ok) {
+    return Unexpected(ok.error());
+  }
+  RegionStore::Config store_config;
+  store_config.schema = config.schema();
+  store_config.region_voxels = config.geometry.region_voxels;
+  store_config.capacity = static_cast<std::uint32_t>(config.capacityRegions());
+  store_config.prefault = config.prefault;
+  auto store = RegionStore::create(store_config);
+  if (!store) {
+    return Unexpected(store.error());
+  }
+  return VoxelMap(config, std::move(store).value());
+}
+
+VoxelMap::VoxelMap(MapConfig config, RegionStore store) noexcept
+    : config_(config), store_(std::move(store)) {
+  inv_resolution_ = 1.0 / config_.geometry.resolution;
+  max_voxel_coord_ = RegionStore::kMaxRegionCoord * config_.geometry.region_voxels;
+  const LayerSchema& schema = store_.schema();
+  occupancy_layer_ = schema.indexOf(LayerKind::kOccupancy);
+  mean_layer_ = schema.indexOf(LayerKind::kVoxelMean);
+  scan_mark_layer_ = schema.indexOf(LayerKind::kScanMark);
+}
+
+Vec3i VoxelMap::voxelOf(Vec3d p) const noexcept {
+  // Multiply by the inverse resolution, as OctoMap does, so both put boundary points in the same
+  // voxel (0.3 * 10 == 3 but 0.3 / 0.1 < 3 in double).
+  return Vec3i{static_cast<std::int32_t>(std::floor(p.x * inv_resolution_)),
+               static_cast<std::int32_t>(std::floor(p.y * inv_resolution_)),
+               static_cast<std::int32_t>(std::floor(p.z * inv_resolution_))};
+}
+
+bool VoxelMap::voxelInRange(Vec3d p) const noexcept {
+  const double limit = static_cast<double>(max_voxel_coord_);
+  for (int a = 0; a < 3; ++a) {
+    const double v = std::floor(p[a] * inv_resolution_);
+    if (!(v > -limit && v < limit)) {  // also false for NaN
+      return false;
+    }
+  }
+  return true;
+}
+
+Vec3d VoxelMap::voxelMinCorner(Vec3i v) const noexcept {
+  const double r = config_.geometry.resolution;
+  return Vec3d{v.x * r, v.y * r, v.z * r};
+}
+
+Vec3d VoxelMap::voxelCentre(Vec3i v) const noexcept {
+  const double h = 0.5 * config_.geometry.resolution;
+  return voxelMinCorner(v) + Vec3d{h, h, h};
+}
+
+Vec3i VoxelMap::regionOfVoxel(Vec3i voxel) const noexcept {
+  return fromKernel(rm_region_of_voxel(toKernel(voxel), config_.geometry.region_voxels));
+}
+
+bool VoxelMap::inWindow(Vec3i r) const noexcept {
+  if (config_.policy != StorePolicy::kRolling) {
+    return true;
+  }
+  const Vec3i hi = windowMaxRegion();
+  return r.x >= window_min_.x && r.x <= hi.x && r.y >= window_min_.y && r.y <= hi.y &&
+         r.z >= window_min_.z && r.z <= hi.z;
+}
+
+Expected<std::uint32_t, StoreError> VoxelMap::acquireRegion(Vec3i region) noexcept {
+  if (!inWindow(region)) {
+    return Unexpected(StoreError::kOutsideWindow);
+  }
+  return store_.findOrCreate(region);
+}
+
+std::uint32_t VoxelMap::setWindowCentre(Vec3d p) noexcept {
+  if (config_.policy != StorePolicy::kRolling) {
+    return 0;
+  }
+  const double extent = config_.geometry.regionExtent();
+  Vec3i min_region;
+  for (int a = 0; a < 3; ++a) {
+    // Window [p - n*E/2, p + n*E/2] snapped to region boundaries.
+    min_region[a] = static_cast<std::int32_t>(
+        std::floor(p[a] / extent - 0.5 * config_.window_regions[a] + 0.5));
+  }
+  if (min_region == window_min_) {
+    return 0;
+  }
+  window_min_ = min_region;
+  std::uint32_t recycled = 0;
+  for (std::uint32_t slot = 0; slot < store_.capacity(); ++slot) {
+    if (store_.inUse(slot) && !inWindow(store_.coordOf(slot))) {
+      store_.release(slot);
+      ++recycled;
+    }
+  }
+  return recycled;
+}
+
+std::pair<Vec3d, Vec3d> VoxelMap::windowBounds() const noexcept {
+  const double e = config_.geometry.regionExtent();
+  const Vec3i hi = windowMaxRegion() + Vec3i{1, 1, 1};
+  return {Vec3d{window_min_.x * e, window_min_.y * e, window_min_.z * e},
+          Vec3d{hi.x * e, hi.y * e, hi.z * e}};
+}
+
+std::uint32_t VoxelMap::beginScan() noexcept {
+  if (scan_sequence_ >= RM_SCAN_SEQUENCE_MAX) {
+    // Marks only grow; after 2^31 scans start again from clean marks.
+    if (scan_mark_layer_ >= 0) {
+      store_.forEachRegion(
+          [&](std::uint32_t slot, Vec3i) { store_.clearLayer(slot, scan_mark_layer_); });
+    }
+    scan_sequence_ = 0;
+  }
+  return ++scan_sequence_;
+}
+
+std::optional<std::pair<std::uint32_t, std::uint32_t>> VoxelMap::locate(
+    Vec3i voxel) const noexcept {
+  const std::int32_t n = config_.geometry.region_voxels;
+  const rm_vec3i region = rm_region_of_voxel(toKernel(voxel), n);
+  const std::uint32_t slot = store_.find(fromKernel(region));
+  if (slot == RegionStore::kNoSlot) {
+    return std::nullopt;
+  }
+  const rm_vec3i local = rm_local_of_voxel(toKernel(voxel), n);
+  return std::make_pair(slot, rm_local_index(local, n));
+}
+
+float VoxelMap::occupancyValue(Vec3i voxel) const noexcept {
+  const auto at = locate(voxel);
+  if (!at) {
+    return RM_OCC_UNOBSERVED;
+  }
+  return store_.layerData<float>(at->first, occupancy_layer_)[at->second];
+}
+
+VoxelState VoxelMap::state(Vec3i voxel) const noexcept {
+  const float v = occupancyValue(voxel);
+  if (!rm_occupancy_observed(v)) {
+    return VoxelState::kUnobserved;
+  }
+  return rm_occupancy_occupied(v, config_.occupancy.threshold) ? VoxelState::kOccupied
+                                                               : VoxelState::kFree;
+}
+
+rm_voxel_mean VoxelMap::mean(Vec3i voxel) const noexcept {
+  const auto at = locate(voxel);
+  if (!at || mean_layer_ < 0) {
+    return rm_voxel_mean{0u, 0u};
+  }
+  return store_.layerData<rm_voxel_mean>(at->first, mean_layer_)[at->second];
+}
+
+MapSummary VoxelMap::summarise() const noexcept {
+  MapSummary s;
+  const std::int32_t n = config_.geometry.region_voxels;
+  const float threshold = config_.occupancy.threshold;
+  Vec3i lo{std::numeric_limits<std::int32_t>::max(), std::numeric_limits<std::int32_t>::max(),
+           std::numeric_limits<std::int32_t>::max()};
+  Vec3i hi{std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min(),
+           std::numeric_limits<std::int32_t>::min()};
+  store_.forEachRegion([&](std::uint32_t slot, Vec3i region) {
+    ++s.regions;
+    const float* occ = store_.layerData<float>(slot, occupancy_layer_);
+    std::uint32_t index = 0;
+    for (std::int32_t z = 0; z < n; ++z) {
+      for (std::int32_t y = 0; y < n; ++y) {
+        for (std::int32_t x = 0; x < n; ++x, ++index) {
+          const float v = occ[index];
+          if (!rm_occupancy_observed(v)) {
+            ++s.voxels_unobserved;
+            continue;
+          }
+          if (rm_occupancy_occupied(v, threshold)) {
+            ++s.voxels_occupied;
+          } else {
+            ++s.voxels_free;
+          }
+          const Vec3i voxel{region.x * n + x, region.y * n + y, region.z * n + z};
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], voxel[a]);
+            hi[a] = std::max(hi[a], voxel[a]);
+          }
+        }
+      }
+    }
+  });
+  if (s.voxels_free + s.voxels_occupied > 0) {
+    s.observed_min = voxelMinCorner(lo);
+    s.observed_max = voxelMinCorner(hi + Vec3i{1, 1, 1});
+  }
+  return s;
+}
+
+void VoxelMap::setInfo(const std::string& key, std::string value) {
+  for (auto& [k, v] : info_) {
+    if (k == key) {
+      v = std::move(value);
+      return;
+    }
+  }
+  info_.emplace_back(key, std::move(value));
+}
+
+}  // namespace raymap

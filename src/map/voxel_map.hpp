@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A voxel map: geometry, occupancy parameters, layer schema and the region store under a policy
+// (global or rolling window).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "kernels/common/voxel_mean.h"
+#include "src/core/error.hpp"
+#include "src/core/vec3.hpp"
+#include "src/map/layer_schema.hpp"
+#include "src/map/map_params.hpp"
+#include "src/map/region_store.hpp"
+
+namespace raymap {
+
+/// How the region store is managed.
+enum class StorePolicy : std::uint8_t {
+  kGlobal = 0,   ///< offline maps: regions are created up to capacity; then integration fails
+  kRolling = 1,  ///< robot-centric window that follows a centre; regions leaving it are recycled
+};
+
+const char* toString(StorePolicy policy) noexcept;
+
+/// @brief Everything needed to build a map. Aggregate with defaults; checked by validate().
+struct MapConfig {
+  static constexpr std::uint64_t kDefaultMemoryBudget = std::uint64_t{4} << 30;  // 4 GiB
+
+  MapGeometry geometry;
+  OccupancyParams occupancy;
+  Semantics semantics = Semantics::kPerRay;
+  bool voxel_mean = true;  ///< keep the voxel-mean layer
+  StorePolicy policy = StorePolicy::kGlobal;
+  /// Global policy: the pool holds floor(memory_budget / bytes-per-region) regions.
+  std::uint64_t memory_budget_bytes = kDefaultMemoryBudget;
+  /// Rolling policy: window size in regions per axis (the pool holds exactly this many).
+  Vec3i window_regions{16, 16, 4};
+  bool prefault = false;  ///< touch all pool pages at creation (real-time users)
+
+  Expected<void, Error> validate() const;
+  /// @brief The layer schema this configuration implies.
+  LayerSchema schema() const;
+  /// @brief Number of regions the pool will hold.
+  std::uint64_t capacityRegions() const;
+};
+
+/// Occupancy state of a voxel.
+enum class VoxelState : std::uint8_t { kUnobserved, kFree, kOccupied };
+
+/// @brief Counts over all stored regions, and the bounds of observed voxels (world frame, metres).
+struct MapSummary {
+  std::uint64_t regions = 0;
+  std::uint64_t voxels_free = 0;
+  std::uint64_t voxels_occupied = 0;
+  std::uint64_t voxels_unobserved = 0;  ///< inside stored regions
+  Vec3d observed_min{};                 ///< min corner of the observed voxels (if any)
+  Vec3d observed_max{};                 ///< max corner
+};
+
+/// @brief The map. Owns its store; move-only.
+/// Thread-safety: const queries may run concurrently; anything that creates, recycles or updates
+/// regions needs exclusive access (the backends coordinate their own workers).
+class VoxelMap {
+ public:
+  static Result<VoxelMap> create(const MapConfig& config);
+
+  VoxelMap(VoxelMap&&) noexcept = default;
+  VoxelMap& operator=(VoxelMap&&) noexcept = default;
+
+  const MapConfig& config() const noexcept { return config_; }
+  const MapGeometry& geometry() const noexcept { return config_.geometry; }
+  const OccupancyParams& occupancy() const noexcept { return config_.occupancy; }
+  Semantics semantics() const noexcept { return config_.semantics; }
+  RegionStore& store() noexcept { return store_; }
+  const RegionStore& store() const noexcept { return store_; }
+
+  int occupancyLayer() const noexcept { return occupancy_layer_; }
+  int meanLayer() const noexcept { return mean_layer_; }          ///< -1 without voxel means
+  int scanMarkLayer() const noexcept { return scan_mark_layer_; }  ///< -1 for per-ray maps
+
+  // ---- keys (world frame, metres) ----
+  /// @brief Global voxel holding a world point: floor(p / resolution) per axis. @pre voxelInRange
+  Vec3i voxelOf(Vec3d p_world) const noexcept;
+  /// @brief True when p_world has a voxel whose region the store can index.
+  bool voxelInRange(Vec3d p_world) const noexcept;
+  Vec3d voxelMinCorner(Vec3i voxel) const noexcept;
+  Vec3d voxelCentre(Vec3i voxel) const noexcept;
+  Vec3i regionOfVoxel(Vec3i voxel) const noexcept;
+  /// @brief Largest |global voxel coordinate| the map accepts on any axis.
+  std::int32_t maxVoxelCoord() const noexcept { return max_voxel_coord_; }
+
+  // ---- regions under the policy ----
+  /// @brief Slot of a region, created if needed. Global: kFull when the pool is exhausted.
+  /// Rolling: kOutsideWindow for regions outside the window. @rt allocates: no.
+  Expected<std::uint32_t, StoreError> acquireRegion(Vec3i region) noexcept;
+
+  // ---- rolling window ----
+  /// @brief Moves the window so that it is centred (to the nearest region) on p_world; regions
+  /// that leave it are recycled (their voxels become unobserved when reused). Global maps: no-op.
+  /// @return the number of regions recycled. @rt allocates: no; O(capacity).
+  std::uint32_t setWindowCentre(Vec3d p_world) noexcept;
+  Vec3i windowMinRegion() const noexcept { return window_min_; }
+  Vec3i windowMaxRegion() const noexcept { return window_min_ + config_.window_regions - Vec3i{1, 1, 1}; }
+  bool inWindow(Vec3i region) const noexcept;
+  /// @brief World-frame box of the window, metres: {min corner, max corner}.
+  std::pair<Vec3d, Vec3d> windowBounds() const noexcept;
+
+  // ---- per-scan semantics ----
+  /// @brief Sequence number for the next scan (starts at 1; on wrap all marks are reset).
+  std::uint32_t beginScan() noexcept;
+
+  // ---- queries ----
+  float occupancyValue(Vec3i voxel) const noexcept;  ///< log-odds, +inf when unobserved
+  VoxelState state(Vec3i voxel) const noexcept;
+  /// @brief Voxel mean of a voxel (zero count when absent or without the layer).
+  rm_voxel_mean mean(Vec3i voxel) const noexcept;
+  MapSummary summarise() const noexcept;
+
+  /// @brief Provenance stored with the map (source file, ray counts, ranges...), in order.
+  std::vector<std::pair<std::string, std::string>>& info() noexcept { return info_; }
+  const std::vector<std::pair<std::string, std::string>>& info() const noexcept { return info_; }
+  void setInfo(const std::string& key, std::string value);
+
+ private:
+  VoxelMap(MapConfig config, RegionStore store) noexcept;
+  /// @brief Slot and in-region index of a voxel, or nullopt if its region is absent.
+  std::optional<std::pair<std::uint32_t, std::uint32_t>> locate(Vec3i voxel) const noexcept;
+
+  MapConfig config_;
+  RegionStore store_;
+  double inv_resolution_ = 10.0;
+  std::int32_t max_voxel_coord_ = 0;
+  int occupancy_layer_ = -1;
+  int mean_layer_ = -1;
+  int scan_mark_layer_ = -1;
+  Vec3i window_min_{};
+  std::uint32_t scan_sequence_ = 0;
+  std::vector<std::pair<std::string, std::string>> info_;
+};
+
+}  // namespace raymap

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
+# src/sim, src/io <- tools. Includes are written relative to the repository root, so grep can tell.
+set -euo pipefail
+root=${1:-.}
+cd "$root"
+status=0
+check() {  # check <folder> <regex of forbidden include prefixes> <why>
+  local hits
+  hits=$(grep -rnE "#include \"($2)" "$1" --include='*.h' --include='*.hpp' --include='*.cpp' --include='*.cl' --include='*.cu' || true)
+  if [ -n "$hits" ]; then
+    echo "layering: $1 must not include $2 ($3):"
+    echo "$hits"
+    status=1
+  fi
+}
+check kernels/common 'src/|platform/|tools/|tests/' 'device code depends on nothing'
+check src/core 'src/map|src/io|src/sim|platform/|tools/|tests/' 'core is the base'
+check platform 'src/map|src/io|src/sim|tools/|tests/' 'platform depends only on core'
+check src/map 'src/io|src/sim|tools/|tests/' 'the map does not know files or tools'
+check src/io 'src/sim|tools/|tests/' 'file formats do not know scenes or tools'
+check src/sim 'src/io|tools/|tests/' 'scenes produce rays, not files'
+# Only kernels/common headers may use C-style guards; everything else is #pragma once.
+for f in $(find src platform tools tests -name '*.hpp'); do
+  grep -q '^#pragma once' "$f" || { echo "header without #pragma once: $f"; status=1; }
+done
+# Every source file starts with an SPDX line.
+for f in $(find src platform tools tests kernels -name '*.hpp' -o -name '*.cpp' -o -name '*.h' -o -name '*.cl' -o -name '*.cu'); do
+  head -1 "$f" | grep -q 'SPDX-License-Identifier' || { echo "missing SPDX line: $f"; status=1; }
+done
+exit $status

@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Test helpers for maps and rays.
+#include "tests/support/test_rays.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <set>
+#include <tuple>
+
+#include "src/map/cpu_backend.hpp"
+
+namespace raymap::test {
+
+Ray makeRay(Vec3d origin, Vec3d sample, std::uint32_t flags, std::uint64_t scan) {
+  Ray ray;
+  ray.origin = origin;
+  ray.sample = sample;
+  ray.flags = flags;
+  ray.scan = scan;
+  return ray;
+}
+
+VoxelMap makeMap(const MapConfig& config) {
+  auto map = VoxelMap::create(config);
+  if (!map) {
+    ADD_FAILURE() << "map creation failed: " << map.error().message;
+    std::abort();
+  }
+  return std::move(map).value();
+}
+
+std::unique_ptr<Backend> cpuBackend(VoxelMap& map, unsigned threads) {
+  CpuBackendOptions options;
+  options.threads = threads;
+  auto backend = createCpuBackend(map, options);
+  if (!backend) {
+    ADD_FAILURE() << "backend creation failed: " << backend.error().message;
+    std::abort();
+  }
+  return std::move(backend).value();
+}
+
+RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays,
+                      const RayFilter& filter) {
+  RayPreparer preparer(map, filter);
+  std::vector<PreparedRay> prepared(rays.size() * 4 + 16);
+  std::size_t begin = 0;
+  while (begin < rays.size()) {
+    std::size_t end = rays.size();
+    if (map.semantics() == Semantics::kPerScan) {
+      end = begin;
+      while (end < rays.size() && rays[end].scan == rays[begin].scan) {
+        ++end;
+      }
+    }
+    const auto progress = preparer.prepare(rays.subspan(begin, end - begin), prepared);
+    EXPECT_EQ(progress.consumed, end - begin);
+    auto ok = backend.integrate(std::span<const PreparedRay>(prepared.data(), progress.written));
+    EXPECT_TRUE(ok.has_value());
+    begin = end;
+  }
+  return preparer.counters();
+}
+
+std::vector<Ray> cubeRoomRays(double resolution, int half) {
+  // Sensor at the centre of voxel (0,0,0); targets at the centres of wall voxels with one
+  // coordinate at +-half and the others strictly inside (-half, half). From the centre, such a
+  // ray moves less than half a voxel sideways while it crosses the last half voxel of the wall
+  // layer, so the wall voxel is the only wall voxel it touches.
+  const Vec3d origin{0.5 * resolution, 0.5 * resolution, 0.5 * resolution};
+  std::vector<Ray> rays;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side : {-half, half}) {
+      for (int u = -half + 1; u <= half - 1; ++u) {
+        for (int v = -half + 1; v <= half - 1; ++v) {
+          int c[3];
+          c[axis] = side;
+          c[(axis + 1) % 3] = u;
+          c[(axis + 2) % 3] = v;
+          const Vec3d sample{(c[0] + 0.5) * resolution, (c[1] + 0.5) * resolution,
+                             (c[2] + 0.5) * resolution};
+          rays.push_back(makeRay(origin, sample));
+        }
+      }
+    }
+  }
+  return rays;
+}
+
+MapComparison compareMaps(const VoxelMap& a, const VoxelMap& b) {
+  MapComparison result;
+  std::set<std::tuple<int, int, int>> regions;
+  a.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
+  b.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
+  const int n = a.geometry().region_voxels;
+  for (const auto& [rx, ry, rz] : regions) {
+    for (int z = 0; z < n; ++z) {
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          const Vec3i voxel{rx * n + x, ry * n + y, rz * n + z};
+          const VoxelState sa = a.state(voxel);
+          const VoxelState sb = b.state(voxel);
+          if (sa == VoxelState::kUnobserved && sb == VoxelState::kUnobserved) {
+            continue;
+          }
+          ++result.compared;
+          result.same_state += sa == sb ? 1u : 0u;
+          const float va = a.occupancyValue(voxel);
+          const float vb = b.occupancyValue(voxel);
+          result.exact_value += std::memcmp(&va, &vb, sizeof(float)) == 0 ? 1u : 0u;
+        }
+      }
+    }
+  }
+  return result;
+}
+
+}  // namespace raymap::test

@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Helpers to build maps and integrate rays in tests.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "src/map/backend.hpp"
+#include "src/map/ray_preparer.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::test {
+
+/// @brief A ray from `origin` to `sample` (world frame, metres) with optional flags and scan.
+Ray makeRay(Vec3d origin, Vec3d sample, std::uint32_t flags = 0, std::uint64_t scan = 0);
+
+/// @brief Creates a map or fails the test.
+VoxelMap makeMap(const MapConfig& config);
+
+/// @brief Prepares `rays` and integrates them: per-ray maps in one batch, per-scan maps one batch
+/// per run of equal `scan` values. Fails the test on any error. Returns the preparer's counters.
+RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays,
+                      const RayFilter& filter = {});
+
+/// @brief Creates a CPU backend with `threads` workers or fails the test.
+std::unique_ptr<Backend> cpuBackend(VoxelMap& map, unsigned threads);
+
+/// @brief The cube room of the exact-expectation tests (see test_rays.cpp): the sensor sits at
+/// the centre of voxel (0,0,0); one ray goes to the centre of every wall voxel at +-`half`
+/// voxels, except the wall edges. Every such ray crosses only interior voxels and its own wall
+/// voxel.
+std::vector<Ray> cubeRoomRays(double resolution, int half);
+
+/// @brief Compares two maps voxel by voxel over the union of their regions: the fraction of
+/// voxels (observed in either) with equal state, and whether all occupancy values match exactly.
+struct MapComparison {
+  std::uint64_t compared = 0;
+  std::uint64_t same_state = 0;
+  std::uint64_t exact_value = 0;
+  double sameStateFraction() const { return compared ? double(same_state) / double(compared) : 1.0; }
+};
+MapComparison compareMaps(const VoxelMap& a, const VoxelMap& b);
+
+}  // namespace raymap::test

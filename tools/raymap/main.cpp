@@ -1,0 +1,3 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymap command line (placeholder until the subcommands land in this change).
+int main() { return 0; }
