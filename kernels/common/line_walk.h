@@ -84,15 +84,18 @@ RAYMAP_FN rm_i32 rm_line_walk_span_key(float p, rm_i32 exact_key, int use_exact,
 
 /* Starts a walk over the span [t0, t1] (0 <= t0 <= t1 <= 1) of the ray from `start` to `end`,
  * restricted to the voxel box [box_lo, box_hi] (inclusive, relative to the start voxel).
- * end_voxel is the exact offset of the end voxel from the start voxel. With t0 == 0 the walk starts
- * on the start voxel (0,0,0) and with t1 == 1 it ends on end_voxel, whatever the box says; the
- * caller makes sure those lie in the box. After init, (x, y, z) is the first voxel. */
+ * end_voxel is the exact offset of the end voxel from the start voxel. The first span of a ray
+ * (holds_start) starts on the start voxel (0,0,0) and the last (holds_end) ends on end_voxel,
+ * exactly; the caller makes sure those lie in the box. Other ends are the voxel holding the point
+ * at t0 or t1, clamped into the box: a ray may touch several regions at the same t (a start point
+ * on a region face, a crossing through a region edge), so t alone cannot say which span holds an
+ * end. After init, (x, y, z) is the first voxel. */
 RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
                                       rm_vec3i end_voxel, float t0, float t1, rm_vec3i box_lo,
-                                      rm_vec3i box_hi) {
+                                      rm_vec3i box_hi, int holds_start, int holds_end) {
   rm_vec3f extent = rm_vec3f_make(end.x - start.x, end.y - start.y, end.z - start.z);
-  int start_exact = t0 <= 0.0f;
-  int end_exact = t1 >= 1.0f;
+  int start_exact = holds_start;
+  int end_exact = holds_end;
   rm_vec3f p0 = rm_vec3f_make(start.x + t0 * extent.x, start.y + t0 * extent.y,
                               start.z + t0 * extent.z);
   rm_vec3f p1 = rm_vec3f_make(start.x + t1 * extent.x, start.y + t1 * extent.y,
@@ -129,7 +132,7 @@ RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, rm_vec3f start, rm_vec3f 
 /* Starts a walk over the whole ray: from the start voxel (0,0,0) to end_voxel. */
 RAYMAP_FN void rm_line_walk_init(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
                                  rm_vec3i end_voxel) {
-  rm_line_walk_init_span(w, start, end, end_voxel, 0.0f, 1.0f, end_voxel, end_voxel);
+  rm_line_walk_init_span(w, start, end, end_voxel, 0.0f, 1.0f, end_voxel, end_voxel, 1, 1);
 }
 
 /* Next crossing time on an axis after one more step there. */

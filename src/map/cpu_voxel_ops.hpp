@@ -10,6 +10,7 @@
 #include "kernels/common/ray.h"
 #include "kernels/common/scan_mark.h"
 #include "kernels/common/voxel_mean.h"
+#include "src/core/assert.hpp"
 #include "src/map/ray_region_walk.hpp"
 
 namespace raymap::detail {
@@ -22,8 +23,10 @@ inline std::uint32_t walkSpan(const rm_ray_walk_frame& frame, const RaySpan& spa
                               std::int32_t region_voxels, Visit&& visit) noexcept {
   rm_line_walk w;
   rm_line_walk_init_span(&w, frame.start, frame.end, frame.end_voxel, span.t0, span.t1,
-                         span.box_lo, span.box_hi);
+                         span.box_lo, span.box_hi, span.first ? 1 : 0, span.last ? 1 : 0);
   const std::int32_t n = region_voxels;
+  RAYMAP_DEBUG_ASSERT(w.x >= span.box_lo.x && w.x <= span.box_hi.x && w.y >= span.box_lo.y &&
+                      w.y <= span.box_hi.y && w.z >= span.box_lo.z && w.z <= span.box_hi.z);
   std::int32_t index =
       (w.x - span.box_lo.x) + n * ((w.y - span.box_lo.y) + n * (w.z - span.box_lo.z));
   const std::int32_t delta[3] = {w.step_x, w.step_y * n, w.step_z * n * n};

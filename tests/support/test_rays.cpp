@@ -45,7 +45,8 @@ std::unique_ptr<Backend> cpuBackend(VoxelMap& map, unsigned threads) {
 RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays,
                       const RayFilter& filter) {
   RayPreparer preparer(map, filter);
-  std::vector<PreparedRay> prepared(rays.size() * 4 + 16);
+  // Room for rays cut into up to 16 pieces each (segmentation in tests).
+  std::vector<PreparedRay> prepared(rays.size() * 16 + 64);
   std::size_t begin = 0;
   while (begin < rays.size()) {
     std::size_t end = rays.size();

@@ -1,0 +1,177 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Ray preparation: rejection counters, clipping, no-return rays, segmentation, reverse walks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "src/map/ray_preparer.hpp"
+#include "tests/support/test_rays.hpp"
+
+namespace raymap {
+namespace {
+
+using test::makeRay;
+
+class Preparer : public ::testing::Test {
+ protected:
+  static MapConfig config() {
+    MapConfig c;
+    c.memory_budget_bytes = 16u << 20;
+    return c;
+  }
+  std::vector<PreparedRay> run(const std::vector<Ray>& rays, const RayFilter& filter,
+                               RayCounters* counters = nullptr) {
+    RayPreparer preparer(map_, filter);
+    std::vector<PreparedRay> out(rays.size() * RayFilter::kMaxPiecesPerRay + 8);
+    const auto p = preparer.prepare(rays, out);
+    EXPECT_EQ(p.consumed, rays.size());
+    out.resize(p.written);
+    if (counters != nullptr) {
+      *counters = preparer.counters();
+    }
+    return out;
+  }
+  VoxelMap map_ = test::makeMap(config());
+};
+
+TEST_F(Preparer, InvalidRaysAreCountedNotFatal) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<Ray> rays = {makeRay({0, 0, 0}, {1, 0, 0}), makeRay({nan, 0, 0}, {1, 0, 0}),
+                                 makeRay({0, 0, 0}, {1, inf, 0}), makeRay({0, 0, 0}, {0, 2, 0})};
+  RayCounters c;
+  const auto out = run(rays, {}, &c);
+  EXPECT_EQ(out.size(), 2u);
+  EXPECT_EQ(c.rays_in, 4u);
+  EXPECT_EQ(c.rays_invalid, 2u);
+  EXPECT_EQ(c.rays_accepted, 2u);
+  EXPECT_EQ(c.rejected(), 2u);
+}
+
+TEST_F(Preparer, ShortRaysAreDropped) {
+  RayFilter f;
+  f.min_range_m = 0.5;
+  RayCounters c;
+  const auto out = run({makeRay({0, 0, 0}, {0.3, 0, 0}), makeRay({0, 0, 0}, {0.6, 0, 0})}, f, &c);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(c.rays_too_short, 1u);
+  EXPECT_EQ(out[0].sample_voxel.x, 6);
+}
+
+TEST_F(Preparer, LongRaysAreClippedAndGiveNoHit) {
+  RayFilter f;
+  f.max_range_m = 2.0;
+  RayCounters c;
+  const auto out = run({makeRay({0.05, 0.05, 0.05}, {10.05, 0.05, 0.05})}, f, &c);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(c.rays_clipped, 1u);
+  EXPECT_EQ(out[0].flags & (RM_RAY_END_HIT | RM_RAY_END_MISS), RM_RAY_END_MISS);
+  EXPECT_EQ(out[0].sample_voxel.x, 20);  // 2.05 m
+  EXPECT_NEAR(out[0].sample_local.x, 0.5f, 1e-5f);
+}
+
+TEST_F(Preparer, NoReturnRaysClearWithoutHit) {
+  RayCounters c;
+  const auto out = run({makeRay({0, 0, 0}, {3, 0, 0}, kRayNoReturn)}, {}, &c);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(c.rays_no_return, 1u);
+  EXPECT_EQ(out[0].flags & RM_RAY_END_HIT, 0u);
+  EXPECT_NE(out[0].flags & RM_RAY_END_MISS, 0u);
+}
+
+TEST_F(Preparer, KeysAreExactFarFromTheOrigin) {
+  const auto out = run({makeRay({-3000.05, 7000.0, 2.0}, {-2990.0, 7000.25, 2.0})}, {});
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].origin_voxel.x, -30001);
+  EXPECT_EQ(out[0].origin_voxel.y, 70000);
+  EXPECT_NEAR(out[0].origin_local.x, 0.5f, 1e-4f);
+  EXPECT_EQ(out[0].sample_voxel.x, -29900);
+  EXPECT_NEAR(out[0].sample_local.y, 0.5f, 1e-4f);
+}
+
+TEST_F(Preparer, RaysBeyondTheKeyRangeAreRejected) {
+  RayCounters c;
+  const auto out = run({makeRay({0, 0, 0}, {1e8, 0, 0})}, {}, &c);
+  EXPECT_TRUE(out.empty());
+  EXPECT_EQ(c.rays_out_of_bounds, 1u);
+}
+
+TEST_F(Preparer, SegmentsJoinAndOnlyTheLastOneHits) {
+  RayFilter f;
+  f.segment_length_m = 1.0;
+  RayCounters c;
+  const auto out = run({makeRay({0.05, 0.05, 0.05}, {3.55, 0.05, 0.05})}, f, &c);
+  ASSERT_EQ(out.size(), 4u);  // 3.5 m in equal pieces of at most 1 m
+  EXPECT_EQ(c.pieces_out, 4u);
+  EXPECT_EQ(c.rays_accepted, 1u);
+  for (std::size_t i = 0; i + 1 < out.size(); ++i) {
+    EXPECT_EQ(out[i].flags & (RM_RAY_END_HIT | RM_RAY_END_MISS), 0u) << "piece " << i;
+    EXPECT_EQ(out[i].sample_voxel.x, out[i + 1].origin_voxel.x);
+    EXPECT_FLOAT_EQ(out[i].sample_local.x, out[i + 1].origin_local.x);
+  }
+  EXPECT_EQ(out.back().flags & RM_RAY_END_HIT, RM_RAY_END_HIT);
+  EXPECT_EQ(out.back().sample_voxel.x, 35);
+}
+
+TEST_F(Preparer, ReverseFlagsEveryPiece) {
+  RayFilter f;
+  f.reverse = true;
+  f.segment_length_m = 1.0;
+  const auto out = run({makeRay({0, 0, 0}, {2.5, 0, 0})}, f);
+  ASSERT_EQ(out.size(), 3u);
+  for (const PreparedRay& r : out) {
+    EXPECT_NE(r.flags & RM_RAY_REVERSE, 0u);
+  }
+}
+
+TEST_F(Preparer, StopsWhenTheOutputIsFullAndResumes) {
+  RayPreparer preparer(map_, {});
+  const std::vector<Ray> rays(5, makeRay({0, 0, 0}, {1, 1, 1}));
+  std::vector<PreparedRay> out(3);
+  auto p = preparer.prepare(rays, out);
+  EXPECT_EQ(p.consumed, 3u);
+  EXPECT_EQ(p.written, 3u);
+  p = preparer.prepare(std::span<const Ray>(rays).subspan(3), out);
+  EXPECT_EQ(p.consumed, 2u);
+  EXPECT_EQ(preparer.counters().rays_in, 5u);
+}
+
+TEST(PreparerRolling, RaysAreClippedToTheWindow) {
+  MapConfig c;
+  c.geometry.region_voxels = 8;  // 0.8 m regions
+  c.policy = StorePolicy::kRolling;
+  c.window_regions = {4, 4, 4};  // 3.2 m cube
+  VoxelMap map = test::makeMap(c);
+  map.setWindowCentre({0, 0, 0});  // window [-1.6, 1.6)^3
+  RayPreparer preparer(map, {});
+  const std::vector<Ray> rays = {makeRay({0, 0, 0}, {5, 0, 0}), makeRay({0, 0, 0}, {1, 0, 0}),
+                                 makeRay({10, 10, 10}, {11, 10, 10}),
+                                 makeRay({-5, 0.05, 0.05}, {0.05, 0.05, 0.05})};
+  std::vector<PreparedRay> out(8);
+  const auto p = preparer.prepare(rays, out);
+  ASSERT_EQ(p.written, 3u);
+  EXPECT_EQ(preparer.counters().rays_outside_window, 1u);
+  EXPECT_EQ(preparer.counters().rays_clipped, 2u);
+  EXPECT_EQ(out[0].sample_voxel.x, 15);  // last voxel inside the window
+  EXPECT_EQ(out[0].flags & RM_RAY_END_MISS, RM_RAY_END_MISS);
+  EXPECT_EQ(out[1].flags & RM_RAY_END_HIT, RM_RAY_END_HIT);
+  EXPECT_EQ(out[2].origin_voxel.x, -16);  // origin moved onto the window face
+  EXPECT_EQ(out[2].flags & RM_RAY_END_HIT, RM_RAY_END_HIT);
+}
+
+TEST(RayFilterValidation, NamesTheOption) {
+  RayFilter f;
+  f.min_range_m = -1.0;
+  ASSERT_FALSE(f.validate());
+  EXPECT_NE(f.validate().error().message.find("min-range"), std::string::npos);
+  f = RayFilter();
+  f.min_range_m = 5.0;
+  f.max_range_m = 2.0;
+  ASSERT_FALSE(f.validate());
+  EXPECT_NE(f.validate().error().message.find("max-range"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace raymap
