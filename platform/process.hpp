@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 namespace raymap::platform {
 
@@ -14,5 +15,8 @@ bool stderrIsTerminal() noexcept;
 
 /// @brief Number of hardware threads the process may run on (at least 1).
 unsigned availableCores() noexcept;
+
+/// @brief The processor's model name (for benchmark records), or "unknown".
+std::string cpuModelName();
 
 }  // namespace raymap::platform

@@ -53,8 +53,11 @@ typedef uint32_t rm_u32;
 #endif
 #define RM_FLOORF(x) floorf(x)
 #define RM_FABSF(x) fabsf(x)
-#define RM_FMINF(a, b) fminf((a), (b))
-#define RM_FMAXF(a, b) fmaxf((a), (b))
+/* Not fminf/fmaxf: without -ffinite-math-only GCC turns those into libm calls (their NaN rules
+ * differ from the minss instruction), and the walk calls them on every step. Kernel inputs are
+ * validated finite, so the comparison form is exact here. */
+#define RM_FMINF(a, b) rm_minf((a), (b))
+#define RM_FMAXF(a, b) rm_maxf((a), (b))
 #define RM_INF INFINITY
 #define RM_FLT_MAX FLT_MAX
 #endif
@@ -88,6 +91,11 @@ RAYMAP_FN rm_vec3i rm_vec3i_make(rm_i32 x, rm_i32 y, rm_i32 z) {
   v.z = z;
   return v;
 }
+
+#if !defined(__OPENCL_C_VERSION__)
+RAYMAP_FN float rm_minf(float a, float b) { return b < a ? b : a; }
+RAYMAP_FN float rm_maxf(float a, float b) { return a < b ? b : a; }
+#endif
 
 RAYMAP_FN rm_i32 rm_clamp_i32(rm_i32 v, rm_i32 lo, rm_i32 hi) {
   return v < lo ? lo : (v > hi ? hi : v);

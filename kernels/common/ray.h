@@ -10,11 +10,13 @@
 
 #include "portable.h"
 
-/* What the voxel holding the sample receives. With neither END flag the sample voxel is left out:
- * that is how the pieces of a segmented ray avoid updating their shared voxels twice. */
-#define RM_RAY_END_HIT 1u  /* a hit (occupied evidence) and a voxel-mean sample */
-#define RM_RAY_END_MISS 2u /* a miss: the ray was clipped at max range or had no return */
-#define RM_RAY_REVERSE 4u  /* walk from the sample back to the origin (spreads GPU contention) */
+/* With RM_RAY_END_HIT the voxel holding the sample gets a hit; without it that voxel is left out.
+ * A ray clipped at max range (or at a rolling window) or without a return is known free only up to
+ * its end point, which lies inside its end voxel: like OctoMap, that partly seen voxel is not
+ * updated. The inner pieces of a segmented ray leave out their end voxel too, because the next
+ * piece starts in it. */
+#define RM_RAY_END_HIT 1u /* a hit (occupied evidence) and a voxel-mean sample */
+#define RM_RAY_REVERSE 4u /* walk from the sample back to the origin (spreads GPU contention) */
 
 typedef struct rm_prepared_ray {
   rm_vec3i origin_voxel; /* global voxel holding the ray origin (sensor side) */

@@ -24,6 +24,11 @@ Result<PageBlock> PageBlock::create(std::size_t bytes) {
     return fail(ErrorCode::kCapacity, "cannot reserve " + std::to_string(rounded) +
                                           " bytes of memory: " + std::strerror(errno));
   }
+#if defined(MADV_HUGEPAGE)
+  // Voxel walks touch memory all over the pool; 2 MiB pages cut TLB misses. Advice only: where
+  // transparent huge pages are off this changes nothing.
+  (void)madvise(p, rounded, MADV_HUGEPAGE);
+#endif
   return PageBlock(static_cast<std::byte*>(p), rounded);
 }
 

@@ -222,14 +222,14 @@ class CpuBackend final : public Backend {
         }
         ws.voxels_visited += missSpan(walk.frame(), span, layersOf(*slot));
       }
-      if ((ray.flags & (RM_RAY_END_HIT | RM_RAY_END_MISS)) != 0u) {
+      if ((ray.flags & RM_RAY_END_HIT) != 0u) {
         const auto [region, index] = sampleCell(ray);
         auto slot = acquire(region, &cache);
         if (!slot) {
           return Unexpected(slot.error());
         }
         if (*slot != RegionStore::kNoSlot) {
-          detail::applySampleRule(ray, layersOf(*slot), index, per_scan_, sequence_, params_);
+          detail::applySampleHit(ray, layersOf(*slot), index, per_scan_, params_);
           ++ws.voxels_visited;
         }
       }
@@ -360,11 +360,11 @@ class CpuBackend final : public Backend {
             ws.voxels_visited += missSpan(walk.frame(), span, layersOf(slot));
           }
         }
-        if ((ray.flags & (RM_RAY_END_HIT | RM_RAY_END_MISS)) != 0u) {
+        if ((ray.flags & RM_RAY_END_HIT) != 0u) {
           const auto [region, index] = sampleCell(ray);
           const std::uint32_t slot = ownSlot(region);
           if (slot != RegionStore::kNoSlot && owner_[slot] == w) {
-            detail::applySampleRule(ray, layersOf(slot), index, per_scan_, sequence_, params_);
+            detail::applySampleHit(ray, layersOf(slot), index, per_scan_, params_);
             ++ws.voxels_visited;
           }
         }

@@ -86,26 +86,18 @@ struct RegionLayers {
   std::uint32_t* marks = nullptr;
 };
 
-/// @brief Applies a ray's end rule to its sample voxel (index `i` of region `layers`).
-/// Per-scan hits are applied in a separate pass (applyScanHit); here they only feed the mean.
-inline void applySampleRule(const rm_prepared_ray& ray, const RegionLayers& layers, std::uint32_t i,
-                            bool per_scan, std::uint32_t sequence,
-                            const rm_occupancy_params& params) noexcept {
-  if ((ray.flags & RM_RAY_END_HIT) != 0u) {
-    if (!per_scan) {
-      layers.occupancy[i] = rm_occupancy_hit(layers.occupancy[i], params);
-    }
-    if (layers.mean != nullptr) {
-      rm_voxel_mean& m = layers.mean[i];
-      m.packed = rm_mean_fold(m.packed, m.count, ray.sample_local);
-      m.count = rm_mean_count_increment(m.count);
-    }
-  } else if ((ray.flags & RM_RAY_END_MISS) != 0u) {
-    if (per_scan) {
-      PerScanMiss{layers.occupancy, layers.marks, sequence, params}(i);
-    } else {
-      PerRayMiss{layers.occupancy, params}(i);
-    }
+/// @brief Applies a ray's hit to its sample voxel (index `i` of region `layers`). Per-scan hits
+/// change the occupancy in a separate pass (applyScanHit); here they only feed the mean.
+/// @pre ray.flags has RM_RAY_END_HIT.
+inline void applySampleHit(const rm_prepared_ray& ray, const RegionLayers& layers, std::uint32_t i,
+                           bool per_scan, const rm_occupancy_params& params) noexcept {
+  if (!per_scan) {
+    layers.occupancy[i] = rm_occupancy_hit(layers.occupancy[i], params);
+  }
+  if (layers.mean != nullptr) {
+    rm_voxel_mean& m = layers.mean[i];
+    m.packed = rm_mean_fold(m.packed, m.count, ray.sample_local);
+    m.count = rm_mean_count_increment(m.count);
   }
 }
 

@@ -102,18 +102,21 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
       continue;
     }
     const bool no_return = (ray.flags & kRayNoReturn) != 0u;
-    std::uint32_t end_flag = no_return ? RM_RAY_END_MISS : RM_RAY_END_HIT;
+    std::uint32_t end_flag = no_return ? 0u : RM_RAY_END_HIT;
     bool clipped = false;
     if (filter_.max_range_m > 0.0 && length > filter_.max_range_m) {
       sample = origin + (sample - origin) * (filter_.max_range_m / length);
-      end_flag = RM_RAY_END_MISS;
+      end_flag = 0u;
       clipped = true;
     }
     if (rolling) {
       auto [lo, hi] = map_->windowBounds();
-      // Keep clipped ends strictly inside the window's last voxels.
-      const double inset = 1e-6 * map_->geometry().resolution;
-      hi = hi - Vec3d{inset, inset, inset};
+      // Clip half a voxel outside the window: a ray that leaves the window crosses its boundary
+      // voxels completely, so they must be cleared; the end voxel, which is left out, and any
+      // other voxel outside the window are skipped by the backend.
+      const double margin = 0.5 * map_->geometry().resolution;
+      lo = lo - Vec3d{margin, margin, margin};
+      hi = hi + Vec3d{margin, margin, margin};
       double t0 = 0.0;
       double t1 = 1.0;
       if (!clipToBox(origin, sample, lo, hi, &t0, &t1)) {
@@ -125,7 +128,7 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
       const Vec3d d = sample - origin;
       if (t1 < 1.0) {
         sample = origin + d * t1;
-        end_flag = RM_RAY_END_MISS;
+        end_flag = 0u;
         clipped = true;
       }
       if (t0 > 0.0) {

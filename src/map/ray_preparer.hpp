@@ -43,9 +43,9 @@ struct RayCounters {
 };
 
 /// @brief Turns Rays into PreparedRays for one map.
-/// A clipped or no-return ray gets RM_RAY_END_MISS (its end voxel is traversed free space); a ray
-/// with a real return gets RM_RAY_END_HIT; the inner pieces of a segmented ray get neither (the next
-/// piece starts in that voxel, so it is updated once).
+/// A ray with a real return gets RM_RAY_END_HIT. A clipped or no-return ray does not: it clears the
+/// voxels before its end voxel, which it only partly crosses (OctoMap's insertRay does the same);
+/// the inner pieces of a segmented ray leave their end voxel to the next piece, which starts there.
 /// Thread-safety: one preparer per thread. @rt prepare() allocates: no; throws: no.
 class RayPreparer {
  public:

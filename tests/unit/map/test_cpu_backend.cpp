@@ -153,7 +153,7 @@ TEST(Semantics, PerScanAppliesOnceInEachScan) {
   EXPECT_FLOAT_EQ(map.occupancyValue({10, 0, 0}), std::min(3 * p.hit, p.clamp_max));
 }
 
-TEST(EndRules, ClippedAndNoReturnRaysClearTheirEndVoxel) {
+TEST(EndRules, ClippedAndNoReturnRaysClearUpToTheirEndVoxel) {
   VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
   auto backend = test::cpuBackend(map, 1);
   RayFilter filter;
@@ -162,9 +162,10 @@ TEST(EndRules, ClippedAndNoReturnRaysClearTheirEndVoxel) {
                   std::vector<Ray>{makeRay({0.05, 0.05, 0.05}, {5.05, 0.05, 0.05}),
                                    makeRay({0.05, 0.05, 1.05}, {0.75, 0.05, 1.05}, kRayNoReturn)},
                   filter);
-  EXPECT_EQ(map.state({10, 0, 0}), VoxelState::kFree);        // the clip voxel is traversed
-  EXPECT_EQ(map.state({11, 0, 0}), VoxelState::kUnobserved);  // beyond max range
-  EXPECT_EQ(map.state({7, 0, 10}), VoxelState::kFree);        // no-return end voxel
+  EXPECT_EQ(map.state({9, 0, 0}), VoxelState::kFree);         // before the clip point
+  EXPECT_EQ(map.state({10, 0, 0}), VoxelState::kUnobserved);  // holds the clip point: partly seen
+  EXPECT_EQ(map.state({6, 0, 10}), VoxelState::kFree);        // before the no-return end
+  EXPECT_EQ(map.state({7, 0, 10}), VoxelState::kUnobserved);  // no-return end voxel
   EXPECT_EQ(map.summarise().voxels_occupied, 0u);
   EXPECT_EQ(map.mean({10, 0, 0}).count, 0u);
 }

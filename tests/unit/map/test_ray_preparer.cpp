@@ -67,7 +67,7 @@ TEST_F(Preparer, LongRaysAreClippedAndGiveNoHit) {
   const auto out = run({makeRay({0.05, 0.05, 0.05}, {10.05, 0.05, 0.05})}, f, &c);
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(c.rays_clipped, 1u);
-  EXPECT_EQ(out[0].flags & (RM_RAY_END_HIT | RM_RAY_END_MISS), RM_RAY_END_MISS);
+  EXPECT_EQ(out[0].flags & RM_RAY_END_HIT, 0u);
   EXPECT_EQ(out[0].sample_voxel.x, 20);  // 2.05 m
   EXPECT_NEAR(out[0].sample_local.x, 0.5f, 1e-5f);
 }
@@ -78,7 +78,6 @@ TEST_F(Preparer, NoReturnRaysClearWithoutHit) {
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(c.rays_no_return, 1u);
   EXPECT_EQ(out[0].flags & RM_RAY_END_HIT, 0u);
-  EXPECT_NE(out[0].flags & RM_RAY_END_MISS, 0u);
 }
 
 TEST_F(Preparer, KeysAreExactFarFromTheOrigin) {
@@ -107,7 +106,7 @@ TEST_F(Preparer, SegmentsJoinAndOnlyTheLastOneHits) {
   EXPECT_EQ(c.pieces_out, 4u);
   EXPECT_EQ(c.rays_accepted, 1u);
   for (std::size_t i = 0; i + 1 < out.size(); ++i) {
-    EXPECT_EQ(out[i].flags & (RM_RAY_END_HIT | RM_RAY_END_MISS), 0u) << "piece " << i;
+    EXPECT_EQ(out[i].flags & RM_RAY_END_HIT, 0u) << "piece " << i;
     EXPECT_EQ(out[i].sample_voxel.x, out[i + 1].origin_voxel.x);
     EXPECT_FLOAT_EQ(out[i].sample_local.x, out[i + 1].origin_local.x);
   }
@@ -154,10 +153,10 @@ TEST(PreparerRolling, RaysAreClippedToTheWindow) {
   ASSERT_EQ(p.written, 3u);
   EXPECT_EQ(preparer.counters().rays_outside_window, 1u);
   EXPECT_EQ(preparer.counters().rays_clipped, 2u);
-  EXPECT_EQ(out[0].sample_voxel.x, 15);  // last voxel inside the window
-  EXPECT_EQ(out[0].flags & RM_RAY_END_MISS, RM_RAY_END_MISS);
+  EXPECT_EQ(out[0].sample_voxel.x, 16);  // first voxel outside the window: left out
+  EXPECT_EQ(out[0].flags & RM_RAY_END_HIT, 0u);
   EXPECT_EQ(out[1].flags & RM_RAY_END_HIT, RM_RAY_END_HIT);
-  EXPECT_EQ(out[2].origin_voxel.x, -16);  // origin moved onto the window face
+  EXPECT_EQ(out[2].origin_voxel.x, -17);  // origin moved half a voxel outside the window face
   EXPECT_EQ(out[2].flags & RM_RAY_END_HIT, RM_RAY_END_HIT);
 }
 
