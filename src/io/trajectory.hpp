@@ -1,0 +1,94 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Sensor trajectories from text files, and poses interpolated from them at any covered time.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "src/core/error.hpp"
+#include "src/core/vec3.hpp"
+
+namespace raymap::io {
+
+/// @brief A rotation as a Hamilton quaternion (w, x, y, z). Unit length wherever a Trajectory
+/// hands one out.
+struct Quaternion {
+  double w = 1.0;
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+
+  constexpr double dot(const Quaternion& o) const noexcept {
+    return w * o.w + x * o.x + y * o.y + z * o.z;
+  }
+  /// @brief Rotates `v` by this rotation. @pre unit length
+  Vec3d rotate(Vec3d v) const noexcept;
+};
+
+/// @brief One trajectory line: time (s, the time base of the points), the body position in the
+/// world frame (metres) and its orientation (body to world; identity when the file has none).
+struct TrajectorySample {
+  double time_s = 0.0;
+  Vec3d position;
+  Quaternion orientation;
+};
+
+/// @brief A pose: p_world = orientation.rotate(p_body) + position.
+struct Pose {
+  Vec3d position;
+  Quaternion orientation;
+
+  /// @brief Maps a point from the body frame into the world frame (metres).
+  Vec3d transform(Vec3d p_body) const noexcept { return position + orientation.rotate(p_body); }
+};
+
+/// @brief Time-ordered poses of the sensor body, with interpolation in between: position
+/// linearly, orientation by normalised linear quaternion interpolation along the shorter arc
+/// (nlerp; close to slerp for the small steps between trajectory samples). Immutable after
+/// loading; const methods are safe to call from several threads.
+class Trajectory {
+ public:
+  /// @brief Loads a text trajectory (plain or gzip): one sample per line, `time x y z` or
+  /// `time x y z qw qx qy qz`, separated by whitespace or commas. Blank lines and `#` comments
+  /// are ignored, and so is one non-numeric header line before the first sample. Every line has
+  /// the column count of the first; times increase strictly; quaternions are normalised.
+  /// @return the trajectory, or an error "PATH: line N: problem".
+  static Result<Trajectory> load(const std::string& path);
+
+  /// @brief Builds a trajectory from samples (same checks as load()); `name` names it in errors.
+  static Result<Trajectory> fromSamples(std::vector<TrajectorySample> samples, bool has_orientation,
+                                        std::string name);
+
+  const std::string& path() const noexcept { return path_; }
+  /// @brief True when the samples carry orientations (else they are the identity).
+  bool hasOrientation() const noexcept { return has_orientation_; }
+  std::span<const TrajectorySample> samples() const noexcept { return samples_; }
+  double startTime() const noexcept { return samples_.front().time_s; }
+  double endTime() const noexcept { return samples_.back().time_s; }
+  /// @brief True when startTime() <= time_s <= endTime() (the endpoints are inside).
+  bool covers(double time_s) const noexcept { return time_s >= startTime() && time_s <= endTime(); }
+
+  /// @brief The pose at `time_s`: exactly a sample's pose at that sample's time, interpolated
+  /// between the two bracketing samples otherwise.
+  /// @param[in,out] segment_hint index of the sample before the previous query (start at 0);
+  /// makes time-ordered queries O(1) instead of a binary search each.
+  /// @return nullopt when the trajectory does not cover `time_s` (NaN included).
+  std::optional<Pose> poseAt(double time_s, std::size_t& segment_hint) const noexcept;
+  std::optional<Pose> poseAt(double time_s) const noexcept {
+    std::size_t hint = 0;
+    return poseAt(time_s, hint);
+  }
+
+ private:
+  Trajectory(std::string path, std::vector<TrajectorySample> samples,
+             bool has_orientation) noexcept;
+
+  std::string path_;
+  std::vector<TrajectorySample> samples_;  // at least one, times strictly increasing
+  bool has_orientation_ = false;
+};
+
+}  // namespace raymap::io
