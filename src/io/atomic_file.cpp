@@ -2,11 +2,13 @@
 // AtomicFileWriter: temporary file, fsync, rename.
 #include "src/io/atomic_file.hpp"
 
-#include <unistd.h>
-
 #include <cerrno>
 #include <cstring>
 #include <utility>
+
+#include <stdio.h>  // fseeko
+#include <sys/types.h>
+#include <unistd.h>
 
 namespace raymap::io {
 
@@ -17,13 +19,13 @@ Result<AtomicFileWriter> AtomicFileWriter::open(const std::string& path) {
   std::string temp = path + ".tmp-" + std::to_string(::getpid());
   std::FILE* file = std::fopen(temp.c_str(), "wb");
   if (file == nullptr) {
-    return fail(ErrorCode::kIo,
-                "cannot write '" + path + "': " + std::strerror(errno));
+    return fail(ErrorCode::kIo, "cannot write '" + path + "': " + std::strerror(errno));
   }
   return AtomicFileWriter(path, std::move(temp), file);
 }
 
-AtomicFileWriter::AtomicFileWriter(std::string path, std::string temp_path, std::FILE* file) noexcept
+AtomicFileWriter::AtomicFileWriter(std::string path, std::string temp_path,
+                                   std::FILE* file) noexcept
     : path_(std::move(path)), temp_path_(std::move(temp_path)), file_(file) {}
 
 AtomicFileWriter::AtomicFileWriter(AtomicFileWriter&& other) noexcept
@@ -71,6 +73,37 @@ Expected<void, Error> AtomicFileWriter::write(std::span<const std::byte> bytes) 
 
 Expected<void, Error> AtomicFileWriter::write(const std::string& text) {
   return write(std::as_bytes(std::span<const char>(text.data(), text.size())));
+}
+
+Expected<void, Error> AtomicFileWriter::patch(std::size_t offset,
+                                              std::span<const std::byte> bytes) {
+  if (file_ == nullptr) {
+    return fail(ErrorCode::kIo, "cannot write '" + path_ + "': file already closed");
+  }
+  if (offset > written_ || bytes.size() > written_ - offset) {
+    return fail(ErrorCode::kInvalidArgument,
+                "cannot patch '" + path_ + "': bytes " + std::to_string(offset) + " to " +
+                    std::to_string(offset + bytes.size()) + " are beyond the " +
+                    std::to_string(written_) + " bytes written");
+  }
+  if (bytes.empty()) {
+    return {};
+  }
+  // fseeko rather than fseek: off_t is 64-bit on 64-bit Linux (and on 32-bit targets built with
+  // _FILE_OFFSET_BITS=64), where fseek's long would stop at 2 GiB.
+  const bool ok = ::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) == 0 &&
+                  std::fwrite(bytes.data(), 1, bytes.size(), file_) == bytes.size() &&
+                  ::fseeko(file_, 0, SEEK_END) == 0;
+  if (!ok) {
+    const std::string reason = std::strerror(errno);
+    abandon();
+    return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + reason);
+  }
+  return {};
+}
+
+Expected<void, Error> AtomicFileWriter::patch(std::size_t offset, const std::string& text) {
+  return patch(offset, std::as_bytes(std::span<const char>(text.data(), text.size())));
 }
 
 Expected<void, Error> AtomicFileWriter::commit() {

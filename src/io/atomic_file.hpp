@@ -30,6 +30,11 @@ class AtomicFileWriter {
   /// @brief Appends bytes. Errors (disk full) are reported here or by commit().
   Expected<void, Error> write(std::span<const std::byte> bytes);
   Expected<void, Error> write(const std::string& text);
+  /// @brief Overwrites bytes already written, starting `offset` bytes from the start of the file
+  /// (e.g. a count in a header that is only known at the end); later writes still append.
+  /// @pre offset + bytes.size() <= size(), else it fails with kInvalidArgument.
+  Expected<void, Error> patch(std::size_t offset, std::span<const std::byte> bytes);
+  Expected<void, Error> patch(std::size_t offset, const std::string& text);
   /// @brief Bytes written so far.
   std::size_t size() const noexcept { return written_; }
   /// @brief Flushes, fsyncs and renames onto the destination.

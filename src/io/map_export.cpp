@@ -1,1 +1,190 @@
 // SPDX-License-Identifier: BSD-3-Clause
+// Exporting occupied, free or mean voxels of a map as a binary little-endian point-cloud PLY.
+#include "src/io/map_export.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstdio>
+#include <tuple>
+#include <vector>
+
+#include "kernels/common/occupancy.h"
+#include "kernels/common/voxel_mean.h"
+#include "src/io/atomic_file.hpp"
+
+namespace raymap::io {
+namespace {
+
+// float x y z probability, uint count.
+constexpr std::size_t kRecordBytes = 5 * 4;
+constexpr std::size_t kPointsPerChunk = 16384;
+// Written for voxels no ray observed (mean mode only): the prior, "unknown".
+constexpr float kUnobservedProbability = 0.5f;
+
+struct Point {
+  Vec3d p_world;  ///< metres
+  float probability = 0.0f;
+  std::uint32_t count = 0;
+};
+
+/// Calls fn(point) for every voxel `mode` selects: regions in coordinate order (z, y, x), voxels
+/// in index order, so the output is deterministic.
+template <class Fn>
+void forEachPoint(const VoxelMap& map, ExportMode mode, Fn&& fn) {
+  const RegionStore& store = map.store();
+  std::vector<std::pair<Vec3i, std::uint32_t>> regions;
+  regions.reserve(store.size());
+  store.forEachRegion([&](std::uint32_t slot, Vec3i coord) { regions.emplace_back(coord, slot); });
+  std::sort(regions.begin(), regions.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
+  });
+
+  const std::int32_t n = map.geometry().region_voxels;
+  const double resolution = map.geometry().resolution;
+  const float threshold = map.occupancy().threshold;
+  const int mean_layer = map.meanLayer();
+  for (const auto& [region, slot] : regions) {
+    const float* occupancy = store.layerData<float>(slot, map.occupancyLayer());
+    const rm_voxel_mean* means =
+        mean_layer >= 0 ? store.layerData<rm_voxel_mean>(slot, mean_layer) : nullptr;
+    std::uint32_t index = 0;
+    for (std::int32_t z = 0; z < n; ++z) {
+      for (std::int32_t y = 0; y < n; ++y) {
+        for (std::int32_t x = 0; x < n; ++x, ++index) {
+          const float value = occupancy[index];
+          const rm_voxel_mean mean = means != nullptr ? means[index] : rm_voxel_mean{0u, 0u};
+          const bool observed = rm_occupancy_observed(value) != 0;
+          bool selected = false;
+          bool at_mean = false;
+          switch (mode) {
+            case ExportMode::kOccupied:
+              selected = rm_occupancy_occupied(value, threshold) != 0;
+              at_mean = true;
+              break;
+            case ExportMode::kFree:
+              selected = observed && rm_occupancy_free(value, threshold) != 0;
+              break;
+            case ExportMode::kMean:
+              selected = mean.count > 0;
+              at_mean = true;
+              break;
+          }
+          if (!selected) {
+            continue;
+          }
+          const Vec3i voxel{region.x * n + x, region.y * n + y, region.z * n + z};
+          Point point;
+          // Voxel-local mean in voxel units (the centre when the voxel has no samples).
+          const rm_vec3f local =
+              at_mean ? rm_mean_decode(mean.packed, mean.count) : rm_vec3f_make(0.5f, 0.5f, 0.5f);
+          point.p_world = map.voxelMinCorner(voxel) + Vec3d{static_cast<double>(local.x),
+                                                            static_cast<double>(local.y),
+                                                            static_cast<double>(local.z)} *
+                                                          resolution;
+          point.probability =
+              observed ? static_cast<float>(probability(value)) : kUnobservedProbability;
+          point.count = mean.count;
+          fn(point);
+        }
+      }
+    }
+  }
+}
+
+std::string headerText(const VoxelMap& map, ExportMode mode, std::uint64_t count) {
+  char resolution[64];
+  std::snprintf(resolution, sizeof(resolution), "%g", map.geometry().resolution);
+  return std::string(
+             "ply\n"
+             "format binary_little_endian 1.0\n"
+             "comment raymap map export: ") +
+         toString(mode) + " voxels, resolution " + resolution +
+         " m, world frame, metres\n"
+         "element vertex " +
+         std::to_string(count) +
+         "\n"
+         "property float x\n"
+         "property float y\n"
+         "property float z\n"
+         "property float probability\n"
+         "property uint count\n"
+         "end_header\n";
+}
+
+void putU32(std::byte*& out, std::uint32_t v) noexcept {
+  for (int i = 0; i < 4; ++i) {
+    *out++ = static_cast<std::byte>((v >> (8 * i)) & 0xFFu);
+  }
+}
+void putF32(std::byte*& out, float v) noexcept { putU32(out, std::bit_cast<std::uint32_t>(v)); }
+
+}  // namespace
+
+Result<ExportMode> exportModeFromString(const std::string& text) {
+  for (const ExportMode mode : {ExportMode::kOccupied, ExportMode::kFree, ExportMode::kMean}) {
+    if (text == toString(mode)) {
+      return mode;
+    }
+  }
+  return fail(ErrorCode::kInvalidArgument,
+              "unknown export mode '" + text + "' (expected occupied, free or mean)");
+}
+
+const char* toString(ExportMode mode) noexcept {
+  switch (mode) {
+    case ExportMode::kOccupied:
+      return "occupied";
+    case ExportMode::kFree:
+      return "free";
+    case ExportMode::kMean:
+      return "mean";
+  }
+  return "unknown";
+}
+
+Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std::string& path) {
+  // Count first so that the header is final before any point is written (one cheap extra pass
+  // over the voxels instead of patching the file).
+  std::uint64_t count = 0;
+  forEachPoint(map, mode, [&](const Point&) { ++count; });
+
+  auto writer = AtomicFileWriter::open(path);
+  if (!writer) {
+    return Unexpected(writer.error());
+  }
+  if (auto ok = writer->write(headerText(map, mode, count)); !ok) {
+    return Unexpected(ok.error());
+  }
+  std::vector<std::byte> buffer;
+  buffer.reserve(kPointsPerChunk * kRecordBytes);
+  Expected<void, Error> status;
+  const auto flush = [&]() {
+    if (status && !buffer.empty()) {
+      status = writer->write(buffer);
+    }
+    buffer.clear();
+  };
+  forEachPoint(map, mode, [&](const Point& point) {
+    std::byte record[kRecordBytes];
+    std::byte* out = record;
+    putF32(out, static_cast<float>(point.p_world.x));
+    putF32(out, static_cast<float>(point.p_world.y));
+    putF32(out, static_cast<float>(point.p_world.z));
+    putF32(out, point.probability);
+    putU32(out, point.count);
+    buffer.insert(buffer.end(), record, record + kRecordBytes);
+    if (buffer.size() >= kPointsPerChunk * kRecordBytes) {
+      flush();
+    }
+  });
+  flush();
+  if (!status) {
+    return Unexpected(status.error());
+  }
+  if (auto ok = writer->commit(); !ok) {
+    return Unexpected(ok.error());
+  }
+  return count;
+}
+
+}  // namespace raymap::io

@@ -1,1 +1,879 @@
 // SPDX-License-Identifier: BSD-3-Clause
+// Saving and loading .rmap map files: header, per-region zlib blocks, region index and footer, all
+// little-endian and checksummed (layout in docs/map-format.md).
+#include "src/io/map_file.hpp"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cerrno>
+#include <cstddef>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <tuple>
+
+#include <zlib.h>
+
+#include "src/io/atomic_file.hpp"
+
+namespace raymap::io {
+namespace {
+
+// ---- format constants (see docs/map-format.md; changing any of them needs a version bump) ----
+
+// PNG-style magic: a name, then CR LF, SUB, LF so that text-mode transfers and `type` on old
+// systems show up as a bad magic instead of a subtly corrupt map.
+constexpr std::array<std::uint8_t, 8> kMagic = {'R', 'M', 'A', 'P', '\r', '\n', 0x1A, '\n'};
+
+/// Four ASCII characters as the little-endian u32 that spells them in the file.
+constexpr std::uint32_t fourCc(const char (&text)[5]) noexcept {
+  return static_cast<std::uint32_t>(static_cast<unsigned char>(text[0])) |
+         static_cast<std::uint32_t>(static_cast<unsigned char>(text[1])) << 8 |
+         static_cast<std::uint32_t>(static_cast<unsigned char>(text[2])) << 16 |
+         static_cast<std::uint32_t>(static_cast<unsigned char>(text[3])) << 24;
+}
+constexpr std::uint32_t kRegionTag = fourCc("RREG");
+constexpr std::uint32_t kIndexTag = fourCc("RIDX");
+constexpr std::uint32_t kEndTag = fourCc("REND");
+
+constexpr std::size_t kPrefixBytes = 16;       // magic, version, header body size
+constexpr std::size_t kBlockHeaderBytes = 32;  // tag, coord, raw size, packed size, 2 CRCs
+constexpr std::size_t kIndexEntryBytes = 20;   // coord, u64 block offset
+constexpr std::size_t kIndexFixedBytes = 8;    // tag + CRC
+constexpr std::size_t kFooterBytes = 24;       // tag, u64 region count, u64 index offset, CRC
+constexpr std::size_t kZlibOverheadBytes = 6;  // zlib header (2) + Adler-32 trailer (4)
+// Deflate cannot do better than about 1032:1; 2048:1 is a safe lower bound on a block's size,
+// used to reject a region count that the rest of the file cannot possibly hold.
+constexpr std::uint64_t kDeflateMaxRatio = 2048;
+
+// Sane limits, enforced on save (so we never write what we cannot read) and on load (so a
+// corrupt size never drives an allocation).
+constexpr std::size_t kMaxHeaderBodyBytes = std::size_t{16} << 20;
+constexpr std::size_t kMaxInfoItems = 4096;
+constexpr std::size_t kMaxInfoKeyBytes = 1024;
+constexpr std::size_t kMaxInfoValueBytes = std::size_t{1} << 20;
+constexpr std::size_t kMaxLayerNameBytes = 64;
+constexpr std::uint64_t kMaxRegions = std::numeric_limits<std::uint32_t>::max() / 4u;
+
+// ---- little-endian encoding, byte by byte (correct whatever the host's byte order) ----
+
+class ByteWriter {
+ public:
+  void u8(std::uint8_t v) { bytes_.push_back(static_cast<std::byte>(v)); }
+  void u16(std::uint16_t v) { put(v, 2); }
+  void u32(std::uint32_t v) { put(v, 4); }
+  void u64(std::uint64_t v) { put(v, 8); }
+  void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+  void f32(float v) { u32(std::bit_cast<std::uint32_t>(v)); }
+  void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
+  void raw(std::string_view text) {
+    for (const char c : text) {
+      bytes_.push_back(static_cast<std::byte>(c));
+    }
+  }
+  std::vector<std::byte>& bytes() noexcept { return bytes_; }
+
+ private:
+  void put(std::uint64_t v, int count) {
+    for (int i = 0; i < count; ++i) {
+      bytes_.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFFu));
+    }
+  }
+  std::vector<std::byte> bytes_;
+};
+
+/// Bounds-checked little-endian reads over a byte span; every getter fails instead of overrunning.
+class ByteReader {
+ public:
+  explicit ByteReader(std::span<const std::byte> bytes) noexcept : bytes_(bytes) {}
+
+  std::size_t remaining() const noexcept { return bytes_.size() - pos_; }
+  std::size_t position() const noexcept { return pos_; }
+
+  bool u8(std::uint8_t& v) noexcept {
+    std::uint64_t w = 0;
+    const bool ok = get(w, 1);
+    v = static_cast<std::uint8_t>(w);
+    return ok;
+  }
+  bool u16(std::uint16_t& v) noexcept {
+    std::uint64_t w = 0;
+    const bool ok = get(w, 2);
+    v = static_cast<std::uint16_t>(w);
+    return ok;
+  }
+  bool u32(std::uint32_t& v) noexcept {
+    std::uint64_t w = 0;
+    const bool ok = get(w, 4);
+    v = static_cast<std::uint32_t>(w);
+    return ok;
+  }
+  bool u64(std::uint64_t& v) noexcept { return get(v, 8); }
+  bool i32(std::int32_t& v) noexcept {
+    std::uint32_t w = 0;
+    const bool ok = u32(w);
+    v = static_cast<std::int32_t>(w);
+    return ok;
+  }
+  bool f32(float& v) noexcept {
+    std::uint32_t w = 0;
+    const bool ok = u32(w);
+    v = std::bit_cast<float>(w);
+    return ok;
+  }
+  bool f64(double& v) noexcept {
+    std::uint64_t w = 0;
+    const bool ok = u64(w);
+    v = std::bit_cast<double>(w);
+    return ok;
+  }
+  bool text(std::size_t length, std::string& out) {
+    if (length > remaining()) {
+      return false;
+    }
+    out.assign(reinterpret_cast<const char*>(bytes_.data() + pos_), length);
+    pos_ += length;
+    return true;
+  }
+
+ private:
+  bool get(std::uint64_t& v, std::size_t count) noexcept {
+    if (count > remaining()) {
+      return false;
+    }
+    v = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      v |= static_cast<std::uint64_t>(std::to_integer<std::uint8_t>(bytes_[pos_ + i])) << (8 * i);
+    }
+    pos_ += count;
+    return true;
+  }
+
+  std::span<const std::byte> bytes_;
+  std::size_t pos_ = 0;
+};
+
+std::uint32_t crc32Of(std::span<const std::byte> bytes) noexcept {
+  const auto crc = ::crc32_z(0L, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size());
+  return static_cast<std::uint32_t>(crc);
+}
+
+// ---- the layers of a file ----
+
+/// The saved layers a configuration implies, in schema order (the scan-mark scratch layer is not
+/// saved).
+std::vector<LayerSpec> savedLayersOf(const LayerSchema& schema) {
+  std::vector<LayerSpec> specs;
+  for (int i = 0; i < schema.size(); ++i) {
+    if (schema.at(i).saved) {
+      specs.push_back(schema.at(i));
+    }
+  }
+  return specs;
+}
+
+std::uint64_t rawRegionBytes(std::span<const LayerSpec> layers, std::uint32_t voxels) noexcept {
+  std::uint64_t bytes = 0;
+  for (const LayerSpec& spec : layers) {
+    bytes += std::uint64_t{spec.bytes_per_voxel} * voxels;
+  }
+  return bytes;
+}
+
+/// The smallest block (block header + zlib stream) a region of `raw_bytes` can take on disk,
+/// plus its index entry.
+std::uint64_t minBytesPerRegion(std::uint64_t raw_bytes) noexcept {
+  return kBlockHeaderBytes + kZlibOverheadBytes + raw_bytes / kDeflateMaxRatio + kIndexEntryBytes;
+}
+
+// Region payload: for each saved layer, for each 32-bit word j of a voxel, for each byte
+// significance b (0 = least significant), byte b of word j of every voxel in voxel-index order.
+// Splitting words into byte planes is what makes zlib effective here: the high bytes of counts
+// and the exponent bytes of log-odds are long runs of equal bytes. Reading whole native words and
+// shifting makes the encoding independent of the host's byte order.
+
+void encodeLayer(const std::byte* src, std::uint32_t voxels, std::uint32_t words_per_voxel,
+                 std::byte* out) noexcept {
+  const std::size_t n = voxels;
+  for (std::uint32_t j = 0; j < words_per_voxel; ++j) {
+    std::byte* plane = out + std::size_t{j} * 4u * n;
+    for (std::size_t v = 0; v < n; ++v) {
+      std::uint32_t word = 0;
+      std::memcpy(&word, src + (v * words_per_voxel + j) * 4u, sizeof(word));
+      plane[v] = static_cast<std::byte>(word & 0xFFu);
+      plane[n + v] = static_cast<std::byte>((word >> 8) & 0xFFu);
+      plane[2 * n + v] = static_cast<std::byte>((word >> 16) & 0xFFu);
+      plane[3 * n + v] = static_cast<std::byte>(word >> 24);
+    }
+  }
+}
+
+void decodeLayer(const std::byte* in, std::uint32_t voxels, std::uint32_t words_per_voxel,
+                 std::byte* dst) noexcept {
+  const std::size_t n = voxels;
+  for (std::uint32_t j = 0; j < words_per_voxel; ++j) {
+    const std::byte* plane = in + std::size_t{j} * 4u * n;
+    for (std::size_t v = 0; v < n; ++v) {
+      const std::uint32_t word = std::to_integer<std::uint32_t>(plane[v]) |
+                                 std::to_integer<std::uint32_t>(plane[n + v]) << 8 |
+                                 std::to_integer<std::uint32_t>(plane[2 * n + v]) << 16 |
+                                 std::to_integer<std::uint32_t>(plane[3 * n + v]) << 24;
+      std::memcpy(dst + (v * words_per_voxel + j) * 4u, &word, sizeof(word));
+    }
+  }
+}
+
+// ---- reading ----
+
+struct FileCloser {
+  void operator()(std::FILE* file) const noexcept { std::fclose(file); }
+};
+
+/// Sequential reads of a file whose size is known up front, so that every declared size can be
+/// checked against what is left before anything is allocated or read.
+class FileReader {
+ public:
+  static Result<FileReader> open(const std::string& path) {
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (ec || !std::filesystem::exists(status)) {
+      return fail(ErrorCode::kIo,
+                  path + ": cannot open: " + (ec ? ec.message() : std::string("no such file")));
+    }
+    if (!std::filesystem::is_regular_file(status)) {
+      return fail(ErrorCode::kIo, path + ": cannot open: not a regular file");
+    }
+    std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
+    if (!file) {
+      return fail(ErrorCode::kIo, path + ": cannot open: " + std::strerror(errno));
+    }
+    const std::uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) {
+      return fail(ErrorCode::kIo, path + ": cannot read its size: " + ec.message());
+    }
+    return FileReader(path, std::move(file), size);
+  }
+
+  std::uint64_t size() const noexcept { return size_; }
+  std::uint64_t offset() const noexcept { return offset_; }
+  std::uint64_t remaining() const noexcept { return size_ - offset_; }
+
+  /// Reads exactly out.size() bytes. @pre out.size() <= remaining()
+  Expected<void, Error> read(std::span<std::byte> out) {
+    if (out.empty()) {
+      return {};
+    }
+    if (std::fread(out.data(), 1, out.size(), file_.get()) != out.size()) {
+      // Sizes were checked against the file size first, so a short read is an I/O error or a
+      // file that shrank while we read it.
+      const bool eof = std::feof(file_.get()) != 0;
+      return fail(eof ? ErrorCode::kTruncated : ErrorCode::kIo,
+                  path_ + ": read failed at offset " + std::to_string(offset_) + ": " +
+                      (eof ? std::string("unexpected end of file") : std::strerror(errno)));
+    }
+    offset_ += out.size();
+    return {};
+  }
+
+ private:
+  FileReader(std::string path, std::unique_ptr<std::FILE, FileCloser> file,
+             std::uint64_t size) noexcept
+      : path_(std::move(path)), file_(std::move(file)), size_(size) {}
+
+  std::string path_;
+  std::unique_ptr<std::FILE, FileCloser> file_;
+  std::uint64_t size_ = 0;
+  std::uint64_t offset_ = 0;
+};
+
+/// What the header parser hands to the region reader.
+struct ParsedHeader {
+  MapFileHeader header;
+  std::vector<LayerSpec> layers;  ///< saved layers, in file order
+  std::uint64_t raw_region_bytes = 0;
+};
+
+std::string describeLayer(std::size_t index, std::uint8_t kind, const std::string& name) {
+  return "layer " + std::to_string(index + 1) + " (kind " + std::to_string(kind) + ", '" + name +
+         "')";
+}
+
+/// Parses and checks the header; on success the reader is at the first region block.
+Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
+  if (file.size() == 0) {
+    return fail(ErrorCode::kFormat, path + ": empty file, not a raymap map");
+  }
+  std::array<std::byte, kPrefixBytes> prefix{};
+  const std::size_t prefix_bytes =
+      static_cast<std::size_t>(std::min<std::uint64_t>(file.size(), kPrefixBytes));
+  if (auto ok = file.read(std::span(prefix).first(prefix_bytes)); !ok) {
+    return Unexpected(ok.error());
+  }
+  const std::size_t magic_bytes = std::min(prefix_bytes, kMagic.size());
+  for (std::size_t i = 0; i < magic_bytes; ++i) {
+    if (std::to_integer<std::uint8_t>(prefix[i]) != kMagic[i]) {
+      return fail(ErrorCode::kFormat, path + ": not a raymap map file (bad magic)");
+    }
+  }
+  if (prefix_bytes < kPrefixBytes) {
+    return fail(ErrorCode::kTruncated, path + ": truncated in the header (file is " +
+                                           std::to_string(file.size()) + " bytes)");
+  }
+  ByteReader prefix_reader{std::span(prefix).subspan(kMagic.size())};
+  std::uint32_t version = 0;
+  std::uint32_t body_bytes = 0;
+  (void)prefix_reader.u32(version);
+  (void)prefix_reader.u32(body_bytes);
+  if (version > kMapFormatVersion) {
+    return fail(ErrorCode::kUnsupported, path + ": map format version " + std::to_string(version) +
+                                             " is newer than this raymap (" +
+                                             std::to_string(kMapFormatVersion) + ")");
+  }
+  if (version == 0) {
+    return fail(ErrorCode::kCorrupt, path + ": invalid map format version 0");
+  }
+  if (body_bytes > kMaxHeaderBodyBytes) {
+    return fail(ErrorCode::kCorrupt, path + ": header declares " + std::to_string(body_bytes) +
+                                         " bytes (limit " + std::to_string(kMaxHeaderBodyBytes) +
+                                         ")");
+  }
+  if (std::uint64_t{body_bytes} + 4u > file.remaining()) {
+    return fail(ErrorCode::kTruncated, path + ": truncated in the header (file is " +
+                                           std::to_string(file.size()) + " bytes, header needs " +
+                                           std::to_string(kPrefixBytes + body_bytes + 4u) + ")");
+  }
+  std::vector<std::byte> header(kPrefixBytes + body_bytes + 4u);
+  std::copy(prefix.begin(), prefix.end(), header.begin());
+  if (auto ok = file.read(std::span(header).subspan(kPrefixBytes)); !ok) {
+    return Unexpected(ok.error());
+  }
+  std::uint32_t stored_crc = 0;
+  (void)ByteReader(std::span(header).last(4)).u32(stored_crc);
+  if (crc32Of(std::span(header).first(kPrefixBytes + body_bytes)) != stored_crc) {
+    return fail(ErrorCode::kCorrupt, path + ": header checksum mismatch");
+  }
+
+  // The body is covered by the CRC, so a failed check below is a writer bug or a forged file;
+  // it still never reads out of bounds.
+  ByteReader body{std::span(header).subspan(kPrefixBytes, body_bytes)};
+  const auto malformed = [&](const std::string& what) {
+    return fail(ErrorCode::kCorrupt, path + ": malformed header: " + what + " (header offset " +
+                                         std::to_string(kPrefixBytes + body.position()) + ")");
+  };
+  ParsedHeader parsed;
+  MapFileHeader& out = parsed.header;
+  out.format_version = version;
+  MapConfig& config = out.config;
+  std::uint8_t semantics = 0;
+  std::uint8_t voxel_mean = 0;
+  std::uint16_t layer_count = 0;
+  if (!body.f64(config.geometry.resolution) || !body.i32(config.geometry.region_voxels) ||
+      !body.f32(config.occupancy.hit) || !body.f32(config.occupancy.miss) ||
+      !body.f32(config.occupancy.clamp_min) || !body.f32(config.occupancy.clamp_max) ||
+      !body.f32(config.occupancy.threshold) || !body.u8(semantics) || !body.u8(voxel_mean) ||
+      !body.u16(layer_count)) {
+    return malformed("map parameters run past the header");
+  }
+  if (semantics > static_cast<std::uint8_t>(Semantics::kPerScan)) {
+    return malformed("unknown semantics " + std::to_string(semantics));
+  }
+  if (voxel_mean > 1) {
+    return malformed("voxel-mean flag is " + std::to_string(voxel_mean) + ", not 0 or 1");
+  }
+  config.semantics = static_cast<Semantics>(semantics);
+  config.voxel_mean = voxel_mean != 0;
+  config.policy = StorePolicy::kGlobal;
+  if (auto ok = config.geometry.validate(); !ok) {
+    return fail(ErrorCode::kCorrupt, path + ": bad map parameters: " + ok.error().message);
+  }
+  if (auto ok = config.occupancy.validate(); !ok) {
+    return fail(ErrorCode::kCorrupt, path + ": bad map parameters: " + ok.error().message);
+  }
+
+  if (layer_count > LayerSchema::kMaxLayers) {
+    return malformed(std::to_string(layer_count) + " layers (at most " +
+                     std::to_string(LayerSchema::kMaxLayers) + ")");
+  }
+  for (std::size_t i = 0; i < layer_count; ++i) {
+    std::uint8_t kind = 0;
+    std::uint8_t reserved = 0;
+    std::uint16_t layer_version = 0;
+    std::uint32_t bytes_per_voxel = 0;
+    std::uint16_t name_bytes = 0;
+    std::string name;
+    if (!body.u8(kind) || !body.u8(reserved) || !body.u16(layer_version) ||
+        !body.u32(bytes_per_voxel) || !body.u16(name_bytes)) {
+      return malformed("layer " + std::to_string(i + 1) + " runs past the header");
+    }
+    if (name_bytes > kMaxLayerNameBytes || !body.text(name_bytes, name)) {
+      return malformed("layer " + std::to_string(i + 1) + " has a bad name length");
+    }
+    const std::optional<LayerSpec> spec = layerSpec(static_cast<LayerKind>(kind));
+    if (!spec) {
+      return fail(ErrorCode::kUnsupported,
+                  path + ": " + describeLayer(i, kind, name) + " is unknown to this raymap");
+    }
+    if (layer_version > spec->version) {
+      return fail(ErrorCode::kUnsupported,
+                  path + ": " + describeLayer(i, kind, name) + " has encoding version " +
+                      std::to_string(layer_version) + ", newer than this raymap (" +
+                      std::to_string(spec->version) + ")");
+    }
+    if (layer_version != spec->version) {
+      return fail(ErrorCode::kUnsupported,
+                  path + ": " + describeLayer(i, kind, name) + " has old encoding version " +
+                      std::to_string(layer_version) + " that this raymap cannot convert");
+    }
+    if (!spec->saved || name != spec->name || bytes_per_voxel != spec->bytes_per_voxel ||
+        reserved != 0) {
+      return malformed(describeLayer(i, kind, name) + " does not match its definition ('" +
+                       std::string(spec->name) + "', " + std::to_string(spec->bytes_per_voxel) +
+                       " bytes per voxel)");
+    }
+    out.saved_layers.push_back(spec->kind);
+    parsed.layers.push_back(*spec);
+  }
+  // The voxels are only meaningful with the layers the parameters imply, in that order.
+  const std::vector<LayerSpec> expected = savedLayersOf(config.schema());
+  bool layers_match = expected.size() == parsed.layers.size();
+  for (std::size_t i = 0; layers_match && i < expected.size(); ++i) {
+    layers_match = expected[i].kind == parsed.layers[i].kind;
+  }
+  if (!layers_match) {
+    return malformed("the saved layers do not match the map parameters");
+  }
+
+  std::uint32_t info_count = 0;
+  if (!body.u32(info_count)) {
+    return malformed("info count runs past the header");
+  }
+  if (info_count > kMaxInfoItems) {
+    return malformed(std::to_string(info_count) + " info items (at most " +
+                     std::to_string(kMaxInfoItems) + ")");
+  }
+  for (std::uint32_t i = 0; i < info_count; ++i) {
+    std::uint32_t key_bytes = 0;
+    std::uint32_t value_bytes = 0;
+    std::string key;
+    std::string value;
+    if (!body.u32(key_bytes) || key_bytes > kMaxInfoKeyBytes || !body.text(key_bytes, key) ||
+        !body.u32(value_bytes) || value_bytes > kMaxInfoValueBytes ||
+        !body.text(value_bytes, value)) {
+      return malformed("info item " + std::to_string(i + 1) + " is malformed");
+    }
+    out.info.emplace_back(std::move(key), std::move(value));
+  }
+  if (!body.u64(out.region_count)) {
+    return malformed("region count runs past the header");
+  }
+  if (body.remaining() != 0) {
+    return malformed(std::to_string(body.remaining()) + " unexpected bytes at the end");
+  }
+  if (out.region_count > kMaxRegions) {
+    return fail(ErrorCode::kCorrupt, path + ": header declares " +
+                                         std::to_string(out.region_count) + " regions (at most " +
+                                         std::to_string(kMaxRegions) + ")");
+  }
+  const std::uint32_t voxels = config.geometry.voxelsPerRegion();
+  parsed.raw_region_bytes = rawRegionBytes(parsed.layers, voxels);
+  if (parsed.raw_region_bytes > std::numeric_limits<std::uint32_t>::max()) {
+    return fail(
+        ErrorCode::kUnsupported,
+        path + ": regions of " + std::to_string(parsed.raw_region_bytes) + " bytes are too large");
+  }
+  // Before the pool is sized from region_count: the rest of the file must be able to hold that
+  // many regions.
+  const std::uint64_t needed = out.region_count * minBytesPerRegion(parsed.raw_region_bytes) +
+                               kIndexFixedBytes + kFooterBytes;
+  if (needed > file.remaining()) {
+    return fail(ErrorCode::kTruncated,
+                path + ": truncated: the header declares " + std::to_string(out.region_count) +
+                    " regions, which need at least " + std::to_string(needed) + " bytes, but " +
+                    std::to_string(file.remaining()) + " follow the header");
+  }
+  // Just enough pool for the file's regions (at least one: a map always holds a region).
+  const std::uint64_t per_region = config.schema().bytesPerRegion(voxels);
+  config.memory_budget_bytes = std::max<std::uint64_t>(out.region_count, 1) * per_region;
+  return parsed;
+}
+
+struct IndexEntry {
+  Vec3i coord;
+  std::uint64_t offset = 0;
+};
+
+std::string coordText(Vec3i c) {
+  return "(" + std::to_string(c.x) + ", " + std::to_string(c.y) + ", " + std::to_string(c.z) + ")";
+}
+
+/// Reads and checks the region index and the footer that follow the last block.
+Expected<void, Error> readTrailer(FileReader& file, const std::string& path,
+                                  std::span<const IndexEntry> blocks) {
+  const std::uint64_t index_offset = file.offset();
+  const std::uint64_t index_bytes = kIndexFixedBytes + blocks.size() * kIndexEntryBytes;
+  if (index_bytes + kFooterBytes > file.remaining()) {
+    return fail(ErrorCode::kTruncated, path + ": truncated in the region index (offset " +
+                                           std::to_string(index_offset) + ")");
+  }
+  std::vector<std::byte> index(static_cast<std::size_t>(index_bytes));
+  if (auto ok = file.read(index); !ok) {
+    return ok;
+  }
+  ByteReader reader(index);
+  std::uint32_t tag = 0;
+  (void)reader.u32(tag);
+  if (tag != kIndexTag) {
+    return fail(ErrorCode::kCorrupt, path + ": no region index at offset " +
+                                         std::to_string(index_offset) + " (bad marker)");
+  }
+  std::uint32_t index_crc = 0;
+  (void)ByteReader(std::span(index).last(4)).u32(index_crc);
+  if (crc32Of(std::span(index).first(index.size() - 4)) != index_crc) {
+    return fail(ErrorCode::kCorrupt, path + ": region index checksum mismatch (offset " +
+                                         std::to_string(index_offset) + ")");
+  }
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    IndexEntry entry;
+    (void)reader.i32(entry.coord.x);
+    (void)reader.i32(entry.coord.y);
+    (void)reader.i32(entry.coord.z);
+    (void)reader.u64(entry.offset);
+    if (entry.coord != blocks[i].coord || entry.offset != blocks[i].offset) {
+      return fail(ErrorCode::kCorrupt, path + ": region index entry " + std::to_string(i + 1) +
+                                           " does not match the region blocks");
+    }
+  }
+
+  const std::uint64_t footer_offset = file.offset();
+  std::array<std::byte, kFooterBytes> footer{};
+  if (auto ok = file.read(footer); !ok) {
+    return ok;
+  }
+  ByteReader footer_reader(footer);
+  std::uint32_t end_tag = 0;
+  std::uint64_t count = 0;
+  std::uint64_t stored_index_offset = 0;
+  std::uint32_t footer_crc = 0;
+  (void)footer_reader.u32(end_tag);
+  (void)footer_reader.u64(count);
+  (void)footer_reader.u64(stored_index_offset);
+  (void)footer_reader.u32(footer_crc);
+  if (end_tag != kEndTag) {
+    return fail(ErrorCode::kCorrupt,
+                path + ": no end marker at offset " + std::to_string(footer_offset));
+  }
+  if (crc32Of(std::span(footer).first(kFooterBytes - 4)) != footer_crc) {
+    return fail(ErrorCode::kCorrupt, path + ": end marker checksum mismatch (offset " +
+                                         std::to_string(footer_offset) + ")");
+  }
+  if (count != blocks.size() || stored_index_offset != index_offset) {
+    return fail(ErrorCode::kCorrupt, path + ": end marker does not match the file (" +
+                                         std::to_string(count) + " regions, index at " +
+                                         std::to_string(stored_index_offset) + ")");
+  }
+  if (file.remaining() != 0) {
+    return fail(ErrorCode::kCorrupt, path + ": " + std::to_string(file.remaining()) +
+                                         " unexpected bytes after the end marker");
+  }
+  return {};
+}
+
+/// Reads every region block into `map`, then the index and footer.
+Expected<void, Error> readRegions(FileReader& file, const std::string& path,
+                                  const ParsedHeader& parsed, VoxelMap& map) {
+  const std::uint64_t count = parsed.header.region_count;
+  const std::uint32_t voxels = map.geometry().voxelsPerRegion();
+  const auto raw_bytes = static_cast<std::size_t>(parsed.raw_region_bytes);
+  const std::uint64_t max_packed = ::compressBound(static_cast<uLong>(raw_bytes));
+  // Each saved layer's index in the map's schema (the file's layers are the schema's saved ones).
+  std::vector<int> schema_layers;
+  for (const LayerSpec& spec : parsed.layers) {
+    schema_layers.push_back(map.store().schema().indexOf(spec.kind));
+  }
+
+  std::vector<IndexEntry> blocks;
+  blocks.reserve(static_cast<std::size_t>(count));  // bounded by the file size (readHeader)
+  std::vector<std::byte> packed;
+  std::vector<std::byte> raw(raw_bytes);
+  for (std::uint64_t r = 0; r < count; ++r) {
+    const std::uint64_t offset = file.offset();
+    const std::string where = path + ": region " + std::to_string(r + 1) + " of " +
+                              std::to_string(count) + " (offset " + std::to_string(offset) + ")";
+    if (kBlockHeaderBytes > file.remaining()) {
+      return fail(ErrorCode::kTruncated, path + ": truncated in region " + std::to_string(r + 1) +
+                                             " of " + std::to_string(count) + " (offset " +
+                                             std::to_string(offset) + ")");
+    }
+    std::array<std::byte, kBlockHeaderBytes> head{};
+    if (auto ok = file.read(head); !ok) {
+      return ok;
+    }
+    ByteReader reader(head);
+    std::uint32_t tag = 0;
+    Vec3i coord;
+    std::uint32_t stored_raw = 0;
+    std::uint32_t stored_packed = 0;
+    std::uint32_t payload_crc = 0;
+    std::uint32_t head_crc = 0;
+    (void)reader.u32(tag);
+    (void)reader.i32(coord.x);
+    (void)reader.i32(coord.y);
+    (void)reader.i32(coord.z);
+    (void)reader.u32(stored_raw);
+    (void)reader.u32(stored_packed);
+    (void)reader.u32(payload_crc);
+    (void)reader.u32(head_crc);
+    if (tag != kRegionTag) {
+      return fail(ErrorCode::kCorrupt, where + ": bad block marker");
+    }
+    if (crc32Of(std::span(head).first(kBlockHeaderBytes - 4)) != head_crc) {
+      return fail(ErrorCode::kCorrupt, where + ": block header checksum mismatch");
+    }
+    if (stored_raw != raw_bytes) {
+      return fail(ErrorCode::kCorrupt, where + ": holds " + std::to_string(stored_raw) +
+                                           " bytes of voxels, expected " +
+                                           std::to_string(raw_bytes));
+    }
+    if (stored_packed < kZlibOverheadBytes || stored_packed > max_packed) {
+      return fail(ErrorCode::kCorrupt,
+                  where + ": compressed size " + std::to_string(stored_packed) + " is impossible");
+    }
+    if (stored_packed > file.remaining()) {
+      return fail(ErrorCode::kTruncated, path + ": truncated in region " + std::to_string(r + 1) +
+                                             " of " + std::to_string(count) + " (offset " +
+                                             std::to_string(offset) + ")");
+    }
+    if (!RegionStore::inRange(coord)) {
+      return fail(ErrorCode::kCorrupt,
+                  where + ": region coordinate " + coordText(coord) + " is out of range");
+    }
+    if (map.store().find(coord) != RegionStore::kNoSlot) {
+      return fail(ErrorCode::kCorrupt, where + ": duplicate region " + coordText(coord));
+    }
+    packed.resize(stored_packed);
+    if (auto ok = file.read(packed); !ok) {
+      return ok;
+    }
+    if (crc32Of(packed) != payload_crc) {
+      return fail(ErrorCode::kCorrupt, where + ": checksum mismatch");
+    }
+    uLongf out_bytes = static_cast<uLongf>(raw.size());
+    uLong in_bytes = static_cast<uLong>(packed.size());
+    const int z = ::uncompress2(reinterpret_cast<Bytef*>(raw.data()), &out_bytes,
+                                reinterpret_cast<const Bytef*>(packed.data()), &in_bytes);
+    if (z != Z_OK || out_bytes != raw.size() || in_bytes != packed.size()) {
+      return fail(ErrorCode::kCorrupt,
+                  where + ": compressed voxels do not decode (zlib " + std::to_string(z) + ")");
+    }
+    const auto slot = map.store().findOrCreate(coord);
+    if (!slot) {
+      // The pool was sized for region_count regions; this is a bug, not a file problem.
+      return fail(ErrorCode::kCapacity, where + ": cannot store region: " + toString(slot.error()));
+    }
+    std::size_t at = 0;
+    for (std::size_t l = 0; l < parsed.layers.size(); ++l) {
+      const std::uint32_t words = parsed.layers[l].bytes_per_voxel / 4u;
+      decodeLayer(raw.data() + at, voxels, words, map.store().layerBytes(*slot, schema_layers[l]));
+      at += std::size_t{parsed.layers[l].bytes_per_voxel} * voxels;
+    }
+    blocks.push_back(IndexEntry{coord, offset});
+  }
+  return readTrailer(file, path, blocks);
+}
+
+// ---- writing ----
+
+Expected<void, Error> checkInfoFits(const VoxelMap& map, const std::string& path) {
+  const auto& info = map.info();
+  if (info.size() > kMaxInfoItems) {
+    return fail(ErrorCode::kInvalidArgument, path + ": " + std::to_string(info.size()) +
+                                                 " info items (a map file holds at most " +
+                                                 std::to_string(kMaxInfoItems) + ")");
+  }
+  for (const auto& [key, value] : info) {
+    if (key.size() > kMaxInfoKeyBytes || value.size() > kMaxInfoValueBytes) {
+      return fail(ErrorCode::kInvalidArgument,
+                  path + ": info item '" + key.substr(0, 64) + "' is too long (key at most " +
+                      std::to_string(kMaxInfoKeyBytes) + " bytes, value at most " +
+                      std::to_string(kMaxInfoValueBytes) + ")");
+    }
+  }
+  return {};
+}
+
+std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSpec> layers) {
+  ByteWriter body;
+  const MapConfig& config = map.config();
+  body.f64(config.geometry.resolution);
+  body.i32(config.geometry.region_voxels);
+  body.f32(config.occupancy.hit);
+  body.f32(config.occupancy.miss);
+  body.f32(config.occupancy.clamp_min);
+  body.f32(config.occupancy.clamp_max);
+  body.f32(config.occupancy.threshold);
+  body.u8(static_cast<std::uint8_t>(config.semantics));
+  body.u8(static_cast<std::uint8_t>(config.voxel_mean ? 1 : 0));
+  body.u16(static_cast<std::uint16_t>(layers.size()));
+  for (const LayerSpec& spec : layers) {
+    body.u8(static_cast<std::uint8_t>(spec.kind));
+    body.u8(0);  // reserved
+    body.u16(spec.version);
+    body.u32(spec.bytes_per_voxel);
+    body.u16(static_cast<std::uint16_t>(spec.name.size()));
+    body.raw(spec.name);
+  }
+  body.u32(static_cast<std::uint32_t>(map.info().size()));
+  for (const auto& [key, value] : map.info()) {
+    body.u32(static_cast<std::uint32_t>(key.size()));
+    body.raw(key);
+    body.u32(static_cast<std::uint32_t>(value.size()));
+    body.raw(value);
+  }
+  body.u64(map.store().size());
+
+  ByteWriter header;
+  for (const std::uint8_t b : kMagic) {
+    header.u8(b);
+  }
+  header.u32(kMapFormatVersion);
+  header.u32(static_cast<std::uint32_t>(body.bytes().size()));
+  header.bytes().insert(header.bytes().end(), body.bytes().begin(), body.bytes().end());
+  header.u32(crc32Of(header.bytes()));
+  return std::move(header.bytes());
+}
+
+}  // namespace
+
+Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
+  if (auto ok = checkInfoFits(map, path); !ok) {
+    return ok;
+  }
+  const RegionStore& store = map.store();
+  const std::vector<LayerSpec> layers = savedLayersOf(store.schema());
+  std::vector<int> schema_layers;
+  for (const LayerSpec& spec : layers) {
+    schema_layers.push_back(store.schema().indexOf(spec.kind));
+  }
+  const std::uint32_t voxels = store.voxelsPerRegion();
+  const auto raw_bytes = static_cast<std::size_t>(rawRegionBytes(layers, voxels));
+
+  // Regions in coordinate order (z, y, x), so that equal maps give equal files whatever order
+  // their regions were created in.
+  std::vector<std::pair<Vec3i, std::uint32_t>> regions;
+  regions.reserve(store.size());
+  store.forEachRegion([&](std::uint32_t slot, Vec3i coord) { regions.emplace_back(coord, slot); });
+  std::sort(regions.begin(), regions.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
+  });
+
+  auto writer = AtomicFileWriter::open(path);
+  if (!writer) {
+    return Unexpected(writer.error());
+  }
+  if (auto ok = writer->write(encodeHeader(map, layers)); !ok) {
+    return ok;
+  }
+
+  std::vector<std::byte> raw(raw_bytes);
+  std::vector<std::byte> packed(::compressBound(static_cast<uLong>(raw_bytes)));
+  ByteWriter index;
+  index.u32(kIndexTag);
+  for (const auto& [coord, slot] : regions) {
+    std::size_t at = 0;
+    for (std::size_t l = 0; l < layers.size(); ++l) {
+      encodeLayer(store.layerBytes(slot, schema_layers[l]), voxels, layers[l].bytes_per_voxel / 4u,
+                  raw.data() + at);
+      at += std::size_t{layers[l].bytes_per_voxel} * voxels;
+    }
+    uLongf packed_bytes = static_cast<uLongf>(packed.size());
+    const int z = ::compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_bytes,
+                              reinterpret_cast<const Bytef*>(raw.data()),
+                              static_cast<uLong>(raw.size()), Z_BEST_SPEED);
+    if (z != Z_OK) {
+      return fail(ErrorCode::kIo, path + ": compressing region " + coordText(coord) +
+                                      " failed (zlib " + std::to_string(z) + ")");
+    }
+    const auto payload = std::span<const std::byte>(packed).first(packed_bytes);
+    ByteWriter head;
+    head.u32(kRegionTag);
+    head.i32(coord.x);
+    head.i32(coord.y);
+    head.i32(coord.z);
+    head.u32(static_cast<std::uint32_t>(raw.size()));
+    head.u32(static_cast<std::uint32_t>(payload.size()));
+    head.u32(crc32Of(payload));
+    head.u32(crc32Of(head.bytes()));
+
+    index.i32(coord.x);
+    index.i32(coord.y);
+    index.i32(coord.z);
+    index.u64(writer->size());
+    if (auto ok = writer->write(head.bytes()); !ok) {
+      return ok;
+    }
+    if (auto ok = writer->write(payload); !ok) {
+      return ok;
+    }
+  }
+
+  const std::uint64_t index_offset = writer->size();
+  index.u32(crc32Of(index.bytes()));
+  if (auto ok = writer->write(index.bytes()); !ok) {
+    return ok;
+  }
+  ByteWriter footer;
+  footer.u32(kEndTag);
+  footer.u64(regions.size());
+  footer.u64(index_offset);
+  footer.u32(crc32Of(footer.bytes()));
+  if (auto ok = writer->write(footer.bytes()); !ok) {
+    return ok;
+  }
+  return writer->commit();
+}
+
+Result<MapFileHeader> readMapHeader(const std::string& path) {
+  auto file = FileReader::open(path);
+  if (!file) {
+    return Unexpected(file.error());
+  }
+  auto parsed = readHeader(*file, path);
+  if (!parsed) {
+    return Unexpected(parsed.error());
+  }
+  return std::move(parsed->header);
+}
+
+Result<VoxelMap> loadMap(const std::string& path, const MapLoadOptions& options) {
+  auto file = FileReader::open(path);
+  if (!file) {
+    return Unexpected(file.error());
+  }
+  auto parsed = readHeader(*file, path);
+  if (!parsed) {
+    return Unexpected(parsed.error());
+  }
+  MapConfig config = parsed->header.config;
+  // Pool: the file's regions, or more when the caller wants room to keep integrating.
+  const std::uint64_t per_region =
+      config.schema().bytesPerRegion(config.geometry.voxelsPerRegion());
+  const std::uint64_t capacity = std::max<std::uint64_t>(
+      {parsed->header.region_count, options.memory_budget_bytes / per_region, 1});
+  config.memory_budget_bytes = capacity * per_region;
+  auto map = VoxelMap::create(config);
+  if (!map) {
+    return fail(map.error().code, path + ": cannot create the map: " + map.error().message);
+  }
+  if (auto ok = readRegions(*file, path, *parsed, *map); !ok) {
+    return Unexpected(ok.error());
+  }
+  map->info() = std::move(parsed->header.info);
+  return map;
+}
+
+}  // namespace raymap::io

@@ -18,7 +18,9 @@ inline constexpr std::uint32_t kMapFormatVersion = 1;
 /// @brief The header of a map file: everything except the voxels.
 struct MapFileHeader {
   std::uint32_t format_version = kMapFormatVersion;
-  MapConfig config;  ///< geometry, occupancy, semantics, voxel mean; policy is always global
+  /// Geometry, occupancy, semantics, voxel mean. Policy is always global; the memory budget holds
+  /// exactly region_count regions (at least one).
+  MapConfig config;
   std::vector<LayerKind> saved_layers;  ///< layers stored per region, in order
   std::uint64_t region_count = 0;
   std::vector<std::pair<std::string, std::string>> info;  ///< provenance
@@ -36,6 +38,8 @@ struct MapLoadOptions {
 
 /// @brief Reads a map. A corrupt, truncated or foreign file fails with an error naming the file and
 /// what is wrong (which region, which offset); it never crashes and never returns a partial map.
+/// The map is global, with room for max(file's regions, options.memory_budget_bytes / bytes per
+/// region) regions; a per-scan map gets a fresh (zeroed) scan-mark layer.
 Result<VoxelMap> loadMap(const std::string& path, const MapLoadOptions& options = {});
 
 /// @brief Reads and checks only the header (fast; for `raymap info` without counts).
