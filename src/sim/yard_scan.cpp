@@ -53,6 +53,18 @@ std::vector<Box> yardSolids() {
   };
 }
 
+double distanceToSurface(Vec3d p, const std::vector<Box>& solids) {
+  double best = std::max(p.z, 0.0);  // the ground plane; below it counts as inside
+  for (const Box& box : solids) {
+    Vec3d outside;
+    for (int a = 0; a < 3; ++a) {
+      outside[a] = std::max({box.min[a] - p[a], 0.0, p[a] - box.max[a]});
+    }
+    best = std::min(best, outside.norm());
+  }
+  return best;
+}
+
 std::vector<Ray> simulateYardScans(const YardScanConfig& config) {
   const std::vector<Box> solids = config.solids.empty() ? yardSolids() : config.solids;
   const LidarModel& lidar = config.lidar;

@@ -44,6 +44,10 @@ struct YardScanConfig {
 /// @brief The default yard's walls and obstacles (ground excluded: it is the plane z = 0).
 std::vector<Box> yardSolids();
 
+/// @brief Distance from a point to the nearest surface of the scene (ground plane z = 0 and the
+/// solids), metres; 0 inside a solid or below the ground.
+double distanceToSurface(Vec3d p, const std::vector<Box>& solids);
+
 /// @brief Simulates the scans. Rays that hit nothing within max range are no-return rays
 /// (kRayNoReturn) ending at max range. Deterministic for a given seed.
 std::vector<Ray> simulateYardScans(const YardScanConfig& config);

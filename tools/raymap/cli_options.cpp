@@ -1,0 +1,180 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Shared mapping options.
+#include "tools/raymap/cli_options.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+namespace raymap::cli {
+
+void addMappingOptions(CLI::App& c, MappingFlags& f) {
+  c.add_option("--trajectory", f.trajectory,
+               "Point clouds: sensor trajectory, lines 'time x y z [qw qx qy qz]'");
+  c.add_option("--sensor-offset", f.sensor_offset,
+               "Sensor position in the trajectory's body frame, metres: x,y,z")
+      ->capture_default_str();
+  c.add_option("--scan-period", f.scan_period,
+               "Without a 'scan' property: seconds per scan (<= 0: one scan)")
+      ->capture_default_str();
+  c.add_option("--resolution", f.resolution, "Voxel edge, metres")->capture_default_str();
+  c.add_option("--region-voxels", f.region_voxels, "Voxels per region edge (4 to 128)")
+      ->capture_default_str();
+  c.add_option("--min-range", f.min_range, "Drop rays shorter than this, metres")
+      ->capture_default_str();
+  c.add_option("--max-range", f.max_range,
+               "Clip longer rays (free space only, no hit), metres; 0 = none")
+      ->capture_default_str();
+  c.add_option("--hit", f.hit, "Hit probability (default 0.9)");
+  c.add_option("--miss", f.miss, "Miss probability (default 0.45)");
+  c.add_option("--clamp-min", f.clamp_min, "Lower probability clamp (default 0.1192 = -2.0 log-odds)");
+  c.add_option("--clamp-max", f.clamp_max, "Upper probability clamp (default 0.971 = 3.511 log-odds)");
+  c.add_option("--threshold", f.threshold, "Occupied at or above this probability (default 0.5)");
+  c.add_option("--semantics", f.semantics,
+               "ray: every ray updates every voxel it crosses; scan: each voxel once per scan, "
+               "occupied wins")
+      ->check(CLI::IsMember({"ray", "scan"}))
+      ->capture_default_str();
+  c.add_option("--backend", f.backend, "Integration backend")
+      ->check(CLI::IsMember({"cpu"}))
+      ->capture_default_str();
+  c.add_option("--threads", f.threads, "Worker threads (0 = all cores, 1 = reference)")
+      ->capture_default_str();
+  c.add_option("--segment-length", f.segment_length,
+               "Split longer rays into equal pieces, metres; 0 = off")
+      ->capture_default_str();
+  auto* reverse = c.add_flag("--reverse", f.reverse, "Walk rays from the sample to the sensor");
+  auto* forward = c.add_flag("--forward", f.forward, "Walk rays from the sensor (default)");
+  reverse->excludes(forward);
+  c.add_flag("--no-mean", f.no_mean, "Do not keep the voxel-mean layer");
+  c.add_option("--max-memory", f.max_memory, "Region pool size, e.g. 512MiB, 4GiB")
+      ->capture_default_str();
+  c.add_option("--batch-rays", f.batch_rays, "Prepared rays per backend call")
+      ->check(CLI::Range(std::size_t{1024}, std::size_t{1} << 26))
+      ->capture_default_str();
+}
+
+Result<std::uint64_t> parseByteSize(const std::string& text) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return fail(ErrorCode::kInvalidArgument, "'" + text + "' is not a size (try 4GiB or 512MiB)");
+  }
+  std::string unit = text.substr(used);
+  double scale = 1.0;
+  if (unit.empty() || unit == "B") {
+    scale = 1.0;
+  } else if (unit == "K" || unit == "KiB" || unit == "k") {
+    scale = 1024.0;
+  } else if (unit == "M" || unit == "MiB") {
+    scale = 1024.0 * 1024.0;
+  } else if (unit == "G" || unit == "GiB") {
+    scale = 1024.0 * 1024.0 * 1024.0;
+  } else if (unit == "T" || unit == "TiB") {
+    scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+  } else {
+    return fail(ErrorCode::kInvalidArgument,
+                "unknown size unit '" + unit + "' in '" + text + "' (use B, KiB, MiB, GiB, TiB)");
+  }
+  const double bytes = value * scale;
+  if (!std::isfinite(bytes) || bytes < 0.0 || bytes > 1.8e19) {
+    return fail(ErrorCode::kInvalidArgument, "size '" + text + "' is out of range");
+  }
+  return static_cast<std::uint64_t>(bytes);
+}
+
+Result<Vec3d> parseVector(const std::string& text, const std::string& option) {
+  Vec3d v;
+  char c1 = 0;
+  char c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> v.x >> c1 >> v.y >> c2 >> v.z) || c1 != ',' || c2 != ',' || !v.isFinite()) {
+    return fail(ErrorCode::kInvalidArgument,
+                option + ": expected three numbers 'x,y,z' in metres, got '" + text + "'");
+  }
+  std::string rest;
+  if (in >> rest) {
+    return fail(ErrorCode::kInvalidArgument,
+                option + ": unexpected '" + rest + "' after 'x,y,z'");
+  }
+  return v;
+}
+
+Expected<void, Error> checkWritable(const std::string& path, const std::string& option) {
+  const std::string probe = path + ".probe-" + std::to_string(::getpid());
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+  if (fd < 0) {
+    return fail(ErrorCode::kIo,
+                option + ": cannot write '" + path + "': " + std::strerror(errno));
+  }
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return {};
+}
+
+Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& f) {
+  PopulateOptions o;
+  o.input = input;
+  o.source.trajectory_path = f.trajectory;
+  o.source.scan_period_s = f.scan_period;
+  auto offset = parseVector(f.sensor_offset, "--sensor-offset");
+  if (!offset) {
+    return Unexpected(offset.error());
+  }
+  o.source.sensor_offset = *offset;
+  o.map.geometry.resolution = f.resolution;
+  o.map.geometry.region_voxels = f.region_voxels;
+  o.map.semantics = f.semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
+  o.map.voxel_mean = !f.no_mean;
+  auto budget = parseByteSize(f.max_memory);
+  if (!budget) {
+    return fail(ErrorCode::kInvalidArgument, "--max-memory: " + budget.error().message);
+  }
+  o.map.memory_budget_bytes = *budget;
+  auto probability_option = [](const std::optional<double>& p, const char* name,
+                               float* log_odds) -> Expected<void, Error> {
+    if (!p) {
+      return {};
+    }
+    if (!(*p > 0.0 && *p < 1.0)) {
+      return fail(ErrorCode::kInvalidArgument,
+                  std::string(name) + ": a probability strictly between 0 and 1 is required");
+    }
+    *log_odds = logOdds(*p);
+    return {};
+  };
+  for (auto ok : {probability_option(f.hit, "--hit", &o.map.occupancy.hit),
+                  probability_option(f.miss, "--miss", &o.map.occupancy.miss),
+                  probability_option(f.clamp_min, "--clamp-min", &o.map.occupancy.clamp_min),
+                  probability_option(f.clamp_max, "--clamp-max", &o.map.occupancy.clamp_max),
+                  probability_option(f.threshold, "--threshold", &o.map.occupancy.threshold)}) {
+    if (!ok) {
+      return Unexpected(ok.error());
+    }
+  }
+  if (auto ok = o.map.validate(); !ok) {
+    return Unexpected(ok.error());
+  }
+  o.filter.min_range_m = f.min_range;
+  o.filter.max_range_m = f.max_range;
+  o.filter.segment_length_m = f.segment_length;
+  o.filter.reverse = f.reverse;
+  if (auto ok = o.filter.validate(); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (f.segment_length > 0.0 && f.segment_length < f.resolution) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--segment-length must be 0 (off) or at least the resolution");
+  }
+  o.threads = f.threads;
+  o.batch_rays = f.batch_rays;
+  return o;
+}
+
+}  // namespace raymap::cli

@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Command-line options shared by the mapping subcommands, and their conversion and validation.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+
+#include "src/core/error.hpp"
+#include "tools/raymap/populate.hpp"
+
+namespace raymap::cli {
+
+/// @brief Options as typed by the user, before conversion (probabilities, sizes, vectors).
+struct MappingFlags {
+  std::string trajectory;
+  std::string sensor_offset = "0,0,0";
+  double scan_period = io::RaySourceOptions::kDefaultScanPeriod;
+  double resolution = MapGeometry::kDefaultResolution;
+  int region_voxels = MapGeometry::kDefaultRegionVoxels;
+  double min_range = 0.0;
+  double max_range = 0.0;
+  std::optional<double> hit;
+  std::optional<double> miss;
+  std::optional<double> clamp_min;
+  std::optional<double> clamp_max;
+  std::optional<double> threshold;
+  std::string semantics = "ray";
+  std::string backend = "cpu";
+  unsigned threads = 0;
+  double segment_length = 0.0;
+  bool reverse = false;
+  bool forward = false;
+  bool no_mean = false;
+  std::string max_memory = "4GiB";
+  std::size_t batch_rays = PopulateOptions::kDefaultBatchRays;
+};
+
+/// @brief Registers the input and mapping options on a subcommand.
+void addMappingOptions(CLI::App& command, MappingFlags& flags);
+
+/// @brief Converts and validates the flags; errors name the option and the reason.
+Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& flags);
+
+/// @brief Parses sizes such as "4GiB", "512M", "1.5G" or plain bytes.
+Result<std::uint64_t> parseByteSize(const std::string& text);
+
+/// @brief Parses "x,y,z" (metres).
+Result<Vec3d> parseVector(const std::string& text, const std::string& option);
+
+/// @brief Fails when `path` cannot be created (missing or read-only directory), before any work
+/// is done. Leaves no file behind.
+Expected<void, Error> checkWritable(const std::string& path, const std::string& option);
+
+}  // namespace raymap::cli

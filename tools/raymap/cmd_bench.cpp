@@ -1,0 +1,153 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap bench`: integration throughput on a preloaded input, printed as JSON.
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "platform/process.hpp"
+#include "src/io/atomic_file.hpp"
+#include "tools/raymap/cli_options.hpp"
+#include "tools/raymap/commands.hpp"
+#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/populate.hpp"
+
+namespace raymap::cli {
+namespace {
+
+struct BenchFlags {
+  std::string input;
+  MappingFlags mapping;
+  std::string threads_list = "1,0";
+  std::string semantics_list = "ray,scan";
+  int repeat = 3;
+  std::string json;
+};
+
+std::vector<std::string> splitComma(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream in(text);
+  std::string part;
+  while (std::getline(in, part, ',')) {
+    if (!part.empty()) {
+      parts.push_back(part);
+    }
+  }
+  return parts;
+}
+
+int runBench(const BenchFlags& f) {
+  const char* command = "bench";
+  auto base = toPopulateOptions(f.input, f.mapping);
+  if (!base) {
+    printError(command, base.error().message);
+    return kExitUsage;
+  }
+  base->progress = false;
+  // Preload: the benchmark measures preparation and integration, not file decoding.
+  auto source = io::openRaySource(f.input, base->source);
+  if (!source) {
+    printError(command, source.error().message);
+    return kExitFailure;
+  }
+  std::vector<Ray> rays;
+  std::vector<Ray> chunk(std::size_t{1} << 16);
+  for (;;) {
+    auto n = (*source)->read(chunk);
+    if (!n) {
+      printError(command, n.error().message);
+      return kExitFailure;
+    }
+    if (*n == 0) {
+      break;
+    }
+    rays.insert(rays.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(*n));
+  }
+  std::string runs = "[";
+  for (const std::string& semantics : splitComma(f.semantics_list)) {
+    if (semantics != "ray" && semantics != "scan") {
+      printError(command, "--semantics-list: unknown semantics '" + semantics + "'");
+      return kExitUsage;
+    }
+    for (const std::string& threads_text : splitComma(f.threads_list)) {
+      PopulateOptions options = *base;
+      options.map.semantics = semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
+      try {
+        options.threads = static_cast<unsigned>(std::stoul(threads_text));
+      } catch (const std::exception&) {
+        printError(command, "--threads-list: '" + threads_text + "' is not a number");
+        return kExitUsage;
+      }
+      std::vector<PopulateReport> reports;
+      for (int r = 0; r < std::max(f.repeat, 1); ++r) {
+        auto map = VoxelMap::create(options.map);
+        if (!map) {
+          printError(command, map.error().message);
+          return kExitFailure;
+        }
+        std::size_t next = 0;
+        auto report = integrateStream(
+            *map, options,
+            [&](std::span<Ray> out) -> Result<std::size_t> {
+              const std::size_t n = std::min(out.size(), rays.size() - next);
+              std::copy_n(rays.begin() + static_cast<std::ptrdiff_t>(next), n, out.begin());
+              next += n;
+              return n;
+            },
+            [&] { return static_cast<double>(next) / static_cast<double>(rays.size()); });
+        if (!report) {
+          printError(command, report.error().message);
+          return kExitFailure;
+        }
+        reports.push_back(*report);
+      }
+      std::sort(reports.begin(), reports.end(), [](const auto& a, const auto& b) {
+        return a.integrate_seconds < b.integrate_seconds;
+      });
+      const PopulateReport& median = reports[reports.size() / 2];
+      runs += (runs.size() > 1 ? ",\n" : "\n") + statsJson(median, options);
+      std::fprintf(stderr, "bench: %s semantics, %u threads: %.3f s median of %zu, %.3g M rays/s\n",
+                   semantics.c_str(), median.threads, median.integrate_seconds, reports.size(),
+                   static_cast<double>(median.rays.rays_accepted) / median.integrate_seconds / 1e6);
+    }
+  }
+  runs += "\n]";
+  JsonObject machine;
+  machine.add("cpu_model", platform::cpuModelName()).add("cores", platform::availableCores());
+  JsonObject result;
+  result.add("benchmark", "raymap bench").add("repeat", f.repeat).raw("machine", machine.str()).raw("runs", runs);
+  const std::string text = result.str() + "\n";
+  if (f.json.empty() || f.json == "-") {
+    std::fputs(text.c_str(), stdout);
+    return kExitOk;
+  }
+  auto writer = io::AtomicFileWriter::open(f.json);
+  if (!writer || !writer->write(text) || !writer->commit()) {
+    printError(command, "cannot write '" + f.json + "'");
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void addBenchCommand(CLI::App& app, int* exit_code) {
+  auto flags = std::make_shared<BenchFlags>();
+  CLI::App* c = app.add_subcommand(
+      "bench", "Measure integration throughput on a preloaded input (prints JSON)");
+  c->add_option("input", flags->input, "Input file (.ply or .ply.gz)")->required();
+  addMappingOptions(*c, flags->mapping);
+  c->add_option("--threads-list", flags->threads_list, "Thread counts to run, e.g. 1,2,0 (0 = all)")
+      ->capture_default_str();
+  c->add_option("--semantics-list", flags->semantics_list, "Semantics to run: ray, scan or both")
+      ->capture_default_str();
+  c->add_option("--repeat", flags->repeat, "Runs per configuration (the median is reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  c->add_option("--json", flags->json, "Write the JSON here instead of stdout");
+  c->callback([flags, exit_code] { *exit_code = runBench(*flags); });
+}
+
+}  // namespace raymap::cli

@@ -1,0 +1,201 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap demo`: the whole offline job on built-in data, checked against the scene it came from.
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "src/io/map_export.hpp"
+#include "src/io/map_file.hpp"
+#include "src/io/ray_cloud_writer.hpp"
+#include "src/sim/yard_scan.hpp"
+#include "tools/raymap/commands.hpp"
+#include "tools/raymap/populate.hpp"
+
+namespace raymap::cli {
+namespace {
+
+struct DemoFlags {
+  std::string output_dir = "raymap-demo";
+  int scans = 10;
+  unsigned threads = 0;
+  bool quiet = false;
+};
+
+// The map must find at least this share of the true surface points and have at most this
+// share of occupied voxels away from any surface; measured values are in docs/cli.md.
+constexpr double kMinRecall = 0.95;
+constexpr double kMinPrecision = 0.98;
+
+struct SceneCheck {
+  double recall = 0.0;     ///< true surface points with an occupied voxel within one voxel
+  double precision = 0.0;  ///< occupied voxels whose centre is near a true surface
+  int probe_failures = 0;  ///< places whose state the geometry fixes (shadows, solids)
+};
+
+SceneCheck checkAgainstScene(const VoxelMap& map, const sim::YardScanConfig& scene) {
+  SceneCheck check;
+  const double resolution = map.geometry().resolution;
+  const std::vector<sim::Box> solids = sim::yardSolids();
+  // Recall: the noiseless returns of the same scans lie exactly on the surfaces.
+  sim::YardScanConfig truth = scene;
+  truth.lidar.range_noise_m = 0.0;
+  std::uint64_t points = 0;
+  std::uint64_t found = 0;
+  for (const Ray& ray : sim::simulateYardScans(truth)) {
+    if ((ray.flags & kRayNoReturn) != 0u) {
+      continue;
+    }
+    ++points;
+    const Vec3i v = map.voxelOf(ray.sample);
+    bool hit = false;
+    for (int dz = -1; dz <= 1 && !hit; ++dz) {
+      for (int dy = -1; dy <= 1 && !hit; ++dy) {
+        for (int dx = -1; dx <= 1 && !hit; ++dx) {
+          hit = map.state(v + Vec3i{dx, dy, dz}) == VoxelState::kOccupied;
+        }
+      }
+    }
+    found += hit ? 1u : 0u;
+  }
+  check.recall = points > 0 ? static_cast<double>(found) / static_cast<double>(points) : 0.0;
+  // Precision: an occupied voxel is right when a surface passes within a voxel diagonal (plus
+  // the range noise) of its centre.
+  const double tolerance = std::sqrt(3.0) * 0.5 * resolution + 3.0 * scene.lidar.range_noise_m;
+  std::uint64_t occupied = 0;
+  std::uint64_t near_surface = 0;
+  const int n = map.geometry().region_voxels;
+  map.store().forEachRegion([&](std::uint32_t slot, Vec3i region) {
+    for (int i = 0; i < n * n * n; ++i) {
+      const Vec3i v{region.x * n + i % n, region.y * n + (i / n) % n, region.z * n + i / (n * n)};
+      (void)slot;
+      if (map.state(v) != VoxelState::kOccupied) {
+        continue;
+      }
+      ++occupied;
+      near_surface += sim::distanceToSurface(map.voxelCentre(v), solids) <= tolerance ? 1u : 0u;
+    }
+  });
+  check.precision =
+      occupied > 0 ? static_cast<double>(near_surface) / static_cast<double>(occupied) : 0.0;
+  // Places the lidar cannot see stay unobserved.
+  const Vec3d hidden[] = {{15.05, 0.05, 1.05},   // behind the east wall, below its top
+                          {-6.45, 3.65, 0.55}};  // inside a crate
+  for (const Vec3d& p : hidden) {
+    if (map.state(map.voxelOf(p)) != VoxelState::kUnobserved) {
+      ++check.probe_failures;
+      std::fprintf(stderr, "demo check: (%.2f, %.2f, %.2f) should be unobserved\n", p.x, p.y, p.z);
+    }
+  }
+  return check;
+}
+
+int runDemo(const DemoFlags& f) {
+  const char* command = "demo";
+  if (::mkdir(f.output_dir.c_str(), 0755) != 0 && errno != EEXIST) {
+    printError(command, "cannot create '" + f.output_dir + "': " + std::strerror(errno));
+    return kExitFailure;
+  }
+  const std::string cloud = f.output_dir + "/yard_raycloud.ply";
+  const std::string map_path = f.output_dir + "/yard.rmap";
+  const std::string ply = f.output_dir + "/yard_occupied.ply";
+
+  // 1. Simulate a lidar driving through the built-in yard and record it as a ray cloud.
+  sim::YardScanConfig scene;
+  scene.scans = f.scans;
+  const std::vector<Ray> rays = sim::simulateYardScans(scene);
+  auto writer = io::RayCloudWriter::open(cloud);
+  if (!writer) {
+    printError(command, writer.error().message);
+    return kExitFailure;
+  }
+  if (auto ok = (*writer)->write(rays); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
+  }
+  if (auto ok = (*writer)->finish(); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
+  }
+
+  // 2. Map the recording exactly as `raymap populate` does.
+  PopulateOptions options;
+  options.input = cloud;
+  options.threads = f.threads;
+  options.filter.max_range_m = 30.0;
+  options.progress = !f.quiet;
+  auto map = VoxelMap::create(options.map);
+  if (!map) {
+    printError(command, map.error().message);
+    return kExitFailure;
+  }
+  auto report = populateFromFile(*map, options);
+  if (!report) {
+    printError(command, report.error().message);
+    return kExitFailure;
+  }
+  if (auto ok = io::saveMap(*map, map_path); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
+  }
+  auto exported = io::exportPly(*map, io::ExportMode::kOccupied, ply);
+  if (!exported) {
+    printError(command, exported.error().message);
+    return kExitFailure;
+  }
+
+  // 3. Check the map, read back from its file, against the scene it was made from.
+  auto loaded = io::loadMap(map_path);
+  if (!loaded) {
+    printError(command, loaded.error().message);
+    return kExitFailure;
+  }
+  const SceneCheck check = checkAgainstScene(*loaded, scene);
+  const bool passed = check.recall >= kMinRecall && check.precision >= kMinPrecision &&
+                      check.probe_failures == 0;
+  if (!f.quiet) {
+    std::printf("simulated      %s rays in %d scans -> %s\n", withCommas(rays.size()).c_str(),
+                f.scans, cloud.c_str());
+    std::printf("mapped         %s free, %s occupied voxels in %.3f s (%.3g M rays/s, %u threads)\n",
+                withCommas(report->summary.voxels_free).c_str(),
+                withCommas(report->summary.voxels_occupied).c_str(), report->integrate_seconds,
+                static_cast<double>(report->rays.rays_accepted) / report->integrate_seconds / 1e6,
+                report->threads);
+    std::printf("wrote          %s, %s (%s points)\n", map_path.c_str(), ply.c_str(),
+                withCommas(*exported).c_str());
+    std::printf("checked        surface recall %.1f %% (>= %.0f %%), precision %.1f %% (>= %.0f %%),"
+                " %d probe(s) wrong\n",
+                100.0 * check.recall, 100.0 * kMinRecall, 100.0 * check.precision,
+                100.0 * kMinPrecision, check.probe_failures);
+    std::printf("next           raymap info %s\n", map_path.c_str());
+    std::printf("               raymap populate %s --max-range 30 --output my.rmap\n",
+                cloud.c_str());
+  }
+  if (!passed) {
+    printError(command, "the map does not match the simulated scene (see the check line)");
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void addDemoCommand(CLI::App& app, int* exit_code) {
+  auto flags = std::make_shared<DemoFlags>();
+  CLI::App* c = app.add_subcommand(
+      "demo", "Simulate a lidar in a built-in yard, map it, save, export and check the map");
+  c->add_option("--output-dir", flags->output_dir, "Where to write the files")
+      ->capture_default_str();
+  c->add_option("--scans", flags->scans, "Lidar scans to simulate")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  c->add_option("--threads", flags->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
+  c->callback([flags, exit_code] { *exit_code = runDemo(*flags); });
+}
+
+}  // namespace raymap::cli

@@ -1,0 +1,124 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap info`: parameters, layers and voxel counts of a map file.
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "src/io/map_file.hpp"
+#include "tools/raymap/commands.hpp"
+#include "tools/raymap/json_writer.hpp"
+
+namespace raymap::cli {
+namespace {
+
+struct InfoFlags {
+  std::string map;
+  bool json = false;
+};
+
+std::string vectorJson(Vec3d v) {
+  char buffer[128];
+  std::snprintf(buffer, sizeof(buffer), "[%.6g, %.6g, %.6g]", v.x, v.y, v.z);
+  return buffer;
+}
+
+int runInfo(const InfoFlags& f) {
+  auto map = io::loadMap(f.map);
+  if (!map) {
+    printError("info", map.error().message);
+    return kExitFailure;
+  }
+  const MapConfig& c = map->config();
+  const MapSummary s = map->summarise();
+  const OccupancyParams& o = c.occupancy;
+  std::string layers;
+  const LayerSchema& schema = map->store().schema();
+  for (int i = 0; i < schema.size(); ++i) {
+    if (schema.at(i).saved) {
+      layers += (layers.empty() ? "" : ", ") + std::string(schema.at(i).name);
+    }
+  }
+  const std::uint64_t bytes_per_region =
+      schema.bytesPerRegion(c.geometry.voxelsPerRegion());
+  if (f.json) {
+    JsonObject params;
+    params.add("hit_probability", probability(o.hit))
+        .add("miss_probability", probability(o.miss))
+        .add("clamp_min_probability", probability(o.clamp_min))
+        .add("clamp_max_probability", probability(o.clamp_max))
+        .add("threshold_probability", probability(o.threshold))
+        .add("hit_log_odds", static_cast<double>(o.hit))
+        .add("miss_log_odds", static_cast<double>(o.miss))
+        .add("clamp_min_log_odds", static_cast<double>(o.clamp_min))
+        .add("clamp_max_log_odds", static_cast<double>(o.clamp_max))
+        .add("threshold_log_odds", static_cast<double>(o.threshold));
+    std::string layer_array = "[";
+    for (int i = 0; i < schema.size(); ++i) {
+      if (schema.at(i).saved) {
+        layer_array += (layer_array.size() > 1 ? ", " : "") + jsonQuote(schema.at(i).name);
+      }
+    }
+    layer_array += "]";
+    JsonObject info;
+    for (const auto& [key, value] : map->info()) {
+      info.add(key, value);
+    }
+    JsonObject j;
+    j.add("path", f.map)
+        .add("format_version", io::kMapFormatVersion)
+        .add("resolution", c.geometry.resolution)
+        .add("region_voxels", c.geometry.region_voxels)
+        .add("region_extent", c.geometry.regionExtent())
+        .add("semantics", toString(c.semantics))
+        .raw("occupancy", params.str())
+        .raw("layers", layer_array)
+        .add("regions", s.regions)
+        .add("memory_bytes", s.regions * bytes_per_region)
+        .add("voxels_free", s.voxels_free)
+        .add("voxels_occupied", s.voxels_occupied)
+        .add("voxels_unobserved", s.voxels_unobserved);
+    if (s.voxels_free + s.voxels_occupied > 0) {
+      j.raw("extent_min", vectorJson(s.observed_min)).raw("extent_max", vectorJson(s.observed_max));
+    }
+    j.raw("info", info.str());
+    std::printf("%s\n", j.str().c_str());
+    return kExitOk;
+  }
+  std::printf("map            %s (format %u)\n", f.map.c_str(), io::kMapFormatVersion);
+  std::printf("resolution     %g m, regions of %d^3 voxels (%g m)\n", c.geometry.resolution,
+              c.geometry.region_voxels, c.geometry.regionExtent());
+  std::printf("semantics      %s\n", toString(c.semantics));
+  std::printf("occupancy      hit %.4g, miss %.4g, clamps %.4g / %.4g, threshold %.4g"
+              " (log-odds %+.4f %+.4f %+.4f %+.4f %+.4f)\n",
+              probability(o.hit), probability(o.miss), probability(o.clamp_min),
+              probability(o.clamp_max), probability(o.threshold), static_cast<double>(o.hit),
+              static_cast<double>(o.miss), static_cast<double>(o.clamp_min),
+              static_cast<double>(o.clamp_max), static_cast<double>(o.threshold));
+  std::printf("layers         %s\n", layers.c_str());
+  std::printf("regions        %s (%.1f MiB in memory)\n", withCommas(s.regions).c_str(),
+              static_cast<double>(s.regions * bytes_per_region) / (1024.0 * 1024.0));
+  std::printf("voxels         %s free, %s occupied, %s unobserved in stored regions\n",
+              withCommas(s.voxels_free).c_str(), withCommas(s.voxels_occupied).c_str(),
+              withCommas(s.voxels_unobserved).c_str());
+  if (s.voxels_free + s.voxels_occupied > 0) {
+    std::printf("extent         [%.2f, %.2f, %.2f] to [%.2f, %.2f, %.2f] m\n", s.observed_min.x,
+                s.observed_min.y, s.observed_min.z, s.observed_max.x, s.observed_max.y,
+                s.observed_max.z);
+  }
+  for (const auto& [key, value] : map->info()) {
+    std::printf("%-14s %s\n", key.c_str(), value.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void addInfoCommand(CLI::App& app, int* exit_code) {
+  auto flags = std::make_shared<InfoFlags>();
+  CLI::App* c = app.add_subcommand("info", "Show a map's parameters, layers and voxel counts");
+  c->add_option("map", flags->map, "Map file (.rmap)")->required();
+  c->add_flag("--json", flags->json, "Print JSON");
+  c->callback([flags, exit_code] { *exit_code = runInfo(*flags); });
+}
+
+}  // namespace raymap::cli

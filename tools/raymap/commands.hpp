@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The subcommands of `raymap`. Each registers itself on the app and sets *exit_code when it runs.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+
+namespace raymap::cli {
+
+/// Exit codes of the raymap program.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;  ///< bad input, unwritable output, full store, ...
+inline constexpr int kExitUsage = 2;    ///< unknown option, bad option value
+
+void addPopulateCommand(CLI::App& app, int* exit_code);
+void addInfoCommand(CLI::App& app, int* exit_code);
+void addExportCommand(CLI::App& app, int* exit_code);
+void addBenchCommand(CLI::App& app, int* exit_code);
+void addDemoCommand(CLI::App& app, int* exit_code);
+
+/// @brief Prints "raymap <command>: error: <message>" on stderr.
+void printError(const std::string& command, const std::string& message);
+
+/// @brief 1234567 -> "1,234,567".
+std::string withCommas(std::uint64_t value);
+
+}  // namespace raymap::cli

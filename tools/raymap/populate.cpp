@@ -1,0 +1,212 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The offline mapping job.
+#include "tools/raymap/populate.hpp"
+
+#include <chrono>
+#include <vector>
+
+#include "platform/process.hpp"
+#include "src/map/cpu_backend.hpp"
+#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/progress.hpp"
+
+namespace raymap::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string number(double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%g", value);
+  return buffer;
+}
+
+}  // namespace
+
+Result<PopulateReport> integrateStream(
+    VoxelMap& map, const PopulateOptions& options,
+    const std::function<Result<std::size_t>(std::span<Ray>)>& next_chunk,
+    const std::function<double()>& progress) {
+  const Clock::time_point start = Clock::now();
+  CpuBackendOptions backend_options;
+  backend_options.threads = options.threads;
+  auto backend_or = createCpuBackend(map, backend_options);
+  if (!backend_or) {
+    return Unexpected(backend_or.error());
+  }
+  Backend& backend = **backend_or;
+  RayPreparer preparer(map, options.filter);
+  const bool per_scan = map.semantics() == Semantics::kPerScan;
+
+  PopulateReport report;
+  report.backend_name = backend.name();
+  report.threads = backend.threads();
+  std::vector<Ray> chunk(std::size_t{1} << 16);
+  std::vector<PreparedRay> batch(options.batch_rays);
+  std::size_t batch_fill = 0;
+  bool have_scan = false;
+  bool scan_was_split = false;
+  std::uint64_t current_scan = 0;
+  ProgressBar bar("populate", options.progress);
+
+  auto flush = [&]() -> Expected<void, Error> {
+    if (batch_fill == 0) {
+      return {};
+    }
+    const Clock::time_point t = Clock::now();
+    auto ok = backend.integrate(std::span<const PreparedRay>(batch.data(), batch_fill));
+    report.integrate_seconds += secondsSince(t);
+    batch_fill = 0;
+    if (!ok) {
+      if (ok.error() == IntegrateError::kStoreFull) {
+        const double gib =
+            static_cast<double>(map.store().poolBytes()) / static_cast<double>(1u << 30);
+        return fail(ErrorCode::kCapacity,
+                    "the map needs more than the " + std::to_string(map.store().capacity()) +
+                        " regions (" + number(gib) +
+                        " GiB) its memory budget allows; raise --max-memory");
+      }
+      return fail(ErrorCode::kIo, std::string("integration failed: ") + toString(ok.error()));
+    }
+    return {};
+  };
+
+  for (;;) {
+    const Clock::time_point t_read = Clock::now();
+    auto count = next_chunk(chunk);
+    report.read_seconds += secondsSince(t_read);
+    if (!count) {
+      return Unexpected(count.error());
+    }
+    if (*count == 0) {
+      break;
+    }
+    const std::span<const Ray> rays(chunk.data(), *count);
+    std::size_t i = 0;
+    while (i < rays.size()) {
+      // A run of rays of one scan (per-ray maps take the whole chunk as one run).
+      std::size_t run_end = i;
+      while (run_end < rays.size() && rays[run_end].scan == rays[i].scan) {
+        ++run_end;
+      }
+      if (!have_scan || rays[i].scan != current_scan) {
+        ++report.scans;
+        if (per_scan && have_scan) {
+          if (auto ok = flush(); !ok) {
+            return Unexpected(ok.error());
+          }
+        }
+        scan_was_split = false;
+        have_scan = true;
+        current_scan = rays[i].scan;
+      }
+      while (i < run_end) {
+        const Clock::time_point t_prep = Clock::now();
+        const RayPreparer::Progress p =
+            preparer.prepare(rays.subspan(i, run_end - i),
+                             std::span<PreparedRay>(batch.data() + batch_fill, batch.size() - batch_fill));
+        report.integrate_seconds += secondsSince(t_prep);
+        batch_fill += p.written;
+        i += p.consumed;
+        if (i < run_end) {  // the batch is full
+          if (per_scan && !scan_was_split) {
+            ++report.scans_split;
+            scan_was_split = true;
+          }
+          if (auto ok = flush(); !ok) {
+            return Unexpected(ok.error());
+          }
+        }
+      }
+    }
+    if (!per_scan && batch_fill == batch.size()) {
+      if (auto ok = flush(); !ok) {
+        return Unexpected(ok.error());
+      }
+    }
+    const double seconds = report.integrate_seconds;
+    bar.update(progress(), preparer.counters().rays_in,
+               seconds > 0 ? static_cast<double>(preparer.counters().rays_accepted) / seconds : 0.0);
+  }
+  if (auto ok = flush(); !ok) {
+    return Unexpected(ok.error());
+  }
+  (void)backend.synchronise();
+  bar.finish();
+  report.rays = preparer.counters();
+  report.backend = backend.stats();
+  report.summary = map.summarise();
+  report.total_seconds = secondsSince(start);
+  report.peak_rss_bytes = platform::peakResidentBytes();
+  return report;
+}
+
+Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& options) {
+  auto source_or = io::openRaySource(options.input, options.source);
+  if (!source_or) {
+    return Unexpected(source_or.error());
+  }
+  io::RaySource& source = **source_or;
+  auto report = integrateStream(
+      map, options, [&](std::span<Ray> out) { return source.read(out); },
+      [&] { return source.progress(); });
+  if (!report) {
+    return report;
+  }
+  map.setInfo("source", options.input);
+  map.setInfo("rays_in", std::to_string(report->rays.rays_in));
+  map.setInfo("rays_integrated", std::to_string(report->rays.rays_accepted));
+  map.setInfo("min_range_m", number(options.filter.min_range_m));
+  map.setInfo("max_range_m", number(options.filter.max_range_m));
+  map.setInfo("segment_length_m", number(options.filter.segment_length_m));
+  map.setInfo("walk", options.filter.reverse ? "reverse" : "forward");
+  map.setInfo("created_by", "raymap populate");
+  return report;
+}
+
+std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
+  JsonObject j;
+  const double rate = r.integrate_seconds > 0
+                          ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
+                          : 0.0;
+  j.add("input", options.input)
+      .add("mapper", "raymap")
+      .add("semantics", toString(options.map.semantics))
+      .add("resolution", options.map.geometry.resolution)
+      .add("region_voxels", options.map.geometry.region_voxels)
+      .add("min_range", options.filter.min_range_m)
+      .add("max_range", options.filter.max_range_m)
+      .add("walk", options.filter.reverse ? "reverse" : "forward")
+      .add("hit_probability", probability(options.map.occupancy.hit))
+      .add("miss_probability", probability(options.map.occupancy.miss))
+      .add("rays_in", r.rays.rays_in)
+      .add("rays_integrated", r.rays.rays_accepted)
+      .add("rays_rejected", r.rays.rejected())
+      .add("rays_invalid", r.rays.rays_invalid)
+      .add("rays_too_short", r.rays.rays_too_short)
+      .add("rays_out_of_bounds", r.rays.rays_out_of_bounds)
+      .add("rays_clipped", r.rays.rays_clipped)
+      .add("rays_no_return", r.rays.rays_no_return)
+      .add("ray_pieces", r.rays.pieces_out)
+      .add("scans", r.scans)
+      .add("scans_split", r.scans_split)
+      .add("integrate_seconds", r.integrate_seconds)
+      .add("rays_per_second", rate)
+      .add("read_seconds", r.read_seconds)
+      .add("total_seconds", r.total_seconds)
+      .add("voxels_free", r.summary.voxels_free)
+      .add("voxels_occupied", r.summary.voxels_occupied)
+      .add("regions", r.summary.regions)
+      .add("voxels_visited", r.backend.voxels_visited)
+      .add("backend", r.backend_name)
+      .add("threads", r.threads)
+      .add("updates_dropped", r.backend.updates_dropped)
+      .add("peak_rss_bytes", r.peak_rss_bytes);
+  return j.str();
+}
+
+}  // namespace raymap::cli

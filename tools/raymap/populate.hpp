@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The offline mapping job: stream rays from a file through preparation into a backend.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+
+#include "src/core/error.hpp"
+#include "src/io/ray_source.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/ray_preparer.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::cli {
+
+/// @brief Everything `raymap populate` needs besides output paths.
+struct PopulateOptions {
+  static constexpr std::size_t kDefaultBatchRays = std::size_t{1} << 18;
+
+  std::string input;
+  io::RaySourceOptions source;
+  MapConfig map;
+  RayFilter filter;
+  unsigned threads = 0;  ///< 0 = all cores, 1 = single-threaded reference
+  std::size_t batch_rays = kDefaultBatchRays;  ///< prepared rays per backend call
+  bool progress = true;  ///< progress bar on a terminal
+};
+
+/// @brief What a run did and how long it took.
+struct PopulateReport {
+  RayCounters rays;
+  BackendStats backend;
+  std::string backend_name;
+  unsigned threads = 0;
+  std::uint64_t scans = 0;        ///< runs of equal scan index seen
+  std::uint64_t scans_split = 0;  ///< per-scan: scans larger than a batch, integrated in parts
+  double integrate_seconds = 0;   ///< preparation + integration; file reading excluded
+  double read_seconds = 0;        ///< reading and decoding the input
+  double total_seconds = 0;
+  MapSummary summary;
+  std::uint64_t peak_rss_bytes = 0;
+};
+
+/// @brief Integrates rays into `map` with a new backend, batching by size (per-ray) or by scan
+/// (per-scan). `next_chunk` fills a span and returns how many rays it wrote (0 at the end).
+/// `progress` gets the fraction of the input consumed. Fails on read errors and when a global
+/// map's store is full (the message says how to raise --max-memory).
+Result<PopulateReport> integrateStream(
+    VoxelMap& map, const PopulateOptions& options,
+    const std::function<Result<std::size_t>(std::span<Ray>)>& next_chunk,
+    const std::function<double()>& progress);
+
+/// @brief Opens options.input and integrates it (integrateStream over a RaySource); records
+/// provenance in the map's info.
+Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& options);
+
+/// @brief The statistics JSON of a run (keys documented in docs/cli.md).
+std::string statsJson(const PopulateReport& report, const PopulateOptions& options);
+
+}  // namespace raymap::cli
