@@ -12,6 +12,9 @@
 
 #include "portable.h"
 
+/* Largest region edge in voxels (MapGeometry::kMaxRegionVoxels). */
+#define RM_MAX_REGION_VOXELS 128
+
 /* Floor division for a positive divisor: rm_floor_div(-1, 32) == -1 (C division truncates). */
 RAYMAP_FN rm_i32 rm_floor_div(rm_i32 value, rm_i32 divisor) {
   rm_i32 q = value / divisor;

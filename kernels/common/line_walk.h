@@ -8,14 +8,14 @@
  * across: only the host computes global keys (in double).
  *
  * Termination and endpoints come from integers, not from float comparisons. The caller supplies
- * the integer offset of the end voxel (computed on the host from exact keys); the walk takes exactly
- * |dx| + |dy| + |dz| steps, each to a face-adjacent voxel, and an axis whose steps are used up is
- * never stepped again. Floats only choose the ORDER of the steps. So the walk ends on the end voxel
- * and terminates for every input: rays starting or ending on faces, edges or corners, axis-aligned
- * rays, zero-length rays (no step), rays whose float direction rounds to zero on an axis (that
- * axis is stepped first, at t = 0), and rays of any length (the next crossing on an axis is
- * recomputed as first + steps * inverse-extent each time, never accumulated, so rounding does not
- * grow along a 1 km ray).
+ * the integer offset of the end voxel (computed on the host from exact keys); the walk takes
+ * exactly |dx| + |dy| + |dz| steps, each to a face-adjacent voxel, and an axis whose steps are used
+ * up is never stepped again. Floats only choose the ORDER of the steps. So the walk ends on the end
+ * voxel and terminates for every input: rays starting or ending on faces, edges or corners,
+ * axis-aligned rays, zero-length rays (no step), rays whose float direction rounds to zero on an
+ * axis (that axis is stepped first, at t = 0), and rays of any length (the next crossing on an axis
+ * is recomputed as first + steps * inverse-extent each time, never accumulated, so rounding does
+ * not grow along a 1 km ray).
  *
  * The ray parameter t runs from 0 at the start point to 1 at the end point. A walk may cover only
  * a span [t0, t1] of the ray clamped to a box of voxels (one region of the map): that is how the
@@ -96,10 +96,10 @@ RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, rm_vec3f start, rm_vec3f 
   rm_vec3f extent = rm_vec3f_make(end.x - start.x, end.y - start.y, end.z - start.z);
   int start_exact = holds_start;
   int end_exact = holds_end;
-  rm_vec3f p0 = rm_vec3f_make(start.x + t0 * extent.x, start.y + t0 * extent.y,
-                              start.z + t0 * extent.z);
-  rm_vec3f p1 = rm_vec3f_make(start.x + t1 * extent.x, start.y + t1 * extent.y,
-                              start.z + t1 * extent.z);
+  rm_vec3f p0 =
+      rm_vec3f_make(start.x + t0 * extent.x, start.y + t0 * extent.y, start.z + t0 * extent.z);
+  rm_vec3f p1 =
+      rm_vec3f_make(start.x + t1 * extent.x, start.y + t1 * extent.y, start.z + t1 * extent.z);
   rm_vec3i k0;
   rm_vec3i k1;
   if (start_exact) {

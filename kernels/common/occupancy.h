@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: BSD-3-Clause */
 /* Occupancy update rules (log-odds), shared by the CPU reference, OpenCL and CUDA.
  *
- * A voxel's occupancy is a float log-odds value l = ln(p / (1 - p)). RM_OCC_UNOBSERVED (+inf) marks a
- * voxel no ray has touched; the first update starts from l = 0 (p = 0.5), as OctoMap does. Values
+ * A voxel's occupancy is a float log-odds value l = ln(p / (1 - p)). RM_OCC_UNOBSERVED (+inf) marks
+ * a voxel no ray has touched; the first update starts from l = 0 (p = 0.5), as OctoMap does. Values
  * are clamped to [clamp_min, clamp_max] so that a voxel can change state again after many
  * consistent observations. A voxel is occupied when observed and l >= threshold, free when
  * l < threshold. */

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: BSD-3-Clause */
-/* Maps qualifiers, fixed-width types, casts and float helpers onto host C/C++, CUDA and OpenCL C 1.2,
- * so that the kernel headers beside this one are written once. */
+/* Maps qualifiers, fixed-width types, casts and float helpers onto host C/C++, CUDA and OpenCL
+ * C 1.2, so that the kernel headers beside this one are written once. */
 #ifndef RAYMAP_KERNELS_COMMON_PORTABLE_H
 #define RAYMAP_KERNELS_COMMON_PORTABLE_H
 

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PageBlock on Linux: anonymous private mappings.
-#include <sys/mman.h>
-#include <unistd.h>
+#include "platform/memory.hpp"
 
 #include <cerrno>
 #include <cstring>
 #include <string>
 #include <utility>
 
-#include "platform/memory.hpp"
+#include <sys/mman.h>
+#include <unistd.h>
 
 namespace raymap::platform {
 
@@ -18,8 +18,8 @@ Result<PageBlock> PageBlock::create(std::size_t bytes) {
   }
   const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
   const std::size_t rounded = (bytes + page - 1) / page * page;
-  void* p = mmap(nullptr, rounded, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE,
-                 -1, 0);
+  void* p = mmap(nullptr, rounded, PROT_READ | PROT_WRITE,
+                 MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
   if (p == MAP_FAILED) {
     return fail(ErrorCode::kCapacity, "cannot reserve " + std::to_string(rounded) +
                                           " bytes of memory: " + std::strerror(errno));

@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Process facts on Linux.
-#include <sched.h>
-#include <sys/resource.h>
-#include <unistd.h>
+#include "platform/process.hpp"
 
 #include <fstream>
 
-#include "platform/process.hpp"
+#include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 namespace raymap::platform {
 

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Contract checks: a failed check is a bug, so it reports where and aborts (systemd restarts the service).
+// Contract checks: a failed check is a bug, so it reports where and aborts (systemd restarts the
+// service).
 #pragma once
 
 namespace raymap::detail {
@@ -9,28 +10,28 @@ namespace raymap::detail {
 }  // namespace raymap::detail
 
 /// Precondition check, on in every build type (use only for O(1) checks).
-#define RAYMAP_EXPECTS(cond)                                                         \
-  do {                                                                               \
-    if (!(cond)) [[unlikely]] {                                                      \
+#define RAYMAP_EXPECTS(cond)                                                          \
+  do {                                                                                \
+    if (!(cond)) [[unlikely]] {                                                       \
       ::raymap::detail::contractViolation("precondition", #cond, __FILE__, __LINE__); \
-    }                                                                                \
+    }                                                                                 \
   } while (false)
 
 /// Postcondition check, on in every build type (use only for O(1) checks).
-#define RAYMAP_ENSURES(cond)                                                          \
-  do {                                                                                \
-    if (!(cond)) [[unlikely]] {                                                       \
+#define RAYMAP_ENSURES(cond)                                                           \
+  do {                                                                                 \
+    if (!(cond)) [[unlikely]] {                                                        \
       ::raymap::detail::contractViolation("postcondition", #cond, __FILE__, __LINE__); \
-    }                                                                                 \
+    }                                                                                  \
   } while (false)
 
 /// Expensive checks: compiled only into debug and test builds (RAYMAP_DEBUG_CHECKS).
 #if defined(RAYMAP_DEBUG_CHECKS)
-#define RAYMAP_DEBUG_ASSERT(cond)                                                   \
-  do {                                                                              \
-    if (!(cond)) [[unlikely]] {                                                     \
+#define RAYMAP_DEBUG_ASSERT(cond)                                                        \
+  do {                                                                                   \
+    if (!(cond)) [[unlikely]] {                                                          \
       ::raymap::detail::contractViolation("debug assertion", #cond, __FILE__, __LINE__); \
-    }                                                                               \
+    }                                                                                    \
   } while (false)
 #else
 #define RAYMAP_DEBUG_ASSERT(cond) \

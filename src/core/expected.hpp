@@ -36,11 +36,13 @@ class [[nodiscard]] Expected {
   constexpr Expected() requires std::is_default_constructible_v<T> : has_value_(true) {
     new (&storage_.value) T();
   }
-  constexpr Expected(T value) : has_value_(true) {  // NOLINT(google-explicit-constructor): like std::expected
+  constexpr Expected(T value)
+      : has_value_(true) {  // NOLINT(google-explicit-constructor): like std::expected
     new (&storage_.value) T(std::move(value));
   }
   template <class G>
-  constexpr Expected(Unexpected<G> error)  // NOLINT(google-explicit-constructor): like std::expected
+  constexpr Expected(
+      Unexpected<G> error)  // NOLINT(google-explicit-constructor): like std::expected
       : has_value_(false) {
     new (&storage_.error) E(std::move(error).error());
   }
@@ -142,7 +144,8 @@ class [[nodiscard]] Expected<void, E> {
 
   constexpr Expected() = default;
   template <class G>
-  constexpr Expected(Unexpected<G> error)  // NOLINT(google-explicit-constructor): like std::expected
+  constexpr Expected(
+      Unexpected<G> error)  // NOLINT(google-explicit-constructor): like std::expected
       : has_value_(false), error_(std::move(error).error()) {}
 
   constexpr bool has_value() const noexcept { return has_value_; }

@@ -14,16 +14,26 @@ struct Vec3d {
   double y = 0.0;
   double z = 0.0;
 
-  constexpr double operator[](int axis) const noexcept { return axis == 0 ? x : (axis == 1 ? y : z); }
+  constexpr double operator[](int axis) const noexcept {
+    return axis == 0 ? x : (axis == 1 ? y : z);
+  }
   constexpr double& operator[](int axis) noexcept { return axis == 0 ? x : (axis == 1 ? y : z); }
-  friend constexpr Vec3d operator+(Vec3d a, Vec3d b) noexcept { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-  friend constexpr Vec3d operator-(Vec3d a, Vec3d b) noexcept { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-  friend constexpr Vec3d operator*(Vec3d a, double s) noexcept { return {a.x * s, a.y * s, a.z * s}; }
+  friend constexpr Vec3d operator+(Vec3d a, Vec3d b) noexcept {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+  }
+  friend constexpr Vec3d operator-(Vec3d a, Vec3d b) noexcept {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+  }
+  friend constexpr Vec3d operator*(Vec3d a, double s) noexcept {
+    return {a.x * s, a.y * s, a.z * s};
+  }
   friend constexpr Vec3d operator*(double s, Vec3d a) noexcept { return a * s; }
   friend constexpr bool operator==(Vec3d a, Vec3d b) noexcept = default;
   constexpr double dot(Vec3d o) const noexcept { return x * o.x + y * o.y + z * o.z; }
   double norm() const noexcept { return std::sqrt(dot(*this)); }
-  bool isFinite() const noexcept { return std::isfinite(x) && std::isfinite(y) && std::isfinite(z); }
+  bool isFinite() const noexcept {
+    return std::isfinite(x) && std::isfinite(y) && std::isfinite(z);
+  }
 };
 
 /// @brief A 3-vector of 32-bit integers: voxel and region coordinates.
@@ -35,9 +45,15 @@ struct Vec3i {
   constexpr std::int32_t operator[](int axis) const noexcept {
     return axis == 0 ? x : (axis == 1 ? y : z);
   }
-  constexpr std::int32_t& operator[](int axis) noexcept { return axis == 0 ? x : (axis == 1 ? y : z); }
-  friend constexpr Vec3i operator+(Vec3i a, Vec3i b) noexcept { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-  friend constexpr Vec3i operator-(Vec3i a, Vec3i b) noexcept { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+  constexpr std::int32_t& operator[](int axis) noexcept {
+    return axis == 0 ? x : (axis == 1 ? y : z);
+  }
+  friend constexpr Vec3i operator+(Vec3i a, Vec3i b) noexcept {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+  }
+  friend constexpr Vec3i operator-(Vec3i a, Vec3i b) noexcept {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+  }
   friend constexpr bool operator==(Vec3i a, Vec3i b) noexcept = default;
 };
 

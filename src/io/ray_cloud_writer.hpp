@@ -15,8 +15,8 @@ namespace raymap::io {
 /// @brief Streams rays into a binary little-endian ray-cloud PLY with the layout of the shared
 /// data: double x y z (sample, world frame, metres), double time (s), float nx ny nz
 /// (origin - sample), float intensity, uint scan, uchar alpha (255 = return, 0 = no-return ray).
-/// The vertex count is patched in on finish(); the file appears (temporary file + rename) only then.
-/// Not thread-safe.
+/// The vertex count is patched in on finish(); the file appears (temporary file + rename) only
+/// then. Not thread-safe.
 class RayCloudWriter {
  public:
   static Result<std::unique_ptr<RayCloudWriter>> open(const std::string& path);

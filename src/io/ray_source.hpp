@@ -31,14 +31,14 @@ struct RaySourceOptions {
 /// @brief What the source found in the file header.
 struct RaySourceInfo {
   std::string path;
-  std::string format;       ///< "ascii", "binary_little_endian" or "binary_big_endian"
-  bool compressed = false;  ///< gzip-compressed (.ply.gz)
-  bool ray_cloud = false;   ///< per-point vector to the sensor (origin = point + normal)
+  std::string format;               ///< "ascii", "binary_little_endian" or "binary_big_endian"
+  bool compressed = false;          ///< gzip-compressed (.ply.gz)
+  bool ray_cloud = false;           ///< per-point vector to the sensor (origin = point + normal)
   std::uint64_t declared_rays = 0;  ///< vertex count from the header
   std::string time_property;        ///< property used as time, empty when none
   bool has_scan = false;            ///< `scan` property present
   bool has_intensity = false;
-  bool has_alpha = false;           ///< alpha present (0 = no-return ray)
+  bool has_alpha = false;  ///< alpha present (0 = no-return ray)
 };
 
 /// @brief A stream of rays in file order. Reads a bounded chunk at a time, so files larger than

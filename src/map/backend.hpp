@@ -21,8 +21,8 @@ const char* toString(IntegrateError error) noexcept;
 /// @brief Counters a backend keeps over its lifetime.
 struct BackendStats {
   std::uint64_t batches = 0;
-  std::uint64_t rays = 0;            ///< prepared rays integrated
-  std::uint64_t voxels_visited = 0;  ///< voxel visits (updates plus skipped per-scan repeats)
+  std::uint64_t rays = 0;             ///< prepared rays integrated
+  std::uint64_t voxels_visited = 0;   ///< voxel visits (updates plus skipped per-scan repeats)
   std::uint64_t updates_dropped = 0;  ///< updates given up under contention (always 0 on the CPU)
   std::uint64_t spans_outside_window = 0;  ///< ray pieces skipped: region outside a rolling window
 };

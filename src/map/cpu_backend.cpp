@@ -165,8 +165,8 @@ class CpuBackend final : public Backend {
   std::uint32_t missSpan(const rm_ray_walk_frame& frame, const RaySpan& span,
                          const RegionLayers& layers) const noexcept {
     if (per_scan_) {
-      return detail::walkSpan(frame, span, n_,
-                              detail::PerScanMiss{layers.occupancy, layers.marks, sequence_, params_});
+      return detail::walkSpan(
+          frame, span, n_, detail::PerScanMiss{layers.occupancy, layers.marks, sequence_, params_});
     }
     return detail::walkSpan(frame, span, n_, detail::PerRayMiss{layers.occupancy, params_});
   }

@@ -52,7 +52,8 @@ Expected<void, Error> LayerSchema::add(LayerKind kind) {
                 "unknown layer kind " + std::to_string(static_cast<int>(kind)));
   }
   if (count_ >= kMaxLayers) {
-    return fail(ErrorCode::kCapacity, "a map holds at most " + std::to_string(kMaxLayers) + " layers");
+    return fail(ErrorCode::kCapacity,
+                "a map holds at most " + std::to_string(kMaxLayers) + " layers");
   }
   kinds_[static_cast<std::size_t>(count_)] = kind;
   specs_[static_cast<std::size_t>(count_)] = *spec;

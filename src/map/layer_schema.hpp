@@ -26,12 +26,12 @@ struct LayerSpec {
   static constexpr std::uint32_t kMaxWordsPerVoxel = 8;
 
   LayerKind kind;
-  std::string_view name;         ///< stable name, used in files and tools
+  std::string_view name;          ///< stable name, used in files and tools
   std::uint32_t bytes_per_voxel;  ///< multiple of 4, at most 32
   /// Value of a voxel nobody has touched, as 32-bit words (little-endian order of the struct).
   std::array<std::uint32_t, kMaxWordsPerVoxel> clear_words;
-  bool saved;              ///< written to map files
-  std::uint16_t version;   ///< bumped when the layer's encoding changes
+  bool saved;             ///< written to map files
+  std::uint16_t version;  ///< bumped when the layer's encoding changes
 };
 
 /// @brief The spec of a known layer kind; nullopt for values this build does not know (a newer

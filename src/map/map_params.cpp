@@ -48,10 +48,10 @@ Expected<void, Error> MapGeometry::validate() const {
                 "resolution must be between 0.001 and 100 metres (got " + number(resolution) + ")");
   }
   if (region_voxels < kMinRegionVoxels || region_voxels > kMaxRegionVoxels) {
-    return fail(ErrorCode::kInvalidArgument,
-                "region-voxels must be between " + std::to_string(kMinRegionVoxels) + " and " +
-                    std::to_string(kMaxRegionVoxels) + " (got " + std::to_string(region_voxels) +
-                    ")");
+    return fail(ErrorCode::kInvalidArgument, "region-voxels must be between " +
+                                                 std::to_string(kMinRegionVoxels) + " and " +
+                                                 std::to_string(kMaxRegionVoxels) + " (got " +
+                                                 std::to_string(region_voxels) + ")");
   }
   return {};
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "kernels/common/key_math.h"
 #include "kernels/common/occupancy.h"
 #include "src/core/error.hpp"
 
@@ -62,13 +63,13 @@ enum class Semantics : std::uint8_t {
 const char* toString(Semantics semantics) noexcept;
 
 /// @brief Geometry of the voxel grid.
-/// Voxel v covers [v * resolution, (v + 1) * resolution) metres on each axis (world frame); a region
-/// is region_voxels^3 voxels.
+/// Voxel v covers [v * resolution, (v + 1) * resolution) metres on each axis (world frame); a
+/// region is region_voxels^3 voxels.
 struct MapGeometry {
   static constexpr double kDefaultResolution = 0.1;  // metres
   static constexpr std::int32_t kDefaultRegionVoxels = 32;
   static constexpr std::int32_t kMinRegionVoxels = 4;
-  static constexpr std::int32_t kMaxRegionVoxels = 128;
+  static constexpr std::int32_t kMaxRegionVoxels = RM_MAX_REGION_VOXELS;
 
   double resolution = kDefaultResolution;  ///< voxel edge, metres
   std::int32_t region_voxels = kDefaultRegionVoxels;

@@ -17,9 +17,9 @@ inline constexpr std::uint32_t kRayNoReturn = 1u;
 /// @brief One measurement: the sensor origin and the sample (return) point, world frame, metres.
 /// Plain value type as readers produce it.
 struct Ray {
-  Vec3d origin;          ///< sensor position, world frame, metres
-  Vec3d sample;          ///< return (or no-return end point), world frame, metres
-  double time_s = 0.0;   ///< time of the sample, seconds (time base of the source)
+  Vec3d origin;         ///< sensor position, world frame, metres
+  Vec3d sample;         ///< return (or no-return end point), world frame, metres
+  double time_s = 0.0;  ///< time of the sample, seconds (time base of the source)
   float intensity = 0.0f;
   std::uint32_t flags = 0;  ///< kRay* flags
   std::uint64_t scan = 0;   ///< index of the scan (sensor sweep) the ray belongs to

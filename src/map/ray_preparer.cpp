@@ -164,8 +164,8 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
     ++progress.consumed;
     const std::uint32_t walk_flag = filter_.reverse ? RM_RAY_REVERSE : 0u;
     if (pieces == 1) {
-      out[progress.written++] = PreparedRay{origin_voxel, origin_local, sample_voxel, sample_local,
-                                            end_flag | walk_flag, ray.intensity};
+      out[progress.written++] = PreparedRay{origin_voxel, origin_local,         sample_voxel,
+                                            sample_local, end_flag | walk_flag, ray.intensity};
       continue;
     }
     const Vec3d d = sample - origin;

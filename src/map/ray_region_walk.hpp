@@ -31,20 +31,19 @@ class RayRegionWalk {
       : frame_(rm_ray_walk_frame_make(ray)), n_(region_voxels) {
     start_region_ = rm_region_of_voxel(frame_.start_voxel, n_);
     start_local_ = rm_local_of_voxel(frame_.start_voxel, n_);
-    const rm_vec3i end_global =
-        rm_vec3i_make(frame_.start_voxel.x + frame_.end_voxel.x,
-                      frame_.start_voxel.y + frame_.end_voxel.y,
-                      frame_.start_voxel.z + frame_.end_voxel.z);
+    const rm_vec3i end_global = rm_vec3i_make(frame_.start_voxel.x + frame_.end_voxel.x,
+                                              frame_.start_voxel.y + frame_.end_voxel.y,
+                                              frame_.start_voxel.z + frame_.end_voxel.z);
     const rm_vec3i end_region = rm_region_of_voxel(end_global, n_);
     const float inv_n = 1.0f / static_cast<float>(n_);
-    const rm_vec3f region_start = rm_vec3f_make(
-        (static_cast<float>(start_local_.x) + frame_.start.x) * inv_n,
-        (static_cast<float>(start_local_.y) + frame_.start.y) * inv_n,
-        (static_cast<float>(start_local_.z) + frame_.start.z) * inv_n);
-    const rm_vec3f region_end = rm_vec3f_make(
-        (static_cast<float>(start_local_.x) + frame_.end.x) * inv_n,
-        (static_cast<float>(start_local_.y) + frame_.end.y) * inv_n,
-        (static_cast<float>(start_local_.z) + frame_.end.z) * inv_n);
+    const rm_vec3f region_start =
+        rm_vec3f_make((static_cast<float>(start_local_.x) + frame_.start.x) * inv_n,
+                      (static_cast<float>(start_local_.y) + frame_.start.y) * inv_n,
+                      (static_cast<float>(start_local_.z) + frame_.start.z) * inv_n);
+    const rm_vec3f region_end =
+        rm_vec3f_make((static_cast<float>(start_local_.x) + frame_.end.x) * inv_n,
+                      (static_cast<float>(start_local_.y) + frame_.end.y) * inv_n,
+                      (static_cast<float>(start_local_.z) + frame_.end.z) * inv_n);
     rm_line_walk_init(&walk_, region_start, region_end,
                       rm_vec3i_make(end_region.x - start_region_.x, end_region.y - start_region_.y,
                                     end_region.z - start_region_.z));
@@ -63,15 +62,15 @@ class RayRegionWalk {
     }
     span->first = !started_;
     started_ = true;
-    span->region = Vec3i{start_region_.x + walk_.x, start_region_.y + walk_.y,
-                         start_region_.z + walk_.z};
+    span->region =
+        Vec3i{start_region_.x + walk_.x, start_region_.y + walk_.y, start_region_.z + walk_.z};
     span->t0 = walk_.t_enter;
     span->t1 = rm_line_walk_t_exit(&walk_);
     span->last = walk_.steps_left == 0;
     span->box_lo = rm_vec3i_make(walk_.x * n_ - start_local_.x, walk_.y * n_ - start_local_.y,
                                  walk_.z * n_ - start_local_.z);
-    span->box_hi = rm_vec3i_make(span->box_lo.x + n_ - 1, span->box_lo.y + n_ - 1,
-                                 span->box_lo.z + n_ - 1);
+    span->box_hi =
+        rm_vec3i_make(span->box_lo.x + n_ - 1, span->box_lo.y + n_ - 1, span->box_lo.z + n_ - 1);
     return true;
   }
 

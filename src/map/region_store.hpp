@@ -15,7 +15,7 @@ namespace raymap {
 
 /// Why a region could not be stored (real-time path: a code, no message).
 enum class StoreError : std::uint8_t {
-  kFull,        ///< every slot holds a region
+  kFull,           ///< every slot holds a region
   kOutOfRange,     ///< the region coordinate is beyond RegionStore::kMaxRegionCoord
   kOutsideWindow,  ///< a rolling map was asked for a region outside its window
 };
@@ -23,8 +23,8 @@ enum class StoreError : std::uint8_t {
 const char* toString(StoreError error) noexcept;
 
 /// @brief All region memory of a map: one page-backed pool cut into `capacity` slots, each slot
-/// holding one contiguous array per layer, and a linear-probing hash index from region coordinate to
-/// slot.
+/// holding one contiguous array per layer, and a linear-probing hash index from region coordinate
+/// to slot.
 ///
 /// Design: memory is layer-major: layer L of slot S starts at
 /// `pool + layer_offset[L] + S * layer_region_bytes[L]`, so one layer of all regions is one array
@@ -83,7 +83,8 @@ class RegionStore {
   }
   template <class T>
   T* layerData(std::uint32_t slot, int layer) const noexcept {
-    return reinterpret_cast<T*>(layerBytes(slot, layer));  // NOLINT: pool holds trivially copyable voxels
+    return reinterpret_cast<T*>(
+        layerBytes(slot, layer));  // NOLINT: pool holds trivially copyable voxels
   }
   std::size_t layerRegionBytes(int layer) const noexcept {
     return layer_region_bytes_[static_cast<std::size_t>(layer)];

@@ -35,7 +35,8 @@ LayerSchema MapConfig::schema() const {
 
 std::uint64_t MapConfig::capacityRegions() const {
   if (policy == StorePolicy::kRolling) {
-    return std::uint64_t(std::max(window_regions.x, 0)) * std::uint64_t(std::max(window_regions.y, 0)) *
+    return std::uint64_t(std::max(window_regions.x, 0)) *
+           std::uint64_t(std::max(window_regions.y, 0)) *
            std::uint64_t(std::max(window_regions.z, 0));
   }
   const std::uint64_t per_region = schema().bytesPerRegion(geometry.voxelsPerRegion());
@@ -59,15 +60,14 @@ Expected<void, Error> MapConfig::validate() const {
   const std::uint64_t capacity = capacityRegions();
   if (capacity == 0) {
     const std::uint64_t per_region = schema().bytesPerRegion(geometry.voxelsPerRegion());
-    return fail(ErrorCode::kInvalidArgument,
-                "memory budget of " + std::to_string(memory_budget_bytes) +
-                    " bytes holds no region (one region takes " + std::to_string(per_region) +
-                    " bytes)");
+    return fail(ErrorCode::kInvalidArgument, "memory budget of " +
+                                                 std::to_string(memory_budget_bytes) +
+                                                 " bytes holds no region (one region takes " +
+                                                 std::to_string(per_region) + " bytes)");
   }
   if (capacity > std::numeric_limits<std::uint32_t>::max() / 4u) {
     return fail(ErrorCode::kInvalidArgument,
-                "the configuration asks for " + std::to_string(capacity) +
-                    " regions; at most " +
+                "the configuration asks for " + std::to_string(capacity) + " regions; at most " +
                     std::to_string(std::numeric_limits<std::uint32_t>::max() / 4u) +
                     " are supported");
   }

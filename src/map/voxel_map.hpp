@@ -80,7 +80,7 @@ class VoxelMap {
   const RegionStore& store() const noexcept { return store_; }
 
   int occupancyLayer() const noexcept { return occupancy_layer_; }
-  int meanLayer() const noexcept { return mean_layer_; }          ///< -1 without voxel means
+  int meanLayer() const noexcept { return mean_layer_; }           ///< -1 without voxel means
   int scanMarkLayer() const noexcept { return scan_mark_layer_; }  ///< -1 for per-ray maps
 
   // ---- keys (world frame, metres) ----
@@ -105,7 +105,9 @@ class VoxelMap {
   /// @return the number of regions recycled. @rt allocates: no; O(capacity).
   std::uint32_t setWindowCentre(Vec3d p_world) noexcept;
   Vec3i windowMinRegion() const noexcept { return window_min_; }
-  Vec3i windowMaxRegion() const noexcept { return window_min_ + config_.window_regions - Vec3i{1, 1, 1}; }
+  Vec3i windowMaxRegion() const noexcept {
+    return window_min_ + config_.window_regions - Vec3i{1, 1, 1};
+  }
   bool inWindow(Vec3i region) const noexcept;
   /// @brief World-frame box of the window, metres: {min corner, max corner}.
   std::pair<Vec3d, Vec3d> windowBounds() const noexcept;

@@ -28,8 +28,7 @@ class WorkerPool {
 
   template <class Fn>
   void run(Fn& job) {
-    runErased(
-        [](void* context, unsigned worker) { (*static_cast<Fn*>(context))(worker); }, &job);
+    runErased([](void* context, unsigned worker) { (*static_cast<Fn*>(context))(worker); }, &job);
   }
 
  private:

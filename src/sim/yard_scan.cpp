@@ -69,7 +69,8 @@ std::vector<Ray> simulateYardScans(const YardScanConfig& config) {
   const std::vector<Box> solids = config.solids.empty() ? yardSolids() : config.solids;
   const LidarModel& lidar = config.lidar;
   std::mt19937_64 rng(config.seed);
-  std::normal_distribution<double> noise(0.0, lidar.range_noise_m > 0.0 ? lidar.range_noise_m : 1.0);
+  std::normal_distribution<double> noise(0.0,
+                                         lidar.range_noise_m > 0.0 ? lidar.range_noise_m : 1.0);
   std::vector<Ray> rays;
   rays.reserve(static_cast<std::size_t>(config.scans) * static_cast<std::size_t>(lidar.beams) *
                static_cast<std::size_t>(lidar.columns));
@@ -82,10 +83,10 @@ std::vector<Ray> simulateYardScans(const YardScanConfig& config) {
       const double time = s * lidar.scan_period_s + lidar.scan_period_s * c / lidar.columns;
       for (int b = 0; b < lidar.beams; ++b) {
         const double elevation =
-            (lidar.beams > 1 ? lidar.elevation_min_deg + (lidar.elevation_max_deg -
-                                                          lidar.elevation_min_deg) *
-                                                             b / (lidar.beams - 1)
-                             : lidar.elevation_min_deg) *
+            (lidar.beams > 1
+                 ? lidar.elevation_min_deg +
+                       (lidar.elevation_max_deg - lidar.elevation_min_deg) * b / (lidar.beams - 1)
+                 : lidar.elevation_min_deg) *
             deg;
         const Vec3d dir{std::cos(elevation) * std::cos(azimuth),
                         std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};

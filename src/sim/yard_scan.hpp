@@ -25,9 +25,9 @@ struct LidarModel {
   double elevation_min_deg = -25.0;
   double elevation_max_deg = 15.0;
   int columns = 512;
-  double max_range_m = 40.0;     ///< beyond this the lidar reports no return
-  double range_noise_m = 0.01;   ///< standard deviation of Gaussian range noise
-  double scan_period_s = 0.1;    ///< time of one revolution
+  double max_range_m = 40.0;    ///< beyond this the lidar reports no return
+  double range_noise_m = 0.01;  ///< standard deviation of Gaussian range noise
+  double scan_period_s = 0.1;   ///< time of one revolution
 };
 
 /// @brief The yard: ground at z = 0, walls, obstacles; the lidar moves from `start` to `end`

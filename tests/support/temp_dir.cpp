@@ -2,17 +2,17 @@
 // TempDir and the shared-data lookup.
 #include "tests/support/temp_dir.hpp"
 
-#include <unistd.h>
-
 #include <cstdlib>
 #include <stdexcept>
+
+#include <unistd.h>
 
 namespace raymap::test {
 
 TempDir::TempDir() {
   const char* base = std::getenv("TMPDIR");
-  std::string pattern = std::string(base != nullptr && *base != '\0' ? base : "/tmp") +
-                        "/raymap-test-XXXXXX";
+  std::string pattern =
+      std::string(base != nullptr && *base != '\0' ? base : "/tmp") + "/raymap-test-XXXXXX";
   if (::mkdtemp(pattern.data()) == nullptr) {
     throw std::runtime_error("cannot create a temporary directory from " + pattern);
   }

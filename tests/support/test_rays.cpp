@@ -2,12 +2,12 @@
 // Test helpers for maps and rays.
 #include "tests/support/test_rays.hpp"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <cstring>
 #include <set>
 #include <tuple>
+
+#include <gtest/gtest.h>
 
 #include "src/map/cpu_backend.hpp"
 

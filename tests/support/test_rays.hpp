@@ -38,7 +38,9 @@ struct MapComparison {
   std::uint64_t compared = 0;
   std::uint64_t same_state = 0;
   std::uint64_t exact_value = 0;
-  double sameStateFraction() const { return compared ? double(same_state) / double(compared) : 1.0; }
+  double sameStateFraction() const {
+    return compared ? double(same_state) / double(compared) : 1.0;
+  }
 };
 MapComparison compareMaps(const VoxelMap& a, const VoxelMap& b);
 

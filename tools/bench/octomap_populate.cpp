@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // raymap-octomap: integrates an input with OctoMap and prints raymap's stats JSON keys, so both
 // mappers run side by side on the same rays (docs/benchmarks.md).
-#include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <CLI/CLI.hpp>
 
 #include "platform/process.hpp"
 #include "src/io/map_file.hpp"
@@ -37,7 +37,8 @@ int run(int argc, char** argv) {
   app.add_option("--max-range", options.max_range_m, "Clip longer rays, metres (0 = none)");
   app.add_option("--hit", hit, "Hit probability (default 0.7, OctoMap's)");
   app.add_option("--miss", miss, "Miss probability (default 0.4, OctoMap's)");
-  app.add_option("--semantics", semantics, "ray: insertRay per ray; scan: insertPointCloud per scan")
+  app.add_option("--semantics", semantics,
+                 "ray: insertRay per ray; scan: insertPointCloud per scan")
       ->check(CLI::IsMember({"ray", "scan"}));
   app.add_option("--compare", compare, "A raymap map of the same input: report voxel agreement");
   CLI11_PARSE(app, argc, argv);
@@ -94,9 +95,9 @@ int run(int argc, char** argv) {
       .add("rays_rejected", c.rays_rejected)
       .add("rays_skipped_no_return", c.rays_skipped_no_return)
       .add("integrate_seconds", c.integrate_seconds)
-      .add("rays_per_second",
-           c.integrate_seconds > 0 ? static_cast<double>(c.rays_integrated) / c.integrate_seconds
-                                   : 0.0)
+      .add("rays_per_second", c.integrate_seconds > 0
+                                  ? static_cast<double>(c.rays_integrated) / c.integrate_seconds
+                                  : 0.0)
       .add("voxels_free", c.voxels_free)
       .add("voxels_occupied", c.voxels_occupied)
       .add("backend", "octomap")

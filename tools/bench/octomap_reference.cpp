@@ -2,10 +2,10 @@
 // OctoMap reference mapper.
 #include "tools/bench/octomap_reference.hpp"
 
-#include <octomap/OcTree.h>
-
 #include <chrono>
 #include <cmath>
+
+#include <octomap/OcTree.h>
 
 namespace raymap::bench {
 namespace {
@@ -14,7 +14,8 @@ namespace {
 constexpr int kKeyOffset = 32768;
 
 octomap::point3d toPoint(Vec3d p) {
-  return octomap::point3d(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z));
+  return octomap::point3d(static_cast<float>(p.x), static_cast<float>(p.y),
+                          static_cast<float>(p.z));
 }
 
 }  // namespace

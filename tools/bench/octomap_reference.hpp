@@ -27,7 +27,7 @@ struct OctomapOptions {
 struct OctomapCounts {
   std::uint64_t rays_in = 0;
   std::uint64_t rays_integrated = 0;
-  std::uint64_t rays_rejected = 0;  ///< NaN/Inf or shorter than min range
+  std::uint64_t rays_rejected = 0;           ///< NaN/Inf or shorter than min range
   std::uint64_t rays_skipped_no_return = 0;  ///< per-scan: insertPointCloud has no free-only rays
   double integrate_seconds = 0.0;            ///< time inside OctoMap's insert calls
   std::uint64_t voxels_free = 0;
@@ -40,7 +40,9 @@ struct Agreement {
   std::uint64_t same = 0;
   std::uint64_t only_raymap = 0;   ///< observed by raymap only
   std::uint64_t only_octomap = 0;  ///< observed by OctoMap only
-  double fraction() const { return compared ? static_cast<double>(same) / static_cast<double>(compared) : 1.0; }
+  double fraction() const {
+    return compared ? static_cast<double>(same) / static_cast<double>(compared) : 1.0;
+  }
 };
 
 /// @brief An OctoMap OcTree fed ray by ray (per-ray) or scan by scan (per-scan).

@@ -2,13 +2,13 @@
 // Shared mapping options.
 #include "tools/raymap/cli_options.hpp"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <sstream>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 namespace raymap::cli {
 
@@ -31,8 +31,10 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
       ->capture_default_str();
   c.add_option("--hit", f.hit, "Hit probability (default 0.9)");
   c.add_option("--miss", f.miss, "Miss probability (default 0.45)");
-  c.add_option("--clamp-min", f.clamp_min, "Lower probability clamp (default 0.1192 = -2.0 log-odds)");
-  c.add_option("--clamp-max", f.clamp_max, "Upper probability clamp (default 0.971 = 3.511 log-odds)");
+  c.add_option("--clamp-min", f.clamp_min,
+               "Lower probability clamp (default 0.1192 = -2.0 log-odds)");
+  c.add_option("--clamp-max", f.clamp_max,
+               "Upper probability clamp (default 0.971 = 3.511 log-odds)");
   c.add_option("--threshold", f.threshold, "Occupied at or above this probability (default 0.5)");
   c.add_option("--semantics", f.semantics,
                "ray: every ray updates every voxel it crosses; scan: each voxel once per scan, "
@@ -100,8 +102,7 @@ Result<Vec3d> parseVector(const std::string& text, const std::string& option) {
   }
   std::string rest;
   if (in >> rest) {
-    return fail(ErrorCode::kInvalidArgument,
-                option + ": unexpected '" + rest + "' after 'x,y,z'");
+    return fail(ErrorCode::kInvalidArgument, option + ": unexpected '" + rest + "' after 'x,y,z'");
   }
   return v;
 }
@@ -110,8 +111,7 @@ Expected<void, Error> checkWritable(const std::string& path, const std::string& 
   const std::string probe = path + ".probe-" + std::to_string(::getpid());
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
   if (fd < 0) {
-    return fail(ErrorCode::kIo,
-                option + ": cannot write '" + path + "': " + std::strerror(errno));
+    return fail(ErrorCode::kIo, option + ": cannot write '" + path + "': " + std::strerror(errno));
   }
   ::close(fd);
   ::unlink(probe.c_str());

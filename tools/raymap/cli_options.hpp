@@ -2,10 +2,10 @@
 // Command-line options shared by the mapping subcommands, and their conversion and validation.
 #pragma once
 
-#include <CLI/CLI.hpp>
-
 #include <optional>
 #include <string>
+
+#include <CLI/CLI.hpp>
 
 #include "src/core/error.hpp"
 #include "tools/raymap/populate.hpp"

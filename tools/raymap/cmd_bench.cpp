@@ -117,7 +117,10 @@ int runBench(const BenchFlags& f) {
   JsonObject machine;
   machine.add("cpu_model", platform::cpuModelName()).add("cores", platform::availableCores());
   JsonObject result;
-  result.add("benchmark", "raymap bench").add("repeat", f.repeat).raw("machine", machine.str()).raw("runs", runs);
+  result.add("benchmark", "raymap bench")
+      .add("repeat", f.repeat)
+      .raw("machine", machine.str())
+      .raw("runs", runs);
   const std::string text = result.str() + "\n";
   if (f.json.empty() || f.json == "-") {
     std::fputs(text.c_str(), stdout);

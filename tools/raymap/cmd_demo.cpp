@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap demo`: the whole offline job on built-in data, checked against the scene it came from.
-#include <sys/stat.h>
-
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
 #include <string>
+
+#include <sys/stat.h>
 
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
@@ -155,22 +155,24 @@ int runDemo(const DemoFlags& f) {
     return kExitFailure;
   }
   const SceneCheck check = checkAgainstScene(*loaded, scene);
-  const bool passed = check.recall >= kMinRecall && check.precision >= kMinPrecision &&
-                      check.probe_failures == 0;
+  const bool passed =
+      check.recall >= kMinRecall && check.precision >= kMinPrecision && check.probe_failures == 0;
   if (!f.quiet) {
     std::printf("simulated      %s rays in %d scans -> %s\n", withCommas(rays.size()).c_str(),
                 f.scans, cloud.c_str());
-    std::printf("mapped         %s free, %s occupied voxels in %.3f s (%.3g M rays/s, %u threads)\n",
-                withCommas(report->summary.voxels_free).c_str(),
-                withCommas(report->summary.voxels_occupied).c_str(), report->integrate_seconds,
-                static_cast<double>(report->rays.rays_accepted) / report->integrate_seconds / 1e6,
-                report->threads);
+    std::printf(
+        "mapped         %s free, %s occupied voxels in %.3f s (%.3g M rays/s, %u threads)\n",
+        withCommas(report->summary.voxels_free).c_str(),
+        withCommas(report->summary.voxels_occupied).c_str(), report->integrate_seconds,
+        static_cast<double>(report->rays.rays_accepted) / report->integrate_seconds / 1e6,
+        report->threads);
     std::printf("wrote          %s, %s (%s points)\n", map_path.c_str(), ply.c_str(),
                 withCommas(*exported).c_str());
-    std::printf("checked        surface recall %.1f %% (>= %.0f %%), precision %.1f %% (>= %.0f %%),"
-                " %d probe(s) wrong\n",
-                100.0 * check.recall, 100.0 * kMinRecall, 100.0 * check.precision,
-                100.0 * kMinPrecision, check.probe_failures);
+    std::printf(
+        "checked        surface recall %.1f %% (>= %.0f %%), precision %.1f %% (>= %.0f %%),"
+        " %d probe(s) wrong\n",
+        100.0 * check.recall, 100.0 * kMinRecall, 100.0 * check.precision, 100.0 * kMinPrecision,
+        check.probe_failures);
     std::printf("next           raymap info %s\n", map_path.c_str());
     std::printf("               raymap populate %s --max-range 30 --output my.rmap\n",
                 cloud.c_str());
@@ -193,7 +195,8 @@ void addDemoCommand(CLI::App& app, int* exit_code) {
   c->add_option("--scans", flags->scans, "Lidar scans to simulate")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  c->add_option("--threads", flags->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  c->add_option("--threads", flags->threads, "Worker threads (0 = all cores)")
+      ->capture_default_str();
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   c->callback([flags, exit_code] { *exit_code = runDemo(*flags); });
 }

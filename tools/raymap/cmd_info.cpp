@@ -38,8 +38,7 @@ int runInfo(const InfoFlags& f) {
       layers += (layers.empty() ? "" : ", ") + std::string(schema.at(i).name);
     }
   }
-  const std::uint64_t bytes_per_region =
-      schema.bytesPerRegion(c.geometry.voxelsPerRegion());
+  const std::uint64_t bytes_per_region = schema.bytesPerRegion(c.geometry.voxelsPerRegion());
   if (f.json) {
     JsonObject params;
     params.add("hit_probability", probability(o.hit))
@@ -88,12 +87,13 @@ int runInfo(const InfoFlags& f) {
   std::printf("resolution     %g m, regions of %d^3 voxels (%g m)\n", c.geometry.resolution,
               c.geometry.region_voxels, c.geometry.regionExtent());
   std::printf("semantics      %s\n", toString(c.semantics));
-  std::printf("occupancy      hit %.4g, miss %.4g, clamps %.4g / %.4g, threshold %.4g"
-              " (log-odds %+.4f %+.4f %+.4f %+.4f %+.4f)\n",
-              probability(o.hit), probability(o.miss), probability(o.clamp_min),
-              probability(o.clamp_max), probability(o.threshold), static_cast<double>(o.hit),
-              static_cast<double>(o.miss), static_cast<double>(o.clamp_min),
-              static_cast<double>(o.clamp_max), static_cast<double>(o.threshold));
+  std::printf(
+      "occupancy      hit %.4g, miss %.4g, clamps %.4g / %.4g, threshold %.4g"
+      " (log-odds %+.4f %+.4f %+.4f %+.4f %+.4f)\n",
+      probability(o.hit), probability(o.miss), probability(o.clamp_min), probability(o.clamp_max),
+      probability(o.threshold), static_cast<double>(o.hit), static_cast<double>(o.miss),
+      static_cast<double>(o.clamp_min), static_cast<double>(o.clamp_max),
+      static_cast<double>(o.threshold));
   std::printf("layers         %s\n", layers.c_str());
   std::printf("regions        %s (%.1f MiB in memory)\n", withCommas(s.regions).c_str(),
               static_cast<double>(s.regions * bytes_per_region) / (1024.0 * 1024.0));

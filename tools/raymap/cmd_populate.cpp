@@ -3,9 +3,9 @@
 #include <cstdio>
 #include <memory>
 
+#include "src/io/atomic_file.hpp"
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
-#include "src/io/atomic_file.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/populate.hpp"
@@ -43,8 +43,9 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
                           ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
                           : 0.0;
   std::printf("input          %s\n", o.input.c_str());
-  std::printf("rays           %s in, %s integrated, %s rejected", withCommas(r.rays.rays_in).c_str(),
-              withCommas(r.rays.rays_accepted).c_str(), withCommas(r.rays.rejected()).c_str());
+  std::printf("rays           %s in, %s integrated, %s rejected",
+              withCommas(r.rays.rays_in).c_str(), withCommas(r.rays.rays_accepted).c_str(),
+              withCommas(r.rays.rejected()).c_str());
   if (r.rays.rejected() > 0) {
     std::printf(" (invalid %s, too short %s, out of bounds %s)",
                 withCommas(r.rays.rays_invalid).c_str(), withCommas(r.rays.rays_too_short).c_str(),
@@ -71,7 +72,8 @@ int runPopulate(const PopulateFlags& f) {
   options->progress = !f.quiet;
   std::string output = f.output;
   if (output.empty() && f.ply.empty() && f.stats_json.empty()) {
-    printError(command, "nothing to write: give --output MAP, --ply CLOUD.ply or --stats-json FILE");
+    printError(command,
+               "nothing to write: give --output MAP, --ply CLOUD.ply or --stats-json FILE");
     return kExitUsage;
   }
   // Fail on unwritable outputs before spending minutes on the input.

@@ -2,10 +2,10 @@
 // The subcommands of `raymap`. Each registers itself on the app and sets *exit_code when it runs.
 #pragma once
 
-#include <CLI/CLI.hpp>
-
 #include <cstdint>
 #include <string>
+
+#include <CLI/CLI.hpp>
 
 namespace raymap::cli {
 

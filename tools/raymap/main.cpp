@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // raymap: the command line for building, inspecting and exporting occupancy maps.
-#include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <exception>
+
+#include <CLI/CLI.hpp>
 
 #include "tools/raymap/commands.hpp"
 

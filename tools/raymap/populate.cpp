@@ -65,10 +65,10 @@ Result<PopulateReport> integrateStream(
       if (ok.error() == IntegrateError::kStoreFull) {
         const double gib =
             static_cast<double>(map.store().poolBytes()) / static_cast<double>(1u << 30);
-        return fail(ErrorCode::kCapacity,
-                    "the map needs more than the " + std::to_string(map.store().capacity()) +
-                        " regions (" + number(gib) +
-                        " GiB) its memory budget allows; raise --max-memory");
+        return fail(ErrorCode::kCapacity, "the map needs more than the " +
+                                              std::to_string(map.store().capacity()) +
+                                              " regions (" + number(gib) +
+                                              " GiB) its memory budget allows; raise --max-memory");
       }
       return fail(ErrorCode::kIo, std::string("integration failed: ") + toString(ok.error()));
     }
@@ -106,9 +106,9 @@ Result<PopulateReport> integrateStream(
       }
       while (i < run_end) {
         const Clock::time_point t_prep = Clock::now();
-        const RayPreparer::Progress p =
-            preparer.prepare(rays.subspan(i, run_end - i),
-                             std::span<PreparedRay>(batch.data() + batch_fill, batch.size() - batch_fill));
+        const RayPreparer::Progress p = preparer.prepare(
+            rays.subspan(i, run_end - i),
+            std::span<PreparedRay>(batch.data() + batch_fill, batch.size() - batch_fill));
         report.integrate_seconds += secondsSince(t_prep);
         batch_fill += p.written;
         i += p.consumed;
@@ -129,8 +129,9 @@ Result<PopulateReport> integrateStream(
       }
     }
     const double seconds = report.integrate_seconds;
-    bar.update(progress(), preparer.counters().rays_in,
-               seconds > 0 ? static_cast<double>(preparer.counters().rays_accepted) / seconds : 0.0);
+    bar.update(
+        progress(), preparer.counters().rays_in,
+        seconds > 0 ? static_cast<double>(preparer.counters().rays_accepted) / seconds : 0.0);
   }
   if (auto ok = flush(); !ok) {
     return Unexpected(ok.error());

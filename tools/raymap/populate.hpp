@@ -23,9 +23,9 @@ struct PopulateOptions {
   io::RaySourceOptions source;
   MapConfig map;
   RayFilter filter;
-  unsigned threads = 0;  ///< 0 = all cores, 1 = single-threaded reference
+  unsigned threads = 0;                        ///< 0 = all cores, 1 = single-threaded reference
   std::size_t batch_rays = kDefaultBatchRays;  ///< prepared rays per backend call
-  bool progress = true;  ///< progress bar on a terminal
+  bool progress = true;                        ///< progress bar on a terminal
 };
 
 /// @brief What a run did and how long it took.

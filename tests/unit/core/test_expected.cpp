@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Expected<T, E>: values, errors, moves.
-#include <gtest/gtest.h>
-
 #include <memory>
 #include <string>
+
+#include <gtest/gtest.h>
 
 #include "src/core/error.hpp"
 #include "src/core/expected.hpp"

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Keys and quantisation: voxels, regions, local indices.
-#include <gtest/gtest.h>
-
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "kernels/common/key_math.h"
 #include "src/map/voxel_map.hpp"

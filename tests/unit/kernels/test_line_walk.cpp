@@ -2,14 +2,14 @@
 // Property tests of the shared line walk (kernels/common/line_walk.h) on millions of random and
 // adversarial rays: endpoints, face adjacency, step counts, geometric truth of every voxel,
 // termination; and the region-split walk the integrators use.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
 #include <tuple>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "kernels/common/line_walk.h"
 #include "kernels/common/ray.h"
@@ -186,8 +186,10 @@ TEST_F(LineWalk, RaysBetweenFacesEdgesAndCorners) {
   std::mt19937_64 rng(77);
   std::uniform_int_distribution<int> q(-24, 24);
   for (int i = 0; i < 200000 && !HasFailure(); ++i) {
-    const Vec3d o{q(rng) * 0.25 * kResolution, q(rng) * 0.25 * kResolution, q(rng) * 0.25 * kResolution};
-    const Vec3d s{q(rng) * 0.25 * kResolution, q(rng) * 0.25 * kResolution, q(rng) * 0.25 * kResolution};
+    const Vec3d o{q(rng) * 0.25 * kResolution, q(rng) * 0.25 * kResolution,
+                  q(rng) * 0.25 * kResolution};
+    const Vec3d s{q(rng) * 0.25 * kResolution, q(rng) * 0.25 * kResolution,
+                  q(rng) * 0.25 * kResolution};
     checkWalk(o, s, (i & 1) != 0);
   }
 }
@@ -197,7 +199,8 @@ TEST_F(LineWalk, AxisAlignedFromCornersInEveryDirection) {
   const Vec3d corner{2 * kResolution, -3 * kResolution, 5 * kResolution};
   for (int axis = 0; axis < 3; ++axis) {
     for (double sign : {-1.0, 1.0}) {
-      for (double length : {0.0, 0.5 * kResolution, kResolution, 7 * kResolution, 7.3 * kResolution}) {
+      for (double length :
+           {0.0, 0.5 * kResolution, kResolution, 7 * kResolution, 7.3 * kResolution}) {
         Vec3d end = corner;
         end[axis] += sign * length;
         for (bool reverse : {false, true}) {
@@ -223,7 +226,8 @@ TEST_F(LineWalk, DiagonalsThroughCorners) {
 }
 
 TEST_F(LineWalk, ZeroLengthAndTinyRays) {
-  for (const Vec3d p : {Vec3d{0.0, 0.0, 0.0}, Vec3d{0.0625, 0.0625, 0.0625}, Vec3d{1.0, -2.0, 3.0}}) {
+  for (const Vec3d p :
+       {Vec3d{0.0, 0.0, 0.0}, Vec3d{0.0625, 0.0625, 0.0625}, Vec3d{1.0, -2.0, 3.0}}) {
     EXPECT_EQ(checkWalk(p, p).size(), 1u);
     checkWalk(p, p + Vec3d{1e-9, -1e-9, 1e-12});
     checkWalk(p, p - Vec3d{1e-12, 0.0, 0.0});
@@ -233,8 +237,8 @@ TEST_F(LineWalk, ZeroLengthAndTinyRays) {
 TEST_F(LineWalk, KilometreRaysFarFromTheOrigin) {
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  for (const Vec3d base : {Vec3d{0.0, 0.0, 0.0}, Vec3d{5000.0, -7000.0, 300.0},
-                           Vec3d{-20000.0, 15000.0, -40.0}}) {
+  for (const Vec3d base :
+       {Vec3d{0.0, 0.0, 0.0}, Vec3d{5000.0, -7000.0, 300.0}, Vec3d{-20000.0, 15000.0, -40.0}}) {
     for (int i = 0; i < 40 && !HasFailure(); ++i) {
       Vec3d dir{unit(rng), unit(rng), unit(rng)};
       dir = dir * (1.0 / dir.norm());

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Occupancy log-odds arithmetic, voxel mean packing and per-scan marks (kernels/common).
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "kernels/common/occupancy.h"
 #include "kernels/common/scan_mark.h"
@@ -15,14 +15,14 @@ namespace {
 
 TEST(Occupancy, DefaultsMatchTheSpecification) {
   const OccupancyParams p;
-  EXPECT_NEAR(p.hit, 2.1972246f, 1e-6f);     // logit(0.9)
-  EXPECT_NEAR(p.miss, -0.2006707f, 1e-6f);   // logit(0.45)
+  EXPECT_NEAR(p.hit, 2.1972246f, 1e-6f);    // logit(0.9)
+  EXPECT_NEAR(p.miss, -0.2006707f, 1e-6f);  // logit(0.45)
   EXPECT_FLOAT_EQ(p.clamp_min, -2.0f);
   EXPECT_FLOAT_EQ(p.clamp_max, 3.511f);
   EXPECT_FLOAT_EQ(p.threshold, 0.0f);
   const OccupancyParams o = OccupancyParams::octomap();
-  EXPECT_NEAR(o.hit, 0.8472979f, 1e-6f);     // logit(0.7)
-  EXPECT_NEAR(o.miss, -0.4054651f, 1e-6f);   // logit(0.4)
+  EXPECT_NEAR(o.hit, 0.8472979f, 1e-6f);    // logit(0.7)
+  EXPECT_NEAR(o.miss, -0.4054651f, 1e-6f);  // logit(0.4)
   EXPECT_TRUE(p.validate().has_value());
 }
 

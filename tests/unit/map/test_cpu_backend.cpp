@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // CPU backend: exact expectations on constructed scenes for both semantics, single- versus
 // multi-threaded identity, store capacity, clipping and no-return rays.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <random>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "src/map/cpu_backend.hpp"
 #include "tests/support/test_rays.hpp"
@@ -97,18 +97,17 @@ TEST_P(ClosedRoom, WallsOccupiedInteriorFreeOutsideUnobserved) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Cases, ClosedRoom,
-    ::testing::Values(RoomCase{Semantics::kPerRay, 1, false, 8, 0.0},
-                      RoomCase{Semantics::kPerRay, 1, true, 8, 0.0},
-                      RoomCase{Semantics::kPerRay, 2, false, 8, 0.0},
-                      RoomCase{Semantics::kPerRay, 3, true, 32, 0.0},
-                      RoomCase{Semantics::kPerRay, 1, false, 32, 0.7},
-                      RoomCase{Semantics::kPerScan, 1, false, 8, 0.0},
-                      RoomCase{Semantics::kPerScan, 1, true, 32, 0.0},
-                      RoomCase{Semantics::kPerScan, 2, false, 8, 0.0},
-                      RoomCase{Semantics::kPerScan, 4, true, 8, 0.7}),
-    caseName);
+INSTANTIATE_TEST_SUITE_P(Cases, ClosedRoom,
+                         ::testing::Values(RoomCase{Semantics::kPerRay, 1, false, 8, 0.0},
+                                           RoomCase{Semantics::kPerRay, 1, true, 8, 0.0},
+                                           RoomCase{Semantics::kPerRay, 2, false, 8, 0.0},
+                                           RoomCase{Semantics::kPerRay, 3, true, 32, 0.0},
+                                           RoomCase{Semantics::kPerRay, 1, false, 32, 0.7},
+                                           RoomCase{Semantics::kPerScan, 1, false, 8, 0.0},
+                                           RoomCase{Semantics::kPerScan, 1, true, 32, 0.0},
+                                           RoomCase{Semantics::kPerScan, 2, false, 8, 0.0},
+                                           RoomCase{Semantics::kPerScan, 4, true, 8, 0.7}),
+                         caseName);
 
 TEST(Semantics, PerRayCountsEveryCrossingPerScanOnce) {
   // Ray A ends in voxel (5,0,0); rays B and C pass through it. All in one scan.
@@ -127,7 +126,7 @@ TEST(Semantics, PerRayCountsEveryCrossingPerScanOnce) {
     VoxelMap per_scan = test::makeMap(smallConfig(Semantics::kPerScan));
     auto b2 = test::cpuBackend(per_scan, threads);
     test::integrate(per_scan, *b2, rays);
-    EXPECT_FLOAT_EQ(per_scan.occupancyValue({5, 0, 0}), p.hit);  // occupied wins
+    EXPECT_FLOAT_EQ(per_scan.occupancyValue({5, 0, 0}), p.hit);   // occupied wins
     EXPECT_FLOAT_EQ(per_scan.occupancyValue({2, 0, 0}), p.miss);  // once per scan
     EXPECT_FLOAT_EQ(per_scan.occupancyValue({12, 0, 0}), p.hit);
     // Hit twice in one scan: still one hit.
@@ -252,7 +251,8 @@ TEST(Capacity, FullStoreIsAnErrorNotASilentLoss) {
     const auto p = preparer.prepare(rays, prepared);
     ASSERT_TRUE(backend->integrate(std::span<const PreparedRay>(prepared.data(), 1)));
     const MapSummary before = map.summarise();
-    auto result = backend->integrate(std::span<const PreparedRay>(prepared.data() + 1, p.written - 1));
+    auto result =
+        backend->integrate(std::span<const PreparedRay>(prepared.data() + 1, p.written - 1));
     ASSERT_FALSE(result);
     EXPECT_EQ(result.error(), IntegrateError::kStoreFull);
     if (threads > 1) {

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Ray preparation: rejection counters, clipping, no-return rays, segmentation, reverse walks.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <limits>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "src/map/ray_preparer.hpp"
 #include "tests/support/test_rays.hpp"

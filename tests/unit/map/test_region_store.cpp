@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Region store: pool sizing, index behaviour under random inserts and deletes, capacity.
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <map>
 #include <random>
 #include <tuple>
+
+#include <gtest/gtest.h>
 
 #include "src/map/region_store.hpp"
 

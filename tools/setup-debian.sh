@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Installs what raymap needs to build and test on Debian 12, from Debian packages only.
+set -euo pipefail
+packages=(
+  cmake ninja-build g++ pkg-config
+  zlib1g-dev libcli11-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  liboctomap-dev          # OctoMap: the reference in benchmarks and agreement tests only
+  clang-format
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  sudo="sudo"
+fi
+echo "setup: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
