@@ -53,7 +53,7 @@ typedef struct rm_line_walk {
   float inv_x; /* 1 / |extent| on each axis, 0 for a degenerate extent */
   float inv_y;
   float inv_z;
-  float t_enter; /* t at which the walk entered the current voxel */
+  float t_enter; /* t at which the walk entered the current voxel (read rm_line_walk_t_enter) */
   float t_end;   /* t at which the walk ends (t1) */
 } rm_line_walk;
 
@@ -72,7 +72,7 @@ RAYMAP_FN void rm_line_walk_axis_init(float p0, float extent, rm_i32 k0, rm_i32 
   to_face = (*step > 0) ? (1.0f - inside) : inside;
   to_face = RM_FMAXF(to_face, 0.0f);
   *first = t0 + to_face * *inv;
-  *next = (*left > 0) ? RM_FMINF(*first, RM_FLT_MAX) : RM_INF;
+  *next = (*left > 0) ? *first : RM_INF;
 }
 
 /* First or last voxel of a span on one axis: the exact key at the ray's ends, otherwise the voxel
@@ -89,7 +89,8 @@ RAYMAP_FN rm_i32 rm_line_walk_span_key(float p, rm_i32 exact_key, int use_exact,
  * exactly; the caller makes sure those lie in the box. Other ends are the voxel holding the point
  * at t0 or t1, clamped into the box: a ray may touch several regions at the same t (a start point
  * on a region face, a crossing through a region edge), so t alone cannot say which span holds an
- * end. After init, (x, y, z) is the first voxel. */
+ * end. After init, (x, y, z) is the first voxel. Precondition: every component of end_voxel is
+ * below 2^24 in magnitude (the host rejects longer rays). */
 RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
                                       rm_vec3i end_voxel, float t0, float t1, rm_vec3i box_lo,
                                       rm_vec3i box_hi, int holds_start, int holds_end) {
@@ -135,47 +136,56 @@ RAYMAP_FN void rm_line_walk_init(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
   rm_line_walk_init_span(w, start, end, end_voxel, 0.0f, 1.0f, end_voxel, end_voxel, 1, 1);
 }
 
-/* Next crossing time on an axis after one more step there. */
+/* Next crossing time on an axis after `taken` steps there; RM_INF once its steps are used up.
+ * No overflow: inv <= 1 / RM_WALK_MIN_EXTENT and taken < 2^24 (end voxel offsets below 2^24, a
+ * precondition of init), so first + taken * inv stays far below FLT_MAX and an axis with steps
+ * left always compares below an exhausted one. */
 RAYMAP_FN float rm_line_walk_next_crossing(rm_i32 left, float first, float taken, float inv) {
-  return (left > 0) ? RM_FMINF(first + taken * inv, RM_FLT_MAX) : RM_INF;
+  return (left > 0) ? first + taken * inv : RM_INF;
 }
 
-/* Advances to the next voxel. Returns the axis stepped (0 = x, 1 = y, 2 = z), or -1 when the
- * current voxel is the last one (the walk is over). Ties step the lowest axis first, so a ray
- * through a voxel edge or corner visits one of the voxels that touch it there. */
-RAYMAP_FN rm_i32 rm_line_walk_next(rm_line_walk* w) {
+/* Advances to the next voxel and returns the axis stepped (0 = x, 1 = y, 2 = z).
+ * Precondition: w->steps_left > 0. Ties step the lowest axis first, so a ray through a voxel edge
+ * or corner visits one of the voxels that touch it there. The crossing times chosen never
+ * decrease: each axis's crossings grow and the smallest is taken. */
+RAYMAP_FN rm_i32 rm_line_walk_step(rm_line_walk* w) {
   float nx = w->next_x;
   float ny = w->next_y;
   float nz = w->next_z;
-  rm_i32 axis;
-  float t;
-  if (w->steps_left <= 0) {
-    return -1;
-  }
-  axis = (nx <= ny) ? ((nx <= nz) ? 0 : 2) : ((ny <= nz) ? 1 : 2);
   w->steps_left -= 1;
-  if (axis == 0) {
-    t = nx;
+  if (nx <= ny && nx <= nz) {
+    w->t_enter = nx;
     w->x += w->step_x;
     w->left_x -= 1;
     w->taken_x += 1.0f;
     w->next_x = rm_line_walk_next_crossing(w->left_x, w->first_x, w->taken_x, w->inv_x);
-  } else if (axis == 1) {
-    t = ny;
+    return 0;
+  }
+  if (ny <= nz) {
+    w->t_enter = ny;
     w->y += w->step_y;
     w->left_y -= 1;
     w->taken_y += 1.0f;
     w->next_y = rm_line_walk_next_crossing(w->left_y, w->first_y, w->taken_y, w->inv_y);
-  } else {
-    t = nz;
-    w->z += w->step_z;
-    w->left_z -= 1;
-    w->taken_z += 1.0f;
-    w->next_z = rm_line_walk_next_crossing(w->left_z, w->first_z, w->taken_z, w->inv_z);
+    return 1;
   }
-  /* Crossing times of degenerate axes are clamped so that enter/exit stay ordered in [t0, t1]. */
-  w->t_enter = RM_FMINF(RM_FMAXF(t, w->t_enter), w->t_end);
-  return axis;
+  w->t_enter = nz;
+  w->z += w->step_z;
+  w->left_z -= 1;
+  w->taken_z += 1.0f;
+  w->next_z = rm_line_walk_next_crossing(w->left_z, w->first_z, w->taken_z, w->inv_z);
+  return 2;
+}
+
+/* Advances to the next voxel: the axis stepped, or -1 when the current voxel is the last one. */
+RAYMAP_FN rm_i32 rm_line_walk_next(rm_line_walk* w) {
+  return w->steps_left > 0 ? rm_line_walk_step(w) : -1;
+}
+
+/* Ray parameter at which the walk entered the current voxel. Crossings of an axis whose extent
+ * rounds to zero happen at t0; rounding can put a last crossing past t1, hence the clamp. */
+RAYMAP_FN float rm_line_walk_t_enter(const rm_line_walk* w) {
+  return RM_FMINF(w->t_enter, w->t_end);
 }
 
 /* Ray parameter at which the walk leaves the current voxel (t1 for the last voxel). */

@@ -30,18 +30,16 @@ RAYMAP_FN int rm_occupancy_occupied(float value, float threshold) {
 
 RAYMAP_FN int rm_occupancy_free(float value, float threshold) { return value < threshold; }
 
-/* Adds `delta` (log-odds) to a voxel value and clamps the result. */
-RAYMAP_FN float rm_occupancy_add(float value, float delta, float clamp_min, float clamp_max) {
-  float base = rm_occupancy_observed(value) ? value : 0.0f;
-  return RM_FMINF(RM_FMAXF(base + delta, clamp_min), clamp_max);
-}
-
+/* A hit adds p.hit and clamps from above, a miss adds p.miss and clamps from below: values stay in
+ * [clamp_min, clamp_max] from the first update on, so the other bound cannot be crossed. */
 RAYMAP_FN float rm_occupancy_hit(float value, rm_occupancy_params p) {
-  return rm_occupancy_add(value, p.hit, p.clamp_min, p.clamp_max);
+  float base = rm_occupancy_observed(value) ? value : 0.0f;
+  return RM_FMINF(base + p.hit, p.clamp_max);
 }
 
 RAYMAP_FN float rm_occupancy_miss(float value, rm_occupancy_params p) {
-  return rm_occupancy_add(value, p.miss, p.clamp_min, p.clamp_max);
+  float base = rm_occupancy_observed(value) ? value : 0.0f;
+  return RM_FMAXF(base + p.miss, p.clamp_min);
 }
 
 #endif /* RAYMAP_KERNELS_COMMON_OCCUPANCY_H */

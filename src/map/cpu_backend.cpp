@@ -404,9 +404,10 @@ class CpuBackend final : public Backend {
 
 Result<std::unique_ptr<Backend>> createCpuBackend(VoxelMap& map, const CpuBackendOptions& options) {
   unsigned threads = options.threads == 0 ? platform::availableCores() : options.threads;
-  if (threads > 64) {
-    return fail(ErrorCode::kInvalidArgument,
-                "threads must be at most 64 (got " + std::to_string(threads) + ")");
+  if (threads > CpuBackendOptions::kMaxThreads) {
+    return fail(ErrorCode::kInvalidArgument, "threads must be at most " +
+                                                 std::to_string(CpuBackendOptions::kMaxThreads) +
+                                                 " (got " + std::to_string(threads) + ")");
   }
   if (map.occupancyLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument, "the CPU backend needs an occupancy layer");

@@ -12,6 +12,7 @@ namespace raymap {
 
 /// @brief Options of the CPU backend.
 struct CpuBackendOptions {
+  static constexpr unsigned kMaxThreads = 64;
   /// Worker threads: 1 = the single-threaded reference, 0 = one per available core.
   unsigned threads = 1;
 };

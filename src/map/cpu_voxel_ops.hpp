@@ -37,24 +37,27 @@ inline std::uint32_t walkSpan(const rm_ray_walk_frame& frame, const RaySpan& spa
   const std::int32_t delta[3] = {w.step_x, w.step_y * n, w.step_z * n * n};
   const bool skip_first = span.first && frame.sample_is_start != 0;
   const bool skip_last = span.last && frame.sample_is_start == 0;
-  std::uint32_t count = 0;
+  // The span's voxels are its first voxel plus one per remaining step; the sample voxel is left
+  // out at whichever end it is.
+  std::int32_t steps = w.steps_left;
   if (skip_first) {
-    const rm_i32 axis = rm_line_walk_next(&w);
-    if (axis < 0) {
+    if (steps == 0) {
       return 0;
     }
-    index += delta[axis];
+    index += delta[rm_line_walk_step(&w)];
+    --steps;
   }
-  for (;;) {
-    if (skip_last && w.steps_left == 0) {
-      break;
+  if (skip_last) {
+    if (steps == 0) {
+      return 0;
     }
+    --steps;
+  }
+  std::uint32_t count = 0;
+  indices[count++] = static_cast<std::uint32_t>(index);
+  for (std::int32_t k = 0; k < steps; ++k) {
+    index += delta[rm_line_walk_step(&w)];
     indices[count++] = static_cast<std::uint32_t>(index);
-    const rm_i32 axis = rm_line_walk_next(&w);
-    if (axis < 0) {
-      break;
-    }
-    index += delta[axis];
   }
   for (std::uint32_t i = 0; i < count; ++i) {
     visit(indices[i]);

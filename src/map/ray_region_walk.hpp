@@ -64,7 +64,7 @@ class RayRegionWalk {
     started_ = true;
     span->region =
         Vec3i{start_region_.x + walk_.x, start_region_.y + walk_.y, start_region_.z + walk_.z};
-    span->t0 = walk_.t_enter;
+    span->t0 = rm_line_walk_t_enter(&walk_);
     span->t1 = rm_line_walk_t_exit(&walk_);
     span->last = walk_.steps_left == 0;
     span->box_lo = rm_vec3i_make(walk_.x * n_ - start_local_.x, walk_.y * n_ - start_local_.y,

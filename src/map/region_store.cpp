@@ -2,6 +2,7 @@
 // Region pool and index.
 #include "src/map/region_store.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 #include <string>
@@ -154,6 +155,10 @@ void RegionStore::clearLayer(std::uint32_t slot, int layer) noexcept {
     return;
   }
   auto* out = reinterpret_cast<std::uint32_t*>(bytes);  // NOLINT: pool is page-aligned
+  if (words == 1) {
+    std::fill_n(out, voxels_per_region_, spec.clear_words[0]);
+    return;
+  }
   for (std::uint32_t v = 0; v < voxels_per_region_; ++v) {
     for (std::size_t w = 0; w < words; ++w) {
       out[std::size_t{v} * words + w] = spec.clear_words[w];

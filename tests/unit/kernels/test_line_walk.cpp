@@ -62,7 +62,7 @@ std::vector<Visit> walkWhole(const PreparedRay& ray) {
   std::vector<Visit> visits;
   const Vec3i s{f.start_voxel.x, f.start_voxel.y, f.start_voxel.z};
   for (;;) {
-    visits.push_back({s + Vec3i{w.x, w.y, w.z}, w.t_enter, rm_line_walk_t_exit(&w)});
+    visits.push_back({s + Vec3i{w.x, w.y, w.z}, rm_line_walk_t_enter(&w), rm_line_walk_t_exit(&w)});
     if (rm_line_walk_next(&w) < 0) {
       break;
     }
