@@ -8,7 +8,10 @@
 #include <sstream>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+#include "src/map/cpu_backend.hpp"
 
 namespace raymap::cli {
 
@@ -108,6 +111,10 @@ Result<Vec3d> parseVector(const std::string& text, const std::string& option) {
 }
 
 Expected<void, Error> checkWritable(const std::string& path, const std::string& option) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) == 0 && S_ISDIR(info.st_mode)) {
+    return fail(ErrorCode::kIo, option + ": '" + path + "' is a directory, not a file");
+  }
   const std::string probe = path + ".probe-" + std::to_string(::getpid());
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
   if (fd < 0) {
@@ -171,6 +178,11 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   if (f.segment_length > 0.0 && f.segment_length < f.resolution) {
     return fail(ErrorCode::kInvalidArgument,
                 "--segment-length must be 0 (off) or at least the resolution");
+  }
+  if (f.threads > CpuBackendOptions::kMaxThreads) {
+    return fail(ErrorCode::kInvalidArgument, "--threads must be at most " +
+                                                 std::to_string(CpuBackendOptions::kMaxThreads) +
+                                                 " (got " + std::to_string(f.threads) + ")");
   }
   o.threads = f.threads;
   o.batch_rays = f.batch_rays;

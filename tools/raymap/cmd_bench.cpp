@@ -46,6 +46,12 @@ int runBench(const BenchFlags& f) {
     return kExitUsage;
   }
   base->progress = false;
+  if (!f.json.empty() && f.json != "-") {
+    if (auto ok = checkWritable(f.json, "--json"); !ok) {
+      printError(command, ok.error().message);
+      return kExitFailure;
+    }
+  }
   // Preload: the benchmark measures preparation and integration, not file decoding.
   auto source = io::openRaySource(f.input, base->source);
   if (!source) {
@@ -127,8 +133,16 @@ int runBench(const BenchFlags& f) {
     return kExitOk;
   }
   auto writer = io::AtomicFileWriter::open(f.json);
-  if (!writer || !writer->write(text) || !writer->commit()) {
-    printError(command, "cannot write '" + f.json + "'");
+  if (!writer) {
+    printError(command, "--json: " + writer.error().message);
+    return kExitFailure;
+  }
+  Expected<void, Error> ok = writer->write(text);
+  if (ok) {
+    ok = writer->commit();
+  }
+  if (!ok) {
+    printError(command, "--json: " + ok.error().message);
     return kExitFailure;
   }
   return kExitOk;

@@ -1,7 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap populate`: build a map from a recorded file.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <unistd.h>
 
 #include "src/io/atomic_file.hpp"
 #include "src/io/map_export.hpp"
@@ -23,11 +30,6 @@ struct PopulateFlags {
 };
 
 Expected<void, Error> writeText(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    std::fputs(text.c_str(), stdout);
-    std::fputc('\n', stdout);
-    return {};
-  }
   auto writer = io::AtomicFileWriter::open(path);
   if (!writer) {
     return Unexpected(writer.error());
@@ -37,6 +39,37 @@ Expected<void, Error> writeText(const std::string& path, const std::string& text
   }
   return writer->commit();
 }
+
+/// Output files written under temporary names ("<path>.part-<pid>") and renamed together by
+/// commit(); whatever was not committed is removed on destruction.
+class StagedOutputs {
+ public:
+  StagedOutputs() = default;
+  StagedOutputs(const StagedOutputs&) = delete;
+  StagedOutputs& operator=(const StagedOutputs&) = delete;
+  ~StagedOutputs() {
+    for (const auto& [final_path, temp_path] : files_) {
+      std::remove(temp_path.c_str());
+    }
+  }
+  /// @brief The temporary path to write `final_path` to.
+  std::string add(const std::string& final_path) {
+    files_.emplace_back(final_path, final_path + ".part-" + std::to_string(::getpid()));
+    return files_.back().second;
+  }
+  Expected<void, Error> commit() {
+    for (const auto& [final_path, temp_path] : files_) {
+      if (std::rename(temp_path.c_str(), final_path.c_str()) != 0) {
+        return fail(ErrorCode::kIo, "cannot replace '" + final_path + "': " + std::strerror(errno));
+      }
+    }
+    files_.clear();
+    return {};
+  }
+
+ private:
+  std::vector<std::pair<std::string, std::string>> files_;
+};
 
 void printSummary(const PopulateReport& r, const PopulateOptions& o) {
   const double rate = r.integrate_seconds > 0
@@ -96,24 +129,34 @@ int runPopulate(const PopulateFlags& f) {
     printError(command, report.error().message);
     return kExitFailure;
   }
+  // Every output is written under a temporary name and all are renamed at the end, so a run that
+  // fails part-way leaves none of them and existing files untouched.
+  StagedOutputs staged;
   if (!output.empty()) {
-    if (auto ok = io::saveMap(*map, output); !ok) {
-      printError(command, ok.error().message);
+    if (auto ok = io::saveMap(*map, staged.add(output)); !ok) {
+      printError(command, "--output: " + ok.error().message);
       return kExitFailure;
     }
   }
   if (!f.ply.empty()) {
-    auto count = io::exportPly(*map, io::ExportMode::kOccupied, f.ply);
+    auto count = io::exportPly(*map, io::ExportMode::kOccupied, staged.add(f.ply));
     if (!count) {
-      printError(command, count.error().message);
+      printError(command, "--ply: " + count.error().message);
       return kExitFailure;
     }
   }
   if (!f.stats_json.empty()) {
-    if (auto ok = writeText(f.stats_json, statsJson(*report, *options)); !ok) {
-      printError(command, ok.error().message);
+    const std::string json = statsJson(*report, *options);
+    if (f.stats_json == "-") {
+      std::printf("%s\n", json.c_str());
+    } else if (auto ok = writeText(staged.add(f.stats_json), json); !ok) {
+      printError(command, "--stats-json: " + ok.error().message);
       return kExitFailure;
     }
+  }
+  if (auto ok = staged.commit(); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
   }
   if (!f.quiet) {
     printSummary(*report, *options);

@@ -1,0 +1,250 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Agreement of raymap with OctoMap on the shared real data: the same rays, resolution, range
+// limit and probabilities give the same free and occupied voxels, per ray and per scan.
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <ostream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/io/ray_source.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/map_params.hpp"
+#include "src/map/ray_preparer.hpp"
+#include "src/map/voxel_map.hpp"
+#include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
+#include "tools/bench/octomap_reference.hpp"
+
+namespace raymap::test {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// The settings of docs/benchmarks.md: 0.1 m voxels, rays clipped at 20 m, OctoMap's probabilities.
+constexpr double kResolution = 0.1;        // metres
+constexpr double kMaxRange = 20.0;         // metres
+constexpr double kCountTolerance = 0.005;  // relative difference of free or occupied counts
+constexpr double kMinAgreement = 0.999;    // voxels with the same state, of those either observed
+
+struct DataSet {
+  const char* name;
+  const char* file;        ///< under sharedDataDir()
+  const char* trajectory;  ///< point clouds: under sharedDataDir(); nullptr for ray clouds
+};
+
+struct AgreementCase {
+  DataSet data;
+  Semantics semantics;
+};
+
+void PrintTo(const AgreementCase& c, std::ostream* os) {
+  *os << c.data.name << "/" << toString(c.semantics);
+}
+
+/// Reads every ray of a file, failing the test on a read error.
+std::vector<Ray> loadRays(const fs::path& file, const fs::path& trajectory) {
+  io::RaySourceOptions options;
+  if (!trajectory.empty()) {
+    options.trajectory_path = trajectory.string();
+  }
+  auto source = io::openRaySource(file.string(), options);
+  if (!source) {
+    ADD_FAILURE() << source.error().message;
+    return {};
+  }
+  std::vector<Ray> rays;
+  std::vector<Ray> chunk(std::size_t{1} << 16);
+  for (;;) {
+    auto n = (*source)->read(chunk);
+    if (!n) {
+      ADD_FAILURE() << n.error().message;
+      return {};
+    }
+    if (*n == 0) {
+      return rays;
+    }
+    rays.insert(rays.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(*n));
+  }
+}
+
+/// Calls `fn` on every run of rays with equal scan index (the data sets are ordered by scan).
+template <class Fn>
+void forEachScan(std::span<const Ray> rays, Fn&& fn) {
+  std::size_t begin = 0;
+  while (begin < rays.size()) {
+    std::size_t end = begin + 1;
+    while (end < rays.size() && rays[end].scan == rays[begin].scan) {
+      ++end;
+    }
+    fn(rays.subspan(begin, end - begin));
+    begin = end;
+  }
+}
+
+/// A raymap map of the rays and what building it took.
+struct RaymapRun {
+  VoxelMap map;
+  RayCounters counters;
+  double seconds = 0.0;  ///< preparation and integration
+};
+
+MapConfig mapConfig(Semantics semantics) {
+  MapConfig config;
+  config.geometry.resolution = kResolution;
+  config.occupancy = OccupancyParams::octomap();
+  config.semantics = semantics;
+  config.voxel_mean = false;  // not compared; saves memory and time
+  return config;
+}
+
+/// Builds the map with one integrate() call per scan (which per-scan semantics needs).
+RaymapRun buildRaymap(std::span<const Ray> rays, Semantics semantics, unsigned threads) {
+  RaymapRun run{makeMap(mapConfig(semantics)), {}, 0.0};
+  std::unique_ptr<Backend> backend = cpuBackend(run.map, threads);
+  RayFilter filter;
+  filter.max_range_m = kMaxRange;
+  RayPreparer preparer(run.map, filter);
+  std::vector<PreparedRay> prepared;
+  const Clock::time_point start = Clock::now();
+  forEachScan(rays, [&](std::span<const Ray> scan) {
+    prepared.resize(scan.size());  // without segmentation every ray gives at most one piece
+    const RayPreparer::Progress progress = preparer.prepare(scan, prepared);
+    EXPECT_EQ(progress.consumed, scan.size()) << "a scan did not fit one batch";
+    auto ok = backend->integrate(std::span<const PreparedRay>(prepared.data(), progress.written));
+    EXPECT_TRUE(ok.has_value()) << "integration failed: " << toString(ok.error());
+  });
+  EXPECT_TRUE(backend->synchronise().has_value());
+  run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  run.counters = preparer.counters();
+  return run;
+}
+
+/// Relative difference of a count from the reference count.
+double relativeDifference(std::uint64_t ours, std::uint64_t reference) {
+  const double r = static_cast<double>(reference);
+  return r > 0.0 ? std::fabs(static_cast<double>(ours) - r) / r : (ours == 0 ? 0.0 : 1.0);
+}
+
+class OctomapAgreement : public testing::TestWithParam<AgreementCase> {};
+
+TEST_P(OctomapAgreement, CountsAndVoxelStatesMatchOctomap) {
+  // Arrange
+  const AgreementCase& param = GetParam();
+  const fs::path data_dir = sharedDataDir();
+  if (data_dir.empty()) {
+    GTEST_SKIP() << "no shared data (../shared/data or $RAYMAP_SHARED_DATA)";
+  }
+  const fs::path file = data_dir / param.data.file;
+  const fs::path trajectory =
+      param.data.trajectory != nullptr ? data_dir / param.data.trajectory : fs::path();
+  if (!fs::exists(file) || (!trajectory.empty() && !fs::exists(trajectory))) {
+    GTEST_SKIP() << "missing " << file.string();
+  }
+  const std::vector<Ray> rays = loadRays(file, trajectory);
+  ASSERT_FALSE(rays.empty());
+  bench::OctomapOptions octomap_options;
+  octomap_options.resolution = kResolution;
+  octomap_options.max_range_m = kMaxRange;
+  octomap_options.occupancy = OccupancyParams::octomap();
+  octomap_options.semantics = param.semantics;
+  bench::OctomapReference octomap(octomap_options);
+
+  // Act
+  const RaymapRun one_thread = buildRaymap(rays, param.semantics, 1);
+  const RaymapRun two_threads = buildRaymap(rays, param.semantics, 2);
+  forEachScan(rays, [&](std::span<const Ray> scan) { octomap.integrate(scan); });
+  const bench::OctomapCounts theirs = octomap.counts();
+  const MapSummary ours = one_thread.map.summarise();
+  const MapSummary ours_two = two_threads.map.summarise();
+  const bench::Agreement agreement = octomap.compare(one_thread.map);
+  const MapComparison threads_comparison = compareMaps(one_thread.map, two_threads.map);
+
+  // Report (for docs/benchmarks.md).
+  const double free_diff = relativeDifference(ours.voxels_free, theirs.voxels_free);
+  const double occupied_diff = relativeDifference(ours.voxels_occupied, theirs.voxels_occupied);
+  char line[512];
+  std::snprintf(
+      line, sizeof(line),
+      "%s %s: rays %zu (raymap integrated %llu, octomap %llu); free raymap %llu octomap "
+      "%llu (%+.3f %%); occupied raymap %llu octomap %llu (%+.3f %%); agreement %.4f %% "
+      "of %llu voxels (only raymap %llu, only octomap %llu); seconds raymap 1t %.2f 2t "
+      "%.2f octomap %.2f",
+      param.data.name, toString(param.semantics), rays.size(),
+      static_cast<unsigned long long>(one_thread.counters.rays_accepted),
+      static_cast<unsigned long long>(theirs.rays_integrated),
+      static_cast<unsigned long long>(ours.voxels_free),
+      static_cast<unsigned long long>(theirs.voxels_free),
+      100.0 * (static_cast<double>(ours.voxels_free) - static_cast<double>(theirs.voxels_free)) /
+          static_cast<double>(std::max<std::uint64_t>(theirs.voxels_free, 1)),
+      static_cast<unsigned long long>(ours.voxels_occupied),
+      static_cast<unsigned long long>(theirs.voxels_occupied),
+      100.0 *
+          (static_cast<double>(ours.voxels_occupied) -
+           static_cast<double>(theirs.voxels_occupied)) /
+          static_cast<double>(std::max<std::uint64_t>(theirs.voxels_occupied, 1)),
+      100.0 * agreement.fraction(), static_cast<unsigned long long>(agreement.compared),
+      static_cast<unsigned long long>(agreement.only_raymap),
+      static_cast<unsigned long long>(agreement.only_octomap), one_thread.seconds,
+      two_threads.seconds, theirs.integrate_seconds);
+  std::cout << "[agreement] " << line << std::endl;
+  RecordProperty("raymap_free", std::to_string(ours.voxels_free));
+  RecordProperty("octomap_free", std::to_string(theirs.voxels_free));
+  RecordProperty("raymap_occupied", std::to_string(ours.voxels_occupied));
+  RecordProperty("octomap_occupied", std::to_string(theirs.voxels_occupied));
+  RecordProperty("agreement_percent", std::to_string(100.0 * agreement.fraction()));
+  RecordProperty("compared_voxels", std::to_string(agreement.compared));
+
+  // Assert
+  EXPECT_EQ(one_thread.counters.rays_in, rays.size());
+  EXPECT_GT(ours.voxels_occupied, 0u);
+  EXPECT_LE(free_diff, kCountTolerance) << "free voxels differ by " << 100.0 * free_diff << " %";
+  EXPECT_LE(occupied_diff, kCountTolerance)
+      << "occupied voxels differ by " << 100.0 * occupied_diff << " %";
+  EXPECT_GE(agreement.fraction(), kMinAgreement);
+  // Two threads build the single-threaded map, bit for bit.
+  EXPECT_EQ(ours_two.voxels_free, ours.voxels_free);
+  EXPECT_EQ(ours_two.voxels_occupied, ours.voxels_occupied);
+  EXPECT_EQ(threads_comparison.exact_value, threads_comparison.compared);
+}
+
+const DataSet kDataSets[] = {
+    {"ouster", "ouster/ouster_os1_lb_n3_raycloud.ply.gz", nullptr},
+    {"3dtk", "3dtk/3dtk_raycloud.ply.gz", nullptr},
+    {"octomap", "octomap/octomap_scan_raycloud.ply.gz", nullptr},
+    {"3dtk_points", "3dtk/3dtk_points.ply.gz", "3dtk/3dtk_trajectory.txt"},
+};
+
+std::vector<AgreementCase> allCases() {
+  std::vector<AgreementCase> cases;
+  for (const DataSet& data : kDataSets) {
+    for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+      cases.push_back({data, semantics});
+    }
+  }
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedData, OctomapAgreement, testing::ValuesIn(allCases()),
+                         [](const testing::TestParamInfo<AgreementCase>& param_info) {
+                           std::string name = std::string(param_info.param.data.name) + "_" +
+                                              toString(param_info.param.semantics);
+                           for (char& c : name) {
+                             c = (std::isalnum(static_cast<unsigned char>(c)) != 0) ? c : '_';
+                           }
+                           return name;
+                         });
+
+}  // namespace
+}  // namespace raymap::test

@@ -1,0 +1,1094 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The raymap program end to end: runs the real binary on generated inputs and checks its exit
+// codes, messages, output files and that failures leave nothing behind.
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <optional>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "src/io/ray_cloud_writer.hpp"
+#include "src/sim/yard_scan.hpp"
+#include "tests/support/ply_test_writer.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace raymap::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------
+// Running the program
+// ---------------------------------------------------------------------------------------------
+
+/// What one run of the program did.
+struct RunResult {
+  int exit_code = -1;  ///< exit status, or 128 + signal number when it was killed
+  std::string out;
+  std::string err;
+};
+
+/// Appends what `fd` has to `text`; returns false at end of file (or on a read error).
+bool drain(int fd, std::string& text) {
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer, sizeof(buffer));
+    if (n > 0) {
+      text.append(buffer, static_cast<std::size_t>(n));
+      return true;
+    }
+    if (n < 0 && errno == EINTR) {
+      continue;
+    }
+    return false;
+  }
+}
+
+/// Runs the raymap binary with `args`, capturing its exit code, stdout and stderr.
+RunResult runRaymap(const std::vector<std::string>& args) {
+  RunResult result;
+  std::vector<std::string> words;
+  words.emplace_back(RAYMAP_CLI_PATH);
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& word : words) {
+    argv.push_back(word.data());
+  }
+  argv.push_back(nullptr);
+
+  int out_pipe[2] = {-1, -1};
+  int err_pipe[2] = {-1, -1};
+  if (::pipe2(out_pipe, O_CLOEXEC) != 0) {
+    ADD_FAILURE() << "pipe2: " << std::strerror(errno);
+    return result;
+  }
+  if (::pipe2(err_pipe, O_CLOEXEC) != 0) {
+    ADD_FAILURE() << "pipe2: " << std::strerror(errno);
+    ::close(out_pipe[0]);
+    ::close(out_pipe[1]);
+    return result;
+  }
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, out_pipe[1], STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
+  pid_t pid = -1;
+  const int spawned = ::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(out_pipe[1]);
+  ::close(err_pipe[1]);
+  if (spawned != 0) {
+    ::close(out_pipe[0]);
+    ::close(err_pipe[0]);
+    ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawned);
+    return result;
+  }
+  // Read both pipes as they fill, so a chatty child never blocks on a full pipe.
+  pollfd fds[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
+  std::string* sinks[2] = {&result.out, &result.err};
+  int open_pipes = 2;
+  while (open_pipes > 0) {
+    if (::poll(fds, 2, -1) < 0) {
+      if (errno == EINTR) {
+        continue;
+      }
+      ADD_FAILURE() << "poll: " << std::strerror(errno);
+      break;
+    }
+    for (int i = 0; i < 2; ++i) {
+      if (fds[i].fd >= 0 && (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) != 0 &&
+          !drain(fds[i].fd, *sinks[i])) {
+        ::close(fds[i].fd);
+        fds[i].fd = -1;  // poll ignores negative descriptors
+        --open_pipes;
+      }
+    }
+  }
+  for (const pollfd& p : fds) {
+    if (p.fd >= 0) {
+      ::close(p.fd);
+    }
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFEXITED(status)) {
+    result.exit_code = WEXITSTATUS(status);
+  } else if (WIFSIGNALED(status)) {
+    result.exit_code = 128 + WTERMSIG(status);
+  }
+  return result;
+}
+
+/// Prints a run for failure messages.
+std::string describe(const RunResult& r) {
+  return "exit code " + std::to_string(r.exit_code) + "\n--- stdout ---\n" + r.out +
+         "--- stderr ---\n" + r.err;
+}
+
+testing::AssertionResult contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) {
+    return testing::AssertionSuccess();
+  }
+  return testing::AssertionFailure() << "'" << part << "' not found in:\n" << text;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Files
+// ---------------------------------------------------------------------------------------------
+
+/// Every path under `dir`, relative to it.
+std::set<std::string> listFiles(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    names.insert(fs::relative(entry.path(), dir).string());
+  }
+  return names;
+}
+
+/// Fails unless `dir` holds exactly `before` (no map, PLY, JSON, temporary or probe file left).
+testing::AssertionResult nothingNewIn(const fs::path& dir, const std::set<std::string>& before) {
+  const std::set<std::string> after = listFiles(dir);
+  std::vector<std::string> added;
+  std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
+                      std::back_inserter(added));
+  if (added.empty()) {
+    return testing::AssertionSuccess();
+  }
+  auto failure = testing::AssertionFailure() << "left behind in " << dir.string() << ":";
+  for (const std::string& name : added) {
+    failure << " " << name;
+  }
+  return failure;
+}
+
+/// Fails when a temporary ("*.tmp-*") or probe ("*.probe-*") file is in `dir`.
+testing::AssertionResult noTemporaryFilesIn(const fs::path& dir) {
+  for (const std::string& name : listFiles(dir)) {
+    if (name.find(".tmp-") != std::string::npos || name.find(".probe-") != std::string::npos) {
+      return testing::AssertionFailure() << "temporary file left behind: " << name;
+    }
+  }
+  return testing::AssertionSuccess();
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  ASSERT_TRUE(out.good()) << "cannot write " << path;
+}
+
+/// The vertex count in a PLY header, or nullopt when there is none.
+std::optional<std::uint64_t> plyVertexCount(const std::string& path) {
+  const std::string text = readFile(path);
+  const std::string tag = "element vertex ";
+  const std::size_t at = text.find(tag);
+  const std::size_t end_header = text.find("end_header");
+  if (at == std::string::npos || end_header == std::string::npos || at > end_header) {
+    return std::nullopt;
+  }
+  return std::stoull(text.substr(at + tag.size()));
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON (the program's flat output: enough to read one value by key)
+// ---------------------------------------------------------------------------------------------
+
+/// The raw text of the first value of `"key"`: a string without quotes, or a number as written.
+std::optional<std::string> jsonValue(const std::string& json, const std::string& key) {
+  const std::string tag = "\"" + key + "\":";
+  std::size_t at = json.find(tag);
+  if (at == std::string::npos) {
+    return std::nullopt;
+  }
+  at += tag.size();
+  while (at < json.size() && json[at] == ' ') {
+    ++at;
+  }
+  if (at < json.size() && json[at] == '"') {
+    const std::size_t end = json.find('"', at + 1);
+    return end == std::string::npos ? std::nullopt
+                                    : std::optional<std::string>(json.substr(at + 1, end - at - 1));
+  }
+  const std::size_t end = json.find_first_of(",}\n", at);
+  return json.substr(at, end == std::string::npos ? std::string::npos : end - at);
+}
+
+/// A numeric value by key; NaN (which fails every comparison) when it is missing or not a number.
+double jsonNumber(const std::string& json, const std::string& key) {
+  const std::optional<std::string> text = jsonValue(json, key);
+  if (!text) {
+    ADD_FAILURE() << "key '" << key << "' missing from:\n" << json;
+    return std::nan("");
+  }
+  try {
+    return std::stod(*text);
+  } catch (const std::exception&) {
+    ADD_FAILURE() << "key '" << key << "' is not a number: " << *text;
+    return std::nan("");
+  }
+}
+
+std::uint64_t jsonCount(const std::string& json, const std::string& key) {
+  const double value = jsonNumber(json, key);
+  return value >= 0.0 ? static_cast<std::uint64_t>(value) : ~std::uint64_t{0};
+}
+
+/// 1234567 -> "1,234,567", as the program prints counts.
+std::string withCommas(std::uint64_t value) {
+  const std::string digits = std::to_string(value);
+  std::string out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    out += digits[i];
+    const std::size_t left = digits.size() - i - 1;
+    if (left > 0 && left % 3 == 0) {
+      out += ',';
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Inputs
+// ---------------------------------------------------------------------------------------------
+
+/// A small yard recording: 8 beams x 256 columns per scan.
+std::vector<Ray> yardRays(int scans) {
+  sim::YardScanConfig config;
+  config.lidar.beams = 8;
+  config.lidar.columns = 256;
+  config.lidar.max_range_m = 20.0;
+  config.scans = scans;
+  return sim::simulateYardScans(config);
+}
+
+constexpr int kYardScans = 2;
+constexpr std::uint64_t kYardRays = 2 * 8 * 256;
+/// Keeps the maps of the success tests small and fast.
+const std::vector<std::string> kSmallMap = {"--max-range", "8", "--quiet"};
+
+void writeRayCloud(const std::string& path, const std::vector<Ray>& rays) {
+  auto writer = io::RayCloudWriter::open(path);
+  ASSERT_TRUE(writer.has_value()) << writer.error().message;
+  ASSERT_TRUE((*writer)->write(rays).has_value());
+  ASSERT_TRUE((*writer)->finish().has_value());
+}
+
+/// A valid ray cloud of `count` rays as a PlyTestFile (float x y z nx ny nz), for damaging.
+PlyTestFile smallRayCloud(int count) {
+  PlyTestFile file;
+  PlyTestElement vertex("vertex", {{"float", "x", ""},
+                                   {"float", "y", ""},
+                                   {"float", "z", ""},
+                                   {"float", "nx", ""},
+                                   {"float", "ny", ""},
+                                   {"float", "nz", ""}});
+  for (int i = 0; i < count; ++i) {
+    const double y = 0.01 * i;
+    // Sample on a wall at x = 3; the sensor at (0, 0, 1).
+    vertex.add({3.0, y, 0.5, -3.0, -y, 0.5});
+  }
+  file.elements.push_back(vertex);
+  return file;
+}
+
+/// The three outputs of a populate run, inside `dir`.
+std::vector<std::string> allOutputs(const TempDir& dir) {
+  return {"--output",          dir.file("out.rmap"), "--ply",
+          dir.file("out.ply"), "--stats-json",       dir.file("out.json")};
+}
+
+std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Malformed PLY input
+// ---------------------------------------------------------------------------------------------
+
+struct MalformedCase {
+  const char* name;
+  std::function<void(const std::string& path)> write;
+  std::vector<std::string> expected;  ///< parts of the message besides the file name
+};
+
+void PrintTo(const MalformedCase& c, std::ostream* os) { *os << c.name; }
+
+const char kRayCloudHeaderAscii[] =
+    "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+    "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nend_header\n";
+
+std::vector<MalformedCase> malformedCases() {
+  return {
+      {"BadMagic",
+       [](const std::string& path) {
+         writeBytes(path,
+                    "plx\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n");
+       },
+       {"not a PLY file"}},
+      {"UnknownFormat",
+       [](const std::string& path) {
+         writeBytes(path,
+                    "ply\nformat binary_middle_endian 1.0\nelement vertex 1\nproperty float x\n"
+                    "end_header\n");
+       },
+       {"line 2", "binary_middle_endian"}},
+      {"NoEndHeader",
+       [](const std::string& path) {
+         writeBytes(path,
+                    "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                    "property float z\n");
+       },
+       {"end_header"}},
+      {"MissingY",
+       [](const std::string& path) {
+         PlyTestFile file;
+         PlyTestElement vertex("vertex", {{"float", "x", ""},
+                                          {"float", "z", ""},
+                                          {"float", "nx", ""},
+                                          {"float", "ny", ""},
+                                          {"float", "nz", ""}});
+         vertex.add({3.0, 0.5, -3.0, 0.0, 0.5});
+         file.elements.push_back(vertex);
+         writePly(path, file);
+       },
+       {"'y'"}},
+      {"TruncatedBinary",
+       [](const std::string& path) {
+         PlyTestFile file = smallRayCloud(10);
+         file.truncate_data_to = 100;  // 4 whole records (24 bytes each) and a part
+         writePly(path, file);
+       },
+       {"truncated"}},
+      {"AsciiLineWithTooFewValues",
+       [](const std::string& path) {
+         writeBytes(path,
+                    std::string(kRayCloudHeaderAscii) + "3 0 0.5 -3 0 0.5\n3 0.1 0.5 -3 -0.1\n");
+       },
+       {"too few values", "line 12"}},
+      {"VertexCountLargerThanData",
+       [](const std::string& path) {
+         PlyTestFile file = smallRayCloud(10);
+         file.elements.front().declared_count = 15;
+         writePly(path, file);
+       },
+       {"truncated", "15"}},
+      {"TrailingDataAfterVertices",
+       [](const std::string& path) {
+         PlyTestFile file = smallRayCloud(10);
+         file.trailing = std::string(24, 'x');
+         writePly(path, file);
+       },
+       {"unexpected data after the last vertex"}},
+      {"GzipCutShort",
+       [](const std::string& path) {
+         PlyTestFile file = smallRayCloud(2000);
+         file.gzip = true;
+         writePly(path, file);
+         fs::resize_file(path, fs::file_size(path) / 2);
+       },
+       {"truncated"}},
+  };
+}
+
+class MalformedPly : public testing::TestWithParam<MalformedCase> {};
+
+TEST_P(MalformedPly, FailsNamingTheFileAndLeavesNoOutput) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("input.ply");
+  ASSERT_NO_THROW(GetParam().write(input));
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(concat({"populate", input, "--quiet"}, allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, input));
+  for (const std::string& part : GetParam().expected) {
+    EXPECT_TRUE(contains(r.err, part));
+  }
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+INSTANTIATE_TEST_SUITE_P(Cli, MalformedPly, testing::ValuesIn(malformedCases()),
+                         [](const testing::TestParamInfo<MalformedCase>& param_info) {
+                           return std::string(param_info.param.name);
+                         });
+
+// ---------------------------------------------------------------------------------------------
+// Other bad input
+// ---------------------------------------------------------------------------------------------
+
+/// A point cloud (double x y z time, no normals) of one yard scan without its no-return rays, and
+/// the sensor positions at its first and last time.
+struct PointCloudInput {
+  std::vector<Ray> rays;  ///< the rays the points came from
+  double first_time = 0.0;
+  double last_time = 0.0;
+  Vec3d origin;
+};
+
+PointCloudInput writePointCloud(const std::string& path) {
+  PointCloudInput input;
+  for (const Ray& ray : yardRays(1)) {
+    if ((ray.flags & kRayNoReturn) == 0u) {
+      input.rays.push_back(ray);
+    }
+  }
+  PlyTestFile file;
+  PlyTestElement vertex(
+      "vertex",
+      {{"double", "x", ""}, {"double", "y", ""}, {"double", "z", ""}, {"double", "time", ""}});
+  for (const Ray& ray : input.rays) {
+    vertex.add({ray.sample.x, ray.sample.y, ray.sample.z, ray.time_s});
+  }
+  file.elements.push_back(vertex);
+  writePly(path, file);
+  input.first_time = input.rays.front().time_s;
+  input.last_time = input.rays.back().time_s;
+  input.origin = input.rays.front().origin;  // one scan: one sensor position
+  return input;
+}
+
+/// A trajectory holding the sensor still at `origin` from `t0` to `t1`.
+std::string stillTrajectory(Vec3d origin, double t0, double t1) {
+  std::ostringstream text;
+  text.precision(17);
+  text << "# time x y z\n";
+  for (const double t : {t0, t1}) {
+    text << t << " " << origin.x << " " << origin.y << " " << origin.z << "\n";
+  }
+  return text.str();
+}
+
+TEST(Cli, PointCloudWithoutTrajectoryFails) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("points.ply");
+  writePointCloud(input);
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(concat({"populate", input, "--quiet"}, allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, input));
+  EXPECT_TRUE(contains(r.err, "--trajectory"));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST(Cli, TrajectoryNotCoveringTheCloudFailsNamingBothFiles) {
+  // Arrange: the trajectory ends halfway through the scan.
+  TempDir dir;
+  const std::string input = dir.file("points.ply");
+  const std::string trajectory = dir.file("path.txt");
+  const PointCloudInput cloud = writePointCloud(input);
+  writeText(trajectory, stillTrajectory(cloud.origin, cloud.first_time,
+                                        0.5 * (cloud.first_time + cloud.last_time)));
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(
+      concat({"populate", input, "--trajectory", trajectory, "--quiet"}, allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, input));
+  EXPECT_TRUE(contains(r.err, trajectory));
+  EXPECT_TRUE(contains(r.err, "outside"));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST(Cli, NonexistentInputFails) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("missing.ply");
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(concat({"populate", input, "--quiet"}, allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, input));
+  EXPECT_TRUE(contains(r.err, std::strerror(ENOENT)));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Unwritable outputs
+// ---------------------------------------------------------------------------------------------
+
+/// The output options of populate, one at a time.
+class UnwritableOutput : public testing::TestWithParam<const char*> {
+ protected:
+  /// Populate arguments with every output in `dir` except GetParam(), which goes to `bad_path`.
+  std::vector<std::string> arguments(const std::string& input, const TempDir& dir,
+                                     const std::string& bad_path) const {
+    std::vector<std::string> args = {"populate", input, "--max-range", "8", "--quiet"};
+    const std::vector<std::string> outputs = allOutputs(dir);
+    for (std::size_t i = 0; i < outputs.size(); i += 2) {
+      args.push_back(outputs[i]);
+      args.push_back(outputs[i] == GetParam() ? bad_path : outputs[i + 1]);
+    }
+    return args;
+  }
+};
+
+TEST_P(UnwritableOutput, InMissingDirectoryFailsBeforeWork) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("input.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  const std::string bad_path = dir.file("no-such-dir/out");
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(arguments(input, dir, bad_path));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, GetParam()));
+  EXPECT_TRUE(contains(r.err, bad_path));
+  EXPECT_TRUE(contains(r.err, std::strerror(ENOENT)));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST_P(UnwritableOutput, InReadOnlyDirectoryFails) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("input.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  const fs::path read_only = dir.path() / "read-only";
+  fs::create_directory(read_only);
+  fs::permissions(read_only, fs::perms::owner_read | fs::perms::owner_exec);
+  const std::string try_path = (read_only / "try").string();
+  if (const int fd = ::open(try_path.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644); fd >= 0) {
+    ::close(fd);
+    ::unlink(try_path.c_str());
+    fs::permissions(read_only, fs::perms::owner_all);
+    GTEST_SKIP() << "this user can write into a read-only directory (root?)";
+  }
+  const std::string bad_path = (read_only / "out").string();
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(arguments(input, dir, bad_path));
+
+  // Assert
+  fs::permissions(read_only, fs::perms::owner_all);  // so TempDir can remove it
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, GetParam()));
+  EXPECT_TRUE(contains(r.err, bad_path));
+  EXPECT_TRUE(contains(r.err, std::strerror(EACCES)));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST_P(UnwritableOutput, ThatIsADirectoryFailsAndLeavesNoOtherOutput) {
+  // Arrange: the output path names an existing directory (creatable next to, not at, the path).
+  TempDir dir;
+  const std::string input = dir.file("input.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  const std::string bad_path = dir.file("a-directory");
+  fs::create_directory(bad_path);
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(arguments(input, dir, bad_path));
+
+  // Assert: a failed run writes nothing, not some of its outputs.
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, bad_path));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+INSTANTIATE_TEST_SUITE_P(Cli, UnwritableOutput,
+                         testing::Values("--output", "--ply", "--stats-json"),
+                         [](const testing::TestParamInfo<const char*>& param_info) {
+                           std::string name;
+                           for (const char* c = param_info.param; *c != '\0'; ++c) {
+                             if (*c != '-') {
+                               name += *c;
+                             }
+                           }
+                           return name;
+                         });
+
+// ---------------------------------------------------------------------------------------------
+// Bad option values
+// ---------------------------------------------------------------------------------------------
+
+struct OptionCase {
+  const char* name;
+  std::vector<std::string> args;
+  /// Parts of the message: the option (as the message spells it) and, where given, the value.
+  std::vector<std::string> expected;
+};
+
+void PrintTo(const OptionCase& c, std::ostream* os) { *os << c.name; }
+
+class BadOption : public testing::TestWithParam<OptionCase> {};
+
+TEST_P(BadOption, IsAUsageErrorNamingTheOption) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("input.ply");
+  ASSERT_NO_THROW(writePly(input, smallRayCloud(10)));
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r =
+      runRaymap(concat(concat({"populate", input, "--quiet"}, GetParam().args), allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, "error: "));
+  for (const std::string& part : GetParam().expected) {
+    EXPECT_TRUE(contains(r.err, part));
+  }
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+// NOTE(tests): the library's validation messages name options without their dashes
+// ("hit probability", "region-voxels"), so those cases look for the bare name.
+INSTANTIATE_TEST_SUITE_P(
+    Cli, BadOption,
+    testing::Values(
+        OptionCase{"HitBelowHalf", {"--hit", "0.3"}, {"hit", "0.3"}},
+        OptionCase{"MissAboveHalf", {"--miss", "0.6"}, {"miss", "0.6"}},
+        OptionCase{"ZeroResolution", {"--resolution", "0"}, {"resolution"}},
+        OptionCase{"RegionVoxelsTooLarge", {"--region-voxels", "1000"}, {"region-voxels", "1000"}},
+        OptionCase{"MaxRangeBelowMinRange",
+                   {"--min-range", "5", "--max-range", "2"},
+                   {"max-range", "min-range"}},
+        OptionCase{"MaxMemoryUnknownUnit", {"--max-memory", "12XB"}, {"--max-memory", "12XB"}},
+        OptionCase{"SemanticsBoth", {"--semantics", "both"}, {"--semantics", "both"}},
+        OptionCase{"UnknownOption", {"--no-such-option"}, {"--no-such-option"}},
+        OptionCase{"TooManyThreads", {"--threads", "100"}, {"threads", "100"}}),
+    [](const testing::TestParamInfo<OptionCase>& param_info) {
+      return std::string(param_info.param.name);
+    });
+
+TEST(Cli, UnknownExportModeIsAUsageError) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  const std::string map = dir.file("yard.rmap");
+  writeRayCloud(input, yardRays(kYardScans));
+  ASSERT_EQ(runRaymap(concat({"populate", input, "--output", map}, kSmallMap)).exit_code, 0);
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap({"export", map, "--mode", "bogus", "--ply", dir.file("out.ply")});
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap export: error: "));
+  EXPECT_TRUE(contains(r.err, "mode"));
+  EXPECT_TRUE(contains(r.err, "bogus"));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST(Cli, MapTooBigForMaxMemoryFailsAndLeavesNoOutput) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r =
+      runRaymap(concat({"populate", input, "--max-memory", "1MiB", "--quiet"}, allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
+  EXPECT_TRUE(contains(r.err, "--max-memory"));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Success paths
+// ---------------------------------------------------------------------------------------------
+
+/// Checks the statistics JSON of a run over kYardRays rays; returns nothing, fails the test.
+void expectSaneStats(const std::string& json, unsigned threads) {
+  for (const char* key : {"rays_in", "rays_integrated", "rays_rejected", "integrate_seconds",
+                          "rays_per_second", "voxels_free", "voxels_occupied", "backend", "threads",
+                          "updates_dropped", "peak_rss_bytes"}) {
+    EXPECT_TRUE(jsonValue(json, key).has_value()) << "missing key " << key << " in\n" << json;
+  }
+  EXPECT_EQ(jsonCount(json, "rays_in"), kYardRays);
+  EXPECT_EQ(jsonCount(json, "rays_integrated") + jsonCount(json, "rays_rejected"), kYardRays);
+  EXPECT_GT(jsonCount(json, "rays_integrated"), kYardRays * 9 / 10);
+  EXPECT_GT(jsonNumber(json, "integrate_seconds"), 0.0);
+  EXPECT_GT(jsonNumber(json, "rays_per_second"), 0.0);
+  EXPECT_GT(jsonCount(json, "voxels_free"), 0u);
+  EXPECT_GT(jsonCount(json, "voxels_occupied"), 0u);
+  EXPECT_EQ(jsonValue(json, "backend"), std::optional<std::string>("cpu"));
+  EXPECT_EQ(jsonCount(json, "threads"), threads);
+  EXPECT_EQ(jsonCount(json, "updates_dropped"), 0u);
+  EXPECT_GT(jsonCount(json, "peak_rss_bytes"), 1u << 20);
+}
+
+struct VoxelCounts {
+  std::uint64_t free = 0;
+  std::uint64_t occupied = 0;
+  bool operator==(const VoxelCounts&) const = default;
+};
+
+/// Voxel counts as `raymap info --json` reports them for a saved map.
+VoxelCounts infoCounts(const std::string& map_path) {
+  const RunResult r = runRaymap({"info", "--json", map_path});
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  return {jsonCount(r.out, "voxels_free"), jsonCount(r.out, "voxels_occupied")};
+}
+
+class Populate : public testing::TestWithParam<const char*> {};
+
+TEST_P(Populate, WritesMapPlyAndStatsWithMatchingCountsForOneAndTwoThreads) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  std::vector<VoxelCounts> per_thread_count;
+
+  for (const unsigned threads : {1u, 2u}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    const std::string map = dir.file("yard-" + std::to_string(threads) + ".rmap");
+    const std::string ply = dir.file("yard-" + std::to_string(threads) + ".ply");
+    const std::string stats = dir.file("yard-" + std::to_string(threads) + ".json");
+
+    // Act
+    const RunResult r = runRaymap(
+        concat({"populate", input, "--semantics", GetParam(), "--threads", std::to_string(threads),
+                "--output", map, "--ply", ply, "--stats-json", stats},
+               kSmallMap));
+
+    // Assert
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+    EXPECT_EQ(r.out, "");  // --quiet
+    ASSERT_TRUE(fs::exists(map));
+    ASSERT_TRUE(fs::exists(ply));
+    ASSERT_TRUE(fs::exists(stats));
+    const std::string json = readFile(stats);
+    expectSaneStats(json, threads);
+    EXPECT_EQ(jsonValue(json, "semantics"), std::optional<std::string>(GetParam()));
+    const VoxelCounts saved = infoCounts(map);
+    EXPECT_EQ(saved.free, jsonCount(json, "voxels_free"));
+    EXPECT_EQ(saved.occupied, jsonCount(json, "voxels_occupied"));
+    EXPECT_EQ(plyVertexCount(ply), std::optional<std::uint64_t>(saved.occupied));
+    per_thread_count.push_back(saved);
+  }
+  ASSERT_EQ(per_thread_count.size(), 2u);
+  EXPECT_EQ(per_thread_count[0], per_thread_count[1]) << "2 threads must build the 1-thread map";
+  EXPECT_TRUE(noTemporaryFilesIn(dir.path()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Cli, Populate, testing::Values("ray", "scan"),
+                         [](const testing::TestParamInfo<const char*>& param_info) {
+                           return std::string(param_info.param);
+                         });
+
+TEST(Cli, InfoAndExportDescribeThePopulatedMap) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  const std::string map = dir.file("yard.rmap");
+  writeRayCloud(input, yardRays(kYardScans));
+  const RunResult populated = runRaymap(concat({"populate", input, "--output", map}, kSmallMap));
+  ASSERT_EQ(populated.exit_code, 0) << describe(populated);
+  const VoxelCounts counts = infoCounts(map);
+  ASSERT_GT(counts.free, 0u);
+  ASSERT_GT(counts.occupied, 0u);
+
+  // Act
+  const RunResult text = runRaymap({"info", map});
+  const RunResult json = runRaymap({"info", "--json", map});
+  const std::string occupied_ply = dir.file("occupied.ply");
+  const std::string free_ply = dir.file("free.ply");
+  const std::string mean_ply = dir.file("mean.ply");
+  const RunResult occupied =
+      runRaymap({"export", map, "--mode", "occupied", "--ply", occupied_ply});
+  const RunResult free = runRaymap({"export", map, "--mode", "free", "--ply", free_ply});
+  const RunResult mean = runRaymap({"export", map, "--mode", "mean", "--ply", mean_ply});
+
+  // Assert: info, as text and as JSON.
+  ASSERT_EQ(text.exit_code, 0) << describe(text);
+  EXPECT_TRUE(contains(text.out, map));
+  EXPECT_TRUE(contains(text.out, withCommas(counts.free) + " free"));
+  EXPECT_TRUE(contains(text.out, withCommas(counts.occupied) + " occupied"));
+  EXPECT_TRUE(contains(text.out, "semantics      ray"));
+  ASSERT_EQ(json.exit_code, 0) << describe(json);
+  EXPECT_EQ(jsonValue(json.out, "path"), std::optional<std::string>(map));
+  EXPECT_EQ(jsonNumber(json.out, "resolution"), 0.1);
+  EXPECT_EQ(jsonValue(json.out, "semantics"), std::optional<std::string>("ray"));
+  EXPECT_EQ(jsonCount(json.out, "rays_in"), kYardRays);  // provenance ("info") as a string
+  // Export: the PLY headers and the printed counts match the map.
+  ASSERT_EQ(occupied.exit_code, 0) << describe(occupied);
+  ASSERT_EQ(free.exit_code, 0) << describe(free);
+  ASSERT_EQ(mean.exit_code, 0) << describe(mean);
+  EXPECT_EQ(plyVertexCount(occupied_ply), std::optional<std::uint64_t>(counts.occupied));
+  EXPECT_EQ(plyVertexCount(free_ply), std::optional<std::uint64_t>(counts.free));
+  EXPECT_TRUE(contains(occupied.out, "wrote " + withCommas(counts.occupied) + " points"));
+  EXPECT_TRUE(contains(free.out, "wrote " + withCommas(counts.free) + " points"));
+  // Every occupied voxel has samples (its hits); every voxel with samples is observed.
+  const std::optional<std::uint64_t> with_samples = plyVertexCount(mean_ply);
+  ASSERT_TRUE(with_samples.has_value());
+  EXPECT_GE(*with_samples, counts.occupied);
+  EXPECT_LE(*with_samples, counts.free + counts.occupied);
+  EXPECT_TRUE(noTemporaryFilesIn(dir.path()));
+}
+
+TEST(Cli, PointCloudWithTrajectoryMatchesTheRayCloud) {
+  // Arrange: the same scan as a point cloud + trajectory and as a ray cloud.
+  TempDir dir;
+  const std::string points = dir.file("points.ply");
+  const std::string trajectory = dir.file("path.txt");
+  const std::string rays = dir.file("rays.ply");
+  const PointCloudInput cloud = writePointCloud(points);
+  writeText(trajectory, stillTrajectory(cloud.origin, cloud.first_time, cloud.last_time));
+  writeRayCloud(rays, cloud.rays);
+
+  // Act
+  const RunResult from_points =
+      runRaymap(concat({"populate", points, "--trajectory", trajectory, "--stats-json",
+                        dir.file("points.json"), "--output", dir.file("points.rmap")},
+                       kSmallMap));
+  const RunResult from_rays =
+      runRaymap(concat({"populate", rays, "--stats-json", dir.file("rays.json")}, kSmallMap));
+
+  // Assert: ray clouds store origins as float offsets, so allow a few voxels of difference.
+  ASSERT_EQ(from_points.exit_code, 0) << describe(from_points);
+  ASSERT_EQ(from_rays.exit_code, 0) << describe(from_rays);
+  const std::string points_json = readFile(dir.file("points.json"));
+  const std::string rays_json = readFile(dir.file("rays.json"));
+  EXPECT_EQ(jsonCount(points_json, "rays_in"), cloud.rays.size());
+  EXPECT_EQ(jsonCount(points_json, "rays_rejected"), 0u);
+  for (const char* key : {"voxels_free", "voxels_occupied"}) {
+    const double a = jsonNumber(points_json, key);
+    const double b = jsonNumber(rays_json, key);
+    EXPECT_GT(a, 0.0) << key;
+    EXPECT_NEAR(a, b, 0.005 * b) << key;
+  }
+  EXPECT_EQ(infoCounts(dir.file("points.rmap")).occupied,
+            jsonCount(points_json, "voxels_occupied"));
+}
+
+TEST(Cli, GzipInputGivesTheSameMapAsPlainInput) {
+  // Arrange
+  TempDir dir;
+  const std::string plain = dir.file("yard.ply");
+  const std::string gzipped = dir.file("yard.ply.gz");
+  writeRayCloud(plain, yardRays(kYardScans));
+  ASSERT_NO_THROW(writeBytes(gzipped, readFile(plain), /*gzip=*/true));
+  ASSERT_LT(fs::file_size(gzipped), fs::file_size(plain));
+
+  // Act
+  const RunResult from_plain =
+      runRaymap(concat({"populate", plain, "--output", dir.file("plain.rmap")}, kSmallMap));
+  const RunResult from_gzip =
+      runRaymap(concat({"populate", gzipped, "--output", dir.file("gzip.rmap")}, kSmallMap));
+
+  // Assert
+  ASSERT_EQ(from_plain.exit_code, 0) << describe(from_plain);
+  ASSERT_EQ(from_gzip.exit_code, 0) << describe(from_gzip);
+  const VoxelCounts plain_counts = infoCounts(dir.file("plain.rmap"));
+  EXPECT_GT(plain_counts.occupied, 0u);
+  EXPECT_EQ(infoCounts(dir.file("gzip.rmap")), plain_counts);
+}
+
+TEST(Cli, PopulatingOverAnExistingMapReplacesIt) {
+  // Arrange: an older map from one scan, then a run over both scans to the same path.
+  TempDir dir;
+  const std::string one_scan = dir.file("one.ply");
+  const std::string two_scans = dir.file("two.ply");
+  const std::string map = dir.file("map.rmap");
+  writeRayCloud(one_scan, yardRays(1));
+  writeRayCloud(two_scans, yardRays(kYardScans));
+  ASSERT_EQ(runRaymap(concat({"populate", one_scan, "--output", map}, kSmallMap)).exit_code, 0);
+  const VoxelCounts old_counts = infoCounts(map);
+  const RunResult reference =
+      runRaymap(concat({"populate", two_scans, "--output", dir.file("ref.rmap")}, kSmallMap));
+  ASSERT_EQ(reference.exit_code, 0) << describe(reference);
+  const VoxelCounts new_counts = infoCounts(dir.file("ref.rmap"));
+  ASSERT_NE(old_counts, new_counts);
+
+  // Act
+  const RunResult r = runRaymap(concat({"populate", two_scans, "--output", map}, kSmallMap));
+
+  // Assert
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(infoCounts(map), new_counts);
+  EXPECT_EQ(jsonValue(runRaymap({"info", "--json", map}).out, "source"),
+            std::optional<std::string>(two_scans));
+  EXPECT_TRUE(noTemporaryFilesIn(dir.path()));
+}
+
+TEST(Cli, FailedPopulateLeavesTheExistingMapUntouched) {
+  // Arrange
+  TempDir dir;
+  const std::string good = dir.file("good.ply");
+  const std::string bad = dir.file("bad.ply");
+  const std::string map = dir.file("map.rmap");
+  writeRayCloud(good, yardRays(1));
+  PlyTestFile damaged = smallRayCloud(10);
+  damaged.truncate_data_to = 100;
+  ASSERT_NO_THROW(writePly(bad, damaged));
+  ASSERT_EQ(runRaymap(concat({"populate", good, "--output", map}, kSmallMap)).exit_code, 0);
+  const std::string old_bytes = readFile(map);
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(concat({"populate", bad, "--output", map}, kSmallMap));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(readFile(map) == old_bytes) << "the old map was changed";
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST(Cli, CorruptMapFailsInInfoAndExportNamingTheFile) {
+  // Arrange: a real map, then a truncated copy, a copy with a flipped byte in its region data,
+  // and a file that is no map at all.
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  const std::string map = dir.file("good.rmap");
+  writeRayCloud(input, yardRays(kYardScans));
+  ASSERT_EQ(runRaymap(concat({"populate", input, "--output", map}, kSmallMap)).exit_code, 0);
+  const std::string good = readFile(map);
+  ASSERT_GT(good.size(), 1000u);
+  std::string flipped = good;
+  flipped[flipped.size() - 100] = static_cast<char>(flipped[flipped.size() - 100] ^ 0x5a);
+  const std::vector<std::pair<std::string, std::string>> corrupt = {
+      {dir.file("truncated.rmap"), good.substr(0, good.size() / 2)},
+      {dir.file("flipped.rmap"), flipped},
+      {dir.file("foreign.rmap"), "this is not a raymap map file\n"},
+      {dir.file("empty.rmap"), ""},
+  };
+  for (const auto& [path, bytes] : corrupt) {
+    writeText(path, bytes);
+  }
+  const std::set<std::string> before = listFiles(dir.path());
+
+  for (const auto& [path, bytes] : corrupt) {
+    SCOPED_TRACE(path);
+
+    // Act
+    const RunResult info = runRaymap({"info", path});
+    const RunResult info_json = runRaymap({"info", "--json", path});
+    const RunResult exported = runRaymap({"export", path, "--ply", dir.file("out.ply")});
+
+    // Assert
+    EXPECT_EQ(info.exit_code, 1) << describe(info);
+    EXPECT_TRUE(contains(info.err, "raymap info: error: " + path));
+    EXPECT_EQ(info_json.exit_code, 1) << describe(info_json);
+    EXPECT_TRUE(contains(info_json.err, "raymap info: error: " + path));
+    EXPECT_EQ(exported.exit_code, 1) << describe(exported);
+    EXPECT_TRUE(contains(exported.err, "raymap export: error: " + path));
+  }
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST(Cli, DemoWritesItsFiles) {
+  // Arrange
+  TempDir dir;
+  const std::string out = dir.file("demo");
+
+  // Act
+  const RunResult r = runRaymap({"demo", "--output-dir", out, "--quiet"});
+
+  // Assert
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(r.out, "");
+  for (const char* name : {"yard_raycloud.ply", "yard.rmap", "yard_occupied.ply"}) {
+    EXPECT_TRUE(fs::exists(fs::path(out) / name)) << name;
+  }
+  EXPECT_GT(infoCounts((fs::path(out) / "yard.rmap").string()).occupied, 0u);
+  EXPECT_TRUE(noTemporaryFilesIn(out));
+}
+
+TEST(Cli, BenchPrintsJsonWithARunPerConfiguration) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+
+  // Act
+  const RunResult r = runRaymap({"bench", input, "--max-range", "8", "--repeat", "1",
+                                 "--threads-list", "1,2", "--semantics-list", "ray,scan"});
+
+  // Assert
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const std::size_t runs = r.out.find("\"runs\":");
+  ASSERT_NE(runs, std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find_first_not_of(" \n", runs + 7), r.out.find('[', runs)) << "not an array";
+  const std::string run_list = r.out.substr(runs);
+  std::size_t run_count = 0;
+  for (std::size_t at = run_list.find("\"rays_in\":"); at != std::string::npos;
+       at = run_list.find("\"rays_in\":", at + 1)) {
+    ++run_count;
+    EXPECT_EQ(jsonCount(run_list.substr(at), "rays_in"), kYardRays);
+  }
+  EXPECT_EQ(run_count, 4u);  // 2 semantics x 2 thread counts
+  EXPECT_TRUE(noTemporaryFilesIn(dir.path()));
+}
+
+TEST(Cli, BenchWithUnwritableJsonFailsNamingThePathAndReason) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(1));
+  const std::string bad_path = dir.file("no-such-dir/bench.json");
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r =
+      runRaymap({"bench", input, "--max-range", "8", "--repeat", "1", "--threads-list", "1",
+                 "--semantics-list", "ray", "--json", bad_path});
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap bench: error: "));
+  EXPECT_TRUE(contains(r.err, bad_path));
+  EXPECT_TRUE(contains(r.err, std::strerror(ENOENT)));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+}  // namespace
+}  // namespace raymap::test
