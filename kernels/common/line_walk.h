@@ -57,21 +57,44 @@ typedef struct rm_line_walk {
   float t_end;   /* t at which the walk ends (t1) */
 } rm_line_walk;
 
-/* Sets up one axis. p0: start point of the span on this axis; extent: end - start of the whole ray;
- * k0, k1: first and last voxel of the span on this axis; t0: ray parameter of p0. */
-RAYMAP_FN void rm_line_walk_axis_init(float p0, float extent, rm_i32 k0, rm_i32 k1, float t0,
-                                      rm_i32* step, rm_i32* left, float* first, float* inv,
-                                      float* next) {
-  rm_i32 delta = k1 - k0;
+/* The per-ray constants of a walk, computed once and shared by every span of the ray. */
+typedef struct rm_line_walk_ray {
+  rm_vec3f start;     /* start point, voxel units relative to the start voxel's minimum corner */
+  rm_vec3f extent;    /* end - start */
+  rm_vec3f inv;       /* 1 / |extent| per axis, 0 for a degenerate extent */
+  rm_vec3i end_voxel; /* exact offset of the end voxel from the start voxel */
+} rm_line_walk_ray;
+
+RAYMAP_FN float rm_line_walk_inverse_extent(float extent) {
   float abs_extent = RM_FABSF(extent);
+  return (abs_extent > RM_WALK_MIN_EXTENT) ? 1.0f / abs_extent : 0.0f;
+}
+
+/* Precondition: every component of end_voxel is below 2^24 in magnitude (the host rejects longer
+ * rays), so step counts stay exact in float. */
+RAYMAP_FN rm_line_walk_ray rm_line_walk_ray_make(rm_vec3f start, rm_vec3f end, rm_vec3i end_voxel) {
+  rm_line_walk_ray r;
+  r.start = start;
+  r.extent = rm_vec3f_make(end.x - start.x, end.y - start.y, end.z - start.z);
+  r.inv = rm_vec3f_make(rm_line_walk_inverse_extent(r.extent.x),
+                        rm_line_walk_inverse_extent(r.extent.y),
+                        rm_line_walk_inverse_extent(r.extent.z));
+  r.end_voxel = end_voxel;
+  return r;
+}
+
+/* Sets up one axis. p0: start point of the span on this axis; inv: 1 / |extent| of the whole ray;
+ * k0, k1: first and last voxel of the span on this axis; t0: ray parameter of p0. */
+RAYMAP_FN void rm_line_walk_axis_init(float p0, float inv, rm_i32 k0, rm_i32 k1, float t0,
+                                      rm_i32* step, rm_i32* left, float* first, float* next) {
+  rm_i32 delta = k1 - k0;
   float inside = p0 - RM_F32(k0); /* position inside the first voxel, nominally in [0,1] */
   float to_face;
   *step = rm_sign_i32(delta);
   *left = rm_abs_i32(delta);
-  *inv = (abs_extent > RM_WALK_MIN_EXTENT) ? 1.0f / abs_extent : 0.0f;
   to_face = (*step > 0) ? (1.0f - inside) : inside;
   to_face = RM_FMAXF(to_face, 0.0f);
-  *first = t0 + to_face * *inv;
+  *first = t0 + to_face * inv;
   *next = (*left > 0) ? *first : RM_INF;
 }
 
@@ -79,46 +102,45 @@ RAYMAP_FN void rm_line_walk_axis_init(float p0, float extent, rm_i32 k0, rm_i32 
  * holding the point, clamped into the box (a point on a box face belongs to the box). */
 RAYMAP_FN rm_i32 rm_line_walk_span_key(float p, rm_i32 exact_key, int use_exact, rm_i32 lo,
                                        rm_i32 hi) {
-  return use_exact ? exact_key : rm_clamp_i32(RM_I32(RM_FLOORF(p)), lo, hi);
+  return use_exact ? exact_key : rm_clamp_i32(rm_floor_i32(p), lo, hi);
 }
 
-/* Starts a walk over the span [t0, t1] (0 <= t0 <= t1 <= 1) of the ray from `start` to `end`,
- * restricted to the voxel box [box_lo, box_hi] (inclusive, relative to the start voxel).
- * end_voxel is the exact offset of the end voxel from the start voxel. The first span of a ray
- * (holds_start) starts on the start voxel (0,0,0) and the last (holds_end) ends on end_voxel,
- * exactly; the caller makes sure those lie in the box. Other ends are the voxel holding the point
- * at t0 or t1, clamped into the box: a ray may touch several regions at the same t (a start point
- * on a region face, a crossing through a region edge), so t alone cannot say which span holds an
- * end. After init, (x, y, z) is the first voxel. Precondition: every component of end_voxel is
- * below 2^24 in magnitude (the host rejects longer rays). */
-RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
-                                      rm_vec3i end_voxel, float t0, float t1, rm_vec3i box_lo,
-                                      rm_vec3i box_hi, int holds_start, int holds_end) {
-  rm_vec3f extent = rm_vec3f_make(end.x - start.x, end.y - start.y, end.z - start.z);
-  int start_exact = holds_start;
-  int end_exact = holds_end;
-  rm_vec3f p0 =
-      rm_vec3f_make(start.x + t0 * extent.x, start.y + t0 * extent.y, start.z + t0 * extent.z);
-  rm_vec3f p1 =
-      rm_vec3f_make(start.x + t1 * extent.x, start.y + t1 * extent.y, start.z + t1 * extent.z);
+/* Starts a walk over the span [t0, t1] (0 <= t0 <= t1 <= 1) of a ray, restricted to the voxel box
+ * [box_lo, box_hi] (inclusive, relative to the start voxel). The first span of a ray (holds_start)
+ * starts on the start voxel (0,0,0) and the last (holds_end) ends on the end voxel, exactly; the
+ * caller makes sure those lie in the box. Other ends are the voxel holding the point at t0 or t1,
+ * clamped into the box: a ray may touch several regions at the same t (a start point on a region
+ * face, a crossing through a region edge), so t alone cannot say which span holds an end. After
+ * init, (x, y, z) is the first voxel. */
+RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, const rm_line_walk_ray* ray, float t0,
+                                      float t1, rm_vec3i box_lo, rm_vec3i box_hi, int holds_start,
+                                      int holds_end) {
+  rm_vec3f p0 = ray->start;
+  rm_vec3f p1 = rm_vec3f_make(ray->start.x + t1 * ray->extent.x, ray->start.y + t1 * ray->extent.y,
+                              ray->start.z + t1 * ray->extent.z);
   rm_vec3i k0;
   rm_vec3i k1;
-  if (start_exact) {
-    p0 = start;
+  if (holds_start) {
     t0 = 0.0f;
+  } else {
+    p0 = rm_vec3f_make(ray->start.x + t0 * ray->extent.x, ray->start.y + t0 * ray->extent.y,
+                       ray->start.z + t0 * ray->extent.z);
   }
-  k0.x = rm_line_walk_span_key(p0.x, 0, start_exact, box_lo.x, box_hi.x);
-  k0.y = rm_line_walk_span_key(p0.y, 0, start_exact, box_lo.y, box_hi.y);
-  k0.z = rm_line_walk_span_key(p0.z, 0, start_exact, box_lo.z, box_hi.z);
-  k1.x = rm_line_walk_span_key(p1.x, end_voxel.x, end_exact, box_lo.x, box_hi.x);
-  k1.y = rm_line_walk_span_key(p1.y, end_voxel.y, end_exact, box_lo.y, box_hi.y);
-  k1.z = rm_line_walk_span_key(p1.z, end_voxel.z, end_exact, box_lo.z, box_hi.z);
-  rm_line_walk_axis_init(p0.x, extent.x, k0.x, k1.x, t0, &w->step_x, &w->left_x, &w->first_x,
-                         &w->inv_x, &w->next_x);
-  rm_line_walk_axis_init(p0.y, extent.y, k0.y, k1.y, t0, &w->step_y, &w->left_y, &w->first_y,
-                         &w->inv_y, &w->next_y);
-  rm_line_walk_axis_init(p0.z, extent.z, k0.z, k1.z, t0, &w->step_z, &w->left_z, &w->first_z,
-                         &w->inv_z, &w->next_z);
+  k0.x = rm_line_walk_span_key(p0.x, 0, holds_start, box_lo.x, box_hi.x);
+  k0.y = rm_line_walk_span_key(p0.y, 0, holds_start, box_lo.y, box_hi.y);
+  k0.z = rm_line_walk_span_key(p0.z, 0, holds_start, box_lo.z, box_hi.z);
+  k1.x = rm_line_walk_span_key(p1.x, ray->end_voxel.x, holds_end, box_lo.x, box_hi.x);
+  k1.y = rm_line_walk_span_key(p1.y, ray->end_voxel.y, holds_end, box_lo.y, box_hi.y);
+  k1.z = rm_line_walk_span_key(p1.z, ray->end_voxel.z, holds_end, box_lo.z, box_hi.z);
+  rm_line_walk_axis_init(p0.x, ray->inv.x, k0.x, k1.x, t0, &w->step_x, &w->left_x, &w->first_x,
+                         &w->next_x);
+  rm_line_walk_axis_init(p0.y, ray->inv.y, k0.y, k1.y, t0, &w->step_y, &w->left_y, &w->first_y,
+                         &w->next_y);
+  rm_line_walk_axis_init(p0.z, ray->inv.z, k0.z, k1.z, t0, &w->step_z, &w->left_z, &w->first_z,
+                         &w->next_z);
+  w->inv_x = ray->inv.x;
+  w->inv_y = ray->inv.y;
+  w->inv_z = ray->inv.z;
   w->x = k0.x;
   w->y = k0.y;
   w->z = k0.z;
@@ -127,13 +149,14 @@ RAYMAP_FN void rm_line_walk_init_span(rm_line_walk* w, rm_vec3f start, rm_vec3f 
   w->taken_z = 0.0f;
   w->steps_left = w->left_x + w->left_y + w->left_z;
   w->t_enter = t0;
-  w->t_end = end_exact ? 1.0f : t1;
+  w->t_end = holds_end ? 1.0f : t1;
 }
 
 /* Starts a walk over the whole ray: from the start voxel (0,0,0) to end_voxel. */
 RAYMAP_FN void rm_line_walk_init(rm_line_walk* w, rm_vec3f start, rm_vec3f end,
                                  rm_vec3i end_voxel) {
-  rm_line_walk_init_span(w, start, end, end_voxel, 0.0f, 1.0f, end_voxel, end_voxel, 1, 1);
+  rm_line_walk_ray ray = rm_line_walk_ray_make(start, end, end_voxel);
+  rm_line_walk_init_span(w, &ray, 0.0f, 1.0f, end_voxel, end_voxel, 1, 1);
 }
 
 /* Next crossing time on an axis after `taken` steps there; RM_INF once its steps are used up.

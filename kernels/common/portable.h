@@ -97,6 +97,13 @@ RAYMAP_FN float rm_minf(float a, float b) { return b < a ? b : a; }
 RAYMAP_FN float rm_maxf(float a, float b) { return a < b ? b : a; }
 #endif
 
+/* floor() to an integer for |x| < 2^31. Without SSE4.1 (the x86-64 baseline) floorf is a libm
+ * call, and the walk floors six values per region span. */
+RAYMAP_FN rm_i32 rm_floor_i32(float x) {
+  rm_i32 truncated = RM_I32(x);
+  return truncated - ((x < RM_F32(truncated)) ? 1 : 0);
+}
+
 RAYMAP_FN rm_i32 rm_clamp_i32(rm_i32 v, rm_i32 lo, rm_i32 hi) {
   return v < lo ? lo : (v > hi ? hi : v);
 }

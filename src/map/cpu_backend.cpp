@@ -103,6 +103,7 @@ class CpuBackend final : public Backend {
         tables_.emplace_back(capacity);
       }
       owner_.assign(capacity, kNoOwner);
+      created_.assign(capacity, 0);
       slot_work_.assign(capacity, 0.0);
       touched_.reserve(capacity);
       order_.reserve(capacity);
@@ -162,13 +163,13 @@ class CpuBackend final : public Backend {
   }
 
   /// Walks the voxels of one span with the semantics' miss rule.
-  std::uint32_t missSpan(const rm_ray_walk_frame& frame, const RaySpan& span,
+  std::uint32_t missSpan(const RayRegionWalk& ray, const RaySpan& span,
                          const RegionLayers& layers) const noexcept {
     if (per_scan_) {
       return detail::walkSpan(
-          frame, span, n_, detail::PerScanMiss{layers.occupancy, layers.marks, sequence_, params_});
+          ray, span, n_, detail::PerScanMiss{layers.occupancy, layers.marks, sequence_, params_});
     }
-    return detail::walkSpan(frame, span, n_, detail::PerRayMiss{layers.occupancy, params_});
+    return detail::walkSpan(ray, span, n_, detail::PerRayMiss{layers.occupancy, params_});
   }
 
   // ---- single-threaded reference ----
@@ -220,7 +221,7 @@ class CpuBackend final : public Backend {
           ++ws.spans_outside_window;
           continue;
         }
-        ws.voxels_visited += missSpan(walk.frame(), span, layersOf(*slot));
+        ws.voxels_visited += missSpan(walk, span, layersOf(*slot));
       }
       if ((ray.flags & RM_RAY_END_HIT) != 0u) {
         const auto [region, index] = sampleCell(ray);
@@ -284,7 +285,8 @@ class CpuBackend final : public Backend {
         if (!status) {
           return;
         }
-        auto slot = map_.acquireRegion(RegionStore::unpackCoord(key));
+        bool created = false;
+        auto slot = map_.acquireRegionUncleared(RegionStore::unpackCoord(key), &created);
         if (!slot) {
           if (slot.error() == StoreError::kFull) {
             status = Unexpected(IntegrateError::kStoreFull);
@@ -296,6 +298,9 @@ class CpuBackend final : public Backend {
           slot_work_[*slot] = 0.0;
           touched_.push_back(*slot);
         }
+        if (created) {
+          created_[*slot] = 1;  // cleared by its owner in step 4, in parallel
+        }
         slot_work_[*slot] += work;
       });
     }
@@ -306,6 +311,13 @@ class CpuBackend final : public Backend {
       status = Unexpected(IntegrateError::kStoreFull);
     }
     if (!status) {
+      // Regions created before the failure still need their clear values.
+      for (std::uint32_t slot : touched_) {
+        if (created_[slot] != 0) {
+          map_.store().clearRegion(slot);
+          created_[slot] = 0;
+        }
+      }
       releaseOwners();
       return status;
     }
@@ -327,7 +339,13 @@ class CpuBackend final : public Backend {
     // 4. Every worker walks the whole batch and updates only its own regions, in ray order.
     auto apply = [&](unsigned w) {
       WorkerStats& ws = worker_stats_[w];
-      const RegionStore& store = map_.store();
+      RegionStore& store = map_.store();
+      for (std::uint32_t slot : touched_) {
+        if (owner_[slot] == w && created_[slot] != 0) {
+          store.clearRegion(slot);  // first touch of new regions, spread over the workers
+          created_[slot] = 0;
+        }
+      }
       RegionCache cache;
       auto ownSlot = [&](Vec3i region) -> std::uint32_t {
         if (!(cache.valid && cache.region == region)) {
@@ -357,7 +375,7 @@ class CpuBackend final : public Backend {
             continue;
           }
           if (owner_[slot] == w) {
-            ws.voxels_visited += missSpan(walk.frame(), span, layersOf(slot));
+            ws.voxels_visited += missSpan(walk, span, layersOf(slot));
           }
         }
         if ((ray.flags & RM_RAY_END_HIT) != 0u) {
@@ -393,6 +411,7 @@ class CpuBackend final : public Backend {
   // Multi-threaded scratch, sized at construction.
   std::vector<RegionWorkTable> tables_;
   std::vector<std::uint8_t> owner_;
+  std::vector<std::uint8_t> created_;  // region created in this batch, not cleared yet
   std::vector<double> slot_work_;
   std::vector<std::uint32_t> touched_;
   std::vector<std::pair<double, std::uint32_t>> order_;

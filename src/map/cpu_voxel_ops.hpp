@@ -20,18 +20,15 @@ namespace raymap::detail {
 /// the ray's sample voxel, which the caller updates by its own rule. Returns the voxels visited.
 /// @rt allocates: no.
 template <class Visit>
-inline std::uint32_t walkSpan(const rm_ray_walk_frame& frame, const RaySpan& span,
+inline std::uint32_t walkSpan(const RayRegionWalk& ray, const RaySpan& span,
                               std::int32_t region_voxels, Visit&& visit) noexcept {
+  const rm_ray_walk_frame& frame = ray.frame();
   rm_line_walk w;
-  rm_line_walk_init_span(&w, frame.start, frame.end, frame.end_voxel, span.t0, span.t1, span.box_lo,
-                         span.box_hi, span.first ? 1 : 0, span.last ? 1 : 0);
+  rm_line_walk_init_span(&w, &ray.voxelRay(), span.t0, span.t1, span.box_lo, span.box_hi,
+                         span.first ? 1 : 0, span.last ? 1 : 0);
   const std::int32_t n = region_voxels;
   RAYMAP_DEBUG_ASSERT(w.x >= span.box_lo.x && w.x <= span.box_hi.x && w.y >= span.box_lo.y &&
                       w.y <= span.box_hi.y && w.z >= span.box_lo.z && w.z <= span.box_hi.z);
-  // Walk first, update after: the walk is a chain of dependent float operations and the updates
-  // are independent loads and stores; kept apart, the core overlaps many cache misses instead of
-  // a few. A span stays in one region, so it has at most 3N - 2 voxels.
-  std::uint32_t indices[3 * RM_MAX_REGION_VOXELS];
   std::int32_t index =
       (w.x - span.box_lo.x) + n * ((w.y - span.box_lo.y) + n * (w.z - span.box_lo.z));
   const std::int32_t delta[3] = {w.step_x, w.step_y * n, w.step_z * n * n};
@@ -53,16 +50,12 @@ inline std::uint32_t walkSpan(const rm_ray_walk_frame& frame, const RaySpan& spa
     }
     --steps;
   }
-  std::uint32_t count = 0;
-  indices[count++] = static_cast<std::uint32_t>(index);
+  visit(static_cast<std::uint32_t>(index));
   for (std::int32_t k = 0; k < steps; ++k) {
     index += delta[rm_line_walk_step(&w)];
-    indices[count++] = static_cast<std::uint32_t>(index);
+    visit(static_cast<std::uint32_t>(index));
   }
-  for (std::uint32_t i = 0; i < count; ++i) {
-    visit(indices[i]);
-  }
-  return count;
+  return static_cast<std::uint32_t>(steps + 1);
 }
 
 /// Per-ray miss: every crossing lowers the occupancy.

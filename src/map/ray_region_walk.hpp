@@ -28,7 +28,9 @@ struct RaySpan {
 class RayRegionWalk {
  public:
   RayRegionWalk(const rm_prepared_ray& ray, std::int32_t region_voxels) noexcept
-      : frame_(rm_ray_walk_frame_make(ray)), n_(region_voxels) {
+      : frame_(rm_ray_walk_frame_make(ray)),
+        voxel_ray_(rm_line_walk_ray_make(frame_.start, frame_.end, frame_.end_voxel)),
+        n_(region_voxels) {
     start_region_ = rm_region_of_voxel(frame_.start_voxel, n_);
     start_local_ = rm_local_of_voxel(frame_.start_voxel, n_);
     const rm_vec3i end_global = rm_vec3i_make(frame_.start_voxel.x + frame_.end_voxel.x,
@@ -50,6 +52,8 @@ class RayRegionWalk {
   }
 
   const rm_ray_walk_frame& frame() const noexcept { return frame_; }
+  /// @brief The voxel-level constants of the ray, shared by all its spans.
+  const rm_line_walk_ray& voxelRay() const noexcept { return voxel_ray_; }
 
   /// @brief The next span; false when every region has been visited.
   bool next(RaySpan* span) noexcept {
@@ -76,6 +80,7 @@ class RayRegionWalk {
 
  private:
   rm_ray_walk_frame frame_;
+  rm_line_walk_ray voxel_ray_;
   std::int32_t n_;
   rm_vec3i start_region_;
   rm_vec3i start_local_;

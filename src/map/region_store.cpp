@@ -61,6 +61,7 @@ Result<RegionStore> RegionStore::create(const Config& config) {
   }
   store.coords_.assign(config.capacity, Vec3i{});
   store.used_.assign(config.capacity, 0);
+  store.fresh_.assign(config.capacity, 1);  // prefault() writes zeros: still zero pages
   store.free_slots_.reserve(config.capacity);
   for (std::uint32_t s = config.capacity; s > 0; --s) {
     store.free_slots_.push_back(s - 1);  // slot 0 is handed out first
@@ -112,6 +113,17 @@ std::uint32_t RegionStore::find(Vec3i region) const noexcept {
 }
 
 Expected<std::uint32_t, StoreError> RegionStore::findOrCreate(Vec3i region) noexcept {
+  bool created = false;
+  auto slot = findOrCreateUncleared(region, &created);
+  if (slot && created) {
+    clearRegion(*slot);
+  }
+  return slot;
+}
+
+Expected<std::uint32_t, StoreError> RegionStore::findOrCreateUncleared(Vec3i region,
+                                                                       bool* created) noexcept {
+  *created = false;
   if (!inRange(region)) {
     return Unexpected(StoreError::kOutOfRange);
   }
@@ -136,10 +148,24 @@ Expected<std::uint32_t, StoreError> RegionStore::findOrCreate(Vec3i region) noex
   coords_[slot] = region;
   used_[slot] = 1;
   ++size_;
-  for (int l = 0; l < schema_.size(); ++l) {
-    clearLayer(slot, l);
-  }
+  *created = true;
   return slot;
+}
+
+void RegionStore::clearRegion(std::uint32_t slot) noexcept {
+  for (int l = 0; l < schema_.size(); ++l) {
+    const LayerSpec& spec = schema_.at(l);
+    bool all_zero = true;
+    for (std::size_t w = 0; w < spec.bytes_per_voxel / 4u; ++w) {
+      all_zero = all_zero && spec.clear_words[w] == 0u;
+    }
+    // A slot's first use finds the OS's zero pages: zero-valued layers need no writes, and pages
+    // that are never written (voxel means away from surfaces) never become resident.
+    if (!(all_zero && fresh_[slot] != 0)) {
+      clearLayer(slot, l);
+    }
+  }
+  fresh_[slot] = 0;
 }
 
 void RegionStore::clearLayer(std::uint32_t slot, int layer) noexcept {

@@ -68,6 +68,13 @@ class RegionStore {
   std::uint32_t find(Vec3i region) const noexcept;
   /// @brief Slot of a region, creating it (all voxels clear) if absent. @rt allocates: no.
   Expected<std::uint32_t, StoreError> findOrCreate(Vec3i region) noexcept;
+  /// @brief Like findOrCreate(), but a region it creates (*created = true) is NOT cleared: the
+  /// caller calls clearRegion() before the region is used. Lets a multi-threaded caller insert
+  /// serially and clear in parallel. @rt allocates: no.
+  Expected<std::uint32_t, StoreError> findOrCreateUncleared(Vec3i region, bool* created) noexcept;
+  /// @brief Sets every voxel of every layer of a region to its clear value. Different slots may be
+  /// cleared concurrently.
+  void clearRegion(std::uint32_t slot) noexcept;
   /// @brief Removes the region in `slot`; the slot becomes free for reuse. @rt allocates: no.
   void release(std::uint32_t slot) noexcept;
   /// @brief Removes every region.
@@ -127,6 +134,7 @@ class RegionStore {
   std::vector<std::size_t> layer_region_bytes_;
   std::vector<Vec3i> coords_;
   std::vector<std::uint8_t> used_;
+  std::vector<std::uint8_t> fresh_;  // slot never used: its pages are still the OS's zero pages
   std::vector<std::uint32_t> free_slots_;  // stack
   std::vector<std::uint64_t> index_keys_;  // kEmptyKey or packed coordinate
   std::vector<std::uint32_t> index_slots_;

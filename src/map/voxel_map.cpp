@@ -149,6 +149,15 @@ Expected<std::uint32_t, StoreError> VoxelMap::acquireRegion(Vec3i region) noexce
   return store_.findOrCreate(region);
 }
 
+Expected<std::uint32_t, StoreError> VoxelMap::acquireRegionUncleared(Vec3i region,
+                                                                     bool* created) noexcept {
+  *created = false;
+  if (!inWindow(region)) {
+    return Unexpected(StoreError::kOutsideWindow);
+  }
+  return store_.findOrCreateUncleared(region, created);
+}
+
 std::uint32_t VoxelMap::setWindowCentre(Vec3d p) noexcept {
   if (config_.policy != StorePolicy::kRolling) {
     return 0;

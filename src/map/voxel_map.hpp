@@ -98,6 +98,9 @@ class VoxelMap {
   /// @brief Slot of a region, created if needed. Global: kFull when the pool is exhausted.
   /// Rolling: kOutsideWindow for regions outside the window. @rt allocates: no.
   Expected<std::uint32_t, StoreError> acquireRegion(Vec3i region) noexcept;
+  /// @brief acquireRegion() that leaves a created region (*created) uncleared; the caller clears
+  /// it with store().clearRegion() before use (see RegionStore::findOrCreateUncleared).
+  Expected<std::uint32_t, StoreError> acquireRegionUncleared(Vec3i region, bool* created) noexcept;
 
   // ---- rolling window ----
   /// @brief Moves the window so that it is centred (to the nearest region) on p_world; regions

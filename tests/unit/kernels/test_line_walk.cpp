@@ -82,8 +82,8 @@ std::vector<Vec3i> walkByRegion(const PreparedRay& ray, int region_voxels) {
   RaySpan span;
   while (regions.next(&span)) {
     rm_line_walk w;
-    rm_line_walk_init_span(&w, f.start, f.end, f.end_voxel, span.t0, span.t1, span.box_lo,
-                           span.box_hi, span.first ? 1 : 0, span.last ? 1 : 0);
+    rm_line_walk_init_span(&w, &regions.voxelRay(), span.t0, span.t1, span.box_lo, span.box_hi,
+                           span.first ? 1 : 0, span.last ? 1 : 0);
     for (;;) {
       const Vec3i v = s + Vec3i{w.x, w.y, w.z};
       const rm_vec3i r = rm_region_of_voxel(rm_vec3i{v.x, v.y, v.z}, region_voxels);
