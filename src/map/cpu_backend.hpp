@@ -2,6 +2,7 @@
 // The CPU backend: a single-threaded reference and a multi-threaded path over the same code.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 
 #include "src/core/error.hpp"
@@ -15,17 +16,18 @@ struct CpuBackendOptions {
   static constexpr unsigned kMaxThreads = 64;
   /// Worker threads: 1 = the single-threaded reference, 0 = one per available core.
   unsigned threads = 1;
+  /// Rays per integrate() call the multi-threaded scratch is sized for (larger batches grow it).
+  std::size_t expected_batch_rays = std::size_t{1} << 18;
 };
 
 /// @brief Creates a CPU backend integrating into `map` (which must outlive it).
 ///
 /// Both paths split every ray into its per-region spans (RayRegionWalk) and walk each span's voxels
-/// with the shared line walk. The single-threaded path does this ray by ray. The multi-threaded
-/// path first walks all rays of the batch at region level (in parallel) to find the regions and
-/// estimate each region's work, creates the regions, gives each region to one worker (largest
-/// first, to the least-loaded worker), and then every worker walks the batch and updates only the
-/// spans in its own regions, in ray order. No voxel is ever written by two threads and no atomics
-/// are needed; because each voxel sees its updates in ray order, the map is bit-identical to the
+/// with the shared line walk. The single-threaded path (src/map/cpu_serial.hpp) does this ray by
+/// ray. The multi-threaded path (src/map/cpu_parallel.hpp) records every ray's spans once, gives
+/// each region of the batch to one worker, and lets every worker update only the spans in its own
+/// regions, in ray order. No voxel is ever written by two threads and no atomics are needed;
+/// because each voxel sees its updates in ray order, the map is bit-identical to the
 /// single-threaded one for any thread count.
 ///
 /// Thread-safety: integrate() must not be called concurrently; the map must not be touched by

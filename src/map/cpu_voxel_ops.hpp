@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The CPU integrator's inner loops: walking the voxels of one ray span inside one region and
-// applying the shared update rules (kernels/common) to them.
+// What the CPU integrators share: walking the voxels of one ray span inside one region, applying
+// the shared update rules (kernels/common) to them, and finding regions quickly.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <utility>
 
 #include "kernels/common/key_math.h"
 #include "kernels/common/line_walk.h"
@@ -13,27 +15,29 @@
 #include "kernels/common/voxel_mean.h"
 #include "src/core/assert.hpp"
 #include "src/map/ray_region_walk.hpp"
+#include "src/map/voxel_map.hpp"
 
 namespace raymap::detail {
 
 /// @brief Calls visit(index) for each voxel of `span` (index inside the span's region), leaving out
-/// the ray's sample voxel, which the caller updates by its own rule. Returns the voxels visited.
-/// @rt allocates: no.
+/// the ray's sample voxel, which the caller updates by its own rule. `ray` holds the ray's walk
+/// constants; sample_is_start says whether the sample voxel is where the walk starts (reverse).
+/// Returns the voxels visited. @rt allocates: no.
 template <class Visit>
-inline std::uint32_t walkSpan(const RayRegionWalk& ray, const RaySpan& span,
-                              std::int32_t region_voxels, Visit&& visit) noexcept {
-  const rm_ray_walk_frame& frame = ray.frame();
+inline std::uint32_t walkSpan(const rm_line_walk_ray& ray, bool sample_is_start,
+                              const RaySpan& span, std::int32_t region_voxels,
+                              Visit&& visit) noexcept {
   rm_line_walk w;
-  rm_line_walk_init_span(&w, &ray.voxelRay(), span.t0, span.t1, span.box_lo, span.box_hi,
-                         span.first ? 1 : 0, span.last ? 1 : 0);
+  rm_line_walk_init_span(&w, &ray, span.t0, span.t1, span.box_lo, span.box_hi, span.first ? 1 : 0,
+                         span.last ? 1 : 0);
   const std::int32_t n = region_voxels;
   RAYMAP_DEBUG_ASSERT(w.x >= span.box_lo.x && w.x <= span.box_hi.x && w.y >= span.box_lo.y &&
                       w.y <= span.box_hi.y && w.z >= span.box_lo.z && w.z <= span.box_hi.z);
   std::int32_t index =
       (w.x - span.box_lo.x) + n * ((w.y - span.box_lo.y) + n * (w.z - span.box_lo.z));
   const std::int32_t delta[3] = {w.step_x, w.step_y * n, w.step_z * n * n};
-  const bool skip_first = span.first && frame.sample_is_start != 0;
-  const bool skip_last = span.last && frame.sample_is_start == 0;
+  const bool skip_first = span.first && sample_is_start;
+  const bool skip_last = span.last && !sample_is_start;
   // The span's voxels are its first voxel plus one per remaining step; the sample voxel is left
   // out at whichever end it is.
   std::int32_t steps = w.steps_left;
@@ -112,5 +116,107 @@ inline void applyScanHit(const RegionLayers& layers, std::uint32_t i, std::uint3
     layers.marks[i] = rm_scan_mark_hit(sequence);
   }
 }
+
+/// @brief What every integration step needs to know about the map and the batch.
+struct IntegrationContext {
+  VoxelMap* map = nullptr;
+  std::int32_t region_voxels = 32;
+  rm_occupancy_params params{};
+  bool per_scan = false;
+  std::uint32_t sequence = 0;  ///< scan sequence of this batch (per-scan semantics)
+};
+
+/// @brief Pointers to the layers of the region in `slot`.
+inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexcept {
+  const RegionStore& store = map.store();
+  RegionLayers layers;
+  layers.occupancy = store.layerData<float>(slot, map.occupancyLayer());
+  if (map.meanLayer() >= 0) {
+    layers.mean = store.layerData<rm_voxel_mean>(slot, map.meanLayer());
+  }
+  if (map.scanMarkLayer() >= 0) {
+    layers.marks = store.layerData<std::uint32_t>(slot, map.scanMarkLayer());
+  }
+  return layers;
+}
+
+/// @brief Walks one span with the semantics' miss rule; returns the voxels visited.
+inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_ray& ray,
+                              bool sample_is_start, const RaySpan& span,
+                              const RegionLayers& layers) noexcept {
+  if (ctx.per_scan) {
+    return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
+                    PerScanMiss{layers.occupancy, layers.marks, ctx.sequence, ctx.params});
+  }
+  return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
+                  PerRayMiss{layers.occupancy, ctx.params});
+}
+
+/// @brief Region and in-region index of a ray's sample voxel (integer divisions; the region walk
+/// has a cheaper RayRegionWalk::sampleCell()).
+inline std::pair<Vec3i, std::uint32_t> sampleCellOf(const rm_prepared_ray& ray,
+                                                    std::int32_t n) noexcept {
+  const rm_vec3i region = rm_region_of_voxel(ray.sample_voxel, n);
+  const rm_vec3i local =
+      rm_vec3i_make(ray.sample_voxel.x - region.x * n, ray.sample_voxel.y - region.y * n,
+                    ray.sample_voxel.z - region.z * n);
+  return {Vec3i{region.x, region.y, region.z}, rm_local_index(local, n)};
+}
+
+/// @brief Direct-mapped cache in front of the store's index (region coordinate -> slot), one per
+/// worker: a ray visits a handful of regions and neighbouring rays the same ones, so most lookups
+/// hit a few kilobytes instead of probing the store's large index. Valid for one batch only
+/// (regions may be recycled between batches). Not thread-safe; allocation-free.
+class RegionSlotCache {
+ public:
+  static constexpr std::size_t kEntries = 256;
+
+  void reset() noexcept {
+    for (Entry& e : entries_) {
+      e.key = kEmpty;
+    }
+  }
+  /// @brief Cached slot of a region (packed coordinate), or nullptr: then look it up and call
+  /// remember().
+  const std::uint32_t* find(std::uint64_t key) noexcept {
+    key_ = key;
+    entry_ = &entries_[(key_ * 0x9E3779B97F4A7C15ull) >> 56];
+    return entry_->key == key_ ? &entry_->slot : nullptr;
+  }
+  /// @brief Records the slot of the region last passed to find().
+  void remember(std::uint32_t slot) noexcept {
+    entry_->key = key_;
+    entry_->slot = slot;
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  static_assert(kEntries == 256, "the index is the top 8 bits of the hash");
+  struct Entry {
+    std::uint64_t key = kEmpty;
+    std::uint32_t slot = RegionStore::kNoSlot;
+  };
+  std::array<Entry, kEntries> entries_{};
+  std::uint64_t key_ = kEmpty;
+  Entry* entry_ = nullptr;
+};
+
+/// @brief Slot of an existing region by packed coordinate, or RegionStore::kNoSlot (read-only
+/// lookups; several threads may look up concurrently, each with its own cache).
+inline std::uint32_t findSlot(const RegionStore& store, RegionSlotCache& cache,
+                              std::uint64_t key) noexcept {
+  if (const std::uint32_t* cached = cache.find(key)) {
+    return *cached;
+  }
+  const std::uint32_t slot = store.findPacked(key);
+  cache.remember(slot);
+  return slot;
+}
+
+/// @brief Counters of one worker during one batch.
+struct WorkerStats {
+  std::uint64_t voxels_visited = 0;
+  std::uint64_t spans_outside_window = 0;
+};
 
 }  // namespace raymap::detail

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 
 #include "kernels/common/key_math.h"
 #include "kernels/common/line_walk.h"
@@ -32,11 +33,14 @@ class RayRegionWalk {
         voxel_ray_(rm_line_walk_ray_make(frame_.start, frame_.end, frame_.end_voxel)),
         n_(region_voxels) {
     start_region_ = rm_region_of_voxel(frame_.start_voxel, n_);
-    start_local_ = rm_local_of_voxel(frame_.start_voxel, n_);
+    start_local_ = rm_vec3i_make(frame_.start_voxel.x - start_region_.x * n_,
+                                 frame_.start_voxel.y - start_region_.y * n_,
+                                 frame_.start_voxel.z - start_region_.z * n_);
     const rm_vec3i end_global = rm_vec3i_make(frame_.start_voxel.x + frame_.end_voxel.x,
                                               frame_.start_voxel.y + frame_.end_voxel.y,
                                               frame_.start_voxel.z + frame_.end_voxel.z);
-    const rm_vec3i end_region = rm_region_of_voxel(end_global, n_);
+    end_region_ = rm_region_of_voxel(end_global, n_);
+    const rm_vec3i end_region = end_region_;
     const float inv_n = 1.0f / static_cast<float>(n_);
     const rm_vec3f region_start =
         rm_vec3f_make((static_cast<float>(start_local_.x) + frame_.start.x) * inv_n,
@@ -54,6 +58,20 @@ class RayRegionWalk {
   const rm_ray_walk_frame& frame() const noexcept { return frame_; }
   /// @brief The voxel-level constants of the ray, shared by all its spans.
   const rm_line_walk_ray& voxelRay() const noexcept { return voxel_ray_; }
+
+  /// @brief Region and in-region index of the ray's sample voxel (the walk's end voxel, or its
+  /// start voxel for a reverse walk), without a division.
+  std::pair<Vec3i, std::uint32_t> sampleCell() const noexcept {
+    if (frame_.sample_is_start != 0) {
+      return {Vec3i{start_region_.x, start_region_.y, start_region_.z},
+              rm_local_index(start_local_, n_)};
+    }
+    const rm_vec3i local =
+        rm_vec3i_make(start_local_.x + frame_.end_voxel.x - (end_region_.x - start_region_.x) * n_,
+                      start_local_.y + frame_.end_voxel.y - (end_region_.y - start_region_.y) * n_,
+                      start_local_.z + frame_.end_voxel.z - (end_region_.z - start_region_.z) * n_);
+    return {Vec3i{end_region_.x, end_region_.y, end_region_.z}, rm_local_index(local, n_)};
+  }
 
   /// @brief The next span; false when every region has been visited.
   bool next(RaySpan* span) noexcept {
@@ -84,6 +102,7 @@ class RayRegionWalk {
   std::int32_t n_;
   rm_vec3i start_region_;
   rm_vec3i start_local_;
+  rm_vec3i end_region_;
   rm_line_walk walk_;
   bool started_ = false;
   bool done_ = false;

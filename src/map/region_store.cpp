@@ -97,10 +97,16 @@ std::size_t RegionStore::bucketOf(std::uint64_t key) const noexcept {
 }
 
 std::uint32_t RegionStore::find(Vec3i region) const noexcept {
-  if (!inRange(region) || capacity_ == 0) {
+  if (!inRange(region)) {
     return kNoSlot;
   }
-  const std::uint64_t key = packCoord(region);
+  return findPacked(packCoord(region));
+}
+
+std::uint32_t RegionStore::findPacked(std::uint64_t key) const noexcept {
+  if (capacity_ == 0) {
+    return kNoSlot;
+  }
   for (std::size_t b = bucketOf(key);; b = (b + 1) & index_mask_) {
     const std::uint64_t k = index_keys_[b];
     if (k == key) {

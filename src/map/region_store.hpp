@@ -66,6 +66,8 @@ class RegionStore {
 
   /// @brief Slot of a region, or kNoSlot. @rt wait-free; allocates: no.
   std::uint32_t find(Vec3i region) const noexcept;
+  /// @brief find() by packed coordinate (packCoord()).
+  std::uint32_t findPacked(std::uint64_t key) const noexcept;
   /// @brief Slot of a region, creating it (all voxels clear) if absent. @rt allocates: no.
   Expected<std::uint32_t, StoreError> findOrCreate(Vec3i region) noexcept;
   /// @brief Like findOrCreate(), but a region it creates (*created = true) is NOT cleared: the

@@ -1,0 +1,126 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The multi-threaded integrator of the CPU backend: regions partitioned over workers, no atomics.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "src/core/expected.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/cpu_voxel_ops.hpp"
+#include "src/map/worker_pool.hpp"
+
+namespace raymap::detail {
+
+/// @brief Integrates a batch with several workers, giving every region to exactly one of them.
+///
+/// Design: five steps per batch.
+///  1. Survey (parallel, rays split into contiguous ranges): each worker walks its rays at region
+///     level once, records every span (region, t0, t1, voxel box) and the sample cell per ray, and
+///     sums the estimated work (voxel steps) per region in a private table.
+///  2. Create (serial): the regions of the batch are inserted into the store, uncleared; if the
+///     store is full the batch fails here, before any voxel changes.
+///  3. Assign (serial): regions sorted by work, each to the least-loaded worker.
+///  4. Resolve (parallel): each worker clears the new regions it owns (their first touch) and
+///     looks up the slots of the spans it recorded.
+///  5. Apply (parallel): each worker goes through all recorded spans in ray order and walks only
+///     those in its own regions (and the sample hits there).
+/// Each voxel is written by one worker, in ray order, so the map is bit-identical to the
+/// single-threaded one and needs no atomics. The survey's records are read twice per worker
+/// instead of walking every ray at region level once per worker.
+///
+/// Scratch is sized at construction for `expected_batch_rays` rays of up to 6 regions each; a
+/// larger batch grows it once (an allocation outside the steady state). Not thread-safe:
+/// integrate() must not be called concurrently.
+class ParallelIntegrator {
+ public:
+  ParallelIntegrator(unsigned workers, std::uint32_t store_capacity,
+                     std::size_t expected_batch_rays);
+
+  unsigned workers() const noexcept { return pool_.size(); }
+
+  /// @param caches one region cache per worker (reset for this batch)
+  /// @param stats one counter set per worker
+  Expected<void, IntegrateError> integrate(const IntegrationContext& ctx,
+                                           std::span<const PreparedRay> rays,
+                                           std::span<RegionSlotCache> caches,
+                                           std::span<WorkerStats> stats) noexcept;
+
+ private:
+  static constexpr std::uint8_t kNoOwner = 0xFF;
+
+  /// One region piece of a ray, recorded by the survey; `slot` is filled in after creation.
+  struct SpanRecord {
+    std::uint64_t region_key;  // RegionStore::packCoord
+    std::uint32_t slot;        // RegionStore::kNoSlot: outside a rolling window
+    std::uint32_t flags;       // kFirst | kLast
+    float t0;
+    float t1;
+    rm_vec3i box_lo;  // the region's voxels relative to the walk's start voxel
+  };
+  static constexpr std::uint32_t kFirst = 1u;
+  static constexpr std::uint32_t kLast = 2u;
+
+  /// Per ray: where its spans are (in the survey worker's list), its walk constants and its
+  /// sample cell.
+  struct RayRecord {
+    rm_line_walk_ray walk;
+    std::uint32_t first_span;
+    std::uint32_t span_count;
+    std::uint64_t sample_key;
+    std::uint32_t sample_slot;
+    std::uint32_t sample_index;
+    bool sample_is_start;
+  };
+
+  /// Fixed-capacity open-addressing table: region key -> estimated work, behind a small
+  /// direct-mapped write-back front (most spans of neighbouring rays fall in a few regions, so
+  /// most additions stay in a few kilobytes).
+  class WorkTable {
+   public:
+    explicit WorkTable(std::size_t max_regions);
+    /// @brief Adds work to a region; false when the table would exceed the store's capacity.
+    bool add(std::uint64_t key, double work) noexcept;
+    /// @brief Moves the front's entries into the table; call before forEach().
+    bool flush() noexcept;
+    template <class Fn>
+    void forEach(Fn&& fn) const {
+      for (std::size_t b : used_) {
+        fn(keys_[b], work_[b]);
+      }
+    }
+    void clear() noexcept;
+
+   private:
+    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+    static constexpr std::size_t kFrontEntries = 256;
+    bool addToTable(std::uint64_t key, double work) noexcept;
+    std::array<std::uint64_t, kFrontEntries> front_keys_{};
+    std::array<double, kFrontEntries> front_work_{};
+    std::vector<std::uint64_t> keys_;
+    std::vector<double> work_;
+    std::vector<std::size_t> used_;
+    std::size_t mask_ = 0;
+    std::size_t limit_ = 0;
+  };
+
+  std::pair<std::size_t, std::size_t> rangeOf(unsigned worker, std::size_t count) const noexcept;
+  void releaseOwners() noexcept;
+
+  WorkerPool pool_;
+  std::vector<WorkTable> tables_;               // one per worker
+  std::vector<std::vector<SpanRecord>> spans_;  // one per worker
+  std::vector<std::uint8_t> overflow_;          // one per worker: work table full
+  std::vector<RayRecord> rays_;
+  std::vector<std::uint8_t> owner_;     // per slot: owning worker in this batch
+  std::vector<std::uint8_t> created_;   // per slot: created in this batch, not cleared yet
+  std::vector<double> slot_work_;       // per slot
+  std::vector<std::uint32_t> touched_;  // slots of this batch
+  std::vector<std::pair<double, std::uint32_t>> order_;
+  std::vector<double> loads_;  // per worker
+};
+
+}  // namespace raymap::detail

@@ -1,0 +1,80 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Single-threaded integration: the reference every other path is compared with.
+#include "src/map/cpu_serial.hpp"
+
+namespace raymap::detail {
+namespace {
+
+/// Slot of a region, created on demand (cached). kNoSlot: outside a rolling window.
+Expected<std::uint32_t, IntegrateError> acquire(VoxelMap& map, RegionSlotCache& cache,
+                                                Vec3i region) noexcept {
+  if (const std::uint32_t* cached = cache.find(RegionStore::packCoord(region))) {
+    return *cached;
+  }
+  auto slot = map.acquireRegion(region);
+  if (!slot) {
+    if (slot.error() == StoreError::kFull) {
+      return Unexpected(IntegrateError::kStoreFull);  // not cached: a later call may succeed
+    }
+    cache.remember(RegionStore::kNoSlot);
+    return RegionStore::kNoSlot;
+  }
+  cache.remember(*slot);
+  return *slot;
+}
+
+}  // namespace
+
+Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
+                                               std::span<const PreparedRay> rays,
+                                               RegionSlotCache& cache,
+                                               WorkerStats& stats) noexcept {
+  VoxelMap& map = *ctx.map;
+  if (ctx.per_scan) {
+    // Hits first: a voxel hit anywhere in the scan takes no miss from it (occupied wins).
+    for (const PreparedRay& ray : rays) {
+      if ((ray.flags & RM_RAY_END_HIT) == 0u) {
+        continue;
+      }
+      const auto [region, index] = sampleCellOf(ray, ctx.region_voxels);
+      auto slot = acquire(map, cache, region);
+      if (!slot) {
+        return Unexpected(slot.error());
+      }
+      if (*slot != RegionStore::kNoSlot) {
+        applyScanHit(regionLayers(map, *slot), index, ctx.sequence, ctx.params);
+      }
+    }
+  }
+  for (const PreparedRay& ray : rays) {
+    RayRegionWalk walk(ray, ctx.region_voxels);
+    const bool sample_is_start = walk.frame().sample_is_start != 0;
+    RaySpan span;
+    while (walk.next(&span)) {
+      auto slot = acquire(map, cache, span.region);
+      if (!slot) {
+        return Unexpected(slot.error());
+      }
+      if (*slot == RegionStore::kNoSlot) {
+        ++stats.spans_outside_window;
+        continue;
+      }
+      stats.voxels_visited +=
+          missSpan(ctx, walk.voxelRay(), sample_is_start, span, regionLayers(map, *slot));
+    }
+    if ((ray.flags & RM_RAY_END_HIT) != 0u) {
+      const auto [region, index] = walk.sampleCell();
+      auto slot = acquire(map, cache, region);
+      if (!slot) {
+        return Unexpected(slot.error());
+      }
+      if (*slot != RegionStore::kNoSlot) {
+        applySampleHit(ray, regionLayers(map, *slot), index, ctx.per_scan, ctx.params);
+        ++stats.voxels_visited;
+      }
+    }
+  }
+  return {};
+}
+
+}  // namespace raymap::detail
