@@ -39,4 +39,11 @@ RAYMAP_FN rm_u32 rm_local_index(rm_vec3i local, rm_i32 region_voxels) {
   return RM_U32(local.x + region_voxels * (local.y + region_voxels * local.z));
 }
 
+/* Inverse of rm_local_index: the region-local coordinate of a linear index. */
+RAYMAP_FN rm_vec3i rm_local_of_index(rm_u32 index, rm_i32 region_voxels) {
+  rm_i32 i = RM_I32(index);
+  return rm_vec3i_make(i % region_voxels, (i / region_voxels) % region_voxels,
+                       i / (region_voxels * region_voxels));
+}
+
 #endif /* RAYMAP_KERNELS_COMMON_KEY_MATH_H */

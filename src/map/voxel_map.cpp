@@ -133,6 +133,12 @@ Vec3i VoxelMap::regionOfVoxel(Vec3i voxel) const noexcept {
   return fromKernel(rm_region_of_voxel(toKernel(voxel), config_.geometry.region_voxels));
 }
 
+Vec3i VoxelMap::voxelAt(Vec3i region, std::uint32_t index) const noexcept {
+  const std::int32_t n = config_.geometry.region_voxels;
+  const rm_vec3i local = rm_local_of_index(index, n);
+  return Vec3i{region.x * n + local.x, region.y * n + local.y, region.z * n + local.z};
+}
+
 bool VoxelMap::inWindow(Vec3i r) const noexcept {
   if (config_.policy != StorePolicy::kRolling) {
     return true;

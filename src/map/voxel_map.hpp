@@ -91,6 +91,9 @@ class VoxelMap {
   Vec3d voxelMinCorner(Vec3i voxel) const noexcept;
   Vec3d voxelCentre(Vec3i voxel) const noexcept;
   Vec3i regionOfVoxel(Vec3i voxel) const noexcept;
+  /// @brief Global voxel of the voxel at linear `index` of `region` (see
+  /// kernels/common/key_math.h).
+  Vec3i voxelAt(Vec3i region, std::uint32_t index) const noexcept;
   /// @brief Largest |global voxel coordinate| the map accepts on any axis.
   std::int32_t maxVoxelCoord() const noexcept { return max_voxel_coord_; }
 

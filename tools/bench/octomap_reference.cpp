@@ -152,7 +152,7 @@ Agreement OctomapReference::compare(const VoxelMap& map) const {
       if (std::isinf(occ[i])) {
         continue;
       }
-      const Vec3i v{region.x * n + i % n, region.y * n + (i / n) % n, region.z * n + i / (n * n)};
+      const Vec3i v = map.voxelAt(region, static_cast<std::uint32_t>(i));
       const octomap::OcTreeKey key(static_cast<octomap::key_type>(v.x + kKeyOffset),
                                    static_cast<octomap::key_type>(v.y + kKeyOffset),
                                    static_cast<octomap::key_type>(v.z + kKeyOffset));

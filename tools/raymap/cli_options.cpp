@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "src/io/atomic_file.hpp"
 #include "src/map/cpu_backend.hpp"
 
 namespace raymap::cli {
@@ -108,6 +109,17 @@ Result<Vec3d> parseVector(const std::string& text, const std::string& option) {
     return fail(ErrorCode::kInvalidArgument, option + ": unexpected '" + rest + "' after 'x,y,z'");
   }
   return v;
+}
+
+Expected<void, Error> writeTextFile(const std::string& path, const std::string& text) {
+  auto writer = io::AtomicFileWriter::open(path);
+  if (!writer) {
+    return Unexpected(writer.error());
+  }
+  if (auto ok = writer->write(text + "\n"); !ok) {
+    return ok;
+  }
+  return writer->commit();
 }
 
 Expected<void, Error> checkWritable(const std::string& path, const std::string& option) {

@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "platform/process.hpp"
-#include "src/io/atomic_file.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
@@ -140,21 +139,11 @@ int runBench(const BenchFlags& f) {
       .add("repeat", f.repeat)
       .raw("machine", machine.str())
       .raw("runs", runs);
-  const std::string text = result.str() + "\n";
   if (f.json.empty() || f.json == "-") {
-    std::fputs(text.c_str(), stdout);
+    std::printf("%s\n", result.str().c_str());
     return kExitOk;
   }
-  auto writer = io::AtomicFileWriter::open(f.json);
-  if (!writer) {
-    printError(command, "--json: " + writer.error().message);
-    return kExitFailure;
-  }
-  Expected<void, Error> ok = writer->write(text);
-  if (ok) {
-    ok = writer->commit();
-  }
-  if (!ok) {
+  if (auto ok = writeTextFile(f.json, result.str()); !ok) {
     printError(command, "--json: " + ok.error().message);
     return kExitFailure;
   }

@@ -71,7 +71,7 @@ SceneCheck checkAgainstScene(const VoxelMap& map, const sim::YardScanConfig& sce
   const int n = map.geometry().region_voxels;
   map.store().forEachRegion([&](std::uint32_t slot, Vec3i region) {
     for (int i = 0; i < n * n * n; ++i) {
-      const Vec3i v{region.x * n + i % n, region.y * n + (i / n) % n, region.z * n + i / (n * n)};
+      const Vec3i v = map.voxelAt(region, static_cast<std::uint32_t>(i));
       (void)slot;
       if (map.state(v) != VoxelState::kOccupied) {
         continue;

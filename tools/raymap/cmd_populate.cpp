@@ -10,7 +10,6 @@
 
 #include <unistd.h>
 
-#include "src/io/atomic_file.hpp"
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
 #include "tools/raymap/cli_options.hpp"
@@ -28,17 +27,6 @@ struct PopulateFlags {
   std::string stats_json;
   bool quiet = false;
 };
-
-Expected<void, Error> writeText(const std::string& path, const std::string& text) {
-  auto writer = io::AtomicFileWriter::open(path);
-  if (!writer) {
-    return Unexpected(writer.error());
-  }
-  if (auto ok = writer->write(text + "\n"); !ok) {
-    return ok;
-  }
-  return writer->commit();
-}
 
 /// Output files written under temporary names ("<path>.part-<pid>") and renamed together by
 /// commit(); whatever was not committed is removed on destruction.
@@ -149,7 +137,7 @@ int runPopulate(const PopulateFlags& f) {
     const std::string json = statsJson(*report, *options);
     if (f.stats_json == "-") {
       std::printf("%s\n", json.c_str());
-    } else if (auto ok = writeText(staged.add(f.stats_json), json); !ok) {
+    } else if (auto ok = writeTextFile(staged.add(f.stats_json), json); !ok) {
       printError(command, "--stats-json: " + ok.error().message);
       return kExitFailure;
     }
