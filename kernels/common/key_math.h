@@ -12,9 +12,6 @@
 
 #include "portable.h"
 
-/* Largest region edge in voxels (MapGeometry::kMaxRegionVoxels). */
-#define RM_MAX_REGION_VOXELS 128
-
 /* Floor division for a positive divisor: rm_floor_div(-1, 32) == -1 (C division truncates). */
 RAYMAP_FN rm_i32 rm_floor_div(rm_i32 value, rm_i32 divisor) {
   rm_i32 q = value / divisor;
@@ -27,11 +24,15 @@ RAYMAP_FN rm_vec3i rm_region_of_voxel(rm_vec3i voxel, rm_i32 region_voxels) {
                        rm_floor_div(voxel.z, region_voxels));
 }
 
-/* Voxel coordinate inside its region, each component in [0, region_voxels). */
-RAYMAP_FN rm_vec3i rm_local_of_voxel(rm_vec3i voxel, rm_i32 region_voxels) {
-  rm_vec3i region = rm_region_of_voxel(voxel, region_voxels);
+/* Coordinate of a voxel inside a region that holds it (no division). */
+RAYMAP_FN rm_vec3i rm_local_in_region(rm_vec3i voxel, rm_vec3i region, rm_i32 region_voxels) {
   return rm_vec3i_make(voxel.x - region.x * region_voxels, voxel.y - region.y * region_voxels,
                        voxel.z - region.z * region_voxels);
+}
+
+/* Voxel coordinate inside its region, each component in [0, region_voxels). */
+RAYMAP_FN rm_vec3i rm_local_of_voxel(rm_vec3i voxel, rm_i32 region_voxels) {
+  return rm_local_in_region(voxel, rm_region_of_voxel(voxel, region_voxels), region_voxels);
 }
 
 /* Linear index of a region-local voxel coordinate (x fastest). */

@@ -18,7 +18,6 @@ typedef uint rm_u32;
 #define RM_FMINF(a, b) fmin((a), (b))
 #define RM_FMAXF(a, b) fmax((a), (b))
 #define RM_INF INFINITY
-#define RM_FLT_MAX FLT_MAX
 
 #else
 /* ---- host C, host C++ and CUDA C++ ---- */
@@ -59,7 +58,6 @@ typedef uint32_t rm_u32;
 #define RM_FMINF(a, b) rm_minf((a), (b))
 #define RM_FMAXF(a, b) rm_maxf((a), (b))
 #define RM_INF INFINITY
-#define RM_FLT_MAX FLT_MAX
 #endif
 
 /* Small vectors passed by value between the kernel helpers. Plain arrays-in-structs are legal in

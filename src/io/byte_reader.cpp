@@ -206,9 +206,10 @@ Result<std::span<const std::byte>> ByteReader::ensure(std::size_t bytes) {
   return buffered();
 }
 
-Result<std::size_t> ByteReader::read(std::span<std::byte> out) {
-  std::size_t copied = 0;
-  while (copied < out.size()) {
+template <class Sink>
+Result<std::uint64_t> ByteReader::drain(std::uint64_t bytes, Sink&& sink) {
+  std::uint64_t done = 0;
+  while (done < bytes) {
     if (begin_ == end_) {
       if (eof_) {
         break;
@@ -218,12 +219,22 @@ Result<std::size_t> ByteReader::read(std::span<std::byte> out) {
       }
       continue;
     }
-    const std::size_t n = std::min(out.size() - copied, end_ - begin_);
-    std::memcpy(out.data() + copied, buffer_.get() + begin_, n);
+    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(bytes - done, end_ - begin_));
+    sink(buffer_.get() + begin_, done, n);
     consume(n);
-    copied += n;
+    done += n;
   }
-  return copied;
+  return done;
+}
+
+Result<std::size_t> ByteReader::read(std::span<std::byte> out) {
+  auto copied = drain(out.size(), [&](const std::byte* from, std::uint64_t at, std::size_t n) {
+    std::memcpy(out.data() + at, from, n);
+  });
+  if (!copied) {
+    return Unexpected(std::move(copied).error());
+  }
+  return static_cast<std::size_t>(*copied);
 }
 
 Expected<void, Error> ByteReader::readExact(std::span<std::byte> out, std::string_view what) {
@@ -242,23 +253,7 @@ Expected<void, Error> ByteReader::readExact(std::span<std::byte> out, std::strin
 }
 
 Result<std::uint64_t> ByteReader::skip(std::uint64_t bytes) {
-  std::uint64_t skipped = 0;
-  while (skipped < bytes) {
-    if (begin_ == end_) {
-      if (eof_) {
-        break;
-      }
-      if (auto filled = refill(); !filled) {
-        return Unexpected(std::move(filled).error());
-      }
-      continue;
-    }
-    const std::size_t n =
-        static_cast<std::size_t>(std::min<std::uint64_t>(bytes - skipped, end_ - begin_));
-    consume(n);
-    skipped += n;
-  }
-  return skipped;
+  return drain(bytes, [](const std::byte*, std::uint64_t, std::size_t) {});
 }
 
 Result<bool> ByteReader::atEnd() {

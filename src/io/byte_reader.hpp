@@ -80,6 +80,10 @@ class ByteReader {
              std::size_t capacity, std::uint64_t file_bytes, bool compressed) noexcept;
   /// Moves the unconsumed bytes to the front and reads more behind them. Sets eof_ at the end.
   Expected<void, Error> refill();
+  /// Consumes up to `bytes`, handing each buffered piece to sink(data, offset so far, size);
+  /// returns how many were consumed (fewer at the end of the data). The loop of read and skip.
+  template <class Sink>
+  Result<std::uint64_t> drain(std::uint64_t bytes, Sink&& sink);
   void close() noexcept;
 
   std::string path_;

@@ -19,7 +19,7 @@ ParallelIntegrator::WorkTable::WorkTable(std::size_t max_regions) {
 }
 
 bool ParallelIntegrator::WorkTable::add(std::uint64_t key, double work) noexcept {
-  const std::size_t f = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 56);
+  const std::size_t f = directMappedIndex(key);
   if (front_keys_[f] == key) {
     front_work_[f] += work;
     return true;

@@ -96,7 +96,7 @@ class ParallelIntegrator {
 
    private:
     static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
-    static constexpr std::size_t kFrontEntries = 256;
+    static constexpr std::size_t kFrontEntries = 256;  // directMappedIndex() range
     bool addToTable(std::uint64_t key, double work) noexcept;
     std::array<std::uint64_t, kFrontEntries> front_keys_{};
     std::array<double, kFrontEntries> front_work_{};

@@ -157,10 +157,14 @@ inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_
 inline std::pair<Vec3i, std::uint32_t> sampleCellOf(const rm_prepared_ray& ray,
                                                     std::int32_t n) noexcept {
   const rm_vec3i region = rm_region_of_voxel(ray.sample_voxel, n);
-  const rm_vec3i local =
-      rm_vec3i_make(ray.sample_voxel.x - region.x * n, ray.sample_voxel.y - region.y * n,
-                    ray.sample_voxel.z - region.z * n);
-  return {Vec3i{region.x, region.y, region.z}, rm_local_index(local, n)};
+  return {Vec3i{region.x, region.y, region.z},
+          rm_local_index(rm_local_in_region(ray.sample_voxel, region, n), n)};
+}
+
+/// @brief Slot of a packed region key in a 256-entry direct-mapped table (Fibonacci hashing: the
+/// top 8 bits of key * 2^64 / golden ratio).
+inline std::size_t directMappedIndex(std::uint64_t key) noexcept {
+  return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 56);
 }
 
 /// @brief Direct-mapped cache in front of the store's index (region coordinate -> slot), one per
@@ -180,7 +184,7 @@ class RegionSlotCache {
   /// remember().
   const std::uint32_t* find(std::uint64_t key) noexcept {
     key_ = key;
-    entry_ = &entries_[(key_ * 0x9E3779B97F4A7C15ull) >> 56];
+    entry_ = &entries_[directMappedIndex(key_)];
     return entry_->key == key_ ? &entry_->slot : nullptr;
   }
   /// @brief Records the slot of the region last passed to find().

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdint>
 
-#include "kernels/common/key_math.h"
 #include "kernels/common/occupancy.h"
 #include "src/core/error.hpp"
 
@@ -69,7 +68,7 @@ struct MapGeometry {
   static constexpr double kDefaultResolution = 0.1;  // metres
   static constexpr std::int32_t kDefaultRegionVoxels = 32;
   static constexpr std::int32_t kMinRegionVoxels = 4;
-  static constexpr std::int32_t kMaxRegionVoxels = RM_MAX_REGION_VOXELS;
+  static constexpr std::int32_t kMaxRegionVoxels = 128;
 
   double resolution = kDefaultResolution;  ///< voxel edge, metres
   std::int32_t region_voxels = kDefaultRegionVoxels;

@@ -33,9 +33,7 @@ class RayRegionWalk {
         voxel_ray_(rm_line_walk_ray_make(frame_.start, frame_.end, frame_.end_voxel)),
         n_(region_voxels) {
     start_region_ = rm_region_of_voxel(frame_.start_voxel, n_);
-    start_local_ = rm_vec3i_make(frame_.start_voxel.x - start_region_.x * n_,
-                                 frame_.start_voxel.y - start_region_.y * n_,
-                                 frame_.start_voxel.z - start_region_.z * n_);
+    start_local_ = rm_local_in_region(frame_.start_voxel, start_region_, n_);
     const rm_vec3i end_global = rm_vec3i_make(frame_.start_voxel.x + frame_.end_voxel.x,
                                               frame_.start_voxel.y + frame_.end_voxel.y,
                                               frame_.start_voxel.z + frame_.end_voxel.z);

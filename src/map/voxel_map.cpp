@@ -216,7 +216,7 @@ std::optional<std::pair<std::uint32_t, std::uint32_t>> VoxelMap::locate(
   if (slot == RegionStore::kNoSlot) {
     return std::nullopt;
   }
-  const rm_vec3i local = rm_local_of_voxel(toKernel(voxel), n);
+  const rm_vec3i local = rm_local_in_region(toKernel(voxel), region, n);
   return std::make_pair(slot, rm_local_index(local, n));
 }
 
