@@ -36,8 +36,8 @@ RAYMAP_FN rm_vec3i rm_local_of_voxel(rm_vec3i voxel, rm_i32 region_voxels) {
 }
 
 /* Linear index of a region-local voxel coordinate (x fastest). */
-RAYMAP_FN rm_u32 rm_local_index(rm_vec3i local, rm_i32 region_voxels) {
-  return RM_U32(local.x + region_voxels * (local.y + region_voxels * local.z));
+RAYMAP_FN rm_u32 rm_local_index(rm_vec3i cell, rm_i32 region_voxels) {
+  return RM_U32(cell.x + region_voxels * (cell.y + region_voxels * cell.z));
 }
 
 /* Inverse of rm_local_index: the region-local coordinate of a linear index. */

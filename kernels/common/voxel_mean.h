@@ -36,9 +36,9 @@ RAYMAP_FN rm_u32 rm_mean_quantise(float u) {
 }
 
 /* Packs a voxel-local position (voxel units, clamped to [0,1]). */
-RAYMAP_FN rm_u32 rm_mean_encode(rm_vec3f local) {
-  return rm_mean_quantise(local.x) | (rm_mean_quantise(local.y) << 10) |
-         (rm_mean_quantise(local.z) << 20);
+RAYMAP_FN rm_u32 rm_mean_encode(rm_vec3f cell) {
+  return rm_mean_quantise(cell.x) | (rm_mean_quantise(cell.y) << 10) |
+         (rm_mean_quantise(cell.z) << 20);
 }
 
 /* Unpacks a mean; a voxel with count 0 has no samples and decodes to its centre. */

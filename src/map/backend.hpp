@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string>
 
 #include "src/core/expected.hpp"
 #include "src/map/ray.hpp"
@@ -25,6 +26,16 @@ struct BackendStats {
   std::uint64_t voxels_visited = 0;   ///< voxel visits (updates plus skipped per-scan repeats)
   std::uint64_t updates_dropped = 0;  ///< updates given up under contention (always 0 on the CPU)
   std::uint64_t spans_outside_window = 0;  ///< ray pieces skipped: region outside a rolling window
+  // ---- device backends (0 on the CPU) ----
+  std::uint64_t rays_skipped = 0;       ///< rays crossing more regions than the device cache holds
+  std::uint64_t bytes_to_device = 0;    ///< batch arrays and region uploads
+  std::uint64_t bytes_from_device = 0;  ///< region downloads and counters
+  std::uint64_t region_bytes_to_device = 0;    ///< of bytes_to_device: region uploads only
+  std::uint64_t region_bytes_from_device = 0;  ///< of bytes_from_device: region downloads only
+  std::uint64_t cache_hits = 0;                ///< a batch needed a region already on the device
+  std::uint64_t cache_misses = 0;              ///< it had to be uploaded or created there
+  std::uint64_t cache_evictions = 0;           ///< a region left the device to make room
+  std::uint64_t cache_slots = 0;               ///< regions the device cache holds
 };
 
 /// @brief Integrates batches of prepared rays into the map it was created for.
@@ -39,11 +50,15 @@ class Backend {
 
   /// @brief Short name: "cpu", "opencl", "cuda".
   virtual const char* name() const noexcept = 0;
+  /// @brief The device in words ("AMD EPYC ... (PoCL 3.1)"); empty for the CPU backend.
+  virtual std::string deviceName() const { return {}; }
   /// @brief Host threads used for integration.
   virtual unsigned threads() const noexcept = 0;
   /// @brief Integrates one batch. @rt allocates: no; throws: no.
   virtual Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept = 0;
-  /// @brief Makes the host region store current (device backends download; CPU: no-op).
+  /// @brief Waits for the device and makes the host region store current (device backends
+  /// download what changed; CPU: no-op). Call before reading the map (export, save, summarise);
+  /// device counters of batches still in flight are only in stats() after it.
   virtual Expected<void, IntegrateError> synchronise() noexcept = 0;
   virtual BackendStats stats() const noexcept = 0;
 };

@@ -12,6 +12,7 @@
 #include "kernels/common/occupancy.h"
 #include "kernels/common/ray.h"
 #include "kernels/common/scan_mark.h"
+#include "kernels/common/span_walk.h"
 #include "kernels/common/voxel_mean.h"
 #include "src/core/assert.hpp"
 #include "src/map/ray_region_walk.hpp"
@@ -27,39 +28,18 @@ template <class Visit>
 inline std::uint32_t walkSpan(const rm_line_walk_ray& ray, bool sample_is_start,
                               const RaySpan& span, std::int32_t region_voxels,
                               Visit&& visit) noexcept {
-  rm_line_walk w;
-  rm_line_walk_init_span(&w, &ray, span.t0, span.t1, span.box_lo, span.box_hi, span.first ? 1 : 0,
-                         span.last ? 1 : 0);
-  const std::int32_t n = region_voxels;
-  RAYMAP_DEBUG_ASSERT(w.x >= span.box_lo.x && w.x <= span.box_hi.x && w.y >= span.box_lo.y &&
-                      w.y <= span.box_hi.y && w.z >= span.box_lo.z && w.z <= span.box_hi.z);
-  std::int32_t index =
-      (w.x - span.box_lo.x) + n * ((w.y - span.box_lo.y) + n * (w.z - span.box_lo.z));
-  const std::int32_t delta[3] = {w.step_x, w.step_y * n, w.step_z * n * n};
-  const bool skip_first = span.first && sample_is_start;
-  const bool skip_last = span.last && !sample_is_start;
-  // The span's voxels are its first voxel plus one per remaining step; the sample voxel is left
-  // out at whichever end it is.
-  std::int32_t steps = w.steps_left;
-  if (skip_first) {
-    if (steps == 0) {
-      return 0;
-    }
-    index += delta[rm_line_walk_step(&w)];
-    --steps;
+  rm_span_walk walk;
+  const std::uint32_t flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
+  const std::int32_t count = rm_span_walk_init(&walk, &ray, span.t0, span.t1, span.box_lo,
+                                               region_voxels, flags, sample_is_start ? 1 : 0);
+  if (count == 0) {
+    return 0;
   }
-  if (skip_last) {
-    if (steps == 0) {
-      return 0;
-    }
-    --steps;
+  visit(static_cast<std::uint32_t>(walk.index));
+  for (std::int32_t k = 1; k < count; ++k) {
+    visit(rm_span_walk_advance(&walk));
   }
-  visit(static_cast<std::uint32_t>(index));
-  for (std::int32_t k = 0; k < steps; ++k) {
-    index += delta[rm_line_walk_step(&w)];
-    visit(static_cast<std::uint32_t>(index));
-  }
-  return static_cast<std::uint32_t>(steps + 1);
+  return static_cast<std::uint32_t>(count);
 }
 
 /// Per-ray miss: every crossing lowers the occupancy.

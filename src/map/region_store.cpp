@@ -3,14 +3,12 @@
 #include "src/map/region_store.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cstring>
 #include <string>
 
 namespace raymap {
 namespace {
 
-constexpr std::uint64_t kEmptyKey = ~std::uint64_t{0};
 constexpr std::int32_t kCoordBias = 1 << 20;
 constexpr std::uint64_t kCoordMask = (std::uint64_t{1} << 21) - 1;
 
@@ -66,10 +64,7 @@ Result<RegionStore> RegionStore::create(const Config& config) {
   for (std::uint32_t s = config.capacity; s > 0; --s) {
     store.free_slots_.push_back(s - 1);  // slot 0 is handed out first
   }
-  const std::size_t buckets = std::bit_ceil(std::size_t{config.capacity} * 2u + 2u);
-  store.index_keys_.assign(buckets, kEmptyKey);
-  store.index_slots_.assign(buckets, kNoSlot);
-  store.index_mask_ = buckets - 1;
+  store.index_ = RegionIndex(config.capacity);
   return store;
 }
 
@@ -86,16 +81,6 @@ Vec3i RegionStore::unpackCoord(std::uint64_t key) noexcept {
                static_cast<std::int32_t>((key >> 42) & kCoordMask) - kCoordBias};
 }
 
-std::size_t RegionStore::bucketOf(std::uint64_t key) const noexcept {
-  // splitmix64 finaliser: neighbouring regions land in unrelated buckets.
-  key ^= key >> 30;
-  key *= 0xbf58476d1ce4e5b9ull;
-  key ^= key >> 27;
-  key *= 0x94d049bb133111ebull;
-  key ^= key >> 31;
-  return static_cast<std::size_t>(key) & index_mask_;
-}
-
 std::uint32_t RegionStore::find(Vec3i region) const noexcept {
   if (!inRange(region)) {
     return kNoSlot;
@@ -104,18 +89,8 @@ std::uint32_t RegionStore::find(Vec3i region) const noexcept {
 }
 
 std::uint32_t RegionStore::findPacked(std::uint64_t key) const noexcept {
-  if (capacity_ == 0) {
-    return kNoSlot;
-  }
-  for (std::size_t b = bucketOf(key);; b = (b + 1) & index_mask_) {
-    const std::uint64_t k = index_keys_[b];
-    if (k == key) {
-      return index_slots_[b];
-    }
-    if (k == kEmptyKey) {
-      return kNoSlot;
-    }
-  }
+  static_assert(RegionIndex::kNone == kNoSlot);
+  return index_.find(key);
 }
 
 Expected<std::uint32_t, StoreError> RegionStore::findOrCreate(Vec3i region) noexcept {
@@ -134,23 +109,15 @@ Expected<std::uint32_t, StoreError> RegionStore::findOrCreateUncleared(Vec3i reg
     return Unexpected(StoreError::kOutOfRange);
   }
   const std::uint64_t key = packCoord(region);
-  std::size_t b = bucketOf(key);
-  for (;; b = (b + 1) & index_mask_) {
-    const std::uint64_t k = index_keys_[b];
-    if (k == key) {
-      return index_slots_[b];
-    }
-    if (k == kEmptyKey) {
-      break;
-    }
+  if (const std::uint32_t existing = index_.find(key); existing != kNoSlot) {
+    return existing;
   }
   if (free_slots_.empty()) {
     return Unexpected(StoreError::kFull);
   }
   const std::uint32_t slot = free_slots_.back();
   free_slots_.pop_back();
-  index_keys_[b] = key;
-  index_slots_[b] = slot;
+  index_.insert(key, slot);
   coords_[slot] = region;
   used_[slot] = 1;
   ++size_;
@@ -200,27 +167,7 @@ void RegionStore::clearLayer(std::uint32_t slot, int layer) noexcept {
 
 void RegionStore::release(std::uint32_t slot) noexcept {
   RAYMAP_EXPECTS(slot < capacity_ && used_[slot] != 0);
-  const std::uint64_t key = packCoord(coords_[slot]);
-  std::size_t b = bucketOf(key);
-  while (index_keys_[b] != key) {
-    b = (b + 1) & index_mask_;
-  }
-  // Backward-shift deletion: pull later members of the probe run into the hole.
-  std::size_t hole = b;
-  for (std::size_t next = (hole + 1) & index_mask_; index_keys_[next] != kEmptyKey;
-       next = (next + 1) & index_mask_) {
-    const std::size_t home = bucketOf(index_keys_[next]);
-    // Move `next` into the hole if its home is not cyclically within (hole, next].
-    const bool home_in_range =
-        hole <= next ? (home > hole && home <= next) : (home > hole || home <= next);
-    if (!home_in_range) {
-      index_keys_[hole] = index_keys_[next];
-      index_slots_[hole] = index_slots_[next];
-      hole = next;
-    }
-  }
-  index_keys_[hole] = kEmptyKey;
-  index_slots_[hole] = kNoSlot;
+  index_.erase(packCoord(coords_[slot]));
   used_[slot] = 0;
   free_slots_.push_back(slot);
   --size_;

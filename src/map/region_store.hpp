@@ -10,6 +10,7 @@
 #include "src/core/error.hpp"
 #include "src/core/vec3.hpp"
 #include "src/map/layer_schema.hpp"
+#include "src/map/region_index.hpp"
 
 namespace raymap {
 
@@ -30,7 +31,7 @@ const char* toString(StoreError error) noexcept;
 /// `pool + layer_offset[L] + S * layer_region_bytes[L]`, so one layer of all regions is one array
 /// (what a device cache uploads). Everything is sized in create(); nothing is allocated afterwards.
 /// A newly created region has every voxel at its layer's clear value (e.g. "unobserved").
-/// The index uses linear probing with backward-shift deletion (no tombstones), at most half full.
+/// The index is a RegionIndex (linear probing, backward-shift deletion, at most half full).
 ///
 /// Thread-safety: find(), coordOf() and the layer accessors may run concurrently with each other.
 /// findOrCreate(), release() and clear() need exclusive access (no concurrent readers).
@@ -124,8 +125,6 @@ class RegionStore {
   }
 
  private:
-  std::size_t bucketOf(std::uint64_t key) const noexcept;
-
   LayerSchema schema_;
   std::int32_t region_voxels_ = 0;
   std::uint32_t voxels_per_region_ = 0;
@@ -138,9 +137,7 @@ class RegionStore {
   std::vector<std::uint8_t> used_;
   std::vector<std::uint8_t> fresh_;  // slot never used: its pages are still the OS's zero pages
   std::vector<std::uint32_t> free_slots_;  // stack
-  std::vector<std::uint64_t> index_keys_;  // kEmptyKey or packed coordinate
-  std::vector<std::uint32_t> index_slots_;
-  std::size_t index_mask_ = 0;
+  RegionIndex index_;                      // packed coordinate -> slot
 };
 
 }  // namespace raymap

@@ -186,6 +186,7 @@ std::uint32_t VoxelMap::setWindowCentre(Vec3d p) noexcept {
       ++recycled;
     }
   }
+  regions_recycled_ += recycled;
   return recycled;
 }
 

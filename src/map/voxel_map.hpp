@@ -110,6 +110,9 @@ class VoxelMap {
   /// that leave it are recycled (their voxels become unobserved when reused). Global maps: no-op.
   /// @return the number of regions recycled. @rt allocates: no; O(capacity).
   std::uint32_t setWindowCentre(Vec3d p_world) noexcept;
+  /// @brief Regions recycled by window moves since creation (monotone). Device backends compare it
+  /// between batches to notice that cached regions left the window.
+  std::uint64_t regionsRecycled() const noexcept { return regions_recycled_; }
   Vec3i windowMinRegion() const noexcept { return window_min_; }
   Vec3i windowMaxRegion() const noexcept {
     return window_min_ + config_.window_regions - Vec3i{1, 1, 1};
@@ -148,6 +151,7 @@ class VoxelMap {
   int scan_mark_layer_ = -1;
   Vec3i window_min_{};
   std::uint32_t scan_sequence_ = 0;
+  std::uint64_t regions_recycled_ = 0;
   std::vector<std::pair<std::string, std::string>> info_;
 };
 

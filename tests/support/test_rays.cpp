@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <set>
 #include <tuple>
 
@@ -85,6 +86,23 @@ std::vector<Ray> cubeRoomRays(double resolution, int half) {
           rays.push_back(makeRay(origin, sample));
         }
       }
+    }
+  }
+  return rays;
+}
+
+std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> range(0.2, 12.0);
+  std::vector<Ray> rays;
+  for (int s = 0; s < scans; ++s) {
+    const Vec3d origin{u(rng) * 2, u(rng) * 2, u(rng) * 0.5};
+    for (int i = 0; i < rays_per_scan; ++i) {
+      Vec3d d{u(rng), u(rng), u(rng) * 0.4};
+      d = d * (range(rng) / d.norm());
+      rays.push_back(makeRay(origin, origin + d, (i % 17 == 0) ? kRayNoReturn : 0u,
+                             static_cast<std::uint64_t>(s)));
     }
   }
   return rays;

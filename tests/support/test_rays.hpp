@@ -23,6 +23,10 @@ VoxelMap makeMap(const MapConfig& config);
 RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays,
                       const RayFilter& filter = {});
 
+/// @brief `scans` scans of `rays_per_scan` random rays (0.2-12 m, flattened in z) from random
+/// origins within +-2 m; every 17th ray is a no-return ray. Deterministic for a seed.
+std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan);
+
 /// @brief Creates a CPU backend with `threads` workers or fails the test.
 std::unique_ptr<Backend> cpuBackend(VoxelMap& map, unsigned threads);
 

@@ -19,6 +19,8 @@ void addInfoCommand(CLI::App& app, int* exit_code);
 void addExportCommand(CLI::App& app, int* exit_code);
 void addBenchCommand(CLI::App& app, int* exit_code);
 void addDemoCommand(CLI::App& app, int* exit_code);
+/// Present in every build; without the OpenCL backend it says so and exits 1.
+void addDevicesCommand(CLI::App& app, int* exit_code);
 
 /// @brief Prints "raymap <command>: error: <message>" on stderr.
 void printError(const std::string& command, const std::string& message);

@@ -183,25 +183,8 @@ TEST(EndRules, ZeroLengthRayIsAHitOnly) {
   EXPECT_NEAR(m.z, 0.4f, 1e-3f);
 }
 
-std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::uniform_real_distribution<double> range(0.2, 12.0);
-  std::vector<Ray> rays;
-  for (int s = 0; s < scans; ++s) {
-    const Vec3d origin{u(rng) * 2, u(rng) * 2, u(rng) * 0.5};
-    for (int i = 0; i < rays_per_scan; ++i) {
-      Vec3d d{u(rng), u(rng), u(rng) * 0.4};
-      d = d * (range(rng) / d.norm());
-      rays.push_back(makeRay(origin, origin + d, (i % 17 == 0) ? kRayNoReturn : 0u,
-                             static_cast<std::uint64_t>(s)));
-    }
-  }
-  return rays;
-}
-
 TEST(Threads, MultiThreadedMapIsBitIdenticalToSingleThreaded) {
-  const std::vector<Ray> rays = randomScans(5489, 6, 4000);
+  const std::vector<Ray> rays = test::randomScans(5489, 6, 4000);
   for (Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
     for (bool reverse : {false, true}) {
       RayFilter filter;
@@ -225,7 +208,7 @@ TEST(Threads, MultiThreadedMapIsBitIdenticalToSingleThreaded) {
 }
 
 TEST(Threads, ReverseAndForwardWalksAgree) {
-  const std::vector<Ray> rays = randomScans(99, 4, 5000);
+  const std::vector<Ray> rays = test::randomScans(99, 4, 5000);
   VoxelMap forward = test::makeMap(smallConfig(Semantics::kPerRay));
   VoxelMap reverse = test::makeMap(smallConfig(Semantics::kPerRay));
   auto bf = test::cpuBackend(forward, 1);

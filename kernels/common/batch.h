@@ -1,0 +1,55 @@
+/* SPDX-License-Identifier: BSD-3-Clause */
+/* What the host hands a device for one batch, besides the prepared rays: span records (one
+ * work-item each), hit groups (one work-item per voxel that samples fell in) and the launch
+ * parameters. Host and device share these layouts: every member is a 4-byte scalar, so C++,
+ * CUDA and OpenCL C lay them out identically (checked by static_asserts on the host). */
+#ifndef RAYMAP_KERNELS_COMMON_BATCH_H
+#define RAYMAP_KERNELS_COMMON_BATCH_H
+
+#include "occupancy.h"
+#include "portable.h"
+
+/* The piece of one ray inside one region, with the device cache slot that holds the region.
+ * Spans are produced by the host's coarse region walk; the device walks their voxels with
+ * rm_span_walk (span_walk.h). */
+typedef struct rm_span_record {
+  rm_u32 ray;      /* index of the ray in the batch */
+  rm_u32 slot;     /* device cache slot of the region */
+  rm_u32 flags;    /* RM_SPAN_FIRST | RM_SPAN_LAST (span_walk.h) */
+  rm_u32 sample;   /* per-ray semantics: index of the sample voxel to hit after the walk (the span
+                      holding it), else RM_SPAN_NO_SAMPLE */
+  float t0;        /* ray parameter where the span starts (walk frame, see line_walk.h) */
+  float t1;        /* ray parameter where it ends */
+  rm_vec3i box_lo; /* the region's minimum voxel relative to the walk's start voxel */
+} rm_span_record;
+
+#define RM_SPAN_NO_SAMPLE 0xFFFFFFFFu
+
+/* All samples of a batch that fell into one voxel: hit_rays[first .. first + count) are their ray
+ * indices, in ray order, so folding them one after another gives the same voxel mean as the CPU
+ * reference, bit for bit. */
+typedef struct rm_hit_group {
+  rm_u32 slot;  /* device cache slot of the region */
+  rm_u32 index; /* voxel index inside the region */
+  rm_u32 first; /* first entry in the hit-ray list */
+  rm_u32 count; /* number of samples */
+} rm_hit_group;
+
+/* Launch parameters of the occupancy kernels. */
+typedef struct rm_integrate_params {
+  rm_occupancy_params occupancy;
+  rm_i32 region_voxels;     /* voxels per region edge */
+  rm_u32 voxels_per_region; /* region_voxels^3 */
+  rm_u32 item_count;        /* spans or hit groups in this launch */
+  rm_u32 per_scan;          /* 1: per-scan semantics (scan marks), 0: per-ray */
+  rm_u32 sequence;          /* scan sequence (per-scan semantics) */
+  rm_u32 has_mean;          /* 1 when the map keeps the voxel-mean layer */
+} rm_integrate_params;
+
+/* Device counters of one batch: RM_COUNTER_BUCKETS buckets of voxel visits (work-items add to
+ * bucket id % RM_COUNTER_BUCKETS, so no single word is contended) and the updates given up. */
+#define RM_COUNTER_BUCKETS 64u
+#define RM_COUNTER_DROPPED RM_COUNTER_BUCKETS
+#define RM_COUNTER_COUNT (RM_COUNTER_BUCKETS + 1u)
+
+#endif /* RAYMAP_KERNELS_COMMON_BATCH_H */

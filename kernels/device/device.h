@@ -1,0 +1,83 @@
+/* SPDX-License-Identifier: BSD-3-Clause */
+/* The translation header for device code: kernel qualifiers, work-item indices and atomics for
+ * OpenCL C 1.2 and CUDA, so that the headers in kernels/device are written once and the OpenCL
+ * (.cl) and CUDA (.cu) entry points are thin wrappers. Host C++ never includes this header.
+ *
+ * 64-bit atomics: CUDA always has them; OpenCL 1.2 only with cl_khr_int64_base_atomics, which
+ * the host detects at run time and announces by defining RM_HAVE_INT64_ATOMICS when it builds the
+ * program. Everything that uses them has a 32-bit path. */
+#ifndef RAYMAP_KERNELS_DEVICE_DEVICE_H
+#define RAYMAP_KERNELS_DEVICE_DEVICE_H
+
+#include "../common/portable.h"
+
+#if defined(__OPENCL_C_VERSION__)
+/* ---- OpenCL C 1.2 ---- */
+#define RM_DEVICE_FN static inline
+#define RM_KERNEL __kernel
+#define RM_GLOBAL __global
+/* Memory updated by atomics from several work-items. */
+#define RM_ATOMIC_GLOBAL volatile __global
+
+RM_DEVICE_FN rm_u32 rm_global_id(void) { return RM_U32(get_global_id(0)); }
+RM_DEVICE_FN float rm_as_float(rm_u32 bits) { return as_float(bits); }
+RM_DEVICE_FN rm_u32 rm_as_u32(float value) { return as_uint(value); }
+RM_DEVICE_FN rm_u32 rm_atomic_cas_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 expected, rm_u32 desired) {
+  return atomic_cmpxchg(p, expected, desired);
+}
+RM_DEVICE_FN rm_u32 rm_atomic_max_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  return atomic_max(p, value);
+}
+RM_DEVICE_FN rm_u32 rm_atomic_add_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  return atomic_add(p, value);
+}
+#if defined(RM_HAVE_INT64_ATOMICS)
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+typedef ulong rm_u64;
+RM_DEVICE_FN rm_u64 rm_atomic_add_u64(RM_ATOMIC_GLOBAL rm_u64* p, rm_u64 value) {
+  return atom_add(p, value);
+}
+RM_DEVICE_FN rm_u64 rm_atomic_cas_u64(RM_ATOMIC_GLOBAL rm_u64* p, rm_u64 expected, rm_u64 desired) {
+  return atom_cmpxchg(p, expected, desired);
+}
+#endif
+
+#elif defined(__CUDACC__)
+/* ---- CUDA ---- */
+#define RM_DEVICE_FN static inline __device__
+#define RM_KERNEL extern "C" __global__
+#define RM_GLOBAL
+#define RM_ATOMIC_GLOBAL
+#ifndef RM_HAVE_INT64_ATOMICS
+#define RM_HAVE_INT64_ATOMICS 1
+#endif
+typedef unsigned long long rm_u64;
+
+RM_DEVICE_FN rm_u32 rm_global_id(void) { return blockIdx.x * blockDim.x + threadIdx.x; }
+RM_DEVICE_FN float rm_as_float(rm_u32 bits) { return __uint_as_float(bits); }
+RM_DEVICE_FN rm_u32 rm_as_u32(float value) { return __float_as_uint(value); }
+RM_DEVICE_FN rm_u32 rm_atomic_cas_u32(rm_u32* p, rm_u32 expected, rm_u32 desired) {
+  return atomicCAS(p, expected, desired);
+}
+RM_DEVICE_FN rm_u32 rm_atomic_max_u32(rm_u32* p, rm_u32 value) { return atomicMax(p, value); }
+RM_DEVICE_FN rm_u32 rm_atomic_add_u32(rm_u32* p, rm_u32 value) { return atomicAdd(p, value); }
+RM_DEVICE_FN rm_u64 rm_atomic_add_u64(rm_u64* p, rm_u64 value) { return atomicAdd(p, value); }
+RM_DEVICE_FN rm_u64 rm_atomic_cas_u64(rm_u64* p, rm_u64 expected, rm_u64 desired) {
+  return atomicCAS(p, expected, desired);
+}
+
+#else
+#error "kernels/device headers are device code: include them from .cl or .cu files only"
+#endif
+
+/* A fresh read of a word other work-items update (volatile in OpenCL, so it is not cached in a
+ * register across a compare-and-swap loop). */
+RM_DEVICE_FN rm_u32 rm_load_u32(RM_ATOMIC_GLOBAL rm_u32* p) {
+#if defined(__CUDACC__)
+  return *(volatile rm_u32*)p;
+#else
+  return *p;
+#endif
+}
+
+#endif /* RAYMAP_KERNELS_DEVICE_DEVICE_H */

@@ -1,0 +1,202 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Batch planning for device backends.
+#include "src/gpu/batch_plan.hpp"
+
+#include <algorithm>
+
+#include "kernels/common/span_walk.h"
+#include "src/core/assert.hpp"
+#include "src/map/ray_region_walk.hpp"
+
+namespace raymap::gpu {
+
+BatchPlanner::BatchPlanner(VoxelMap& map, DeviceRegionCache& cache, RegionTransfer& transfer,
+                           const BatchLimits& limits)
+    : map_(&map),
+      cache_(&cache),
+      transfer_(&transfer),
+      limits_(limits),
+      region_voxels_(map.store().regionVoxels()),
+      voxels_per_region_(map.store().voxelsPerRegion()),
+      host_uninitialised_(map.store().capacity(), 0),
+      seen_recycled_(map.regionsRecycled()),
+      per_scan_(map.semantics() == Semantics::kPerScan) {
+  RAYMAP_EXPECTS(limits.max_rays > 0 && limits.max_rays < (std::size_t{1} << 32));
+  RAYMAP_EXPECTS(limits.max_spans > 0);
+}
+
+void BatchPlanner::reserve(BatchArrays& out) const {
+  out.rays.reserve(limits_.max_rays);
+  out.spans.reserve(limits_.max_spans);
+  out.groups.reserve(limits_.max_rays);
+  out.hit_rays.reserve(limits_.max_rays);
+  out.hit_keys.reserve(limits_.max_rays);
+}
+
+void BatchPlanner::revalidate() noexcept {
+  if (map_->regionsRecycled() == seen_recycled_) {
+    return;
+  }
+  seen_recycled_ = map_->regionsRecycled();
+  const RegionStore& store = map_->store();
+  for (std::uint32_t slot = 0; slot < cache_->capacity(); ++slot) {
+    const DeviceRegionCache::Entry& e = cache_->entry(slot);
+    if (e.used && store.find(e.region) != e.host_slot) {
+      cache_->drop(slot);
+      ++stats_.regions_dropped;
+    }
+  }
+}
+
+Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
+                                                                  std::uint32_t host_slot,
+                                                                  bool* full) noexcept {
+  *full = false;
+  auto placement = cache_->place(region, host_slot);
+  if (!placement) {
+    // A region created for this ray must not stay uninitialised on the host: it is not on the
+    // device yet, and a later batch will upload it from here.
+    if (host_uninitialised_[host_slot] != 0) {
+      map_->store().clearRegion(host_slot);
+      host_uninitialised_[host_slot] = 0;
+    }
+    *full = true;
+    return DeviceRegionCache::kNoSlot;
+  }
+  if (placement->evicted && placement->evicted_entry.dirty) {
+    auto ok = transfer_->download(placement->slot, placement->evicted_entry.host_slot);
+    if (!ok) {
+      return Unexpected(ok.error());
+    }
+    host_uninitialised_[placement->evicted_entry.host_slot] = 0;
+    ++stats_.regions_downloaded;
+  }
+  if (!placement->resident) {
+    if (host_uninitialised_[host_slot] != 0) {
+      auto ok = transfer_->fillClear(placement->slot);
+      if (!ok) {
+        return Unexpected(ok.error());
+      }
+      ++stats_.regions_filled;
+    } else {
+      auto ok = transfer_->upload(placement->slot, host_slot);
+      if (!ok) {
+        return Unexpected(ok.error());
+      }
+      ++stats_.regions_uploaded;
+    }
+  }
+  return placement->slot;
+}
+
+Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const PreparedRay> rays,
+                                                         BatchArrays& out) noexcept {
+  out.clear();
+  cache_->beginBatch();
+  std::size_t consumed = 0;
+  for (; consumed < rays.size() && out.rays.size() < limits_.max_rays; ++consumed) {
+    const PreparedRay& ray = rays[consumed];
+    const auto ray_index = static_cast<std::uint32_t>(out.rays.size());
+    const std::size_t spans_before = out.spans.size();
+    RayRegionWalk walk(ray, region_voxels_);
+    RaySpan span;
+    bool full = false;
+    while (walk.next(&span)) {
+      bool created = false;
+      auto host = map_->acquireRegionUncleared(span.region, &created);
+      if (!host) {
+        if (host.error() == StoreError::kFull) {
+          return Unexpected(IntegrateError::kStoreFull);
+        }
+        ++stats_.spans_outside_window;  // outside a rolling window (or the index's range)
+        continue;
+      }
+      if (created) {
+        host_uninitialised_[*host] = 1;
+      }
+      auto slot = placeRegion(span.region, *host, &full);
+      if (!slot) {
+        return Unexpected(slot.error());
+      }
+      if (full || out.spans.size() == limits_.max_spans) {
+        full = true;
+        break;
+      }
+      rm_span_record record;
+      record.ray = ray_index;
+      record.slot = *slot;
+      record.flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
+      record.sample = RM_SPAN_NO_SAMPLE;
+      record.t0 = span.t0;
+      record.t1 = span.t1;
+      record.box_lo = span.box_lo;
+      out.spans.push_back(record);
+    }
+    if (full) {
+      out.spans.resize(spans_before);
+      if (out.rays.empty()) {
+        // Even an empty batch cannot hold this ray's regions: skip it, counted.
+        ++stats_.rays_too_long;
+        cache_->beginBatch();
+        continue;
+      }
+      break;  // the next batch starts with this ray
+    }
+    if ((ray.flags & RM_RAY_END_HIT) != 0u) {
+      const auto [region, index] = walk.sampleCell();
+      const std::uint32_t slot = cache_->find(region);
+      if (slot != DeviceRegionCache::kNoSlot) {
+        const std::uint64_t voxel = std::uint64_t{slot} * voxels_per_region_ + index;
+        out.hit_keys.push_back((voxel << 32) | ray_index);
+        if (!per_scan_) {
+          // The span holding the sample applies the hit after its misses.
+          const bool sample_is_start = walk.frame().sample_is_start != 0;
+          for (std::size_t s = spans_before; s < out.spans.size(); ++s) {
+            const std::uint32_t end_flag = sample_is_start ? RM_SPAN_FIRST : RM_SPAN_LAST;
+            if ((out.spans[s].flags & end_flag) != 0u) {
+              out.spans[s].sample = index;
+            }
+          }
+        }
+      }
+    }
+    out.rays.push_back(ray);
+  }
+  buildHitGroups(out);
+  return consumed;
+}
+
+void BatchPlanner::buildHitGroups(BatchArrays& out) const {
+  // Sorting (voxel, ray) keys groups the samples of each voxel, in ray order within a group.
+  std::sort(out.hit_keys.begin(), out.hit_keys.end());
+  for (std::size_t i = 0; i < out.hit_keys.size();) {
+    const std::uint64_t voxel = out.hit_keys[i] >> 32;
+    rm_hit_group group;
+    group.slot = static_cast<std::uint32_t>(voxel / voxels_per_region_);
+    group.index = static_cast<std::uint32_t>(voxel % voxels_per_region_);
+    group.first = static_cast<std::uint32_t>(out.hit_rays.size());
+    for (; i < out.hit_keys.size() && (out.hit_keys[i] >> 32) == voxel; ++i) {
+      out.hit_rays.push_back(static_cast<std::uint32_t>(out.hit_keys[i] & 0xFFFFFFFFu));
+    }
+    group.count = static_cast<std::uint32_t>(out.hit_rays.size()) - group.first;
+    out.groups.push_back(group);
+  }
+}
+
+Expected<void, IntegrateError> BatchPlanner::downloadAll() noexcept {
+  for (std::uint32_t slot = 0; slot < cache_->capacity(); ++slot) {
+    const DeviceRegionCache::Entry& e = cache_->entry(slot);
+    if (e.used && e.dirty) {
+      auto ok = transfer_->download(slot, e.host_slot);
+      if (!ok) {
+        return Unexpected(ok.error());
+      }
+      host_uninitialised_[e.host_slot] = 0;
+      cache_->markClean(slot);
+      ++stats_.regions_downloaded;
+    }
+  }
+  return {};
+}
+
+}  // namespace raymap::gpu

@@ -1,0 +1,125 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Turns prepared rays into what a device kernel consumes: span records with device cache slots,
+// and hit groups. Moves regions into the device cache as the batch needs them. API-agnostic.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "kernels/common/batch.h"
+#include "src/core/expected.hpp"
+#include "src/gpu/device_region_cache.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::gpu {
+
+/// @brief Region moves between the host store and the device cache, done by a device backend.
+/// Each call completes (or is ordered on the device queue) before the batch's kernels run, and
+/// a download has landed in host memory when it returns.
+class RegionTransfer {
+ public:
+  virtual ~RegionTransfer() = default;
+  RegionTransfer() = default;
+  RegionTransfer(const RegionTransfer&) = delete;
+  RegionTransfer& operator=(const RegionTransfer&) = delete;
+
+  /// @brief Copies every layer of device slot `device_slot` into host store slot `host_slot`.
+  virtual Expected<void, IntegrateError> download(std::uint32_t device_slot,
+                                                  std::uint32_t host_slot) noexcept = 0;
+  /// @brief Copies every layer of host store slot `host_slot` into device slot `device_slot`.
+  virtual Expected<void, IntegrateError> upload(std::uint32_t device_slot,
+                                                std::uint32_t host_slot) noexcept = 0;
+  /// @brief Sets every voxel of device slot `device_slot` to its layer's clear value (a region
+  /// new to the map: nothing to copy).
+  virtual Expected<void, IntegrateError> fillClear(std::uint32_t device_slot) noexcept = 0;
+};
+
+/// @brief One batch in host memory, ready to copy to the device.
+struct BatchArrays {
+  std::vector<PreparedRay> rays;
+  std::vector<rm_span_record> spans;
+  std::vector<rm_hit_group> groups;     ///< one per voxel with samples, sorted by voxel
+  std::vector<std::uint32_t> hit_rays;  ///< ray indices of each group's samples, in ray order
+  std::vector<std::uint64_t> hit_keys;  ///< scratch: (device voxel << 32) | ray
+
+  void clear() noexcept {
+    rays.clear();
+    spans.clear();
+    groups.clear();
+    hit_rays.clear();
+    hit_keys.clear();
+  }
+};
+
+/// @brief Limits of one batch (the device staging buffers are sized from them).
+struct BatchLimits {
+  std::size_t max_rays = std::size_t{1} << 18;
+  std::size_t max_spans = std::size_t{1} << 21;
+};
+
+/// @brief Counters of the planner over its lifetime.
+struct PlanStats {
+  std::uint64_t spans_outside_window = 0;
+  std::uint64_t rays_too_long = 0;  ///< rays crossing more regions than the cache holds (skipped)
+  std::uint64_t regions_uploaded = 0;
+  std::uint64_t regions_filled = 0;  ///< new regions cleared on the device (no transfer)
+  std::uint64_t regions_downloaded = 0;
+  std::uint64_t regions_dropped = 0;  ///< left a rolling window: forgotten, not downloaded
+};
+
+/// @brief Plans batches for one map, one device cache and one transfer implementation.
+///
+/// For each ray it runs the coarse region walk (the same RayRegionWalk as the CPU backend),
+/// makes sure every region exists in the host store (created uncleared: the device clears its copy
+/// and the host copy is only read after a download) and is resident in the device cache, and
+/// records one rm_span_record per region piece. Sample voxels are gathered and sorted into hit
+/// groups. A batch ends when the rays end, the limits are reached, or the cache cannot hold
+/// another region without evicting one the batch uses.
+///
+/// Thread-safety: none. Real-time: allocation-free once the arrays have reached the limits'
+/// sizes (reserved at construction).
+class BatchPlanner {
+ public:
+  BatchPlanner(VoxelMap& map, DeviceRegionCache& cache, RegionTransfer& transfer,
+               const BatchLimits& limits);
+
+  /// @brief Reserves arrays for the limits.
+  void reserve(BatchArrays& out) const;
+
+  /// @brief Forgets cached regions whose host region a window move recycled. Call before
+  /// planning; cheap when the window has not moved.
+  void revalidate() noexcept;
+
+  /// @brief Plans a batch from the front of `rays` into `out` (cleared first) and returns how
+  /// many rays it consumed (at least one while rays remain, unless an error). kStoreFull: the host
+  /// store cannot create a region (global map full); kDeviceFailure: a region move failed.
+  Expected<std::size_t, IntegrateError> plan(std::span<const PreparedRay> rays,
+                                             BatchArrays& out) noexcept;
+
+  /// @brief Downloads every dirty resident region (the host store becomes current).
+  Expected<void, IntegrateError> downloadAll() noexcept;
+
+  const PlanStats& stats() const noexcept { return stats_; }
+
+ private:
+  /// Device slot for a region of the current batch; kNoSlot + *full when the cache is pinned full.
+  Expected<std::uint32_t, IntegrateError> placeRegion(Vec3i region, std::uint32_t host_slot,
+                                                      bool* full) noexcept;
+  void buildHitGroups(BatchArrays& out) const;
+
+  VoxelMap* map_;
+  DeviceRegionCache* cache_;
+  RegionTransfer* transfer_;
+  BatchLimits limits_;
+  std::int32_t region_voxels_;
+  std::uint32_t voxels_per_region_;
+  std::vector<std::uint8_t> host_uninitialised_;  // per host slot: created, never written
+  std::uint64_t seen_recycled_ = 0;
+  bool per_scan_ = false;
+  PlanStats stats_;
+};
+
+}  // namespace raymap::gpu

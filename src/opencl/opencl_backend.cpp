@@ -1,0 +1,431 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// OpenCL backend: device buffers, batch submission and region transfers.
+#include "src/opencl/opencl_backend.hpp"
+
+#include <algorithm>
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "kernels/common/batch.h"
+#include "src/gpu/batch_plan.hpp"
+#include "src/gpu/device_region_cache.hpp"
+
+namespace raymap {
+namespace kernels {
+extern const char* const kIntegrateOccupancySource;  // embedded at build time
+}  // namespace kernels
+
+namespace {
+
+static_assert(sizeof(rm_span_record) == 36, "device ABI");
+static_assert(sizeof(rm_hit_group) == 16, "device ABI");
+static_assert(sizeof(rm_integrate_params) == 44, "device ABI");
+
+// Work-group size for the kernels (clamped to the device maximum).
+constexpr std::size_t kWorkGroup = 64;
+
+/// One set of batch staging buffers (host arrays and their device copies). Two sets alternate so
+/// that the host plans batch N+1 while the device runs batch N.
+struct StagingSet {
+  gpu::BatchArrays arrays;
+  opencl::BufferHandle rays;
+  opencl::BufferHandle spans;
+  opencl::BufferHandle groups;
+  opencl::BufferHandle hit_rays;
+  opencl::BufferHandle counters;
+  std::array<std::uint64_t, RM_COUNTER_COUNT> counters_host{};  // 64- or 32-bit words
+  opencl::EventHandle done;  // completes when the set's counters have been read back
+};
+
+class OpenClBackend final : public Backend, private gpu::RegionTransfer {
+ public:
+  OpenClBackend(VoxelMap& map, opencl::DeviceContext ctx, std::uint32_t slots, bool int64_counters,
+                const OpenClBackendOptions& options)
+      : map_(map),
+        ctx_(std::move(ctx)),
+        cache_(slots),
+        planner_(map, cache_, *this, gpu::BatchLimits{options.batch_rays, options.batch_rays * 8}),
+        limits_{options.batch_rays, options.batch_rays * 8},
+        int64_counters_(int64_counters) {
+    params_.occupancy = map.occupancy().toKernel();
+    params_.region_voxels = map.geometry().region_voxels;
+    params_.voxels_per_region = map.store().voxelsPerRegion();
+    params_.per_scan = map.semantics() == Semantics::kPerScan ? 1u : 0u;
+    params_.has_mean = map.meanLayer() >= 0 ? 1u : 0u;
+    stats_.cache_slots = slots;
+    local_size_ = std::min(kWorkGroup, std::max<std::size_t>(ctx_.info.max_work_group_size, 1));
+  }
+
+  ~OpenClBackend() override {
+    if (ctx_.queue) {
+      (void)clFinish(ctx_.queue.get());
+    }
+  }
+
+  /// Allocates device memory and builds kernels; called once by the factory.
+  Expected<void, Error> initialise(const OpenClBackendOptions& options) {
+    const std::string options_text =
+        std::string("-cl-std=CL1.2") + (int64_counters_ ? " -DRM_HAVE_INT64_ATOMICS=1" : "") +
+        (options.extra_build_options.empty() ? "" : " " + options.extra_build_options);
+    auto program = opencl::buildProgram(ctx_, kernels::kIntegrateOccupancySource, options_text,
+                                        options.program_cache);
+    if (!program) {
+      return Unexpected(program.error());
+    }
+    program_warning_ = program->warning;
+    program_ = std::move(program->program);
+    auto spans = opencl::createKernel(program_, "rm_integrate_spans");
+    if (!spans) {
+      return Unexpected(spans.error());
+    }
+    span_kernel_ = std::move(*spans);
+    auto hits = opencl::createKernel(program_, "rm_apply_hit_groups");
+    if (!hits) {
+      return Unexpected(hits.error());
+    }
+    hit_kernel_ = std::move(*hits);
+
+    const RegionStore& store = map_.store();
+    const LayerSchema& schema = store.schema();
+    layers_.resize(static_cast<std::size_t>(schema.size()));
+    for (int l = 0; l < schema.size(); ++l) {
+      auto buffer = opencl::createBuffer(
+          ctx_, store.layerRegionBytes(l) * cache_.capacity(),
+          std::string("device region cache, layer '") + std::string(schema.at(l).name) + "'");
+      if (!buffer) {
+        return Unexpected(buffer.error());
+      }
+      layers_[static_cast<std::size_t>(l)] = std::move(*buffer);
+    }
+    auto dummy = opencl::createBuffer(ctx_, 8, "placeholder for absent layers");
+    if (!dummy) {
+      return Unexpected(dummy.error());
+    }
+    dummy_ = std::move(*dummy);
+    const std::size_t counter_bytes = RM_COUNTER_COUNT * (int64_counters_ ? 8u : 4u);
+    for (StagingSet& set : sets_) {
+      planner_.reserve(set.arrays);
+      for (auto [handle, bytes, what] :
+           {std::tuple{&set.rays, limits_.max_rays * sizeof(PreparedRay), "ray batch"},
+            std::tuple{&set.spans, limits_.max_spans * sizeof(rm_span_record), "span batch"},
+            std::tuple{&set.groups, limits_.max_rays * sizeof(rm_hit_group), "hit groups"},
+            std::tuple{&set.hit_rays, limits_.max_rays * sizeof(std::uint32_t), "hit list"},
+            std::tuple{&set.counters, counter_bytes, "counters"}}) {
+        auto buffer = opencl::createBuffer(ctx_, bytes, what);
+        if (!buffer) {
+          return Unexpected(buffer.error());
+        }
+        *handle = std::move(*buffer);
+      }
+    }
+    return {};
+  }
+
+  const char* name() const noexcept override { return "opencl"; }
+  std::string deviceName() const override {
+    return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")";
+  }
+  unsigned threads() const noexcept override { return 1; }
+
+  Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept override {
+    params_.sequence = params_.per_scan != 0u ? map_.beginScan() : 0u;
+    planner_.revalidate();
+    while (!rays.empty()) {
+      StagingSet& set = sets_[next_set_];
+      if (auto ok = retire(set); !ok) {
+        return ok;
+      }
+      auto consumed = planner_.plan(rays, set.arrays);
+      if (!consumed) {
+        return Unexpected(consumed.error());
+      }
+      rays = rays.subspan(*consumed);
+      if (set.arrays.rays.empty()) {
+        continue;  // every ray was skipped
+      }
+      if (auto ok = submit(set); !ok) {
+        return ok;
+      }
+      next_set_ ^= 1u;
+    }
+    ++stats_.batches;
+    return {};
+  }
+
+  Expected<void, IntegrateError> synchronise() noexcept override {
+    if (clFinish(ctx_.queue.get()) != CL_SUCCESS) {
+      return Unexpected(IntegrateError::kDeviceFailure);
+    }
+    for (StagingSet& set : sets_) {
+      if (auto ok = retire(set); !ok) {
+        return ok;
+      }
+    }
+    return planner_.downloadAll();
+  }
+
+  BackendStats stats() const noexcept override {
+    BackendStats s = stats_;
+    const gpu::PlanStats& p = planner_.stats();
+    s.spans_outside_window = p.spans_outside_window;
+    s.rays_skipped = p.rays_too_long;
+    s.cache_hits = cache_.hits();
+    s.cache_misses = cache_.misses();
+    s.cache_evictions = cache_.evictions();
+    return s;
+  }
+
+ private:
+  // ---- gpu::RegionTransfer ----
+  Expected<void, IntegrateError> download(std::uint32_t device_slot,
+                                          std::uint32_t host_slot) noexcept override {
+    return copyRegion(device_slot, host_slot, /*to_device=*/false);
+  }
+  Expected<void, IntegrateError> upload(std::uint32_t device_slot,
+                                        std::uint32_t host_slot) noexcept override {
+    return copyRegion(device_slot, host_slot, /*to_device=*/true);
+  }
+  Expected<void, IntegrateError> fillClear(std::uint32_t device_slot) noexcept override {
+    const RegionStore& store = map_.store();
+    for (int l = 0; l < store.schema().size(); ++l) {
+      const LayerSpec& spec = store.schema().at(l);
+      const std::size_t bytes = store.layerRegionBytes(l);
+      if (clEnqueueFillBuffer(ctx_.queue.get(), layers_[static_cast<std::size_t>(l)].get(),
+                              spec.clear_words.data(), spec.bytes_per_voxel, bytes * device_slot,
+                              bytes, 0, nullptr, nullptr) != CL_SUCCESS) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+    }
+    return {};
+  }
+
+  /// Blocking copy of every layer of one region (regions move rarely: only on misses, evictions
+  /// and synchronise(); a blocking copy keeps the host store safe to reuse right away).
+  Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
+                                            bool to_device) noexcept {
+    const RegionStore& store = map_.store();
+    for (int l = 0; l < store.schema().size(); ++l) {
+      const std::size_t bytes = store.layerRegionBytes(l);
+      cl_mem buffer = layers_[static_cast<std::size_t>(l)].get();
+      std::byte* host = store.layerBytes(host_slot, l);
+      const cl_int status =
+          to_device ? clEnqueueWriteBuffer(ctx_.queue.get(), buffer, CL_TRUE, bytes * device_slot,
+                                           bytes, host, 0, nullptr, nullptr)
+                    : clEnqueueReadBuffer(ctx_.queue.get(), buffer, CL_TRUE, bytes * device_slot,
+                                          bytes, host, 0, nullptr, nullptr);
+      if (status != CL_SUCCESS) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+      (to_device ? stats_.bytes_to_device : stats_.bytes_from_device) += bytes;
+      (to_device ? stats_.region_bytes_to_device : stats_.region_bytes_from_device) += bytes;
+    }
+    return {};
+  }
+
+  /// Waits for the set's previous batch (if any) and adds its device counters to the stats.
+  Expected<void, IntegrateError> retire(StagingSet& set) noexcept {
+    if (!set.done) {
+      return {};
+    }
+    const cl_event event = set.done.get();
+    const cl_int status = clWaitForEvents(1, &event);
+    set.done.reset();
+    if (status != CL_SUCCESS) {
+      return Unexpected(IntegrateError::kDeviceFailure);
+    }
+    std::uint64_t visits = 0;
+    std::uint64_t dropped = 0;
+    if (int64_counters_) {
+      for (std::uint32_t b = 0; b < RM_COUNTER_BUCKETS; ++b) {
+        visits += set.counters_host[b];
+      }
+      dropped = set.counters_host[RM_COUNTER_DROPPED];
+    } else {
+      const auto* words = reinterpret_cast<const std::uint32_t*>(set.counters_host.data());
+      for (std::uint32_t b = 0; b < RM_COUNTER_BUCKETS; ++b) {
+        visits += words[b];
+      }
+      dropped = words[RM_COUNTER_DROPPED];
+    }
+    stats_.voxels_visited += visits;
+    stats_.updates_dropped += dropped;
+    return {};
+  }
+
+  /// Enqueues the batch in `set`: copies, kernels in the semantics' order, counter read-back.
+  Expected<void, IntegrateError> submit(StagingSet& set) noexcept {
+    const gpu::BatchArrays& a = set.arrays;
+    cl_command_queue q = ctx_.queue.get();
+    bool ok = true;
+    auto write = [&](const opencl::BufferHandle& buffer, const void* data, std::size_t bytes) {
+      if (bytes > 0 && ok) {
+        ok = clEnqueueWriteBuffer(q, buffer.get(), CL_FALSE, 0, bytes, data, 0, nullptr, nullptr) ==
+             CL_SUCCESS;
+        stats_.bytes_to_device += bytes;
+      }
+    };
+    write(set.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
+    write(set.spans, a.spans.data(), a.spans.size() * sizeof(rm_span_record));
+    write(set.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
+    write(set.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
+    const std::uint32_t zero = 0;
+    const std::size_t counter_bytes = RM_COUNTER_COUNT * (int64_counters_ ? 8u : 4u);
+    ok = ok && clEnqueueFillBuffer(q, set.counters.get(), &zero, sizeof(zero), 0, counter_bytes, 0,
+                                   nullptr, nullptr) == CL_SUCCESS;
+    if (params_.per_scan != 0u) {
+      ok = ok && launchHits(set) && launchSpans(set);  // hits first: occupied wins
+    } else {
+      ok = ok && launchSpans(set) && launchHits(set);  // misses and hits, then voxel means
+    }
+    cl_event done = nullptr;
+    ok = ok && clEnqueueReadBuffer(q, set.counters.get(), CL_FALSE, 0, counter_bytes,
+                                   set.counters_host.data(), 0, nullptr, &done) == CL_SUCCESS;
+    if (!ok) {
+      return Unexpected(IntegrateError::kDeviceFailure);
+    }
+    set.done = opencl::EventHandle(done);
+    stats_.bytes_from_device += counter_bytes;
+    (void)clFlush(q);  // start the device now; the host goes on planning
+    stats_.rays += a.rays.size();
+    return {};
+  }
+
+  cl_mem layerOr(int layer) const noexcept {
+    return layer >= 0 ? layers_[static_cast<std::size_t>(layer)].get() : dummy_.get();
+  }
+
+  bool launch(cl_kernel kernel, std::uint32_t items) noexcept {
+    if (items == 0) {
+      return true;
+    }
+    const std::size_t local = local_size_;
+    const std::size_t global = (items + local - 1) / local * local;
+    return clEnqueueNDRangeKernel(ctx_.queue.get(), kernel, 1, nullptr, &global, &local, 0, nullptr,
+                                  nullptr) == CL_SUCCESS;
+  }
+
+  bool launchSpans(StagingSet& set) noexcept {
+    cl_kernel k = span_kernel_.get();
+    rm_integrate_params p = params_;
+    p.item_count = static_cast<std::uint32_t>(set.arrays.spans.size());
+    cl_mem rays = set.rays.get();
+    cl_mem spans = set.spans.get();
+    cl_mem occupancy = layerOr(map_.occupancyLayer());
+    cl_mem marks = layerOr(map_.scanMarkLayer());
+    cl_mem counters = set.counters.get();
+    const bool ok = clSetKernelArg(k, 0, sizeof(cl_mem), &rays) == CL_SUCCESS &&
+                    clSetKernelArg(k, 1, sizeof(cl_mem), &spans) == CL_SUCCESS &&
+                    clSetKernelArg(k, 2, sizeof(cl_mem), &occupancy) == CL_SUCCESS &&
+                    clSetKernelArg(k, 3, sizeof(cl_mem), &marks) == CL_SUCCESS &&
+                    clSetKernelArg(k, 4, sizeof(p), &p) == CL_SUCCESS &&
+                    clSetKernelArg(k, 5, sizeof(cl_mem), &counters) == CL_SUCCESS;
+    return ok && launch(k, p.item_count);
+  }
+
+  bool launchHits(StagingSet& set) noexcept {
+    cl_kernel k = hit_kernel_.get();
+    rm_integrate_params p = params_;
+    p.item_count = static_cast<std::uint32_t>(set.arrays.groups.size());
+    cl_mem rays = set.rays.get();
+    cl_mem groups = set.groups.get();
+    cl_mem hit_rays = set.hit_rays.get();
+    cl_mem occupancy = layerOr(map_.occupancyLayer());
+    cl_mem means = layerOr(map_.meanLayer());
+    cl_mem marks = layerOr(map_.scanMarkLayer());
+    cl_mem counters = set.counters.get();
+    const bool ok = clSetKernelArg(k, 0, sizeof(cl_mem), &rays) == CL_SUCCESS &&
+                    clSetKernelArg(k, 1, sizeof(cl_mem), &groups) == CL_SUCCESS &&
+                    clSetKernelArg(k, 2, sizeof(cl_mem), &hit_rays) == CL_SUCCESS &&
+                    clSetKernelArg(k, 3, sizeof(cl_mem), &occupancy) == CL_SUCCESS &&
+                    clSetKernelArg(k, 4, sizeof(cl_mem), &means) == CL_SUCCESS &&
+                    clSetKernelArg(k, 5, sizeof(cl_mem), &marks) == CL_SUCCESS &&
+                    clSetKernelArg(k, 6, sizeof(p), &p) == CL_SUCCESS &&
+                    clSetKernelArg(k, 7, sizeof(cl_mem), &counters) == CL_SUCCESS;
+    return ok && launch(k, p.item_count);
+  }
+
+  VoxelMap& map_;
+  opencl::DeviceContext ctx_;  // first member with handles: released last
+  opencl::ProgramHandle program_;
+  opencl::KernelHandle span_kernel_;
+  opencl::KernelHandle hit_kernel_;
+  std::vector<opencl::BufferHandle> layers_;  // one per schema layer: the cache slots
+  opencl::BufferHandle dummy_;
+  gpu::DeviceRegionCache cache_;
+  gpu::BatchPlanner planner_;
+  gpu::BatchLimits limits_;
+  std::array<StagingSet, 2> sets_;
+  unsigned next_set_ = 0;
+  bool int64_counters_;
+  std::size_t local_size_ = kWorkGroup;
+  rm_integrate_params params_{};
+  BackendStats stats_;
+  std::string program_warning_;
+};
+
+/// Device cache slots for the options: the byte budget over the bytes of one region (all layers),
+/// capped by the host store, the largest single allocation and 32-bit voxel indices.
+Result<std::uint32_t> cacheSlots(const VoxelMap& map, const opencl::DeviceInfo& device,
+                                 std::uint64_t cache_bytes) {
+  const RegionStore& store = map.store();
+  std::uint64_t region_bytes = 0;
+  std::uint64_t largest_layer = 0;
+  for (int l = 0; l < store.schema().size(); ++l) {
+    region_bytes += store.layerRegionBytes(l);
+    largest_layer = std::max<std::uint64_t>(largest_layer, store.layerRegionBytes(l));
+  }
+  std::uint64_t budget = cache_bytes;
+  if (budget == 0) {
+    budget = std::min<std::uint64_t>(OpenClBackendOptions::kDefaultCacheBytes,
+                                     device.global_mem_bytes / 2);
+  }
+  std::uint64_t slots = budget / region_bytes;
+  slots = std::min<std::uint64_t>(slots, store.capacity());
+  slots = std::min<std::uint64_t>(slots, device.max_alloc_bytes / largest_layer);
+  slots = std::min<std::uint64_t>(slots, (std::uint64_t{1} << 32) / store.voxelsPerRegion() - 1);
+  if (slots == 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "the OpenCL region cache of " + std::to_string(budget) +
+                    " bytes cannot hold one region of " + std::to_string(region_bytes) +
+                    " bytes; raise --gpu-cache");
+  }
+  return static_cast<std::uint32_t>(slots);
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
+                                                     const OpenClBackendOptions& options) {
+  if (map.occupancyLayer() < 0) {
+    return fail(ErrorCode::kInvalidArgument, "the OpenCL backend needs an occupancy layer");
+  }
+  if (options.batch_rays == 0 || options.batch_rays > (std::size_t{1} << 24)) {
+    return fail(ErrorCode::kInvalidArgument, "OpenCL batch size must be 1 to 16777216 rays");
+  }
+  auto devices = opencl::listDevices();
+  if (!devices) {
+    return Unexpected(devices.error());
+  }
+  auto device = opencl::selectDevice(*devices, options.device);
+  if (!device) {
+    return Unexpected(device.error());
+  }
+  auto slots = cacheSlots(map, *device, options.cache_bytes);
+  if (!slots) {
+    return Unexpected(slots.error());
+  }
+  auto ctx = opencl::createContext(*device);
+  if (!ctx) {
+    return Unexpected(ctx.error());
+  }
+  const bool int64_counters = device->int64_atomics && !options.force_32bit_atomics;
+  auto backend =
+      std::make_unique<OpenClBackend>(map, std::move(*ctx), *slots, int64_counters, options);
+  if (auto ok = backend->initialise(options); !ok) {
+    return Unexpected(ok.error());
+  }
+  return std::unique_ptr<Backend>(std::move(backend));
+}
+
+}  // namespace raymap

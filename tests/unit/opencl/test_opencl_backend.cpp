@@ -1,0 +1,309 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// OpenCL backend against the CPU reference: random scans in both semantics and walk directions,
+// adversarial rays, a device cache smaller than a batch's working set, a moving rolling window,
+// sync back to the host store and a saved map. Runs for real on PoCL; skips without a platform.
+#include <cstring>
+#include <random>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/io/map_file.hpp"
+#include "src/opencl/opencl_backend.hpp"
+#include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
+
+namespace raymap {
+namespace {
+
+using test::makeRay;
+
+MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels = 8) {
+  MapConfig c;
+  c.semantics = semantics;
+  c.geometry.region_voxels = region_voxels;
+  c.memory_budget_bytes = 256u << 20;
+  return c;
+}
+
+/// An OpenCL backend, or a skip when this machine has no OpenCL platform (never a silent pass).
+std::unique_ptr<Backend> openClBackend(VoxelMap& map, OpenClBackendOptions options = {}) {
+  auto devices = opencl::listDevices();
+  if (!devices) {
+    return nullptr;
+  }
+  options.program_cache.directory = ::testing::TempDir() + "raymap-opencl-test-cache";
+  auto backend = createOpenClBackend(map, options);
+  EXPECT_TRUE(backend) << (backend ? "" : backend.error().message);
+  return backend ? std::move(*backend) : nullptr;
+}
+
+#define REQUIRE_OPENCL(backend)                                            \
+  if (!(backend)) {                                                        \
+    GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)"; \
+  }
+
+/// Voxel means that differ between two maps (packed word or count), over the union of regions.
+std::uint64_t meanDifferences(const VoxelMap& a, const VoxelMap& b) {
+  std::set<std::tuple<int, int, int>> regions;
+  a.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
+  b.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
+  const std::uint32_t n = a.store().voxelsPerRegion();
+  std::uint64_t differing = 0;
+  for (const auto& [x, y, z] : regions) {
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const Vec3i voxel = a.voxelAt({x, y, z}, i);
+      const rm_voxel_mean ma = a.mean(voxel);
+      const rm_voxel_mean mb = b.mean(voxel);
+      differing += (ma.count != mb.count || (ma.count != 0 && ma.packed != mb.packed)) ? 1u : 0u;
+    }
+  }
+  return differing;
+}
+
+struct Built {
+  VoxelMap map;
+  BackendStats stats;
+};
+
+Built buildCpu(const MapConfig& config, const std::vector<Ray>& rays, const RayFilter& filter) {
+  VoxelMap map = test::makeMap(config);
+  auto backend = test::cpuBackend(map, 1);
+  test::integrate(map, *backend, rays, filter);
+  return {std::move(map), backend->stats()};
+}
+
+TEST(OpenClBackend, AgreesWithTheCpuReferenceOnRandomScans) {
+  const std::vector<Ray> rays = test::randomScans(5489, 6, 4000);
+  for (Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    for (bool reverse : {false, true}) {
+      RayFilter filter;
+      filter.reverse = reverse;
+      filter.max_range_m = 9.0;
+      const Built cpu = buildCpu(smallConfig(semantics), rays, filter);
+      VoxelMap map = test::makeMap(smallConfig(semantics));
+      auto backend = openClBackend(map);
+      REQUIRE_OPENCL(backend);
+      test::integrate(map, *backend, rays, filter);
+      ASSERT_TRUE(backend->synchronise());
+      const test::MapComparison cmp = test::compareMaps(cpu.map, map);
+      const std::string label = std::string(toString(semantics)) + (reverse ? " reverse" : "");
+      EXPECT_GT(cmp.compared, 100000u) << label;
+      EXPECT_GE(cmp.sameStateFraction(), 0.999) << label;
+      if (semantics == Semantics::kPerScan) {
+        // One writer per voxel and scan, hits before misses as on the CPU: exactly equal.
+        EXPECT_EQ(cmp.exact_value, cmp.compared) << label;
+      }
+      EXPECT_EQ(meanDifferences(cpu.map, map), 0u) << label;
+      const BackendStats s = backend->stats();
+      EXPECT_EQ(s.updates_dropped, 0u) << label;
+      EXPECT_EQ(s.voxels_visited, cpu.stats.voxels_visited) << label;
+      EXPECT_EQ(s.rays_skipped, 0u);
+      EXPECT_GT(s.bytes_to_device, 0u);
+    }
+  }
+}
+
+TEST(OpenClBackend, PerRayValuesDifferByLessThanHalfAHitWhereStatesAgree) {
+  const std::vector<Ray> rays = test::randomScans(77, 3, 6000);
+  const Built cpu = buildCpu(smallConfig(Semantics::kPerRay), rays, {});
+  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  auto backend = openClBackend(map);
+  REQUIRE_OPENCL(backend);
+  test::integrate(map, *backend, rays);
+  ASSERT_TRUE(backend->synchronise());
+  const float half_hit = 0.5f * map.occupancy().toKernel().hit;
+  std::uint64_t compared = 0;
+  std::uint64_t beyond = 0;
+  map.store().forEachRegion([&](std::uint32_t, Vec3i region) {
+    for (std::uint32_t i = 0; i < map.store().voxelsPerRegion(); ++i) {
+      const Vec3i v = map.voxelAt(region, i);
+      if (map.state(v) == VoxelState::kUnobserved || map.state(v) != cpu.map.state(v)) {
+        continue;
+      }
+      ++compared;
+      beyond += std::fabs(map.occupancyValue(v) - cpu.map.occupancyValue(v)) > half_hit ? 1u : 0u;
+    }
+  });
+  EXPECT_GT(compared, 50000u);
+  EXPECT_LE(static_cast<double>(beyond), 0.001 * static_cast<double>(compared));
+}
+
+TEST(OpenClBackend, AdversarialRaysTerminateAndAgree) {
+  // Endpoints on a lattice of quarter voxels (faces, edges, corners), axis-aligned rays from
+  // corners, zero-length rays, and long rays far from the origin.
+  std::vector<Ray> rays;
+  std::mt19937_64 rng(4242);
+  std::uniform_int_distribution<int> lattice(-40, 40);
+  const double q = 0.025;
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3d a{lattice(rng) * q, lattice(rng) * q, lattice(rng) * q};
+    const Vec3d b{lattice(rng) * q, lattice(rng) * q, lattice(rng) * q};
+    rays.push_back(makeRay(a, b));
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double sign : {-1.0, 1.0}) {
+      Vec3d end{0.2, -0.3, 0.5};
+      (axis == 0 ? end.x : axis == 1 ? end.y : end.z) += sign * 2.4;
+      rays.push_back(makeRay({0.2, -0.3, 0.5}, end));
+    }
+  }
+  rays.push_back(makeRay({0.3, 0.3, 0.3}, {0.3, 0.3, 0.3}));
+  rays.push_back(makeRay({1500.0, -2000.0, 30.0}, {1530.5, -1990.25, 31.0}));
+  for (bool reverse : {false, true}) {
+    RayFilter filter;
+    filter.reverse = reverse;
+    const Built cpu = buildCpu(smallConfig(Semantics::kPerScan), rays, filter);
+    VoxelMap map = test::makeMap(smallConfig(Semantics::kPerScan));
+    auto backend = openClBackend(map);
+    REQUIRE_OPENCL(backend);
+    test::integrate(map, *backend, rays, filter);
+    ASSERT_TRUE(backend->synchronise());
+    const test::MapComparison cmp = test::compareMaps(cpu.map, map);
+    EXPECT_EQ(cmp.exact_value, cmp.compared);
+    EXPECT_EQ(backend->stats().voxels_visited, cpu.stats.voxels_visited);
+  }
+}
+
+TEST(OpenClBackend, CacheSmallerThanTheWorkingSetEvictsAndStillAgrees) {
+  const std::vector<Ray> rays = test::randomScans(11, 2, 1500);
+  for (Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    const Built cpu = buildCpu(smallConfig(semantics), rays, {});
+    VoxelMap map = test::makeMap(smallConfig(semantics));
+    OpenClBackendOptions options;
+    // 8^3 voxels of 4 + 8 (+ 4) bytes: 60 regions, against several hundred per scan.
+    options.cache_bytes = 60u * map.store().schema().bytesPerRegion(512);
+    options.batch_rays = 1000;
+    auto backend = openClBackend(map, options);
+    REQUIRE_OPENCL(backend);
+    test::integrate(map, *backend, rays);
+    ASSERT_TRUE(backend->synchronise());
+    const BackendStats s = backend->stats();
+    EXPECT_EQ(s.cache_slots, 60u);
+    EXPECT_GT(s.cache_evictions, 200u);
+    EXPECT_GT(s.region_bytes_from_device, 0u);
+    EXPECT_GT(s.region_bytes_to_device, 0u);
+    EXPECT_EQ(s.rays_skipped, 0u);
+    EXPECT_EQ(s.updates_dropped, 0u);
+    const test::MapComparison cmp = test::compareMaps(cpu.map, map);
+    EXPECT_GE(cmp.sameStateFraction(), 0.999) << toString(semantics);
+    EXPECT_EQ(meanDifferences(cpu.map, map), 0u);
+  }
+}
+
+TEST(OpenClBackend, RayLongerThanTheCacheIsSkippedAndCounted) {
+  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  OpenClBackendOptions options;
+  options.cache_bytes = 4u * map.store().schema().bytesPerRegion(512);  // 4 regions of 0.8 m
+  auto backend = openClBackend(map, options);
+  REQUIRE_OPENCL(backend);
+  test::integrate(map, *backend,
+                  std::vector<Ray>{makeRay({0.1, 0.1, 0.1}, {9.0, 0.1, 0.1}),
+                                   makeRay({0.1, 0.1, 0.1}, {0.5, 0.3, 0.1})});
+  ASSERT_TRUE(backend->synchronise());
+  EXPECT_EQ(backend->stats().rays_skipped, 1u);
+  EXPECT_EQ(map.state({5, 3, 1}), VoxelState::kOccupied);  // the short ray still went in
+  EXPECT_EQ(map.state({80, 1, 1}), VoxelState::kUnobserved);
+}
+
+TEST(OpenClBackend, MovingRollingWindowMatchesTheCpu) {
+  MapConfig config = smallConfig(Semantics::kPerRay);
+  config.policy = StorePolicy::kRolling;
+  config.window_regions = {6, 6, 3};
+  VoxelMap cpu_map = test::makeMap(config);
+  VoxelMap map = test::makeMap(config);
+  auto cpu = test::cpuBackend(cpu_map, 1);
+  auto backend = openClBackend(map);
+  REQUIRE_OPENCL(backend);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int step = 0; step < 8; ++step) {
+    const Vec3d robot{0.6 * step, 0.2 * step, 0.3};
+    cpu_map.setWindowCentre(robot);
+    map.setWindowCentre(robot);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 3000; ++i) {
+      Vec3d d{u(rng), u(rng), u(rng) * 0.3};
+      d = d * (4.0 / d.norm());
+      rays.push_back(makeRay(robot, robot + d));
+    }
+    test::integrate(cpu_map, *cpu, rays);
+    test::integrate(map, *backend, rays);
+  }
+  ASSERT_TRUE(backend->synchronise());
+  const test::MapComparison cmp = test::compareMaps(cpu_map, map);
+  EXPECT_GT(cmp.compared, 10000u);
+  EXPECT_GE(cmp.sameStateFraction(), 0.999);
+  EXPECT_EQ(backend->stats().spans_outside_window, cpu->stats().spans_outside_window);
+  EXPECT_EQ(backend->stats().updates_dropped, 0u);
+  // The window fits the cache: regions entering it are created on the device, never copied.
+  EXPECT_EQ(backend->stats().region_bytes_to_device, 0u);
+  EXPECT_EQ(backend->stats().cache_evictions, 0u);
+}
+
+TEST(OpenClBackend, SavedMapEqualsTheCpuMapWithinTolerance) {
+  const std::vector<Ray> rays = test::randomScans(8, 3, 3000);
+  const Built cpu = buildCpu(smallConfig(Semantics::kPerScan), rays, {});
+  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerScan));
+  auto backend = openClBackend(map);
+  REQUIRE_OPENCL(backend);
+  test::integrate(map, *backend, rays);
+  ASSERT_TRUE(backend->synchronise());
+  test::TempDir dir;
+  const std::string path = (dir.path() / "gpu.rmap").string();
+  ASSERT_TRUE(io::saveMap(map, path));
+  auto loaded = io::loadMap(path);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  const test::MapComparison cmp = test::compareMaps(cpu.map, *loaded);
+  EXPECT_EQ(cmp.exact_value, cmp.compared);
+  EXPECT_EQ(meanDifferences(cpu.map, *loaded), 0u);
+}
+
+TEST(OpenClBackend, ThirtyTwoBitCountersGiveTheSameMap) {
+  const std::vector<Ray> rays = test::randomScans(21, 2, 3000);
+  VoxelMap a = test::makeMap(smallConfig(Semantics::kPerScan));
+  VoxelMap b = test::makeMap(smallConfig(Semantics::kPerScan));
+  auto wide = openClBackend(a);
+  REQUIRE_OPENCL(wide);
+  OpenClBackendOptions narrow_options;
+  narrow_options.force_32bit_atomics = true;
+  auto narrow = openClBackend(b, narrow_options);
+  ASSERT_TRUE(narrow);
+  test::integrate(a, *wide, rays);
+  test::integrate(b, *narrow, rays);
+  ASSERT_TRUE(wide->synchronise());
+  ASSERT_TRUE(narrow->synchronise());
+  const test::MapComparison cmp = test::compareMaps(a, b);
+  EXPECT_EQ(cmp.exact_value, cmp.compared);
+  EXPECT_EQ(wide->stats().voxels_visited, narrow->stats().voxels_visited);
+}
+
+TEST(OpenClBackend, KernelBuildFailureIsAClearError) {
+  if (!opencl::listDevices()) {
+    GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
+  }
+  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  OpenClBackendOptions options;
+  options.program_cache.enabled = false;
+  options.extra_build_options = "-Dcount=)";  // breaks the kernel source
+  auto backend = createOpenClBackend(map, options);
+  ASSERT_FALSE(backend);
+  EXPECT_NE(backend.error().message.find("build"), std::string::npos) << backend.error().message;
+}
+
+TEST(OpenClBackend, UnknownDeviceIsAClearError) {
+  if (!opencl::listDevices()) {
+    GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
+  }
+  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  OpenClBackendOptions options;
+  options.device.device = "no-such-device-anywhere";
+  auto backend = createOpenClBackend(map, options);
+  ASSERT_FALSE(backend);
+  EXPECT_NE(backend.error().message.find("no-such-device-anywhere"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace raymap
