@@ -17,8 +17,9 @@
 namespace raymap::gpu {
 
 /// @brief Region moves between the host store and the device cache, done by a device backend.
-/// Each call completes (or is ordered on the device queue) before the batch's kernels run, and
-/// a download has landed in host memory when it returns.
+/// Each call is ordered before the batch's kernels (and before later calls). A download may still
+/// be in flight when it returns: the backend waits for it before anyone reads the host store
+/// (synchronise()).
 class RegionTransfer {
  public:
   virtual ~RegionTransfer() = default;
@@ -99,7 +100,8 @@ class BatchPlanner {
   Expected<std::size_t, IntegrateError> plan(std::span<const PreparedRay> rays,
                                              BatchArrays& out) noexcept;
 
-  /// @brief Downloads every dirty resident region (the host store becomes current).
+  /// @brief Enqueues the download of every dirty resident region; the host store is current once
+  /// the backend has waited for the device.
   Expected<void, IntegrateError> downloadAll() noexcept;
 
   const PlanStats& stats() const noexcept { return stats_; }

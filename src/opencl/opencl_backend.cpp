@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <optional>
 #include <vector>
 
@@ -22,6 +23,12 @@ static_assert(sizeof(rm_span_record) == 36, "device ABI");
 static_assert(sizeof(rm_hit_group) == 16, "device ABI");
 static_assert(sizeof(rm_integrate_params) == 44, "device ABI");
 
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) noexcept {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
 // Work-group size for the kernels (clamped to the device maximum).
 constexpr std::size_t kWorkGroup = 64;
 
@@ -38,6 +45,15 @@ struct StagingSet {
   opencl::EventHandle done;  // completes when the set's counters have been read back
 };
 
+/// Rays and spans per device batch for the map's semantics (8 spans per ray on average is far
+/// more than lidar rays need; a batch also ends when its spans run out).
+gpu::BatchLimits batchLimits(const VoxelMap& map, const OpenClBackendOptions& options) {
+  const std::size_t rays = map.semantics() == Semantics::kPerScan
+                               ? options.batch_rays
+                               : std::min(options.batch_rays, options.per_ray_batch_rays);
+  return gpu::BatchLimits{rays, rays * 8};
+}
+
 class OpenClBackend final : public Backend, private gpu::RegionTransfer {
  public:
   OpenClBackend(VoxelMap& map, opencl::DeviceContext ctx, std::uint32_t slots, bool int64_counters,
@@ -45,8 +61,8 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
       : map_(map),
         ctx_(std::move(ctx)),
         cache_(slots),
-        planner_(map, cache_, *this, gpu::BatchLimits{options.batch_rays, options.batch_rays * 8}),
-        limits_{options.batch_rays, options.batch_rays * 8},
+        limits_(batchLimits(map, options)),
+        planner_(map, cache_, *this, limits_),
         int64_counters_(int64_counters) {
     params_.occupancy = map.occupancy().toKernel();
     params_.region_voxels = map.geometry().region_voxels;
@@ -97,6 +113,18 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
         return Unexpected(buffer.error());
       }
       layers_[static_cast<std::size_t>(l)] = std::move(*buffer);
+      // Touch all of the cache now, at start-up: drivers (and PoCL, whose device memory is host
+      // memory) commit pages on first use, and integration must not stall on that later.
+      const LayerSpec& spec = schema.at(l);
+      if (clEnqueueFillBuffer(ctx_.queue.get(), layers_[static_cast<std::size_t>(l)].get(),
+                              spec.clear_words.data(), spec.bytes_per_voxel, 0,
+                              store.layerRegionBytes(l) * cache_.capacity(), 0, nullptr,
+                              nullptr) != CL_SUCCESS) {
+        return fail(ErrorCode::kCapacity,
+                    "OpenCL device region cache: cannot initialise " +
+                        std::to_string(store.layerRegionBytes(l) * cache_.capacity()) +
+                        " bytes on " + ctx_.info.device_name);
+      }
     }
     auto dummy = opencl::createBuffer(ctx_, 8, "placeholder for absent layers");
     if (!dummy) {
@@ -119,6 +147,11 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
         *handle = std::move(*buffer);
       }
     }
+    if (const cl_int status = clFinish(ctx_.queue.get()); status != CL_SUCCESS) {
+      return fail(ErrorCode::kCapacity, std::string("OpenCL device region cache: ") +
+                                            opencl::errorName(status) + " on " +
+                                            ctx_.info.device_name);
+    }
     return {};
   }
 
@@ -133,10 +166,14 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
     planner_.revalidate();
     while (!rays.empty()) {
       StagingSet& set = sets_[next_set_];
+      const Clock::time_point t_wait = Clock::now();
       if (auto ok = retire(set); !ok) {
         return ok;
       }
+      const Clock::time_point t_plan = Clock::now();
+      stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
       auto consumed = planner_.plan(rays, set.arrays);
+      stats_.plan_seconds += secondsSince(t_plan);
       if (!consumed) {
         return Unexpected(consumed.error());
       }
@@ -154,6 +191,7 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
   }
 
   Expected<void, IntegrateError> synchronise() noexcept override {
+    const Clock::time_point start = Clock::now();
     if (clFinish(ctx_.queue.get()) != CL_SUCCESS) {
       return Unexpected(IntegrateError::kDeviceFailure);
     }
@@ -162,7 +200,12 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
         return ok;
       }
     }
-    return planner_.downloadAll();
+    auto ok = planner_.downloadAll();
+    if (ok && clFinish(ctx_.queue.get()) != CL_SUCCESS) {
+      ok = Unexpected(IntegrateError::kDeviceFailure);
+    }
+    stats_.sync_seconds += secondsSince(start);
+    return ok;
   }
 
   BackendStats stats() const noexcept override {
@@ -200,8 +243,10 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
     return {};
   }
 
-  /// Blocking copy of every layer of one region (regions move rarely: only on misses, evictions
-  /// and synchronise(); a blocking copy keeps the host store safe to reuse right away).
+  /// Copies every layer of one region. Uploads block, so the host store slot may be reused at
+  /// once (they happen only on cache misses of regions that exist on the host). Downloads do not:
+  /// the in-order queue runs them before anything enqueued later (an upload of the same host
+  /// memory included), and the host reads the store only after synchronise(), which waits.
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
                                             bool to_device) noexcept {
     const RegionStore& store = map_.store();
@@ -212,7 +257,7 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
       const cl_int status =
           to_device ? clEnqueueWriteBuffer(ctx_.queue.get(), buffer, CL_TRUE, bytes * device_slot,
                                            bytes, host, 0, nullptr, nullptr)
-                    : clEnqueueReadBuffer(ctx_.queue.get(), buffer, CL_TRUE, bytes * device_slot,
+                    : clEnqueueReadBuffer(ctx_.queue.get(), buffer, CL_FALSE, bytes * device_slot,
                                           bytes, host, 0, nullptr, nullptr);
       if (status != CL_SUCCESS) {
         return Unexpected(IntegrateError::kDeviceFailure);
@@ -353,8 +398,8 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
   std::vector<opencl::BufferHandle> layers_;  // one per schema layer: the cache slots
   opencl::BufferHandle dummy_;
   gpu::DeviceRegionCache cache_;
-  gpu::BatchPlanner planner_;
   gpu::BatchLimits limits_;
+  gpu::BatchPlanner planner_;
   std::array<StagingSet, 2> sets_;
   unsigned next_set_ = 0;
   bool int64_counters_;
@@ -400,7 +445,8 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
   if (map.occupancyLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument, "the OpenCL backend needs an occupancy layer");
   }
-  if (options.batch_rays == 0 || options.batch_rays > (std::size_t{1} << 24)) {
+  if (options.batch_rays == 0 || options.batch_rays > (std::size_t{1} << 24) ||
+      options.per_ray_batch_rays == 0) {
     return fail(ErrorCode::kInvalidArgument, "OpenCL batch size must be 1 to 16777216 rays");
   }
   auto devices = opencl::listDevices();

@@ -24,8 +24,14 @@ struct OpenClBackendOptions {
   /// Device region cache size in bytes (all layers). 0: min(1 GiB, half the device's global
   /// memory, the host store); never more regions than the host store holds.
   std::uint64_t cache_bytes = 0;
-  /// Rays per device batch (staging buffers are sized for it, twice: double buffering).
+  /// Most rays per device batch with per-scan semantics, where one integrate() call (one scan)
+  /// must be one device batch for "occupied wins" to hold across the scan; larger scans are
+  /// integrated in parts, each as its own scan. Staging buffers are sized for it, twice.
   std::size_t batch_rays = std::size_t{1} << 18;
+  /// Most rays per device batch with per-ray semantics, where integrate() calls are cut into
+  /// batches of this size: smaller batches let planning overlap the device sooner (measured on
+  /// PoCL: 64 Ki rays was faster than 256 Ki; see docs/benchmarks.md).
+  std::size_t per_ray_batch_rays = std::size_t{1} << 16;
   /// Use 32-bit counters even where the device has cl_khr_int64_base_atomics (tests both paths).
   bool force_32bit_atomics = false;
   opencl::ProgramCacheOptions program_cache;

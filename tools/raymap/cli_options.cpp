@@ -45,16 +45,29 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "occupied wins")
       ->check(CLI::IsMember({"ray", "scan"}))
       ->capture_default_str();
-  c.add_option("--backend", f.backend, "Integration backend")
-      ->check(CLI::IsMember({"cpu"}))
+  c.add_option("--backend", f.backend, "Integration backend: cpu or opencl")
+      ->check(CLI::IsMember({"cpu", "opencl"}))
       ->capture_default_str();
-  c.add_option("--threads", f.threads, "Worker threads (0 = all cores, 1 = reference)")
+  c.add_option("--threads", f.threads, "CPU worker threads (0 = all cores, 1 = reference)")
+      ->capture_default_str();
+  c.add_option("--opencl-platform", f.opencl_platform,
+               "OpenCL platform: index or name substring (see raymap devices)");
+  c.add_option("--opencl-device", f.opencl_device,
+               "OpenCL device: index or name substring; default: first GPU, else first device");
+  c.add_option("--gpu-cache", f.gpu_cache,
+               "Device region cache size, e.g. 512MiB; auto = min(1 GiB, half the device memory)")
+      ->capture_default_str();
+  c.add_option("--fallback", f.fallback,
+               "If the device backend cannot start: none (fail) or cpu (warn, map on the CPU)")
+      ->check(CLI::IsMember({"none", "cpu"}))
       ->capture_default_str();
   c.add_option("--segment-length", f.segment_length,
                "Split longer rays into equal pieces, metres; 0 = off")
       ->capture_default_str();
   auto* reverse = c.add_flag("--reverse", f.reverse, "Walk rays from the sample to the sensor");
-  auto* forward = c.add_flag("--forward", f.forward, "Walk rays from the sensor (default)");
+  auto* forward = c.add_flag("--forward", f.forward,
+                             "Walk rays from the sensor (default on the CPU; device backends "
+                             "default to --reverse)");
   reverse->excludes(forward);
   c.add_flag("--no-mean", f.no_mean, "Do not keep the voxel-mean layer");
   c.add_option("--max-memory", f.max_memory, "Region pool size, e.g. 512MiB, 4GiB")
@@ -183,7 +196,9 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.filter.min_range_m = f.min_range;
   o.filter.max_range_m = f.max_range;
   o.filter.segment_length_m = f.segment_length;
-  o.filter.reverse = f.reverse;
+  // Device backends walk from the sample back to the sensor unless told otherwise: rays of a scan
+  // all start near the sensor, and forward walks make the device's threads collide there.
+  o.filter.reverse = f.reverse || (f.backend != "cpu" && !f.forward);
   if (auto ok = o.filter.validate(); !ok) {
     return Unexpected(ok.error());
   }
@@ -196,7 +211,19 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
                                                  std::to_string(CpuBackendOptions::kMaxThreads) +
                                                  " (got " + std::to_string(f.threads) + ")");
   }
-  o.threads = f.threads;
+  o.backend.name = f.backend;
+  o.backend.threads = f.threads;
+  o.backend.opencl_platform = f.opencl_platform;
+  o.backend.opencl_device = f.opencl_device;
+  o.backend.fallback_cpu = f.fallback == "cpu";
+  o.backend.gpu_batch_rays = f.batch_rays;
+  if (f.gpu_cache != "auto") {
+    auto cache = parseByteSize(f.gpu_cache);
+    if (!cache) {
+      return fail(ErrorCode::kInvalidArgument, "--gpu-cache: " + cache.error().message);
+    }
+    o.backend.gpu_cache_bytes = *cache;
+  }
   o.batch_rays = f.batch_rays;
   return o;
 }

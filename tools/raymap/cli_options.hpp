@@ -29,6 +29,10 @@ struct MappingFlags {
   std::string semantics = "ray";
   std::string backend = "cpu";
   unsigned threads = 0;
+  std::string opencl_platform;
+  std::string opencl_device;
+  std::string gpu_cache = "auto";
+  std::string fallback = "none";
   double segment_length = 0.0;
   bool reverse = false;
   bool forward = false;

@@ -77,11 +77,14 @@ int runBench(const BenchFlags& f) {
       printError(command, "--semantics-list: unknown semantics '" + semantics + "'");
       return kExitUsage;
     }
-    for (const std::string& threads_text : splitComma(f.threads_list)) {
+    // Thread counts apply to the CPU backend; a device backend runs once per semantics.
+    const std::vector<std::string> thread_runs =
+        base->backend.name == "cpu" ? splitComma(f.threads_list) : std::vector<std::string>{"1"};
+    for (const std::string& threads_text : thread_runs) {
       PopulateOptions options = *base;
       options.map.semantics = semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
       try {
-        options.threads = static_cast<unsigned>(std::stoul(threads_text));
+        options.backend.threads = static_cast<unsigned>(std::stoul(threads_text));
       } catch (const std::exception&) {
         printError(command, "--threads-list: '" + threads_text + "' is not a number");
         return kExitUsage;
@@ -126,8 +129,13 @@ int runBench(const BenchFlags& f) {
       });
       const PopulateReport& median = reports[reports.size() / 2];
       runs += (runs.size() > 1 ? ",\n" : "\n") + statsJson(median, options);
-      std::fprintf(stderr, "bench: %s semantics, %u threads: %.3f s median of %zu, %.3g M rays/s\n",
-                   semantics.c_str(), median.threads, median.integrate_seconds, reports.size(),
+      if (!median.fallback_warning.empty()) {
+        std::fprintf(stderr, "bench: warning: %s\n", median.fallback_warning.c_str());
+      }
+      std::fprintf(stderr,
+                   "bench: %s semantics, %s, %u threads: %.3f s median of %zu, %.3g M rays/s\n",
+                   semantics.c_str(), median.backend_name.c_str(), median.threads,
+                   median.integrate_seconds, reports.size(),
                    static_cast<double>(median.rays.rays_accepted) / median.integrate_seconds / 1e6);
     }
   }

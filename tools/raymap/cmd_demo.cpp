@@ -125,7 +125,7 @@ int runDemo(const DemoFlags& f) {
   // 2. Map the recording exactly as `raymap populate` does.
   PopulateOptions options;
   options.input = cloud;
-  options.threads = f.threads;
+  options.backend.threads = f.threads;
   options.filter.max_range_m = 30.0;
   options.progress = !f.quiet;
   auto map = VoxelMap::create(options.map);

@@ -79,8 +79,22 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
               withCommas(r.summary.voxels_free).c_str(),
               withCommas(r.summary.voxels_occupied).c_str(), withCommas(r.summary.regions).c_str(),
               o.map.geometry.resolution, toString(o.map.semantics));
-  std::printf("integration    %.3f s, %.3g M rays/s (%s, %u threads); reading %.3f s\n",
-              r.integrate_seconds, rate / 1e6, r.backend_name.c_str(), r.threads, r.read_seconds);
+  if (r.device.empty()) {
+    std::printf("integration    %.3f s, %.3g M rays/s (%s, %u threads); reading %.3f s\n",
+                r.integrate_seconds, rate / 1e6, r.backend_name.c_str(), r.threads, r.read_seconds);
+    return;
+  }
+  const BackendStats& b = r.backend;
+  std::printf("integration    %.3f s, %.3g M rays/s (%s on %s); reading %.3f s\n",
+              r.integrate_seconds, rate / 1e6, r.backend_name.c_str(), r.device.c_str(),
+              r.read_seconds);
+  std::printf(
+      "device         %s updates dropped, %s rays skipped; cache %s slots, %s hits, %s "
+      "misses, %s evictions; %s MB to the device, %s MB back\n",
+      withCommas(b.updates_dropped).c_str(), withCommas(b.rays_skipped).c_str(),
+      withCommas(b.cache_slots).c_str(), withCommas(b.cache_hits).c_str(),
+      withCommas(b.cache_misses).c_str(), withCommas(b.cache_evictions).c_str(),
+      withCommas(b.bytes_to_device >> 20).c_str(), withCommas(b.bytes_from_device >> 20).c_str());
 }
 
 int runPopulate(const PopulateFlags& f) {
@@ -116,6 +130,9 @@ int runPopulate(const PopulateFlags& f) {
   if (!report) {
     printError(command, report.error().message);
     return kExitFailure;
+  }
+  if (!report->fallback_warning.empty()) {
+    std::fprintf(stderr, "raymap populate: warning: %s\n", report->fallback_warning.c_str());
   }
   // Every output is written under a temporary name and all are renamed at the end, so a run that
   // fails part-way leaves none of them and existing files untouched.

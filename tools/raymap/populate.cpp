@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "platform/process.hpp"
-#include "src/map/cpu_backend.hpp"
 #include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/progress.hpp"
 
@@ -32,18 +31,18 @@ Result<PopulateReport> integrateStream(
     const std::function<Result<std::size_t>(std::span<Ray>)>& next_chunk,
     const std::function<double()>& progress) {
   const Clock::time_point start = Clock::now();
-  CpuBackendOptions backend_options;
-  backend_options.threads = options.threads;
-  auto backend_or = createCpuBackend(map, backend_options);
-  if (!backend_or) {
-    return Unexpected(backend_or.error());
+  auto created = createBackend(map, options.backend);
+  if (!created) {
+    return Unexpected(created.error());
   }
-  Backend& backend = **backend_or;
+  Backend& backend = *created->backend;
   RayPreparer preparer(map, options.filter);
   const bool per_scan = map.semantics() == Semantics::kPerScan;
 
   PopulateReport report;
   report.backend_name = backend.name();
+  report.device = backend.deviceName();
+  report.fallback_warning = created->fallback_warning;
   report.threads = backend.threads();
   std::vector<Ray> chunk(std::size_t{1} << 16);
   std::vector<PreparedRay> batch(options.batch_rays);
@@ -70,7 +69,8 @@ Result<PopulateReport> integrateStream(
                                               " regions (" + number(gib) +
                                               " GiB) its memory budget allows; raise --max-memory");
       }
-      return fail(ErrorCode::kIo, std::string("integration failed: ") + toString(ok.error()));
+      return fail(ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
+                                      " backend: " + toString(ok.error()));
     }
     return {};
   };
@@ -136,7 +136,14 @@ Result<PopulateReport> integrateStream(
   if (auto ok = flush(); !ok) {
     return Unexpected(ok.error());
   }
-  (void)backend.synchronise();
+  // Device backends return before the device finishes: the wait and the download of the map
+  // belong to the integration time.
+  const Clock::time_point t_sync = Clock::now();
+  if (auto ok = backend.synchronise(); !ok) {
+    return fail(ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
+                                    " backend: " + toString(ok.error()));
+  }
+  report.integrate_seconds += secondsSince(t_sync);
   bar.finish();
   report.rays = preparer.counters();
   report.backend = backend.stats();
@@ -204,9 +211,31 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
       .add("regions", r.summary.regions)
       .add("voxels_visited", r.backend.voxels_visited)
       .add("backend", r.backend_name)
+      .add("device", r.device)
       .add("threads", r.threads)
-      .add("updates_dropped", r.backend.updates_dropped)
-      .add("peak_rss_bytes", r.peak_rss_bytes);
+      .add("updates_dropped", r.backend.updates_dropped);
+  if (r.backend_name != "cpu") {
+    const BackendStats& b = r.backend;
+    const std::uint64_t lookups = b.cache_hits + b.cache_misses;
+    j.add("rays_skipped", b.rays_skipped)
+        .add("bytes_to_device", b.bytes_to_device)
+        .add("bytes_from_device", b.bytes_from_device)
+        .add("region_bytes_to_device", b.region_bytes_to_device)
+        .add("region_bytes_from_device", b.region_bytes_from_device)
+        .add("cache_slots", b.cache_slots)
+        .add("cache_hits", b.cache_hits)
+        .add("cache_misses", b.cache_misses)
+        .add("cache_evictions", b.cache_evictions)
+        .add("plan_seconds", b.plan_seconds)
+        .add("wait_seconds", b.wait_seconds)
+        .add("sync_seconds", b.sync_seconds)
+        .add("cache_hit_rate",
+             lookups > 0 ? static_cast<double>(b.cache_hits) / static_cast<double>(lookups) : 0.0);
+  }
+  if (!r.fallback_warning.empty()) {
+    j.add("fallback", r.fallback_warning);
+  }
+  j.add("peak_rss_bytes", r.peak_rss_bytes);
   return j.str();
 }
 

@@ -12,6 +12,7 @@
 #include "src/map/backend.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
+#include "tools/raymap/backend_choice.hpp"
 
 namespace raymap::cli {
 
@@ -23,7 +24,7 @@ struct PopulateOptions {
   io::RaySourceOptions source;
   MapConfig map;
   RayFilter filter;
-  unsigned threads = 0;                        ///< 0 = all cores, 1 = single-threaded reference
+  BackendChoice backend;                       ///< backend, CPU threads, device options
   std::size_t batch_rays = kDefaultBatchRays;  ///< prepared rays per backend call
   bool progress = true;                        ///< progress bar on a terminal
 };
@@ -33,10 +34,12 @@ struct PopulateReport {
   RayCounters rays;
   BackendStats backend;
   std::string backend_name;
+  std::string device;            ///< device backends: the device in words
+  std::string fallback_warning;  ///< the requested device failed; the CPU mapped instead
   unsigned threads = 0;
   std::uint64_t scans = 0;        ///< runs of equal scan index seen
   std::uint64_t scans_split = 0;  ///< per-scan: scans larger than a batch, integrated in parts
-  double integrate_seconds = 0;   ///< preparation + integration; file reading excluded
+  double integrate_seconds = 0;   ///< preparation + integration + final device sync; no reading
   double read_seconds = 0;        ///< reading and decoding the input
   double total_seconds = 0;
   MapSummary summary;

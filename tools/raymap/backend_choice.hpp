@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Which integration backend a command uses, and creating it (with the optional CPU fallback).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "src/core/error.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::cli {
+
+/// @brief The backend options of the mapping commands (--backend and friends).
+struct BackendChoice {
+  std::string name = "cpu";     ///< "cpu" or "opencl"
+  unsigned threads = 0;         ///< CPU: 0 = all cores, 1 = the single-threaded reference
+  std::string opencl_platform;  ///< index or name substring; empty = default
+  std::string opencl_device;    ///< index or name substring; empty = first GPU, else first device
+  std::uint64_t gpu_cache_bytes = 0;  ///< device region cache; 0 = automatic
+  std::size_t gpu_batch_rays = std::size_t{1} << 18;
+  bool fallback_cpu = false;  ///< use the CPU backend (with a warning) if the device fails to start
+};
+
+/// @brief A created backend, and the warning to show when the fallback was taken.
+struct CreatedBackend {
+  std::unique_ptr<Backend> backend;
+  std::string fallback_warning;  ///< empty unless the CPU fallback replaced the requested backend
+};
+
+/// @brief Creates the chosen backend for `map`. Errors say what failed and what to do (install
+/// a driver, pick another device, --fallback cpu).
+Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice);
+
+/// @brief The backends this build has, e.g. {"cpu", "opencl"}.
+std::vector<std::string> availableBackends();
+
+}  // namespace raymap::cli
