@@ -7,6 +7,8 @@ packages=(
   zlib1g-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   liboctomap-dev          # OctoMap: the reference in benchmarks and agreement tests only
+  ocl-icd-opencl-dev opencl-headers  # the OpenCL backend (ICD loader and headers)
+  pocl-opencl-icd clinfo  # OpenCL on the CPU: the OpenCL tests run for real without a GPU
   clang-format
 )
 missing=()

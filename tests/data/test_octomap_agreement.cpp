@@ -17,11 +17,11 @@
 
 #include <gtest/gtest.h>
 
-#include "src/io/ray_source.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/map_params.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
+#include "tests/support/shared_data.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 #include "tools/bench/octomap_reference.hpp"
@@ -38,12 +38,6 @@ constexpr double kMaxRange = 20.0;         // metres
 constexpr double kCountTolerance = 0.005;  // relative difference of free or occupied counts
 constexpr double kMinAgreement = 0.999;    // voxels with the same state, of those either observed
 
-struct DataSet {
-  const char* name;
-  const char* file;        ///< under sharedDataDir()
-  const char* trajectory;  ///< point clouds: under sharedDataDir(); nullptr for ray clouds
-};
-
 struct AgreementCase {
   DataSet data;
   Semantics semantics;
@@ -51,46 +45,6 @@ struct AgreementCase {
 
 void PrintTo(const AgreementCase& c, std::ostream* os) {
   *os << c.data.name << "/" << toString(c.semantics);
-}
-
-/// Reads every ray of a file, failing the test on a read error.
-std::vector<Ray> loadRays(const fs::path& file, const fs::path& trajectory) {
-  io::RaySourceOptions options;
-  if (!trajectory.empty()) {
-    options.trajectory_path = trajectory.string();
-  }
-  auto source = io::openRaySource(file.string(), options);
-  if (!source) {
-    ADD_FAILURE() << source.error().message;
-    return {};
-  }
-  std::vector<Ray> rays;
-  std::vector<Ray> chunk(std::size_t{1} << 16);
-  for (;;) {
-    auto n = (*source)->read(chunk);
-    if (!n) {
-      ADD_FAILURE() << n.error().message;
-      return {};
-    }
-    if (*n == 0) {
-      return rays;
-    }
-    rays.insert(rays.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(*n));
-  }
-}
-
-/// Calls `fn` on every run of rays with equal scan index (the data sets are ordered by scan).
-template <class Fn>
-void forEachScan(std::span<const Ray> rays, Fn&& fn) {
-  std::size_t begin = 0;
-  while (begin < rays.size()) {
-    std::size_t end = begin + 1;
-    while (end < rays.size() && rays[end].scan == rays[begin].scan) {
-      ++end;
-    }
-    fn(rays.subspan(begin, end - begin));
-    begin = end;
-  }
 }
 
 /// A raymap map of the rays and what building it took.
@@ -219,16 +173,9 @@ TEST_P(OctomapAgreement, CountsAndVoxelStatesMatchOctomap) {
   EXPECT_EQ(threads_comparison.exact_value, threads_comparison.compared);
 }
 
-const DataSet kDataSets[] = {
-    {"ouster", "ouster/ouster_os1_lb_n3_raycloud.ply.gz", nullptr},
-    {"3dtk", "3dtk/3dtk_raycloud.ply.gz", nullptr},
-    {"octomap", "octomap/octomap_scan_raycloud.ply.gz", nullptr},
-    {"3dtk_points", "3dtk/3dtk_points.ply.gz", "3dtk/3dtk_trajectory.txt"},
-};
-
 std::vector<AgreementCase> allCases() {
   std::vector<AgreementCase> cases;
-  for (const DataSet& data : kDataSets) {
+  for (const DataSet& data : sharedDataSets()) {
     for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
       cases.push_back({data, semantics});
     }

@@ -1092,3 +1092,98 @@ TEST(Cli, BenchWithUnwritableJsonFailsNamingThePathAndReason) {
 
 }  // namespace
 }  // namespace raymap::test
+
+// ---------------------------------------------------------------------------------------------
+// The OpenCL backend from the command line (runs on PoCL; skips without OpenCL)
+// ---------------------------------------------------------------------------------------------
+
+namespace raymap::test {
+namespace {
+
+/// Why `--backend opencl` cannot run here, or "" when it can.
+std::string openClUnavailable() {
+  const RunResult r = runRaymap({"devices"});
+  return r.exit_code == 0 ? std::string() : r.err;
+}
+
+TEST(CliOpenCl, PopulateMatchesTheCpuAndReportsTheDevice) {
+  if (const std::string why = openClUnavailable(); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  std::vector<VoxelCounts> counts;
+  for (const char* backend : {"cpu", "opencl"}) {
+    SCOPED_TRACE(backend);
+    const std::string map = dir.file(std::string(backend) + ".rmap");
+    const std::string stats = dir.file(std::string(backend) + ".json");
+    // Per-scan semantics: the device map equals the CPU's exactly (docs/architecture.md), for
+    // the same walk direction (devices walk in reverse by default).
+    std::vector<std::string> args = {"populate",     input,   "--semantics", "scan",
+                                     "--backend",    backend, "--output",    map,
+                                     "--stats-json", stats};
+    if (std::string(backend) == "cpu") {
+      args.push_back("--reverse");
+    }
+    const RunResult r = runRaymap(concat(args, kSmallMap));
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+    const std::string json = readFile(stats);
+    EXPECT_EQ(jsonValue(json, "backend"), std::optional<std::string>(backend));
+    EXPECT_EQ(jsonCount(json, "updates_dropped"), 0u);
+    if (std::string(backend) == "opencl") {
+      for (const char* key : {"device", "rays_skipped", "bytes_to_device", "bytes_from_device",
+                              "cache_slots", "cache_hits", "cache_misses", "cache_hit_rate"}) {
+        EXPECT_TRUE(jsonValue(json, key).has_value()) << "missing key " << key << " in\n" << json;
+      }
+      EXPECT_GT(jsonCount(json, "bytes_to_device"), 0u);
+      EXPECT_EQ(jsonCount(json, "rays_skipped"), 0u);
+      EXPECT_EQ(jsonValue(json, "walk"), std::optional<std::string>("reverse"));
+    }
+    counts.push_back(infoCounts(map));
+  }
+  EXPECT_EQ(counts[0], counts[1]);
+}
+
+TEST(CliOpenCl, UnknownDeviceFailsUnlessTheCpuFallbackIsAllowed) {
+  if (const std::string why = openClUnavailable(); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(1));
+  const std::string map = dir.file("out.rmap");
+  const std::string stats = dir.file("out.json");
+  const std::vector<std::string> args = {
+      "populate",     input, "--backend",   "opencl", "--opencl-device", "nosuch", "--output", map,
+      "--stats-json", stats, "--max-range", "8",      "--quiet"};
+  const RunResult failed = runRaymap(args);
+  EXPECT_EQ(failed.exit_code, 1) << describe(failed);
+  EXPECT_TRUE(contains(failed.err, "nosuch"));
+  EXPECT_TRUE(contains(failed.err, "--fallback cpu"));
+  EXPECT_FALSE(fs::exists(map));
+  EXPECT_TRUE(noTemporaryFilesIn(dir.path()));
+
+  const RunResult fell_back = runRaymap(concat(args, {"--fallback", "cpu"}));
+  ASSERT_EQ(fell_back.exit_code, 0) << describe(fell_back);
+  EXPECT_TRUE(contains(fell_back.err, "warning"));
+  EXPECT_TRUE(contains(fell_back.err, "falling back to the CPU"));
+  const std::string json = readFile(stats);
+  EXPECT_EQ(jsonValue(json, "backend"), std::optional<std::string>("cpu"));
+  EXPECT_TRUE(jsonValue(json, "fallback").has_value());
+  EXPECT_TRUE(fs::exists(map));
+}
+
+TEST(CliOpenCl, DevicesListsTheDefaultDeviceAsJson) {
+  if (const std::string why = openClUnavailable(); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
+  const RunResult r = runRaymap({"devices", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.out, "\"platforms\""));
+  EXPECT_TRUE(contains(r.out, "\"int64_atomics\""));
+  EXPECT_TRUE(contains(r.out, "\"default\""));
+}
+
+}  // namespace
+}  // namespace raymap::test
