@@ -16,14 +16,10 @@ typedef struct rm_span_record {
   rm_u32 ray;      /* index of the ray in the batch */
   rm_u32 slot;     /* device cache slot of the region */
   rm_u32 flags;    /* RM_SPAN_FIRST | RM_SPAN_LAST (span_walk.h) */
-  rm_u32 sample;   /* per-ray semantics: index of the sample voxel to hit after the walk (the span
-                      holding it), else RM_SPAN_NO_SAMPLE */
   float t0;        /* ray parameter where the span starts (walk frame, see line_walk.h) */
   float t1;        /* ray parameter where it ends */
   rm_vec3i box_lo; /* the region's minimum voxel relative to the walk's start voxel */
 } rm_span_record;
-
-#define RM_SPAN_NO_SAMPLE 0xFFFFFFFFu
 
 /* All samples of a batch that fell into one voxel: hit_rays[first .. first + count) are their ray
  * indices, in ray order, so folding them one after another gives the same voxel mean as the CPU
@@ -41,10 +37,15 @@ typedef struct rm_integrate_params {
   rm_i32 region_voxels;     /* voxels per region edge */
   rm_u32 voxels_per_region; /* region_voxels^3 */
   rm_u32 item_count;        /* spans or hit groups in this launch */
+  rm_u32 group_count;       /* hit groups in the batch (scratch layout, per-ray semantics) */
   rm_u32 per_scan;          /* 1: per-scan semantics (scan marks), 0: per-ray */
   rm_u32 sequence;          /* scan sequence (per-scan semantics) */
   rm_u32 has_mean;          /* 1 when the map keeps the voxel-mean layer */
 } rm_integrate_params;
+
+/* Per-ray semantics: 32-bit words of batch scratch the device needs for a batch of `groups` hit
+ * groups over `hits` samples: a saved value per group, and count + 1 runs of misses per group. */
+#define RM_SCRATCH_WORDS(groups, hits) (2u * (groups) + (hits))
 
 /* Device counters of one batch: RM_COUNTER_BUCKETS buckets of voxel visits (work-items add to
  * bucket id % RM_COUNTER_BUCKETS, so no single word is contended) and the updates given up. */

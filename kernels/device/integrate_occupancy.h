@@ -1,25 +1,31 @@
 /* SPDX-License-Identifier: BSD-3-Clause */
-/* Occupancy (+ voxel mean, + per-scan marks) integration on a device: the bodies of the two
- * kernels, written once for OpenCL and CUDA over the shared rules in kernels/common.
+/* Occupancy (+ voxel mean, + per-scan marks) integration on a device: the bodies of the kernels,
+ * written once for OpenCL and CUDA over the shared rules in kernels/common.
  *
  * Layout. Each layer is one device buffer cut into cache slots of voxels_per_region voxels; a
- * voxel is at slot * voxels_per_region + index.
+ * voxel is at slot * voxels_per_region + index. The host groups the batch's samples per voxel
+ * (rm_hit_group, rays in ray order) and cuts the rays into span records (one per region piece).
  *
- * Per-ray semantics: each span work-item applies misses to its voxels and, if its span holds the
- * ray's sample, the hit after them, as the CPU does ray by ray. Updates of different rays race on
- * the same voxel: they are applied with a 32-bit compare-and-swap, retried at most
- * RM_CAS_RETRY_LIMIT times; an update still failing then is dropped and counted
- * (RM_COUNTER_DROPPED), never lost silently. An update that would not change the value (a voxel
- * already at its clamp: most of free space) writes nothing. The order of different rays' updates
- * of one voxel is the device's, so where clamping makes the order matter values can differ from
- * the CPU reference (the tests bound how often). rm_apply_hit_group then folds voxel means.
+ * Per-ray semantics, three launches, and the result equals the CPU reference bit for bit:
+ *  1. rm_tag_hit_group: each voxel that samples fell in saves its value in the batch scratch and
+ *     is replaced by a tag (a NaN carrying the group number). Only these voxels see both hits and
+ *     misses in the batch, so only their updates depend on order.
+ *  2. rm_integrate_span: misses along each span. An untagged voxel takes its miss with a 32-bit
+ *     compare-and-swap, retried at most RM_CAS_RETRY_LIMIT times (an update still failing is
+ *     dropped and counted in RM_COUNTER_DROPPED, never lost silently; one that would not change the
+ *     value, a voxel at the lower clamp, writes nothing). Misses are all the same addition with a
+ *     lower clamp, so their order does not matter. A miss to a tagged voxel is not applied but
+ *     counted in the run of misses between the two of the group's hits that surround its ray
+ *     (found by binary search in the group's sorted ray list).
+ *  3. rm_apply_hit_group: replays each tagged voxel's updates in ray order from the saved value:
+ *     run 0 of misses, hit 1, run 1, ..., hit n, run n; and folds the voxel means.
  *
- * Per-scan semantics: rm_apply_hit_group runs first, then rm_integrate_span, as on the CPU. The
- * scan mark decides a single writer per voxel (atomic_max on the monotone mark), so occupancy is
- * updated with plain stores and the result equals the CPU reference exactly.
+ * Per-scan semantics, as on the CPU: rm_apply_hit_group first (the scan's hit, once per voxel),
+ * then rm_integrate_span, where atomic_max on the monotone scan mark elects one writer per voxel
+ * and scan for the miss (a plain store). The result equals the CPU reference exactly.
  *
- * Voxel means: one work-item per voxel folds all of the batch's samples of that voxel in ray order
- * (the host groups them), so means match the CPU reference bit for bit and need no atomics. */
+ * Voxel means: one work-item per voxel folds all of the batch's samples of that voxel in ray
+ * order, so means match the CPU reference bit for bit and need no atomics. */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 
@@ -35,6 +41,12 @@
 /* Compare-and-swap attempts per miss before the update is given up (and counted). */
 #define RM_CAS_RETRY_LIMIT 64
 
+/* A tagged occupancy word: a quiet NaN whose low 22 bits hold the hit group (occupancy values
+ * are never NaN: rays are validated, and +inf marks "unobserved"). */
+#define RM_TAG_BITS 0x7FC00000u
+#define RM_TAG_GROUP_MASK 0x003FFFFFu
+#define RM_TAG_MAX_GROUPS (RM_TAG_GROUP_MASK + 1u)
+
 #if defined(RM_HAVE_INT64_ATOMICS)
 typedef rm_u64 rm_counter;
 RM_DEVICE_FN void rm_count(RM_ATOMIC_GLOBAL rm_counter* counters, rm_u32 which, rm_u32 amount) {
@@ -48,15 +60,22 @@ RM_DEVICE_FN void rm_count(RM_ATOMIC_GLOBAL rm_counter* counters, rm_u32 which, 
 }
 #endif
 
-/* Applies a miss (hit = 0) or a hit (hit = 1) to one occupancy word with bounded
+RM_DEVICE_FN int rm_is_tag(rm_u32 word) { return (word & RM_TAG_BITS) == RM_TAG_BITS; }
+
+/* Where group g's runs of misses start in the scratch buffer: after the saved values (one per
+ * group), count + 1 runs per group. */
+RM_DEVICE_FN rm_u32 rm_runs_offset(rm_hit_group group, rm_u32 g, rm_integrate_params p) {
+  return p.group_count + group.first + g;
+}
+
+/* Applies a miss to an untagged occupancy word whose last seen bits are `old`, with bounded
  * compare-and-swap. Returns 0 when the update was given up. */
-RM_DEVICE_FN int rm_occupancy_update_atomic(RM_ATOMIC_GLOBAL rm_u32* word, int hit,
-                                            rm_occupancy_params p) {
-  rm_u32 old = rm_load_u32(word);
+RM_DEVICE_FN int rm_occupancy_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
+                                          rm_occupancy_params p) {
   int attempt;
   for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
     float value = rm_as_float(old);
-    float updated = hit ? rm_occupancy_hit(value, p) : rm_occupancy_miss(value, p);
+    float updated = rm_occupancy_miss(value, p);
     rm_u32 seen;
     if (updated == value) {
       return 1;
@@ -70,12 +89,41 @@ RM_DEVICE_FN int rm_occupancy_update_atomic(RM_ATOMIC_GLOBAL rm_u32* word, int h
   return 0;
 }
 
-/* Work-item `id`: walks span `id`, applies the semantics' miss rule to its voxels and, per ray,
- * the hit to a sample voxel the span holds. */
+/* Number of the group's hit rays that come before `ray` (the rays are sorted). */
+RM_DEVICE_FN rm_u32 rm_hits_before(const RM_GLOBAL rm_u32* hit_rays, rm_hit_group group,
+                                   rm_u32 ray) {
+  rm_u32 lo = 0u;
+  rm_u32 hi = group.count;
+  while (lo < hi) {
+    rm_u32 mid = lo + (hi - lo) / 2u;
+    if (hit_rays[group.first + mid] < ray) {
+      lo = mid + 1u;
+    } else {
+      hi = mid;
+    }
+  }
+  return lo;
+}
+
+/* Per-ray semantics, launch 1. Work-item `id`: saves the value of hit group `id`'s voxel and tags
+ * it. */
+RM_DEVICE_FN void rm_tag_hit_group(rm_u32 id, const RM_GLOBAL rm_hit_group* groups,
+                                   RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_GLOBAL rm_u32* scratch,
+                                   rm_integrate_params p) {
+  rm_hit_group group = groups[id];
+  rm_u32 i = group.slot * p.voxels_per_region + group.index;
+  scratch[id] = occupancy[i];
+  occupancy[i] = RM_TAG_BITS | id;
+}
+
+/* Work-item `id`: walks span `id` and applies the semantics' miss rule to its voxels. */
 RM_DEVICE_FN void rm_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
                                     const RM_GLOBAL rm_span_record* spans,
+                                    const RM_GLOBAL rm_hit_group* groups,
+                                    const RM_GLOBAL rm_u32* hit_rays,
                                     RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                    RM_ATOMIC_GLOBAL rm_u32* marks, rm_integrate_params p,
+                                    RM_ATOMIC_GLOBAL rm_u32* marks,
+                                    RM_ATOMIC_GLOBAL rm_u32* scratch, rm_integrate_params p,
                                     RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_span_record span = spans[id];
   rm_prepared_ray ray = rays[span.ray];
@@ -96,15 +144,18 @@ RM_DEVICE_FN void rm_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* 
           rm_atomic_max_u32(marks + i, miss_mark) < miss_mark) {
         occupancy[i] = rm_as_u32(rm_occupancy_miss(rm_as_float(occupancy[i]), p.occupancy));
       }
-    } else if (!rm_occupancy_update_atomic(occupancy + i, 0, p.occupancy)) {
-      dropped += 1u;
+    } else {
+      rm_u32 word = rm_load_u32(occupancy + i);
+      if (rm_is_tag(word)) {
+        /* A voxel with samples in this batch: count the miss in its place among the hits. */
+        rm_u32 g = word & RM_TAG_GROUP_MASK;
+        rm_hit_group group = groups[g];
+        rm_u32 run = rm_runs_offset(group, g, p) + rm_hits_before(hit_rays, group, span.ray);
+        (void)rm_atomic_add_u32(scratch + run, 1u);
+      } else if (!rm_occupancy_miss_atomic(occupancy + i, word, p.occupancy)) {
+        dropped += 1u;
+      }
     }
-  }
-  if (span.sample != RM_SPAN_NO_SAMPLE) {
-    if (!rm_occupancy_update_atomic(occupancy + base + span.sample, 1, p.occupancy)) {
-      dropped += 1u;
-    }
-    count += 1;
   }
   if (count > 0) {
     rm_count(counters, id % RM_COUNTER_BUCKETS, RM_U32(count));
@@ -114,15 +165,16 @@ RM_DEVICE_FN void rm_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* 
   }
 }
 
-/* Work-item `id`: folds every sample of hit group `id` into its voxel's mean, in ray order, and
- * with per-scan semantics applies the scan's hit. The only work-item writing this voxel during
- * the launch. */
+/* Work-item `id`: applies hit group `id` to its voxel, the only work-item writing it during the
+ * launch: folds the samples into the voxel mean in ray order; per ray, replays the voxel's hits
+ * and the runs of misses between them from the saved value; per scan, applies the scan's hit. */
 RM_DEVICE_FN void rm_apply_hit_group(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
                                      const RM_GLOBAL rm_hit_group* groups,
                                      const RM_GLOBAL rm_u32* hit_rays,
                                      RM_ATOMIC_GLOBAL rm_u32* occupancy,
                                      RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* marks,
-                                     rm_integrate_params p, RM_ATOMIC_GLOBAL rm_counter* counters) {
+                                     const RM_GLOBAL rm_u32* scratch, rm_integrate_params p,
+                                     RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_hit_group group = groups[id];
   rm_u32 i = group.slot * p.voxels_per_region + group.index;
   rm_u32 k;
@@ -140,8 +192,21 @@ RM_DEVICE_FN void rm_apply_hit_group(rm_u32 id, const RM_GLOBAL rm_prepared_ray*
       occupancy[i] = rm_as_u32(rm_occupancy_hit(rm_as_float(occupancy[i]), p.occupancy));
       marks[i] = rm_scan_mark_hit(p.sequence);
     }
-    rm_count(counters, id % RM_COUNTER_BUCKETS, group.count);
+  } else {
+    rm_u32 runs = rm_runs_offset(group, id, p);
+    float value = rm_as_float(scratch[id]);
+    rm_u32 m;
+    for (k = 0u; k <= group.count; ++k) {
+      for (m = scratch[runs + k]; m > 0u; --m) {
+        value = rm_occupancy_miss(value, p.occupancy);
+      }
+      if (k < group.count) {
+        value = rm_occupancy_hit(value, p.occupancy);
+      }
+    }
+    occupancy[i] = rm_as_u32(value);
   }
+  rm_count(counters, id % RM_COUNTER_BUCKETS, group.count);
 }
 
 #endif /* RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H */

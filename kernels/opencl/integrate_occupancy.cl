@@ -10,14 +10,27 @@
 
 #include "kernels/device/integrate_occupancy.h"
 
+RM_KERNEL void rm_tag_hit_groups(const RM_GLOBAL rm_hit_group* groups,
+                                 RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_GLOBAL rm_u32* scratch,
+                                 rm_integrate_params params) {
+  rm_u32 id = rm_global_id();
+  if (id < params.item_count) {
+    rm_tag_hit_group(id, groups, occupancy, scratch, params);
+  }
+}
+
 RM_KERNEL void rm_integrate_spans(const RM_GLOBAL rm_prepared_ray* rays,
                                   const RM_GLOBAL rm_span_record* spans,
+                                  const RM_GLOBAL rm_hit_group* groups,
+                                  const RM_GLOBAL rm_u32* hit_rays,
                                   RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                  RM_ATOMIC_GLOBAL rm_u32* marks, rm_integrate_params params,
+                                  RM_ATOMIC_GLOBAL rm_u32* marks, RM_ATOMIC_GLOBAL rm_u32* scratch,
+                                  rm_integrate_params params,
                                   RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
-    rm_integrate_span(id, rays, spans, occupancy, marks, params, counters);
+    rm_integrate_span(id, rays, spans, groups, hit_rays, occupancy, marks, scratch, params,
+                      counters);
   }
 }
 
@@ -26,10 +39,11 @@ RM_KERNEL void rm_apply_hit_groups(const RM_GLOBAL rm_prepared_ray* rays,
                                    const RM_GLOBAL rm_u32* hit_rays,
                                    RM_ATOMIC_GLOBAL rm_u32* occupancy,
                                    RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* marks,
-                                   rm_integrate_params params,
+                                   const RM_GLOBAL rm_u32* scratch, rm_integrate_params params,
                                    RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
-    rm_apply_hit_group(id, rays, groups, hit_rays, occupancy, means, marks, params, counters);
+    rm_apply_hit_group(id, rays, groups, hit_rays, occupancy, means, marks, scratch, params,
+                       counters);
   }
 }

@@ -19,8 +19,7 @@ BatchPlanner::BatchPlanner(VoxelMap& map, DeviceRegionCache& cache, RegionTransf
       region_voxels_(map.store().regionVoxels()),
       voxels_per_region_(map.store().voxelsPerRegion()),
       host_uninitialised_(map.store().capacity(), 0),
-      seen_recycled_(map.regionsRecycled()),
-      per_scan_(map.semantics() == Semantics::kPerScan) {
+      seen_recycled_(map.regionsRecycled()) {
   RAYMAP_EXPECTS(limits.max_rays > 0 && limits.max_rays < (std::size_t{1} << 32));
   RAYMAP_EXPECTS(limits.max_spans > 0);
 }
@@ -89,10 +88,26 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
   return placement->slot;
 }
 
+namespace {
+
+rm_span_record spanRecord(const RaySpan& span, std::uint32_t ray, std::uint32_t slot) noexcept {
+  rm_span_record record;
+  record.ray = ray;
+  record.slot = slot;
+  record.flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
+  record.t0 = span.t0;
+  record.t1 = span.t1;
+  record.box_lo = span.box_lo;
+  return record;
+}
+
+}  // namespace
+
 Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const PreparedRay> rays,
                                                          BatchArrays& out) noexcept {
   out.clear();
   cache_->beginBatch();
+  batch_regions_.reset();
   std::size_t consumed = 0;
   for (; consumed < rays.size() && out.rays.size() < limits_.max_rays; ++consumed) {
     const PreparedRay& ray = rays[consumed];
@@ -102,6 +117,20 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
     RaySpan span;
     bool full = false;
     while (walk.next(&span)) {
+      if (out.spans.size() == limits_.max_spans) {
+        full = true;
+        break;
+      }
+      const std::uint64_t key = RegionStore::packCoord(span.region);
+      if (const std::uint32_t* cached = batch_regions_.find(key)) {
+        if (*cached == DeviceRegionCache::kNoSlot) {
+          ++stats_.spans_outside_window;
+          continue;
+        }
+        cache_->noteHit();
+        out.spans.push_back(spanRecord(span, ray_index, *cached));
+        continue;
+      }
       bool created = false;
       auto host = map_->acquireRegionUncleared(span.region, &created);
       if (!host) {
@@ -109,6 +138,7 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
           return Unexpected(IntegrateError::kStoreFull);
         }
         ++stats_.spans_outside_window;  // outside a rolling window (or the index's range)
+        batch_regions_.remember(DeviceRegionCache::kNoSlot);
         continue;
       }
       if (created) {
@@ -118,19 +148,11 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
       if (!slot) {
         return Unexpected(slot.error());
       }
-      if (full || out.spans.size() == limits_.max_spans) {
-        full = true;
+      if (full) {
         break;
       }
-      rm_span_record record;
-      record.ray = ray_index;
-      record.slot = *slot;
-      record.flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
-      record.sample = RM_SPAN_NO_SAMPLE;
-      record.t0 = span.t0;
-      record.t1 = span.t1;
-      record.box_lo = span.box_lo;
-      out.spans.push_back(record);
+      batch_regions_.remember(*slot);
+      out.spans.push_back(spanRecord(span, ray_index, *slot));
     }
     if (full) {
       out.spans.resize(spans_before);
@@ -138,26 +160,18 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
         // Even an empty batch cannot hold this ray's regions: skip it, counted.
         ++stats_.rays_too_long;
         cache_->beginBatch();
+        batch_regions_.reset();
         continue;
       }
       break;  // the next batch starts with this ray
     }
     if ((ray.flags & RM_RAY_END_HIT) != 0u) {
       const auto [region, index] = walk.sampleCell();
-      const std::uint32_t slot = cache_->find(region);
+      const std::uint32_t* cached = batch_regions_.find(RegionStore::packCoord(region));
+      const std::uint32_t slot = cached != nullptr ? *cached : cache_->find(region);
       if (slot != DeviceRegionCache::kNoSlot) {
         const std::uint64_t voxel = std::uint64_t{slot} * voxels_per_region_ + index;
         out.hit_keys.push_back((voxel << 32) | ray_index);
-        if (!per_scan_) {
-          // The span holding the sample applies the hit after its misses.
-          const bool sample_is_start = walk.frame().sample_is_start != 0;
-          for (std::size_t s = spans_before; s < out.spans.size(); ++s) {
-            const std::uint32_t end_flag = sample_is_start ? RM_SPAN_FIRST : RM_SPAN_LAST;
-            if ((out.spans[s].flags & end_flag) != 0u) {
-              out.spans[s].sample = index;
-            }
-          }
-        }
       }
     }
     out.rays.push_back(ray);

@@ -12,6 +12,7 @@
 #include "src/core/expected.hpp"
 #include "src/gpu/device_region_cache.hpp"
 #include "src/map/backend.hpp"
+#include "src/map/region_slot_cache.hpp"
 #include "src/map/voxel_map.hpp"
 
 namespace raymap::gpu {
@@ -120,7 +121,9 @@ class BatchPlanner {
   std::uint32_t voxels_per_region_;
   std::vector<std::uint8_t> host_uninitialised_;  // per host slot: created, never written
   std::uint64_t seen_recycled_ = 0;
-  bool per_scan_ = false;
+  // Regions placed in the current batch (packed coordinate -> device slot): neighbouring rays
+  // cross the same few regions, and a placed region stays pinned until the batch ends.
+  detail::RegionSlotCache batch_regions_;
   PlanStats stats_;
 };
 

@@ -71,6 +71,8 @@ class DeviceRegionCache {
     }
   }
 
+  /// @brief Counts a hit the caller resolved itself (a region it already placed in this batch).
+  void noteHit() noexcept { ++hits_; }
   std::uint64_t hits() const noexcept { return hits_; }
   std::uint64_t misses() const noexcept { return misses_; }
   std::uint64_t evictions() const noexcept { return evictions_; }

@@ -19,9 +19,9 @@ extern const char* const kIntegrateOccupancySource;  // embedded at build time
 
 namespace {
 
-static_assert(sizeof(rm_span_record) == 36, "device ABI");
+static_assert(sizeof(rm_span_record) == 32, "device ABI");
 static_assert(sizeof(rm_hit_group) == 16, "device ABI");
-static_assert(sizeof(rm_integrate_params) == 44, "device ABI");
+static_assert(sizeof(rm_integrate_params) == 48, "device ABI");
 
 using Clock = std::chrono::steady_clock;
 
@@ -41,6 +41,7 @@ struct StagingSet {
   opencl::BufferHandle groups;
   opencl::BufferHandle hit_rays;
   opencl::BufferHandle counters;
+  opencl::BufferHandle scratch;  // per-ray semantics: saved values and runs of misses
   std::array<std::uint64_t, RM_COUNTER_COUNT> counters_host{};  // 64- or 32-bit words
   opencl::EventHandle done;  // completes when the set's counters have been read back
 };
@@ -101,6 +102,11 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
       return Unexpected(hits.error());
     }
     hit_kernel_ = std::move(*hits);
+    auto tags = opencl::createKernel(program_, "rm_tag_hit_groups");
+    if (!tags) {
+      return Unexpected(tags.error());
+    }
+    tag_kernel_ = std::move(*tags);
 
     const RegionStore& store = map_.store();
     const LayerSchema& schema = store.schema();
@@ -139,7 +145,10 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
             std::tuple{&set.spans, limits_.max_spans * sizeof(rm_span_record), "span batch"},
             std::tuple{&set.groups, limits_.max_rays * sizeof(rm_hit_group), "hit groups"},
             std::tuple{&set.hit_rays, limits_.max_rays * sizeof(std::uint32_t), "hit list"},
-            std::tuple{&set.counters, counter_bytes, "counters"}}) {
+            std::tuple{&set.counters, counter_bytes, "counters"},
+            std::tuple{&set.scratch,
+                       std::size_t{RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays)} * 4u,
+                       "batch scratch"}}) {
         auto buffer = opencl::createBuffer(ctx_, bytes, what);
         if (!buffer) {
           return Unexpected(buffer.error());
@@ -321,7 +330,12 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
     if (params_.per_scan != 0u) {
       ok = ok && launchHits(set) && launchSpans(set);  // hits first: occupied wins
     } else {
-      ok = ok && launchSpans(set) && launchHits(set);  // misses and hits, then voxel means
+      // Tag the voxels with samples, walk the misses, replay the tagged voxels in ray order.
+      const std::size_t runs = a.hit_rays.size() + a.groups.size();
+      ok = ok && (runs == 0 || clEnqueueFillBuffer(q, set.scratch.get(), &zero, sizeof(zero),
+                                                   a.groups.size() * 4u, runs * 4u, 0, nullptr,
+                                                   nullptr) == CL_SUCCESS);
+      ok = ok && launchTags(set) && launchSpans(set) && launchHits(set);
     }
     cl_event done = nullptr;
     ok = ok && clEnqueueReadBuffer(q, set.counters.get(), CL_FALSE, 0, counter_bytes,
@@ -350,44 +364,42 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
                                   nullptr) == CL_SUCCESS;
   }
 
-  bool launchSpans(StagingSet& set) noexcept {
-    cl_kernel k = span_kernel_.get();
+  /// Launch parameters of one kernel over `items` work-items.
+  rm_integrate_params launchParams(const StagingSet& set, std::size_t items) const noexcept {
     rm_integrate_params p = params_;
-    p.item_count = static_cast<std::uint32_t>(set.arrays.spans.size());
-    cl_mem rays = set.rays.get();
-    cl_mem spans = set.spans.get();
-    cl_mem occupancy = layerOr(map_.occupancyLayer());
-    cl_mem marks = layerOr(map_.scanMarkLayer());
-    cl_mem counters = set.counters.get();
-    const bool ok = clSetKernelArg(k, 0, sizeof(cl_mem), &rays) == CL_SUCCESS &&
-                    clSetKernelArg(k, 1, sizeof(cl_mem), &spans) == CL_SUCCESS &&
-                    clSetKernelArg(k, 2, sizeof(cl_mem), &occupancy) == CL_SUCCESS &&
-                    clSetKernelArg(k, 3, sizeof(cl_mem), &marks) == CL_SUCCESS &&
-                    clSetKernelArg(k, 4, sizeof(p), &p) == CL_SUCCESS &&
-                    clSetKernelArg(k, 5, sizeof(cl_mem), &counters) == CL_SUCCESS;
-    return ok && launch(k, p.item_count);
+    p.item_count = static_cast<std::uint32_t>(items);
+    p.group_count = static_cast<std::uint32_t>(set.arrays.groups.size());
+    return p;
+  }
+
+  /// Sets the kernel's arguments in order (buffers as cl_mem, the parameters by value).
+  template <class... Args>
+  static bool setArgs(cl_kernel k, const Args&... args) noexcept {
+    cl_uint index = 0;
+    return ((clSetKernelArg(k, index++, sizeof(Args), &args) == CL_SUCCESS) && ...);
+  }
+
+  bool launchTags(StagingSet& set) noexcept {
+    const rm_integrate_params p = launchParams(set, set.arrays.groups.size());
+    return setArgs(tag_kernel_.get(), set.groups.get(), layerOr(map_.occupancyLayer()),
+                   set.scratch.get(), p) &&
+           launch(tag_kernel_.get(), p.item_count);
+  }
+
+  bool launchSpans(StagingSet& set) noexcept {
+    const rm_integrate_params p = launchParams(set, set.arrays.spans.size());
+    return setArgs(span_kernel_.get(), set.rays.get(), set.spans.get(), set.groups.get(),
+                   set.hit_rays.get(), layerOr(map_.occupancyLayer()),
+                   layerOr(map_.scanMarkLayer()), set.scratch.get(), p, set.counters.get()) &&
+           launch(span_kernel_.get(), p.item_count);
   }
 
   bool launchHits(StagingSet& set) noexcept {
-    cl_kernel k = hit_kernel_.get();
-    rm_integrate_params p = params_;
-    p.item_count = static_cast<std::uint32_t>(set.arrays.groups.size());
-    cl_mem rays = set.rays.get();
-    cl_mem groups = set.groups.get();
-    cl_mem hit_rays = set.hit_rays.get();
-    cl_mem occupancy = layerOr(map_.occupancyLayer());
-    cl_mem means = layerOr(map_.meanLayer());
-    cl_mem marks = layerOr(map_.scanMarkLayer());
-    cl_mem counters = set.counters.get();
-    const bool ok = clSetKernelArg(k, 0, sizeof(cl_mem), &rays) == CL_SUCCESS &&
-                    clSetKernelArg(k, 1, sizeof(cl_mem), &groups) == CL_SUCCESS &&
-                    clSetKernelArg(k, 2, sizeof(cl_mem), &hit_rays) == CL_SUCCESS &&
-                    clSetKernelArg(k, 3, sizeof(cl_mem), &occupancy) == CL_SUCCESS &&
-                    clSetKernelArg(k, 4, sizeof(cl_mem), &means) == CL_SUCCESS &&
-                    clSetKernelArg(k, 5, sizeof(cl_mem), &marks) == CL_SUCCESS &&
-                    clSetKernelArg(k, 6, sizeof(p), &p) == CL_SUCCESS &&
-                    clSetKernelArg(k, 7, sizeof(cl_mem), &counters) == CL_SUCCESS;
-    return ok && launch(k, p.item_count);
+    const rm_integrate_params p = launchParams(set, set.arrays.groups.size());
+    return setArgs(hit_kernel_.get(), set.rays.get(), set.groups.get(), set.hit_rays.get(),
+                   layerOr(map_.occupancyLayer()), layerOr(map_.meanLayer()),
+                   layerOr(map_.scanMarkLayer()), set.scratch.get(), p, set.counters.get()) &&
+           launch(hit_kernel_.get(), p.item_count);
   }
 
   VoxelMap& map_;
@@ -395,6 +407,7 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
   opencl::ProgramHandle program_;
   opencl::KernelHandle span_kernel_;
   opencl::KernelHandle hit_kernel_;
+  opencl::KernelHandle tag_kernel_;
   std::vector<opencl::BufferHandle> layers_;  // one per schema layer: the cache slots
   opencl::BufferHandle dummy_;
   gpu::DeviceRegionCache cache_;

@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Reproduces the OpenCL table of docs/benchmarks.md: the OpenCL backend against the CPU backend
+# (all cores) on the shared data sets, at 0.1 m with a 20 m max range and OctoMap's
+# probabilities, both semantics, with the device statistics (transfers, cache, dropped updates).
+#   tools/bench/run-opencl-benchmarks.sh [DATA_DIR] [OUT_DIR] [extra raymap options...]
+# e.g. extra options --opencl-device 1 or --gpu-cache 256MiB. Needs an OpenCL platform (PoCL
+# runs on the CPU) and the release build.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+data=${1:-../shared/data}
+out=${2:-build/bench-results}
+shift $(($# > 2 ? 2 : $#))
+repeat=${RAYMAP_BENCH_REPEAT:-5}
+mkdir -p "$out"
+cmake --preset release >/dev/null
+cmake --build --preset release --target raymap >/dev/null
+bin=build/release/tools
+common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --repeat "$repeat")
+
+value() {  # value KEY FILE: the first number after "KEY": in a JSON file
+  grep -o "\"$1\": [0-9.e+-]*" "$2" | head -1 | awk '{print $2}'
+}
+text() {  # text KEY FILE: the first string value of KEY
+  grep -o "\"$1\": \"[^\"]*\"" "$2" | head -1 | cut -d'"' -f4
+}
+
+summary="$out/opencl-summary.md"
+{
+  echo "commit $(git rev-parse --short HEAD), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores, repeat $repeat"
+  echo
+  echo "| data | semantics | CPU $(nproc) threads (rays/s) | OpenCL (rays/s) | OpenCL / CPU | to device (MB) | from device (MB) | cache hit rate | updates dropped | plan / wait / sync (s) |"
+  echo "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
+} >"$summary"
+
+run() {  # run NAME INPUT [extra options]
+  local name=$1 input=$2
+  shift 2
+  for semantics in ray scan; do
+    local tag="$name-$semantics"
+    "$bin/raymap" bench "$input" "${common[@]}" "$@" --semantics-list "$semantics" \
+      --threads-list 0 --json "$out/$tag-cpu.json" 2>/dev/null
+    "$bin/raymap" bench "$input" "${common[@]}" "$@" --semantics-list "$semantics" \
+      --backend opencl "${extra[@]}" --json "$out/$tag-opencl.json" 2>/dev/null
+    local cpu ocl f="$out/$tag-opencl.json"
+    cpu=$(value rays_per_second "$out/$tag-cpu.json")
+    ocl=$(value rays_per_second "$f")
+    printf '| %s | %s | %.0f | %.0f | %.2f | %.0f | %.0f | %.4f | %s | %.3f / %.3f / %.3f |\n' \
+      "$name" "$semantics" "$cpu" "$ocl" "$(awk -v a="$ocl" -v b="$cpu" 'BEGIN { print a / b }')" \
+      "$(awk -v a="$(value bytes_to_device "$f")" 'BEGIN { print a / 1e6 }')" \
+      "$(awk -v a="$(value bytes_from_device "$f")" 'BEGIN { print a / 1e6 }')" \
+      "$(value cache_hit_rate "$f")" "$(value updates_dropped "$f")" \
+      "$(value plan_seconds "$f")" "$(value wait_seconds "$f")" "$(value sync_seconds "$f")" \
+      >>"$summary"
+  done
+  echo "device: $(text device "$out/$name-ray-opencl.json")" >"$out/opencl-device.txt"
+}
+
+extra=("$@")
+run ouster "$data/ouster/ouster_os1_lb_n3_raycloud.ply.gz"
+run 3dtk "$data/3dtk/3dtk_raycloud.ply.gz"
+run 3dtk-points "$data/3dtk/3dtk_points.ply.gz" --trajectory "$data/3dtk/3dtk_trajectory.txt"
+run octomap "$data/octomap/octomap_scan_raycloud.ply.gz"
+cat "$out/opencl-device.txt" >>"$summary"
+cat "$summary"
