@@ -24,18 +24,46 @@ std::string number(double value) {
   return buffer;
 }
 
+/// Counters of `now` minus those of `before` (a reused backend's share of one run).
+BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
+  BackendStats d = now;
+  d.batches -= before.batches;
+  d.rays -= before.rays;
+  d.voxels_visited -= before.voxels_visited;
+  d.updates_dropped -= before.updates_dropped;
+  d.spans_outside_window -= before.spans_outside_window;
+  d.rays_skipped -= before.rays_skipped;
+  d.bytes_to_device -= before.bytes_to_device;
+  d.bytes_from_device -= before.bytes_from_device;
+  d.region_bytes_to_device -= before.region_bytes_to_device;
+  d.region_bytes_from_device -= before.region_bytes_from_device;
+  d.cache_hits -= before.cache_hits;
+  d.cache_misses -= before.cache_misses;
+  d.cache_evictions -= before.cache_evictions;
+  d.plan_seconds -= before.plan_seconds;
+  d.wait_seconds -= before.wait_seconds;
+  d.sync_seconds -= before.sync_seconds;
+  return d;  // cache_slots is a size, not a counter
+}
+
 }  // namespace
 
 Result<PopulateReport> integrateStream(
     VoxelMap& map, const PopulateOptions& options,
     const std::function<Result<std::size_t>(std::span<Ray>)>& next_chunk,
-    const std::function<double()>& progress) {
+    const std::function<double()>& progress, CreatedBackend* reuse) {
   const Clock::time_point start = Clock::now();
-  auto created = createBackend(map, options.backend);
-  if (!created) {
-    return Unexpected(created.error());
+  CreatedBackend owned;
+  CreatedBackend* created = reuse != nullptr ? reuse : &owned;
+  if (!created->backend) {
+    auto made = createBackend(map, options.backend);
+    if (!made) {
+      return Unexpected(made.error());
+    }
+    *created = std::move(*made);
   }
   Backend& backend = *created->backend;
+  const BackendStats stats_before = backend.stats();
   RayPreparer preparer(map, options.filter);
   const bool per_scan = map.semantics() == Semantics::kPerScan;
 
@@ -146,7 +174,7 @@ Result<PopulateReport> integrateStream(
   report.integrate_seconds += secondsSince(t_sync);
   bar.finish();
   report.rays = preparer.counters();
-  report.backend = backend.stats();
+  report.backend = statsSince(backend.stats(), stats_before);
   report.summary = map.summarise();
   report.total_seconds = secondsSince(start);
   report.peak_rss_bytes = platform::peakResidentBytes();

@@ -50,10 +50,13 @@ struct PopulateReport {
 /// (per-scan). `next_chunk` fills a span and returns how many rays it wrote (0 at the end).
 /// `progress` gets the fraction of the input consumed. Fails on read errors and when a global
 /// map's store is full (the message says how to raise --max-memory).
+/// `reuse`: when given, the backend is taken from it (created there on first use) and kept for
+/// the next call, so that a device's cache stays warm; the report's backend counters then cover
+/// this call only.
 Result<PopulateReport> integrateStream(
     VoxelMap& map, const PopulateOptions& options,
     const std::function<Result<std::size_t>(std::span<Ray>)>& next_chunk,
-    const std::function<double()>& progress);
+    const std::function<double()>& progress, CreatedBackend* reuse = nullptr);
 
 /// @brief Opens options.input and integrates it (integrateStream over a RaySource); records
 /// provenance in the map's info.
