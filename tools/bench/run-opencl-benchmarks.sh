@@ -12,11 +12,16 @@ data=${1:-../shared/data}
 out=${2:-build/bench-results}
 shift $(($# > 2 ? 2 : $#))
 repeat=${RAYMAP_BENCH_REPEAT:-5}
+# RAYMAP_BENCH_STEADY=1: time a second pass into the same map and backend (--steady-state).
+steady=()
+if [ "${RAYMAP_BENCH_STEADY:-0}" = 1 ]; then
+  steady=(--steady-state)
+fi
 mkdir -p "$out"
 cmake --preset release >/dev/null
 cmake --build --preset release --target raymap >/dev/null
 bin=build/release/tools
-common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --repeat "$repeat")
+common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --repeat "$repeat" "${steady[@]}")
 
 value() {  # value KEY FILE: the first number after "KEY": in a JSON file
   grep -o "\"$1\": [0-9.e+-]*" "$2" | head -1 | awk '{print $2}'
@@ -25,9 +30,9 @@ text() {  # text KEY FILE: the first string value of KEY
   grep -o "\"$1\": \"[^\"]*\"" "$2" | head -1 | cut -d'"' -f4
 }
 
-summary="$out/opencl-summary.md"
+summary="$out/opencl-summary${steady:+-steady}.md"
 {
-  echo "commit $(git rev-parse --short HEAD), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores, repeat $repeat"
+  echo "commit $(git rev-parse --short HEAD), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores, repeat $repeat ${steady[*]}"
   echo
   echo "| data | semantics | CPU $(nproc) threads (rays/s) | OpenCL (rays/s) | OpenCL / CPU | to device (MB) | from device (MB) | cache hit rate | updates dropped | plan / wait / sync (s) |"
   echo "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
