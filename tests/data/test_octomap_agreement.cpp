@@ -38,15 +38,6 @@ constexpr double kMaxRange = 20.0;         // metres
 constexpr double kCountTolerance = 0.005;  // relative difference of free or occupied counts
 constexpr double kMinAgreement = 0.999;    // voxels with the same state, of those either observed
 
-struct AgreementCase {
-  DataSet data;
-  Semantics semantics;
-};
-
-void PrintTo(const AgreementCase& c, std::ostream* os) {
-  *os << c.data.name << "/" << toString(c.semantics);
-}
-
 /// A raymap map of the rays and what building it took.
 struct RaymapRun {
   VoxelMap map;
@@ -91,22 +82,16 @@ double relativeDifference(std::uint64_t ours, std::uint64_t reference) {
   return r > 0.0 ? std::fabs(static_cast<double>(ours) - r) / r : (ours == 0 ? 0.0 : 1.0);
 }
 
-class OctomapAgreement : public testing::TestWithParam<AgreementCase> {};
+class OctomapAgreement : public testing::TestWithParam<DataCase> {};
 
 TEST_P(OctomapAgreement, CountsAndVoxelStatesMatchOctomap) {
   // Arrange
-  const AgreementCase& param = GetParam();
-  const fs::path data_dir = sharedDataDir();
-  if (data_dir.empty()) {
-    GTEST_SKIP() << "no shared data (../shared/data or $RAYMAP_SHARED_DATA)";
+  const DataCase& param = GetParam();
+  const DataFiles files = dataFiles(param.data);
+  if (!files.missing.empty()) {
+    GTEST_SKIP() << files.missing;
   }
-  const fs::path file = data_dir / param.data.file;
-  const fs::path trajectory =
-      param.data.trajectory != nullptr ? data_dir / param.data.trajectory : fs::path();
-  if (!fs::exists(file) || (!trajectory.empty() && !fs::exists(trajectory))) {
-    GTEST_SKIP() << "missing " << file.string();
-  }
-  const std::vector<Ray> rays = loadRays(file, trajectory);
+  const std::vector<Ray> rays = loadRays(files.file, files.trajectory);
   ASSERT_FALSE(rays.empty());
   bench::OctomapOptions octomap_options;
   octomap_options.resolution = kResolution;
@@ -173,24 +158,9 @@ TEST_P(OctomapAgreement, CountsAndVoxelStatesMatchOctomap) {
   EXPECT_EQ(threads_comparison.exact_value, threads_comparison.compared);
 }
 
-std::vector<AgreementCase> allCases() {
-  std::vector<AgreementCase> cases;
-  for (const DataSet& data : sharedDataSets()) {
-    for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
-      cases.push_back({data, semantics});
-    }
-  }
-  return cases;
-}
-
-INSTANTIATE_TEST_SUITE_P(SharedData, OctomapAgreement, testing::ValuesIn(allCases()),
-                         [](const testing::TestParamInfo<AgreementCase>& param_info) {
-                           std::string name = std::string(param_info.param.data.name) + "_" +
-                                              toString(param_info.param.semantics);
-                           for (char& c : name) {
-                             c = (std::isalnum(static_cast<unsigned char>(c)) != 0) ? c : '_';
-                           }
-                           return name;
+INSTANTIATE_TEST_SUITE_P(SharedData, OctomapAgreement, testing::ValuesIn(dataCases()),
+                         [](const testing::TestParamInfo<DataCase>& param_info) {
+                           return dataCaseName(param_info.param);
                          });
 
 }  // namespace

@@ -48,15 +48,6 @@ constexpr double kMinAgreement = 0.999;  // voxels with the same state, of those
 constexpr double kMaxValueOutliers = 0.001;
 constexpr float kMeanTolerance = 1e-4f;  // voxel units, per component of a decoded mean
 
-struct AgreementCase {
-  DataSet data;
-  Semantics semantics;
-};
-
-void PrintTo(const AgreementCase& c, std::ostream* os) {
-  *os << c.data.name << "/" << toString(c.semantics);
-}
-
 MapConfig mapConfig(Semantics semantics) {
   MapConfig config;
   config.geometry.resolution = kResolution;
@@ -143,26 +134,20 @@ ValueComparison compareValues(const VoxelMap& reference, const VoxelMap& map) {
   return result;
 }
 
-class OpenClDataAgreement : public testing::TestWithParam<AgreementCase> {};
+class OpenClDataAgreement : public testing::TestWithParam<DataCase> {};
 
 TEST_P(OpenClDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
   // Arrange
-  const AgreementCase& param = GetParam();
-  const fs::path data_dir = sharedDataDir();
-  if (data_dir.empty()) {
-    GTEST_SKIP() << "no shared data (../shared/data or $RAYMAP_SHARED_DATA)";
-  }
-  const fs::path file = data_dir / param.data.file;
-  const fs::path trajectory =
-      param.data.trajectory != nullptr ? data_dir / param.data.trajectory : fs::path();
-  if (!fs::exists(file) || (!trajectory.empty() && !fs::exists(trajectory))) {
-    GTEST_SKIP() << "missing " << file.string();
+  const DataCase& param = GetParam();
+  const DataFiles files = dataFiles(param.data);
+  if (!files.missing.empty()) {
+    GTEST_SKIP() << files.missing;
   }
   auto devices = opencl::listDevices();
   if (!devices || devices->empty()) {
     GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
   }
-  const std::vector<Ray> rays = loadRays(file, trajectory);
+  const std::vector<Ray> rays = loadRays(files.file, files.trajectory);
   ASSERT_FALSE(rays.empty());
   VoxelMap reference = makeMap(mapConfig(param.semantics));
   std::unique_ptr<Backend> cpu = cpuBackend(reference, 1);
@@ -235,24 +220,9 @@ TEST_P(OpenClDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
   EXPECT_EQ(same_walk_states.exact_value, same_walk_states.compared);
 }
 
-std::vector<AgreementCase> allCases() {
-  std::vector<AgreementCase> cases;
-  for (const DataSet& data : sharedDataSets()) {
-    for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
-      cases.push_back({data, semantics});
-    }
-  }
-  return cases;
-}
-
-INSTANTIATE_TEST_SUITE_P(SharedData, OpenClDataAgreement, testing::ValuesIn(allCases()),
-                         [](const testing::TestParamInfo<AgreementCase>& param_info) {
-                           std::string name = std::string(param_info.param.data.name) + "_" +
-                                              toString(param_info.param.semantics);
-                           for (char& c : name) {
-                             c = (std::isalnum(static_cast<unsigned char>(c)) != 0) ? c : '_';
-                           }
-                           return name;
+INSTANTIATE_TEST_SUITE_P(SharedData, OpenClDataAgreement, testing::ValuesIn(dataCases()),
+                         [](const testing::TestParamInfo<DataCase>& param_info) {
+                           return dataCaseName(param_info.param);
                          });
 
 }  // namespace

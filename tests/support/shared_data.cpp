@@ -2,11 +2,13 @@
 // The shared data sets and the ray loader.
 #include "tests/support/shared_data.hpp"
 
+#include <cctype>
 #include <cstddef>
 
 #include <gtest/gtest.h>
 
 #include "src/io/ray_source.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
 
@@ -18,6 +20,46 @@ std::span<const DataSet> sharedDataSets() {
       {"3dtk_points", "3dtk/3dtk_points.ply.gz", "3dtk/3dtk_trajectory.txt"},
   };
   return kDataSets;
+}
+
+void PrintTo(const DataCase& c, std::ostream* os) {
+  *os << c.data.name << "/" << toString(c.semantics);
+}
+
+std::vector<DataCase> dataCases() {
+  std::vector<DataCase> cases;
+  for (const DataSet& data : sharedDataSets()) {
+    for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+      cases.push_back({data, semantics});
+    }
+  }
+  return cases;
+}
+
+std::string dataCaseName(const DataCase& c) {
+  std::string name = std::string(c.data.name) + "_" + toString(c.semantics);
+  for (char& ch : name) {
+    ch = (std::isalnum(static_cast<unsigned char>(ch)) != 0) ? ch : '_';
+  }
+  return name;
+}
+
+DataFiles dataFiles(const DataSet& data) {
+  namespace fs = std::filesystem;
+  DataFiles files;
+  const fs::path dir = sharedDataDir();
+  if (dir.empty()) {
+    files.missing = "no shared data (../shared/data or $RAYMAP_SHARED_DATA)";
+    return files;
+  }
+  files.file = dir / data.file;
+  if (data.trajectory != nullptr) {
+    files.trajectory = dir / data.trajectory;
+  }
+  if (!fs::exists(files.file) || (!files.trajectory.empty() && !fs::exists(files.trajectory))) {
+    files.missing = "missing " + files.file.string();
+  }
+  return files;
 }
 
 std::vector<Ray> loadRays(const std::filesystem::path& file,

@@ -5,9 +5,12 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <ostream>
 #include <span>
+#include <string>
 #include <vector>
 
+#include "src/map/map_params.hpp"
 #include "src/map/ray.hpp"
 
 namespace raymap::test {
@@ -21,6 +24,27 @@ struct DataSet {
 
 /// @brief Every shared data set, in the order of docs/benchmarks.md.
 std::span<const DataSet> sharedDataSets();
+
+/// @brief One data set under one semantics: the parameter of the agreement tests.
+struct DataCase {
+  DataSet data;
+  Semantics semantics;
+};
+void PrintTo(const DataCase& c, std::ostream* os);
+
+/// @brief Every data set under both semantics.
+std::vector<DataCase> dataCases();
+
+/// @brief A test name for a case: "<data>_<semantics>", other characters replaced by '_'.
+std::string dataCaseName(const DataCase& c);
+
+/// @brief The files of a data set: empty when present, else why not (the test skips with it).
+struct DataFiles {
+  std::filesystem::path file;
+  std::filesystem::path trajectory;  ///< empty for ray clouds
+  std::string missing;
+};
+DataFiles dataFiles(const DataSet& data);
 
 /// @brief Reads every ray of a file (with `trajectory` unless it is empty), failing the test on a
 /// read error. @return the rays, or nothing after a failure.

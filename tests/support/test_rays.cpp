@@ -91,6 +91,14 @@ std::vector<Ray> cubeRoomRays(double resolution, int half) {
   return rays;
 }
 
+MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels) {
+  MapConfig c;
+  c.semantics = semantics;
+  c.geometry.region_voxels = region_voxels;
+  c.memory_budget_bytes = 256u << 20;
+  return c;
+}
+
 std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

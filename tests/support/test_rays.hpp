@@ -15,6 +15,9 @@ namespace raymap::test {
 /// @brief A ray from `origin` to `sample` (world frame, metres) with optional flags and scan.
 Ray makeRay(Vec3d origin, Vec3d sample, std::uint32_t flags = 0, std::uint64_t scan = 0);
 
+/// @brief A small test map: `semantics`, regions of `region_voxels`^3 at 0.1 m, a 256 MiB pool.
+MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels = 8);
+
 /// @brief Creates a map or fails the test.
 VoxelMap makeMap(const MapConfig& config);
 

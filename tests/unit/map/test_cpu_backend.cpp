@@ -15,14 +15,6 @@ namespace {
 
 using test::makeRay;
 
-MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels = 8) {
-  MapConfig c;
-  c.semantics = semantics;
-  c.geometry.region_voxels = region_voxels;
-  c.memory_budget_bytes = 256u << 20;
-  return c;
-}
-
 struct RoomCase {
   Semantics semantics;
   unsigned threads;
@@ -44,7 +36,7 @@ TEST_P(ClosedRoom, WallsOccupiedInteriorFreeOutsideUnobserved) {
   const RoomCase& rc = GetParam();
   constexpr int kHalf = 20;
   constexpr double kRes = 0.1;
-  VoxelMap map = test::makeMap(smallConfig(rc.semantics, rc.region_voxels));
+  VoxelMap map = test::makeMap(test::smallConfig(rc.semantics, rc.region_voxels));
   auto backend = test::cpuBackend(map, rc.threads);
   std::vector<Ray> rays = test::cubeRoomRays(kRes, kHalf);
   RayFilter filter;
@@ -116,14 +108,14 @@ TEST(Semantics, PerRayCountsEveryCrossingPerScanOnce) {
                                  makeRay({0.05, 0.05, 0.05}, {1.25, 0.05, 0.05})};
   const OccupancyParams p;
   for (unsigned threads : {1u, 2u}) {
-    VoxelMap per_ray = test::makeMap(smallConfig(Semantics::kPerRay));
+    VoxelMap per_ray = test::makeMap(test::smallConfig(Semantics::kPerRay));
     auto b1 = test::cpuBackend(per_ray, threads);
     test::integrate(per_ray, *b1, rays);
     EXPECT_FLOAT_EQ(per_ray.occupancyValue({5, 0, 0}), p.hit + 2 * p.miss);
     EXPECT_FLOAT_EQ(per_ray.occupancyValue({2, 0, 0}), 3 * p.miss);
     EXPECT_FLOAT_EQ(per_ray.occupancyValue({11, 0, 0}), p.miss);
 
-    VoxelMap per_scan = test::makeMap(smallConfig(Semantics::kPerScan));
+    VoxelMap per_scan = test::makeMap(test::smallConfig(Semantics::kPerScan));
     auto b2 = test::cpuBackend(per_scan, threads);
     test::integrate(per_scan, *b2, rays);
     EXPECT_FLOAT_EQ(per_scan.occupancyValue({5, 0, 0}), p.hit);   // occupied wins
@@ -139,7 +131,7 @@ TEST(Semantics, PerRayCountsEveryCrossingPerScanOnce) {
 }
 
 TEST(Semantics, PerScanAppliesOnceInEachScan) {
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerScan));
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerScan));
   auto backend = test::cpuBackend(map, 1);
   std::vector<Ray> rays;
   for (std::uint64_t scan = 0; scan < 3; ++scan) {
@@ -153,7 +145,7 @@ TEST(Semantics, PerScanAppliesOnceInEachScan) {
 }
 
 TEST(EndRules, ClippedAndNoReturnRaysClearUpToTheirEndVoxel) {
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
   auto backend = test::cpuBackend(map, 1);
   RayFilter filter;
   filter.max_range_m = 1.0;
@@ -170,7 +162,7 @@ TEST(EndRules, ClippedAndNoReturnRaysClearUpToTheirEndVoxel) {
 }
 
 TEST(EndRules, ZeroLengthRayIsAHitOnly) {
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
   auto backend = test::cpuBackend(map, 1);
   test::integrate(map, *backend, std::vector<Ray>{makeRay({0.12, 0.13, 0.14}, {0.12, 0.13, 0.14})});
   EXPECT_EQ(map.state({1, 1, 1}), VoxelState::kOccupied);
@@ -190,11 +182,11 @@ TEST(Threads, MultiThreadedMapIsBitIdenticalToSingleThreaded) {
       RayFilter filter;
       filter.reverse = reverse;
       filter.max_range_m = 9.0;
-      VoxelMap reference = test::makeMap(smallConfig(semantics));
+      VoxelMap reference = test::makeMap(test::smallConfig(semantics));
       auto single = test::cpuBackend(reference, 1);
       test::integrate(reference, *single, rays, filter);
       for (unsigned threads : {2u, 3u, 5u}) {
-        VoxelMap map = test::makeMap(smallConfig(semantics));
+        VoxelMap map = test::makeMap(test::smallConfig(semantics));
         auto multi = test::cpuBackend(map, threads);
         test::integrate(map, *multi, rays, filter);
         const test::MapComparison cmp = test::compareMaps(reference, map);
@@ -209,8 +201,8 @@ TEST(Threads, MultiThreadedMapIsBitIdenticalToSingleThreaded) {
 
 TEST(Threads, ReverseAndForwardWalksAgree) {
   const std::vector<Ray> rays = test::randomScans(99, 4, 5000);
-  VoxelMap forward = test::makeMap(smallConfig(Semantics::kPerRay));
-  VoxelMap reverse = test::makeMap(smallConfig(Semantics::kPerRay));
+  VoxelMap forward = test::makeMap(test::smallConfig(Semantics::kPerRay));
+  VoxelMap reverse = test::makeMap(test::smallConfig(Semantics::kPerRay));
   auto bf = test::cpuBackend(forward, 1);
   auto br = test::cpuBackend(reverse, 2);
   RayFilter rf;
@@ -222,7 +214,7 @@ TEST(Threads, ReverseAndForwardWalksAgree) {
 }
 
 TEST(Capacity, FullStoreIsAnErrorNotASilentLoss) {
-  MapConfig config = smallConfig(Semantics::kPerRay);
+  MapConfig config = test::smallConfig(Semantics::kPerRay);
   config.memory_budget_bytes = 3u * 8u * 8u * 8u * 12u;  // three 0.8 m regions
   const std::vector<Ray> rays = {makeRay({0.1, 0.1, 0.1}, {0.5, 0.1, 0.1}),
                                  makeRay({0.1, 0.1, 0.1}, {5.0, 0.1, 0.1})};
@@ -249,7 +241,7 @@ TEST(Capacity, FullStoreIsAnErrorNotASilentLoss) {
 }
 
 TEST(Rolling, OnlyTheWindowIsMapped) {
-  MapConfig config = smallConfig(Semantics::kPerRay);
+  MapConfig config = test::smallConfig(Semantics::kPerRay);
   config.policy = StorePolicy::kRolling;
   config.window_regions = {4, 4, 4};
   VoxelMap map = test::makeMap(config);

@@ -20,14 +20,6 @@ namespace {
 
 using test::makeRay;
 
-MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels = 8) {
-  MapConfig c;
-  c.semantics = semantics;
-  c.geometry.region_voxels = region_voxels;
-  c.memory_budget_bytes = 256u << 20;
-  return c;
-}
-
 /// An OpenCL backend, or a skip when this machine has no OpenCL platform (never a silent pass).
 std::unique_ptr<Backend> openClBackend(VoxelMap& map, OpenClBackendOptions options = {}) {
   auto devices = opencl::listDevices();
@@ -82,8 +74,8 @@ TEST(OpenClBackend, AgreesWithTheCpuReferenceOnRandomScans) {
       RayFilter filter;
       filter.reverse = reverse;
       filter.max_range_m = 9.0;
-      const Built cpu = buildCpu(smallConfig(semantics), rays, filter);
-      VoxelMap map = test::makeMap(smallConfig(semantics));
+      const Built cpu = buildCpu(test::smallConfig(semantics), rays, filter);
+      VoxelMap map = test::makeMap(test::smallConfig(semantics));
       auto backend = openClBackend(map);
       REQUIRE_OPENCL(backend);
       test::integrate(map, *backend, rays, filter);
@@ -106,8 +98,8 @@ TEST(OpenClBackend, AgreesWithTheCpuReferenceOnRandomScans) {
 
 TEST(OpenClBackend, PerRayReplaysHitsAndMissesInRayOrderEvenInSmallBatches) {
   const std::vector<Ray> rays = test::randomScans(77, 3, 6000);
-  const Built cpu = buildCpu(smallConfig(Semantics::kPerRay), rays, {});
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  const Built cpu = buildCpu(test::smallConfig(Semantics::kPerRay), rays, {});
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
   OpenClBackendOptions options;
   options.per_ray_batch_rays = 700;  // many batches, each with voxels hit by several rays
   auto backend = openClBackend(map, options);
@@ -145,8 +137,8 @@ TEST(OpenClBackend, AdversarialRaysTerminateAndAgree) {
   for (bool reverse : {false, true}) {
     RayFilter filter;
     filter.reverse = reverse;
-    const Built cpu = buildCpu(smallConfig(Semantics::kPerScan), rays, filter);
-    VoxelMap map = test::makeMap(smallConfig(Semantics::kPerScan));
+    const Built cpu = buildCpu(test::smallConfig(Semantics::kPerScan), rays, filter);
+    VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerScan));
     auto backend = openClBackend(map);
     REQUIRE_OPENCL(backend);
     test::integrate(map, *backend, rays, filter);
@@ -160,8 +152,8 @@ TEST(OpenClBackend, AdversarialRaysTerminateAndAgree) {
 TEST(OpenClBackend, CacheSmallerThanTheWorkingSetEvictsAndStillAgrees) {
   const std::vector<Ray> rays = test::randomScans(11, 2, 1500);
   for (Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
-    const Built cpu = buildCpu(smallConfig(semantics), rays, {});
-    VoxelMap map = test::makeMap(smallConfig(semantics));
+    const Built cpu = buildCpu(test::smallConfig(semantics), rays, {});
+    VoxelMap map = test::makeMap(test::smallConfig(semantics));
     OpenClBackendOptions options;
     // 8^3 voxels of 4 + 8 (+ 4) bytes: 60 regions, against several hundred per scan.
     options.cache_bytes = 60u * map.store().schema().bytesPerRegion(512);
@@ -184,7 +176,7 @@ TEST(OpenClBackend, CacheSmallerThanTheWorkingSetEvictsAndStillAgrees) {
 }
 
 TEST(OpenClBackend, RayLongerThanTheCacheIsSkippedAndCounted) {
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
   OpenClBackendOptions options;
   options.cache_bytes = 4u * map.store().schema().bytesPerRegion(512);  // 4 regions of 0.8 m
   auto backend = openClBackend(map, options);
@@ -199,7 +191,7 @@ TEST(OpenClBackend, RayLongerThanTheCacheIsSkippedAndCounted) {
 }
 
 TEST(OpenClBackend, MovingRollingWindowMatchesTheCpu) {
-  MapConfig config = smallConfig(Semantics::kPerRay);
+  MapConfig config = test::smallConfig(Semantics::kPerRay);
   config.policy = StorePolicy::kRolling;
   config.window_regions = {6, 6, 3};
   VoxelMap cpu_map = test::makeMap(config);
@@ -235,8 +227,8 @@ TEST(OpenClBackend, MovingRollingWindowMatchesTheCpu) {
 
 TEST(OpenClBackend, SavedMapEqualsTheCpuMapWithinTolerance) {
   const std::vector<Ray> rays = test::randomScans(8, 3, 3000);
-  const Built cpu = buildCpu(smallConfig(Semantics::kPerScan), rays, {});
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerScan));
+  const Built cpu = buildCpu(test::smallConfig(Semantics::kPerScan), rays, {});
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerScan));
   auto backend = openClBackend(map);
   REQUIRE_OPENCL(backend);
   test::integrate(map, *backend, rays);
@@ -253,8 +245,8 @@ TEST(OpenClBackend, SavedMapEqualsTheCpuMapWithinTolerance) {
 
 TEST(OpenClBackend, ThirtyTwoBitCountersGiveTheSameMap) {
   const std::vector<Ray> rays = test::randomScans(21, 2, 3000);
-  VoxelMap a = test::makeMap(smallConfig(Semantics::kPerScan));
-  VoxelMap b = test::makeMap(smallConfig(Semantics::kPerScan));
+  VoxelMap a = test::makeMap(test::smallConfig(Semantics::kPerScan));
+  VoxelMap b = test::makeMap(test::smallConfig(Semantics::kPerScan));
   auto wide = openClBackend(a);
   REQUIRE_OPENCL(wide);
   OpenClBackendOptions narrow_options;
@@ -274,7 +266,7 @@ TEST(OpenClBackend, KernelBuildFailureIsAClearError) {
   if (!opencl::listDevices()) {
     GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
   }
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
   OpenClBackendOptions options;
   options.program_cache.enabled = false;
   options.extra_build_options = "-Dcount=)";  // breaks the kernel source
@@ -287,7 +279,7 @@ TEST(OpenClBackend, UnknownDeviceIsAClearError) {
   if (!opencl::listDevices()) {
     GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
   }
-  VoxelMap map = test::makeMap(smallConfig(Semantics::kPerRay));
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
   OpenClBackendOptions options;
   options.device.device = "no-such-device-anywhere";
   auto backend = createOpenClBackend(map, options);
