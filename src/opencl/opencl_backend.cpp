@@ -425,7 +425,7 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
 /// Device cache slots for the options: the byte budget over the bytes of one region (all layers),
 /// capped by the host store, the largest single allocation and 32-bit voxel indices.
 Result<std::uint32_t> cacheSlots(const VoxelMap& map, const opencl::DeviceInfo& device,
-                                 std::uint64_t cache_bytes) {
+                                 std::uint64_t cache_bytes, std::uint32_t cache_regions) {
   const RegionStore& store = map.store();
   std::uint64_t region_bytes = 0;
   std::uint64_t largest_layer = 0;
@@ -438,7 +438,7 @@ Result<std::uint32_t> cacheSlots(const VoxelMap& map, const opencl::DeviceInfo& 
     budget = std::min<std::uint64_t>(OpenClBackendOptions::kDefaultCacheBytes,
                                      device.global_mem_bytes / 2);
   }
-  std::uint64_t slots = budget / region_bytes;
+  std::uint64_t slots = cache_regions > 0 ? cache_regions : budget / region_bytes;
   slots = std::min<std::uint64_t>(slots, store.capacity());
   slots = std::min<std::uint64_t>(slots, device.max_alloc_bytes / largest_layer);
   slots = std::min<std::uint64_t>(slots, (std::uint64_t{1} << 32) / store.voxelsPerRegion() - 1);
@@ -472,7 +472,7 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
   if (!device) {
     return Unexpected(device.error());
   }
-  auto slots = cacheSlots(map, *device, options.cache_bytes);
+  auto slots = cacheSlots(map, *device, options.cache_bytes, options.cache_regions);
   if (!slots) {
     return Unexpected(slots.error());
   }

@@ -24,6 +24,8 @@ struct OpenClBackendOptions {
   /// Device region cache size in bytes (all layers). 0: min(1 GiB, half the device's global
   /// memory, the host store); never more regions than the host store holds.
   std::uint64_t cache_bytes = 0;
+  /// Device region cache size in regions; when non-zero it is used instead of cache_bytes.
+  std::uint32_t cache_regions = 0;
   /// Most rays per device batch with per-scan semantics, where one integrate() call (one scan)
   /// must be one device batch for "occupied wins" to hold across the scan; larger scans are
   /// integrated in parts, each as its own scan. Staging buffers are sized for it, twice.

@@ -699,7 +699,10 @@ INSTANTIATE_TEST_SUITE_P(
         OptionCase{"MaxMemoryUnknownUnit", {"--max-memory", "12XB"}, {"--max-memory", "12XB"}},
         OptionCase{"SemanticsBoth", {"--semantics", "both"}, {"--semantics", "both"}},
         OptionCase{"UnknownOption", {"--no-such-option"}, {"--no-such-option"}},
-        OptionCase{"TooManyThreads", {"--threads", "100"}, {"threads", "100"}}),
+        OptionCase{"TooManyThreads", {"--threads", "100"}, {"threads", "100"}},
+        OptionCase{"UnknownBackend", {"--backend", "vulkan"}, {"--backend", "vulkan"}},
+        OptionCase{"GpuCacheNotASize", {"--gpu-cache", "5xregions"}, {"--gpu-cache", "5xregions"}},
+        OptionCase{"UnknownFallback", {"--fallback", "gpu"}, {"--fallback", "gpu"}}),
     [](const testing::TestParamInfo<OptionCase>& param_info) {
       return std::string(param_info.param.name);
     });

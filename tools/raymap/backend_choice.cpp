@@ -25,6 +25,7 @@ Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice
     options.device.platform = choice.opencl_platform;
     options.device.device = choice.opencl_device;
     options.cache_bytes = choice.gpu_cache_bytes;
+    options.cache_regions = choice.gpu_cache_regions;
     options.batch_rays = choice.gpu_batch_rays;
     auto backend = createOpenClBackend(map, options);
     if (!backend) {

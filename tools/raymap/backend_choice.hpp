@@ -18,7 +18,8 @@ struct BackendChoice {
   unsigned threads = 0;         ///< CPU: 0 = all cores, 1 = the single-threaded reference
   std::string opencl_platform;  ///< index or name substring; empty = default
   std::string opencl_device;    ///< index or name substring; empty = first GPU, else first device
-  std::uint64_t gpu_cache_bytes = 0;  ///< device region cache; 0 = automatic
+  std::uint64_t gpu_cache_bytes = 0;    ///< device region cache; 0 = automatic
+  std::uint32_t gpu_cache_regions = 0;  ///< device region cache in regions (overrides bytes)
   std::size_t gpu_batch_rays = std::size_t{1} << 18;
   bool fallback_cpu = false;  ///< use the CPU backend (with a warning) if the device fails to start
 };

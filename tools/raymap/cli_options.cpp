@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <sstream>
 
@@ -55,7 +56,8 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--opencl-device", f.opencl_device,
                "OpenCL device: index or name substring; default: first GPU, else first device");
   c.add_option("--gpu-cache", f.gpu_cache,
-               "Device region cache size, e.g. 512MiB; auto = min(1 GiB, half the device memory)")
+               "Device region cache: a size (512MiB), a region count (2000regions), or auto = "
+               "min(1 GiB, half the device memory)")
       ->capture_default_str();
   c.add_option("--fallback", f.fallback,
                "If the device backend cannot start: none (fail) or cpu (warn, map on the CPU)")
@@ -150,6 +152,35 @@ Expected<void, Error> checkWritable(const std::string& path, const std::string& 
   return {};
 }
 
+namespace {
+
+/// --gpu-cache: "auto", a byte size ("512MiB") or a region count ("2000regions").
+Expected<void, Error> parseCacheSize(const std::string& text, BackendChoice* choice) {
+  if (text == "auto") {
+    return {};
+  }
+  const std::string suffix = "regions";
+  if (text.size() > suffix.size() && text.ends_with(suffix)) {
+    const std::string digits = text.substr(0, text.size() - suffix.size());
+    char* end = nullptr;
+    const unsigned long long n = std::strtoull(digits.c_str(), &end, 10);
+    if (digits.empty() || end != digits.c_str() + digits.size() || n == 0 || n > 0xFFFFFFFFull) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "--gpu-cache: '" + text + "' is not a region count such as 2000regions");
+    }
+    choice->gpu_cache_regions = static_cast<std::uint32_t>(n);
+    return {};
+  }
+  auto bytes = parseByteSize(text);
+  if (!bytes) {
+    return fail(ErrorCode::kInvalidArgument, "--gpu-cache: " + bytes.error().message);
+  }
+  choice->gpu_cache_bytes = *bytes;
+  return {};
+}
+
+}  // namespace
+
 Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& f) {
   PopulateOptions o;
   o.input = input;
@@ -217,12 +248,8 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.backend.opencl_device = f.opencl_device;
   o.backend.fallback_cpu = f.fallback == "cpu";
   o.backend.gpu_batch_rays = f.batch_rays;
-  if (f.gpu_cache != "auto") {
-    auto cache = parseByteSize(f.gpu_cache);
-    if (!cache) {
-      return fail(ErrorCode::kInvalidArgument, "--gpu-cache: " + cache.error().message);
-    }
-    o.backend.gpu_cache_bytes = *cache;
+  if (auto cache = parseCacheSize(f.gpu_cache, &o.backend); !cache) {
+    return Unexpected(cache.error());
   }
   o.batch_rays = f.batch_rays;
   return o;
