@@ -10,10 +10,10 @@
 
 namespace raymap::gpu {
 
-BatchPlanner::BatchPlanner(VoxelMap& map, DeviceRegionCache& cache, RegionTransfer& transfer,
+BatchPlanner::BatchPlanner(VoxelMap& map, DeviceRegionCache* cache, RegionTransfer& transfer,
                            const BatchLimits& limits)
     : map_(&map),
-      cache_(&cache),
+      cache_(cache),
       transfer_(&transfer),
       limits_(limits),
       region_voxels_(map.store().regionVoxels()),
@@ -33,7 +33,7 @@ void BatchPlanner::reserve(BatchArrays& out) const {
 }
 
 void BatchPlanner::revalidate() noexcept {
-  if (map_->regionsRecycled() == seen_recycled_) {
+  if (cache_ == nullptr || map_->regionsRecycled() == seen_recycled_) {
     return;
   }
   seen_recycled_ = map_->regionsRecycled();
@@ -45,6 +45,22 @@ void BatchPlanner::revalidate() noexcept {
       ++stats_.regions_dropped;
     }
   }
+}
+
+Expected<std::uint32_t, IntegrateError> BatchPlanner::sharedRegion(
+    std::uint32_t host_slot) noexcept {
+  if (host_uninitialised_[host_slot] != 0) {
+    auto ok = transfer_->fillClear(host_slot);
+    if (!ok) {
+      return Unexpected(ok.error());
+    }
+    host_uninitialised_[host_slot] = 0;
+    ++stats_.regions_filled;
+    ++stats_.region_misses;
+  } else {
+    ++stats_.region_hits;
+  }
+  return host_slot;
 }
 
 Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
@@ -106,7 +122,9 @@ rm_span_record spanRecord(const RaySpan& span, std::uint32_t ray, std::uint32_t 
 Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const PreparedRay> rays,
                                                          BatchArrays& out) noexcept {
   out.clear();
-  cache_->beginBatch();
+  if (cache_ != nullptr) {
+    cache_->beginBatch();
+  }
   batch_regions_.reset();
   std::size_t consumed = 0;
   for (; consumed < rays.size() && out.rays.size() < limits_.max_rays; ++consumed) {
@@ -127,7 +145,11 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
           ++stats_.spans_outside_window;
           continue;
         }
-        cache_->noteHit();
+        if (cache_ != nullptr) {
+          cache_->noteHit();
+        } else {
+          ++stats_.region_hits;
+        }
         out.spans.push_back(spanRecord(span, ray_index, *cached));
         continue;
       }
@@ -144,7 +166,7 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
       if (created) {
         host_uninitialised_[*host] = 1;
       }
-      auto slot = placeRegion(span.region, *host, &full);
+      auto slot = cache_ != nullptr ? placeRegion(span.region, *host, &full) : sharedRegion(*host);
       if (!slot) {
         return Unexpected(slot.error());
       }
@@ -159,7 +181,9 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
       if (out.rays.empty()) {
         // Even an empty batch cannot hold this ray's regions: skip it, counted.
         ++stats_.rays_too_long;
-        cache_->beginBatch();
+        if (cache_ != nullptr) {
+          cache_->beginBatch();
+        }
         batch_regions_.reset();
         continue;
       }
@@ -168,7 +192,14 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
     if ((ray.flags & RM_RAY_END_HIT) != 0u) {
       const auto [region, index] = walk.sampleCell();
       const std::uint32_t* cached = batch_regions_.find(RegionStore::packCoord(region));
-      const std::uint32_t slot = cached != nullptr ? *cached : cache_->find(region);
+      std::uint32_t slot = DeviceRegionCache::kNoSlot;
+      if (cached != nullptr) {
+        slot = *cached;
+      } else if (cache_ != nullptr) {
+        slot = cache_->find(region);
+      } else {
+        slot = map_->store().find(region);  // RegionStore::kNoSlot == DeviceRegionCache::kNoSlot
+      }
       if (slot != DeviceRegionCache::kNoSlot) {
         const std::uint64_t voxel = std::uint64_t{slot} * voxels_per_region_ + index;
         out.hit_keys.push_back((voxel << 32) | ray_index);
@@ -198,6 +229,9 @@ void BatchPlanner::buildHitGroups(BatchArrays& out) const {
 }
 
 Expected<void, IntegrateError> BatchPlanner::downloadAll() noexcept {
+  if (cache_ == nullptr) {
+    return {};  // shared mode: the device worked on the host store itself
+  }
   for (std::uint32_t slot = 0; slot < cache_->capacity(); ++slot) {
     const DeviceRegionCache::Entry& e = cache_->entry(slot);
     if (e.used && e.dirty) {

@@ -70,6 +70,8 @@ struct PlanStats {
   std::uint64_t regions_filled = 0;  ///< new regions cleared on the device (no transfer)
   std::uint64_t regions_downloaded = 0;
   std::uint64_t regions_dropped = 0;  ///< left a rolling window: forgotten, not downloaded
+  std::uint64_t region_hits = 0;      ///< shared mode: spans in regions the map already had
+  std::uint64_t region_misses = 0;    ///< shared mode: regions new to the map
 };
 
 /// @brief Plans batches for one map, one device cache and one transfer implementation.
@@ -81,11 +83,15 @@ struct PlanStats {
 /// groups. A batch ends when the rays end, the limits are reached, or the cache cannot hold
 /// another region without evicting one the batch uses.
 ///
+/// Without a cache (`cache` null) the planner works in shared mode: the device works on the host
+/// store's memory in place, a region's device slot is its host slot, and nothing is ever copied
+/// (new regions are still cleared on the device, in order with the kernels).
+///
 /// Thread-safety: none. Real-time: allocation-free once the arrays have reached the limits'
 /// sizes (reserved at construction).
 class BatchPlanner {
  public:
-  BatchPlanner(VoxelMap& map, DeviceRegionCache& cache, RegionTransfer& transfer,
+  BatchPlanner(VoxelMap& map, DeviceRegionCache* cache, RegionTransfer& transfer,
                const BatchLimits& limits);
 
   /// @brief Reserves arrays for the limits.
@@ -108,6 +114,8 @@ class BatchPlanner {
   const PlanStats& stats() const noexcept { return stats_; }
 
  private:
+  /// Shared mode: the region's host slot, cleared on the device if it is new.
+  Expected<std::uint32_t, IntegrateError> sharedRegion(std::uint32_t host_slot) noexcept;
   /// Device slot for a region of the current batch; kNoSlot + *full when the cache is pinned full.
   Expected<std::uint32_t, IntegrateError> placeRegion(Vec3i region, std::uint32_t host_slot,
                                                       bool* full) noexcept;

@@ -426,8 +426,10 @@ Result<DeviceContext> createContext(const DeviceInfo& device) {
   return ctx;
 }
 
-Result<BufferHandle> createBuffer(const DeviceContext& ctx, std::size_t bytes,
-                                  std::string_view what) {
+namespace {
+
+Result<BufferHandle> makeBuffer(const DeviceContext& ctx, cl_mem_flags flags, void* host,
+                                std::size_t bytes, std::string_view what) {
   const std::string name(what);
   if (bytes == 0) {
     // OpenCL has no empty buffers (CL_INVALID_BUFFER_SIZE); say so in our own words.
@@ -440,8 +442,7 @@ Result<BufferHandle> createBuffer(const DeviceContext& ctx, std::size_t bytes,
                                           ctx.info.device_name);
   }
   cl_int status = CL_SUCCESS;
-  BufferHandle buffer(
-      clCreateBuffer(ctx.context.get(), CL_MEM_READ_WRITE, bytes, nullptr, &status));
+  BufferHandle buffer(clCreateBuffer(ctx.context.get(), flags, bytes, host, &status));
   if (status != CL_SUCCESS || !buffer) {
     const bool out_of_memory =
         status == CL_MEM_OBJECT_ALLOCATION_FAILURE || status == CL_OUT_OF_RESOURCES;
@@ -450,6 +451,18 @@ Result<BufferHandle> createBuffer(const DeviceContext& ctx, std::size_t bytes,
                     ctx.info.device_name + ": " + errorName(status));
   }
   return buffer;
+}
+
+}  // namespace
+
+Result<BufferHandle> createBuffer(const DeviceContext& ctx, std::size_t bytes,
+                                  std::string_view what) {
+  return makeBuffer(ctx, CL_MEM_READ_WRITE, nullptr, bytes, what);
+}
+
+Result<BufferHandle> createHostBuffer(const DeviceContext& ctx, void* host, std::size_t bytes,
+                                      std::string_view what) {
+  return makeBuffer(ctx, CL_MEM_READ_WRITE | CL_MEM_USE_HOST_PTR, host, bytes, what);
 }
 
 Result<KernelHandle> createKernel(const ProgramHandle& program, const char* name) {

@@ -110,6 +110,12 @@ Result<DeviceContext> createContext(const DeviceInfo& device);
 Result<BufferHandle> createBuffer(const DeviceContext& ctx, std::size_t bytes,
                                   std::string_view what);
 
+/// @brief Wraps `bytes` of host memory at `host` as a device buffer (CL_MEM_USE_HOST_PTR): on a
+/// device that shares memory with the host (CL_DEVICE_HOST_UNIFIED_MEMORY) kernels work on that
+/// memory in place. `host` must stay valid for the buffer's life. Same errors as createBuffer().
+Result<BufferHandle> createHostBuffer(const DeviceContext& ctx, void* host, std::size_t bytes,
+                                      std::string_view what);
+
 /// @brief Creates a kernel from a built program.
 Result<KernelHandle> createKernel(const ProgramHandle& program, const char* name);
 

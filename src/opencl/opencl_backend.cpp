@@ -57,20 +57,22 @@ gpu::BatchLimits batchLimits(const VoxelMap& map, const OpenClBackendOptions& op
 
 class OpenClBackend final : public Backend, private gpu::RegionTransfer {
  public:
+  /// slots == 0: shared memory (the device works on the host store in place).
   OpenClBackend(VoxelMap& map, opencl::DeviceContext ctx, std::uint32_t slots, bool int64_counters,
                 const OpenClBackendOptions& options)
       : map_(map),
         ctx_(std::move(ctx)),
-        cache_(slots),
+        cache_(slots > 0 ? std::optional<gpu::DeviceRegionCache>(std::in_place, slots)
+                         : std::nullopt),
         limits_(batchLimits(map, options)),
-        planner_(map, cache_, *this, limits_),
+        planner_(map, cache_ ? &*cache_ : nullptr, *this, limits_),
         int64_counters_(int64_counters) {
     params_.occupancy = map.occupancy().toKernel();
     params_.region_voxels = map.geometry().region_voxels;
     params_.voxels_per_region = map.store().voxelsPerRegion();
     params_.per_scan = map.semantics() == Semantics::kPerScan ? 1u : 0u;
     params_.has_mean = map.meanLayer() >= 0 ? 1u : 0u;
-    stats_.cache_slots = slots;
+    stats_.cache_slots = slots > 0 ? slots : map.store().capacity();
     local_size_ = std::min(kWorkGroup, std::max<std::size_t>(ctx_.info.max_work_group_size, 1));
   }
 
@@ -112,9 +114,20 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
     const LayerSchema& schema = store.schema();
     layers_.resize(static_cast<std::size_t>(schema.size()));
     for (int l = 0; l < schema.size(); ++l) {
-      auto buffer = opencl::createBuffer(
-          ctx_, store.layerRegionBytes(l) * cache_.capacity(),
-          std::string("device region cache, layer '") + std::string(schema.at(l).name) + "'");
+      const std::string what = (cache_ ? "device region cache, layer '" : "shared map, layer '") +
+                               std::string(schema.at(l).name) + "'";
+      if (!cache_) {
+        // Layer l of every slot is one array in the host store: the device uses it in place.
+        auto buffer = opencl::createHostBuffer(ctx_, store.layerBytes(0, l),
+                                               store.layerRegionBytes(l) * store.capacity(), what);
+        if (!buffer) {
+          return Unexpected(buffer.error());
+        }
+        layers_[static_cast<std::size_t>(l)] = std::move(*buffer);
+        continue;
+      }
+      const std::size_t bytes = store.layerRegionBytes(l) * cache_->capacity();
+      auto buffer = opencl::createBuffer(ctx_, bytes, what);
       if (!buffer) {
         return Unexpected(buffer.error());
       }
@@ -123,13 +136,11 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
       // memory) commit pages on first use, and integration must not stall on that later.
       const LayerSpec& spec = schema.at(l);
       if (clEnqueueFillBuffer(ctx_.queue.get(), layers_[static_cast<std::size_t>(l)].get(),
-                              spec.clear_words.data(), spec.bytes_per_voxel, 0,
-                              store.layerRegionBytes(l) * cache_.capacity(), 0, nullptr,
+                              spec.clear_words.data(), spec.bytes_per_voxel, 0, bytes, 0, nullptr,
                               nullptr) != CL_SUCCESS) {
-        return fail(ErrorCode::kCapacity,
-                    "OpenCL device region cache: cannot initialise " +
-                        std::to_string(store.layerRegionBytes(l) * cache_.capacity()) +
-                        " bytes on " + ctx_.info.device_name);
+        return fail(ErrorCode::kCapacity, "OpenCL " + what + ": cannot initialise " +
+                                              std::to_string(bytes) + " bytes on " +
+                                              ctx_.info.device_name);
       }
     }
     auto dummy = opencl::createBuffer(ctx_, 8, "placeholder for absent layers");
@@ -166,7 +177,8 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
 
   const char* name() const noexcept override { return "opencl"; }
   std::string deviceName() const override {
-    return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")";
+    return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")" +
+           (cache_ ? "" : ", shared memory");
   }
   unsigned threads() const noexcept override { return 1; }
 
@@ -210,6 +222,9 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
       }
     }
     auto ok = planner_.downloadAll();
+    if (ok && !cache_) {
+      ok = syncSharedLayers();
+    }
     if (ok && clFinish(ctx_.queue.get()) != CL_SUCCESS) {
       ok = Unexpected(IntegrateError::kDeviceFailure);
     }
@@ -222,9 +237,9 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
     const gpu::PlanStats& p = planner_.stats();
     s.spans_outside_window = p.spans_outside_window;
     s.rays_skipped = p.rays_too_long;
-    s.cache_hits = cache_.hits();
-    s.cache_misses = cache_.misses();
-    s.cache_evictions = cache_.evictions();
+    s.cache_hits = cache_ ? cache_->hits() : p.region_hits;
+    s.cache_misses = cache_ ? cache_->misses() : p.region_misses;
+    s.cache_evictions = cache_ ? cache_->evictions() : 0;
     return s;
   }
 
@@ -273,6 +288,25 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
       }
       (to_device ? stats_.bytes_to_device : stats_.bytes_from_device) += bytes;
       (to_device ? stats_.region_bytes_to_device : stats_.region_bytes_from_device) += bytes;
+    }
+    return {};
+  }
+
+  /// Shared memory: mapping a CL_MEM_USE_HOST_PTR buffer is what makes the device's writes
+  /// visible in the host memory by the standard (on shared-memory devices it copies nothing).
+  Expected<void, IntegrateError> syncSharedLayers() noexcept {
+    const RegionStore& store = map_.store();
+    for (int l = 0; l < store.schema().size(); ++l) {
+      cl_mem buffer = layers_[static_cast<std::size_t>(l)].get();
+      const std::size_t bytes = store.layerRegionBytes(l) * store.capacity();
+      cl_int status = CL_SUCCESS;
+      void* mapped =
+          clEnqueueMapBuffer(ctx_.queue.get(), buffer, CL_TRUE, CL_MAP_READ | CL_MAP_WRITE, 0,
+                             bytes, 0, nullptr, nullptr, &status);
+      if (status != CL_SUCCESS || clEnqueueUnmapMemObject(ctx_.queue.get(), buffer, mapped, 0,
+                                                          nullptr, nullptr) != CL_SUCCESS) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
     }
     return {};
   }
@@ -410,7 +444,7 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
   opencl::KernelHandle tag_kernel_;
   std::vector<opencl::BufferHandle> layers_;  // one per schema layer: the cache slots
   opencl::BufferHandle dummy_;
-  gpu::DeviceRegionCache cache_;
+  std::optional<gpu::DeviceRegionCache> cache_;  // empty: shared memory
   gpu::BatchLimits limits_;
   gpu::BatchPlanner planner_;
   std::array<StagingSet, 2> sets_;
@@ -451,6 +485,25 @@ Result<std::uint32_t> cacheSlots(const VoxelMap& map, const opencl::DeviceInfo& 
   return static_cast<std::uint32_t>(slots);
 }
 
+/// Whether the device should work on the host store in place: asked for, or (auto) the device
+/// shares memory with the host and every layer of the store fits one allocation.
+bool useSharedMemory(const VoxelMap& map, const opencl::DeviceInfo& device, DeviceMemory memory) {
+  if (memory != DeviceMemory::kAuto) {
+    return memory == DeviceMemory::kShared;
+  }
+  const RegionStore& store = map.store();
+  if (!device.unified_memory ||
+      std::uint64_t{store.capacity()} * store.voxelsPerRegion() >= (std::uint64_t{1} << 32)) {
+    return false;
+  }
+  for (int l = 0; l < store.schema().size(); ++l) {
+    if (std::uint64_t{store.layerRegionBytes(l)} * store.capacity() > device.max_alloc_bytes) {
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
@@ -472,9 +525,17 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
   if (!device) {
     return Unexpected(device.error());
   }
-  auto slots = cacheSlots(map, *device, options.cache_bytes, options.cache_regions);
-  if (!slots) {
-    return Unexpected(slots.error());
+  std::uint32_t slots = 0;  // 0: shared memory
+  if (!useSharedMemory(map, *device, options.memory)) {
+    auto cache_slots = cacheSlots(map, *device, options.cache_bytes, options.cache_regions);
+    if (!cache_slots) {
+      return Unexpected(cache_slots.error());
+    }
+    slots = *cache_slots;
+  } else if (options.memory == DeviceMemory::kShared && !device->unified_memory) {
+    return fail(ErrorCode::kUnsupported,
+                "shared device memory: " + device->device_name +
+                    " does not share memory with the host; use the region cache");
   }
   auto ctx = opencl::createContext(*device);
   if (!ctx) {
@@ -482,7 +543,7 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
   }
   const bool int64_counters = device->int64_atomics && !options.force_32bit_atomics;
   auto backend =
-      std::make_unique<OpenClBackend>(map, std::move(*ctx), *slots, int64_counters, options);
+      std::make_unique<OpenClBackend>(map, std::move(*ctx), slots, int64_counters, options);
   if (auto ok = backend->initialise(options); !ok) {
     return Unexpected(ok.error());
   }

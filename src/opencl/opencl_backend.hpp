@@ -16,11 +16,19 @@
 
 namespace raymap {
 
+/// Where the device keeps the map while it integrates.
+enum class DeviceMemory : std::uint8_t {
+  kAuto,    ///< kShared where the device shares memory with the host and the map fits, else kCache
+  kCache,   ///< a region cache in device buffers; regions are copied in and out as needed
+  kShared,  ///< the host map itself (CL_MEM_USE_HOST_PTR): nothing is copied (PoCL, Intel iGPU)
+};
+
 /// @brief Options of the OpenCL backend.
 struct OpenClBackendOptions {
   static constexpr std::uint64_t kDefaultCacheBytes = std::uint64_t{1} << 30;  // 1 GiB
 
   opencl::DeviceSelector device;  ///< platform/device by index or name substring
+  DeviceMemory memory = DeviceMemory::kAuto;
   /// Device region cache size in bytes (all layers). 0: min(1 GiB, half the device's global
   /// memory, the host store); never more regions than the host store holds.
   std::uint64_t cache_bytes = 0;
@@ -53,6 +61,9 @@ struct OpenClBackendOptions {
 ///    (downloaded to the host store) only when their slot is needed and the batch being planned
 ///    does not use them.
 ///  - synchronise(): waits for the device and downloads every region changed since the last call.
+///  - Shared memory (DeviceMemory::kShared, chosen automatically on devices that share memory with
+///    the host when every layer of the host store fits one device allocation): the device works
+///    on the host store in place; no cache, no copies, and synchronise() only waits.
 ///
 /// Errors: creation fails with a clear message when no platform exists, the kernel does not build
 /// (the build log is in the message) or the buffers cannot be allocated. integrate() returns

@@ -26,6 +26,9 @@ Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice
     options.device.device = choice.opencl_device;
     options.cache_bytes = choice.gpu_cache_bytes;
     options.cache_regions = choice.gpu_cache_regions;
+    options.memory = choice.gpu_memory == "cache"    ? DeviceMemory::kCache
+                     : choice.gpu_memory == "shared" ? DeviceMemory::kShared
+                                                     : DeviceMemory::kAuto;
     options.batch_rays = choice.gpu_batch_rays;
     auto backend = createOpenClBackend(map, options);
     if (!backend) {

@@ -20,6 +20,7 @@ struct BackendChoice {
   std::string opencl_device;    ///< index or name substring; empty = first GPU, else first device
   std::uint64_t gpu_cache_bytes = 0;    ///< device region cache; 0 = automatic
   std::uint32_t gpu_cache_regions = 0;  ///< device region cache in regions (overrides bytes)
+  std::string gpu_memory = "auto";      ///< "auto", "cache" or "shared"
   std::size_t gpu_batch_rays = std::size_t{1} << 18;
   bool fallback_cpu = false;  ///< use the CPU backend (with a warning) if the device fails to start
 };

@@ -59,6 +59,11 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "Device region cache: a size (512MiB), a region count (2000regions), or auto = "
                "min(1 GiB, half the device memory)")
       ->capture_default_str();
+  c.add_option("--gpu-memory", f.gpu_memory,
+               "Where the device keeps the map: cache (device buffers), shared (the host map in "
+               "place, for devices sharing memory with the host), or auto")
+      ->check(CLI::IsMember({"auto", "cache", "shared"}))
+      ->capture_default_str();
   c.add_option("--fallback", f.fallback,
                "If the device backend cannot start: none (fail) or cpu (warn, map on the CPU)")
       ->check(CLI::IsMember({"none", "cpu"}))
@@ -247,6 +252,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.backend.opencl_platform = f.opencl_platform;
   o.backend.opencl_device = f.opencl_device;
   o.backend.fallback_cpu = f.fallback == "cpu";
+  o.backend.gpu_memory = f.gpu_memory;
   o.backend.gpu_batch_rays = f.batch_rays;
   if (auto cache = parseCacheSize(f.gpu_cache, &o.backend); !cache) {
     return Unexpected(cache.error());

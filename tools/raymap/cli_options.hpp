@@ -32,6 +32,7 @@ struct MappingFlags {
   std::string opencl_platform;
   std::string opencl_device;
   std::string gpu_cache = "auto";
+  std::string gpu_memory = "auto";
   std::string fallback = "none";
   double segment_length = 0.0;
   bool reverse = false;

@@ -75,13 +75,18 @@ TEST(OpenClBackend, AgreesWithTheCpuReferenceOnRandomScans) {
       filter.reverse = reverse;
       filter.max_range_m = 9.0;
       const Built cpu = buildCpu(test::smallConfig(semantics), rays, filter);
+      // Region cache with reverse walks, shared memory with forward walks: every combination of
+      // semantics, walk and memory is covered without running all eight.
       VoxelMap map = test::makeMap(test::smallConfig(semantics));
-      auto backend = openClBackend(map);
+      OpenClBackendOptions options;
+      options.memory = reverse ? DeviceMemory::kCache : DeviceMemory::kShared;
+      auto backend = openClBackend(map, options);
       REQUIRE_OPENCL(backend);
       test::integrate(map, *backend, rays, filter);
       ASSERT_TRUE(backend->synchronise());
       const test::MapComparison cmp = test::compareMaps(cpu.map, map);
-      const std::string label = std::string(toString(semantics)) + (reverse ? " reverse" : "");
+      const std::string label = std::string(toString(semantics)) +
+                                (reverse ? " reverse, cache" : " forward, shared memory");
       EXPECT_GT(cmp.compared, 100000u) << label;
       // Per scan: one writer per voxel and scan, hits before misses as on the CPU. Per ray: the
       // voxels with samples replay their updates in ray order. Both exactly equal.
@@ -92,6 +97,9 @@ TEST(OpenClBackend, AgreesWithTheCpuReferenceOnRandomScans) {
       EXPECT_EQ(s.voxels_visited, cpu.stats.voxels_visited) << label;
       EXPECT_EQ(s.rays_skipped, 0u);
       EXPECT_GT(s.bytes_to_device, 0u);
+      if (!reverse) {
+        EXPECT_EQ(s.region_bytes_to_device + s.region_bytes_from_device, 0u) << label;
+      }
     }
   }
 }
@@ -155,6 +163,7 @@ TEST(OpenClBackend, CacheSmallerThanTheWorkingSetEvictsAndStillAgrees) {
     const Built cpu = buildCpu(test::smallConfig(semantics), rays, {});
     VoxelMap map = test::makeMap(test::smallConfig(semantics));
     OpenClBackendOptions options;
+    options.memory = DeviceMemory::kCache;
     // 8^3 voxels of 4 + 8 (+ 4) bytes: 60 regions, against several hundred per scan.
     options.cache_bytes = 60u * map.store().schema().bytesPerRegion(512);
     options.batch_rays = 1000;
@@ -178,6 +187,7 @@ TEST(OpenClBackend, CacheSmallerThanTheWorkingSetEvictsAndStillAgrees) {
 TEST(OpenClBackend, RayLongerThanTheCacheIsSkippedAndCounted) {
   VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
   OpenClBackendOptions options;
+  options.memory = DeviceMemory::kCache;
   options.cache_bytes = 4u * map.store().schema().bytesPerRegion(512);  // 4 regions of 0.8 m
   auto backend = openClBackend(map, options);
   REQUIRE_OPENCL(backend);
@@ -190,14 +200,18 @@ TEST(OpenClBackend, RayLongerThanTheCacheIsSkippedAndCounted) {
   EXPECT_EQ(map.state({80, 1, 1}), VoxelState::kUnobserved);
 }
 
-TEST(OpenClBackend, MovingRollingWindowMatchesTheCpu) {
+class OpenClMemory : public ::testing::TestWithParam<DeviceMemory> {};
+
+TEST_P(OpenClMemory, MovingRollingWindowMatchesTheCpu) {
   MapConfig config = test::smallConfig(Semantics::kPerRay);
   config.policy = StorePolicy::kRolling;
   config.window_regions = {6, 6, 3};
   VoxelMap cpu_map = test::makeMap(config);
   VoxelMap map = test::makeMap(config);
   auto cpu = test::cpuBackend(cpu_map, 1);
-  auto backend = openClBackend(map);
+  OpenClBackendOptions options;
+  options.memory = GetParam();
+  auto backend = openClBackend(map, options);
   REQUIRE_OPENCL(backend);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -217,7 +231,7 @@ TEST(OpenClBackend, MovingRollingWindowMatchesTheCpu) {
   ASSERT_TRUE(backend->synchronise());
   const test::MapComparison cmp = test::compareMaps(cpu_map, map);
   EXPECT_GT(cmp.compared, 10000u);
-  EXPECT_GE(cmp.sameStateFraction(), 0.999);
+  EXPECT_EQ(cmp.exact_value, cmp.compared);
   EXPECT_EQ(backend->stats().spans_outside_window, cpu->stats().spans_outside_window);
   EXPECT_EQ(backend->stats().updates_dropped, 0u);
   // The window fits the cache: regions entering it are created on the device, never copied.
@@ -225,11 +239,13 @@ TEST(OpenClBackend, MovingRollingWindowMatchesTheCpu) {
   EXPECT_EQ(backend->stats().cache_evictions, 0u);
 }
 
-TEST(OpenClBackend, SavedMapEqualsTheCpuMapWithinTolerance) {
+TEST_P(OpenClMemory, SavedMapEqualsTheCpuMap) {
   const std::vector<Ray> rays = test::randomScans(8, 3, 3000);
   const Built cpu = buildCpu(test::smallConfig(Semantics::kPerScan), rays, {});
   VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerScan));
-  auto backend = openClBackend(map);
+  OpenClBackendOptions options;
+  options.memory = GetParam();
+  auto backend = openClBackend(map, options);
   REQUIRE_OPENCL(backend);
   test::integrate(map, *backend, rays);
   ASSERT_TRUE(backend->synchronise());
@@ -242,6 +258,14 @@ TEST(OpenClBackend, SavedMapEqualsTheCpuMapWithinTolerance) {
   EXPECT_EQ(cmp.exact_value, cmp.compared);
   EXPECT_EQ(meanDifferences(cpu.map, *loaded), 0u);
 }
+
+INSTANTIATE_TEST_SUITE_P(OpenClBackend, OpenClMemory,
+                         ::testing::Values(DeviceMemory::kCache, DeviceMemory::kShared),
+                         [](const ::testing::TestParamInfo<DeviceMemory>& param_info) {
+                           return std::string(param_info.param == DeviceMemory::kCache
+                                                  ? "RegionCache"
+                                                  : "SharedMemory");
+                         });
 
 TEST(OpenClBackend, ThirtyTwoBitCountersGiveTheSameMap) {
   const std::vector<Ray> rays = test::randomScans(21, 2, 3000);
