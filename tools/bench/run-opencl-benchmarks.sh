@@ -34,8 +34,8 @@ summary="$out/opencl-summary${steady:+-steady}.md"
 {
   echo "commit $(git rev-parse --short HEAD), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores, repeat $repeat ${steady[*]}"
   echo
-  echo "| data | semantics | CPU $(nproc) threads (rays/s) | OpenCL (rays/s) | OpenCL / CPU | to device (MB) | from device (MB) | cache hit rate | updates dropped | plan / wait / sync (s) |"
-  echo "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
+  echo "| data | semantics | CPU $(nproc) threads (rays/s) | OpenCL (rays/s) | OpenCL / CPU | device memory | to device (MB) | from device (MB) | cache hit rate | updates dropped | plan / wait / sync (s) |"
+  echo "| --- | --- | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | --- |"
 } >"$summary"
 
 run() {  # run NAME INPUT [extra options]
@@ -50,8 +50,10 @@ run() {  # run NAME INPUT [extra options]
     local cpu ocl f="$out/$tag-opencl.json"
     cpu=$(value rays_per_second "$out/$tag-cpu.json")
     ocl=$(value rays_per_second "$f")
-    printf '| %s | %s | %.0f | %.0f | %.2f | %.0f | %.0f | %.4f | %s | %.3f / %.3f / %.3f |\n' \
-      "$name" "$semantics" "$cpu" "$ocl" "$(awk -v a="$ocl" -v b="$cpu" 'BEGIN { print a / b }')" \
+    local memory=cache
+    case "$(text device "$f")" in *"shared memory"*) memory=shared ;; esac
+    printf '| %s | %s | %.0f | %.0f | %.2f | %s | %.0f | %.0f | %.4f | %s | %.3f / %.3f / %.3f |\n' \
+      "$name" "$semantics" "$cpu" "$ocl" "$(awk -v a="$ocl" -v b="$cpu" 'BEGIN { print a / b }')" "$memory" \
       "$(awk -v a="$(value bytes_to_device "$f")" 'BEGIN { print a / 1e6 }')" \
       "$(awk -v a="$(value bytes_from_device "$f")" 'BEGIN { print a / 1e6 }')" \
       "$(value cache_hit_rate "$f")" "$(value updates_dropped "$f")" \
