@@ -17,13 +17,11 @@ cmake --build --preset release --target raymap raymap-octomap raymap-microbench 
 bin=build/release/tools
 common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4)
 
-value() {  # value KEY FILE [occurrence]: the number after "KEY": in a JSON file
-  grep -o "\"$1\": [0-9.e+-]*" "$2" | sed -n "${3:-1}p" | awk '{print $2}'
-}
+source tools/bench/bench-lib.sh
 
 summary="$out/summary.md"
 {
-  echo "commit $(git rev-parse --short HEAD), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores, repeat $repeat"
+  machine_line "repeat $repeat"
   echo
   echo "| data | semantics | raymap 1 thread (rays/s) | raymap $(nproc) threads (rays/s) | OctoMap (rays/s) | speed-up vs OctoMap | free raymap / OctoMap | occupied raymap / OctoMap | agreement |"
   echo "| --- | --- | ---: | ---: | ---: | ---: | --- | --- | ---: |"
@@ -53,10 +51,7 @@ run() {  # run NAME INPUT [extra options]
   done
 }
 
-run ouster "$data/ouster/ouster_os1_lb_n3_raycloud.ply.gz"
-run 3dtk "$data/3dtk/3dtk_raycloud.ply.gz"
-run 3dtk-points "$data/3dtk/3dtk_points.ply.gz" --trajectory "$data/3dtk/3dtk_trajectory.txt"
-run octomap "$data/octomap/octomap_scan_raycloud.ply.gz"
+run_data_sets run "$data"
 
 "$bin/raymap-microbench" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
   --benchmark_format=json >"$out/microbench.json" 2>/dev/null

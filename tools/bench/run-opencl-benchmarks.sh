@@ -23,16 +23,11 @@ cmake --build --preset release --target raymap >/dev/null
 bin=build/release/tools
 common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --repeat "$repeat" "${steady[@]}")
 
-value() {  # value KEY FILE: the first number after "KEY": in a JSON file
-  grep -o "\"$1\": [0-9.e+-]*" "$2" | head -1 | awk '{print $2}'
-}
-text() {  # text KEY FILE: the first string value of KEY
-  grep -o "\"$1\": \"[^\"]*\"" "$2" | head -1 | cut -d'"' -f4
-}
+source tools/bench/bench-lib.sh
 
 summary="$out/opencl-summary${steady:+-steady}.md"
 {
-  echo "commit $(git rev-parse --short HEAD), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores, repeat $repeat ${steady[*]}"
+  machine_line "repeat $repeat ${steady[*]}"
   echo
   echo "| data | semantics | CPU $(nproc) threads (rays/s) | OpenCL (rays/s) | OpenCL / CPU | device memory | to device (MB) | from device (MB) | cache hit rate | updates dropped | plan / wait / sync (s) |"
   echo "| --- | --- | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | --- |"
@@ -64,9 +59,6 @@ run() {  # run NAME INPUT [extra options]
 }
 
 extra=("$@")
-run ouster "$data/ouster/ouster_os1_lb_n3_raycloud.ply.gz"
-run 3dtk "$data/3dtk/3dtk_raycloud.ply.gz"
-run 3dtk-points "$data/3dtk/3dtk_points.ply.gz" --trajectory "$data/3dtk/3dtk_trajectory.txt"
-run octomap "$data/octomap/octomap_scan_raycloud.ply.gz"
+run_data_sets run "$data"
 cat "$out/opencl-device.txt" >>"$summary"
 cat "$summary"
