@@ -55,6 +55,9 @@ class Backend {
   virtual const char* name() const noexcept = 0;
   /// @brief The device in words ("AMD EPYC ... (PoCL 3.1)"); empty for the CPU backend.
   virtual std::string deviceName() const { return {}; }
+  /// @brief A non-fatal problem met at start-up that the user should hear about (a device backend
+  /// whose binary cache is not writable); empty when there was none.
+  virtual std::string startupWarning() const { return {}; }
   /// @brief Host threads used for integration.
   virtual unsigned threads() const noexcept = 0;
   /// @brief Integrates one batch. @rt allocates: no; throws: no.

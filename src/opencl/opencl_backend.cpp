@@ -180,6 +180,7 @@ class OpenClBackend final : public Backend, private gpu::RegionTransfer {
     return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")" +
            (cache_ ? "" : ", shared memory");
   }
+  std::string startupWarning() const override { return program_warning_; }
   unsigned threads() const noexcept override { return 1; }
 
   Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept override {

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -1186,6 +1187,31 @@ TEST(CliOpenCl, DevicesListsTheDefaultDeviceAsJson) {
   EXPECT_TRUE(contains(r.out, "\"platforms\""));
   EXPECT_TRUE(contains(r.out, "\"int64_atomics\""));
   EXPECT_TRUE(contains(r.out, "\"default\""));
+}
+
+}  // namespace
+}  // namespace raymap::test
+
+namespace raymap::test {
+namespace {
+
+TEST(CliOpenCl, UnwritableKernelCacheIsAWarningNotAFailure) {
+  if (const std::string why = openClUnavailable(); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(1));
+  const std::string stats = dir.file("out.json");
+  // The child inherits the environment; /proc refuses new directories even to root.
+  ASSERT_EQ(::setenv("RAYMAP_CACHE_DIR", "/proc/raymap-test", 1), 0);
+  const RunResult r = runRaymap(
+      concat({"populate", input, "--backend", "opencl", "--stats-json", stats}, kSmallMap));
+  ::unsetenv("RAYMAP_CACHE_DIR");
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.err, "warning"));
+  EXPECT_TRUE(contains(r.err, "/proc/raymap-test"));
+  EXPECT_TRUE(jsonValue(readFile(stats), "backend_warning").has_value());
 }
 
 }  // namespace

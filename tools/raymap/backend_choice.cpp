@@ -70,6 +70,7 @@ Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice)
   auto device = createDevice(map, choice);
   if (device) {
     created.backend = std::move(*device);
+    created.startup_warning = created.backend->startupWarning();
     return created;
   }
   if (!choice.fallback_cpu) {

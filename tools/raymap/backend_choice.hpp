@@ -29,6 +29,7 @@ struct BackendChoice {
 struct CreatedBackend {
   std::unique_ptr<Backend> backend;
   std::string fallback_warning;  ///< empty unless the CPU fallback replaced the requested backend
+  std::string startup_warning;   ///< the backend's Backend::startupWarning()
 };
 
 /// @brief Creates the chosen backend for `map`. Errors say what failed and what to do (install

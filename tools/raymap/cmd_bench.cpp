@@ -132,8 +132,10 @@ int runBench(const BenchFlags& f) {
       });
       const PopulateReport& median = reports[reports.size() / 2];
       runs += (runs.size() > 1 ? ",\n" : "\n") + statsJson(median, options);
-      if (!median.fallback_warning.empty()) {
-        std::fprintf(stderr, "bench: warning: %s\n", median.fallback_warning.c_str());
+      for (const std::string* warning : {&median.fallback_warning, &median.startup_warning}) {
+        if (!warning->empty()) {
+          std::fprintf(stderr, "bench: warning: %s\n", warning->c_str());
+        }
       }
       std::fprintf(stderr,
                    "bench: %s semantics, %s, %u threads: %.3f s median of %zu, %.3g M rays/s\n",

@@ -131,8 +131,10 @@ int runPopulate(const PopulateFlags& f) {
     printError(command, report.error().message);
     return kExitFailure;
   }
-  if (!report->fallback_warning.empty()) {
-    std::fprintf(stderr, "raymap populate: warning: %s\n", report->fallback_warning.c_str());
+  for (const std::string* warning : {&report->fallback_warning, &report->startup_warning}) {
+    if (!warning->empty()) {
+      std::fprintf(stderr, "raymap populate: warning: %s\n", warning->c_str());
+    }
   }
   // Every output is written under a temporary name and all are renamed at the end, so a run that
   // fails part-way leaves none of them and existing files untouched.

@@ -71,6 +71,7 @@ Result<PopulateReport> integrateStream(
   report.backend_name = backend.name();
   report.device = backend.deviceName();
   report.fallback_warning = created->fallback_warning;
+  report.startup_warning = created->startup_warning;
   report.threads = backend.threads();
   std::vector<Ray> chunk(std::size_t{1} << 16);
   std::vector<PreparedRay> batch(options.batch_rays);
@@ -262,6 +263,9 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
   }
   if (!r.fallback_warning.empty()) {
     j.add("fallback", r.fallback_warning);
+  }
+  if (!r.startup_warning.empty()) {
+    j.add("backend_warning", r.startup_warning);
   }
   j.add("peak_rss_bytes", r.peak_rss_bytes);
   return j.str();

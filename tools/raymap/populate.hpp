@@ -36,6 +36,7 @@ struct PopulateReport {
   std::string backend_name;
   std::string device;            ///< device backends: the device in words
   std::string fallback_warning;  ///< the requested device failed; the CPU mapped instead
+  std::string startup_warning;   ///< a non-fatal start-up problem of the backend
   unsigned threads = 0;
   std::uint64_t scans = 0;        ///< runs of equal scan index seen
   std::uint64_t scans_split = 0;  ///< per-scan: scans larger than a batch, integrated in parts
