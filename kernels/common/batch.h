@@ -43,6 +43,11 @@ typedef struct rm_integrate_params {
   rm_u32 has_mean;          /* 1 when the map keeps the voxel-mean layer */
 } rm_integrate_params;
 
+/* Per-ray semantics: most hit groups in one batch. The device tags a voxel with samples with its
+ * group number in 22 bits (kernels/device/integrate_occupancy.h), so the host never plans more
+ * rays per per-ray batch than this. */
+#define RM_TAG_MAX_GROUPS 0x00400000u
+
 /* Per-ray semantics: 32-bit words of batch scratch the device needs for a batch of `groups` hit
  * groups over `hits` samples: a saved value per group, and count + 1 runs of misses per group. */
 #define RM_SCRATCH_WORDS(groups, hits) (2u * (groups) + (hits))

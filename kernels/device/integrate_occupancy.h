@@ -44,8 +44,7 @@
 /* A tagged occupancy word: a quiet NaN whose low 22 bits hold the hit group (occupancy values
  * are never NaN: rays are validated, and +inf marks "unobserved"). */
 #define RM_TAG_BITS 0x7FC00000u
-#define RM_TAG_GROUP_MASK 0x003FFFFFu
-#define RM_TAG_MAX_GROUPS (RM_TAG_GROUP_MASK + 1u)
+#define RM_TAG_GROUP_MASK (RM_TAG_MAX_GROUPS - 1u)
 
 #if defined(RM_HAVE_INT64_ATOMICS)
 typedef rm_u64 rm_counter;

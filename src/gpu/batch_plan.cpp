@@ -42,7 +42,6 @@ void BatchPlanner::revalidate() noexcept {
     const DeviceRegionCache::Entry& e = cache_->entry(slot);
     if (e.used && store.find(e.region) != e.host_slot) {
       cache_->drop(slot);
-      ++stats_.regions_dropped;
     }
   }
 }
@@ -55,7 +54,6 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::sharedRegion(
       return Unexpected(ok.error());
     }
     host_uninitialised_[host_slot] = 0;
-    ++stats_.regions_filled;
     ++stats_.region_misses;
   } else {
     ++stats_.region_hits;
@@ -84,7 +82,6 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
       return Unexpected(ok.error());
     }
     host_uninitialised_[placement->evicted_entry.host_slot] = 0;
-    ++stats_.regions_downloaded;
   }
   if (!placement->resident) {
     if (host_uninitialised_[host_slot] != 0) {
@@ -92,13 +89,11 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
       if (!ok) {
         return Unexpected(ok.error());
       }
-      ++stats_.regions_filled;
     } else {
       auto ok = transfer_->upload(placement->slot, host_slot);
       if (!ok) {
         return Unexpected(ok.error());
       }
-      ++stats_.regions_uploaded;
     }
   }
   return placement->slot;
@@ -241,7 +236,6 @@ Expected<void, IntegrateError> BatchPlanner::downloadAll() noexcept {
       }
       host_uninitialised_[e.host_slot] = 0;
       cache_->markClean(slot);
-      ++stats_.regions_downloaded;
     }
   }
   return {};

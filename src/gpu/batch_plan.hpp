@@ -66,12 +66,8 @@ struct BatchLimits {
 struct PlanStats {
   std::uint64_t spans_outside_window = 0;
   std::uint64_t rays_too_long = 0;  ///< rays crossing more regions than the cache holds (skipped)
-  std::uint64_t regions_uploaded = 0;
-  std::uint64_t regions_filled = 0;  ///< new regions cleared on the device (no transfer)
-  std::uint64_t regions_downloaded = 0;
-  std::uint64_t regions_dropped = 0;  ///< left a rolling window: forgotten, not downloaded
-  std::uint64_t region_hits = 0;      ///< shared mode: spans in regions the map already had
-  std::uint64_t region_misses = 0;    ///< shared mode: regions new to the map
+  std::uint64_t region_hits = 0;    ///< shared mode: spans in regions the map already had
+  std::uint64_t region_misses = 0;  ///< shared mode: regions new to the map
 };
 
 /// @brief Plans batches for one map, one device cache and one transfer implementation.

@@ -512,9 +512,8 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
   if (map.occupancyLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument, "the OpenCL backend needs an occupancy layer");
   }
-  // Per-ray batches tag each voxel with samples with its group number (22 bits).
   if (options.batch_rays == 0 || options.batch_rays > (std::size_t{1} << 24) ||
-      options.per_ray_batch_rays == 0 || options.per_ray_batch_rays > (std::size_t{1} << 22)) {
+      options.per_ray_batch_rays == 0 || options.per_ray_batch_rays > RM_TAG_MAX_GROUPS) {
     return fail(ErrorCode::kInvalidArgument,
                 "OpenCL batch sizes must be 1 to 16777216 rays (per-ray: 1 to 4194304)");
   }
