@@ -9,6 +9,7 @@
 #include <string>
 
 #include "src/core/error.hpp"
+#include "src/gpu/device_options.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 #include "src/opencl/cl_runtime.hpp"
@@ -16,32 +17,10 @@
 
 namespace raymap {
 
-/// Where the device keeps the map while it integrates.
-enum class DeviceMemory : std::uint8_t {
-  kAuto,    ///< kShared where the device shares memory with the host and the map fits, else kCache
-  kCache,   ///< a region cache in device buffers; regions are copied in and out as needed
-  kShared,  ///< the host map itself (CL_MEM_USE_HOST_PTR): nothing is copied (PoCL, Intel iGPU)
-};
-
-/// @brief Options of the OpenCL backend.
-struct OpenClBackendOptions {
-  static constexpr std::uint64_t kDefaultCacheBytes = std::uint64_t{1} << 30;  // 1 GiB
-
+/// @brief Options of the OpenCL backend: the shared device options (memory, cache, batches) and
+/// the OpenCL ones.
+struct OpenClBackendOptions : DeviceBackendOptions {
   opencl::DeviceSelector device;  ///< platform/device by index or name substring
-  DeviceMemory memory = DeviceMemory::kAuto;
-  /// Device region cache size in bytes (all layers). 0: min(1 GiB, half the device's global
-  /// memory, the host store); never more regions than the host store holds.
-  std::uint64_t cache_bytes = 0;
-  /// Device region cache size in regions; when non-zero it is used instead of cache_bytes.
-  std::uint32_t cache_regions = 0;
-  /// Most rays per device batch with per-scan semantics, where one integrate() call (one scan)
-  /// must be one device batch for "occupied wins" to hold across the scan; larger scans are
-  /// integrated in parts, each as its own scan. Staging buffers are sized for it, twice.
-  std::size_t batch_rays = std::size_t{1} << 18;
-  /// Most rays per device batch with per-ray semantics, where integrate() calls are cut into
-  /// batches of this size: smaller batches let planning overlap the device sooner (measured on
-  /// PoCL: 64 Ki rays was faster than 256 Ki; see docs/benchmarks.md).
-  std::size_t per_ray_batch_rays = std::size_t{1} << 16;
   /// Use 32-bit counters even where the device has cl_khr_int64_base_atomics (tests both paths).
   bool force_32bit_atomics = false;
   opencl::ProgramCacheOptions program_cache;
@@ -51,7 +30,7 @@ struct OpenClBackendOptions {
 
 /// @brief Creates an OpenCL backend integrating into `map` (which must outlive it).
 ///
-/// Design (see docs/architecture.md, "Device backends"):
+/// Design (see docs/architecture.md, "Device backends"; the batch loop is gpu::StagedBackend's):
 ///  - At creation: picks the device, builds the embedded kernel source (binary cached on disk),
 ///    allocates one device buffer per map layer cut into cache slots, and two sets of batch
 ///    staging buffers. Nothing is allocated on the device afterwards.

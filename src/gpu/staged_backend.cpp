@@ -1,0 +1,218 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The API-independent half of the device backends: batch loop, kernel order, region moves.
+#include "src/gpu/staged_backend.hpp"
+
+#include <chrono>
+
+namespace raymap::gpu {
+namespace {
+
+static_assert(sizeof(rm_span_record) == 32, "device ABI");
+static_assert(sizeof(rm_hit_group) == 16, "device ABI");
+static_assert(sizeof(rm_integrate_params) == 48, "device ABI");
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) noexcept {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_counters,
+                             const DeviceBackendOptions& options)
+    : map_(&map),
+      cache_(slots > 0 ? std::optional<DeviceRegionCache>(std::in_place, slots) : std::nullopt),
+      limits_(batchLimits(map, options)),
+      planner_(map, cache_ ? &*cache_ : nullptr, *this, limits_),
+      wide_counters_(wide_counters) {
+  params_.occupancy = map.occupancy().toKernel();
+  params_.region_voxels = map.geometry().region_voxels;
+  params_.voxels_per_region = map.store().voxelsPerRegion();
+  params_.per_scan = map.semantics() == Semantics::kPerScan ? 1u : 0u;
+  params_.has_mean = map.meanLayer() >= 0 ? 1u : 0u;
+  stats_.cache_slots = layerRegions();
+  for (StagingSet& set : sets_) {
+    planner_.reserve(set.arrays);
+  }
+}
+
+std::uint32_t StagedBackend::layerRegions() const noexcept {
+  return cache_ ? cache_->capacity() : map_->store().capacity();
+}
+
+std::size_t StagedBackend::counterBytes() const noexcept {
+  return RM_COUNTER_COUNT * (wide_counters_ ? 8u : 4u);
+}
+
+std::size_t StagedBackend::scratchWords() const noexcept {
+  return RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays);
+}
+
+Expected<void, IntegrateError> StagedBackend::integrate(
+    std::span<const PreparedRay> rays) noexcept {
+  params_.sequence = params_.per_scan != 0u ? map_->beginScan() : 0u;
+  planner_.revalidate();
+  while (!rays.empty()) {
+    const unsigned set = next_set_;
+    const Clock::time_point t_wait = Clock::now();
+    if (auto ok = retire(set); !ok) {
+      return ok;
+    }
+    const Clock::time_point t_plan = Clock::now();
+    stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
+    auto consumed = planner_.plan(rays, sets_[set].arrays);
+    stats_.plan_seconds += secondsSince(t_plan);
+    if (!consumed) {
+      return Unexpected(consumed.error());
+    }
+    rays = rays.subspan(*consumed);
+    if (sets_[set].arrays.rays.empty()) {
+      continue;  // every ray was skipped
+    }
+    if (auto ok = submit(set); !ok) {
+      return ok;
+    }
+    next_set_ = (next_set_ + 1) % kStagingSets;
+  }
+  ++stats_.batches;
+  return {};
+}
+
+Expected<void, IntegrateError> StagedBackend::synchronise() noexcept {
+  const Clock::time_point start = Clock::now();
+  if (!finish()) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  for (unsigned set = 0; set < kStagingSets; ++set) {
+    if (auto ok = retire(set); !ok) {
+      return ok;
+    }
+  }
+  auto ok = planner_.downloadAll();
+  if (ok && !finish()) {
+    ok = Unexpected(IntegrateError::kDeviceFailure);
+  }
+  if (ok && !cache_ && !syncSharedMemory()) {
+    ok = Unexpected(IntegrateError::kDeviceFailure);
+  }
+  stats_.sync_seconds += secondsSince(start);
+  return ok;
+}
+
+BackendStats StagedBackend::stats() const noexcept {
+  BackendStats s = stats_;
+  const PlanStats& p = planner_.stats();
+  s.spans_outside_window = p.spans_outside_window;
+  s.rays_skipped = p.rays_too_long;
+  s.cache_hits = cache_ ? cache_->hits() : p.region_hits;
+  s.cache_misses = cache_ ? cache_->misses() : p.region_misses;
+  s.cache_evictions = cache_ ? cache_->evictions() : 0;
+  return s;
+}
+
+Expected<void, IntegrateError> StagedBackend::download(std::uint32_t device_slot,
+                                                       std::uint32_t host_slot) noexcept {
+  return copyRegion(device_slot, host_slot, /*to_device=*/false);
+}
+
+Expected<void, IntegrateError> StagedBackend::upload(std::uint32_t device_slot,
+                                                     std::uint32_t host_slot) noexcept {
+  return copyRegion(device_slot, host_slot, /*to_device=*/true);
+}
+
+Expected<void, IntegrateError> StagedBackend::fillClear(std::uint32_t device_slot) noexcept {
+  const RegionStore& store = map_->store();
+  for (int l = 0; l < store.schema().size(); ++l) {
+    const std::size_t bytes = store.layerRegionBytes(l);
+    if (!fillLayer(l, bytes * device_slot, bytes, store.schema().at(l))) {
+      return Unexpected(IntegrateError::kDeviceFailure);
+    }
+  }
+  return {};
+}
+
+Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_slot,
+                                                         std::uint32_t host_slot,
+                                                         bool to_device) noexcept {
+  const RegionStore& store = map_->store();
+  for (int l = 0; l < store.schema().size(); ++l) {
+    const std::size_t bytes = store.layerRegionBytes(l);
+    if (!copyLayer(l, bytes * device_slot, store.layerBytes(host_slot, l), bytes, to_device)) {
+      return Unexpected(IntegrateError::kDeviceFailure);
+    }
+    (to_device ? stats_.bytes_to_device : stats_.bytes_from_device) += bytes;
+    (to_device ? stats_.region_bytes_to_device : stats_.region_bytes_from_device) += bytes;
+  }
+  return {};
+}
+
+Expected<void, IntegrateError> StagedBackend::retire(unsigned set) noexcept {
+  if (!sets_[set].in_flight) {
+    return {};
+  }
+  sets_[set].in_flight = false;
+  const void* counters = waitForBatch(set);
+  if (counters == nullptr) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  std::uint64_t visits = 0;
+  std::uint64_t dropped = 0;
+  if (wide_counters_) {
+    const auto* words = static_cast<const std::uint64_t*>(counters);
+    for (std::uint32_t b = 0; b < RM_COUNTER_BUCKETS; ++b) {
+      visits += words[b];
+    }
+    dropped = words[RM_COUNTER_DROPPED];
+  } else {
+    const auto* words = static_cast<const std::uint32_t*>(counters);
+    for (std::uint32_t b = 0; b < RM_COUNTER_BUCKETS; ++b) {
+      visits += words[b];
+    }
+    dropped = words[RM_COUNTER_DROPPED];
+  }
+  stats_.voxels_visited += visits;
+  stats_.updates_dropped += dropped;
+  return {};
+}
+
+bool StagedBackend::launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept {
+  if (items == 0) {
+    return true;
+  }
+  rm_integrate_params p = params_;
+  p.item_count = static_cast<std::uint32_t>(items);
+  p.group_count = static_cast<std::uint32_t>(sets_[set].arrays.groups.size());
+  return launch(kernel, set, p);
+}
+
+Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
+  const BatchArrays& a = sets_[set].arrays;
+  bool ok = uploadBatch(set, a);
+  stats_.bytes_to_device +=
+      a.rays.size() * sizeof(PreparedRay) + a.spans.size() * sizeof(rm_span_record) +
+      a.groups.size() * sizeof(rm_hit_group) + a.hit_rays.size() * sizeof(std::uint32_t);
+  if (params_.per_scan != 0u) {
+    // Hits first: the scan mark they leave makes the misses skip those voxels (occupied wins).
+    ok = ok && launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size()) &&
+         launchOver(OccupancyKernel::kIntegrateSpans, set, a.spans.size());
+  } else {
+    // Tag the voxels with samples, walk the misses (counting runs of misses between the samples
+    // of tagged voxels), then replay the tagged voxels in ray order.
+    const std::size_t runs = a.hit_rays.size() + a.groups.size();
+    ok = ok && (runs == 0 || clearScratch(set, a.groups.size(), runs));
+    ok = ok && launchOver(OccupancyKernel::kTagHitGroups, set, a.groups.size()) &&
+         launchOver(OccupancyKernel::kIntegrateSpans, set, a.spans.size()) &&
+         launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size());
+  }
+  ok = ok && endBatch(set);
+  if (!ok) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  sets_[set].in_flight = true;
+  stats_.bytes_from_device += counterBytes();
+  stats_.rays += a.rays.size();
+  return {};
+}
+
+}  // namespace raymap::gpu

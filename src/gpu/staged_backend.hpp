@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The part of a device backend that is the same on every GPU API: batches planned on the host
+// while the device runs the previous one (two staging sets), the kernel order of each semantics,
+// region moves through the device cache, counters and statistics. The OpenCL and CUDA backends
+// derive from it and supply the device calls.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+
+#include "kernels/common/batch.h"
+#include "src/gpu/batch_plan.hpp"
+#include "src/gpu/device_options.hpp"
+#include "src/gpu/device_region_cache.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/layer_schema.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::gpu {
+
+/// The kernels of the occupancy integration (kernels/device/integrate_occupancy.h).
+enum class OccupancyKernel : std::uint8_t {
+  kTagHitGroups,    ///< per-ray semantics: tag the voxels with samples before the misses
+  kIntegrateSpans,  ///< one work-item per span record: the misses (and per-scan marks)
+  kApplyHitGroups,  ///< one work-item per voxel with samples: hits (and, per ray, the replay)
+};
+
+/// @brief A device backend over an API-specific queue of copies and kernels.
+///
+/// integrate() plans a batch into one of two staging sets (waiting first for the batch that set
+/// carried before), then asks the derived class to upload it, launch the kernels in the order the
+/// semantics needs and read the counters back, all without waiting; the host then plans the next
+/// batch into the other set while the device works. Every device call of one backend goes to one
+/// in-order queue (OpenCL command queue, CUDA stream), which is what orders region moves, batches
+/// and read-backs.
+///
+/// Thread-safety: none; the map must not be changed by others between integrate() and
+/// synchronise(), except for rolling-window moves, which the next integrate() takes into account.
+/// Real-time: integrate() allocates nothing once constructed; it blocks only to wait for the
+/// device's batch before last.
+class StagedBackend : public Backend, private RegionTransfer {
+ public:
+  static constexpr unsigned kStagingSets = 2;
+
+  Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept final;
+  Expected<void, IntegrateError> synchronise() noexcept final;
+  BackendStats stats() const noexcept final;
+  unsigned threads() const noexcept final { return 1; }
+
+ protected:
+  /// `slots` == 0: shared memory (the device works on the host store in place). `wide_counters`:
+  /// the kernels count in 64-bit words (else 32-bit).
+  StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_counters,
+                const DeviceBackendOptions& options);
+
+  VoxelMap& map() const noexcept { return *map_; }
+  bool sharedMemory() const noexcept { return !cache_.has_value(); }
+  /// Regions per layer buffer: the cache slots, or the host store's capacity in shared memory.
+  std::uint32_t layerRegions() const noexcept;
+  const BatchLimits& limits() const noexcept { return limits_; }
+  /// Host arrays of a staging set (reserved for the limits; their storage never moves).
+  BatchArrays& stagingArrays(unsigned set) noexcept { return sets_[set].arrays; }
+  std::size_t counterBytes() const noexcept;
+  /// 32-bit words of a set's scratch buffer.
+  std::size_t scratchWords() const noexcept;
+
+  // ---- what the API layer supplies; every call goes to the backend's one in-order queue ----
+
+  /// Copies the batch's arrays into set `set`'s device buffers and zeroes its counters. The copy
+  /// may still run when this returns: the host arrays are not written again before
+  /// waitForBatch(set) has returned.
+  virtual bool uploadBatch(unsigned set, const BatchArrays& arrays) noexcept = 0;
+  /// Zeroes `words` 32-bit words of set `set`'s scratch buffer from `first_word` on.
+  virtual bool clearScratch(unsigned set, std::size_t first_word, std::size_t words) noexcept = 0;
+  /// Runs `kernel` over params.item_count work-items on set `set`'s buffers (items > 0).
+  virtual bool launch(OccupancyKernel kernel, unsigned set,
+                      const rm_integrate_params& params) noexcept = 0;
+  /// Reads set `set`'s counters back, marks the end of its batch and starts the device.
+  virtual bool endBatch(unsigned set) noexcept = 0;
+  /// Waits for set `set`'s batch; its RM_COUNTER_COUNT counter words (64-bit if wide, else
+  /// 32-bit), or nullptr when the device failed.
+  virtual const void* waitForBatch(unsigned set) noexcept = 0;
+  /// Copies `bytes` of layer `layer` between the device (byte offset `device_offset`) and host
+  /// memory. Uploads finish before they return (the host slot may be reused at once); downloads
+  /// may still run, and nothing reads the host store before finish().
+  virtual bool copyLayer(int layer, std::size_t device_offset, std::byte* host, std::size_t bytes,
+                         bool to_device) noexcept = 0;
+  /// Sets `bytes` of layer `layer` from `device_offset` on to the layer's clear value.
+  virtual bool fillLayer(int layer, std::size_t device_offset, std::size_t bytes,
+                         const LayerSpec& spec) noexcept = 0;
+  /// Waits until the queue is empty.
+  virtual bool finish() noexcept = 0;
+  /// Shared memory, after finish(): makes the device's writes visible to host reads.
+  virtual bool syncSharedMemory() noexcept { return true; }
+
+ private:
+  // ---- RegionTransfer (called by the planner) ----
+  Expected<void, IntegrateError> download(std::uint32_t device_slot,
+                                          std::uint32_t host_slot) noexcept final;
+  Expected<void, IntegrateError> upload(std::uint32_t device_slot,
+                                        std::uint32_t host_slot) noexcept final;
+  Expected<void, IntegrateError> fillClear(std::uint32_t device_slot) noexcept final;
+
+  Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
+                                            bool to_device) noexcept;
+  /// Waits for the set's previous batch (if any) and adds its device counters to the stats.
+  Expected<void, IntegrateError> retire(unsigned set) noexcept;
+  /// Enqueues the batch planned into `set`: copies, kernels in the semantics' order, read-back.
+  Expected<void, IntegrateError> submit(unsigned set) noexcept;
+  bool launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept;
+
+  struct StagingSet {
+    BatchArrays arrays;
+    bool in_flight = false;
+  };
+
+  VoxelMap* map_;
+  std::optional<DeviceRegionCache> cache_;  // empty: shared memory
+  BatchLimits limits_;
+  BatchPlanner planner_;
+  std::array<StagingSet, kStagingSets> sets_;
+  unsigned next_set_ = 0;
+  bool wide_counters_;
+  rm_integrate_params params_{};
+  BackendStats stats_;
+};
+
+}  // namespace raymap::gpu
