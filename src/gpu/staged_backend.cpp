@@ -51,6 +51,9 @@ std::size_t StagedBackend::scratchWords() const noexcept {
 
 Expected<void, IntegrateError> StagedBackend::integrate(
     std::span<const PreparedRay> rays) noexcept {
+  if (!makeCurrent()) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
   params_.sequence = params_.per_scan != 0u ? map_->beginScan() : 0u;
   planner_.revalidate();
   while (!rays.empty()) {
@@ -81,7 +84,7 @@ Expected<void, IntegrateError> StagedBackend::integrate(
 
 Expected<void, IntegrateError> StagedBackend::synchronise() noexcept {
   const Clock::time_point start = Clock::now();
-  if (!finish()) {
+  if (!makeCurrent() || !finish()) {
     return Unexpected(IntegrateError::kDeviceFailure);
   }
   for (unsigned set = 0; set < kStagingSets; ++set) {

@@ -69,6 +69,10 @@ class StagedBackend : public Backend, private RegionTransfer {
 
   // ---- what the API layer supplies; every call goes to the backend's one in-order queue ----
 
+  /// Called first by integrate() and synchronise(): binds the device to the calling thread where
+  /// the API needs it (CUDA's current device).
+  virtual bool makeCurrent() noexcept { return true; }
+
   /// Copies the batch's arrays into set `set`'s device buffers and zeroes its counters. The copy
   /// may still run when this returns: the host arrays are not written again before
   /// waitForBatch(set) has returned.

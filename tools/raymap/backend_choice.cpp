@@ -8,6 +8,9 @@
 #if defined(RAYMAP_HAVE_OPENCL)
 #include "src/opencl/opencl_backend.hpp"
 #endif
+#if defined(RAYMAP_HAVE_CUDA)
+#include "src/cuda/cuda_backend.hpp"
+#endif
 
 namespace raymap::cli {
 namespace {
@@ -18,43 +21,68 @@ Result<std::unique_ptr<Backend>> createCpu(VoxelMap& map, const BackendChoice& c
   return createCpuBackend(map, options);
 }
 
-Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice& choice) {
-#if defined(RAYMAP_HAVE_OPENCL)
-  if (choice.name == "opencl") {
-    OpenClBackendOptions options;
-    options.device.platform = choice.opencl_platform;
-    options.device.device = choice.opencl_device;
-    options.cache_bytes = choice.gpu_cache_bytes;
-    options.cache_regions = choice.gpu_cache_regions;
-    options.memory = choice.gpu_memory == "cache"    ? DeviceMemory::kCache
-                     : choice.gpu_memory == "shared" ? DeviceMemory::kShared
-                                                     : DeviceMemory::kAuto;
-    options.batch_rays = choice.gpu_batch_rays;
-    auto backend = createOpenClBackend(map, options);
-    if (!backend) {
-      return fail(backend.error().code, "--backend opencl: " + backend.error().message);
-    }
-    return backend;
+#if defined(RAYMAP_HAVE_OPENCL) || defined(RAYMAP_HAVE_CUDA)
+/// The options every device backend shares.
+void setDeviceOptions(const BackendChoice& choice, DeviceBackendOptions* options) {
+  options->cache_bytes = choice.gpu_cache_bytes;
+  options->cache_regions = choice.gpu_cache_regions;
+  options->memory = choice.gpu_memory == "cache"    ? DeviceMemory::kCache
+                    : choice.gpu_memory == "shared" ? DeviceMemory::kShared
+                                                    : DeviceMemory::kAuto;
+  options->batch_rays = choice.gpu_batch_rays;
+}
+
+/// The backend's creation, with its errors prefixed by the option that chose it.
+Result<std::unique_ptr<Backend>> named(Result<std::unique_ptr<Backend>> backend,
+                                       const std::string& name) {
+  if (!backend) {
+    return fail(backend.error().code, "--backend " + name + ": " + backend.error().message);
   }
-#else
+  return backend;
+}
+#endif
+
+Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice& choice) {
   (void)map;
   if (choice.name == "opencl") {
+#if defined(RAYMAP_HAVE_OPENCL)
+    OpenClBackendOptions options;
+    setDeviceOptions(choice, &options);
+    options.device.platform = choice.opencl_platform;
+    options.device.device = choice.opencl_device;
+    return named(createOpenClBackend(map, options), choice.name);
+#else
     return fail(ErrorCode::kUnsupported,
                 "--backend opencl: this build has no OpenCL backend (install ocl-icd-opencl-dev "
                 "and opencl-headers, then build again)");
-  }
 #endif
+  }
+  if (choice.name == "cuda") {
+#if defined(RAYMAP_HAVE_CUDA)
+    CudaBackendOptions options;
+    setDeviceOptions(choice, &options);
+    options.device = choice.cuda_device;
+    return named(createCudaBackend(map, options), choice.name);
+#else
+    return fail(ErrorCode::kUnsupported,
+                "--backend cuda: this build has no CUDA backend (it is built whenever CMake finds "
+                "nvcc; install the CUDA toolkit, then configure again)");
+#endif
+  }
   return fail(ErrorCode::kInvalidArgument, "--backend: unknown backend '" + choice.name + "'");
 }
 
 }  // namespace
 
 std::vector<std::string> availableBackends() {
+  std::vector<std::string> names{"cpu"};
 #if defined(RAYMAP_HAVE_OPENCL)
-  return {"cpu", "opencl"};
-#else
-  return {"cpu"};
+  names.emplace_back("opencl");
 #endif
+#if defined(RAYMAP_HAVE_CUDA)
+  names.emplace_back("cuda");
+#endif
+  return names;
 }
 
 Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice) {

@@ -14,10 +14,11 @@ namespace raymap::cli {
 
 /// @brief The backend options of the mapping commands (--backend and friends).
 struct BackendChoice {
-  std::string name = "cpu";     ///< "cpu" or "opencl"
+  std::string name = "cpu";     ///< "cpu", "opencl" or "cuda"
   unsigned threads = 0;         ///< CPU: 0 = all cores, 1 = the single-threaded reference
   std::string opencl_platform;  ///< index or name substring; empty = default
   std::string opencl_device;    ///< index or name substring; empty = first GPU, else first device
+  int cuda_device = 0;          ///< CUDA device ordinal
   std::uint64_t gpu_cache_bytes = 0;    ///< device region cache; 0 = automatic
   std::uint32_t gpu_cache_regions = 0;  ///< device region cache in regions (overrides bytes)
   std::string gpu_memory = "auto";      ///< "auto", "cache" or "shared"
@@ -36,7 +37,7 @@ struct CreatedBackend {
 /// a driver, pick another device, --fallback cpu).
 Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice);
 
-/// @brief The backends this build has, e.g. {"cpu", "opencl"}.
+/// @brief The backends this build has, e.g. {"cpu", "opencl", "cuda"}.
 std::vector<std::string> availableBackends();
 
 }  // namespace raymap::cli

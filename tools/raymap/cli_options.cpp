@@ -46,8 +46,8 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "occupied wins")
       ->check(CLI::IsMember({"ray", "scan"}))
       ->capture_default_str();
-  c.add_option("--backend", f.backend, "Integration backend: cpu or opencl")
-      ->check(CLI::IsMember({"cpu", "opencl"}))
+  c.add_option("--backend", f.backend, "Integration backend: cpu, opencl or cuda")
+      ->check(CLI::IsMember({"cpu", "opencl", "cuda"}))
       ->capture_default_str();
   c.add_option("--threads", f.threads, "CPU worker threads (0 = all cores, 1 = reference)")
       ->capture_default_str();
@@ -55,6 +55,10 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "OpenCL platform: index or name substring (see raymap devices)");
   c.add_option("--opencl-device", f.opencl_device,
                "OpenCL device: index or name substring; default: first GPU, else first device");
+  c.add_option("--cuda-device", f.cuda_device,
+               "CUDA device ordinal (see raymap devices; CUDA_VISIBLE_DEVICES applies)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   c.add_option("--gpu-cache", f.gpu_cache,
                "Device region cache: a size (512MiB), a region count (2000regions), or auto = "
                "min(1 GiB, half the device memory)")
@@ -251,6 +255,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.backend.threads = f.threads;
   o.backend.opencl_platform = f.opencl_platform;
   o.backend.opencl_device = f.opencl_device;
+  o.backend.cuda_device = f.cuda_device;
   o.backend.fallback_cpu = f.fallback == "cpu";
   o.backend.gpu_memory = f.gpu_memory;
   o.backend.gpu_batch_rays = f.batch_rays;

@@ -31,6 +31,7 @@ struct MappingFlags {
   unsigned threads = 0;
   std::string opencl_platform;
   std::string opencl_device;
+  int cuda_device = 0;
   std::string gpu_cache = "auto";
   std::string gpu_memory = "auto";
   std::string fallback = "none";

@@ -19,7 +19,8 @@ void addInfoCommand(CLI::App& app, int* exit_code);
 void addExportCommand(CLI::App& app, int* exit_code);
 void addBenchCommand(CLI::App& app, int* exit_code);
 void addDemoCommand(CLI::App& app, int* exit_code);
-/// Present in every build; without the OpenCL backend it says so and exits 1.
+/// Present in every build; lists OpenCL and CUDA devices, says why an API has none, and exits 1
+/// only when neither has a device.
 void addDevicesCommand(CLI::App& app, int* exit_code);
 
 /// @brief Prints "raymap <command>: error: <message>" on stderr.

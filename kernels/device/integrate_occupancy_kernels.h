@@ -1,0 +1,50 @@
+/* SPDX-License-Identifier: BSD-3-Clause */
+/* The entry points of the occupancy integration, written once for OpenCL C 1.2 and CUDA through
+ * the qualifiers of device.h: kernels/opencl/integrate_occupancy.cl and
+ * kernels/cuda/integrate_occupancy.cu are this header and nothing more (plus, in CUDA, the host
+ * launchers). One work-item per hit group (tag, apply) or per span record (integrate); the host
+ * rounds the work-item count up to whole work-groups, so each entry point checks its index. */
+#ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H
+#define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H
+
+#include "integrate_occupancy.h"
+
+RM_KERNEL void rm_tag_hit_groups(const RM_GLOBAL rm_hit_group* groups,
+                                 RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_GLOBAL rm_u32* scratch,
+                                 rm_integrate_params params) {
+  rm_u32 id = rm_global_id();
+  if (id < params.item_count) {
+    rm_tag_hit_group(id, groups, occupancy, scratch, params);
+  }
+}
+
+RM_KERNEL void rm_integrate_spans(const RM_GLOBAL rm_prepared_ray* rays,
+                                  const RM_GLOBAL rm_span_record* spans,
+                                  const RM_GLOBAL rm_hit_group* groups,
+                                  const RM_GLOBAL rm_u32* hit_rays,
+                                  RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                  RM_ATOMIC_GLOBAL rm_u32* marks, RM_ATOMIC_GLOBAL rm_u32* scratch,
+                                  rm_integrate_params params,
+                                  RM_ATOMIC_GLOBAL rm_counter* counters) {
+  rm_u32 id = rm_global_id();
+  if (id < params.item_count) {
+    rm_integrate_span(id, rays, spans, groups, hit_rays, occupancy, marks, scratch, params,
+                      counters);
+  }
+}
+
+RM_KERNEL void rm_apply_hit_groups(const RM_GLOBAL rm_prepared_ray* rays,
+                                   const RM_GLOBAL rm_hit_group* groups,
+                                   const RM_GLOBAL rm_u32* hit_rays,
+                                   RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                   RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* marks,
+                                   const RM_GLOBAL rm_u32* scratch, rm_integrate_params params,
+                                   RM_ATOMIC_GLOBAL rm_counter* counters) {
+  rm_u32 id = rm_global_id();
+  if (id < params.item_count) {
+    rm_apply_hit_group(id, rays, groups, hit_rays, occupancy, means, marks, scratch, params,
+                       counters);
+  }
+}
+
+#endif /* RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H */

@@ -1,0 +1,341 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// CUDA backend: device memory, one stream, events per batch, kernel launches. The batch loop, the
+// kernel order and region moves are gpu::StagedBackend's.
+#include "src/cuda/cuda_backend.hpp"
+
+#include <array>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "kernels/common/batch.h"
+#include "kernels/cuda/launch.h"
+#include "src/cuda/cuda_devices.hpp"
+#include "src/cuda/cuda_handles.hpp"
+#include "src/gpu/staged_backend.hpp"
+
+namespace raymap {
+namespace {
+
+using gpu::OccupancyKernel;
+
+/// Device buffers of one staging set, its page-locked counter read-back and its end event.
+struct DeviceBatch {
+  cuda::DeviceMemoryHandle rays;
+  cuda::DeviceMemoryHandle spans;
+  cuda::DeviceMemoryHandle groups;
+  cuda::DeviceMemoryHandle hit_rays;
+  cuda::DeviceMemoryHandle counters;
+  cuda::DeviceMemoryHandle scratch;        // per-ray semantics: saved values and runs of misses
+  cuda::PinnedMemoryHandle counters_host;  // RM_COUNTER_COUNT 64-bit words
+  cuda::EventHandle done;                  // recorded after the counters' read-back
+  // The host arrays of the set, page-locked where they are (declared after nothing they outlive:
+  // the arrays belong to the base class, which is destroyed after this).
+  std::vector<cuda::HostRegistration> pinned_arrays;
+};
+
+template <class T>
+T* typed(const cuda::DeviceMemoryHandle& memory) noexcept {
+  return static_cast<T*>(memory.get());
+}
+
+class CudaBackend final : public gpu::StagedBackend {
+ public:
+  /// slots == 0: shared memory (the device works on the host store in place).
+  CudaBackend(VoxelMap& map, cuda::DeviceInfo device, std::uint32_t slots,
+              const CudaBackendOptions& options)
+      : StagedBackend(map, slots, /*wide_counters=*/true, options),
+        device_(std::move(device)),
+        block_threads_(options.block_threads) {}
+
+  ~CudaBackend() override {
+    if (stream_ && cudaSetDevice(device_.index) == cudaSuccess) {
+      (void)cudaStreamSynchronize(stream_.get());
+    }
+  }
+
+  /// Allocates device memory and page-locks host memory; called once by the factory.
+  Expected<void, Error> initialise() {
+    if (const cudaError_t s = cudaSetDevice(device_.index); s != cudaSuccess) {
+      return Unexpected(cuda::cudaFailure("CUDA device " + std::to_string(device_.index), s));
+    }
+    auto stream = cuda::createStream();
+    if (!stream) {
+      return Unexpected(stream.error());
+    }
+    stream_ = std::move(*stream);
+    auto idle = cuda::createEvent();
+    if (!idle) {
+      return Unexpected(idle.error());
+    }
+    idle_ = std::move(*idle);
+    if (auto ok = allocateLayers(); !ok) {
+      return ok;
+    }
+    auto dummy = cuda::allocateDevice(sizeof(rm_voxel_mean), "placeholder for absent layers");
+    if (!dummy) {
+      return Unexpected(dummy.error());
+    }
+    dummy_ = std::move(*dummy);
+    for (unsigned set = 0; set < kStagingSets; ++set) {
+      if (auto ok = allocateBatch(set); !ok) {
+        return ok;
+      }
+    }
+    if (!finish()) {
+      return fail(ErrorCode::kCapacity,
+                  "CUDA device region cache: initialising it failed on " + device_.name);
+    }
+    return {};
+  }
+
+  const char* name() const noexcept override { return "cuda"; }
+  std::string deviceName() const override {
+    return device_.name + " (CUDA " + std::to_string(device_.compute_major) + "." +
+           std::to_string(device_.compute_minor) + ", runtime " +
+           cuda::versionText(device_.runtime_version) + ")" +
+           (sharedMemory() ? ", shared memory" : "");
+  }
+  std::string startupWarning() const override { return warning_; }
+
+ private:
+  /// One allocation per map layer: cache slots in device memory, or (shared memory) the host
+  /// store's array, page-locked and mapped.
+  Expected<void, Error> allocateLayers() {
+    const RegionStore& store = map().store();
+    const LayerSchema& schema = store.schema();
+    layers_.resize(static_cast<std::size_t>(schema.size()));
+    for (int l = 0; l < schema.size(); ++l) {
+      const auto index = static_cast<std::size_t>(l);
+      const std::size_t bytes = store.layerRegionBytes(l) * layerRegions();
+      const std::string layer_name(schema.at(l).name);
+      if (sharedMemory()) {
+        auto pinned =
+            cuda::HostRegistration::create(store.layerBytes(0, l), bytes, cudaHostRegisterMapped,
+                                           "the map's layer '" + layer_name + "'");
+        if (!pinned) {
+          return Unexpected(pinned.error());
+        }
+        shared_layers_.push_back(std::move(*pinned));
+        void* device_ptr = nullptr;
+        if (const cudaError_t s = cudaHostGetDevicePointer(&device_ptr, store.layerBytes(0, l), 0);
+            s != cudaSuccess) {
+          return Unexpected(cuda::cudaFailure("mapping the map's layer '" + layer_name + "'", s));
+        }
+        layer_ptrs_.push_back(device_ptr);
+        continue;
+      }
+      auto memory = cuda::allocateDevice(bytes, "device region cache, layer '" + layer_name + "'");
+      if (!memory) {
+        return Unexpected(memory.error());
+      }
+      layers_[index] = std::move(*memory);
+      layer_ptrs_.push_back(layers_[index].get());
+      // Clear all of the cache now, at start-up, so integration never meets uninitialised memory
+      // or first-touch costs.
+      if (!fillLayer(l, 0, bytes, schema.at(l))) {
+        return fail(ErrorCode::kCapacity, "CUDA device region cache, layer '" + layer_name +
+                                              "': cannot initialise " + std::to_string(bytes) +
+                                              " bytes on " + device_.name);
+      }
+    }
+    return {};
+  }
+
+  /// Device buffers of one staging set; its host arrays are page-locked in place. Page-locking is
+  /// a speed-up only (copies from pageable memory are correct, merely staged by the driver), so
+  /// a refusal becomes a start-up warning.
+  Expected<void, Error> allocateBatch(unsigned set) {
+    DeviceBatch& b = batches_[set];
+    const gpu::BatchLimits& limits = this->limits();
+    for (auto [handle, bytes, what] :
+         {std::tuple{&b.rays, limits.max_rays * sizeof(PreparedRay), "ray batch"},
+          std::tuple{&b.spans, limits.max_spans * sizeof(rm_span_record), "span batch"},
+          std::tuple{&b.groups, limits.max_rays * sizeof(rm_hit_group), "hit groups"},
+          std::tuple{&b.hit_rays, limits.max_rays * sizeof(std::uint32_t), "hit list"},
+          std::tuple{&b.counters, counterBytes(), "counters"},
+          std::tuple{&b.scratch, scratchWords() * 4u, "batch scratch"}}) {
+      auto memory = cuda::allocateDevice(bytes, what);
+      if (!memory) {
+        return Unexpected(memory.error());
+      }
+      *handle = std::move(*memory);
+    }
+    void* host = nullptr;
+    if (const cudaError_t s = cudaMallocHost(&host, counterBytes()); s != cudaSuccess) {
+      return Unexpected(cuda::cudaFailure("CUDA counter read-back buffer", s));
+    }
+    b.counters_host.reset(host);
+    auto event = cuda::createEvent();
+    if (!event) {
+      return Unexpected(event.error());
+    }
+    b.done = std::move(*event);
+    gpu::BatchArrays& a = stagingArrays(set);
+    for (auto [data, bytes] :
+         {std::pair<void*, std::size_t>{a.rays.data(), a.rays.capacity() * sizeof(PreparedRay)},
+          {a.spans.data(), a.spans.capacity() * sizeof(rm_span_record)},
+          {a.groups.data(), a.groups.capacity() * sizeof(rm_hit_group)},
+          {a.hit_rays.data(), a.hit_rays.capacity() * sizeof(std::uint32_t)}}) {
+      auto pinned = cuda::HostRegistration::create(data, bytes, cudaHostRegisterDefault,
+                                                   "the batch staging arrays");
+      if (!pinned) {
+        warning_ = pinned.error().message + "; batch copies will be staged by the driver";
+        continue;
+      }
+      b.pinned_arrays.push_back(std::move(*pinned));
+    }
+    return {};
+  }
+
+  // ---- gpu::StagedBackend ----
+  bool makeCurrent() noexcept override { return cudaSetDevice(device_.index) == cudaSuccess; }
+
+  bool uploadBatch(unsigned set, const gpu::BatchArrays& a) noexcept override {
+    const DeviceBatch& b = batches_[set];
+    bool ok = true;
+    auto copy = [&](const cuda::DeviceMemoryHandle& dst, const void* src, std::size_t bytes) {
+      ok = ok && (bytes == 0 || cudaMemcpyAsync(dst.get(), src, bytes, cudaMemcpyHostToDevice,
+                                                stream_.get()) == cudaSuccess);
+    };
+    copy(b.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
+    copy(b.spans, a.spans.data(), a.spans.size() * sizeof(rm_span_record));
+    copy(b.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
+    copy(b.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
+    return ok && cudaMemsetAsync(b.counters.get(), 0, counterBytes(), stream_.get()) == cudaSuccess;
+  }
+
+  bool clearScratch(unsigned set, std::size_t first_word, std::size_t words) noexcept override {
+    return cudaMemsetAsync(typed<std::uint32_t>(batches_[set].scratch) + first_word, 0, words * 4u,
+                           stream_.get()) == cudaSuccess;
+  }
+
+  bool launch(OccupancyKernel kernel, unsigned set,
+              const rm_integrate_params& p) noexcept override {
+    const DeviceBatch& b = batches_[set];
+    cuda::OccupancyKernelBuffers buffers;
+    buffers.rays = typed<const rm_prepared_ray>(b.rays);
+    buffers.spans = typed<const rm_span_record>(b.spans);
+    buffers.groups = typed<const rm_hit_group>(b.groups);
+    buffers.hit_rays = typed<const std::uint32_t>(b.hit_rays);
+    buffers.occupancy = static_cast<std::uint32_t*>(layerOr(map().occupancyLayer()));
+    buffers.means = static_cast<rm_voxel_mean*>(layerOr(map().meanLayer()));
+    buffers.marks = static_cast<std::uint32_t*>(layerOr(map().scanMarkLayer()));
+    buffers.scratch = typed<std::uint32_t>(b.scratch);
+    buffers.counters = typed<unsigned long long>(b.counters);
+    const cuda::OccupancyKernelId id =
+        kernel == OccupancyKernel::kTagHitGroups     ? cuda::OccupancyKernelId::kTagHitGroups
+        : kernel == OccupancyKernel::kIntegrateSpans ? cuda::OccupancyKernelId::kIntegrateSpans
+                                                     : cuda::OccupancyKernelId::kApplyHitGroups;
+    return cuda::launchOccupancyKernel(id, stream_.get(), block_threads_, buffers, p) ==
+           cudaSuccess;
+  }
+
+  bool endBatch(unsigned set) noexcept override {
+    DeviceBatch& b = batches_[set];
+    return cudaMemcpyAsync(b.counters_host.get(), b.counters.get(), counterBytes(),
+                           cudaMemcpyDeviceToHost, stream_.get()) == cudaSuccess &&
+           cudaEventRecord(b.done.get(), stream_.get()) == cudaSuccess;
+  }
+
+  const void* waitForBatch(unsigned set) noexcept override {
+    DeviceBatch& b = batches_[set];
+    return cudaEventSynchronize(b.done.get()) == cudaSuccess ? b.counters_host.get() : nullptr;
+  }
+
+  /// The host store is pageable: an upload is staged by the driver and then waited for, so the
+  /// host slot may be reused at once (uploads happen only on cache misses of regions the host
+  /// holds). A download into pageable memory returns when it is done; nothing reads the host
+  /// store before synchronise() anyway.
+  bool copyLayer(int layer, std::size_t device_offset, std::byte* host, std::size_t bytes,
+                 bool to_device) noexcept override {
+    std::byte* device =
+        static_cast<std::byte*>(layer_ptrs_[static_cast<std::size_t>(layer)]) + device_offset;
+    if (to_device) {
+      return cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_.get()) ==
+                 cudaSuccess &&
+             finish();
+    }
+    return cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, stream_.get()) ==
+           cudaSuccess;
+  }
+
+  bool fillLayer(int layer, std::size_t device_offset, std::size_t bytes,
+                 const LayerSpec& spec) noexcept override {
+    cuda::FillPattern pattern;
+    pattern.count = spec.bytes_per_voxel / 4u;
+    for (unsigned w = 0; w < pattern.count && w < LayerSpec::kMaxWordsPerVoxel; ++w) {
+      pattern.words[w] = spec.clear_words[w];
+    }
+    auto* device = static_cast<std::uint32_t*>(layer_ptrs_[static_cast<std::size_t>(layer)]) +
+                   device_offset / 4u;
+    return cuda::launchFill(stream_.get(), device, bytes / 4u, pattern) == cudaSuccess;
+  }
+
+  /// Waits on an event rather than the stream, so the host thread sleeps instead of spinning.
+  bool finish() noexcept override {
+    return cudaEventRecord(idle_.get(), stream_.get()) == cudaSuccess &&
+           cudaEventSynchronize(idle_.get()) == cudaSuccess;
+  }
+
+  void* layerOr(int layer) const noexcept {
+    return layer >= 0 ? layer_ptrs_[static_cast<std::size_t>(layer)] : dummy_.get();
+  }
+
+  cuda::DeviceInfo device_;
+  unsigned block_threads_;
+  cuda::StreamHandle stream_;
+  cuda::EventHandle idle_;
+  std::vector<cuda::DeviceMemoryHandle> layers_;       // cache mode: one per schema layer
+  std::vector<cuda::HostRegistration> shared_layers_;  // shared memory: the host store, mapped
+  std::vector<void*> layer_ptrs_;                      // device address of each layer
+  cuda::DeviceMemoryHandle dummy_;
+  std::array<DeviceBatch, kStagingSets> batches_;
+  std::string warning_;
+};
+
+gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device) {
+  gpu::DeviceMemoryLimits limits;
+  limits.device_name = device.name;
+  limits.global_mem_bytes = device.global_mem_bytes;
+  limits.max_alloc_bytes = device.global_mem_bytes;  // CUDA has no per-allocation limit
+  limits.unified_memory = device.integrated;
+  limits.can_map_host_memory = device.can_map_host_memory;
+  return limits;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
+                                                   const CudaBackendOptions& options) {
+  if (map.occupancyLayer() < 0) {
+    return fail(ErrorCode::kInvalidArgument, "the CUDA backend needs an occupancy layer");
+  }
+  if (auto ok = gpu::checkBatchOptions(options, "CUDA"); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (options.block_threads == 0 || options.block_threads > 1024 ||
+      options.block_threads % 32 != 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "CUDA block size must be a multiple of 32 from 32 to 1024 threads");
+  }
+  auto devices = cuda::listDevices();
+  if (!devices) {
+    return Unexpected(devices.error());
+  }
+  auto device = cuda::selectDevice(*devices, options.device);
+  if (!device) {
+    return Unexpected(device.error());
+  }
+  auto slots = gpu::deviceCacheSlots(map, memoryLimits(*device), options, "CUDA");
+  if (!slots) {
+    return Unexpected(slots.error());
+  }
+  auto backend = std::make_unique<CudaBackend>(map, std::move(*device), *slots, options);
+  if (auto ok = backend->initialise(); !ok) {
+    return Unexpected(ok.error());
+  }
+  return std::unique_ptr<Backend>(std::move(backend));
+}
+
+}  // namespace raymap

@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap devices`, CUDA part: the CUDA devices and the one --backend cuda uses.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tools/raymap/device_listing.hpp"
+#include "tools/raymap/json_writer.hpp"
+
+#if RAYMAP_HAVE_CUDA
+#include "src/cuda/cuda_devices.hpp"
+#endif
+
+namespace raymap::cli {
+namespace {
+
+#if RAYMAP_HAVE_CUDA
+
+std::string capability(const cuda::DeviceInfo& d) {
+  return std::to_string(d.compute_major) + "." + std::to_string(d.compute_minor);
+}
+
+std::string deviceJson(const cuda::DeviceInfo& d) {
+  JsonObject j;
+  j.add("index", d.index)
+      .add("name", d.name)
+      .add("compute_capability", capability(d))
+      .add("multiprocessors", d.multiprocessors)
+      .add("global_mem_bytes", d.global_mem_bytes)
+      .add("integrated", d.integrated)
+      .add("can_map_host_memory", d.can_map_host_memory)
+      .add("pci_bus_id", d.pci_bus_id)
+      .add("default", d.index == 0);
+  return j.str();
+}
+
+std::string listJson(const std::vector<cuda::DeviceInfo>& devices) {
+  std::vector<std::string> items;
+  for (const cuda::DeviceInfo& d : devices) {
+    items.push_back(deviceJson(d));
+  }
+  JsonObject j;
+  j.add("runtime_version", cuda::versionText(devices.front().runtime_version))
+      .add("driver_version", cuda::versionText(devices.front().driver_version))
+      .raw("devices", jsonArray(items))
+      .add("default", 0);
+  return j.str();
+}
+
+std::string listText(const std::vector<cuda::DeviceInfo>& devices) {
+  std::string out;
+  appendf(&out, "CUDA runtime %s, driver supports CUDA %s\n",
+          cuda::versionText(devices.front().runtime_version).c_str(),
+          cuda::versionText(devices.front().driver_version).c_str());
+  for (const cuda::DeviceInfo& d : devices) {
+    appendf(&out, "  device %d: %s%s\n", d.index, d.name.c_str(),
+            d.index == 0 ? "  [default]" : "");
+    appendf(&out, "    compute capability  %s\n", capability(d).c_str());
+    appendf(&out, "    multiprocessors     %u\n", d.multiprocessors);
+    appendf(&out, "    global memory       %s\n", sizeText(d.global_mem_bytes).c_str());
+    appendf(&out, "    integrated          %s\n", d.integrated ? "yes (shares host memory)" : "no");
+    appendf(&out, "    maps host memory    %s\n", d.can_map_host_memory ? "yes" : "no");
+    if (!d.pci_bus_id.empty()) {
+      appendf(&out, "    PCI bus             %s\n", d.pci_bus_id.c_str());
+    }
+  }
+  appendf(&out, "default for --backend cuda: device 0 (%s)\n", devices.front().name.c_str());
+  return out;
+}
+
+#endif
+
+}  // namespace
+
+DeviceListing listCudaDevices() {
+  DeviceListing listing;
+#if RAYMAP_HAVE_CUDA
+  auto devices = cuda::listDevices();
+  if (!devices) {
+    listing.error = devices.error().message;
+    return listing;
+  }
+  listing.available = !devices->empty();
+  if (listing.available) {
+    listing.text = listText(*devices);
+    listing.json = listJson(*devices);
+  }
+#else
+  listing.error =
+      "this build has no CUDA backend (it is built whenever CMake finds nvcc; install the CUDA "
+      "toolkit, then configure again)";
+#endif
+  return listing;
+}
+
+}  // namespace raymap::cli
