@@ -1110,24 +1110,22 @@ std::string openClUnavailable() {
   return contains(r.out, "default for --backend opencl") ? std::string() : r.out + r.err;
 }
 
-TEST(CliOpenCl, PopulateMatchesTheCpuAndReportsTheDevice) {
-  if (const std::string why = openClUnavailable(); !why.empty()) {
-    GTEST_SKIP() << why;
-  }
+/// Maps the yard on the CPU and on `device`, and expects the same map and the device report.
+void expectDeviceMatchesTheCpu(const std::string& device) {
   TempDir dir;
   const std::string input = dir.file("yard.ply");
   writeRayCloud(input, yardRays(kYardScans));
   std::vector<VoxelCounts> counts;
-  for (const char* backend : {"cpu", "opencl"}) {
+  for (const std::string& backend : {std::string("cpu"), device}) {
     SCOPED_TRACE(backend);
-    const std::string map = dir.file(std::string(backend) + ".rmap");
-    const std::string stats = dir.file(std::string(backend) + ".json");
+    const std::string map = dir.file(backend + ".rmap");
+    const std::string stats = dir.file(backend + ".json");
     // Per-scan semantics: the device map equals the CPU's exactly (docs/architecture.md), for
     // the same walk direction (devices walk in reverse by default).
     std::vector<std::string> args = {"populate",     input,   "--semantics", "scan",
                                      "--backend",    backend, "--output",    map,
                                      "--stats-json", stats};
-    if (std::string(backend) == "cpu") {
+    if (backend == "cpu") {
       args.push_back("--reverse");
     }
     const RunResult r = runRaymap(concat(args, kSmallMap));
@@ -1135,7 +1133,7 @@ TEST(CliOpenCl, PopulateMatchesTheCpuAndReportsTheDevice) {
     const std::string json = readFile(stats);
     EXPECT_EQ(jsonValue(json, "backend"), std::optional<std::string>(backend));
     EXPECT_EQ(jsonCount(json, "updates_dropped"), 0u);
-    if (std::string(backend) == "opencl") {
+    if (backend != "cpu") {
       for (const char* key : {"device", "rays_skipped", "bytes_to_device", "bytes_from_device",
                               "cache_slots", "cache_hits", "cache_misses", "cache_hit_rate"}) {
         EXPECT_TRUE(jsonValue(json, key).has_value()) << "missing key " << key << " in\n" << json;
@@ -1147,6 +1145,58 @@ TEST(CliOpenCl, PopulateMatchesTheCpuAndReportsTheDevice) {
     counts.push_back(infoCounts(map));
   }
   EXPECT_EQ(counts[0], counts[1]);
+}
+
+TEST(CliOpenCl, PopulateMatchesTheCpuAndReportsTheDevice) {
+  if (const std::string why = openClUnavailable(); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
+  expectDeviceMatchesTheCpu("opencl");
+}
+
+/// Why `--backend cuda` cannot run here, or "" when it can.
+std::string cudaUnavailable() {
+  const RunResult r = runRaymap({"devices"});
+  return contains(r.out, "default for --backend cuda") ? std::string() : r.out + r.err;
+}
+
+TEST(CliCuda, PopulateMatchesTheCpuOrExplainsWhyNotAndOffersTheFallback) {
+  if (cudaUnavailable().empty()) {
+    expectDeviceMatchesTheCpu("cuda");
+    return;
+  }
+  // No NVIDIA driver or GPU (CI), or a build without CUDA: a clear error, nothing written, and
+  // --fallback cpu still maps.
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(1));
+  const std::string map = dir.file("out.rmap");
+  const std::string stats = dir.file("out.json");
+  const std::vector<std::string> args = {
+      "populate",     input, "--backend", "cuda",        "--output", map,
+      "--stats-json", stats, "--quiet",   "--max-range", "8"};
+  const RunResult failed = runRaymap(args);
+  EXPECT_EQ(failed.exit_code, 1) << describe(failed);
+  EXPECT_TRUE(contains(failed.err, "--backend cuda: ")) << failed.err;
+  EXPECT_TRUE(contains(failed.err, "--fallback cpu")) << failed.err;
+  EXPECT_FALSE(fs::exists(map));
+  const RunResult fell_back = runRaymap(concat(args, {"--fallback", "cpu"}));
+  ASSERT_EQ(fell_back.exit_code, 0) << describe(fell_back);
+  EXPECT_TRUE(contains(fell_back.err, "falling back to the CPU"));
+  EXPECT_EQ(jsonValue(readFile(stats), "backend"), std::optional<std::string>("cpu"));
+}
+
+TEST(CliCuda, DevicesListsBothApisAndSaysWhyOneHasNone) {
+  const RunResult text = runRaymap({"devices"});
+  EXPECT_TRUE(contains(text.out, "OpenCL\n")) << text.out;
+  EXPECT_TRUE(contains(text.out, "\nCUDA\n")) << text.out;
+  const RunResult json = runRaymap({"devices", "--json"});
+  EXPECT_TRUE(contains(json.out, "\"opencl\": {")) << json.out;
+  EXPECT_TRUE(contains(json.out, "\"cuda\": {")) << json.out;
+  if (!cudaUnavailable().empty()) {
+    EXPECT_TRUE(contains(text.out, "none: ")) << text.out;
+    EXPECT_TRUE(contains(json.out, "\"error\": ")) << json.out;
+  }
 }
 
 TEST(CliOpenCl, UnknownDeviceFailsUnlessTheCpuFallbackIsAllowed) {

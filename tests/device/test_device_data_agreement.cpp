@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Agreement of the OpenCL backend with the CPU reference on the shared real data: the same rays,
+// Agreement of a device backend with the CPU reference on the shared real data: the same rays,
 // resolution, range limit and probabilities give the same voxel states, log-odds within half a
-// hit and the same voxel means, per ray and per scan. Skips without the data or an OpenCL platform.
+// hit and the same voxel means, per ray and per scan. Written once; linked into one executable
+// per GPU API (test_opencl_data, test_cuda_data). Skips without the data or the device.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -26,8 +27,7 @@
 #include "src/map/map_params.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/opencl/cl_runtime.hpp"
-#include "src/opencl/opencl_backend.hpp"
+#include "tests/device/device_under_test.hpp"
 #include "tests/support/shared_data.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -134,19 +134,16 @@ ValueComparison compareValues(const VoxelMap& reference, const VoxelMap& map) {
   return result;
 }
 
-class OpenClDataAgreement : public testing::TestWithParam<DataCase> {};
+class DeviceDataAgreement : public testing::TestWithParam<DataCase> {};
 
-TEST_P(OpenClDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
+TEST_P(DeviceDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
   // Arrange
   const DataCase& param = GetParam();
   const DataFiles files = dataFiles(param.data);
   if (!files.missing.empty()) {
     GTEST_SKIP() << files.missing;
   }
-  auto devices = opencl::listDevices();
-  if (!devices || devices->empty()) {
-    GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
-  }
+  REQUIRE_DEVICE();
   const std::vector<Ray> rays = loadRays(files.file, files.trajectory);
   ASSERT_FALSE(rays.empty());
   VoxelMap reference = makeMap(mapConfig(param.semantics));
@@ -154,11 +151,8 @@ TEST_P(OpenClDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
   RayFilter forward;
   forward.max_range_m = kMaxRange;
   VoxelMap map = makeMap(mapConfig(param.semantics));
-  OpenClBackendOptions options;
-  options.program_cache.directory = ::testing::TempDir() + "raymap-opencl-test-cache";
-  auto created = createOpenClBackend(map, options);
-  ASSERT_TRUE(created) << created.error().message;
-  std::unique_ptr<Backend> device = std::move(*created);
+  std::unique_ptr<Backend> device = createDeviceBackend(map);
+  ASSERT_TRUE(device);
   RayFilter reverse = forward;
   reverse.reverse = true;  // the shipped default for device backends
 
@@ -182,7 +176,7 @@ TEST_P(OpenClDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
       "%s %s: rays %zu (integrated %llu); states agree %.4f %% of %llu voxels (exact values "
       "%.4f %%); values beyond half a hit %.4f %% of %llu; means %llu, count mismatches %llu, "
       "mean mismatches %llu (max %.6f voxel); same walk: %llu of %llu values exact; seconds cpu "
-      "1t %.2f opencl %.2f; dropped %llu, skipped %llu; device %s",
+      "1t %.2f %s %.2f; dropped %llu, skipped %llu; device %s",
       param.data.name, toString(param.semantics), rays.size(),
       static_cast<unsigned long long>(device_run.counters.rays_accepted),
       100.0 * states.sameStateFraction(), static_cast<unsigned long long>(states.compared),
@@ -195,9 +189,10 @@ TEST_P(OpenClDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
       static_cast<double>(values.max_mean_difference),
       static_cast<unsigned long long>(same_walk_states.exact_value),
       static_cast<unsigned long long>(same_walk_states.compared), cpu_run.seconds,
-      device_run.seconds, static_cast<unsigned long long>(stats.updates_dropped),
+      deviceUnderTest().api, device_run.seconds,
+      static_cast<unsigned long long>(stats.updates_dropped),
       static_cast<unsigned long long>(stats.rays_skipped), device->deviceName().c_str());
-  std::cout << "[opencl-agreement] " << line << std::endl;
+  std::cout << "[device-agreement] " << line << std::endl;
   RecordProperty("agreement_percent", std::to_string(100.0 * states.sameStateFraction()));
   RecordProperty("compared_voxels", std::to_string(states.compared));
   RecordProperty("value_outliers", std::to_string(values.value_outliers));
@@ -220,7 +215,7 @@ TEST_P(OpenClDataAgreement, StatesValuesAndMeansMatchTheCpuReference) {
   EXPECT_EQ(same_walk_states.exact_value, same_walk_states.compared);
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedData, OpenClDataAgreement, testing::ValuesIn(dataCases()),
+INSTANTIATE_TEST_SUITE_P(SharedData, DeviceDataAgreement, testing::ValuesIn(dataCases()),
                          [](const testing::TestParamInfo<DataCase>& param_info) {
                            return dataCaseName(param_info.param);
                          });

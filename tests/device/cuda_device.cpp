@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The shared device tests against the CUDA backend (skipped, exit code 77, without a CUDA device).
+#include "src/cuda/cuda_backend.hpp"
+#include "src/cuda/cuda_devices.hpp"
+#include "tests/device/device_under_test.hpp"
+
+namespace raymap::test {
+namespace {
+
+std::string unavailable() {
+  auto devices = cuda::listDevices();
+  return devices ? std::string() : devices.error().message;
+}
+
+Result<std::unique_ptr<Backend>> create(VoxelMap& map, const DeviceBackendOptions& shared) {
+  CudaBackendOptions options;
+  static_cast<DeviceBackendOptions&>(options) = shared;
+  return createCudaBackend(map, options);
+}
+
+bool sharesMemory() {
+  auto devices = cuda::listDevices();
+  return devices && !devices->empty() && devices->front().integrated &&
+         devices->front().can_map_host_memory;
+}
+
+}  // namespace
+
+const DeviceUnderTest& deviceUnderTest() {
+  static const DeviceUnderTest device{"CUDA", &unavailable, &create, &sharesMemory};
+  return device;
+}
+
+}  // namespace raymap::test

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The device backend a device test executable runs against. The tests in this folder are written
+// once and linked into one executable per GPU API (OpenCL, CUDA) together with that API's
+// definition of deviceUnderTest().
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "src/core/error.hpp"
+#include "src/gpu/device_options.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::test {
+
+/// @brief One GPU API's backend, as the shared device tests see it.
+struct DeviceUnderTest {
+  const char* api = "";  ///< "OpenCL", "CUDA" (messages and reports)
+  /// Why this machine cannot run the backend ("" when it can): the tests skip with it.
+  std::string (*unavailable)() = nullptr;
+  /// Creates the backend with the shared options and the API's defaults for the rest.
+  Result<std::unique_ptr<Backend>> (*create)(VoxelMap& map,
+                                             const DeviceBackendOptions& options) = nullptr;
+  /// Whether the device can work on the host map in place (DeviceMemory::kShared).
+  bool (*shares_memory)() = nullptr;
+};
+
+/// @brief Defined once per executable by the API's file (opencl_device.cpp, cuda_device.cpp).
+const DeviceUnderTest& deviceUnderTest();
+
+/// @brief The backend, with a test failure (and nullptr) when creation fails.
+std::unique_ptr<Backend> createDeviceBackend(VoxelMap& map,
+                                             const DeviceBackendOptions& options = {});
+
+}  // namespace raymap::test
+
+/// Skips the test, with the reason, when the machine cannot run the device under test.
+#define REQUIRE_DEVICE()                                                                       \
+  if (const std::string why = ::raymap::test::deviceUnderTest().unavailable(); !why.empty()) { \
+    GTEST_SKIP() << why;                                                                       \
+  }

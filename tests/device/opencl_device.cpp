@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The shared device tests against the OpenCL backend (PoCL in CI).
+#include "src/opencl/cl_runtime.hpp"
+#include "src/opencl/opencl_backend.hpp"
+#include "tests/device/device_under_test.hpp"
+
+namespace raymap::test {
+namespace {
+
+std::string unavailable() {
+  auto devices = opencl::listDevices();
+  if (!devices || devices->empty()) {
+    return "no OpenCL platform (install pocl-opencl-icd to run)";
+  }
+  return {};
+}
+
+Result<std::unique_ptr<Backend>> create(VoxelMap& map, const DeviceBackendOptions& shared) {
+  OpenClBackendOptions options;
+  static_cast<DeviceBackendOptions&>(options) = shared;
+  options.program_cache.directory = ::testing::TempDir() + "raymap-opencl-test-cache";
+  return createOpenClBackend(map, options);
+}
+
+bool sharesMemory() {
+  auto devices = opencl::listDevices();
+  if (!devices) {
+    return false;
+  }
+  auto device = opencl::selectDevice(*devices, opencl::DeviceSelector{});
+  return device && device->unified_memory;
+}
+
+}  // namespace
+
+const DeviceUnderTest& deviceUnderTest() {
+  static const DeviceUnderTest device{"OpenCL", &unavailable, &create, &sharesMemory};
+  return device;
+}
+
+}  // namespace raymap::test
