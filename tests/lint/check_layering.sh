@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
-# src/sim, src/io, src/gpu <- src/opencl <- tools. Includes are written relative to the repository root, so grep can tell.
+# src/sim, src/io, src/gpu <- src/opencl, src/cuda <- tools. Includes are written relative to the repository root, so grep can tell.
 set -euo pipefail
 root=${1:-.}
 cd "$root"
@@ -22,8 +22,10 @@ check src/map 'src/io|src/sim|tools/|tests/' 'the map does not know files or too
 check src/io 'src/sim|tools/|tests/' 'file formats do not know scenes or tools'
 check src/sim 'src/io|tools/|tests/' 'scenes produce rays, not files'
 check kernels/device 'src/|platform/|tools/|tests/' 'device code depends only on kernels/'
-check src/gpu 'src/io|src/sim|src/opencl|tools/|tests/' 'shared device-backend logic is API-agnostic'
-check src/opencl 'src/sim|tools/|tests/' 'a backend does not know scenes or tools'
+check src/gpu 'src/io|src/sim|src/opencl|src/cuda|tools/|tests/' 'shared device-backend logic is API-agnostic'
+check src/opencl 'src/sim|src/cuda|tools/|tests/' 'a backend does not know scenes, tools or the other API'
+check src/cuda 'src/sim|src/opencl|tools/|tests/' 'a backend does not know scenes, tools or the other API'
+check kernels/cuda 'src/|platform/|tools/|tests/' 'CUDA entry points depend only on kernels/'
 # Only kernels/common headers may use C-style guards; everything else is #pragma once.
 for f in $(find src platform tools tests -name '*.hpp'); do
   grep -q '^#pragma once' "$f" || { echo "header without #pragma once: $f"; status=1; }
