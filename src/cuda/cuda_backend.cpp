@@ -4,6 +4,7 @@
 #include "src/cuda/cuda_backend.hpp"
 
 #include <array>
+#include <new>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -29,9 +30,6 @@ struct DeviceBatch {
   cuda::DeviceMemoryHandle scratch;        // per-ray semantics: saved values and runs of misses
   cuda::PinnedMemoryHandle counters_host;  // RM_COUNTER_COUNT 64-bit words
   cuda::EventHandle done;                  // recorded after the counters' read-back
-  // The host arrays of the set, page-locked where they are (declared after nothing they outlive:
-  // the arrays belong to the base class, which is destroyed after this).
-  std::vector<cuda::HostRegistration> pinned_arrays;
 };
 
 template <class T>
@@ -44,7 +42,7 @@ class CudaBackend final : public gpu::StagedBackend {
   /// slots == 0: shared memory (the device works on the host store in place).
   CudaBackend(VoxelMap& map, cuda::DeviceInfo device, std::uint32_t slots,
               const CudaBackendOptions& options)
-      : StagedBackend(map, slots, /*wide_counters=*/true, options),
+      : StagedBackend(map, slots, /*wide_counters=*/true, options, cuda::pinnedHostMemory()),
         device_(std::move(device)),
         block_threads_(options.block_threads) {}
 
@@ -96,7 +94,6 @@ class CudaBackend final : public gpu::StagedBackend {
            cuda::versionText(device_.runtime_version) + ")" +
            (sharedMemory() ? ", shared memory" : "");
   }
-  std::string startupWarning() const override { return warning_; }
 
  private:
   /// One allocation per map layer: cache slots in device memory, or (shared memory) the host
@@ -104,27 +101,14 @@ class CudaBackend final : public gpu::StagedBackend {
   Expected<void, Error> allocateLayers() {
     const RegionStore& store = map().store();
     const LayerSchema& schema = store.schema();
+    if (sharedMemory()) {
+      return mapHostStore();
+    }
     layers_.resize(static_cast<std::size_t>(schema.size()));
     for (int l = 0; l < schema.size(); ++l) {
       const auto index = static_cast<std::size_t>(l);
       const std::size_t bytes = store.layerRegionBytes(l) * layerRegions();
       const std::string layer_name(schema.at(l).name);
-      if (sharedMemory()) {
-        auto pinned =
-            cuda::HostRegistration::create(store.layerBytes(0, l), bytes, cudaHostRegisterMapped,
-                                           "the map's layer '" + layer_name + "'");
-        if (!pinned) {
-          return Unexpected(pinned.error());
-        }
-        shared_layers_.push_back(std::move(*pinned));
-        void* device_ptr = nullptr;
-        if (const cudaError_t s = cudaHostGetDevicePointer(&device_ptr, store.layerBytes(0, l), 0);
-            s != cudaSuccess) {
-          return Unexpected(cuda::cudaFailure("mapping the map's layer '" + layer_name + "'", s));
-        }
-        layer_ptrs_.push_back(device_ptr);
-        continue;
-      }
       auto memory = cuda::allocateDevice(bytes, "device region cache, layer '" + layer_name + "'");
       if (!memory) {
         return Unexpected(memory.error());
@@ -142,9 +126,34 @@ class CudaBackend final : public gpu::StagedBackend {
     return {};
   }
 
-  /// Device buffers of one staging set; its host arrays are page-locked in place. Page-locking is
-  /// a speed-up only (copies from pageable memory are correct, merely staged by the driver), so
-  /// a refusal becomes a start-up warning.
+  /// Shared memory: the store's layers lie one after the other in one pool, so the pool is
+  /// page-locked and mapped once (layers need not start on page boundaries, and a page can be
+  /// registered only once), and each layer's device address is taken inside it.
+  Expected<void, Error> mapHostStore() {
+    const RegionStore& store = map().store();
+    const int last = store.schema().size() - 1;
+    std::byte* begin = store.layerBytes(0, 0);
+    std::byte* end = store.layerBytes(0, last) + store.layerRegionBytes(last) * store.capacity();
+    auto pinned = cuda::HostRegistration::create(begin, static_cast<std::size_t>(end - begin),
+                                                 cudaHostRegisterMapped, "the map's region pool");
+    if (!pinned) {
+      return Unexpected(pinned.error());
+    }
+    shared_store_ = std::move(*pinned);
+    for (int l = 0; l <= last; ++l) {
+      void* device_ptr = nullptr;
+      if (const cudaError_t s = cudaHostGetDevicePointer(&device_ptr, store.layerBytes(0, l), 0);
+          s != cudaSuccess) {
+        return Unexpected(cuda::cudaFailure(
+            "mapping the map's layer '" + std::string(store.schema().at(l).name) + "'", s));
+      }
+      layer_ptrs_.push_back(device_ptr);
+    }
+    return {};
+  }
+
+  /// Device buffers of one staging set (its host arrays are the base class's, in page-locked
+  /// memory from cuda::pinnedHostMemory()).
   Expected<void, Error> allocateBatch(unsigned set) {
     DeviceBatch& b = batches_[set];
     const gpu::BatchLimits& limits = this->limits();
@@ -171,20 +180,6 @@ class CudaBackend final : public gpu::StagedBackend {
       return Unexpected(event.error());
     }
     b.done = std::move(*event);
-    gpu::BatchArrays& a = stagingArrays(set);
-    for (auto [data, bytes] :
-         {std::pair<void*, std::size_t>{a.rays.data(), a.rays.capacity() * sizeof(PreparedRay)},
-          {a.spans.data(), a.spans.capacity() * sizeof(rm_span_record)},
-          {a.groups.data(), a.groups.capacity() * sizeof(rm_hit_group)},
-          {a.hit_rays.data(), a.hit_rays.capacity() * sizeof(std::uint32_t)}}) {
-      auto pinned = cuda::HostRegistration::create(data, bytes, cudaHostRegisterDefault,
-                                                   "the batch staging arrays");
-      if (!pinned) {
-        warning_ = pinned.error().message + "; batch copies will be staged by the driver";
-        continue;
-      }
-      b.pinned_arrays.push_back(std::move(*pinned));
-    }
     return {};
   }
 
@@ -286,12 +281,11 @@ class CudaBackend final : public gpu::StagedBackend {
   unsigned block_threads_;
   cuda::StreamHandle stream_;
   cuda::EventHandle idle_;
-  std::vector<cuda::DeviceMemoryHandle> layers_;       // cache mode: one per schema layer
-  std::vector<cuda::HostRegistration> shared_layers_;  // shared memory: the host store, mapped
-  std::vector<void*> layer_ptrs_;                      // device address of each layer
+  std::vector<cuda::DeviceMemoryHandle> layers_;  // cache mode: one per schema layer
+  cuda::HostRegistration shared_store_;  // shared memory: the host store, page-locked and mapped
+  std::vector<void*> layer_ptrs_;        // device address of each layer
   cuda::DeviceMemoryHandle dummy_;
   std::array<DeviceBatch, kStagingSets> batches_;
-  std::string warning_;
 };
 
 gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device) {
@@ -331,7 +325,19 @@ Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
   if (!slots) {
     return Unexpected(slots.error());
   }
-  auto backend = std::make_unique<CudaBackend>(map, std::move(*device), *slots, options);
+  // The device is current before anything of it is allocated (the staging arrays are, in the
+  // constructor).
+  if (const cudaError_t s = cudaSetDevice(device->index); s != cudaSuccess) {
+    return Unexpected(cuda::cudaFailure("CUDA device " + std::to_string(device->index), s));
+  }
+  std::unique_ptr<CudaBackend> backend;
+  try {
+    backend = std::make_unique<CudaBackend>(map, std::move(*device), *slots, options);
+  } catch (const std::bad_alloc&) {
+    return fail(ErrorCode::kCapacity,
+                "CUDA batch staging: cannot allocate page-locked host memory for batches of " +
+                    std::to_string(options.batch_rays) + " rays; lower --batch-rays");
+  }
   if (auto ok = backend->initialise(); !ok) {
     return Unexpected(ok.error());
   }

@@ -2,6 +2,8 @@
 // CUDA runtime handles and error text.
 #include "src/cuda/cuda_handles.hpp"
 
+#include <new>
+
 namespace raymap::cuda {
 
 std::string errorText(cudaError_t status) {
@@ -43,6 +45,33 @@ void HostRegistration::reset() noexcept {
     (void)cudaHostUnregister(ptr_);
     ptr_ = nullptr;
   }
+}
+
+namespace {
+
+class PinnedHostResource final : public std::pmr::memory_resource {
+ private:
+  void* do_allocate(std::size_t bytes, std::size_t alignment) override {
+    // cudaHostAlloc returns page-aligned memory, more than any alignment asked of it here.
+    void* p = nullptr;
+    if (alignment > 4096 ||
+        cudaHostAlloc(&p, bytes > 0 ? bytes : 1, cudaHostAllocPortable) != cudaSuccess) {
+      (void)cudaGetLastError();
+      throw std::bad_alloc();
+    }
+    return p;
+  }
+  void do_deallocate(void* p, std::size_t, std::size_t) override { (void)cudaFreeHost(p); }
+  bool do_is_equal(const std::pmr::memory_resource& other) const noexcept override {
+    return this == &other;
+  }
+};
+
+}  // namespace
+
+std::pmr::memory_resource* pinnedHostMemory() noexcept {
+  static PinnedHostResource resource;
+  return &resource;
 }
 
 Result<DeviceMemoryHandle> allocateDevice(std::size_t bytes, const std::string& what) {

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <memory_resource>
 #include <string>
 
 #include <cuda_runtime_api.h>
@@ -57,6 +58,11 @@ class HostRegistration {
  private:
   void* ptr_ = nullptr;
 };
+
+/// @brief Page-locked host memory as a memory resource (cudaHostAlloc, portable to every device;
+/// std::bad_alloc when refused). Stateless and process-wide, so it outlives whatever uses it.
+/// Thread-safe. Not for the real-time path: allocation pins pages and is slow.
+std::pmr::memory_resource* pinnedHostMemory() noexcept;
 
 /// @brief `bytes` of device memory; `what` names it in the error (which gives the size).
 Result<DeviceMemoryHandle> allocateDevice(std::size_t bytes, const std::string& what);

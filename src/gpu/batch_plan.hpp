@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory_resource>
 #include <span>
 #include <vector>
 
@@ -39,13 +40,18 @@ class RegionTransfer {
   virtual Expected<void, IntegrateError> fillClear(std::uint32_t device_slot) noexcept = 0;
 };
 
-/// @brief One batch in host memory, ready to copy to the device.
+/// @brief One batch in host memory, ready to copy to the device. The arrays come from a memory
+/// resource the backend chooses (CUDA: page-locked memory, so copies are asynchronous DMA); they
+/// are reserved once for the batch limits and never grow past them, so their storage never moves.
 struct BatchArrays {
-  std::vector<PreparedRay> rays;
-  std::vector<rm_span_record> spans;
-  std::vector<rm_hit_group> groups;     ///< one per voxel with samples, sorted by voxel
-  std::vector<std::uint32_t> hit_rays;  ///< ray indices of each group's samples, in ray order
-  std::vector<std::uint64_t> hit_keys;  ///< scratch: (device voxel << 32) | ray
+  explicit BatchArrays(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
+      : rays(memory), spans(memory), groups(memory), hit_rays(memory), hit_keys(memory) {}
+
+  std::pmr::vector<PreparedRay> rays;
+  std::pmr::vector<rm_span_record> spans;
+  std::pmr::vector<rm_hit_group> groups;     ///< one per voxel with samples, sorted by voxel
+  std::pmr::vector<std::uint32_t> hit_rays;  ///< ray indices of each group's samples, in ray order
+  std::pmr::vector<std::uint64_t> hit_keys;  ///< scratch: (device voxel << 32) | ray
 
   void clear() noexcept {
     rays.clear();

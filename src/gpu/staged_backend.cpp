@@ -20,11 +20,13 @@ double secondsSince(Clock::time_point start) noexcept {
 }  // namespace
 
 StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_counters,
-                             const DeviceBackendOptions& options)
+                             const DeviceBackendOptions& options,
+                             std::pmr::memory_resource* staging_memory)
     : map_(&map),
       cache_(slots > 0 ? std::optional<DeviceRegionCache>(std::in_place, slots) : std::nullopt),
       limits_(batchLimits(map, options)),
       planner_(map, cache_ ? &*cache_ : nullptr, *this, limits_),
+      sets_{StagingSet(staging_memory), StagingSet(staging_memory)},
       wide_counters_(wide_counters) {
   params_.occupancy = map.occupancy().toKernel();
   params_.region_voxels = map.geometry().region_voxels;

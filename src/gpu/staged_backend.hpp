@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory_resource>
 #include <optional>
 #include <span>
 
@@ -52,17 +53,18 @@ class StagedBackend : public Backend, private RegionTransfer {
 
  protected:
   /// `slots` == 0: shared memory (the device works on the host store in place). `wide_counters`:
-  /// the kernels count in 64-bit words (else 32-bit).
+  /// the kernels count in 64-bit words (else 32-bit). `staging_memory` provides the host batch
+  /// arrays (reserved here, for the limits) and must outlive the backend. Throws std::bad_alloc
+  /// when the arrays cannot be allocated (factories turn it into an error).
   StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_counters,
-                const DeviceBackendOptions& options);
+                const DeviceBackendOptions& options,
+                std::pmr::memory_resource* staging_memory = std::pmr::get_default_resource());
 
   VoxelMap& map() const noexcept { return *map_; }
   bool sharedMemory() const noexcept { return !cache_.has_value(); }
   /// Regions per layer buffer: the cache slots, or the host store's capacity in shared memory.
   std::uint32_t layerRegions() const noexcept;
   const BatchLimits& limits() const noexcept { return limits_; }
-  /// Host arrays of a staging set (reserved for the limits; their storage never moves).
-  BatchArrays& stagingArrays(unsigned set) noexcept { return sets_[set].arrays; }
   std::size_t counterBytes() const noexcept;
   /// 32-bit words of a set's scratch buffer.
   std::size_t scratchWords() const noexcept;
@@ -117,9 +119,12 @@ class StagedBackend : public Backend, private RegionTransfer {
   bool launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept;
 
   struct StagingSet {
+    explicit StagingSet(std::pmr::memory_resource* memory) : arrays(memory) {}
     BatchArrays arrays;
     bool in_flight = false;
   };
+
+  static_assert(kStagingSets == 2, "sets_ is initialised with two sets");
 
   VoxelMap* map_;
   std::optional<DeviceRegionCache> cache_;  // empty: shared memory
