@@ -23,8 +23,8 @@ struct CudaBackendOptions : DeviceBackendOptions {
 ///
 /// Design (see docs/architecture.md, "Device backends"; the batch loop is gpu::StagedBackend's):
 ///  - At creation: picks the device, allocates one cudaMalloc buffer per map layer cut into
-///    cache slots (cleared on the device), two sets of device batch buffers and their host arrays in
-///    page-locked memory (so batch copies are asynchronous DMA), and creates one non-blocking
+///    cache slots (cleared on the device), two sets of device batch buffers and their host arrays
+///    in page-locked memory (so batch copies are asynchronous DMA), and creates one non-blocking
 ///    stream and one event per batch. Nothing is allocated afterwards. No managed memory.
 ///  - integrate(): plans a batch on the host while the stream may still run the previous one,
 ///    enqueues copies and kernels on the stream and returns without waiting.
