@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
-# src/sim, src/io, src/gpu <- src/opencl, src/cuda <- tools. Includes are written relative to the repository root, so grep can tell.
+# src/heightmap, src/sim <- src/io, src/gpu <- src/opencl, src/cuda <- tools. Includes are written relative to the repository root, so grep can tell.
 set -euo pipefail
 root=${1:-.}
 cd "$root"
@@ -19,6 +19,7 @@ check kernels/common 'src/|platform/|tools/|tests/' 'device code depends on noth
 check src/core 'src/map|src/io|src/sim|platform/|tools/|tests/' 'core is the base'
 check platform 'src/map|src/io|src/sim|tools/|tests/' 'platform depends only on core'
 check src/map 'src/io|src/sim|tools/|tests/' 'the map does not know files or tools'
+check src/heightmap 'src/io|src/sim|src/gpu|src/opencl|src/cuda|tools/|tests/' 'height maps read the map only; writers live in src/io'
 check src/io 'src/sim|tools/|tests/' 'file formats do not know scenes or tools'
 check src/sim 'src/io|tools/|tests/' 'scenes produce rays, not files'
 check kernels/device 'src/|platform/|tools/|tests/' 'device code depends only on kernels/'

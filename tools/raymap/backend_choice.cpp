@@ -7,9 +7,11 @@
 #include "src/map/cpu_backend.hpp"
 #if defined(RAYMAP_HAVE_OPENCL)
 #include "src/opencl/opencl_backend.hpp"
+#include "src/opencl/opencl_heightmap.hpp"
 #endif
 #if defined(RAYMAP_HAVE_CUDA)
 #include "src/cuda/cuda_backend.hpp"
+#include "src/cuda/cuda_heightmap.hpp"
 #endif
 
 namespace raymap::cli {
@@ -42,6 +44,21 @@ Result<std::unique_ptr<Backend>> named(Result<std::unique_ptr<Backend>> backend,
 }
 #endif
 
+/// Why --backend NAME cannot work in this build (the API was not found at configure time).
+[[maybe_unused]] Unexpected<Error> notBuilt(const std::string& name) {
+  if (name == "opencl") {
+    return fail(ErrorCode::kUnsupported,
+                "--backend opencl: this build has no OpenCL backend (install ocl-icd-opencl-dev "
+                "and opencl-headers, then build again)");
+  }
+  if (name == "cuda") {
+    return fail(ErrorCode::kUnsupported,
+                "--backend cuda: this build has no CUDA backend (it is built whenever CMake finds "
+                "nvcc; install the CUDA toolkit, then configure again)");
+  }
+  return fail(ErrorCode::kInvalidArgument, "--backend: unknown backend '" + name + "'");
+}
+
 Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice& choice) {
   (void)map;
   if (choice.name == "opencl") {
@@ -52,9 +69,7 @@ Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice
     options.device.device = choice.opencl_device;
     return named(createOpenClBackend(map, options), choice.name);
 #else
-    return fail(ErrorCode::kUnsupported,
-                "--backend opencl: this build has no OpenCL backend (install ocl-icd-opencl-dev "
-                "and opencl-headers, then build again)");
+    return notBuilt(choice.name);
 #endif
   }
   if (choice.name == "cuda") {
@@ -64,12 +79,43 @@ Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice
     options.device = choice.cuda_device;
     return named(createCudaBackend(map, options), choice.name);
 #else
-    return fail(ErrorCode::kUnsupported,
-                "--backend cuda: this build has no CUDA backend (it is built whenever CMake finds "
-                "nvcc; install the CUDA toolkit, then configure again)");
+    return notBuilt(choice.name);
 #endif
   }
-  return fail(ErrorCode::kInvalidArgument, "--backend: unknown backend '" + choice.name + "'");
+  return notBuilt(choice.name);
+}
+
+/// The device height-map generator of --backend NAME.
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createDeviceHeightmap(
+    const BackendChoice& choice) {
+  if (choice.name == "opencl") {
+#if defined(RAYMAP_HAVE_OPENCL)
+    OpenClHeightmapOptions options;
+    options.device.platform = choice.opencl_platform;
+    options.device.device = choice.opencl_device;
+    auto generator = createOpenClHeightmapGenerator(options);
+    if (!generator) {
+      return fail(generator.error().code, "--backend opencl: " + generator.error().message);
+    }
+    return generator;
+#else
+    return notBuilt(choice.name);
+#endif
+  }
+  if (choice.name == "cuda") {
+#if defined(RAYMAP_HAVE_CUDA)
+    CudaHeightmapOptions options;
+    options.device = choice.cuda_device;
+    auto generator = createCudaHeightmapGenerator(options);
+    if (!generator) {
+      return fail(generator.error().code, "--backend cuda: " + generator.error().message);
+    }
+    return generator;
+#else
+    return notBuilt(choice.name);
+#endif
+  }
+  return notBuilt(choice.name);
 }
 
 }  // namespace
@@ -111,6 +157,30 @@ Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice)
   }
   created.backend = std::move(*cpu);
   created.fallback_warning = device.error().message + "; falling back to the CPU backend";
+  return created;
+}
+
+}  // namespace raymap::cli
+
+namespace raymap::cli {
+
+Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& choice) {
+  CreatedHeightmapGenerator created;
+  if (choice.name == "cpu") {
+    created.generator = heightmap::makeCpuHeightmapGenerator();
+    return created;
+  }
+  auto device = createDeviceHeightmap(choice);
+  if (device) {
+    created.generator = std::move(*device);
+    return created;
+  }
+  if (!choice.fallback_cpu) {
+    return Unexpected(Error{device.error().code,
+                            device.error().message + " (--fallback cpu generates on the CPU)"});
+  }
+  created.generator = heightmap::makeCpuHeightmapGenerator();
+  created.fallback_warning = device.error().message + "; falling back to the CPU";
   return created;
 }
 

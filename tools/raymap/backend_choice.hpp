@@ -7,6 +7,7 @@
 #include <string>
 
 #include "src/core/error.hpp"
+#include "src/heightmap/heightmap_generator.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 
@@ -37,6 +38,14 @@ struct CreatedBackend {
 /// a driver, pick another device, --fallback cpu).
 Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice);
 
+/// @brief A created height-map generator, and the warning to show when the fallback was taken.
+struct CreatedHeightmapGenerator {
+  std::unique_ptr<heightmap::HeightmapGenerator> generator;
+  std::string fallback_warning;
+};
+/// @brief The height-map generator of the chosen backend (cpu, opencl, cuda; device selection and
+/// --fallback as for mapping).
+Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& choice);
 /// @brief The backends this build has, e.g. {"cpu", "opencl", "cuda"}.
 std::vector<std::string> availableBackends();
 

@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// CUDA height-map kernels (kernels/device/heightmap_kernels.h, shared with OpenCL) and their host
+// launchers (kernels/cuda/heightmap_launch.h).
+#include "kernels/cuda/heightmap_launch.h"
+#include "kernels/device/heightmap_kernels.h"
+
+namespace raymap::cuda {
+
+cudaError_t launchHeightmapPlanar(cudaStream_t stream, unsigned block_threads,
+                                  const HeightmapKernelBuffers& b,
+                                  const rm_heightmap_params& params) noexcept {
+  const auto items = static_cast<unsigned>(params.cells_x) * static_cast<unsigned>(params.cells_y);
+  if (items == 0) {
+    return cudaSuccess;
+  }
+  const unsigned blocks = (items + block_threads - 1) / block_threads;
+  rm_heightmap_planar<<<blocks, block_threads, 0, stream>>>(params, b.table, b.occupancy, b.mean,
+                                                            b.elevation, b.clearance, b.kind,
+                                                            b.samples, b.reference);
+  return cudaGetLastError();
+}
+
+cudaError_t launchHeightmapFillRing(cudaStream_t stream, unsigned block_threads,
+                                    const HeightmapKernelBuffers& b,
+                                    const rm_heightmap_params& params, int ring) noexcept {
+  const unsigned items = rm_hm_ring_size(ring);
+  const unsigned blocks = (items + block_threads - 1) / block_threads;
+  rm_heightmap_fill_ring<<<blocks, block_threads, 0, stream>>>(params, b.table, b.occupancy, b.mean,
+                                                               b.elevation, b.clearance, b.kind,
+                                                               b.samples, b.reference, ring);
+  return cudaGetLastError();
+}
+
+}  // namespace raymap::cuda

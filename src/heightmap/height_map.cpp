@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "src/heightmap/height_map.hpp"
+
+#include <cmath>
+
+namespace raymap::heightmap {
+
+std::string_view toString(CellKind kind) noexcept {
+  switch (kind) {
+    case CellKind::kUnknown:
+      return "unknown";
+    case CellKind::kSurface:
+      return "surface";
+    case CellKind::kVirtualSurface:
+      return "virtual";
+    case CellKind::kVacant:
+      return "vacant";
+  }
+  return "unknown";
+}
+
+std::string_view toString(HeightmapMode mode) noexcept {
+  return mode == HeightmapMode::kFill ? "fill" : "planar";
+}
+
+bool HeightMap::cellOf(double x, double y, int* i, int* j) const noexcept {
+  const double fi = std::floor((centre_x + 0.5 * cells_x * resolution - x) / resolution);
+  const double fj = std::floor((centre_y + 0.5 * cells_y * resolution - y) / resolution);
+  if (!(fi >= 0.0 && fi < cells_x && fj >= 0.0 && fj < cells_y)) {
+    return false;
+  }
+  *i = static_cast<int>(fi);
+  *j = static_cast<int>(fj);
+  return true;
+}
+
+void HeightMap::resizeLayers() {
+  const std::size_t n = cellCount();
+  elevation.resize(n);
+  clearance.resize(n);
+  kind.resize(n);
+  observed_count.resize(n);
+  reference.resize(n);
+}
+
+}  // namespace raymap::heightmap

@@ -1,0 +1,40 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The height-map generators: one interface, a CPU implementation here, device implementations in
+// src/opencl and src/cuda. All run the column search of kernels/common/heightmap.h, so they
+// produce the same height map.
+#pragma once
+#include <memory>
+#include <string>
+
+#include "src/core/error.hpp"
+#include "src/heightmap/height_map.hpp"
+#include "src/heightmap/heightmap_plan.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::heightmap {
+
+/// @brief Generates height maps from a map's host store.
+/// A map integrated by a device backend must be synchronised (Backend::synchronise()) first.
+/// Thread-safety: one generator per thread; generate() reads the map, which must not be updated
+/// meanwhile. Real-time: generate() allocates only when `out` or the device buffers must grow
+/// (the first call for a grid size), and performs no I/O.
+class HeightmapGenerator {
+ public:
+  virtual ~HeightmapGenerator() = default;
+  /// "cpu", "opencl" or "cuda".
+  virtual const char* name() const noexcept = 0;
+  /// The device it runs on, for logs ("cpu" on the host).
+  virtual std::string deviceName() const { return name(); }
+  /// @brief Runs `plan` (from planHeightmap() on the same map) into `out`: its geometry is the
+  /// plan's grid and every layer is written.
+  virtual Expected<void, Error> generate(const VoxelMap& map, const HeightmapPlan& plan,
+                                         HeightMap& out) = 0;
+};
+
+/// @brief The CPU generator: one thread (a 200 x 200 planar map takes a few milliseconds).
+std::unique_ptr<HeightmapGenerator> makeCpuHeightmapGenerator();
+
+/// @brief Copies the plan's geometry into `out` and sizes its layers.
+void prepareOutput(const HeightmapPlan& plan, HeightMap& out);
+
+}  // namespace raymap::heightmap

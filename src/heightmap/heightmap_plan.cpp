@@ -1,0 +1,165 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "src/heightmap/heightmap_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+namespace raymap::heightmap {
+namespace {
+
+std::string metres(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+/// The box of stored regions, metres: {min corner, max corner}; for rolling maps the window.
+std::pair<Vec3d, Vec3d> mapBounds(const VoxelMap& map) {
+  if (map.config().policy == StorePolicy::kRolling) {
+    return map.windowBounds();
+  }
+  constexpr std::int32_t kBig = std::numeric_limits<std::int32_t>::max();
+  Vec3i lo{kBig, kBig, kBig};
+  Vec3i hi{-kBig, -kBig, -kBig};
+  map.store().forEachRegion([&](std::uint32_t, Vec3i r) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], r[a]);
+      hi[a] = std::max(hi[a], r[a]);
+    }
+  });
+  if (lo.x > hi.x) {
+    return {Vec3d{}, Vec3d{}};
+  }
+  const double e = map.geometry().regionExtent();
+  return {Vec3d{lo.x * e, lo.y * e, lo.z * e},
+          Vec3d{(hi.x + 1) * e, (hi.y + 1) * e, (hi.z + 1) * e}};
+}
+
+}  // namespace
+
+Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions& o,
+                                    HeightmapPlan& plan) {
+  const double res = map.geometry().resolution;
+  if (map.occupancyLayer() < 0) {
+    return fail(ErrorCode::kUnsupported,
+                "the map has no occupancy layer: a height map needs occupied and free voxels");
+  }
+  if (!std::isfinite(o.centre.x) || !std::isfinite(o.centre.y) || !std::isfinite(o.centre.z)) {
+    return fail(ErrorCode::kInvalidArgument, "--center: must be three finite numbers (metres)");
+  }
+  if (!(o.size >= res) || !std::isfinite(o.size)) {
+    return fail(ErrorCode::kInvalidArgument, "--size " + metres(o.size) +
+                                                 ": must be at least the map resolution (" +
+                                                 metres(res) + " m)");
+  }
+  if (!(o.min_clearance >= 0.0) || !std::isfinite(o.min_clearance)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--min-clearance " + metres(o.min_clearance) + ": must be >= 0 metres");
+  }
+  const double floor_depth = o.floor_depth.value_or(0.5 * o.size);
+  const double ceiling_height = o.ceiling_height.value_or(0.5 * o.size);
+  if (!(floor_depth >= 0.0) || !std::isfinite(floor_depth)) {
+    return fail(ErrorCode::kInvalidArgument, "--floor " + metres(floor_depth) + ": must be >= 0");
+  }
+  if (!(ceiling_height >= 0.0) || !std::isfinite(ceiling_height)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--ceiling " + metres(ceiling_height) + ": must be >= 0");
+  }
+  const long cells_long = std::lround(o.size / res);
+  if (cells_long > kMaxCellsPerSide) {
+    return fail(ErrorCode::kInvalidArgument, "--size " + metres(o.size) + ": " +
+                                                 std::to_string(cells_long) +
+                                                 " cells per side at " + metres(res) +
+                                                 " m; at most " + std::to_string(kMaxCellsPerSide));
+  }
+  if (map.config().policy == StorePolicy::kRolling) {
+    const auto [lo, hi] = map.windowBounds();
+    const double window = std::min(hi.x - lo.x, hi.y - lo.y);
+    if (o.size > window + 1e-9) {
+      return fail(ErrorCode::kInvalidArgument, "--size " + metres(o.size) +
+                                                   ": larger than the rolling window (" +
+                                                   metres(window) + " m)");
+    }
+  }
+  const auto [lo, hi] = mapBounds(map);
+  for (int a = 0; a < 3; ++a) {
+    if (!(o.centre[a] >= lo[a] && o.centre[a] < hi[a])) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "--center " + metres(o.centre.x) + "," + metres(o.centre.y) + "," +
+                      metres(o.centre.z) + ": outside the map (x " + metres(lo.x) + ".." +
+                      metres(hi.x) + ", y " + metres(lo.y) + ".." + metres(hi.y) + ", z " +
+                      metres(lo.z) + ".." + metres(hi.z) + " m)");
+    }
+  }
+
+  // Grid: cells_x x cells_y voxel columns, the centre's column at the middle (rounded toward +x).
+  const int cells = static_cast<int>(std::max(1L, cells_long));
+  const Vec3i centre_voxel = map.voxelOf(o.centre);
+  const std::int32_t x_min = centre_voxel.x - cells / 2;
+  const std::int32_t y_min = centre_voxel.y - cells / 2;
+  const std::int32_t x_max = x_min + cells - 1;
+  const std::int32_t y_max = y_min + cells - 1;
+  const auto half_cells = static_cast<std::int32_t>(std::lround(0.5 * o.size / res));
+  const std::int32_t z_min = centre_voxel.z - half_cells;
+  const std::int32_t z_max = centre_voxel.z + half_cells;
+
+  rm_heightmap_params& p = plan.params;
+  p = rm_heightmap_params{};
+  p.cells_x = cells;
+  p.cells_y = cells;
+  p.voxel_x0 = x_max;
+  p.voxel_y0 = y_max;
+  p.region_voxels = map.geometry().region_voxels;
+  const Vec3i region_lo = map.regionOfVoxel({x_min, y_min, z_min - 1});
+  const Vec3i region_hi = map.regionOfVoxel({x_max, y_max, z_max});
+  p.region_x0 = region_lo.x;
+  p.region_y0 = region_lo.y;
+  p.region_z0 = region_lo.z;
+  p.regions_x = region_hi.x - region_lo.x + 1;
+  p.regions_y = region_hi.y - region_lo.y + 1;
+  p.regions_z = region_hi.z - region_lo.z + 1;
+  p.box_z_min = z_min;
+  p.box_z_max = z_max;
+  p.seed_i = x_max - centre_voxel.x;
+  p.seed_j = y_max - centre_voxel.y;
+  p.flags = (o.virtual_surfaces ? RM_HM_FLAG_VIRTUAL : 0) |
+            (o.use_voxel_mean && map.meanLayer() >= 0 ? RM_HM_FLAG_MEAN : 0) |
+            (o.mode == HeightmapMode::kFill ? RM_HM_FLAG_FILL : 0);
+  p.resolution = static_cast<float>(res);
+  p.reference_z = static_cast<float>(o.centre.z);
+  p.floor_depth = static_cast<float>(floor_depth);
+  p.ceiling_height = static_cast<float>(ceiling_height);
+  p.min_clearance = static_cast<float>(o.min_clearance);
+  p.occupied_threshold = map.occupancy().threshold;
+
+  const auto table_size = static_cast<std::size_t>(p.regions_x) *
+                          static_cast<std::size_t>(p.regions_y) *
+                          static_cast<std::size_t>(p.regions_z);
+  plan.region_table.resize(table_size);
+  std::size_t t = 0;
+  for (std::int32_t z = 0; z < p.regions_z; ++z) {
+    for (std::int32_t y = 0; y < p.regions_y; ++y) {
+      for (std::int32_t x = 0; x < p.regions_x; ++x) {
+        const Vec3i region{p.region_x0 + x, p.region_y0 + y, p.region_z0 + z};
+        const std::uint32_t slot =
+            RegionStore::inRange(region) ? map.store().find(region) : RegionStore::kNoSlot;
+        plan.region_table[t++] = slot == RegionStore::kNoSlot ? RM_HM_NO_REGION : slot;
+      }
+    }
+  }
+
+  HeightMap& g = plan.grid;
+  g.resolution = res;
+  g.cells_x = cells;
+  g.cells_y = cells;
+  g.centre_x = (x_min + 0.5 * cells) * res;
+  g.centre_y = (y_min + 0.5 * cells) * res;
+  g.reference_z = o.centre.z;
+  g.mode = o.mode;
+  return {};
+}
+
+}  // namespace raymap::heightmap

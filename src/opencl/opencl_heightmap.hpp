@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Height maps on an OpenCL device: the kernels of kernels/device/heightmap_kernels.h.
+#pragma once
+#include <memory>
+
+#include "src/core/error.hpp"
+#include "src/heightmap/heightmap_generator.hpp"
+#include "src/opencl/cl_runtime.hpp"
+#include "src/opencl/program_cache.hpp"
+
+namespace raymap {
+
+/// @brief Which device, and the program cache.
+struct OpenClHeightmapOptions {
+  opencl::DeviceSelector device;
+  opencl::ProgramCacheOptions program_cache;
+};
+
+/// @brief Creates an OpenCL height-map generator: picks the device, builds the embedded program
+/// (binary cached on disk). generate() uploads the occupancy (and voxel-mean) layer of every map
+/// region under the box, runs one work-item per column (flood fill: one launch per ring) and reads
+/// the layers back; it produces the same height map as the CPU generator. Device buffers grow to
+/// the largest request seen and are then reused (no allocation in steady state).
+/// Errors: no platform or device, a program that does not build (the log is in the message), or
+/// buffers the device refuses. Thread-safety: one thread at a time.
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createOpenClHeightmapGenerator(
+    const OpenClHeightmapOptions& options);
+
+}  // namespace raymap
