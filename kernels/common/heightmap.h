@@ -93,24 +93,53 @@ typedef struct rm_heightmap_cell {
 #define RM_HM_STATE_FREE 1
 #define RM_HM_STATE_OCCUPIED 2
 
-RAYMAP_FN rm_i32 rm_hm_state(float value, float threshold) {
-  if (!rm_occupancy_observed(value)) {
-    return RM_HM_STATE_UNOBSERVED;
-  }
-  return value >= threshold ? RM_HM_STATE_OCCUPIED : RM_HM_STATE_FREE;
+/* Column masks: the search reads voxel states as bits, 32 voxels of one column of one region per
+ * word pair (bit b = voxel z = region base + 32 w + b), built once per generation from the
+ * occupancy layer. A column then costs a few bit operations per 32 voxels instead of one strided
+ * memory read per voxel. */
+typedef struct rm_hm_mask {
+  rm_u32 occupied; /* observed and at or above the threshold */
+  rm_u32 observed;
+} rm_hm_mask;
+
+/* Mask words per region column. */
+RAYMAP_FN rm_i32 rm_hm_mask_words(rm_i32 region_voxels) { return (region_voxels + 31) / 32; }
+
+/* The mask bits of one voxel's occupancy value, 0 or 1 (branch-free, so host loops over a plane
+ * of voxels vectorise). */
+RAYMAP_FN rm_u32 rm_hm_observed_bit(float value) { return RM_U32(value != RM_OCC_UNOBSERVED); }
+RAYMAP_FN rm_u32 rm_hm_occupied_bit(float value, float threshold) {
+  return RM_U32(value >= threshold) & RM_U32(value != RM_OCC_UNOBSERVED);
 }
 
-/* Region-table entry (pool slot) of the region holding voxel z of a column, or RM_HM_NO_REGION. */
-RAYMAP_FN rm_u32 rm_hm_region_slot(RAYMAP_GLOBAL const rm_u32* table, rm_heightmap_params p,
-                                   rm_i32 rx, rm_i32 ry, rm_i32 rz) {
-  rm_i32 tx = rx - p.region_x0;
-  rm_i32 ty = ry - p.region_y0;
-  rm_i32 tz = rz - p.region_z0;
-  if (tx < 0 || ty < 0 || tz < 0 || tx >= p.regions_x || ty >= p.regions_y || tz >= p.regions_z) {
-    return RM_HM_NO_REGION;
-  }
-  return table[tx + p.regions_x * (ty + p.regions_y * tz)];
+/* Folds one voxel's occupancy value into its mask word as bit b (voxel z = word base + b). */
+RAYMAP_FN void rm_hm_mask_add(rm_hm_mask* m, rm_i32 b, float value, float threshold) {
+  m->observed |= rm_hm_observed_bit(value) << b;
+  m->occupied |= rm_hm_occupied_bit(value, threshold) << b;
 }
+
+/* Index of the lowest set bit of x != 0. */
+RAYMAP_FN rm_i32 rm_hm_lowest_bit(rm_u32 x) {
+#if defined(__OPENCL_C_VERSION__)
+  return 31 - RM_I32(clz(x & (0u - x)));
+#elif defined(__CUDA_ARCH__)
+  return __ffs(RM_I32(x)) - 1;
+#else
+  return __builtin_ctz(x);
+#endif
+}
+
+/* Where the column search reads the map. `table` maps each region of the box (x fastest) to a
+ * region index r (or RM_HM_NO_REGION); `masks` holds r's column masks at
+ * (r * region_voxels^2 + column) * words + w; `region_slots[r]` is r's slot in `mean` (the
+ * voxel-mean layer, indexed slot * voxels-per-region + local index; read only with
+ * RM_HM_FLAG_MEAN). */
+typedef struct rm_hm_sources {
+  RAYMAP_GLOBAL const rm_u32* table;
+  RAYMAP_GLOBAL const rm_u32* region_slots;
+  RAYMAP_GLOBAL const rm_hm_mask* masks;
+  RAYMAP_GLOBAL const rm_voxel_mean* mean;
+} rm_hm_sources;
 
 /* A candidate waiting for the next occupied voxel above it, which fixes its clearance. */
 typedef struct rm_hm_candidate {
@@ -148,13 +177,16 @@ RAYMAP_FN void rm_hm_offer(rm_heightmap_cell* best, float* best_distance, rm_hm_
   }
 }
 
-/* Searches the column of global voxel (vx, vy) around `reference` (metres). `occupancy` and `mean`
- * are whole layers indexed by slot * voxels-per-region + local index; `mean` is only read with
- * RM_HM_FLAG_MEAN. */
-RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p,
-                                                RAYMAP_GLOBAL const rm_u32* table,
-                                                RAYMAP_GLOBAL const float* occupancy,
-                                                RAYMAP_GLOBAL const rm_voxel_mean* mean, rm_i32 vx,
+/* State of bit b of a mask word. */
+RAYMAP_FN rm_i32 rm_hm_bit_state(rm_hm_mask m, rm_i32 b) {
+  if (((m.occupied >> b) & 1u) != 0u) {
+    return RM_HM_STATE_OCCUPIED;
+  }
+  return ((m.observed >> b) & 1u) != 0u ? RM_HM_STATE_FREE : RM_HM_STATE_UNOBSERVED;
+}
+
+/* Searches the column of global voxel (vx, vy) around `reference` (metres). */
+RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sources src, rm_i32 vx,
                                                 rm_i32 vy, float reference) {
   rm_heightmap_cell best;
   best.elevation = RM_F32(NAN);
@@ -165,6 +197,7 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p,
 
   const float res = p.resolution;
   const rm_i32 n = p.region_voxels;
+  const rm_i32 words = rm_hm_mask_words(n);
   const rm_u32 voxels_per_region = RM_U32(n * n * n);
   const rm_u32 plane = RM_U32(n * n);
   /* Voxels whose centre lies in [reference - floor, reference + ceiling]. */
@@ -184,76 +217,104 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p,
 
   rm_hm_candidate real = rm_hm_no_candidate();   /* occupied voxel at the bottom of this gap */
   rm_hm_candidate hidden = rm_hm_no_candidate(); /* virtual candidate in this gap */
-  rm_i32 previous = RM_HM_STATE_UNOBSERVED;      /* the voxel below z_lo is read first */
-  rm_i32 lowest_state = RM_HM_STATE_UNOBSERVED;
-  rm_i32 gap_has_virtual = 0;
+  rm_i32 previous = RM_HM_STATE_UNOBSERVED;      /* state of the voxel below the current one */
+  rm_i32 lowest_state = RM_HM_STATE_UNOBSERVED;  /* state of voxel z_lo */
+  int gap_has_virtual = 0;
+  int done = 0;
 
-  /* Walk region by region from the voxel below z_lo up to the top of the box (clearances look
-   * above the search range); stop early once a resolved candidate at or above the reference is
-   * held, because every later candidate is higher and so farther away. */
+  /* Walk mask word by mask word from the voxel below z_lo up to the top of the box (clearances
+   * look above the search range), visiting only events: occupied voxels and, for virtual
+   * surfaces, free voxels over unobserved ones. Stop early once a resolved candidate at or above
+   * the reference is held: every later candidate is higher, so farther away. */
+  /* The column's entries in the region table (one per region layer), when it is in the box. */
+  const rm_i32 tx = rx - p.region_x0;
+  const rm_i32 ty = ry - p.region_y0;
+  const int column_in_box = tx >= 0 && ty >= 0 && tx < p.regions_x && ty < p.regions_y;
+  const rm_u32 table_column = RM_U32(column_in_box ? tx + p.regions_x * ty : 0);
+  const rm_u32 table_layer = RM_U32(p.regions_x * p.regions_y);
+  /* Region layer and mask word of the first voxel, then advanced word by word (no division in
+   * the loop). */
   rm_i32 z = z_lo - 1;
-  while (z <= p.box_z_max) {
-    const rm_i32 rz = rm_floor_div(z, n);
-    const rm_i32 region_top = rz * n + n - 1;
-    const rm_i32 z_end = region_top < p.box_z_max ? region_top : p.box_z_max;
-    const rm_u32 slot = rm_hm_region_slot(table, p, rx, ry, rz);
-    int done = 0;
-    for (; z <= z_end; ++z) {
-      rm_i32 state = RM_HM_STATE_UNOBSERVED;
-      rm_u32 index = 0u;
-      if (slot != RM_HM_NO_REGION) {
-        index = slot * voxels_per_region + column + RM_U32(z - rz * n) * plane;
-        state = rm_hm_state(occupancy[index], p.occupied_threshold);
-      }
-      if (z == z_lo) {
-        lowest_state = state;
-      }
-      if (state == RM_HM_STATE_OCCUPIED) {
+  rm_i32 rz = rm_floor_div(z, n);
+  rm_i32 w = (z - rz * n) / 32;
+  while (z <= p.box_z_max && !done) {
+    const rm_i32 word_z = rz * n + w * 32; /* voxel of bit 0 */
+    const rm_i32 word_bits = (n - w * 32) < 32 ? (n - w * 32) : 32;
+    const rm_i32 z_end =
+        (word_z + word_bits - 1) < p.box_z_max ? (word_z + word_bits - 1) : p.box_z_max;
+    const rm_i32 tz = rz - p.region_z0;
+    const rm_u32 region = (column_in_box && tz >= 0 && tz < p.regions_z)
+                              ? src.table[table_column + table_layer * RM_U32(tz)]
+                              : RM_HM_NO_REGION;
+    rm_hm_mask m;
+    m.occupied = 0u;
+    m.observed = 0u;
+    if (region != RM_HM_NO_REGION) {
+      m = src.masks[(region * plane + column) * RM_U32(words) + RM_U32(w)];
+    }
+    const rm_i32 b0 = z - word_z;
+    const rm_i32 b1 = z_end - word_z;
+    const rm_u32 range = (b1 == 31 ? 0xFFFFFFFFu : ((1u << (b1 + 1)) - 1u)) & ~((1u << b0) - 1u);
+    if (z_lo >= z && z_lo <= z_end) {
+      lowest_state = rm_hm_bit_state(m, z_lo - word_z);
+    }
+    rm_u32 events = m.occupied & range;
+    if (virtual_on) {
+      /* Free voxels whose voxel below is unobserved (bit b0's "below" is `previous`). */
+      rm_u32 below_unobserved = (~m.observed) << 1;
+      below_unobserved =
+          (below_unobserved & ~(1u << b0)) | (previous == RM_HM_STATE_UNOBSERVED ? (1u << b0) : 0u);
+      events |= m.observed & ~m.occupied & below_unobserved & range;
+    }
+    while (events != 0u && !done) {
+      const rm_i32 b = rm_hm_lowest_bit(events);
+      events &= events - 1u;
+      const rm_i32 ze = word_z + b;
+      if (((m.occupied >> b) & 1u) != 0u) {
         /* The gap below ends here: resolve its candidates. */
-        const float ceiling_face = RM_F32(z) * res;
+        const float ceiling_face = RM_F32(ze) * res;
         rm_hm_offer(&best, &best_distance, real, ceiling_face - real.height, reference,
                     p.min_clearance);
         rm_hm_offer(&best, &best_distance, hidden, ceiling_face - hidden.height, reference,
                     p.min_clearance);
-        if (best.kind != RM_HM_UNKNOWN && best.elevation >= reference) {
-          done = 1;
-          break;
-        }
         real = rm_hm_no_candidate();
         hidden = rm_hm_no_candidate();
         gap_has_virtual = 0;
-        if (z >= z_lo && z <= z_hi) {
-          real.kind = RM_HM_SURFACE;
-          real.height = (RM_F32(z) + 0.5f) * res;
-          if (mean_on) {
-            const rm_voxel_mean m = mean[index];
-            if (m.count > 0u) {
-              real.height = (RM_F32(z) + rm_mean_decode(m.packed, m.count).z) * res;
-            }
-            real.samples = m.count;
-          }
-        } else if (z > z_hi) {
-          /* Nothing above the search range can become a candidate. */
+        if (best.kind != RM_HM_UNKNOWN && best.elevation >= reference) {
           done = 1;
-          break;
+        } else if (ze > z_hi) {
+          done = 1; /* nothing above the search range can become a candidate */
+        } else if (ze >= z_lo) {
+          real.kind = RM_HM_SURFACE;
+          real.height = (RM_F32(ze) + 0.5f) * res;
+          if (mean_on) {
+            const rm_voxel_mean mv = src.mean[src.region_slots[region] * voxels_per_region +
+                                              column + RM_U32(ze - rz * n) * plane];
+            if (mv.count > 0u) {
+              real.height = (RM_F32(ze) + rm_mean_decode(mv.packed, mv.count).z) * res;
+            }
+            real.samples = mv.count;
+          }
         }
-      } else if (state == RM_HM_STATE_FREE && previous == RM_HM_STATE_UNOBSERVED && virtual_on &&
-                 !gap_has_virtual && z >= z_lo && z <= z_hi) {
-        const float height = RM_F32(z) * res;
-        if (height <= virtual_limit) {
+      } else if (ze >= z_lo && ze <= z_hi) {
+        /* The lowest free voxel over unobserved space in this gap. */
+        const float height = RM_F32(ze) * res;
+        if (!gap_has_virtual && height <= virtual_limit) {
           hidden.kind = RM_HM_VIRTUAL;
           hidden.height = height;
           hidden.samples = 0u;
         }
         gap_has_virtual = 1;
       }
-      previous = state;
     }
-    if (done) {
-      break;
+    previous = rm_hm_bit_state(m, b1);
+    z = z_end + 1;
+    if (++w == words) {
+      w = 0;
+      ++rz;
     }
   }
-  if (z > p.box_z_max) {
+  if (!done) {
     /* Open above: nothing occupied up to the top of the box. */
     rm_hm_offer(&best, &best_distance, real, RM_INF, reference, p.min_clearance);
     rm_hm_offer(&best, &best_distance, hidden, RM_INF, reference, p.min_clearance);
@@ -262,6 +323,32 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p,
     best.kind = RM_HM_VACANT;
   }
   return best;
+}
+
+/* Builds the masks of one region column: work-item g of region_count * region_voxels^2 (columns
+ * fastest, so neighbouring items read neighbouring voxels). `occupancy` is indexed like `mean`. */
+RAYMAP_FN void rm_hm_mask_item(rm_heightmap_params p, RAYMAP_GLOBAL const rm_u32* region_slots,
+                               RAYMAP_GLOBAL const float* occupancy,
+                               RAYMAP_GLOBAL rm_hm_mask* masks, rm_u32 region_count, rm_u32 g) {
+  const rm_i32 n = p.region_voxels;
+  const rm_u32 plane = RM_U32(n * n);
+  if (g >= region_count * plane) {
+    return;
+  }
+  const rm_u32 region = g / plane;
+  const rm_u32 column = g - region * plane;
+  const rm_i32 words = rm_hm_mask_words(n);
+  RAYMAP_GLOBAL const float* voxels = occupancy + region_slots[region] * RM_U32(n * n * n) + column;
+  for (rm_i32 w = 0; w < words; ++w) {
+    rm_hm_mask m;
+    m.occupied = 0u;
+    m.observed = 0u;
+    const rm_i32 bits = (n - w * 32) < 32 ? (n - w * 32) : 32;
+    for (rm_i32 b = 0; b < bits; ++b) {
+      rm_hm_mask_add(&m, b, voxels[RM_U32(w * 32 + b) * plane], p.occupied_threshold);
+    }
+    masks[g * RM_U32(words) + RM_U32(w)] = m;
+  }
 }
 
 /* Global voxel column of cell (i, j). */
@@ -358,24 +445,20 @@ RAYMAP_FN void rm_hm_store(rm_hm_layers out, rm_i32 index, rm_heightmap_cell c, 
 
 /* Planar mode, work-item g of cells_x * cells_y (x fastest, so neighbouring items read
  * neighbouring voxels). */
-RAYMAP_FN void rm_hm_planar_item(rm_heightmap_params p, RAYMAP_GLOBAL const rm_u32* table,
-                                 RAYMAP_GLOBAL const float* occupancy,
-                                 RAYMAP_GLOBAL const rm_voxel_mean* mean, rm_hm_layers out,
+RAYMAP_FN void rm_hm_planar_item(rm_heightmap_params p, rm_hm_sources src, rm_hm_layers out,
                                  rm_u32 g) {
   if (g >= RM_U32(p.cells_x * p.cells_y)) {
     return;
   }
   const rm_i32 i = RM_I32(g % RM_U32(p.cells_x));
   const rm_i32 j = RM_I32(g / RM_U32(p.cells_x));
-  const rm_heightmap_cell c = rm_heightmap_column(p, table, occupancy, mean, rm_hm_voxel_x(p, i),
-                                                  rm_hm_voxel_y(p, j), p.reference_z);
+  const rm_heightmap_cell c =
+      rm_heightmap_column(p, src, rm_hm_voxel_x(p, i), rm_hm_voxel_y(p, j), p.reference_z);
   rm_hm_store(out, RM_I32(g), c, p.reference_z);
 }
 
 /* Flood fill, work-item g of ring k (rm_hm_ring_size(k) items); ring k - 1 must be complete. */
-RAYMAP_FN void rm_hm_fill_item(rm_heightmap_params p, RAYMAP_GLOBAL const rm_u32* table,
-                               RAYMAP_GLOBAL const float* occupancy,
-                               RAYMAP_GLOBAL const rm_voxel_mean* mean, rm_hm_layers out, rm_i32 k,
+RAYMAP_FN void rm_hm_fill_item(rm_heightmap_params p, rm_hm_sources src, rm_hm_layers out, rm_i32 k,
                                rm_u32 g) {
   if (g >= rm_hm_ring_size(k)) {
     return;
@@ -393,8 +476,8 @@ RAYMAP_FN void rm_hm_fill_item(rm_heightmap_params p, RAYMAP_GLOBAL const rm_u32
   const float reference =
       k == 0 ? p.reference_z
              : rm_hm_fill_reference(p, out.elevation, out.kind, out.reference, i, j, di, dj, k);
-  const rm_heightmap_cell c = rm_heightmap_column(p, table, occupancy, mean, rm_hm_voxel_x(p, i),
-                                                  rm_hm_voxel_y(p, j), reference);
+  const rm_heightmap_cell c =
+      rm_heightmap_column(p, src, rm_hm_voxel_x(p, i), rm_hm_voxel_y(p, j), reference);
   rm_hm_store(out, i + j * p.cells_x, c, reference);
 }
 

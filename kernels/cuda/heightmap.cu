@@ -6,6 +6,20 @@
 
 namespace raymap::cuda {
 
+cudaError_t launchHeightmapMasks(cudaStream_t stream, unsigned block_threads,
+                                 const HeightmapKernelBuffers& b, const rm_heightmap_params& params,
+                                 std::uint32_t region_count) noexcept {
+  const auto plane = static_cast<unsigned>(params.region_voxels * params.region_voxels);
+  const unsigned items = region_count * plane;
+  if (items == 0) {
+    return cudaSuccess;
+  }
+  const unsigned blocks = (items + block_threads - 1) / block_threads;
+  rm_heightmap_masks<<<blocks, block_threads, 0, stream>>>(params, b.region_slots, b.occupancy,
+                                                           b.masks, region_count);
+  return cudaGetLastError();
+}
+
 cudaError_t launchHeightmapPlanar(cudaStream_t stream, unsigned block_threads,
                                   const HeightmapKernelBuffers& b,
                                   const rm_heightmap_params& params) noexcept {
@@ -14,9 +28,9 @@ cudaError_t launchHeightmapPlanar(cudaStream_t stream, unsigned block_threads,
     return cudaSuccess;
   }
   const unsigned blocks = (items + block_threads - 1) / block_threads;
-  rm_heightmap_planar<<<blocks, block_threads, 0, stream>>>(params, b.table, b.occupancy, b.mean,
-                                                            b.elevation, b.clearance, b.kind,
-                                                            b.samples, b.reference);
+  rm_heightmap_planar<<<blocks, block_threads, 0, stream>>>(
+      params, b.table, b.region_slots, b.masks, b.mean, b.elevation, b.clearance, b.kind, b.samples,
+      b.reference);
   return cudaGetLastError();
 }
 
@@ -25,9 +39,9 @@ cudaError_t launchHeightmapFillRing(cudaStream_t stream, unsigned block_threads,
                                     const rm_heightmap_params& params, int ring) noexcept {
   const unsigned items = rm_hm_ring_size(ring);
   const unsigned blocks = (items + block_threads - 1) / block_threads;
-  rm_heightmap_fill_ring<<<blocks, block_threads, 0, stream>>>(params, b.table, b.occupancy, b.mean,
-                                                               b.elevation, b.clearance, b.kind,
-                                                               b.samples, b.reference, ring);
+  rm_heightmap_fill_ring<<<blocks, block_threads, 0, stream>>>(
+      params, b.table, b.region_slots, b.masks, b.mean, b.elevation, b.clearance, b.kind, b.samples,
+      b.reference, ring);
   return cudaGetLastError();
 }
 

@@ -13,15 +13,23 @@ namespace raymap::cuda {
 
 /// Device buffers of one height-map generation (device pointers).
 struct HeightmapKernelBuffers {
-  const std::uint32_t* table = nullptr;  ///< region table: compact region index or RM_HM_NO_REGION
-  const float* occupancy = nullptr;      ///< occupancy layer of the compacted regions
-  const rm_voxel_mean* mean = nullptr;   ///< mean layer (read only with RM_HM_FLAG_MEAN)
+  const std::uint32_t* table = nullptr;         ///< region table: region index or RM_HM_NO_REGION
+  const std::uint32_t* region_slots = nullptr;  ///< slot of each region in the uploaded layers
+  const float* occupancy = nullptr;             ///< occupancy layer of the uploaded regions
+  rm_hm_mask* masks = nullptr;                  ///< column masks (built by launchHeightmapMasks)
+  const rm_voxel_mean* mean = nullptr;          ///< mean layer (read only with RM_HM_FLAG_MEAN)
   float* elevation = nullptr;
   float* clearance = nullptr;
   std::uint32_t* kind = nullptr;
   std::uint32_t* samples = nullptr;
   float* reference = nullptr;
 };
+
+/// @brief Enqueues building the column masks of `region_count` uploaded regions.
+cudaError_t launchHeightmapMasks(cudaStream_t stream, unsigned block_threads,
+                                 const HeightmapKernelBuffers& buffers,
+                                 const rm_heightmap_params& params,
+                                 std::uint32_t region_count) noexcept;
 
 /// @brief Enqueues planar mode (one thread per cell). Real-time: allocates nothing, does not wait.
 cudaError_t launchHeightmapPlanar(cudaStream_t stream, unsigned block_threads,

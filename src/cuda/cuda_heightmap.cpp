@@ -47,20 +47,25 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     const int mean_layer = map.meanLayer();
     const bool with_mean = (plan.params.flags & RM_HM_FLAG_MEAN) != 0 && mean_layer >= 0;
 
-    compact_table_.assign(plan.region_table.begin(), plan.region_table.end());
-    slots_.clear();
-    for (std::uint32_t& entry : compact_table_) {
-      if (entry != RM_HM_NO_REGION) {
-        slots_.push_back(entry);
-        entry = static_cast<std::uint32_t>(slots_.size() - 1);
-      }
+    // Regions are uploaded in the plan's region order, so region r sits in slot r on the device.
+    const std::vector<std::uint32_t>& slots = plan.region_slots;
+    identity_.resize(std::max<std::size_t>(slots.size(), 1));
+    for (std::size_t r = 0; r < identity_.size(); ++r) {
+      identity_[r] = static_cast<std::uint32_t>(r);
     }
-    const std::size_t regions = std::max<std::size_t>(slots_.size(), 1);
+    const std::size_t regions = identity_.size();
+    const auto plane = static_cast<std::size_t>(plan.params.region_voxels) *
+                       static_cast<std::size_t>(plan.params.region_voxels);
+    const std::size_t mask_bytes =
+        regions * plane * static_cast<std::size_t>(rm_hm_mask_words(plan.params.region_voxels)) *
+        sizeof(rm_hm_mask);
     const std::size_t occupancy_bytes = store.layerRegionBytes(occupancy_layer);
     const std::size_t mean_bytes = with_mean ? store.layerRegionBytes(mean_layer) : 0;
     const std::size_t cells = out.cellCount();
     for (auto [buffer, bytes, what] :
-         {std::tuple{&table_, compact_table_.size() * 4, "region table"},
+         {std::tuple{&table_, plan.region_table.size() * 4, "region table"},
+          std::tuple{&region_slots_, regions * 4, "region slots"},
+          std::tuple{&masks_, mask_bytes, "column masks"},
           std::tuple{&occupancy_, regions * occupancy_bytes, "occupancy layer"},
           std::tuple{&mean_, std::max<std::size_t>(regions * mean_bytes, 8), "voxel-mean layer"},
           std::tuple{&outputs_[0], cells * 4, "elevation"},
@@ -74,33 +79,45 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     }
 
     cudaStream_t s = stream_.get();
-    cudaError_t status = cudaMemcpyAsync(table_.memory.get(), compact_table_.data(),
-                                         compact_table_.size() * 4, cudaMemcpyHostToDevice, s);
-    for (std::size_t c = 0; c < slots_.size() && status == cudaSuccess; ++c) {
+    cudaError_t status = cudaMemcpyAsync(table_.memory.get(), plan.region_table.data(),
+                                         plan.region_table.size() * 4, cudaMemcpyHostToDevice, s);
+    if (status == cudaSuccess) {
+      status = cudaMemcpyAsync(region_slots_.memory.get(), identity_.data(), regions * 4,
+                               cudaMemcpyHostToDevice, s);
+    }
+    for (std::size_t c = 0; c < slots.size() && status == cudaSuccess; ++c) {
       status = cudaMemcpyAsync(occupancy_.as<std::byte>() + c * occupancy_bytes,
-                               store.layerBytes(slots_[c], occupancy_layer), occupancy_bytes,
+                               store.layerBytes(slots[c], occupancy_layer), occupancy_bytes,
                                cudaMemcpyHostToDevice, s);
       if (with_mean && status == cudaSuccess) {
         status = cudaMemcpyAsync(mean_.as<std::byte>() + c * mean_bytes,
-                                 store.layerBytes(slots_[c], mean_layer), mean_bytes,
+                                 store.layerBytes(slots[c], mean_layer), mean_bytes,
                                  cudaMemcpyHostToDevice, s);
       }
     }
     if (status != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: uploading the map regions", status));
     }
-    const cuda::HeightmapKernelBuffers buffers{
-        table_.as<const std::uint32_t>(), occupancy_.as<const float>(),
-        mean_.as<const rm_voxel_mean>(),  outputs_[0].as<float>(),
-        outputs_[1].as<float>(),          outputs_[2].as<std::uint32_t>(),
-        outputs_[3].as<std::uint32_t>(),  outputs_[4].as<float>()};
+    cuda::HeightmapKernelBuffers buffers;
+    buffers.table = table_.as<const std::uint32_t>();
+    buffers.region_slots = region_slots_.as<const std::uint32_t>();
+    buffers.occupancy = occupancy_.as<const float>();
+    buffers.masks = masks_.as<rm_hm_mask>();
+    buffers.mean = mean_.as<const rm_voxel_mean>();
+    buffers.elevation = outputs_[0].as<float>();
+    buffers.clearance = outputs_[1].as<float>();
+    buffers.kind = outputs_[2].as<std::uint32_t>();
+    buffers.samples = outputs_[3].as<std::uint32_t>();
+    buffers.reference = outputs_[4].as<float>();
     const rm_heightmap_params& p = plan.params;
-    if ((p.flags & RM_HM_FLAG_FILL) != 0) {
+    status = cuda::launchHeightmapMasks(s, block_threads_, buffers, p,
+                                        static_cast<std::uint32_t>(slots.size()));
+    if (status == cudaSuccess && (p.flags & RM_HM_FLAG_FILL) != 0) {
       const rm_i32 rings = rm_hm_ring_count(p);
       for (rm_i32 k = 0; k < rings && status == cudaSuccess; ++k) {
         status = cuda::launchHeightmapFillRing(s, block_threads_, buffers, p, k);
       }
-    } else {
+    } else if (status == cudaSuccess) {
       status = cuda::launchHeightmapPlanar(s, block_threads_, buffers, p);
     }
     if (status != cudaSuccess) {
@@ -145,11 +162,12 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
   cuda::StreamHandle stream_;
   unsigned block_threads_;
   GrowingBuffer table_;
+  GrowingBuffer region_slots_;
+  GrowingBuffer masks_;
   GrowingBuffer occupancy_;
   GrowingBuffer mean_;
   GrowingBuffer outputs_[kOutputs];
-  std::vector<std::uint32_t> compact_table_;
-  std::vector<std::uint32_t> slots_;
+  std::vector<std::uint32_t> identity_;
 };
 
 }  // namespace

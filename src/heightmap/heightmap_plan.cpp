@@ -139,6 +139,7 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
                           static_cast<std::size_t>(p.regions_y) *
                           static_cast<std::size_t>(p.regions_z);
   plan.region_table.resize(table_size);
+  plan.region_slots.clear();
   std::size_t t = 0;
   for (std::int32_t z = 0; z < p.regions_z; ++z) {
     for (std::int32_t y = 0; y < p.regions_y; ++y) {
@@ -146,7 +147,12 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
         const Vec3i region{p.region_x0 + x, p.region_y0 + y, p.region_z0 + z};
         const std::uint32_t slot =
             RegionStore::inRange(region) ? map.store().find(region) : RegionStore::kNoSlot;
-        plan.region_table[t++] = slot == RegionStore::kNoSlot ? RM_HM_NO_REGION : slot;
+        if (slot == RegionStore::kNoSlot) {
+          plan.region_table[t++] = RM_HM_NO_REGION;
+        } else {
+          plan.region_table[t++] = static_cast<std::uint32_t>(plan.region_slots.size());
+          plan.region_slots.push_back(slot);
+        }
       }
     }
   }

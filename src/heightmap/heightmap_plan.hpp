@@ -38,12 +38,14 @@ struct HeightmapOptions {
 /// Largest grid side accepted, cells (a 0.1 m map: 819.2 m).
 inline constexpr int kMaxCellsPerSide = 8192;
 
-/// @brief The executable form of a request: kernel parameters, the region table (pool slot of
-/// every region under the box, RM_HM_NO_REGION where the map holds none; x fastest) and the output
-/// grid's geometry. Reusable: planHeightmap() keeps the vectors' capacity.
+/// @brief The executable form of a request: kernel parameters, the region table (for every region
+/// under the box, x fastest: its index r into `region_slots`, or RM_HM_NO_REGION where the map
+/// holds none), the pool slot of each present region, and the output grid's geometry. Reusable:
+/// planHeightmap() keeps the vectors' capacity.
 struct HeightmapPlan {
   rm_heightmap_params params{};
   std::vector<std::uint32_t> region_table;
+  std::vector<std::uint32_t> region_slots;
   HeightMap grid;  ///< geometry only (layers empty)
 };
 

@@ -2,7 +2,9 @@
 #include "src/opencl/opencl_heightmap.hpp"
 
 #include <algorithm>
+#include <initializer_list>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "kernels/common/heightmap.h"
@@ -34,7 +36,8 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
       return Unexpected(program.error());
     }
     program_ = std::move(program->program);
-    for (auto [handle, name] : {std::pair{&planar_, "rm_heightmap_planar"},
+    for (auto [handle, name] : {std::pair{&masks_kernel_, "rm_heightmap_masks"},
+                                std::pair{&planar_, "rm_heightmap_planar"},
                                 std::pair{&fill_, "rm_heightmap_fill_ring"}}) {
       auto kernel = opencl::createKernel(program_, name);
       if (!kernel) {
@@ -56,96 +59,99 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     const RegionStore& store = map.store();
     const int occupancy_layer = map.occupancyLayer();
     const int mean_layer = map.meanLayer();
-    const bool with_mean = (plan.params.flags & RM_HM_FLAG_MEAN) != 0 && mean_layer >= 0;
+    const rm_heightmap_params& p = plan.params;
+    const bool with_mean = (p.flags & RM_HM_FLAG_MEAN) != 0 && mean_layer >= 0;
 
-    // Regions under the box, packed: the table names compact indices into the uploaded layers.
-    compact_table_.assign(plan.region_table.begin(), plan.region_table.end());
-    slots_.clear();
-    for (std::uint32_t& entry : compact_table_) {
-      if (entry != RM_HM_NO_REGION) {
-        slots_.push_back(entry);
-        entry = static_cast<std::uint32_t>(slots_.size() - 1);
-      }
+    // Regions are uploaded in the plan's region order, so region r sits in slot r on the device.
+    const std::vector<std::uint32_t>& slots = plan.region_slots;
+    identity_.resize(std::max<std::size_t>(slots.size(), 1));
+    for (std::size_t r = 0; r < identity_.size(); ++r) {
+      identity_[r] = static_cast<std::uint32_t>(r);
     }
-    const std::size_t regions = std::max<std::size_t>(slots_.size(), 1);
+    const std::size_t regions = identity_.size();
+    const auto plane =
+        static_cast<std::size_t>(p.region_voxels) * static_cast<std::size_t>(p.region_voxels);
+    const std::size_t mask_bytes = regions * plane *
+                                   static_cast<std::size_t>(rm_hm_mask_words(p.region_voxels)) *
+                                   sizeof(rm_hm_mask);
     const std::size_t occupancy_bytes = store.layerRegionBytes(occupancy_layer);
     const std::size_t mean_bytes = with_mean ? store.layerRegionBytes(mean_layer) : 0;
     const std::size_t cells = out.cellCount();
-    if (auto ok = reserve(table_, table_bytes_, compact_table_.size() * 4, "region table"); !ok) {
-      return ok;
-    }
-    if (auto ok =
-            reserve(occupancy_, occupancy_bytes_, regions * occupancy_bytes, "occupancy layer");
-        !ok) {
-      return ok;
-    }
-    if (auto ok = reserve(mean_, mean_bytes_, std::max<std::size_t>(regions * mean_bytes, 8),
-                          "voxel-mean layer");
-        !ok) {
-      return ok;
-    }
-    for (std::size_t l = 0; l < kOutputs; ++l) {
-      if (auto ok = reserve(outputs_[l], output_bytes_[l], cells * 4, "height-map layer"); !ok) {
+    for (auto [buffer, bytes, what] :
+         {std::tuple{&table_, plan.region_table.size() * 4, "region table"},
+          std::tuple{&region_slots_, regions * 4, "region slots"},
+          std::tuple{&masks_, mask_bytes, "column masks"},
+          std::tuple{&occupancy_, regions * occupancy_bytes, "occupancy layer"},
+          std::tuple{&mean_, std::max<std::size_t>(regions * mean_bytes, 8), "voxel-mean layer"},
+          std::tuple{&outputs_[0], cells * 4, "elevation"},
+          std::tuple{&outputs_[1], cells * 4, "clearance"},
+          std::tuple{&outputs_[2], cells * 4, "kind"},
+          std::tuple{&outputs_[3], cells * 4, "observed count"},
+          std::tuple{&outputs_[4], cells * 4, "reference"}}) {
+      if (auto ok = reserve(*buffer, bytes, what); !ok) {
         return ok;
       }
     }
 
     cl_command_queue q = ctx_.queue.get();
     cl_int status = CL_SUCCESS;
-    auto write = [&](const opencl::BufferHandle& buffer, std::size_t offset, const void* data,
+    auto write = [&](const GrowingBuffer& buffer, std::size_t offset, const void* data,
                      std::size_t bytes) {
       if (status == CL_SUCCESS && bytes > 0) {
-        status = clEnqueueWriteBuffer(q, buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr,
-                                      nullptr);
+        status = clEnqueueWriteBuffer(q, buffer.handle.get(), CL_FALSE, offset, bytes, data, 0,
+                                      nullptr, nullptr);
       }
     };
-    write(table_, 0, compact_table_.data(), compact_table_.size() * 4);
-    for (std::size_t c = 0; c < slots_.size(); ++c) {
-      write(occupancy_, c * occupancy_bytes, store.layerBytes(slots_[c], occupancy_layer),
+    write(table_, 0, plan.region_table.data(), plan.region_table.size() * 4);
+    write(region_slots_, 0, identity_.data(), regions * 4);
+    for (std::size_t c = 0; c < slots.size(); ++c) {
+      write(occupancy_, c * occupancy_bytes, store.layerBytes(slots[c], occupancy_layer),
             occupancy_bytes);
       if (with_mean) {
-        write(mean_, c * mean_bytes, store.layerBytes(slots_[c], mean_layer), mean_bytes);
+        write(mean_, c * mean_bytes, store.layerBytes(slots[c], mean_layer), mean_bytes);
       }
     }
     if (status != CL_SUCCESS) {
       return deviceError("uploading the map regions", status);
     }
 
-    const rm_heightmap_params& p = plan.params;
-    cl_kernel kernel = (p.flags & RM_HM_FLAG_FILL) != 0 ? fill_.get() : planar_.get();
-    cl_mem args[] = {table_.get(),      occupancy_.get(),  mean_.get(),       outputs_[0].get(),
-                     outputs_[1].get(), outputs_[2].get(), outputs_[3].get(), outputs_[4].get()};
-    status = clSetKernelArg(kernel, 0, sizeof p, &p);
-    for (cl_uint a = 0; a < 8 && status == CL_SUCCESS; ++a) {
-      status = clSetKernelArg(kernel, a + 1, sizeof(cl_mem), &args[a]);
+    const auto region_count = static_cast<cl_uint>(slots.size());
+    if (auto ok = setArguments(masks_kernel_.get(), p, {&region_slots_, &occupancy_, &masks_},
+                               &region_count);
+        !ok) {
+      return ok;
     }
-    if (status != CL_SUCCESS) {
-      return deviceError("setting the kernel arguments", status);
+    if (region_count > 0) {
+      status = launch(masks_kernel_.get(), region_count * plane);
     }
-    auto launch = [&](std::size_t items) {
-      const std::size_t global = (items + local_size_ - 1) / local_size_ * local_size_;
-      status =
-          clEnqueueNDRangeKernel(q, kernel, 1, nullptr, &global, &local_size_, 0, nullptr, nullptr);
-    };
-    if ((p.flags & RM_HM_FLAG_FILL) != 0) {
+    const bool fill = (p.flags & RM_HM_FLAG_FILL) != 0;
+    cl_kernel search = fill ? fill_.get() : planar_.get();
+    if (auto ok = setArguments(search, p,
+                               {&table_, &region_slots_, &masks_, &mean_, &outputs_[0],
+                                &outputs_[1], &outputs_[2], &outputs_[3], &outputs_[4]},
+                               nullptr);
+        !ok) {
+      return ok;
+    }
+    if (fill) {
       const rm_i32 rings = rm_hm_ring_count(p);
       for (rm_i32 k = 0; k < rings && status == CL_SUCCESS; ++k) {
-        status = clSetKernelArg(kernel, 9, sizeof k, &k);
+        status = clSetKernelArg(search, 10, sizeof k, &k);
         if (status == CL_SUCCESS) {
-          launch(rm_hm_ring_size(k));
+          status = launch(search, rm_hm_ring_size(k));
         }
       }
-    } else {
-      launch(cells);
+    } else if (status == CL_SUCCESS) {
+      status = launch(search, cells);
     }
     if (status != CL_SUCCESS) {
-      return deviceError("launching the height-map kernel", status);
+      return deviceError("launching the height-map kernels", status);
     }
     void* targets[kOutputs] = {out.elevation.data(), out.clearance.data(), out.kind.data(),
                                out.observed_count.data(), out.reference.data()};
     for (std::size_t l = 0; l < kOutputs && status == CL_SUCCESS; ++l) {
-      status = clEnqueueReadBuffer(q, outputs_[l].get(), CL_FALSE, 0, cells * 4, targets[l], 0,
-                                   nullptr, nullptr);
+      status = clEnqueueReadBuffer(q, outputs_[l].handle.get(), CL_FALSE, 0, cells * 4, targets[l],
+                                   0, nullptr, nullptr);
     }
     if (status == CL_SUCCESS) {
       status = clFinish(q);
@@ -159,23 +165,55 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
  private:
   static constexpr std::size_t kOutputs = 5;  // elevation, clearance, kind, samples, reference
 
-  /// Grows `buffer` to at least `bytes` (never shrinks).
-  Expected<void, Error> reserve(opencl::BufferHandle& buffer, std::size_t& capacity,
-                                std::size_t bytes, const char* what) {
+  /// A device buffer that grows on demand (never shrinks).
+  struct GrowingBuffer {
+    opencl::BufferHandle handle;
+    std::size_t bytes = 0;
+  };
+
+  Expected<void, Error> reserve(GrowingBuffer& buffer, std::size_t bytes, const char* what) {
     bytes = std::max<std::size_t>(bytes, 4);
-    if (buffer && capacity >= bytes) {
+    if (buffer.handle && buffer.bytes >= bytes) {
       return {};
     }
     (void)clFinish(ctx_.queue.get());
-    buffer.reset();
+    buffer.handle.reset();
+    buffer.bytes = 0;
     auto created = opencl::createBuffer(ctx_, bytes, std::string("height map: ") + what);
     if (!created) {
-      capacity = 0;
       return Unexpected(created.error());
     }
-    buffer = std::move(*created);
-    capacity = bytes;
+    buffer.handle = std::move(*created);
+    buffer.bytes = bytes;
     return {};
+  }
+
+  /// Argument 0 is the parameter block, then the buffers in order, then `last` if given.
+  Expected<void, Error> setArguments(cl_kernel kernel, const rm_heightmap_params& p,
+                                     std::initializer_list<const GrowingBuffer*> buffers,
+                                     const cl_uint* last) {
+    cl_int status = clSetKernelArg(kernel, 0, sizeof p, &p);
+    cl_uint index = 1;
+    for (const GrowingBuffer* buffer : buffers) {
+      if (status == CL_SUCCESS) {
+        const cl_mem mem = buffer->handle.get();
+        status = clSetKernelArg(kernel, index, sizeof(cl_mem), &mem);
+      }
+      ++index;
+    }
+    if (last != nullptr && status == CL_SUCCESS) {
+      status = clSetKernelArg(kernel, index, sizeof *last, last);
+    }
+    if (status != CL_SUCCESS) {
+      return deviceError("setting the kernel arguments", status);
+    }
+    return {};
+  }
+
+  cl_int launch(cl_kernel kernel, std::size_t items) {
+    const std::size_t global = (items + local_size_ - 1) / local_size_ * local_size_;
+    return clEnqueueNDRangeKernel(ctx_.queue.get(), kernel, 1, nullptr, &global, &local_size_, 0,
+                                  nullptr, nullptr);
   }
 
   Unexpected<Error> deviceError(const char* what, cl_int status) const {
@@ -186,19 +224,17 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   opencl::DeviceContext ctx_;
   opencl::ProgramHandle program_;
+  opencl::KernelHandle masks_kernel_;
   opencl::KernelHandle planar_;
   opencl::KernelHandle fill_;
   std::size_t local_size_ = kWorkGroup;
-  opencl::BufferHandle table_;
-  opencl::BufferHandle occupancy_;
-  opencl::BufferHandle mean_;
-  opencl::BufferHandle outputs_[kOutputs];
-  std::size_t table_bytes_ = 0;
-  std::size_t occupancy_bytes_ = 0;
-  std::size_t mean_bytes_ = 0;
-  std::size_t output_bytes_[kOutputs] = {};
-  std::vector<std::uint32_t> compact_table_;
-  std::vector<std::uint32_t> slots_;
+  GrowingBuffer table_;
+  GrowingBuffer region_slots_;
+  GrowingBuffer masks_;
+  GrowingBuffer occupancy_;
+  GrowingBuffer mean_;
+  GrowingBuffer outputs_[kOutputs];
+  std::vector<std::uint32_t> identity_;
 };
 
 }  // namespace
