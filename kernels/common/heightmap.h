@@ -252,6 +252,21 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
     if (region != RM_HM_NO_REGION) {
       m = src.masks[(region * plane + column) * RM_U32(words) + RM_U32(w)];
     }
+    if (m.occupied == 0u &&
+        (m.observed == 0u || (m.observed == 0xFFFFFFFFu && previous == RM_HM_STATE_FREE))) {
+      /* All unobserved, or free continuing a free run: no event (the common case above the
+       * ground and in regions the map does not hold). */
+      previous = m.observed == 0u ? RM_HM_STATE_UNOBSERVED : RM_HM_STATE_FREE;
+      if (z_lo >= z && z_lo <= z_end) {
+        lowest_state = previous;
+      }
+      z = z_end + 1;
+      if (++w == words) {
+        w = 0;
+        ++rz;
+      }
+      continue;
+    }
     const rm_i32 b0 = z - word_z;
     const rm_i32 b1 = z_end - word_z;
     const rm_u32 range = (b1 == 31 ? 0xFFFFFFFFu : ((1u << (b1 + 1)) - 1u)) & ~((1u << b0) - 1u);

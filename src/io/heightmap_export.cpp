@@ -271,15 +271,20 @@ Result<Plan> makePlan(const HeightMap& map, const HeightmapImageOptions& options
   plan.map_width = map.cells_x * layout.cell_pixels;
   plan.map_height = map.cells_y * layout.cell_pixels;
 
-  // Elevation range: observed heights of surface and virtual cells, unless fixed.
+  // Elevation range, unless fixed: the surface cells' heights (virtual cells are clamped into
+  // it: a deep drop seen from above would otherwise squash the scale), else the virtual cells'.
   double lo = std::numeric_limits<double>::infinity();
   double hi = -std::numeric_limits<double>::infinity();
-  for (std::size_t k = 0; k < n; ++k) {
-    const auto kind = static_cast<CellKind>(map.kind[k]);
-    const double z = static_cast<double>(map.elevation[k]);
-    if ((kind == CellKind::kSurface || kind == CellKind::kVirtualSurface) && std::isfinite(z)) {
-      lo = std::min(lo, z);
-      hi = std::max(hi, z);
+  for (const CellKind ranged : {CellKind::kSurface, CellKind::kVirtualSurface}) {
+    if (lo <= hi) {
+      break;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      const double z = static_cast<double>(map.elevation[k]);
+      if (static_cast<CellKind>(map.kind[k]) == ranged && std::isfinite(z)) {
+        lo = std::min(lo, z);
+        hi = std::max(hi, z);
+      }
     }
   }
   if (!(lo <= hi)) {

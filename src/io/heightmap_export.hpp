@@ -50,7 +50,8 @@ struct HeightmapImageOptions {
   /// has more cells than that).
   int cell_pixels = kDefaultCellPixels;
   /// Elevation at the low / high end of the colour scale, metres; nullopt: the lowest / highest
-  /// finite elevation of the surface and virtual cells. Elevations outside are clamped.
+  /// elevation of the surface cells (of the virtual cells when there is no surface). Elevations
+  /// outside are clamped.
   std::optional<double> elevation_min_m;
   std::optional<double> elevation_max_m;
 };

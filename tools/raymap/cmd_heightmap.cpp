@@ -1,0 +1,253 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap heightmap`: the 2.5D height map of a map file around a position, as a PNG to look at
+// and a CSV for machines.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "src/heightmap/heightmap_generator.hpp"
+#include "src/heightmap/heightmap_plan.hpp"
+#include "src/io/heightmap_export.hpp"
+#include "src/io/map_file.hpp"
+#include "tools/raymap/backend_choice.hpp"
+#include "tools/raymap/cli_options.hpp"
+#include "tools/raymap/commands.hpp"
+#include "tools/raymap/json_writer.hpp"
+
+namespace raymap::cli {
+namespace {
+
+struct HeightmapFlags {
+  std::string map;
+  std::string centre;
+  double size = heightmap::HeightmapOptions::kDefaultSize;
+  std::string mode = "planar";
+  double min_clearance = heightmap::HeightmapOptions::kDefaultMinClearance;
+  std::optional<double> floor_depth;
+  std::optional<double> ceiling_height;
+  bool virtual_surfaces = false;
+  bool no_mean = false;
+  std::string backend = "cpu";
+  std::string opencl_platform;
+  std::string opencl_device;
+  int cuda_device = 0;
+  std::string fallback = "none";
+  std::string png;
+  std::string csv;
+  int repeat = 1;
+  bool json = false;
+  bool quiet = false;
+};
+
+/// Default centre: the middle of the observed area, at the lowest observed height (the ground of
+/// a single-storey map).
+Vec3d defaultCentre(const VoxelMap& map) {
+  const MapSummary s = map.summarise();
+  return {0.5 * (s.observed_min.x + s.observed_max.x), 0.5 * (s.observed_min.y + s.observed_max.y),
+          s.observed_min.z + 0.5 * map.geometry().resolution};
+}
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f", value);
+  return text;
+}
+
+int runHeightmap(const HeightmapFlags& f) {
+  heightmap::HeightmapOptions options;
+  if (f.mode == "planar" || f.mode == "fill") {
+    options.mode =
+        f.mode == "fill" ? heightmap::HeightmapMode::kFill : heightmap::HeightmapMode::kPlanar;
+  } else {
+    printError("heightmap", "--mode " + f.mode + ": must be planar or fill");
+    return kExitUsage;
+  }
+  if (f.repeat < 1) {
+    printError("heightmap", "--repeat: must be at least 1");
+    return kExitUsage;
+  }
+  for (const auto& [path, option] : {std::pair{f.png, "--png"}, std::pair{f.csv, "--csv"}}) {
+    if (!path.empty()) {
+      if (auto ok = checkWritable(path, option); !ok) {
+        printError("heightmap", ok.error().message);
+        return kExitFailure;
+      }
+    }
+  }
+  auto map = io::loadMap(f.map);
+  if (!map) {
+    printError("heightmap", map.error().message);
+    return kExitFailure;
+  }
+  if (f.centre.empty()) {
+    options.centre = defaultCentre(*map);
+  } else {
+    auto centre = parseVector(f.centre, "--center");
+    if (!centre) {
+      printError("heightmap", centre.error().message);
+      return kExitUsage;
+    }
+    options.centre = *centre;
+  }
+  options.size = f.size;
+  options.min_clearance = f.min_clearance;
+  options.floor_depth = f.floor_depth;
+  options.ceiling_height = f.ceiling_height;
+  options.virtual_surfaces = f.virtual_surfaces;
+  options.use_voxel_mean = !f.no_mean;
+  heightmap::HeightmapPlan plan;
+  if (auto ok = heightmap::planHeightmap(*map, options, plan); !ok) {
+    printError("heightmap", f.map + ": " + ok.error().message);
+    return kExitFailure;
+  }
+
+  BackendChoice choice;
+  choice.name = f.backend;
+  choice.opencl_platform = f.opencl_platform;
+  choice.opencl_device = f.opencl_device;
+  choice.cuda_device = f.cuda_device;
+  choice.fallback_cpu = f.fallback == "cpu";
+  auto created = createHeightmapGenerator(choice);
+  if (!created) {
+    printError("heightmap", created.error().message);
+    return kExitFailure;
+  }
+  if (!created->fallback_warning.empty()) {
+    std::fprintf(stderr, "raymap heightmap: warning: %s\n", created->fallback_warning.c_str());
+  }
+  heightmap::HeightmapGenerator& generator = *created->generator;
+
+  heightmap::HeightMap result;
+  std::vector<double> seconds;
+  for (int r = 0; r < f.repeat; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    if (auto ok = generator.generate(*map, plan, result); !ok) {
+      printError("heightmap", ok.error().message);
+      return kExitFailure;
+    }
+    seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::sort(seconds.begin(), seconds.end());
+
+  if (!f.png.empty()) {
+    if (auto ok = io::writeHeightmapPng(f.png, result); !ok) {
+      printError("heightmap", ok.error().message);
+      return kExitFailure;
+    }
+  }
+  if (!f.csv.empty()) {
+    if (auto ok = io::writeHeightmapCsv(f.csv, result); !ok) {
+      printError("heightmap", ok.error().message);
+      return kExitFailure;
+    }
+  }
+
+  std::uint64_t counts[4] = {};
+  float lowest = INFINITY;
+  float highest = -INFINITY;
+  for (std::size_t n = 0; n < result.cellCount(); ++n) {
+    counts[std::min<std::uint32_t>(result.kind[n], 3)] += 1;
+    if (result.kind[n] == RM_HM_SURFACE) {
+      lowest = std::min(lowest, result.elevation[n]);
+      highest = std::max(highest, result.elevation[n]);
+    }
+  }
+  const double first = seconds.front();
+  const double median = seconds[seconds.size() / 2];
+  if (f.json) {
+    JsonObject j;
+    j.add("map", f.map)
+        .add("backend", generator.name())
+        .add("device", generator.deviceName())
+        .add("mode", heightmap::toString(options.mode))
+        .add("cells_x", result.cells_x)
+        .add("cells_y", result.cells_y)
+        .add("resolution_m", result.resolution)
+        .add("centre_x_m", result.centre_x)
+        .add("centre_y_m", result.centre_y)
+        .add("reference_z_m", result.reference_z)
+        .add("min_clearance_m", options.min_clearance)
+        .add("surface_cells", counts[RM_HM_SURFACE])
+        .add("virtual_cells", counts[RM_HM_VIRTUAL])
+        .add("vacant_cells", counts[RM_HM_VACANT])
+        .add("unknown_cells", counts[RM_HM_UNKNOWN])
+        .add("repeat", f.repeat)
+        .add("seconds_min", first)
+        .add("seconds_median", median);
+    if (counts[RM_HM_SURFACE] > 0) {
+      j.add("elevation_min_m", static_cast<double>(lowest))
+          .add("elevation_max_m", static_cast<double>(highest));
+    }
+    std::printf("%s\n", j.str().c_str());
+  } else if (!f.quiet) {
+    std::printf(
+        "height map %d x %d cells at %s m around (%s, %s), reference z %s m, %s mode: "
+        "%s surface, %s virtual, %s vacant, %s unknown",
+        result.cells_x, result.cells_y, number(result.resolution).c_str(),
+        number(result.centre_x).c_str(), number(result.centre_y).c_str(),
+        number(result.reference_z).c_str(), std::string(heightmap::toString(options.mode)).c_str(),
+        withCommas(counts[RM_HM_SURFACE]).c_str(), withCommas(counts[RM_HM_VIRTUAL]).c_str(),
+        withCommas(counts[RM_HM_VACANT]).c_str(), withCommas(counts[RM_HM_UNKNOWN]).c_str());
+    if (counts[RM_HM_SURFACE] > 0) {
+      std::printf("; elevation %s .. %s m", number(lowest).c_str(), number(highest).c_str());
+    }
+    std::printf("\ngenerated in %.2f ms on %s%s\n", 1e3 * median, generator.deviceName().c_str(),
+                f.repeat > 1 ? " (median)" : "");
+    for (const auto& [path, what] : {std::pair{f.png, "image"}, std::pair{f.csv, "cells"}}) {
+      if (!path.empty()) {
+        std::printf("wrote %s (%s)\n", path.c_str(), what);
+      }
+    }
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void addHeightmapCommand(CLI::App& app, int* exit_code) {
+  auto f = std::make_shared<HeightmapFlags>();
+  CLI::App* c = app.add_subcommand(
+      "heightmap", "The 2.5D height map of a map around a position (PNG to look at, CSV)");
+  c->add_option("map", f->map, "Map file (.rmap)")->required();
+  c->add_option("--center,--centre", f->centre,
+                "X,Y,Z metres: the map's centre column and the reference height surfaces are "
+                "searched around (default: the middle of the observed area at its lowest "
+                "observed height)");
+  c->add_option("--size", f->size, "Side of the square map and of the searched cube, metres")
+      ->capture_default_str();
+  c->add_option("--mode", f->mode,
+                "planar: one reference height for all columns; fill: flood fill from the centre, "
+                "each column searching around its neighbour's height (follows stairs and ramps)")
+      ->capture_default_str();
+  c->add_option("--min-clearance", f->min_clearance,
+                "Free height a surface needs above it, metres (the robot's height)")
+      ->capture_default_str();
+  c->add_option("--floor", f->floor_depth,
+                "Metres searched below a column's reference (default: size / 2)");
+  c->add_option("--ceiling", f->ceiling_height,
+                "Metres searched above a column's reference (default: size / 2)");
+  c->add_flag("--virtual-surfaces", f->virtual_surfaces,
+              "Report virtual surfaces: free space seen over unseen space (ditch, drop-off)");
+  c->add_flag("--no-voxel-mean", f->no_mean, "Use voxel centres, not voxel means, for heights");
+  c->add_option("--backend", f->backend, "cpu, opencl or cuda")->capture_default_str();
+  c->add_option("--opencl-platform", f->opencl_platform, "OpenCL platform: index or name part");
+  c->add_option("--opencl-device", f->opencl_device, "OpenCL device: index or name part");
+  c->add_option("--cuda-device", f->cuda_device, "CUDA device ordinal")->capture_default_str();
+  c->add_option("--fallback", f->fallback, "none, or cpu: generate on the CPU if the device fails")
+      ->check(CLI::IsMember({"none", "cpu"}))
+      ->capture_default_str();
+  c->add_option("--png", f->png, "Write a colour-mapped image with a legend and scale bar");
+  c->add_option("--csv", f->csv, "Write x,y,elevation,clearance,kind per cell");
+  c->add_option("--repeat", f->repeat, "Generate N times and report the median time (timing)")
+      ->capture_default_str();
+  c->add_flag("--json", f->json, "Print a JSON summary");
+  c->add_flag("-q,--quiet", f->quiet, "Print nothing on success");
+  c->callback([f, exit_code] { *exit_code = runHeightmap(*f); });
+}
+
+}  // namespace raymap::cli
