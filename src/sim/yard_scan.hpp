@@ -9,26 +9,10 @@
 
 #include "src/core/vec3.hpp"
 #include "src/map/ray.hpp"
+#include "src/sim/lidar.hpp"
+#include "src/sim/scene.hpp"
 
 namespace raymap::sim {
-
-/// @brief Axis-aligned solid box, world frame, metres.
-struct Box {
-  Vec3d min;
-  Vec3d max;
-};
-
-/// @brief Spinning lidar: `beams` rows evenly over [min, max] elevation, `columns` azimuth steps
-/// per revolution, one revolution per scan.
-struct LidarModel {
-  int beams = 32;
-  double elevation_min_deg = -25.0;
-  double elevation_max_deg = 15.0;
-  int columns = 512;
-  double max_range_m = 40.0;    ///< beyond this the lidar reports no return
-  double range_noise_m = 0.01;  ///< standard deviation of Gaussian range noise
-  double scan_period_s = 0.1;   ///< time of one revolution
-};
 
 /// @brief The yard: ground at z = 0, walls, obstacles; the lidar moves from `start` to `end`
 /// (world frame, metres) over `scans` scans.
@@ -48,8 +32,10 @@ std::vector<Box> yardSolids();
 /// solids), metres; 0 inside a solid or below the ground.
 double distanceToSurface(Vec3d p, const std::vector<Box>& solids);
 
-/// @brief Simulates the scans. Rays that hit nothing within max range are no-return rays
-/// (kRayNoReturn) ending at max range. Deterministic for a given seed.
+/// @brief Simulates the scans with simulateScans(): the scene is the ground plane z = 0 and the
+/// solids; the sensor rests at each scan's position (heading +x) for the whole revolution.
+/// Rays that hit nothing within max range are no-return rays (kRayNoReturn) ending at max range.
+/// Deterministic for a given seed.
 std::vector<Ray> simulateYardScans(const YardScanConfig& config);
 
 }  // namespace raymap::sim
