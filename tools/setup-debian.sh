@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
-  zlib1g-dev libcli11-dev
+  zlib1g-dev libcli11-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   liboctomap-dev          # OctoMap: the reference in benchmarks and agreement tests only
   ocl-icd-opencl-dev opencl-headers  # the OpenCL backend (ICD loader and headers)

@@ -1,0 +1,607 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The scene-file reader: yaml-cpp parses, a small checked reader turns mappings into the scene
+// and its simulation. The first problem found becomes the error; yaml-cpp's exceptions stay here.
+#include "src/sim/scene_file.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+namespace raymap::sim {
+namespace {
+
+std::string formatNumber(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+/// Where the reader is and the first error it met.
+class Context {
+ public:
+  explicit Context(std::string file) : file_(std::move(file)) {}
+
+  bool failed() const noexcept { return error_.has_value(); }
+
+  /// Records "FILE: line N: PATH: REASON" unless an error is already recorded. `at` gives the
+  /// line (the mapping that lacks a key, the value that is wrong).
+  void fail(const YAML::Node& at, const std::string& path, const std::string& reason) {
+    if (error_) {
+      return;
+    }
+    std::string message = file_ + ": ";
+    if (at.IsDefined()) {
+      const YAML::Mark mark = at.Mark();
+      if (mark.line >= 0) {
+        message += "line " + std::to_string(mark.line + 1) + ": ";
+      }
+    }
+    if (!path.empty()) {
+      message += path + ": ";
+    }
+    error_ = Error{ErrorCode::kFormat, message + reason};
+  }
+
+  Error error() const { return error_.value_or(Error{}); }
+
+ private:
+  std::string file_;
+  std::optional<Error> error_;
+};
+
+/// Key paths as the messages write them: "objects[3].rise".
+std::string child(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+std::string item(const std::string& path, std::size_t index) {
+  return path + "[" + std::to_string(index) + "]";
+}
+
+double toNumber(Context& ctx, const YAML::Node& node, const std::string& path) {
+  double value = 0.0;
+  if (!node.IsScalar() || !YAML::convert<double>::decode(node, value)) {
+    ctx.fail(node, path, "expected a number");
+    return 0.0;
+  }
+  if (!std::isfinite(value)) {
+    ctx.fail(node, path, "must be finite (got " + node.Scalar() + ")");
+    return 0.0;
+  }
+  return value;
+}
+
+/// An integer written as one (no fraction, no exponent), within [lo, hi].
+template <class Int>
+Int toInteger(Context& ctx, const YAML::Node& node, const std::string& path, Int lo, Int hi) {
+  Int value{};
+  if (node.IsScalar()) {
+    const std::string& text = node.Scalar();
+    const char* end = text.data() + text.size();
+    const auto [at, ec] = std::from_chars(text.data(), end, value);
+    if (ec == std::errc() && at == end && !text.empty()) {
+      if (value >= lo && value <= hi) {
+        return value;
+      }
+      ctx.fail(node, path,
+               "must be from " + std::to_string(lo) + " to " + std::to_string(hi) + " (got " +
+                   text + ")");
+      return lo;
+    }
+  }
+  ctx.fail(node, path, "expected an integer");
+  return lo;
+}
+
+/// A list of exactly `count` numbers; `shape` names them in the message ("[x, y, z]").
+std::vector<double> toNumbers(Context& ctx, const YAML::Node& node, const std::string& path,
+                              std::size_t count, const char* shape) {
+  std::vector<double> values(count, 0.0);
+  if (!node.IsSequence() || node.size() != count) {
+    ctx.fail(
+        node, path,
+        std::string("expected ") + shape + " (a list of " + std::to_string(count) + " numbers)");
+    return values;
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    values[i] = toNumber(ctx, node[i], item(path, i));
+  }
+  return values;
+}
+
+/// One YAML mapping being read. Every key a reader asks for is known; finish() reports any other.
+class Fields {
+ public:
+  Fields(Context& ctx, const YAML::Node& node, std::string path)
+      : ctx_(ctx), node_(node), path_(std::move(path)) {
+    if (!node.IsMap()) {
+      ctx_.fail(node, path_, "expected a mapping (key: value lines)");
+      return;
+    }
+    std::set<std::string> seen;
+    for (const auto& entry : node) {
+      if (!entry.first.IsScalar()) {
+        ctx_.fail(entry.first, path_, "keys must be plain words");
+        return;
+      }
+      if (!seen.insert(entry.first.Scalar()).second) {
+        ctx_.fail(entry.first, child(path_, entry.first.Scalar()), "duplicate key");
+        return;
+      }
+    }
+    map_ = true;
+  }
+
+  std::string path(const std::string& key) const { return child(path_, key); }
+
+  /// The value of `key` (undefined when absent); `key` becomes known.
+  YAML::Node get(const std::string& key) {
+    asked_.push_back(key);
+    return map_ ? node_[key] : YAML::Node(YAML::NodeType::Undefined);
+  }
+  bool has(const std::string& key) { return get(key).IsDefined(); }
+
+  /// The value of a key that must be there (a null node after reporting it missing).
+  YAML::Node required(const std::string& key) {
+    YAML::Node value = get(key);
+    if (!value.IsDefined()) {
+      ctx_.fail(node_, path(key), "required key missing");
+      return YAML::Node(YAML::NodeType::Null);
+    }
+    return value;
+  }
+
+  double number(const std::string& key) { return toNumber(ctx_, required(key), path(key)); }
+  double number(const std::string& key, double fallback) {
+    const YAML::Node value = get(key);
+    return value.IsDefined() ? toNumber(ctx_, value, path(key)) : fallback;
+  }
+  /// A number that must be > 0 (or >= 0 with `allow_zero`).
+  double positive(const std::string& key, std::optional<double> fallback = std::nullopt,
+                  bool allow_zero = false) {
+    const double value = fallback && !has(key) ? *fallback : number(key);
+    if (allow_zero ? value < 0.0 : value <= 0.0) {
+      ctx_.fail(get(key), path(key),
+                std::string("must be ") + (allow_zero ? ">= 0" : "> 0") + " (got " +
+                    formatNumber(value) + ")");
+    }
+    return value;
+  }
+  template <class Int>
+  Int integer(const std::string& key, Int lo, Int hi) {
+    return toInteger<Int>(ctx_, required(key), path(key), lo, hi);
+  }
+  template <class Int>
+  Int integer(const std::string& key, Int fallback, Int lo, Int hi) {
+    const YAML::Node value = get(key);
+    return value.IsDefined() ? toInteger<Int>(ctx_, value, path(key), lo, hi) : fallback;
+  }
+  Vec3d vec3(const std::string& key) {
+    const std::vector<double> v = toNumbers(ctx_, required(key), path(key), 3, "[x, y, z]");
+    return {v[0], v[1], v[2]};
+  }
+  std::array<double, 2> vec2(const std::string& key) {
+    const std::vector<double> v = toNumbers(ctx_, required(key), path(key), 2, "[x, y]");
+    return {v[0], v[1]};
+  }
+  /// One of `choices`, as its index.
+  std::size_t choice(const std::string& key, const std::vector<std::string>& choices) {
+    const YAML::Node value = required(key);
+    if (value.IsScalar()) {
+      const auto at = std::find(choices.begin(), choices.end(), value.Scalar());
+      if (at != choices.end()) {
+        return static_cast<std::size_t>(at - choices.begin());
+      }
+    }
+    std::string list;
+    for (std::size_t i = 0; i < choices.size(); ++i) {
+      list += (i == 0 ? "" : i + 1 == choices.size() ? " or " : ", ") + choices[i];
+    }
+    ctx_.fail(value, path(key),
+              "must be " + list + (value.IsScalar() ? " (got '" + value.Scalar() + "')" : ""));
+    return 0;
+  }
+  /// Reports a failed check of `key`'s value.
+  void check(bool ok, const std::string& key, const std::string& reason) {
+    if (!ok) {
+      ctx_.fail(get(key), path(key), reason);
+    }
+  }
+
+  /// Makes `keys` known and reports any other key now, before a missing key is reported for what
+  /// may be a misspelt one.
+  void knownKeys(std::initializer_list<const char*> keys) {
+    asked_.insert(asked_.end(), keys.begin(), keys.end());
+    finish();
+  }
+
+  /// Reports the first key nobody asked for.
+  void finish() {
+    if (!map_ || ctx_.failed()) {
+      return;
+    }
+    for (const auto& entry : node_) {
+      const std::string& key = entry.first.Scalar();
+      if (std::find(asked_.begin(), asked_.end(), key) == asked_.end()) {
+        std::vector<std::string> known = asked_;
+        std::sort(known.begin(), known.end());
+        known.erase(std::unique(known.begin(), known.end()), known.end());
+        std::string list;
+        for (const std::string& k : known) {
+          list += (list.empty() ? "" : ", ") + k;
+        }
+        ctx_.fail(entry.first, path(key), "unknown key (known here: " + list + ")");
+        return;
+      }
+    }
+  }
+
+ private:
+  Context& ctx_;
+  const YAML::Node node_;
+  std::string path_;
+  std::vector<std::string> asked_;
+  bool map_ = false;
+};
+
+// ---- objects ----
+
+const std::vector<std::string> kDirections = {"+x", "-x", "+y", "-y"};
+
+constexpr RampAxis kAxisOfDirection[] = {RampAxis::kPlusX, RampAxis::kMinusX, RampAxis::kPlusY,
+                                         RampAxis::kMinusY};
+
+/// A box's max must exceed its min on every axis.
+void checkOrdered(Fields& f, Vec3d min, Vec3d max) {
+  f.check(max.x > min.x && max.y > min.y && max.z > min.z, "max", "must exceed min on every axis");
+}
+
+void readBox(Fields& f, Scene& scene) {
+  const Vec3d min = f.vec3("min");
+  const Vec3d max = f.vec3("max");
+  checkOrdered(f, min, max);
+  scene.boxes.push_back({min, max});
+}
+
+/// A wall along x or y: the box around the segment from -> to, `thickness` across it, extended
+/// by half the thickness at both ends (so walls meeting at a corner close it).
+void readWall(Fields& f, Scene& scene, double base_default) {
+  const auto from = f.vec2("from");
+  const auto to = f.vec2("to");
+  const double height = f.positive("height");
+  const double thickness = f.positive("thickness");
+  const double base = f.number("base", base_default);
+  const bool along_x = from[1] == to[1] && from[0] != to[0];
+  const bool along_y = from[0] == to[0] && from[1] != to[1];
+  f.check(along_x || along_y, "to",
+          "a wall runs along x or y: from and to must differ in exactly one coordinate");
+  const double h = thickness / 2.0;
+  Box box{{std::min(from[0], to[0]) - h, std::min(from[1], to[1]) - h, base},
+          {std::max(from[0], to[0]) + h, std::max(from[1], to[1]) + h, base + height}};
+  scene.boxes.push_back(box);
+}
+
+void readRamp(Fields& f, Scene& scene) {
+  const Vec3d min = f.vec3("min");
+  const Vec3d max = f.vec3("max");
+  checkOrdered(f, min, max);
+  const RampAxis axis = kAxisOfDirection[f.choice("rises", kDirections)];
+  scene.ramps.push_back({min, max, axis});
+}
+
+/// Steps k = 1..steps: solid boxes from the floor (start.z) up to start.z + k rise, each `run`
+/// deep along `direction` and `width` wide, centred on start across it.
+void readStairs(Fields& f, Scene& scene) {
+  const Vec3d start = f.vec3("start");
+  const std::size_t direction = f.choice("direction", kDirections);
+  const int steps = f.integer<int>("steps", 1, 1000);
+  const double rise = f.positive("rise");
+  const double run = f.positive("run");
+  const double width = f.positive("width");
+  const int along = direction < 2 ? 0 : 1;  // x or y
+  const int across = 1 - along;
+  const double sign = direction % 2 == 0 ? 1.0 : -1.0;
+  for (int k = 1; k <= steps; ++k) {
+    const double near = start[along] + sign * (k - 1) * run;
+    const double far = start[along] + sign * k * run;
+    Box step{start, start};
+    step.min[along] = std::min(near, far);
+    step.max[along] = std::max(near, far);
+    step.min[across] = start[across] - width / 2.0;
+    step.max[across] = start[across] + width / 2.0;
+    step.max.z = start.z + k * rise;
+    scene.boxes.push_back(step);
+  }
+}
+
+/// A top of `size` whose upper face is at base + height, on four square legs in its corners.
+void readTable(Fields& f, Scene& scene, double base_default) {
+  const auto centre = f.vec2("centre");
+  const auto size = f.vec2("size");
+  const double height = f.positive("height");
+  const double top = f.positive("top_thickness");
+  const double leg = f.positive("leg_size");
+  const double base = f.number("base", base_default);
+  f.check(size[0] > 0.0 && size[1] > 0.0, "size", "must be > 0 in x and y");
+  f.check(top < height, "top_thickness", "must be less than the height");
+  f.check(2.0 * leg <= std::min(size[0], size[1]), "leg_size",
+          "two legs must fit across the top (2 leg_size <= size)");
+  const Vec3d lo{centre[0] - size[0] / 2.0, centre[1] - size[1] / 2.0, base};
+  const Vec3d hi{centre[0] + size[0] / 2.0, centre[1] + size[1] / 2.0, base + height};
+  scene.boxes.push_back({{lo.x, lo.y, hi.z - top}, hi});
+  for (const double x : {lo.x, hi.x - leg}) {
+    for (const double y : {lo.y, hi.y - leg}) {
+      scene.boxes.push_back({{x, y, base}, {x + leg, y + leg, hi.z - top}});
+    }
+  }
+}
+
+void readPole(Fields& f, Scene& scene, double base_default) {
+  const auto at = f.vec2("at");
+  const double radius = f.positive("radius");
+  const double height = f.positive("height");
+  const double base = f.number("base", base_default);
+  scene.poles.push_back({at[0], at[1], radius, base, base + height});
+}
+
+void readDitch(Fields& f, Scene& scene, std::vector<std::size_t>& ditch_objects,
+               std::size_t index) {
+  const auto min = f.vec2("min");
+  const auto max = f.vec2("max");
+  const double depth = f.positive("depth");
+  f.check(max[0] > min[0] && max[1] > min[1], "max", "must exceed min in x and y");
+  f.check(scene.has_ground, "type", "a ditch is a hole in the ground, and the scene has none");
+  const Ditch ditch{min[0], min[1], max[0], max[1], depth};
+  for (std::size_t i = 0; i < scene.ditches.size(); ++i) {
+    const Ditch& other = scene.ditches[i];
+    const bool overlap = ditch.x_min < other.x_max && other.x_min < ditch.x_max &&
+                         ditch.y_min < other.y_max && other.y_min < ditch.y_max;
+    f.check(!overlap, "min",
+            "overlaps the ditch objects[" + std::to_string(ditch_objects[i]) +
+                "] (ditches must not overlap)");
+  }
+  scene.ditches.push_back(ditch);
+  ditch_objects.push_back(index);
+}
+
+void readObjects(Context& ctx, const YAML::Node& node, Scene& scene) {
+  if (!node.IsSequence()) {
+    ctx.fail(node, "objects", "expected a list of objects (lines starting with '- ')");
+    return;
+  }
+  const double base = scene.has_ground ? scene.ground_height : 0.0;
+  std::vector<std::size_t> ditch_objects;
+  for (std::size_t i = 0; i < node.size() && !ctx.failed(); ++i) {
+    Fields f(ctx, node[i], item("objects", i));
+    if (ctx.failed()) {
+      return;
+    }
+    switch (f.choice("type", {"box", "wall", "ramp", "stairs", "table", "pole", "ditch"})) {
+      case 0:
+        readBox(f, scene);
+        break;
+      case 1:
+        readWall(f, scene, base);
+        break;
+      case 2:
+        readRamp(f, scene);
+        break;
+      case 3:
+        readStairs(f, scene);
+        break;
+      case 4:
+        readTable(f, scene, base);
+        break;
+      case 5:
+        readPole(f, scene, base);
+        break;
+      default:
+        readDitch(f, scene, ditch_objects, i);
+        break;
+    }
+    f.finish();
+  }
+}
+
+// ---- ground, lidar, trajectory ----
+
+void readGround(Context& ctx, const YAML::Node& node, Scene& scene) {
+  if (!node.IsDefined()) {
+    return;  // ground at z = 0
+  }
+  if (node.IsScalar() && node.Scalar() == "none") {
+    scene.has_ground = false;
+    return;
+  }
+  if (node.IsMap()) {
+    Fields f(ctx, node, "ground");
+    scene.ground_height = f.number("height", 0.0);
+    f.finish();
+    return;
+  }
+  if (!node.IsScalar() || !YAML::convert<double>::decode(node, scene.ground_height) ||
+      !std::isfinite(scene.ground_height)) {
+    ctx.fail(node, "ground", "expected a height, {height: H} or none");
+  }
+}
+
+void readLidar(Context& ctx, const YAML::Node& node, LidarModel& lidar) {
+  if (!node.IsDefined()) {
+    return;  // the defaults
+  }
+  Fields f(ctx, node, "lidar");
+  lidar.beams = f.integer<int>("beams", lidar.beams, 1, 4096);
+  lidar.elevation_min_deg = f.number("elevation_min_deg", lidar.elevation_min_deg);
+  lidar.elevation_max_deg = f.number("elevation_max_deg", lidar.elevation_max_deg);
+  lidar.columns = f.integer<int>("columns", lidar.columns, 1, 1 << 20);
+  const double rate_hz = f.positive("rate_hz", 1.0 / lidar.scan_period_s);
+  lidar.max_range_m = f.positive("max_range", lidar.max_range_m);
+  lidar.min_range_m = f.positive("min_range", lidar.min_range_m, true);
+  lidar.range_noise_m = f.positive("range_noise", lidar.range_noise_m, true);
+  lidar.dropout = f.number("dropout", lidar.dropout);
+  f.check(lidar.elevation_min_deg >= -90.0 && lidar.elevation_min_deg <= 90.0, "elevation_min_deg",
+          "must be from -90 to 90");
+  f.check(lidar.elevation_max_deg >= lidar.elevation_min_deg && lidar.elevation_max_deg <= 90.0,
+          "elevation_max_deg", "must be from elevation_min_deg to 90");
+  f.check(lidar.min_range_m < lidar.max_range_m, "min_range", "must be less than max_range");
+  f.check(lidar.dropout >= 0.0 && lidar.dropout <= 1.0, "dropout",
+          "must be a probability from 0 to 1 (got " + formatNumber(lidar.dropout) + ")");
+  lidar.scan_period_s = rate_hz > 0.0 ? 1.0 / rate_hz : lidar.scan_period_s;
+  f.finish();
+}
+
+/// `waypoints` + `speed`, or `poses` ([t, x, y, z, yaw_deg] each).
+void readTrajectory(Context& ctx, const YAML::Node& node, SensorPath& path) {
+  if (!node.IsDefined()) {
+    ctx.fail(node, "trajectory", "required key missing");
+    return;
+  }
+  Fields f(ctx, node, "trajectory");
+  f.knownKeys({"waypoints", "speed", "poses"});
+  const bool has_waypoints = f.has("waypoints");
+  const bool has_poses = f.has("poses");
+  if (has_waypoints == has_poses) {
+    ctx.fail(node, "trajectory", "give either waypoints (with speed) or poses");
+    return;
+  }
+  const std::string key = has_waypoints ? "waypoints" : "poses";
+  const YAML::Node list = f.get(key);
+  if (!list.IsSequence() || list.size() == 0) {
+    ctx.fail(list, f.path(key), "expected a non-empty list");
+    return;
+  }
+  Result<SensorPath> made = SensorPath{};
+  if (has_waypoints) {
+    const double speed = f.positive("speed");
+    std::vector<Vec3d> waypoints;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const auto v = toNumbers(ctx, list[i], item(f.path(key), i), 3, "[x, y, z]");
+      waypoints.push_back({v[0], v[1], v[2]});
+    }
+    f.finish();
+    if (ctx.failed()) {
+      return;
+    }
+    made = SensorPath::fromWaypoints(waypoints, speed);
+  } else {
+    f.check(!f.has("speed"), "speed", "applies to waypoints only");
+    std::vector<SensorPose> poses;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const auto v = toNumbers(ctx, list[i], item(f.path(key), i), 5, "[t, x, y, z, yaw_deg]");
+      poses.push_back({v[0], {v[1], v[2], v[3]}, v[4] * std::numbers::pi / 180.0});
+    }
+    f.finish();
+    if (ctx.failed()) {
+      return;
+    }
+    made = SensorPath::fromPoses(std::move(poses));
+  }
+  if (!made) {
+    ctx.fail(list, f.path(key), made.error().message);
+    return;
+  }
+  path = std::move(*made);
+}
+
+Result<SceneFile> parse(const YAML::Node& root, const std::string& name) {
+  Context ctx(name);
+  Fields f(ctx, root, "");
+  f.knownKeys({"name", "ground", "objects", "lidar", "trajectory", "seed", "scans", "duration"});
+  if (ctx.failed()) {
+    return Unexpected(ctx.error());
+  }
+  SceneFile file;
+  const YAML::Node scene_name = f.get("name");
+  file.scene.name = std::filesystem::path(name).stem().string();
+  if (scene_name.IsDefined()) {
+    if (!scene_name.IsScalar()) {
+      ctx.fail(scene_name, "name", "expected a text");
+    } else {
+      file.scene.name = scene_name.Scalar();
+    }
+  }
+  readGround(ctx, f.get("ground"), file.scene);
+  if (const YAML::Node objects = f.get("objects"); objects.IsDefined() && !ctx.failed()) {
+    readObjects(ctx, objects, file.scene);
+  }
+  SimulationConfig& sim = file.simulation;
+  if (!ctx.failed()) {
+    readLidar(ctx, f.get("lidar"), sim.lidar);
+  }
+  if (!ctx.failed()) {
+    readTrajectory(ctx, f.get("trajectory"), sim.path);
+  }
+  sim.seed = f.integer<std::uint64_t>("seed", 1, 0, std::numeric_limits<std::uint64_t>::max());
+  const bool has_scans = f.has("scans");
+  const bool has_duration = f.has("duration");
+  f.check(!(has_scans && has_duration), "duration", "give scans or duration, not both");
+  const double rate_hz = 1.0 / sim.lidar.scan_period_s;
+  if (has_scans) {
+    sim.scans = f.integer<int>("scans", 1, 100000);
+  } else {
+    const double seconds =
+        has_duration ? f.positive("duration") : sim.path.endTime() - sim.path.startTime();
+    // A hair of slack so that 2 s at 10 Hz is 20 scans despite rounding.
+    const double scans = std::floor(seconds * rate_hz + 1e-6);
+    if (scans < 1.0 && !ctx.failed()) {
+      ctx.fail(has_duration ? f.get("duration") : f.get("trajectory"),
+               has_duration ? "duration" : "trajectory",
+               "lasts " + formatNumber(seconds) + " s, less than one scan (" +
+                   formatNumber(1.0 / rate_hz) + " s); give scans or a longer duration");
+    }
+    sim.scans = static_cast<int>(std::min(scans, 100000.0));
+  }
+  f.finish();
+  if (ctx.failed()) {
+    return Unexpected(ctx.error());
+  }
+  return file;
+}
+
+}  // namespace
+
+Result<SceneFile> parseSceneFile(const std::string& text, const std::string& name) {
+  try {
+    return parse(YAML::Load(text), name);
+  } catch (const YAML::Exception& e) {
+    std::string where;
+    if (e.mark.line >= 0) {
+      where = "line " + std::to_string(e.mark.line + 1) + ", column " +
+              std::to_string(e.mark.column + 1) + ": ";
+    }
+    return fail(ErrorCode::kFormat, name + ": " + where + "not valid YAML: " + e.msg);
+  } catch (const std::exception& e) {
+    return fail(ErrorCode::kFormat, name + ": cannot read the scene: " + e.what());
+  }
+}
+
+Result<SceneFile> loadSceneFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    return fail(ErrorCode::kIo, "cannot open '" + path + "': " + std::strerror(errno));
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) {
+    return fail(ErrorCode::kIo, "cannot read '" + path + "'");
+  }
+  return parseSceneFile(text.str(), path);
+}
+
+}  // namespace raymap::sim
