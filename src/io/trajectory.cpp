@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Trajectory: text parsing with line-numbered errors, and pose interpolation.
+// Trajectory: text parsing with line-numbered errors, pose interpolation, and writing.
 #include "src/io/trajectory.hpp"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <string_view>
 #include <utility>
 
+#include "src/io/atomic_file.hpp"
 #include "src/io/byte_reader.hpp"
 
 namespace raymap::io {
@@ -228,6 +230,38 @@ std::optional<Pose> Trajectory::poseAt(double time_s, std::size_t& segment_hint)
                                    wa * qa.y + wb * qb.y, wa * qa.z + wb * qb.z});
   }
   return pose;
+}
+
+Expected<void, Error> saveTrajectory(const Trajectory& trajectory, const std::string& path) {
+  auto file = AtomicFileWriter::open(path);
+  if (!file) {
+    return Unexpected(std::move(file).error());
+  }
+  const bool oriented = trajectory.hasOrientation();
+  std::string text = oriented ? "# time x y z qw qx qy qz\n" : "# time x y z\n";
+  constexpr std::size_t kFlushBytes = std::size_t{1} << 16;
+  for (const TrajectorySample& s : trajectory.samples()) {
+    char line[256];
+    int n = std::snprintf(line, sizeof(line), "%.17g %.17g %.17g %.17g", s.time_s, s.position.x,
+                          s.position.y, s.position.z);
+    if (oriented) {
+      n += std::snprintf(line + n, sizeof(line) - static_cast<std::size_t>(n),
+                         " %.17g %.17g %.17g %.17g", s.orientation.w, s.orientation.x,
+                         s.orientation.y, s.orientation.z);
+    }
+    text.append(line, static_cast<std::size_t>(n));
+    text += '\n';
+    if (text.size() >= kFlushBytes) {
+      if (auto ok = file->write(text); !ok) {
+        return ok;
+      }
+      text.clear();
+    }
+  }
+  if (auto ok = file->write(text); !ok) {
+    return ok;
+  }
+  return file->commit();
 }
 
 }  // namespace raymap::io

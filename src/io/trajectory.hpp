@@ -91,4 +91,9 @@ class Trajectory {
   bool has_orientation_ = false;
 };
 
+/// @brief Writes a trajectory as text that Trajectory::load() reads back exactly: a `#` comment
+/// naming the columns, then one line per sample, `time x y z` or `time x y z qw qx qy qz` (with
+/// orientations), every value with 17 significant digits. Temporary file + rename.
+Expected<void, Error> saveTrajectory(const Trajectory& trajectory, const std::string& path);
+
 }  // namespace raymap::io

@@ -12,6 +12,8 @@
 
 #include "src/io/atomic_file.hpp"
 #include "src/io/ray_cloud_writer.hpp"
+#include "src/io/ray_source.hpp"
+#include "src/io/trajectory.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -283,6 +285,48 @@ TEST(AtomicFileWriter, PatchOverwritesInPlaceAndLaterWritesAppend) {
   EXPECT_EQ(std::string(bytes.begin(), bytes.end()), "count=042;end");
   ASSERT_FALSE(beyond.has_value());
   EXPECT_EQ(beyond.error().code, ErrorCode::kInvalidArgument);
+}
+
+TEST(RayCloudWriter, PointCloudLayoutHoldsTheReturnsForATrajectory) {
+  // Arrange: two returns and a no-return ray from a sensor moving along x.
+  TempDir dir;
+  const std::string points = dir.file("points.ply");
+  const std::string path_file = dir.file("path.txt");
+  const std::vector<Ray> rays = {ray({0.0, 0.0, 1.0}, {5.0, 0.0, 0.0}, 0.0, 20.0f, 0),
+                                 ray({0.5, 0.0, 1.0}, {0.5, 30.0, 1.0}, 0.5, 0.0f, 0, kRayNoReturn),
+                                 ray({1.0, 0.0, 1.0}, {1.0, -3.0, 0.5}, 1.0, 30.0f, 1)};
+  auto trajectory = Trajectory::fromSamples(
+      {{0.0, {0.0, 0.0, 1.0}, {}}, {1.0, {1.0, 0.0, 1.0}, {}}}, false, path_file);
+  ASSERT_TRUE(trajectory.has_value()) << trajectory.error().message;
+  ASSERT_TRUE(saveTrajectory(*trajectory, path_file).has_value());
+  auto writer = RayCloudWriter::open(points, PlyLayout::kPointCloud);
+  ASSERT_TRUE(writer.has_value()) << writer.error().message;
+
+  // Act
+  ASSERT_TRUE((*writer)->write(rays).has_value());
+  ASSERT_TRUE((*writer)->finish().has_value());
+  RaySourceOptions options;
+  options.trajectory_path = path_file;
+  auto source = openRaySource(points, options);
+  ASSERT_TRUE(source.has_value()) << source.error().message;
+  std::vector<Ray> read(4);
+  auto n = (*source)->read(read);
+
+  // Assert
+  EXPECT_EQ((*writer)->count(), 2u);
+  EXPECT_FALSE((*source)->info().ray_cloud);
+  EXPECT_FALSE((*source)->info().has_alpha);
+  ASSERT_TRUE(n.has_value()) << n.error().message;
+  ASSERT_EQ(*n, 2u);
+  for (const std::size_t i : {0u, 1u}) {
+    const Ray& expected = rays[i == 0 ? 0 : 2];
+    EXPECT_EQ(read[i].sample, expected.sample);
+    EXPECT_EQ(read[i].origin, expected.origin);
+    EXPECT_EQ(read[i].time_s, expected.time_s);
+    EXPECT_EQ(read[i].intensity, expected.intensity);
+    EXPECT_EQ(read[i].scan, expected.scan);
+    EXPECT_EQ(read[i].flags, 0u);
+  }
 }
 
 }  // namespace

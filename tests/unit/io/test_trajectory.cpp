@@ -182,5 +182,43 @@ TEST(Trajectory, MissingFileNamesThePath) {
   EXPECT_EQ(trajectory.error().message.rfind(dir.file("none.txt") + ": ", 0), 0u);
 }
 
+TEST(Trajectory, SavedTrajectoriesLoadBackExactly) {
+  test::TempDir dir;
+  const std::string path = dir.file("saved.txt");
+  auto original = Trajectory::fromSamples(
+      {{0.1, {1.0 / 3.0, -2e5, 1e-7}, aboutZ(0.3)}, {0.1 + 1e-9, {2.0, 0.0, -1.5}, aboutZ(-2.0)}},
+      true, "original");
+  ASSERT_TRUE(original.has_value()) << original.error().message;
+
+  ASSERT_TRUE(saveTrajectory(*original, path).has_value());
+  const auto loaded = Trajectory::load(path);
+
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  ASSERT_TRUE(loaded->hasOrientation());
+  ASSERT_EQ(loaded->samples().size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const TrajectorySample& a = original->samples()[i];
+    const TrajectorySample& b = loaded->samples()[i];
+    EXPECT_EQ(a.time_s, b.time_s);
+    EXPECT_EQ(a.position, b.position);
+    EXPECT_NEAR(a.orientation.dot(b.orientation), 1.0, kTolerance);
+  }
+}
+
+TEST(Trajectory, SavesPositionsOnlyWithoutOrientation) {
+  test::TempDir dir;
+  const std::string path = dir.file("positions.txt");
+  auto original =
+      Trajectory::fromSamples({{0.0, {1.0, 2.0, 3.0}, {}}, {1.0, {4.0, 5.0, 6.0}, {}}}, false, "p");
+  ASSERT_TRUE(original.has_value());
+
+  ASSERT_TRUE(saveTrajectory(*original, path).has_value());
+  const auto loaded = Trajectory::load(path);
+
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_FALSE(loaded->hasOrientation());
+  EXPECT_EQ(loaded->samples()[1].position, (Vec3d{4.0, 5.0, 6.0}));
+}
+
 }  // namespace
 }  // namespace raymap::io
