@@ -15,6 +15,7 @@
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/populate.hpp"
+#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -26,37 +27,6 @@ struct PopulateFlags {
   std::string ply;
   std::string stats_json;
   bool quiet = false;
-};
-
-/// Output files written under temporary names ("<path>.part-<pid>") and renamed together by
-/// commit(); whatever was not committed is removed on destruction.
-class StagedOutputs {
- public:
-  StagedOutputs() = default;
-  StagedOutputs(const StagedOutputs&) = delete;
-  StagedOutputs& operator=(const StagedOutputs&) = delete;
-  ~StagedOutputs() {
-    for (const auto& [final_path, temp_path] : files_) {
-      std::remove(temp_path.c_str());
-    }
-  }
-  /// @brief The temporary path to write `final_path` to.
-  std::string add(const std::string& final_path) {
-    files_.emplace_back(final_path, final_path + ".part-" + std::to_string(::getpid()));
-    return files_.back().second;
-  }
-  Expected<void, Error> commit() {
-    for (const auto& [final_path, temp_path] : files_) {
-      if (std::rename(temp_path.c_str(), final_path.c_str()) != 0) {
-        return fail(ErrorCode::kIo, "cannot replace '" + final_path + "': " + std::strerror(errno));
-      }
-    }
-    files_.clear();
-    return {};
-  }
-
- private:
-  std::vector<std::pair<std::string, std::string>> files_;
 };
 
 void printSummary(const PopulateReport& r, const PopulateOptions& o) {

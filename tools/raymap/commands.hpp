@@ -19,6 +19,8 @@ void addInfoCommand(CLI::App& app, int* exit_code);
 void addExportCommand(CLI::App& app, int* exit_code);
 void addBenchCommand(CLI::App& app, int* exit_code);
 void addDemoCommand(CLI::App& app, int* exit_code);
+/// `raymap simulate`: a lidar recording and the true height field of a scene file.
+void addSimulateCommand(CLI::App& app, int* exit_code);
 /// Present in every build; lists OpenCL and CUDA devices, says why an API has none, and exits 1
 /// only when neither has a device.
 void addDevicesCommand(CLI::App& app, int* exit_code);

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   addExportCommand(app, &exit_code);
   addBenchCommand(app, &exit_code);
   addDemoCommand(app, &exit_code);
+  addSimulateCommand(app, &exit_code);
   addDevicesCommand(app, &exit_code);
   try {
     app.parse(argc, argv);

@@ -1,0 +1,304 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap simulate`: a lidar recording of a scene file, as a ray cloud or a point cloud with its
+// trajectory, and the scene's true height field.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "src/io/ray_cloud_writer.hpp"
+#include "src/io/trajectory.hpp"
+#include "src/sim/scene_file.hpp"
+#include "tools/raymap/cli_options.hpp"
+#include "tools/raymap/commands.hpp"
+#include "tools/raymap/staged_outputs.hpp"
+
+namespace raymap::cli {
+namespace {
+
+/// The height-map generator's default clearance, so the truth matches what it looks for.
+constexpr double kDefaultMinClearance = 0.5;
+constexpr double kDefaultTruthResolution = 0.1;
+
+struct SimulateFlags {
+  std::string scene;
+  std::string rays;
+  std::string points;
+  std::string trajectory;
+  std::string truth;
+  double truth_resolution = kDefaultTruthResolution;
+  std::string truth_box;
+  std::optional<double> truth_reference;
+  double min_clearance = kDefaultMinClearance;
+  std::optional<std::uint64_t> seed;
+  std::optional<int> scans;
+  bool quiet = false;
+};
+
+/// The xy rectangle of the truth grid.
+struct Rect {
+  double x_min = 0.0;
+  double y_min = 0.0;
+  double x_max = 0.0;
+  double y_max = 0.0;
+};
+
+/// "xmin,ymin,xmax,ymax" with min < max.
+Result<Rect> parseRect(const std::string& text, const std::string& option) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string part;
+  while (std::getline(in, part, ',')) {
+    char* end = nullptr;
+    const double value = std::strtod(part.c_str(), &end);
+    if (part.empty() || end != part.c_str() + part.size() || !std::isfinite(value)) {
+      values.clear();
+      break;
+    }
+    values.push_back(value);
+  }
+  if (values.size() != 4 || !(values[0] < values[2]) || !(values[1] < values[3])) {
+    return fail(ErrorCode::kInvalidArgument,
+                option + ": '" + text + "' is not xmin,ymin,xmax,ymax with min < max (metres)");
+  }
+  return Rect{values[0], values[1], values[2], values[3]};
+}
+
+/// The xy bounds of the scene's objects and the sensor path.
+Rect sceneRect(const sim::Scene& scene, const sim::SensorPath& path) {
+  const sim::SensorPose& start = path.knots().front();
+  Rect rect{start.position.x, start.position.y, start.position.x, start.position.y};
+  const auto add = [&rect](double x, double y) {
+    rect = {std::min(rect.x_min, x), std::min(rect.y_min, y), std::max(rect.x_max, x),
+            std::max(rect.y_max, y)};
+  };
+  for (const sim::SensorPose& knot : path.knots()) {
+    add(knot.position.x, knot.position.y);
+  }
+  if (const std::optional<sim::Box> bounds = sim::objectBounds(scene)) {
+    add(bounds->min.x, bounds->min.y);
+    add(bounds->max.x, bounds->max.y);
+  }
+  return rect;
+}
+
+/// Rotation about +z by `yaw` as a unit quaternion.
+io::Quaternion yawQuaternion(double yaw_rad) {
+  return {std::cos(yaw_rad / 2.0), 0.0, 0.0, std::sin(yaw_rad / 2.0)};
+}
+
+/// The true height field as CSV text: one row per cell of the map's grid (faces on multiples of
+/// the resolution) that overlaps `box`, rows by increasing y, then x. Returns the cell count.
+std::uint64_t truthCsv(const sim::Scene& scene, const Rect& box, double resolution,
+                       double reference_z, double min_clearance, std::string& csv) {
+  // A hair of slack so that a box edge on a cell face does not add a cell beyond it.
+  constexpr double kSlack = 1e-9;
+  const auto first = [&](double v) {
+    return static_cast<long>(std::floor(v / resolution + kSlack));
+  };
+  const auto last = [&](double v) {
+    return static_cast<long>(std::ceil(v / resolution - kSlack)) - 1;
+  };
+  csv = "x,y,height,clearance\n";
+  std::uint64_t cells = 0;
+  char line[128];
+  for (long j = first(box.y_min); j <= last(box.y_max); ++j) {
+    const double y = (static_cast<double>(j) + 0.5) * resolution;
+    for (long i = first(box.x_min); i <= last(box.x_max); ++i) {
+      const double x = (static_cast<double>(i) + 0.5) * resolution;
+      const std::optional<sim::TrueSurface> surface =
+          sim::trueSurface(scene, x, y, reference_z, min_clearance);
+      int n = std::snprintf(line, sizeof(line), "%.10g,%.10g,", x, y);
+      if (surface) {
+        n += std::isinf(surface->clearance)
+                 ? std::snprintf(line + n, sizeof(line) - static_cast<std::size_t>(n), "%.10g,inf",
+                                 surface->height)
+                 : std::snprintf(line + n, sizeof(line) - static_cast<std::size_t>(n),
+                                 "%.10g,%.10g", surface->height, surface->clearance);
+      } else {
+        n += std::snprintf(line + n, sizeof(line) - static_cast<std::size_t>(n), ",");
+      }
+      csv.append(line, static_cast<std::size_t>(n));
+      csv += '\n';
+      ++cells;
+    }
+  }
+  return cells;
+}
+
+/// Writes the rays as a PLY; returns the vertex count.
+Result<std::uint64_t> writeRays(const std::vector<Ray>& rays, const std::string& path,
+                                io::PlyLayout layout) {
+  auto writer = io::RayCloudWriter::open(path, layout);
+  if (!writer) {
+    return Unexpected(writer.error());
+  }
+  if (auto ok = (*writer)->write(rays); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (auto ok = (*writer)->finish(); !ok) {
+    return Unexpected(ok.error());
+  }
+  return (*writer)->count();
+}
+
+/// The sensor pose of every column, as `time x y z qw qx qy qz` lines.
+Expected<void, Error> writeTrajectory(const sim::SimulationConfig& simulation,
+                                      const std::string& path) {
+  std::vector<io::TrajectorySample> samples;
+  for (const sim::SensorPose& pose : sim::columnPoses(simulation)) {
+    samples.push_back({pose.time_s, pose.position, yawQuaternion(pose.yaw_rad)});
+  }
+  auto trajectory = io::Trajectory::fromSamples(std::move(samples), true, path);
+  if (!trajectory) {
+    return Unexpected(trajectory.error());
+  }
+  return io::saveTrajectory(*trajectory, path);
+}
+
+int runSimulate(const SimulateFlags& f) {
+  const char* command = "simulate";
+  if (f.rays.empty() && f.points.empty() && f.truth.empty()) {
+    printError(command,
+               "nothing to write: give --rays OUT.ply, --points OUT.ply --trajectory OUT.txt or "
+               "--truth OUT.csv");
+    return kExitUsage;
+  }
+  if (f.points.empty() != f.trajectory.empty()) {
+    printError(command,
+               "--points and --trajectory go together: a point cloud needs the sensor "
+               "trajectory to be mapped");
+    return kExitUsage;
+  }
+  std::optional<Rect> truth_box;
+  if (!f.truth_box.empty()) {
+    auto box = parseRect(f.truth_box, "--truth-box");
+    if (!box) {
+      printError(command, box.error().message);
+      return kExitUsage;
+    }
+    truth_box = *box;
+  }
+  for (const auto& [path, name] :
+       {std::pair{f.rays, "--rays"}, std::pair{f.points, "--points"},
+        std::pair{f.trajectory, "--trajectory"}, std::pair{f.truth, "--truth"}}) {
+    if (!path.empty()) {
+      if (auto ok = checkWritable(path, name); !ok) {
+        printError(command, ok.error().message);
+        return kExitFailure;
+      }
+    }
+  }
+  auto loaded = sim::loadSceneFile(f.scene);
+  if (!loaded) {
+    printError(command, loaded.error().message);
+    return kExitFailure;
+  }
+  const sim::Scene& scene = loaded->scene;
+  sim::SimulationConfig& simulation = loaded->simulation;
+  simulation.seed = f.seed.value_or(simulation.seed);
+  simulation.scans = f.scans.value_or(simulation.scans);
+
+  std::string truth_csv;
+  std::uint64_t truth_cells = 0;
+  if (!f.truth.empty()) {
+    if (!truth_box) {
+      truth_box = sceneRect(scene, simulation.path);
+    }
+    const double reference =
+        f.truth_reference.value_or(scene.has_ground ? scene.ground_height : 0.0);
+    truth_cells =
+        truthCsv(scene, *truth_box, f.truth_resolution, reference, f.min_clearance, truth_csv);
+  }
+
+  std::vector<Ray> rays;
+  if (!f.rays.empty() || !f.points.empty()) {
+    rays = sim::simulateScans(scene, simulation);
+  }
+  const auto no_returns = static_cast<std::uint64_t>(std::count_if(
+      rays.begin(), rays.end(), [](const Ray& r) { return (r.flags & kRayNoReturn) != 0; }));
+
+  StagedOutputs staged;
+  std::vector<std::string> written;
+  if (!f.rays.empty()) {
+    if (auto ok = writeRays(rays, staged.add(f.rays), io::PlyLayout::kRayCloud); !ok) {
+      printError(command, "--rays: " + ok.error().message);
+      return kExitFailure;
+    }
+    written.push_back(f.rays);
+  }
+  if (!f.points.empty()) {
+    auto points = writeRays(rays, staged.add(f.points), io::PlyLayout::kPointCloud);
+    if (!points) {
+      printError(command, "--points: " + points.error().message);
+      return kExitFailure;
+    }
+    if (auto ok = writeTrajectory(simulation, staged.add(f.trajectory)); !ok) {
+      printError(command, "--trajectory: " + ok.error().message);
+      return kExitFailure;
+    }
+    written.push_back(f.points + " (" + withCommas(*points) + " points)");
+    written.push_back(f.trajectory);
+  }
+  if (!f.truth.empty()) {
+    truth_csv.pop_back();  // writeTextFile ends the last line
+    if (auto ok = writeTextFile(staged.add(f.truth), truth_csv); !ok) {
+      printError(command, "--truth: " + ok.error().message);
+      return kExitFailure;
+    }
+    written.push_back(f.truth + " (" + withCommas(truth_cells) + " cells)");
+  }
+  if (auto ok = staged.commit(); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
+  }
+  if (!f.quiet) {
+    std::string files;
+    for (const std::string& w : written) {
+      files += (files.empty() ? "" : ", ") + w;
+    }
+    const int scans = rays.empty() ? 0 : simulation.scans;
+    std::printf("simulated %s: %d scans, %s rays, %s no-return -> %s\n", scene.name.c_str(), scans,
+                withCommas(rays.size()).c_str(), withCommas(no_returns).c_str(), files.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void addSimulateCommand(CLI::App& app, int* exit_code) {
+  auto flags = std::make_shared<SimulateFlags>();
+  CLI::App* c = app.add_subcommand(
+      "simulate", "Simulate a lidar in a scene file (docs/scenes.md): rays, points, true heights");
+  c->add_option("scene", flags->scene, "Scene file (.yaml)")->required();
+  c->add_option("--rays", flags->rays, "Ray-cloud PLY to write (every ray, no-returns included)");
+  c->add_option("--points", flags->points,
+                "Point-cloud PLY to write (returns only: x y z time intensity scan)");
+  c->add_option("--trajectory", flags->trajectory,
+                "Sensor trajectory to write with --points (time x y z qw qx qy qz per column)");
+  c->add_option("--truth", flags->truth,
+                "True height field to write as CSV (x,y,height,clearance)");
+  c->add_option("--truth-resolution", flags->truth_resolution, "Cell size of the truth grid (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  c->add_option("--truth-box", flags->truth_box,
+                "xmin,ymin,xmax,ymax of the truth grid (default: the objects and the sensor path)");
+  c->add_option("--truth-reference", flags->truth_reference,
+                "Height the true surface is searched around (default: the ground height)");
+  c->add_option("--min-clearance", flags->min_clearance, "Free space a surface needs above it (m)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  c->add_option("--seed", flags->seed, "Random seed (default: the scene file's)");
+  c->add_option("--scans", flags->scans, "Scans to simulate (default: the scene file's)")
+      ->check(CLI::Range(1, 100000));
+  c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
+  c->callback([flags, exit_code] { *exit_code = runSimulate(*flags); });
+}
+
+}  // namespace raymap::cli
