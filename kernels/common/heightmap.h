@@ -10,7 +10,10 @@
  *  - the search range is the voxels whose centres lie in [ref - floor_depth, ref + ceiling_height],
  *    clipped to the box the host mapped (the region table);
  *  - a *surface* candidate is an occupied voxel; its height is the voxel mean's z when the mean
- *    layer is present and has samples, else the voxel centre;
+ *    layer is present and has samples, else the voxel centre. A run of occupied voxels with
+ *    observed free space directly below it and unobserved space directly above it was seen only
+ *    from below (a ceiling, the underside of an overhang): it limits the clearance of what is
+ *    below it but is no candidate itself;
  *  - a *virtual surface* candidate (only with RM_HM_FLAG_VIRTUAL) is the lowest observed free voxel
  *    of a run of non-occupied voxels whose voxel below is unobserved: free space seen over space
  *    never seen, as at a ditch or a drop-off seen from above. Its height is the voxel's bottom face
@@ -220,6 +223,8 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
   rm_i32 previous = RM_HM_STATE_UNOBSERVED;      /* state of the voxel below the current one */
   rm_i32 lowest_state = RM_HM_STATE_UNOBSERVED;  /* state of voxel z_lo */
   int gap_has_virtual = 0;
+  int check_above = 0;    /* `real` is an underside if the voxel above it (next word) is unseen */
+  int run_free_below = 0; /* the run of occupied voxels ending at `real` has free space below */
   int done = 0;
 
   /* Walk mask word by mask word from the voxel below z_lo up to the top of the box (clearances
@@ -251,6 +256,12 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
     m.observed = 0u;
     if (region != RM_HM_NO_REGION) {
       m = src.masks[(region * plane + column) * RM_U32(words) + RM_U32(w)];
+    }
+    if (check_above) {
+      check_above = 0;
+      if (rm_hm_bit_state(m, z - word_z) == RM_HM_STATE_UNOBSERVED) {
+        real = rm_hm_no_candidate();
+      }
     }
     if (m.occupied == 0u &&
         (m.observed == 0u || (m.observed == 0xFFFFFFFFu && previous == RM_HM_STATE_FREE))) {
@@ -300,7 +311,21 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
         } else if (ze > z_hi) {
           done = 1; /* nothing above the search range can become a candidate */
         } else if (ze >= z_lo) {
-          real.kind = RM_HM_SURFACE;
+          /* A run of occupied voxels with observed free space directly below it and unobserved
+           * space directly above it was seen only from below (a ceiling, the underside of an
+           * overhang): it bounds the clearance below it but is no ground to stand on. */
+          const rm_i32 below = b == b0 ? previous : rm_hm_bit_state(m, b - 1);
+          run_free_below =
+              below == RM_HM_STATE_OCCUPIED ? run_free_below : below == RM_HM_STATE_FREE;
+          int underside = 0;
+          if (run_free_below) {
+            if (ze < z_end) {
+              underside = rm_hm_bit_state(m, b + 1) == RM_HM_STATE_UNOBSERVED;
+            } else {
+              check_above = 1; /* decided by the next word's first voxel */
+            }
+          }
+          real.kind = underside ? RM_HM_UNKNOWN : RM_HM_SURFACE;
           real.height = (RM_F32(ze) + 0.5f) * res;
           if (mean_on) {
             const rm_voxel_mean mv = src.mean[src.region_slots[region] * voxels_per_region +
@@ -330,6 +355,9 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
     }
   }
   if (!done) {
+    if (check_above) {
+      real = rm_hm_no_candidate(); /* the voxel above lies outside the box: unobserved */
+    }
     /* Open above: nothing occupied up to the top of the box. */
     rm_hm_offer(&best, &best_distance, real, RM_INF, reference, p.min_clearance);
     rm_hm_offer(&best, &best_distance, hidden, RM_INF, reference, p.min_clearance);

@@ -166,7 +166,8 @@ TEST_P(HeightmapColumns, NearestQualifyingSurfaceToTheReferenceWins) {
   ColumnMap m;
   m.occupied(0, 2, -1, 1.0f);  // ground at 0
   m.freeRange(0, 2, 0, 5);
-  m.occupied(0, 2, 6, 0.5f);  // a platform at 0.65, open above
+  m.occupied(0, 2, 6, 0.5f);  // a platform at 0.65, seen from above
+  m.freeRange(0, 2, 7, 9);
   HeightmapOptions o = options();
   o.min_clearance = 0.3;
   EXPECT_NEAR(at(generate(m, o), 0, 2).elevation, 0.0, 1e-3);
@@ -229,6 +230,35 @@ TEST_P(HeightmapColumns, ASurfaceBeatsAVirtualSurfaceAtTheSameDistance) {
   const Cell c = at(generate(m, o), 3, 3);
   EXPECT_EQ(c.kind, CellKind::kSurface);
   EXPECT_NEAR(c.elevation, 0.2, 1e-3);
+}
+
+TEST_P(HeightmapColumns, ACeilingSeenOnlyFromBelowIsNoSurface) {
+  SKIP_UNAVAILABLE();
+  ColumnMap m;
+  // Free from 0.2 m up to a ceiling at 2.5 m whose top was never seen; the floor never hit.
+  m.freeRange(1, -1, 2, 23);
+  m.occupied(1, -1, 24, 0.9f);  // hits on both sides of a voxel face: a run of two
+  m.occupied(1, -1, 25, 0.1f);
+  HeightmapOptions o = options();
+  o.size = 6.0;  // the box reaches 3 m up
+  Cell c = at(generate(m, o), 1, -1);
+  EXPECT_EQ(c.kind, CellKind::kUnknown);
+  // With the floor seen: the floor, with the ceiling as its clearance.
+  m.occupied(1, -1, 1, 0.5f);
+  c = at(generate(m, o), 1, -1);
+  EXPECT_EQ(c.kind, CellKind::kSurface);
+  EXPECT_NEAR(c.elevation, 0.15, 1e-3);
+  EXPECT_NEAR(c.clearance, 2.25, 1e-3);
+  // The same slab seen from above (free over it) is a surface again: a platform.
+  ColumnMap platform;
+  platform.freeRange(1, -1, 2, 24);
+  platform.occupied(1, -1, 25, 0.9f);
+  platform.freeRange(1, -1, 26, 30);
+  HeightmapOptions high = o;
+  high.centre.z = 2.5;
+  c = at(generate(platform, high), 1, -1);
+  EXPECT_EQ(c.kind, CellKind::kSurface);
+  EXPECT_NEAR(c.elevation, 2.59, 1e-3);
 }
 
 TEST_P(HeightmapColumns, UnobservedColumnsAreUnknownNaN) {
