@@ -143,6 +143,11 @@ const char* toString(ExportMode mode) noexcept {
 }
 
 Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std::string& path) {
+  if (map.occupancyLayer() < 0) {
+    return fail(
+        ErrorCode::kUnsupported,
+        "the map has no occupancy layer: nothing to export as occupied, free or mean voxels");
+  }
   // Count first so that the header is final before any point is written (one cheap extra pass
   // over the voxels instead of patching the file).
   std::uint64_t count = 0;

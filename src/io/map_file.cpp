@@ -438,6 +438,10 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
     out.saved_layers.push_back(spec->kind);
     parsed.layers.push_back(*spec);
   }
+  // A map saved without its occupancy layer says so by the layer list alone.
+  config.occupancy_layer =
+      std::any_of(parsed.layers.begin(), parsed.layers.end(),
+                  [](const LayerSpec& spec) { return spec.kind == LayerKind::kOccupancy; });
   // The voxels are only meaningful with the layers the parameters imply, in that order.
   const std::vector<LayerSpec> expected = savedLayersOf(config.schema());
   bool layers_match = expected.size() == parsed.layers.size();

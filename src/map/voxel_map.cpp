@@ -23,7 +23,9 @@ const char* toString(StorePolicy policy) noexcept {
 
 LayerSchema MapConfig::schema() const {
   LayerSchema schema;
-  (void)schema.add(LayerKind::kOccupancy);
+  if (occupancy_layer) {
+    (void)schema.add(LayerKind::kOccupancy);
+  }
   if (voxel_mean) {
     (void)schema.add(LayerKind::kVoxelMean);
   }
@@ -223,7 +225,7 @@ std::optional<std::pair<std::uint32_t, std::uint32_t>> VoxelMap::locate(
 
 float VoxelMap::occupancyValue(Vec3i voxel) const noexcept {
   const auto at = locate(voxel);
-  if (!at) {
+  if (!at || occupancy_layer_ < 0) {
     return RM_OCC_UNOBSERVED;
   }
   return store_.layerData<float>(at->first, occupancy_layer_)[at->second];
@@ -256,6 +258,10 @@ MapSummary VoxelMap::summarise() const noexcept {
            std::numeric_limits<std::int32_t>::min()};
   store_.forEachRegion([&](std::uint32_t slot, Vec3i region) {
     ++s.regions;
+    if (occupancy_layer_ < 0) {
+      s.voxels_unobserved += config_.geometry.voxelsPerRegion();
+      return;
+    }
     const float* occ = store_.layerData<float>(slot, occupancy_layer_);
     std::uint32_t index = 0;
     for (std::int32_t z = 0; z < n; ++z) {

@@ -35,6 +35,10 @@ struct MapConfig {
   OccupancyParams occupancy;
   Semantics semantics = Semantics::kPerRay;
   bool voxel_mean = true;  ///< keep the voxel-mean layer
+  /// Keep the occupancy layer. Every map built today has it; a map without it (layers that need
+  /// no occupancy, e.g. a distance field) answers occupancy queries with "unobserved", and what
+  /// needs occupancy (integration, height maps, occupied/free export) refuses it with an error.
+  bool occupancy_layer = true;
   StorePolicy policy = StorePolicy::kGlobal;
   /// Global policy: the pool holds floor(memory_budget / bytes-per-region) regions.
   std::uint64_t memory_budget_bytes = kDefaultMemoryBudget;
