@@ -17,6 +17,8 @@ inline constexpr int kExitUsage = 2;    ///< unknown option, bad option value
 void addPopulateCommand(CLI::App& app, int* exit_code);
 void addInfoCommand(CLI::App& app, int* exit_code);
 void addExportCommand(CLI::App& app, int* exit_code);
+/// `raymap heightmap`: the 2.5D height map of a map file (PNG, CSV).
+void addHeightmapCommand(CLI::App& app, int* exit_code);
 void addBenchCommand(CLI::App& app, int* exit_code);
 void addDemoCommand(CLI::App& app, int* exit_code);
 /// `raymap simulate`: a lidar recording and the true height field of a scene file.

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   addPopulateCommand(app, &exit_code);
   addInfoCommand(app, &exit_code);
   addExportCommand(app, &exit_code);
+  addHeightmapCommand(app, &exit_code);
   addBenchCommand(app, &exit_code);
   addDemoCommand(app, &exit_code);
   addSimulateCommand(app, &exit_code);
