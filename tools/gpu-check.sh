@@ -3,7 +3,7 @@
 # The CUDA check on a machine with an NVIDIA GPU: builds raymap with CUDA, runs the CUDA tests
 # (agreement with the CPU reference on generated rays and, when present, on the shared data),
 # then benchmarks the CPU, OpenCL (when a platform exists) and CUDA backends on the shared data
-# and on a large synthetic scene, and prints one table.
+# and on a large synthetic scene, and prints one table; then the height-map tests and timings.
 #   tools/gpu-check.sh [DATA_DIR] [OUT_DIR]
 # Environment: RAYMAP_CUDA_ARCHITECTURES (default: the build's 87;89;90),
 # RAYMAP_GPU_CHECK_SCANS (synthetic scans of 32 x 512 rays, default 1000 = 16.4 M rays),
@@ -110,6 +110,11 @@ bench "synthetic-yard-$scans" "$scene"
 echo "cuda device: $(text device "$out/synthetic-yard-$scans-ray-cuda.json")" >>"$table"
 echo
 cat "$table"
+echo "== height maps (CUDA, OpenCL and CPU generators)"
+ctest --test-dir "$build" -L heightmap --output-on-failure >"$out/ctest-heightmap.log" 2>&1 ||
+  tests_status=$?
+grep -E "tests passed|tests failed" "$out/ctest-heightmap.log" || true
+tools/bench/run-heightmap-benchmarks.sh "$data" "$out" "$build"
 if [ "$tests_status" != 0 ]; then
   echo "gpu-check: CUDA tests failed (see $out/ctest-cuda.log)" >&2
   exit 1

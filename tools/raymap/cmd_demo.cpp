@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap demo`: the whole offline job on built-in data, checked against the scene it came from.
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -9,9 +10,13 @@
 
 #include <sys/stat.h>
 
+#include "src/heightmap/heightmap_generator.hpp"
+#include "src/heightmap/heightmap_plan.hpp"
+#include "src/io/heightmap_export.hpp"
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/ray_cloud_writer.hpp"
+#include "src/sim/scene.hpp"
 #include "src/sim/yard_scan.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/populate.hpp"
@@ -30,6 +35,61 @@ struct DemoFlags {
 // share of occupied voxels away from any surface; measured values are in docs/cli.md.
 constexpr double kMinRecall = 0.95;
 constexpr double kMinPrecision = 0.98;
+/// Height-map surface cells within one voxel of the scene's true height (object edges, where
+/// range noise puts a side's hits into the next column, make up the rest).
+constexpr double kMinHeightAccuracy = 0.95;
+
+/// The height map of the yard around the middle of the drive, checked against the scene's true
+/// height field and written as a PNG.
+struct HeightmapCheck {
+  std::size_t surface_cells = 0;
+  double accuracy = 0.0;  ///< fraction of surface cells within one voxel of the truth
+  double milliseconds = 0.0;
+};
+
+Result<HeightmapCheck> heightmapOfYard(const VoxelMap& map, const sim::YardScanConfig& yard,
+                                       const std::string& png) {
+  heightmap::HeightmapOptions options;
+  options.centre = {0.0, 0.0, 0.0};
+  options.size = 20.0;
+  heightmap::HeightmapPlan plan;
+  if (auto ok = heightmap::planHeightmap(map, options, plan); !ok) {
+    return Unexpected(ok.error());
+  }
+  heightmap::HeightMap result;
+  const auto start = std::chrono::steady_clock::now();
+  if (auto ok = heightmap::makeCpuHeightmapGenerator()->generate(map, plan, result); !ok) {
+    return Unexpected(ok.error());
+  }
+  HeightmapCheck check;
+  check.milliseconds =
+      1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (auto ok = io::writeHeightmapPng(png, result); !ok) {
+    return Unexpected(ok.error());
+  }
+  sim::Scene scene;
+  scene.boxes = yard.solids.empty() ? sim::yardSolids() : yard.solids;
+  std::size_t right = 0;
+  for (int j = 0; j < result.cells_y; ++j) {
+    for (int i = 0; i < result.cells_x; ++i) {
+      const std::size_t n = result.index(i, j);
+      if (result.kind[n] != RM_HM_SURFACE) {
+        continue;
+      }
+      ++check.surface_cells;
+      const Vec3d c = result.cellCentre(i, j);
+      const auto truth = sim::trueSurface(scene, c.x, c.y, options.centre.z, options.min_clearance);
+      if (truth &&
+          std::abs(truth->height - static_cast<double>(result.elevation[n])) <= result.resolution) {
+        ++right;
+      }
+    }
+  }
+  check.accuracy = check.surface_cells > 0
+                       ? static_cast<double>(right) / static_cast<double>(check.surface_cells)
+                       : 0.0;
+  return check;
+}
 
 struct SceneCheck {
   double recall = 0.0;     ///< true surface points with an occupied voxel within one voxel
@@ -103,6 +163,7 @@ int runDemo(const DemoFlags& f) {
   const std::string cloud = f.output_dir + "/yard_raycloud.ply";
   const std::string map_path = f.output_dir + "/yard.rmap";
   const std::string ply = f.output_dir + "/yard_occupied.ply";
+  const std::string png = f.output_dir + "/yard_heightmap.png";
 
   // 1. Simulate a lidar driving through the built-in yard and record it as a ray cloud.
   sim::YardScanConfig scene;
@@ -155,8 +216,14 @@ int runDemo(const DemoFlags& f) {
     return kExitFailure;
   }
   const SceneCheck check = checkAgainstScene(*loaded, scene);
-  const bool passed =
-      check.recall >= kMinRecall && check.precision >= kMinPrecision && check.probe_failures == 0;
+  // 4. The height map a planner would get, against the scene's true height field.
+  auto heights = heightmapOfYard(*loaded, scene, png);
+  if (!heights) {
+    printError(command, heights.error().message);
+    return kExitFailure;
+  }
+  const bool passed = check.recall >= kMinRecall && check.precision >= kMinPrecision &&
+                      check.probe_failures == 0 && heights->accuracy >= kMinHeightAccuracy;
   if (!f.quiet) {
     std::printf("simulated      %s rays in %d scans -> %s\n", withCommas(rays.size()).c_str(),
                 f.scans, cloud.c_str());
@@ -173,7 +240,14 @@ int runDemo(const DemoFlags& f) {
         " %d probe(s) wrong\n",
         100.0 * check.recall, 100.0 * kMinRecall, 100.0 * check.precision, 100.0 * kMinPrecision,
         check.probe_failures);
+    std::printf(
+        "height map     200 x 200 cells in %.1f ms, %s surface cells, %.1f %% within one voxel of "
+        "the true height (>= %.0f %%) -> %s\n",
+        heights->milliseconds, withCommas(heights->surface_cells).c_str(),
+        100.0 * heights->accuracy, 100.0 * kMinHeightAccuracy, png.c_str());
     std::printf("next           raymap info %s\n", map_path.c_str());
+    std::printf("               raymap heightmap %s --center 0,0,0 --png my.png\n",
+                map_path.c_str());
     std::printf("               raymap populate %s --max-range 30 --output my.rmap\n",
                 cloud.c_str());
   }
