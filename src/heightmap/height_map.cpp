@@ -24,8 +24,13 @@ std::string_view toString(HeightmapMode mode) noexcept {
 }
 
 bool HeightMap::cellOf(double x, double y, int* i, int* j) const noexcept {
-  const double fi = std::floor((centre_x + 0.5 * cells_x * resolution - x) / resolution);
-  const double fj = std::floor((centre_y + 0.5 * cells_y * resolution - y) / resolution);
+  // The voxel column holding (x, y), computed as VoxelMap::voxelOf() does (floor of p times the
+  // inverse resolution), so that a point on a voxel face lands in the same column here and there.
+  const double inverse = 1.0 / resolution;
+  const double top_x = std::round((centre_x + 0.5 * cells_x * resolution) * inverse) - 1.0;
+  const double top_y = std::round((centre_y + 0.5 * cells_y * resolution) * inverse) - 1.0;
+  const double fi = top_x - std::floor(x * inverse);
+  const double fj = top_y - std::floor(y * inverse);
   if (!(fi >= 0.0 && fi < cells_x && fj >= 0.0 && fj < cells_y)) {
     return false;
   }

@@ -52,7 +52,8 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   }
   if (!(o.size >= res) || !std::isfinite(o.size)) {
     return fail(ErrorCode::kInvalidArgument, "--size " + metres(o.size) +
-                                                 ": must be at least the map resolution (" +
+                                                 ": must be a finite size of at least the map "
+                                                 "resolution (" +
                                                  metres(res) + " m)");
   }
   if (!(o.min_clearance >= 0.0) || !std::isfinite(o.min_clearance)) {

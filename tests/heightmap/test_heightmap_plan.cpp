@@ -199,7 +199,7 @@ TEST(HeightmapPlanErrors, SizeBelowTheResolution) {
   for (const double size : {0.5 * kRes, 0.0, -1.0, kNaN, kInf, -kInf}) {
     SCOPED_TRACE(size);
     EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, size), ErrorCode::kInvalidArgument,
-                        {"--size", "at least the map resolution"}));
+                        {"--size", "finite size of at least the map resolution"}));
   }
 }
 
@@ -347,12 +347,10 @@ TEST(HeightmapPlanGeometry, TheCentresColumnIsTheSeedCell) {
   }
 }
 
-// NOTE(heightmap-plan-tests): disabled because it fails today. A centre on a voxel face (any
-// typed multiple of the resolution, e.g. --center 3,0,0) is in voxel floor(x * (1 / res)) for
-// VoxelMap::voxelOf(), which the plan seeds from, but HeightMap::cellOf() divides by the
-// resolution from the grid's centre and puts most such points one cell toward -x / -y. Enable
-// once cellOf() rounds as voxelOf() does.
-TEST(HeightmapPlanGeometry, DISABLED_ACentreOnAVoxelFaceIsInTheSeedCell) {
+// A centre on a voxel face (any typed multiple of the resolution, e.g. --center 3,0,0) is in
+// voxel floor(x * (1 / res)) for VoxelMap::voxelOf(), which the plan seeds from; cellOf() must
+// agree.
+TEST(HeightmapPlanGeometry, ACentreOnAVoxelFaceIsInTheSeedCell) {
   auto map = globalMap();
   ASSERT_NE(map, nullptr);
   for (const double size : {1.0, 1.1, 8.0}) {
