@@ -114,6 +114,12 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   p.voxel_x0 = x_max;
   p.voxel_y0 = y_max;
   p.region_voxels = map.geometry().region_voxels;
+  p.region_shift = -1;
+  for (int shift = 0; shift < 31; ++shift) {
+    if ((1 << shift) == p.region_voxels) {
+      p.region_shift = shift;
+    }
+  }
   const Vec3i region_lo = map.regionOfVoxel({x_min, y_min, z_min - 1});
   const Vec3i region_hi = map.regionOfVoxel({x_max, y_max, z_max});
   p.region_x0 = region_lo.x;
