@@ -3,12 +3,13 @@
 
 #include <algorithm>
 #include <string>
-#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "kernels/cuda/heightmap_launch.h"
 #include "src/cuda/cuda_devices.hpp"
 #include "src/cuda/cuda_handles.hpp"
+#include "src/heightmap/device_upload.hpp"
 
 namespace raymap {
 namespace {
@@ -38,96 +39,66 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   Expected<void, Error> generate(const VoxelMap& map, const heightmap::HeightmapPlan& plan,
                                  heightmap::HeightMap& out) override {
-    heightmap::prepareOutput(plan, out);
+    using namespace heightmap;
+    prepareOutput(plan, out);
     if (const cudaError_t s = cudaSetDevice(device_.index); s != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: selecting the device", s));
     }
-    const RegionStore& store = map.store();
-    const int occupancy_layer = map.occupancyLayer();
-    const int mean_layer = map.meanLayer();
-    const bool with_mean = (plan.params.flags & RM_HM_FLAG_MEAN) != 0 && mean_layer >= 0;
-
-    // Regions are uploaded in the plan's region order, so region r sits in slot r on the device.
-    const std::vector<std::uint32_t>& slots = plan.region_slots;
-    identity_.resize(std::max<std::size_t>(slots.size(), 1));
-    for (std::size_t r = 0; r < identity_.size(); ++r) {
-      identity_[r] = static_cast<std::uint32_t>(r);
-    }
-    const std::size_t regions = identity_.size();
-    const auto plane = static_cast<std::size_t>(plan.params.region_voxels) *
-                       static_cast<std::size_t>(plan.params.region_voxels);
-    const std::size_t mask_bytes =
-        regions * plane * static_cast<std::size_t>(rm_hm_mask_words(plan.params.region_voxels)) *
-        sizeof(rm_hm_mask);
-    const std::size_t occupancy_bytes = store.layerRegionBytes(occupancy_layer);
-    const std::size_t mean_bytes = with_mean ? store.layerRegionBytes(mean_layer) : 0;
-    const std::size_t cells = out.cellCount();
-    for (auto [buffer, bytes, what] :
-         {std::tuple{&table_, plan.region_table.size() * 4, "region table"},
-          std::tuple{&region_slots_, regions * 4, "region slots"},
-          std::tuple{&masks_, mask_bytes, "column masks"},
-          std::tuple{&occupancy_, regions * occupancy_bytes, "occupancy layer"},
-          std::tuple{&mean_, std::max<std::size_t>(regions * mean_bytes, 8), "voxel-mean layer"},
-          std::tuple{&outputs_[0], cells * 4, "elevation"},
-          std::tuple{&outputs_[1], cells * 4, "clearance"},
-          std::tuple{&outputs_[2], cells * 4, "kind"},
-          std::tuple{&outputs_[3], cells * 4, "observed count"},
-          std::tuple{&outputs_[4], cells * 4, "reference"}}) {
-      if (auto ok = reserve(*buffer, bytes, what); !ok) {
+    upload_.prepare(map, plan);
+    for (std::size_t b = 0; b < kDeviceBufferCount; ++b) {
+      if (auto ok = reserve(buffers_[b], upload_.bytes[b], static_cast<DeviceBuffer>(b)); !ok) {
         return ok;
       }
     }
-
     cudaStream_t s = stream_.get();
-    cudaError_t status = cudaMemcpyAsync(table_.memory.get(), plan.region_table.data(),
-                                         plan.region_table.size() * 4, cudaMemcpyHostToDevice, s);
-    if (status == cudaSuccess) {
-      status = cudaMemcpyAsync(region_slots_.memory.get(), identity_.data(), regions * 4,
-                               cudaMemcpyHostToDevice, s);
-    }
-    for (std::size_t c = 0; c < slots.size() && status == cudaSuccess; ++c) {
-      status = cudaMemcpyAsync(occupancy_.as<std::byte>() + c * occupancy_bytes,
-                               store.layerBytes(slots[c], occupancy_layer), occupancy_bytes,
-                               cudaMemcpyHostToDevice, s);
-      if (with_mean && status == cudaSuccess) {
-        status = cudaMemcpyAsync(mean_.as<std::byte>() + c * mean_bytes,
-                                 store.layerBytes(slots[c], mean_layer), mean_bytes,
-                                 cudaMemcpyHostToDevice, s);
-      }
-    }
+    cudaError_t status = cudaSuccess;
+    upload_.forEachCopy(
+        map, plan,
+        [&](DeviceBuffer buffer, std::size_t offset, const void* data, std::size_t bytes) {
+          if (status == cudaSuccess) {
+            status = cudaMemcpyAsync(buffers_[buffer].as<std::byte>() + offset, data, bytes,
+                                     cudaMemcpyHostToDevice, s);
+          }
+        });
     if (status != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: uploading the map regions", status));
     }
-    cuda::HeightmapKernelBuffers buffers;
-    buffers.table = table_.as<const std::uint32_t>();
-    buffers.region_slots = region_slots_.as<const std::uint32_t>();
-    buffers.occupancy = occupancy_.as<const float>();
-    buffers.masks = masks_.as<rm_hm_mask>();
-    buffers.mean = mean_.as<const rm_voxel_mean>();
-    buffers.elevation = outputs_[0].as<float>();
-    buffers.clearance = outputs_[1].as<float>();
-    buffers.kind = outputs_[2].as<std::uint32_t>();
-    buffers.samples = outputs_[3].as<std::uint32_t>();
-    buffers.reference = outputs_[4].as<float>();
+    cuda::HeightmapKernelBuffers k;
+    k.table = buffers_[kTableBuffer].as<const std::uint32_t>();
+    k.region_slots = buffers_[kRegionSlotsBuffer].as<const std::uint32_t>();
+    k.occupancy = buffers_[kOccupancyBuffer].as<const float>();
+    k.masks = buffers_[kMasksBuffer].as<rm_hm_mask>();
+    k.mean = buffers_[kMeanBuffer].as<const rm_voxel_mean>();
+    k.elevation = buffers_[kElevationBuffer].as<float>();
+    k.clearance = buffers_[kClearanceBuffer].as<float>();
+    k.kind = buffers_[kKindBuffer].as<std::uint32_t>();
+    k.samples = buffers_[kObservedCountBuffer].as<std::uint32_t>();
+    k.reference = buffers_[kReferenceBuffer].as<float>();
     const rm_heightmap_params& p = plan.params;
-    status = cuda::launchHeightmapMasks(s, block_threads_, buffers, p,
-                                        static_cast<std::uint32_t>(slots.size()));
+    status = cuda::launchHeightmapMasks(s, block_threads_, k, p,
+                                        static_cast<std::uint32_t>(plan.region_slots.size()));
     if (status == cudaSuccess && (p.flags & RM_HM_FLAG_FILL) != 0) {
       const rm_i32 rings = rm_hm_ring_count(p);
-      for (rm_i32 k = 0; k < rings && status == cudaSuccess; ++k) {
-        status = cuda::launchHeightmapFillRing(s, block_threads_, buffers, p, k);
+      for (rm_i32 ring = 0; ring < rings && status == cudaSuccess; ++ring) {
+        status = cuda::launchHeightmapFillRing(s, block_threads_, k, p, ring);
       }
     } else if (status == cudaSuccess) {
-      status = cuda::launchHeightmapPlanar(s, block_threads_, buffers, p);
+      status = cuda::launchHeightmapPlanar(s, block_threads_, k, p);
     }
     if (status != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: launching the kernel", status));
     }
-    void* targets[kOutputs] = {out.elevation.data(), out.clearance.data(), out.kind.data(),
-                               out.observed_count.data(), out.reference.data()};
-    for (std::size_t l = 0; l < kOutputs && status == cudaSuccess; ++l) {
-      status = cudaMemcpyAsync(targets[l], outputs_[l].memory.get(), cells * 4,
-                               cudaMemcpyDeviceToHost, s);
+    const std::pair<void*, DeviceBuffer> layers[] = {
+        {out.elevation.data(), kElevationBuffer},
+        {out.clearance.data(), kClearanceBuffer},
+        {out.kind.data(), kKindBuffer},
+        {out.observed_count.data(), kObservedCountBuffer},
+        {out.reference.data(), kReferenceBuffer}};
+    for (const auto& [target, buffer] : layers) {
+      if (status == cudaSuccess) {
+        status = cudaMemcpyAsync(target, buffers_[buffer].memory.get(), out.cellCount() * 4,
+                                 cudaMemcpyDeviceToHost, s);
+      }
     }
     if (status == cudaSuccess) {
       status = cudaStreamSynchronize(s);
@@ -139,17 +110,16 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
   }
 
  private:
-  static constexpr std::size_t kOutputs = 5;  // elevation, clearance, kind, samples, reference
-
-  Expected<void, Error> reserve(GrowingBuffer& buffer, std::size_t bytes, const char* what) {
-    bytes = std::max<std::size_t>(bytes, 4);
+  Expected<void, Error> reserve(GrowingBuffer& buffer, std::size_t bytes,
+                                heightmap::DeviceBuffer what) {
     if (buffer.memory && buffer.bytes >= bytes) {
       return {};
     }
     (void)cudaStreamSynchronize(stream_.get());
     buffer.memory.reset();
     buffer.bytes = 0;
-    auto memory = cuda::allocateDevice(bytes, std::string("CUDA height map: ") + what);
+    auto memory =
+        cuda::allocateDevice(bytes, std::string("CUDA height map: ") + heightmap::toString(what));
     if (!memory) {
       return Unexpected(memory.error());
     }
@@ -161,13 +131,8 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
   cuda::DeviceInfo device_;
   cuda::StreamHandle stream_;
   unsigned block_threads_;
-  GrowingBuffer table_;
-  GrowingBuffer region_slots_;
-  GrowingBuffer masks_;
-  GrowingBuffer occupancy_;
-  GrowingBuffer mean_;
-  GrowingBuffer outputs_[kOutputs];
-  std::vector<std::uint32_t> identity_;
+  GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
+  heightmap::DeviceUpload upload_;
 };
 
 }  // namespace

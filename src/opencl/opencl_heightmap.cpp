@@ -4,10 +4,11 @@
 #include <algorithm>
 #include <initializer_list>
 #include <string>
-#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "kernels/common/heightmap.h"
+#include "src/heightmap/device_upload.hpp"
 
 namespace raymap {
 namespace kernels {
@@ -55,81 +56,47 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   Expected<void, Error> generate(const VoxelMap& map, const heightmap::HeightmapPlan& plan,
                                  heightmap::HeightMap& out) override {
-    heightmap::prepareOutput(plan, out);
-    const RegionStore& store = map.store();
-    const int occupancy_layer = map.occupancyLayer();
-    const int mean_layer = map.meanLayer();
-    const rm_heightmap_params& p = plan.params;
-    const bool with_mean = (p.flags & RM_HM_FLAG_MEAN) != 0 && mean_layer >= 0;
-
-    // Regions are uploaded in the plan's region order, so region r sits in slot r on the device.
-    const std::vector<std::uint32_t>& slots = plan.region_slots;
-    identity_.resize(std::max<std::size_t>(slots.size(), 1));
-    for (std::size_t r = 0; r < identity_.size(); ++r) {
-      identity_[r] = static_cast<std::uint32_t>(r);
-    }
-    const std::size_t regions = identity_.size();
-    const auto plane =
-        static_cast<std::size_t>(p.region_voxels) * static_cast<std::size_t>(p.region_voxels);
-    const std::size_t mask_bytes = regions * plane *
-                                   static_cast<std::size_t>(rm_hm_mask_words(p.region_voxels)) *
-                                   sizeof(rm_hm_mask);
-    const std::size_t occupancy_bytes = store.layerRegionBytes(occupancy_layer);
-    const std::size_t mean_bytes = with_mean ? store.layerRegionBytes(mean_layer) : 0;
-    const std::size_t cells = out.cellCount();
-    for (auto [buffer, bytes, what] :
-         {std::tuple{&table_, plan.region_table.size() * 4, "region table"},
-          std::tuple{&region_slots_, regions * 4, "region slots"},
-          std::tuple{&masks_, mask_bytes, "column masks"},
-          std::tuple{&occupancy_, regions * occupancy_bytes, "occupancy layer"},
-          std::tuple{&mean_, std::max<std::size_t>(regions * mean_bytes, 8), "voxel-mean layer"},
-          std::tuple{&outputs_[0], cells * 4, "elevation"},
-          std::tuple{&outputs_[1], cells * 4, "clearance"},
-          std::tuple{&outputs_[2], cells * 4, "kind"},
-          std::tuple{&outputs_[3], cells * 4, "observed count"},
-          std::tuple{&outputs_[4], cells * 4, "reference"}}) {
-      if (auto ok = reserve(*buffer, bytes, what); !ok) {
+    using namespace heightmap;
+    prepareOutput(plan, out);
+    upload_.prepare(map, plan);
+    for (std::size_t b = 0; b < kDeviceBufferCount; ++b) {
+      if (auto ok = reserve(buffers_[b], upload_.bytes[b], static_cast<DeviceBuffer>(b)); !ok) {
         return ok;
       }
     }
-
     cl_command_queue q = ctx_.queue.get();
     cl_int status = CL_SUCCESS;
-    auto write = [&](const GrowingBuffer& buffer, std::size_t offset, const void* data,
-                     std::size_t bytes) {
-      if (status == CL_SUCCESS && bytes > 0) {
-        status = clEnqueueWriteBuffer(q, buffer.handle.get(), CL_FALSE, offset, bytes, data, 0,
-                                      nullptr, nullptr);
-      }
-    };
-    write(table_, 0, plan.region_table.data(), plan.region_table.size() * 4);
-    write(region_slots_, 0, identity_.data(), regions * 4);
-    for (std::size_t c = 0; c < slots.size(); ++c) {
-      write(occupancy_, c * occupancy_bytes, store.layerBytes(slots[c], occupancy_layer),
-            occupancy_bytes);
-      if (with_mean) {
-        write(mean_, c * mean_bytes, store.layerBytes(slots[c], mean_layer), mean_bytes);
-      }
-    }
+    upload_.forEachCopy(
+        map, plan,
+        [&](DeviceBuffer buffer, std::size_t offset, const void* data, std::size_t bytes) {
+          if (status == CL_SUCCESS) {
+            status = clEnqueueWriteBuffer(q, buffers_[buffer].handle.get(), CL_FALSE, offset, bytes,
+                                          data, 0, nullptr, nullptr);
+          }
+        });
     if (status != CL_SUCCESS) {
       return deviceError("uploading the map regions", status);
     }
 
-    const auto region_count = static_cast<cl_uint>(slots.size());
-    if (auto ok = setArguments(masks_kernel_.get(), p, {&region_slots_, &occupancy_, &masks_},
-                               &region_count);
+    const rm_heightmap_params& p = plan.params;
+    const auto region_count = static_cast<cl_uint>(plan.region_slots.size());
+    if (auto ok = setArguments(masks_kernel_.get(), p,
+                               {kRegionSlotsBuffer, kOccupancyBuffer, kMasksBuffer}, &region_count);
         !ok) {
       return ok;
     }
+    const auto plane =
+        static_cast<std::size_t>(p.region_voxels) * static_cast<std::size_t>(p.region_voxels);
     if (region_count > 0) {
       status = launch(masks_kernel_.get(), region_count * plane);
     }
     const bool fill = (p.flags & RM_HM_FLAG_FILL) != 0;
     cl_kernel search = fill ? fill_.get() : planar_.get();
-    if (auto ok = setArguments(search, p,
-                               {&table_, &region_slots_, &masks_, &mean_, &outputs_[0],
-                                &outputs_[1], &outputs_[2], &outputs_[3], &outputs_[4]},
-                               nullptr);
+    if (auto ok = setArguments(
+            search, p,
+            {kTableBuffer, kRegionSlotsBuffer, kMasksBuffer, kMeanBuffer, kElevationBuffer,
+             kClearanceBuffer, kKindBuffer, kObservedCountBuffer, kReferenceBuffer},
+            nullptr);
         !ok) {
       return ok;
     }
@@ -142,16 +109,22 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
         }
       }
     } else if (status == CL_SUCCESS) {
-      status = launch(search, cells);
+      status = launch(search, out.cellCount());
     }
     if (status != CL_SUCCESS) {
       return deviceError("launching the height-map kernels", status);
     }
-    void* targets[kOutputs] = {out.elevation.data(), out.clearance.data(), out.kind.data(),
-                               out.observed_count.data(), out.reference.data()};
-    for (std::size_t l = 0; l < kOutputs && status == CL_SUCCESS; ++l) {
-      status = clEnqueueReadBuffer(q, outputs_[l].handle.get(), CL_FALSE, 0, cells * 4, targets[l],
-                                   0, nullptr, nullptr);
+    const std::pair<void*, DeviceBuffer> layers[] = {
+        {out.elevation.data(), kElevationBuffer},
+        {out.clearance.data(), kClearanceBuffer},
+        {out.kind.data(), kKindBuffer},
+        {out.observed_count.data(), kObservedCountBuffer},
+        {out.reference.data(), kReferenceBuffer}};
+    for (const auto& [target, buffer] : layers) {
+      if (status == CL_SUCCESS) {
+        status = clEnqueueReadBuffer(q, buffers_[buffer].handle.get(), CL_FALSE, 0,
+                                     out.cellCount() * 4, target, 0, nullptr, nullptr);
+      }
     }
     if (status == CL_SUCCESS) {
       status = clFinish(q);
@@ -163,23 +136,22 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   }
 
  private:
-  static constexpr std::size_t kOutputs = 5;  // elevation, clearance, kind, samples, reference
-
   /// A device buffer that grows on demand (never shrinks).
   struct GrowingBuffer {
     opencl::BufferHandle handle;
     std::size_t bytes = 0;
   };
 
-  Expected<void, Error> reserve(GrowingBuffer& buffer, std::size_t bytes, const char* what) {
-    bytes = std::max<std::size_t>(bytes, 4);
+  Expected<void, Error> reserve(GrowingBuffer& buffer, std::size_t bytes,
+                                heightmap::DeviceBuffer what) {
     if (buffer.handle && buffer.bytes >= bytes) {
       return {};
     }
     (void)clFinish(ctx_.queue.get());
     buffer.handle.reset();
     buffer.bytes = 0;
-    auto created = opencl::createBuffer(ctx_, bytes, std::string("height map: ") + what);
+    auto created =
+        opencl::createBuffer(ctx_, bytes, std::string("height map: ") + heightmap::toString(what));
     if (!created) {
       return Unexpected(created.error());
     }
@@ -190,13 +162,13 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   /// Argument 0 is the parameter block, then the buffers in order, then `last` if given.
   Expected<void, Error> setArguments(cl_kernel kernel, const rm_heightmap_params& p,
-                                     std::initializer_list<const GrowingBuffer*> buffers,
+                                     std::initializer_list<heightmap::DeviceBuffer> buffers,
                                      const cl_uint* last) {
     cl_int status = clSetKernelArg(kernel, 0, sizeof p, &p);
     cl_uint index = 1;
-    for (const GrowingBuffer* buffer : buffers) {
+    for (const heightmap::DeviceBuffer buffer : buffers) {
       if (status == CL_SUCCESS) {
-        const cl_mem mem = buffer->handle.get();
+        const cl_mem mem = buffers_[buffer].handle.get();
         status = clSetKernelArg(kernel, index, sizeof(cl_mem), &mem);
       }
       ++index;
@@ -228,13 +200,8 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   opencl::KernelHandle planar_;
   opencl::KernelHandle fill_;
   std::size_t local_size_ = kWorkGroup;
-  GrowingBuffer table_;
-  GrowingBuffer region_slots_;
-  GrowingBuffer masks_;
-  GrowingBuffer occupancy_;
-  GrowingBuffer mean_;
-  GrowingBuffer outputs_[kOutputs];
-  std::vector<std::uint32_t> identity_;
+  GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
+  heightmap::DeviceUpload upload_;
 };
 
 }  // namespace

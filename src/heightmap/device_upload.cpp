@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "src/heightmap/device_upload.hpp"
+
+#include <algorithm>
+
+namespace raymap::heightmap {
+
+const char* toString(DeviceBuffer buffer) noexcept {
+  switch (buffer) {
+    case kTableBuffer:
+      return "region table";
+    case kRegionSlotsBuffer:
+      return "region slots";
+    case kMasksBuffer:
+      return "column masks";
+    case kOccupancyBuffer:
+      return "occupancy layer";
+    case kMeanBuffer:
+      return "voxel-mean layer";
+    case kElevationBuffer:
+      return "elevation";
+    case kClearanceBuffer:
+      return "clearance";
+    case kKindBuffer:
+      return "kind";
+    case kObservedCountBuffer:
+      return "observed count";
+    case kReferenceBuffer:
+      return "reference";
+    case kDeviceBufferCount:
+      break;
+  }
+  return "buffer";
+}
+
+void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan) {
+  const RegionStore& store = map.store();
+  const rm_heightmap_params& p = plan.params;
+  with_mean = (p.flags & RM_HM_FLAG_MEAN) != 0 && map.meanLayer() >= 0;
+  occupancy_region_bytes = store.layerRegionBytes(map.occupancyLayer());
+  mean_region_bytes = with_mean ? store.layerRegionBytes(map.meanLayer()) : 0;
+  region_slots.resize(std::max<std::size_t>(plan.region_slots.size(), 1));
+  for (std::size_t r = 0; r < region_slots.size(); ++r) {
+    region_slots[r] = static_cast<std::uint32_t>(r);
+  }
+  const std::size_t regions = region_slots.size();
+  const auto n = static_cast<std::size_t>(p.region_voxels);
+  const std::size_t cells =
+      static_cast<std::size_t>(p.cells_x) * static_cast<std::size_t>(p.cells_y);
+  bytes[kTableBuffer] = plan.region_table.size() * 4;
+  bytes[kRegionSlotsBuffer] = regions * 4;
+  bytes[kMasksBuffer] = regions * n * n *
+                        static_cast<std::size_t>(rm_hm_mask_words(p.region_voxels)) *
+                        sizeof(rm_hm_mask);
+  bytes[kOccupancyBuffer] = regions * occupancy_region_bytes;
+  bytes[kMeanBuffer] = regions * mean_region_bytes;
+  for (const DeviceBuffer layer :
+       {kElevationBuffer, kClearanceBuffer, kKindBuffer, kObservedCountBuffer, kReferenceBuffer}) {
+    bytes[layer] = cells * 4;
+  }
+  for (std::size_t& b : bytes) {
+    b = std::max<std::size_t>(b, 8);
+  }
+}
+
+}  // namespace raymap::heightmap

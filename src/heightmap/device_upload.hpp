@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What a device height-map generator (OpenCL, CUDA) copies to the device for a plan, and the size
+// of each of its buffers: written once here, so that the two APIs differ only in their calls.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "src/heightmap/heightmap_plan.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::heightmap {
+
+/// The device buffers of a generation, in kernel-argument order after the parameter block.
+enum DeviceBuffer : std::uint8_t {
+  kTableBuffer,        ///< the plan's region table
+  kRegionSlotsBuffer,  ///< region r's slot in the uploaded layers: r (regions are packed)
+  kMasksBuffer,        ///< column masks, written by the mask kernel
+  kOccupancyBuffer,    ///< occupancy layer of the regions under the box, packed in plan order
+  kMeanBuffer,         ///< voxel-mean layer, likewise (a placeholder without means)
+  kElevationBuffer,    ///< the output layers of HeightMap, in this order
+  kClearanceBuffer,
+  kKindBuffer,
+  kObservedCountBuffer,
+  kReferenceBuffer,
+  kDeviceBufferCount
+};
+
+/// @brief Name of a buffer, for allocation errors ("column masks").
+const char* toString(DeviceBuffer buffer) noexcept;
+
+/// @brief Sizes and sources of one generation's upload. Value type; reusable (keeps capacity).
+struct DeviceUpload {
+  std::array<std::size_t, kDeviceBufferCount> bytes{};  ///< at least 8 each (no empty buffers)
+  std::vector<std::uint32_t> region_slots;  ///< 0, 1, ... (what kRegionSlotsBuffer holds)
+  std::size_t occupancy_region_bytes = 0;   ///< one region of the occupancy layer
+  std::size_t mean_region_bytes = 0;        ///< one region of the mean layer; 0: not uploaded
+  bool with_mean = false;
+
+  /// @brief Fills the sizes for `plan` on `map`. @rt allocates only when the plan grows.
+  void prepare(const VoxelMap& map, const HeightmapPlan& plan);
+
+  /// @brief Calls copy(buffer, device_offset, host_source, bytes) for every host-to-device copy:
+  /// the table, the slot list, then each region's occupancy (and mean) layer.
+  template <class Copy>
+  void forEachCopy(const VoxelMap& map, const HeightmapPlan& plan, Copy&& copy) const {
+    copy(kTableBuffer, 0, plan.region_table.data(), plan.region_table.size() * 4);
+    copy(kRegionSlotsBuffer, 0, region_slots.data(), region_slots.size() * 4);
+    const RegionStore& store = map.store();
+    for (std::size_t r = 0; r < plan.region_slots.size(); ++r) {
+      copy(kOccupancyBuffer, r * occupancy_region_bytes,
+           store.layerBytes(plan.region_slots[r], map.occupancyLayer()), occupancy_region_bytes);
+      if (with_mean) {
+        copy(kMeanBuffer, r * mean_region_bytes,
+             store.layerBytes(plan.region_slots[r], map.meanLayer()), mean_region_bytes);
+      }
+    }
+  }
+};
+
+}  // namespace raymap::heightmap
