@@ -16,13 +16,11 @@
 #include <utility>
 #include <vector>
 
-#include <fcntl.h>
 #include <gtest/gtest.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include "src/io/map_file.hpp"
 #include "src/map/voxel_map.hpp"
+#include "tests/support/cli_runner.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
@@ -37,58 +35,8 @@ constexpr double kTreadTolerance = 0.1;
 /// Cell centres are written with 4 decimals.
 constexpr double kCsvCoordTolerance = 1e-3;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
-}
-
-/// Runs the raymap binary with `args`; stdout and stderr go through files.
-Outcome raymap(const std::vector<std::string>& args) {
-  Outcome run;
-  TempDir logs;
-  const std::string out = logs.file("stdout");
-  const std::string err = logs.file("stderr");
-  std::vector<std::string> words{RAYMAP_CLI_PATH};
-  words.insert(words.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& word : words) {
-    argv.push_back(word.data());
-  }
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = -1;
-  const int spawned = ::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawned);
-    return run;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  run.out = readFile(out);
-  run.err = readFile(err);
-  return run;
-}
-
-std::string describe(const Outcome& r) {
-  return "exit code " + std::to_string(r.exit_code) + "\nstdout: " + r.out + "\nstderr: " + r.err;
 }
 
 std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
@@ -103,13 +51,13 @@ const std::string& stairsMap() {
   static const std::string map = [] {
     const std::string rays = dir.file("stairs.ply");
     const std::string path = dir.file("stairs.rmap");
-    const Outcome simulated =
-        raymap({"simulate", kScenes + "/stairs.yaml", "--scans", "5", "--rays", rays, "-q"});
+    const RunResult simulated =
+        runRaymap({"simulate", kScenes + "/stairs.yaml", "--scans", "5", "--rays", rays, "-q"});
     if (simulated.exit_code != 0) {
       ADD_FAILURE() << "simulate: " << describe(simulated);
       return std::string();
     }
-    const Outcome populated = raymap({"populate", rays, "--output", path, "-q"});
+    const RunResult populated = runRaymap({"populate", rays, "--output", path, "-q"});
     if (populated.exit_code != 0) {
       ADD_FAILURE() << "populate: " << describe(populated);
       return std::string();
@@ -218,7 +166,7 @@ std::optional<std::string> jsonValue(const std::string& json, const std::string&
 
 /// Why `--backend <device>` cannot run here, or "" when it can (as `raymap devices` says).
 std::string deviceUnavailable(const std::string& device) {
-  const Outcome r = raymap({"devices"});
+  const RunResult r = runRaymap({"devices"});
   return contains(r.out, "default for --backend " + device) ? std::string() : r.out + r.err;
 }
 
@@ -236,9 +184,9 @@ void expectDeviceCsvMatchesTheCpu(const std::string& device) {
     const std::string backends[2] = {"cpu", device};
     for (int b = 0; b < 2; ++b) {
       const std::string path = dir.file(backends[b] + std::to_string(v) + ".csv");
-      const Outcome r =
-          raymap(concat(aroundTheOrigin(map),
-                        concat(variants[v], {"--backend", backends[b], "--csv", path, "-q"})));
+      const RunResult r =
+          runRaymap(concat(aroundTheOrigin(map),
+                           concat(variants[v], {"--backend", backends[b], "--csv", path, "-q"})));
       ASSERT_EQ(r.exit_code, 0) << backends[b] << ": " << describe(r);
       csv[b] = readFile(path);
     }
@@ -257,7 +205,7 @@ TEST(CliHeightmap, WritesAPngAndACsvWithTheStairTreads) {
   const std::string png = dir.file("stairs.png");
   const std::string csv = dir.file("stairs.csv");
 
-  const Outcome r = raymap(concat(aroundTheOrigin(map), {"--png", png, "--csv", csv}));
+  const RunResult r = runRaymap(concat(aroundTheOrigin(map), {"--png", png, "--csv", csv}));
 
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_TRUE(contains(r.out, "80 x 80 cells")) << r.out;
@@ -306,7 +254,7 @@ TEST(CliHeightmap, FillModeFollowsTheStairs) {
   TempDir dir;
   const std::string csv = dir.file("fill.csv");
 
-  const Outcome r = raymap(concat(aroundTheOrigin(map), {"--mode", "fill", "--csv", csv}));
+  const RunResult r = runRaymap(concat(aroundTheOrigin(map), {"--mode", "fill", "--csv", csv}));
 
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_TRUE(contains(r.out, "fill mode")) << r.out;
@@ -321,7 +269,7 @@ TEST(CliHeightmap, VirtualSurfacesAreReportedWhenAskedFor) {
   TempDir dir;
   const std::string csv = dir.file("virtual.csv");
 
-  const Outcome r = raymap(concat(aroundTheOrigin(map), {"--virtual-surfaces", "--csv", csv}));
+  const RunResult r = runRaymap(concat(aroundTheOrigin(map), {"--virtual-surfaces", "--csv", csv}));
 
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   const std::vector<CsvCell> cells = parseCsv(readFile(csv));
@@ -341,7 +289,8 @@ TEST(CliHeightmap, JsonSummaryAgreesWithTheCsv) {
   TempDir dir;
   const std::string csv = dir.file("cells.csv");
 
-  const Outcome r = raymap(concat(aroundTheOrigin(map), {"--json", "--repeat", "3", "--csv", csv}));
+  const RunResult r =
+      runRaymap(concat(aroundTheOrigin(map), {"--json", "--repeat", "3", "--csv", csv}));
 
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   const std::string& json = r.out;
@@ -396,10 +345,11 @@ TEST(CliHeightmap, CudaWithoutADeviceFailsUnlessTheCpuFallbackIsAllowed) {
   const std::string csv = dir.file("cuda.csv");
   const std::string cpu_csv = dir.file("cpu.csv");
 
-  const Outcome refused = raymap(concat(aroundTheOrigin(map), {"--backend", "cuda", "--csv", csv}));
-  const Outcome fallen_back = raymap(
+  const RunResult refused =
+      runRaymap(concat(aroundTheOrigin(map), {"--backend", "cuda", "--csv", csv}));
+  const RunResult fallen_back = runRaymap(
       concat(aroundTheOrigin(map), {"--backend", "cuda", "--fallback", "cpu", "--csv", csv}));
-  const Outcome cpu = raymap(concat(aroundTheOrigin(map), {"--csv", cpu_csv, "-q"}));
+  const RunResult cpu = runRaymap(concat(aroundTheOrigin(map), {"--csv", cpu_csv, "-q"}));
 
   EXPECT_EQ(refused.exit_code, 1) << describe(refused);
   EXPECT_TRUE(contains(refused.err, "--backend cuda")) << refused.err;
@@ -419,7 +369,7 @@ TEST(CliHeightmap, CentreOutsideTheMapNamesTheMapFile) {
   const std::string& map = stairsMap();
   ASSERT_FALSE(map.empty());
 
-  const Outcome r = raymap({"heightmap", map, "--center", "500,0,0", "--size", "8"});
+  const RunResult r = runRaymap({"heightmap", map, "--center", "500,0,0", "--size", "8"});
 
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, map)) << r.err;
@@ -432,7 +382,7 @@ TEST(CliHeightmap, UnknownModeIsAUsageError) {
   const std::string& map = stairsMap();
   ASSERT_FALSE(map.empty());
 
-  const Outcome r = raymap(concat(aroundTheOrigin(map), {"--mode", "sideways"}));
+  const RunResult r = runRaymap(concat(aroundTheOrigin(map), {"--mode", "sideways"}));
 
   EXPECT_EQ(r.exit_code, 2) << describe(r);
   EXPECT_TRUE(contains(r.err, "--mode")) << r.err;
@@ -443,7 +393,7 @@ TEST(CliHeightmap, ZeroSizeNamesTheOption) {
   const std::string& map = stairsMap();
   ASSERT_FALSE(map.empty());
 
-  const Outcome r = raymap({"heightmap", map, "--center", "0,0,0", "--size", "0"});
+  const RunResult r = runRaymap({"heightmap", map, "--center", "0,0,0", "--size", "0"});
 
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, "--size")) << r.err;
@@ -454,7 +404,7 @@ TEST(CliHeightmap, MissingMapFileIsNamed) {
   TempDir dir;
   const std::string missing = dir.file("no-such-map.rmap");
 
-  const Outcome r = raymap({"heightmap", missing, "--center", "0,0,0"});
+  const RunResult r = runRaymap({"heightmap", missing, "--center", "0,0,0"});
 
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, missing)) << r.err;
@@ -467,9 +417,9 @@ TEST(CliHeightmap, UnwritablePngFailsBeforeAnyWork) {
   const std::string png = dir.file("missing-dir/out.png");
   const std::string csv = dir.file("out.csv");
 
-  const Outcome r = raymap(concat(aroundTheOrigin(map), {"--png", png, "--csv", csv}));
+  const RunResult r = runRaymap(concat(aroundTheOrigin(map), {"--png", png, "--csv", csv}));
   // Checked before the map is read: a missing map is not what it reports.
-  const Outcome no_map = raymap({"heightmap", dir.file("no-such-map.rmap"), "--png", png});
+  const RunResult no_map = runRaymap({"heightmap", dir.file("no-such-map.rmap"), "--png", png});
 
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, "--png")) << r.err;
@@ -494,10 +444,11 @@ TEST(CliHeightmap, MapWithoutAnOccupancyLayerIsRefused) {
   auto saved = io::saveMap(*map, path);
   ASSERT_TRUE(saved) << saved.error().message;
 
-  const Outcome centred = raymap({"heightmap", path, "--center", "0.5,0.5,0.5", "--size", "2"});
-  const Outcome defaults = raymap({"heightmap", path});
+  const RunResult centred =
+      runRaymap({"heightmap", path, "--center", "0.5,0.5,0.5", "--size", "2"});
+  const RunResult defaults = runRaymap({"heightmap", path});
 
-  for (const Outcome& r : {centred, defaults}) {
+  for (const RunResult& r : {centred, defaults}) {
     EXPECT_EQ(r.exit_code, 1) << describe(r);
     EXPECT_TRUE(contains(r.err, path)) << r.err;
     EXPECT_TRUE(contains(r.err, "no occupancy layer")) << r.err;

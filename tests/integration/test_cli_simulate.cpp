@@ -17,11 +17,9 @@
 #include <utility>
 #include <vector>
 
-#include <fcntl.h>
 #include <gtest/gtest.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
+#include "tests/support/cli_runner.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
@@ -30,56 +28,6 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kScenes = RAYMAP_SCENES_DIR;
-
-struct Outcome {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-/// Runs the raymap binary with `args`; stdout and stderr go through files.
-Outcome raymap(const std::vector<std::string>& args) {
-  Outcome run;
-  TempDir logs;
-  const std::string out = logs.file("stdout");
-  const std::string err = logs.file("stderr");
-  std::vector<std::string> words{RAYMAP_CLI_PATH};
-  words.insert(words.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& word : words) {
-    argv.push_back(word.data());
-  }
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  pid_t pid = -1;
-  const int spawned = ::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawned);
-    return run;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  run.out = readFile(out);
-  run.err = readFile(err);
-  return run;
-}
-
-std::string describe(const Outcome& r) {
-  return "exit code " + std::to_string(r.exit_code) + "\nstdout: " + r.out + "\nstderr: " + r.err;
-}
 
 /// A number in the stats JSON `populate --stats-json -` prints ("key": value).
 double statsValue(const std::string& json, const std::string& key) {
@@ -148,8 +96,8 @@ TEST(CliSimulate, RayCloudMapsWithPopulate) {
   TempDir dir;
   const std::string rays = dir.file("stairs.ply");
 
-  const Outcome sim =
-      raymap({"simulate", kScenes + "/stairs.yaml", "--rays", rays, "--scans", "3"});
+  const RunResult sim =
+      runRaymap({"simulate", kScenes + "/stairs.yaml", "--rays", rays, "--scans", "3"});
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
   const std::optional<Summary> summary = parseSummary(sim.out);
   ASSERT_TRUE(summary.has_value()) << sim.out;
@@ -157,7 +105,8 @@ TEST(CliSimulate, RayCloudMapsWithPopulate) {
   EXPECT_EQ(summary->rays, 3u * 32u * 1024u);  // stairs.yaml: 32 beams, 1024 columns
   EXPECT_NE(sim.out.find("-> " + rays), std::string::npos) << sim.out;
 
-  const Outcome pop = raymap({"populate", rays, "--max-range", "20", "--stats-json", "-", "-q"});
+  const RunResult pop =
+      runRaymap({"populate", rays, "--max-range", "20", "--stats-json", "-", "-q"});
 
   ASSERT_EQ(pop.exit_code, 0) << describe(pop);
   EXPECT_EQ(statsValue(pop.out, "rays_in"), static_cast<double>(summary->rays));
@@ -173,8 +122,9 @@ TEST(CliSimulate, PointsWithTrajectoryMapWithPopulate) {
   const std::string points = dir.file("points.ply");
   const std::string trajectory = dir.file("trajectory.txt");
 
-  const Outcome sim = raymap({"simulate", kScenes + "/stairs.yaml", "--rays", rays, "--points",
-                              points, "--trajectory", trajectory, "--scans", "3", "--seed", "5"});
+  const RunResult sim =
+      runRaymap({"simulate", kScenes + "/stairs.yaml", "--rays", rays, "--points", points,
+                 "--trajectory", trajectory, "--scans", "3", "--seed", "5"});
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
   const std::optional<Summary> summary = parseSummary(sim.out);
   ASSERT_TRUE(summary.has_value()) << sim.out;
@@ -183,10 +133,10 @@ TEST(CliSimulate, PointsWithTrajectoryMapWithPopulate) {
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 3 * 1024 + 1);
   EXPECT_EQ(text.rfind("# time x y z qw qx qy qz\n", 0), 0u);
 
-  const Outcome from_points = raymap({"populate", points, "--trajectory", trajectory, "--max-range",
-                                      "20", "--stats-json", "-", "-q"});
-  const Outcome from_rays =
-      raymap({"populate", rays, "--max-range", "20", "--stats-json", "-", "-q"});
+  const RunResult from_points = runRaymap({"populate", points, "--trajectory", trajectory,
+                                           "--max-range", "20", "--stats-json", "-", "-q"});
+  const RunResult from_rays =
+      runRaymap({"populate", rays, "--max-range", "20", "--stats-json", "-", "-q"});
 
   ASSERT_EQ(from_points.exit_code, 0) << describe(from_points);
   ASSERT_EQ(from_rays.exit_code, 0) << describe(from_rays);
@@ -205,7 +155,7 @@ TEST(CliSimulate, TruthCsvHoldsTheDitchAndItsSides) {
   TempDir dir;
   const std::string csv = dir.file("truth.csv");
 
-  const Outcome sim = raymap(
+  const RunResult sim = runRaymap(
       {"simulate", kScenes + "/ditch.yaml", "--truth", csv, "--truth-box", "1.5,-0.5,3.5,0.5"});
 
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
@@ -223,9 +173,9 @@ TEST(CliSimulate, TruthUnderATableDependsOnTheClearance) {
   const std::string high = dir.file("high.csv");
   const std::string room = kScenes + "/room.yaml";
 
-  ASSERT_EQ(raymap({"simulate", room, "--truth", low, "-q"}).exit_code, 0);
-  ASSERT_EQ(raymap({"simulate", room, "--truth", high, "--min-clearance", "1.0", "-q"}).exit_code,
-            0);
+  ASSERT_EQ(runRaymap({"simulate", room, "--truth", low, "-q"}).exit_code, 0);
+  ASSERT_EQ(
+      runRaymap({"simulate", room, "--truth", high, "--min-clearance", "1.0", "-q"}).exit_code, 0);
 
   // room.yaml: the table top spans x 0.2..1.8, y 0.05..0.95, from 0.71 to 0.75 m; the ceiling
   // is at 2.5 m.
@@ -246,8 +196,8 @@ TEST(CliSimulate, TruthCellsWithoutSurfaceAreEmpty) {
                           "scans: 1\n";
   const std::string csv = dir.file("truth.csv");
 
-  const Outcome sim =
-      raymap({"simulate", scene, "--truth", csv, "--truth-box", "-1,0,1,0.1", "-q"});
+  const RunResult sim =
+      runRaymap({"simulate", scene, "--truth", csv, "--truth-box", "-1,0,1,0.1", "-q"});
 
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
   const auto truth = readTruth(csv);
@@ -263,10 +213,11 @@ TEST(CliSimulate, SameSeedSameFileOtherSeedOtherFile) {
   const std::string b = dir.file("b.ply");
   const std::string c = dir.file("c.ply");
 
-  ASSERT_EQ(raymap({"simulate", scene, "--rays", a, "--scans", "2", "-q"}).exit_code, 0);
-  ASSERT_EQ(raymap({"simulate", scene, "--rays", b, "--scans", "2", "-q"}).exit_code, 0);
+  ASSERT_EQ(runRaymap({"simulate", scene, "--rays", a, "--scans", "2", "-q"}).exit_code, 0);
+  ASSERT_EQ(runRaymap({"simulate", scene, "--rays", b, "--scans", "2", "-q"}).exit_code, 0);
   ASSERT_EQ(
-      raymap({"simulate", scene, "--rays", c, "--scans", "2", "--seed", "99", "-q"}).exit_code, 0);
+      runRaymap({"simulate", scene, "--rays", c, "--scans", "2", "--seed", "99", "-q"}).exit_code,
+      0);
 
   EXPECT_TRUE(readFile(a) == readFile(b));
   EXPECT_EQ(readFile(a).size(), readFile(c).size());
@@ -280,8 +231,8 @@ TEST(CliSimulate, BadSceneFileNamesTheKeyAndWritesNothing) {
                           "  - {type: pole, at: [0, 0], radius: -0.1, height: 2}\n"
                           "trajectory: {waypoints: [[0, 0, 1], [1, 0, 1]], speed: 1}\n";
 
-  const Outcome sim =
-      raymap({"simulate", scene, "--rays", dir.file("out.ply"), "--truth", dir.file("out.csv")});
+  const RunResult sim =
+      runRaymap({"simulate", scene, "--rays", dir.file("out.ply"), "--truth", dir.file("out.csv")});
 
   EXPECT_EQ(sim.exit_code, 1);
   EXPECT_NE(sim.err.find("raymap simulate: error: " + scene +
@@ -297,10 +248,10 @@ TEST(CliSimulate, UsageErrors) {
   TempDir dir;
   const std::string scene = kScenes + "/room.yaml";
 
-  const Outcome nothing = raymap({"simulate", scene});
-  const Outcome points_alone = raymap({"simulate", scene, "--points", dir.file("p.ply")});
-  const Outcome bad_box =
-      raymap({"simulate", scene, "--truth", dir.file("t.csv"), "--truth-box", "1,1,0,2"});
+  const RunResult nothing = runRaymap({"simulate", scene});
+  const RunResult points_alone = runRaymap({"simulate", scene, "--points", dir.file("p.ply")});
+  const RunResult bad_box =
+      runRaymap({"simulate", scene, "--truth", dir.file("t.csv"), "--truth-box", "1,1,0,2"});
 
   EXPECT_EQ(nothing.exit_code, 2) << describe(nothing);
   EXPECT_NE(nothing.err.find("nothing to write"), std::string::npos) << nothing.err;

@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Running the raymap program from tests: its exit code, stdout and stderr.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace raymap::test {
+
+/// What one run of the program did.
+struct RunResult {
+  int exit_code = -1;  ///< exit status, or 128 + signal number when it was killed
+  std::string out;
+  std::string err;
+};
+
+/// @brief Runs the raymap binary (RAYMAP_CLI_PATH) with `args`, capturing its exit code, stdout
+/// and stderr (read as they fill, so a chatty child never blocks). A failure to start is a test
+/// failure.
+RunResult runRaymap(const std::vector<std::string>& args);
+
+/// @brief A run for failure messages: exit code, stdout and stderr.
+std::string describe(const RunResult& r);
+
+/// @brief The whole content of a file ("" when it cannot be read).
+std::string readFile(const std::string& path);
+
+}  // namespace raymap::test
