@@ -77,6 +77,22 @@ Result<std::vector<DeviceInfo>> listDevices() {
   return devices;
 }
 
+Result<DeviceInfo> findDevice(int index) {
+  auto devices = listDevices();
+  if (!devices) {
+    return Unexpected(devices.error());
+  }
+  return selectDevice(*devices, index);
+}
+
+Expected<void, Error> checkBlockThreads(unsigned block_threads) {
+  if (block_threads == 0 || block_threads > 1024 || block_threads % 32 != 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "CUDA block size must be a multiple of 32 from 32 to 1024 threads");
+  }
+  return {};
+}
+
 Result<DeviceInfo> selectDevice(const std::vector<DeviceInfo>& devices, int index) {
   const int wanted = index < 0 ? 0 : index;
   for (const DeviceInfo& d : devices) {

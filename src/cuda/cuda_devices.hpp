@@ -35,6 +35,12 @@ Result<std::vector<DeviceInfo>> listDevices();
 /// @brief The device with ordinal `index` (-1: device 0), or an error listing what exists.
 Result<DeviceInfo> selectDevice(const std::vector<DeviceInfo>& devices, int index);
 
+/// @brief listDevices() then selectDevice(): the device a `--cuda-device` option names.
+Result<DeviceInfo> findDevice(int index);
+
+/// @brief Checks a launch's threads per block: a multiple of 32 from 32 to 1024.
+Expected<void, Error> checkBlockThreads(unsigned block_threads);
+
 /// @brief "13.0" for 13000 (CUDA's version encoding).
 std::string versionText(int version);
 

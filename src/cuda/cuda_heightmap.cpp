@@ -139,16 +139,10 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
 Result<std::unique_ptr<heightmap::HeightmapGenerator>> createCudaHeightmapGenerator(
     const CudaHeightmapOptions& options) {
-  if (options.block_threads == 0 || options.block_threads > 1024 ||
-      options.block_threads % 32 != 0) {
-    return fail(ErrorCode::kInvalidArgument,
-                "CUDA block size must be a multiple of 32 from 32 to 1024 threads");
+  if (auto ok = cuda::checkBlockThreads(options.block_threads); !ok) {
+    return Unexpected(ok.error());
   }
-  auto devices = cuda::listDevices();
-  if (!devices) {
-    return Unexpected(devices.error());
-  }
-  auto device = cuda::selectDevice(*devices, options.device);
+  auto device = cuda::findDevice(options.device);
   if (!device) {
     return Unexpected(device.error());
   }

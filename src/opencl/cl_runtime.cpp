@@ -351,6 +351,14 @@ Result<std::vector<DeviceInfo>> listDevices() {
   return devices;
 }
 
+Result<DeviceInfo> findDevice(const DeviceSelector& selector) {
+  auto devices = listDevices();
+  if (!devices) {
+    return Unexpected(devices.error());
+  }
+  return selectDevice(*devices, selector);
+}
+
 Result<DeviceInfo> selectDevice(const std::vector<DeviceInfo>& devices,
                                 const DeviceSelector& selector) {
   if (devices.empty()) {
@@ -479,6 +487,19 @@ Result<KernelHandle> createKernel(const ProgramHandle& program, const char* name
         "cannot create OpenCL kernel '" + label + "': " + errorName(status));
   }
   return kernel;
+}
+
+Expected<void, Error> createKernels(
+    const ProgramHandle& program,
+    std::initializer_list<std::pair<KernelHandle*, const char*>> kernels) {
+  for (const auto& [handle, name] : kernels) {
+    auto kernel = createKernel(program, name);
+    if (!kernel) {
+      return Unexpected(kernel.error());
+    }
+    *handle = std::move(*kernel);
+  }
+  return {};
 }
 
 }  // namespace raymap::opencl

@@ -6,8 +6,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <CL/cl.h>
@@ -56,6 +58,9 @@ struct DeviceSelector {
 /// their first device. Errors list what is available.
 Result<DeviceInfo> selectDevice(const std::vector<DeviceInfo>& devices,
                                 const DeviceSelector& selector);
+
+/// @brief listDevices() then selectDevice(): the device the options name.
+Result<DeviceInfo> findDevice(const DeviceSelector& selector);
 
 /// @brief RAII owner of one OpenCL object (release function R). Move-only.
 template <class Handle, cl_int (*Release)(Handle)>
@@ -118,5 +123,11 @@ Result<BufferHandle> createHostBuffer(const DeviceContext& ctx, void* host, std:
 
 /// @brief Creates a kernel from a built program.
 Result<KernelHandle> createKernel(const ProgramHandle& program, const char* name);
+
+/// @brief Creates each named kernel of a built program into its handle; the first failure is
+/// returned.
+Expected<void, Error> createKernels(
+    const ProgramHandle& program,
+    std::initializer_list<std::pair<KernelHandle*, const char*>> kernels);
 
 }  // namespace raymap::opencl

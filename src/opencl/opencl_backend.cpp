@@ -64,14 +64,11 @@ class OpenClBackend final : public gpu::StagedBackend {
     }
     program_warning_ = program->warning;
     program_ = std::move(program->program);
-    for (auto [handle, name] : {std::pair{&span_kernel_, "rm_integrate_spans"},
-                                std::pair{&hit_kernel_, "rm_apply_hit_groups"},
-                                std::pair{&tag_kernel_, "rm_tag_hit_groups"}}) {
-      auto kernel = opencl::createKernel(program_, name);
-      if (!kernel) {
-        return Unexpected(kernel.error());
-      }
-      *handle = std::move(*kernel);
+    if (auto ok = opencl::createKernels(program_, {{&span_kernel_, "rm_integrate_spans"},
+                                                   {&hit_kernel_, "rm_apply_hit_groups"},
+                                                   {&tag_kernel_, "rm_tag_hit_groups"}});
+        !ok) {
+      return ok;
     }
     if (auto ok = allocateLayers(); !ok) {
       return ok;
@@ -299,11 +296,7 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
   if (auto ok = gpu::checkBatchOptions(options, "OpenCL"); !ok) {
     return Unexpected(ok.error());
   }
-  auto devices = opencl::listDevices();
-  if (!devices) {
-    return Unexpected(devices.error());
-  }
-  auto device = opencl::selectDevice(*devices, options.device);
+  auto device = opencl::findDevice(options.device);
   if (!device) {
     return Unexpected(device.error());
   }

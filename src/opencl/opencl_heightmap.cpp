@@ -37,16 +37,9 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
       return Unexpected(program.error());
     }
     program_ = std::move(program->program);
-    for (auto [handle, name] : {std::pair{&masks_kernel_, "rm_heightmap_masks"},
-                                std::pair{&planar_, "rm_heightmap_planar"},
-                                std::pair{&fill_, "rm_heightmap_fill_ring"}}) {
-      auto kernel = opencl::createKernel(program_, name);
-      if (!kernel) {
-        return Unexpected(kernel.error());
-      }
-      *handle = std::move(*kernel);
-    }
-    return {};
+    return opencl::createKernels(program_, {{&masks_kernel_, "rm_heightmap_masks"},
+                                            {&planar_, "rm_heightmap_planar"},
+                                            {&fill_, "rm_heightmap_fill_ring"}});
   }
 
   const char* name() const noexcept override { return "opencl"; }
@@ -208,11 +201,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
 Result<std::unique_ptr<heightmap::HeightmapGenerator>> createOpenClHeightmapGenerator(
     const OpenClHeightmapOptions& options) {
-  auto devices = opencl::listDevices();
-  if (!devices) {
-    return Unexpected(devices.error());
-  }
-  auto device = opencl::selectDevice(*devices, options.device);
+  auto device = opencl::findDevice(options.device);
   if (!device) {
     return Unexpected(device.error());
   }
