@@ -88,18 +88,12 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: launching the kernel", status));
     }
-    const std::pair<void*, DeviceBuffer> layers[] = {
-        {out.elevation.data(), kElevationBuffer},
-        {out.clearance.data(), kClearanceBuffer},
-        {out.kind.data(), kKindBuffer},
-        {out.observed_count.data(), kObservedCountBuffer},
-        {out.reference.data(), kReferenceBuffer}};
-    for (const auto& [target, buffer] : layers) {
+    DeviceUpload::forEachOutput(out, [&](DeviceBuffer buffer, void* target) {
       if (status == cudaSuccess) {
         status = cudaMemcpyAsync(target, buffers_[buffer].memory.get(), out.cellCount() * 4,
                                  cudaMemcpyDeviceToHost, s);
       }
-    }
+    });
     if (status == cudaSuccess) {
       status = cudaStreamSynchronize(s);
     }

@@ -41,6 +41,16 @@ struct DeviceUpload {
   /// @brief Fills the sizes for `plan` on `map`. @rt allocates only when the plan grows.
   void prepare(const VoxelMap& map, const HeightmapPlan& plan);
 
+  /// @brief Calls read(buffer, host_target) for each output layer of `out` (cells * 4 bytes).
+  template <class Read>
+  static void forEachOutput(HeightMap& out, Read&& read) {
+    read(kElevationBuffer, static_cast<void*>(out.elevation.data()));
+    read(kClearanceBuffer, static_cast<void*>(out.clearance.data()));
+    read(kKindBuffer, static_cast<void*>(out.kind.data()));
+    read(kObservedCountBuffer, static_cast<void*>(out.observed_count.data()));
+    read(kReferenceBuffer, static_cast<void*>(out.reference.data()));
+  }
+
   /// @brief Calls copy(buffer, device_offset, host_source, bytes) for every host-to-device copy:
   /// the table, the slot list, then each region's occupancy (and mean) layer.
   template <class Copy>

@@ -107,18 +107,12 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != CL_SUCCESS) {
       return deviceError("launching the height-map kernels", status);
     }
-    const std::pair<void*, DeviceBuffer> layers[] = {
-        {out.elevation.data(), kElevationBuffer},
-        {out.clearance.data(), kClearanceBuffer},
-        {out.kind.data(), kKindBuffer},
-        {out.observed_count.data(), kObservedCountBuffer},
-        {out.reference.data(), kReferenceBuffer}};
-    for (const auto& [target, buffer] : layers) {
+    DeviceUpload::forEachOutput(out, [&](DeviceBuffer buffer, void* target) {
       if (status == CL_SUCCESS) {
         status = clEnqueueReadBuffer(q, buffers_[buffer].handle.get(), CL_FALSE, 0,
                                      out.cellCount() * 4, target, 0, nullptr, nullptr);
       }
-    }
+    });
     if (status == CL_SUCCESS) {
       status = clFinish(q);
     }
