@@ -9,13 +9,14 @@
  * The column search, for a column and a reference height `ref` (metres):
  *  - the search range is the voxels whose centres lie in [ref - floor_depth, ref + ceiling_height],
  *    clipped to the box the host mapped (the region table);
- *  - a *surface* candidate is an occupied voxel; its height is the voxel mean's z when the mean
- *    layer is present and has samples, else the voxel centre. A run of occupied voxels with
+ *  - a *surface* candidate is the top voxel of a run of occupied voxels; its height is the voxel
+ *    mean's z when the mean layer is present and has samples, else the voxel centre. A run with
  *    observed free space directly below it and unobserved space directly above it was seen only
  *    from below (a ceiling, the underside of an overhang): it limits the clearance of what is
  *    below it but is no candidate itself;
- *  - a *virtual surface* candidate (only with RM_HM_FLAG_VIRTUAL) is the lowest observed free voxel
- *    of a run of non-occupied voxels whose voxel below is unobserved: free space seen over space
+ *  - a *virtual surface* candidate (only with RM_HM_FLAG_VIRTUAL) is, in each gap between runs of
+ *    occupied voxels, the lowest free voxel within the search range whose voxel below is
+ *    unobserved: free space seen over space
  *    never seen, as at a ditch or a drop-off seen from above. Its height is the voxel's bottom face
  *    (the highest the hidden ground can be). Virtual candidates above ref + one voxel are ignored:
  *    those are shadows behind obstacles, which stay unknown, not negative obstacles;
@@ -51,8 +52,9 @@
 
 /* Parameter flags. */
 #define RM_HM_FLAG_VIRTUAL 1 /* look for virtual surfaces */
-#define RM_HM_FLAG_MEAN 2    /* the mean layer is present: use it for surface heights */
+#define RM_HM_FLAG_MEAN 2    /* surface heights from the voxel mean (needs RM_HM_FLAG_SAMPLES) */
 #define RM_HM_FLAG_FILL 4    /* flood-fill mode (else planar) */
+#define RM_HM_FLAG_SAMPLES 8 /* the mean layer is present: read sample counts from it */
 
 /* Region table entry of a region the map does not hold (all its voxels are unobserved). */
 #define RM_HM_NO_REGION 0xFFFFFFFFu
@@ -77,6 +79,8 @@ typedef struct rm_heightmap_params {
   rm_i32 flags;             /* RM_HM_FLAG_* */
   rm_i32 region_shift;      /* log2(region_voxels) when it is a power of two, else -1 */
   float resolution;         /* voxel edge, metres */
+  float inverse_resolution; /* 1 / resolution: search limits are multiplied by it (a float
+                             * product is correctly rounded on every device; a quotient is not) */
   float reference_z;        /* planar reference / fill seed reference, metres */
   float floor_depth;        /* metres searched below the reference */
   float ceiling_height;     /* metres searched above the reference */
@@ -216,8 +220,8 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
   const rm_u32 voxels_per_region = RM_U32(n * n * n);
   const rm_u32 plane = RM_U32(n * n);
   /* Voxels whose centre lies in [reference - floor, reference + ceiling]. */
-  rm_i32 z_lo = rm_floor_i32((reference - p.floor_depth) / res + 0.5f);
-  rm_i32 z_hi = rm_floor_i32((reference + p.ceiling_height) / res - 0.5f);
+  rm_i32 z_lo = rm_floor_i32((reference - p.floor_depth) * p.inverse_resolution + 0.5f);
+  rm_i32 z_hi = rm_floor_i32((reference + p.ceiling_height) * p.inverse_resolution - 0.5f);
   z_lo = z_lo < p.box_z_min ? p.box_z_min : z_lo;
   z_hi = z_hi > p.box_z_max ? p.box_z_max : z_hi;
   if (z_lo > z_hi) {
@@ -227,10 +231,11 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
   const rm_i32 ry = rm_hm_region_of(p, vy);
   const rm_u32 column = RM_U32((vx - rx * n) + n * (vy - ry * n));
   const int virtual_on = (p.flags & RM_HM_FLAG_VIRTUAL) != 0;
-  const int mean_on = (p.flags & RM_HM_FLAG_MEAN) != 0;
+  const int samples_on = (p.flags & RM_HM_FLAG_SAMPLES) != 0;
+  const int mean_on = samples_on && (p.flags & RM_HM_FLAG_MEAN) != 0;
   const float virtual_limit = reference + res;
 
-  rm_hm_candidate real = rm_hm_no_candidate();   /* occupied voxel at the bottom of this gap */
+  rm_hm_candidate real = rm_hm_no_candidate();   /* top of the occupied run below this gap */
   rm_hm_candidate hidden = rm_hm_no_candidate(); /* virtual candidate in this gap */
   rm_i32 previous = RM_HM_STATE_UNOBSERVED;      /* state of the voxel below the current one */
   rm_i32 lowest_state = RM_HM_STATE_UNOBSERVED;  /* state of voxel z_lo */
@@ -239,10 +244,12 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
   int run_free_below = 0; /* the run of occupied voxels ending at `real` has free space below */
   int done = 0;
 
-  /* Walk mask word by mask word from the voxel below z_lo up to the top of the box (clearances
-   * look above the search range), visiting only events: occupied voxels and, for virtual
-   * surfaces, free voxels over unobserved ones. Stop early once a resolved candidate at or above
-   * the reference is held: every later candidate is higher, so farther away. */
+  /* Walk mask word by mask word from the voxel below the box up to its top, visiting only events:
+   * occupied voxels and, for virtual surfaces, free voxels over unobserved ones. The walk starts
+   * below the box rather than at z_lo so that a run of occupied voxels is judged by the voxel
+   * below it wherever the search range begins, and clearances look above the search range. Stop
+   * early once a resolved candidate at or above the reference is held: every later candidate is
+   * higher, so farther away. */
   /* The column's entries in the region table (one per region layer), when it is in the box. */
   const rm_i32 tx = rx - p.region_x0;
   const rm_i32 ty = ry - p.region_y0;
@@ -251,7 +258,7 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
   const rm_u32 table_layer = RM_U32(p.regions_x * p.regions_y);
   /* Region layer and mask word of the first voxel, then advanced word by word (no division in
    * the loop). */
-  rm_i32 z = z_lo - 1;
+  rm_i32 z = p.box_z_min - 1;
   rm_i32 rz = rm_hm_region_of(p, z);
   rm_i32 w = (z - rz * n) / 32;
   while (z <= p.box_z_max && !done) {
@@ -309,26 +316,31 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
       events &= events - 1u;
       const rm_i32 ze = word_z + b;
       if (((m.occupied >> b) & 1u) != 0u) {
-        /* The gap below ends here: resolve its candidates. */
-        const float ceiling_face = RM_F32(ze) * res;
-        rm_hm_offer(&best, &best_distance, real, ceiling_face - real.height, reference,
-                    p.min_clearance);
-        rm_hm_offer(&best, &best_distance, hidden, ceiling_face - hidden.height, reference,
-                    p.min_clearance);
-        real = rm_hm_no_candidate();
-        hidden = rm_hm_no_candidate();
-        gap_has_virtual = 0;
-        if (best.kind != RM_HM_UNKNOWN && best.elevation >= reference) {
-          done = 1;
-        } else if (ze > z_hi) {
+        const rm_i32 below = b == b0 ? previous : rm_hm_bit_state(m, b - 1);
+        if (below == RM_HM_STATE_OCCUPIED) {
+          /* Inside a run of occupied voxels: only the run's top can be a surface. */
+          real = rm_hm_no_candidate();
+        } else {
+          /* A new run: the gap below ends here, so resolve its candidates. */
+          const float ceiling_face = RM_F32(ze) * res;
+          rm_hm_offer(&best, &best_distance, real, ceiling_face - real.height, reference,
+                      p.min_clearance);
+          rm_hm_offer(&best, &best_distance, hidden, ceiling_face - hidden.height, reference,
+                      p.min_clearance);
+          real = rm_hm_no_candidate();
+          hidden = rm_hm_no_candidate();
+          gap_has_virtual = 0;
+          run_free_below = below == RM_HM_STATE_FREE;
+          if (best.kind != RM_HM_UNKNOWN && best.elevation >= reference) {
+            done = 1;
+          }
+        }
+        if (!done && ze > z_hi) {
           done = 1; /* nothing above the search range can become a candidate */
-        } else if (ze >= z_lo) {
-          /* A run of occupied voxels with observed free space directly below it and unobserved
-           * space directly above it was seen only from below (a ceiling, the underside of an
-           * overhang): it bounds the clearance below it but is no ground to stand on. */
-          const rm_i32 below = b == b0 ? previous : rm_hm_bit_state(m, b - 1);
-          run_free_below =
-              below == RM_HM_STATE_OCCUPIED ? run_free_below : below == RM_HM_STATE_FREE;
+        } else if (!done && ze >= z_lo) {
+          /* A run with observed free space directly below it and unobserved space directly
+           * above it was seen only from below (a ceiling, the underside of an overhang): it
+           * bounds the clearance below it but is no ground to stand on. */
           int underside = 0;
           if (run_free_below) {
             if (ze < z_end) {
@@ -339,10 +351,10 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
           }
           real.kind = underside ? RM_HM_UNKNOWN : RM_HM_SURFACE;
           real.height = (RM_F32(ze) + 0.5f) * res;
-          if (mean_on) {
+          if (samples_on) {
             const rm_voxel_mean mv = src.mean[src.region_slots[region] * voxels_per_region +
                                               column + RM_U32(ze - rz * n) * plane];
-            if (mv.count > 0u) {
+            if (mean_on && mv.count > 0u) {
               real.height = (RM_F32(ze) + rm_mean_decode(mv.packed, mv.count).z) * res;
             }
             real.samples = mv.count;

@@ -36,7 +36,7 @@ const char* toString(DeviceBuffer buffer) noexcept {
 void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan) {
   const RegionStore& store = map.store();
   const rm_heightmap_params& p = plan.params;
-  with_mean = (p.flags & RM_HM_FLAG_MEAN) != 0 && map.meanLayer() >= 0;
+  with_mean = (p.flags & RM_HM_FLAG_SAMPLES) != 0 && map.meanLayer() >= 0;
   occupancy_region_bytes = store.layerRegionBytes(map.occupancyLayer());
   mean_region_bytes = with_mean ? store.layerRegionBytes(map.meanLayer()) : 0;
   region_slots.resize(std::max<std::size_t>(plan.region_slots.size(), 1));

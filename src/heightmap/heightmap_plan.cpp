@@ -133,9 +133,11 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   p.seed_i = x_max - centre_voxel.x;
   p.seed_j = y_max - centre_voxel.y;
   p.flags = (o.virtual_surfaces ? RM_HM_FLAG_VIRTUAL : 0) |
+            (map.meanLayer() >= 0 ? RM_HM_FLAG_SAMPLES : 0) |
             (o.use_voxel_mean && map.meanLayer() >= 0 ? RM_HM_FLAG_MEAN : 0) |
             (o.mode == HeightmapMode::kFill ? RM_HM_FLAG_FILL : 0);
   p.resolution = static_cast<float>(res);
+  p.inverse_resolution = static_cast<float>(1.0 / res);
   p.reference_z = static_cast<float>(o.centre.z);
   p.floor_depth = static_cast<float>(floor_depth);
   p.ceiling_height = static_cast<float>(ceiling_height);

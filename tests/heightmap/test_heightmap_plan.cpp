@@ -125,8 +125,8 @@ HeightmapPlan planOrFail(const VoxelMap& map, const HeightmapOptions& o) {
 }
 
 void expectSamePlan(const HeightmapPlan& a, const HeightmapPlan& b) {
-  // rm_heightmap_params is 23 four-byte fields: no padding, so bytes compare the values.
-  static_assert(sizeof(rm_heightmap_params) == 23 * 4);
+  // rm_heightmap_params is 24 four-byte fields: no padding, so bytes compare the values.
+  static_assert(sizeof(rm_heightmap_params) == 24 * 4);
   EXPECT_EQ(std::memcmp(&a.params, &b.params, sizeof a.params), 0);
   EXPECT_EQ(a.region_table, b.region_table);
   EXPECT_EQ(a.region_slots, b.region_slots);
@@ -476,7 +476,8 @@ TEST(HeightmapPlanGeometry, LimitsAndFlagsFollowTheRequest) {
   EXPECT_FLOAT_EQ(plan.params.min_clearance,
                   static_cast<float>(HeightmapOptions::kDefaultMinClearance));
   EXPECT_EQ(plan.params.occupied_threshold, map->occupancy().threshold);
-  EXPECT_EQ(plan.params.flags, RM_HM_FLAG_MEAN);  // planar, no virtual surfaces, map has means
+  // Planar, no virtual surfaces; the map has means: heights and sample counts from them.
+  EXPECT_EQ(plan.params.flags, RM_HM_FLAG_MEAN | RM_HM_FLAG_SAMPLES);
   EXPECT_EQ(plan.grid.mode, HeightmapMode::kPlanar);
 
   o.floor_depth = 0.7;
@@ -489,7 +490,7 @@ TEST(HeightmapPlanGeometry, LimitsAndFlagsFollowTheRequest) {
   EXPECT_FLOAT_EQ(plan.params.floor_depth, 0.7f);
   EXPECT_FLOAT_EQ(plan.params.ceiling_height, 1.9f);
   EXPECT_FLOAT_EQ(plan.params.min_clearance, 0.25f);
-  EXPECT_EQ(plan.params.flags, RM_HM_FLAG_FILL | RM_HM_FLAG_VIRTUAL);
+  EXPECT_EQ(plan.params.flags, RM_HM_FLAG_FILL | RM_HM_FLAG_VIRTUAL | RM_HM_FLAG_SAMPLES);
   EXPECT_EQ(plan.grid.mode, HeightmapMode::kFill);
 
   // Asking for means from a map without them is no error; the flag stays off.

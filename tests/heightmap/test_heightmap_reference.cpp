@@ -37,27 +37,6 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // ---------------------------------------------------------------------------------------------
 // The reference.
 
-/// Where the generators differ from the letter of the specification, which side the reference
-/// takes. The default is what the generators do (the enabled test); specification() is the
-/// letter of kernels/common/heightmap.h and docs/heightmap.md, checked by the disabled tests below
-/// until the code or the documents are changed to agree. Everything else in the reference is the
-/// specification as written.
-struct Reading {
-  /// Specification: a run of occupied voxels seen only from below "is no candidate itself": none
-  /// of its voxels. Generators: only the run's top voxel is excluded; a lower voxel of the run is
-  /// a surface when min_clearance is below its clearance up to the next voxel of the run (less
-  /// than one voxel).
-  bool whole_run_underside = false;
-  /// Specification: the voxel below the run decides, wherever the run starts. Generators: the
-  /// search reads one voxel below z_lo, so a run that starts lower is never an underside.
-  bool run_below_from_whole_column = false;
-  /// Specification (docs/heightmap.md): observed_count is the surface voxel's sample count.
-  /// Generators: 0 when use_voxel_mean is off (the mean layer is not read).
-  bool samples_without_mean = false;
-
-  static Reading specification() { return {true, true, true}; }
-};
-
 /// One column of the map as the search may see it: voxel states and means from box_z_min - 1 (the
 /// context voxel below the lowest search range) to box_z_max. Anything else counts as unobserved.
 struct Column {
@@ -96,17 +75,17 @@ struct RefCell {
 };
 
 /// The search range of a reference: voxels whose centre lies in [ref - floor, ref + ceiling], in
-/// float as the specification computes it, clipped to the box.
+/// float as the specification computes it (times the inverse resolution), clipped to the box.
 std::pair<std::int32_t, std::int32_t> searchRange(const rm_heightmap_params& p, float reference) {
-  const float res = p.resolution;
-  auto z_lo = static_cast<std::int32_t>(std::floor((reference - p.floor_depth) / res + 0.5f));
-  auto z_hi = static_cast<std::int32_t>(std::floor((reference + p.ceiling_height) / res - 0.5f));
+  const float inverse = p.inverse_resolution;
+  auto z_lo = static_cast<std::int32_t>(std::floor((reference - p.floor_depth) * inverse + 0.5f));
+  auto z_hi =
+      static_cast<std::int32_t>(std::floor((reference + p.ceiling_height) * inverse - 0.5f));
   return {std::max(z_lo, p.box_z_min), std::min(z_hi, p.box_z_max)};
 }
 
 /// The column search, voxel by voxel: every candidate is listed, then the rule picks one.
-RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float reference,
-                     const Reading& reading) {
+RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float reference) {
   RefCell out;
   const auto [z_lo, z_hi] = searchRange(p, reference);
   if (z_lo > z_hi) {
@@ -114,7 +93,8 @@ RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float refere
   }
   const float res = p.resolution;
   const bool virtual_on = (p.flags & RM_HM_FLAG_VIRTUAL) != 0;
-  const bool mean_on = (p.flags & RM_HM_FLAG_MEAN) != 0;
+  const bool samples_on = (p.flags & RM_HM_FLAG_SAMPLES) != 0;
+  const bool mean_on = samples_on && (p.flags & RM_HM_FLAG_MEAN) != 0;
   auto occupied = [&](std::int32_t z) { return c.at(z) == VoxelState::kOccupied; };
   auto freeOverUnobserved = [&](std::int32_t z) {
     return c.at(z) == VoxelState::kFree && c.at(z - 1) == VoxelState::kUnobserved;
@@ -129,7 +109,7 @@ RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float refere
     return kInf;
   };
   // The lowest voxel the underside rule may look at (below it, the column counts as unobserved).
-  const std::int32_t context = reading.run_below_from_whole_column ? p.box_z_min - 1 : z_lo - 1;
+  const std::int32_t context = p.box_z_min - 1;
 
   struct Candidate {
     float height;
@@ -139,7 +119,8 @@ RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float refere
   };
   std::vector<Candidate> candidates;
   for (std::int32_t z = z_lo; z <= z_hi; ++z) {
-    if (occupied(z)) {
+    // Only the top voxel of a run of occupied voxels is a surface candidate.
+    if (occupied(z) && !occupied(z + 1)) {
       std::int32_t bottom = z;
       while (bottom - 1 >= context && occupied(bottom - 1)) {
         --bottom;
@@ -149,7 +130,7 @@ RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float refere
         ++top;
       }
       const VoxelState below = bottom - 1 >= context ? c.at(bottom - 1) : VoxelState::kUnobserved;
-      const std::int32_t above = reading.whole_run_underside ? top + 1 : z + 1;
+      const std::int32_t above = top + 1;
       const bool underside = below == VoxelState::kFree && c.at(above) == VoxelState::kUnobserved;
       if (!underside) {
         const rm_voxel_mean m = c.meanAt(z);
@@ -157,14 +138,13 @@ RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float refere
         if (mean_on && m.count > 0u) {
           height = (static_cast<float>(z) + rm_mean_decode(m.packed, m.count).z) * res;
         }
-        const std::uint32_t samples = (mean_on || reading.samples_without_mean) ? m.count : 0u;
+        const std::uint32_t samples = samples_on ? m.count : 0u;
         candidates.push_back({height, clearanceAbove(z, height), RM_HM_SURFACE, samples});
       }
     }
     if (virtual_on && freeOverUnobserved(z)) {
-      // "The lowest such in its gap" among the voxels of the search range: the specification's
-      // candidates are the voxels of the search range, so one below z_lo does not count (the
-      // other reading, the lowest of the whole gap, is an open question of the documents).
+      // The lowest free-over-unobserved voxel of its gap within the search range (one below
+      // z_lo does not count: candidates are voxels of the search range; docs/heightmap.md).
       bool lowest_in_gap = true;
       for (std::int32_t u = z - 1; u >= z_lo && !occupied(u); --u) {
         if (freeOverUnobserved(u)) {
@@ -211,8 +191,7 @@ bool hasHeight(std::uint32_t kind) { return kind == RM_HM_SURFACE || kind == RM_
 
 /// The whole grid: planar, or flood fill ring by ring from the seed cell.
 void referenceMap(const std::vector<Column>& columns, const rm_heightmap_params& p,
-                  const Reading& reading, std::vector<RefCell>& cells,
-                  std::vector<float>& references) {
+                  std::vector<RefCell>& cells, std::vector<float>& references) {
   const std::int32_t nx = p.cells_x;
   const std::int32_t ny = p.cells_y;
   const auto count = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
@@ -223,7 +202,7 @@ void referenceMap(const std::vector<Column>& columns, const rm_heightmap_params&
   };
   if ((p.flags & RM_HM_FLAG_FILL) == 0) {
     for (std::size_t n = 0; n < count; ++n) {
-      cells[n] = searchColumn(columns[n], p, p.reference_z, reading);
+      cells[n] = searchColumn(columns[n], p, p.reference_z);
     }
     return;
   }
@@ -273,7 +252,7 @@ void referenceMap(const std::vector<Column>& columns, const rm_heightmap_params&
           reference = chosen.value_or(references[parent]);
         }
         references[at(i, j)] = reference;
-        cells[at(i, j)] = searchColumn(columns[at(i, j)], p, reference, reading);
+        cells[at(i, j)] = searchColumn(columns[at(i, j)], p, reference);
       }
     }
   }
@@ -579,7 +558,7 @@ struct Coverage {
 /// Generates every request of `setup` with `generator` and compares each cell with the
 /// reference. Stops at the first mismatch, with the column, the request and both answers.
 void runRandomized(heightmap::HeightmapGenerator& generator, const RandomSetup& setup,
-                   const Reading& reading, Coverage& coverage) {
+                   Coverage& coverage) {
   Rng rng(setup.seed);
   HeightmapPlan plan;
   HeightMap out;
@@ -611,7 +590,7 @@ void runRandomized(heightmap::HeightmapGenerator& generator, const RandomSetup& 
           columns.push_back(readColumn(*scene.map, p, p.voxel_x0 - i, p.voxel_y0 - j));
         }
       }
-      referenceMap(columns, p, reading, expected, references);
+      referenceMap(columns, p, expected, references);
       ++coverage.requests;
       coverage.fill_requests += o.mode == HeightmapMode::kFill ? 1 : 0;
       // Cells in ring order from the seed, so that in fill mode the first mismatch reported is
@@ -730,7 +709,7 @@ TEST_P(HeightmapReference, RandomMapsMatchTheReferenceExactly) {
   const bool device = GetParam() != "cpu";
   const RandomSetup setup{20240611u, device ? 200 : 300, 3};
   Coverage coverage;
-  runRandomized(*generator, setup, Reading{}, coverage);
+  runRandomized(*generator, setup, coverage);
   std::printf(
       "[ reference ] %s: %zu requests (%zu fill), %zu cells: %zu unknown, %zu surface, "
       "%zu virtual, %zu vacant\n",
@@ -738,19 +717,10 @@ TEST_P(HeightmapReference, RandomMapsMatchTheReferenceExactly) {
       coverage.kinds[0], coverage.kinds[1], coverage.kinds[2], coverage.kinds[3]);
 }
 
-// NOTE(reference): disabled until the generators or the documents change: the letter of the
-// specification (Reading::specification()). The three tests below are its minimal columns.
-TEST_P(HeightmapReference, DISABLED_RandomMapsMatchTheLetterOfTheSpecification) {
-  REQUIRE_HEIGHTMAP_GENERATOR(GetParam(), generator);
-  Coverage coverage;
-  runRandomized(*generator, RandomSetup{20240611u, 100, 3}, Reading::specification(), coverage);
-}
-
-// NOTE(reference): disabled, a discrepancy. A ceiling two voxels thick seen only from below
-// (free under it, never seen above): with min_clearance 0 the generators return its lower voxel
-// as a surface (elevation 2.49, clearance 0.01 up to the upper voxel), where the specification
-// says the run "is no candidate itself". Only a min_clearance below one voxel shows it.
-TEST_P(HeightmapReference, DISABLED_NoVoxelOfACeilingSeenFromBelowIsASurface) {
+// A ceiling two voxels thick seen only from below (free under it, never seen above): with
+// min_clearance 0 its lower voxel must not become a surface (only a run's top is a candidate,
+// and this run is an underside).
+TEST_P(HeightmapReference, NoVoxelOfACeilingSeenFromBelowIsASurface) {
   REQUIRE_HEIGHTMAP_GENERATOR(GetParam(), generator);
   SmallMap m;
   m.freeRange(2, 23);  // the floor was never hit
@@ -764,12 +734,9 @@ TEST_P(HeightmapReference, DISABLED_NoVoxelOfACeilingSeenFromBelowIsASurface) {
   EXPECT_TRUE(std::isnan(c.elevation));
 }
 
-// NOTE(reference): disabled, a discrepancy. The same ceiling, three voxels thick (z 4..6 over free
-// z 0..3, nothing seen above), is excluded when the search range starts at z 4 but becomes a
-// surface (elevation 0.65, clearance inf) when it starts at z 5 or 6: the search reads one voxel
-// below z_lo, so it never sees the free space under a run that starts lower. The specification
-// makes the run's own voxel below decide, wherever the search range starts.
-TEST_P(HeightmapReference, DISABLED_ACeilingIsNoSurfaceWhereverTheSearchRangeStarts) {
+// The same ceiling, three voxels thick (z 4..6 over free z 0..3, nothing seen above), is no
+// surface wherever the search range starts: the run's own voxel below decides.
+TEST_P(HeightmapReference, ACeilingIsNoSurfaceWhereverTheSearchRangeStarts) {
   REQUIRE_HEIGHTMAP_GENERATOR(GetParam(), generator);
   SmallMap m;
   m.freeRange(0, 3);
@@ -777,18 +744,17 @@ TEST_P(HeightmapReference, DISABLED_ACeilingIsNoSurfaceWhereverTheSearchRangeSta
   m.occupied(5);
   m.occupied(6);
   HeightmapOptions o = columnRequest(0.52);
-  o.floor_depth = 0.15;  // z_lo = floor(0.37 / 0.1 + 0.5) = 4: excluded today
+  o.floor_depth = 0.15;  // z_lo = floor(0.37 / 0.1 + 0.5) = 4
   RefCell c = generateColumn(*generator, m.map(), o);
   EXPECT_EQ(c.kind, RM_HM_UNKNOWN) << "z_lo 4: elevation " << c.elevation;
-  o.floor_depth = 0.05;  // z_lo = floor(0.47 / 0.1 + 0.5) = 5: a surface today
+  o.floor_depth = 0.05;  // z_lo = floor(0.47 / 0.1 + 0.5) = 5
   c = generateColumn(*generator, m.map(), o);
   EXPECT_EQ(c.kind, RM_HM_UNKNOWN) << "z_lo 5: elevation " << c.elevation;
 }
 
-// NOTE(reference): disabled, a discrepancy between docs/heightmap.md ("observed_count holds the
-// number of samples in the surface voxel") and the generators, which leave it 0 with
-// use_voxel_mean off (they do not read the mean layer then). Either may change.
-TEST_P(HeightmapReference, DISABLED_ObservedCountIsTheSurfaceSamplesWithoutVoxelMean) {
+// observed_count is the surface voxel's sample count whenever the map has the mean layer, also
+// when heights come from voxel centres.
+TEST_P(HeightmapReference, ObservedCountIsTheSurfaceSamplesWithoutVoxelMean) {
   REQUIRE_HEIGHTMAP_GENERATOR(GetParam(), generator);
   SmallMap m;
   m.occupied(-1, 0.9f, 3);
