@@ -7,6 +7,7 @@
 
 #include "kernels/common/key_math.h"
 #include "src/heightmap/heightmap_plan.hpp"
+#include "tests/heightmap/column_map.hpp"
 #include "tests/heightmap/heightmap_generators.hpp"
 
 namespace raymap {
@@ -17,55 +18,10 @@ using heightmap::HeightMap;
 using heightmap::HeightmapMode;
 using heightmap::HeightmapOptions;
 
-constexpr float kOccupied = 2.0f;
-constexpr float kFree = -1.0f;
+using test::ColumnMap;
+constexpr float kOccupied = ColumnMap::kOccupied;
+constexpr float kFree = ColumnMap::kFree;
 constexpr double kRes = 0.1;
-
-/// A small global map whose voxels the tests set one by one (world frame, voxel coordinates).
-class ColumnMap {
- public:
-  ColumnMap() {
-    MapConfig config;
-    config.memory_budget_bytes = std::uint64_t{64} << 20;
-    auto created = VoxelMap::create(config);
-    EXPECT_TRUE(created) << created.error().message;
-    map_ = std::make_unique<VoxelMap>(std::move(*created));
-    // The eight regions around the origin, so the map's bounds hold every test's centre.
-    for (int x = -1; x <= 0; ++x) {
-      for (int y = -1; y <= 0; ++y) {
-        for (int z = -1; z <= 0; ++z) {
-          EXPECT_TRUE(map_->acquireRegion({x, y, z}));
-        }
-      }
-    }
-  }
-  VoxelMap& map() { return *map_; }
-
-  /// Sets a voxel's log-odds; `mean_z` (voxel units, 0..1) gives it samples.
-  void set(int x, int y, int z, float value, float mean_z = -1.0f, std::uint32_t count = 3) {
-    const Vec3i voxel{x, y, z};
-    auto slot = map_->acquireRegion(map_->regionOfVoxel(voxel));
-    ASSERT_TRUE(slot);
-    const rm_vec3i local = rm_local_of_voxel(rm_vec3i_make(x, y, z), 32);
-    const rm_u32 index = rm_local_index(local, 32);
-    map_->store().layerData<float>(*slot, map_->occupancyLayer())[index] = value;
-    if (mean_z >= 0.0f) {
-      auto* mean = map_->store().layerData<rm_voxel_mean>(*slot, map_->meanLayer());
-      mean[index].packed = rm_mean_encode(rm_vec3f_make(0.5f, 0.5f, mean_z));
-      mean[index].count = count;
-    }
-  }
-  void occupied(int x, int y, int z, float mean_z = -1.0f) { set(x, y, z, kOccupied, mean_z); }
-  /// Free voxels z0..z1 inclusive.
-  void freeRange(int x, int y, int z0, int z1) {
-    for (int z = z0; z <= z1; ++z) {
-      set(x, y, z, kFree);
-    }
-  }
-
- private:
-  std::unique_ptr<VoxelMap> map_;
-};
 
 class HeightmapColumns : public ::testing::TestWithParam<std::string> {
  protected:

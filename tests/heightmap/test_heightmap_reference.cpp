@@ -21,6 +21,7 @@
 #include "kernels/common/key_math.h"
 #include "kernels/common/voxel_mean.h"
 #include "src/heightmap/heightmap_plan.hpp"
+#include "tests/heightmap/column_map.hpp"
 #include "tests/heightmap/heightmap_generators.hpp"
 
 namespace raymap {
@@ -30,6 +31,7 @@ using heightmap::HeightMap;
 using heightmap::HeightmapMode;
 using heightmap::HeightmapOptions;
 using heightmap::HeightmapPlan;
+using test::ColumnMap;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -636,48 +638,6 @@ void runRandomized(heightmap::HeightmapGenerator& generator, const RandomSetup& 
   }
 }
 
-/// A 0.1 m map with the eight regions around the origin stored, for the reported columns.
-class SmallMap {
- public:
-  SmallMap() {
-    MapConfig config;
-    config.memory_budget_bytes = std::uint64_t{64} << 20;
-    auto created = VoxelMap::create(config);
-    EXPECT_TRUE(created) << created.error().message;
-    map_ = std::make_unique<VoxelMap>(std::move(*created));
-    for (int x = -1; x <= 0; ++x) {
-      for (int y = -1; y <= 0; ++y) {
-        for (int z = -1; z <= 0; ++z) {
-          EXPECT_TRUE(map_->acquireRegion({x, y, z}));
-        }
-      }
-    }
-  }
-  VoxelMap& map() { return *map_; }
-  /// Voxel (0, 0, z) occupied; `mean_z` (voxel units) with `count` samples when count > 0.
-  void occupied(int z, float mean_z = 0.5f, std::uint32_t count = 0) {
-    const rm_u32 index = indexOf(z);
-    const std::uint32_t slot = map_->store().find(map_->regionOfVoxel({0, 0, z}));
-    map_->store().layerData<float>(slot, map_->occupancyLayer())[index] = 2.0f;
-    rm_voxel_mean& m = map_->store().layerData<rm_voxel_mean>(slot, map_->meanLayer())[index];
-    m.packed = rm_mean_encode(rm_vec3f_make(0.5f, 0.5f, mean_z));
-    m.count = count;
-  }
-  /// Voxels (0, 0, z0..z1) free.
-  void freeRange(int z0, int z1) {
-    for (int z = z0; z <= z1; ++z) {
-      const std::uint32_t slot = map_->store().find(map_->regionOfVoxel({0, 0, z}));
-      map_->store().layerData<float>(slot, map_->occupancyLayer())[indexOf(z)] = -1.0f;
-    }
-  }
-
- private:
-  static rm_u32 indexOf(int z) {
-    return rm_local_index(rm_local_of_voxel(rm_vec3i_make(0, 0, z), 32), 32);
-  }
-  std::unique_ptr<VoxelMap> map_;
-};
-
 /// The generated cell of voxel column (0, 0).
 RefCell generateColumn(heightmap::HeightmapGenerator& generator, VoxelMap& map,
                        const HeightmapOptions& o) {
@@ -722,10 +682,10 @@ TEST_P(HeightmapReference, RandomMapsMatchTheReferenceExactly) {
 // and this run is an underside).
 TEST_P(HeightmapReference, NoVoxelOfACeilingSeenFromBelowIsASurface) {
   REQUIRE_HEIGHTMAP_GENERATOR(GetParam(), generator);
-  SmallMap m;
-  m.freeRange(2, 23);  // the floor was never hit
-  m.occupied(24, 0.9f, 3);
-  m.occupied(25, 0.1f, 3);  // nothing seen above
+  ColumnMap m;
+  m.freeRange(0, 0, 2, 23);  // the floor was never hit
+  m.set(0, 0, 24, ColumnMap::kOccupied, 0.9f, 3);
+  m.set(0, 0, 25, ColumnMap::kOccupied, 0.1f, 3);  // nothing seen above
   HeightmapOptions o = columnRequest(0.0);
   o.size = 6.0;  // the box reaches 3 m up
   o.min_clearance = 0.0;
@@ -738,11 +698,11 @@ TEST_P(HeightmapReference, NoVoxelOfACeilingSeenFromBelowIsASurface) {
 // surface wherever the search range starts: the run's own voxel below decides.
 TEST_P(HeightmapReference, ACeilingIsNoSurfaceWhereverTheSearchRangeStarts) {
   REQUIRE_HEIGHTMAP_GENERATOR(GetParam(), generator);
-  SmallMap m;
-  m.freeRange(0, 3);
-  m.occupied(4);
-  m.occupied(5);
-  m.occupied(6);
+  ColumnMap m;
+  m.freeRange(0, 0, 0, 3);
+  m.occupied(0, 0, 4);
+  m.occupied(0, 0, 5);
+  m.occupied(0, 0, 6);
   HeightmapOptions o = columnRequest(0.52);
   o.floor_depth = 0.15;  // z_lo = floor(0.37 / 0.1 + 0.5) = 4
   RefCell c = generateColumn(*generator, m.map(), o);
@@ -756,9 +716,9 @@ TEST_P(HeightmapReference, ACeilingIsNoSurfaceWhereverTheSearchRangeStarts) {
 // when heights come from voxel centres.
 TEST_P(HeightmapReference, ObservedCountIsTheSurfaceSamplesWithoutVoxelMean) {
   REQUIRE_HEIGHTMAP_GENERATOR(GetParam(), generator);
-  SmallMap m;
-  m.occupied(-1, 0.9f, 3);
-  m.freeRange(0, 9);
+  ColumnMap m;
+  m.set(0, 0, -1, ColumnMap::kOccupied, 0.9f, 3);
+  m.freeRange(0, 0, 0, 9);
   HeightmapOptions o = columnRequest(0.0);
   o.use_voxel_mean = false;
   const RefCell c = generateColumn(*generator, m.map(), o);
