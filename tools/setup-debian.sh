@@ -9,6 +9,9 @@ packages=(
   liboctomap-dev          # OctoMap: the reference in benchmarks and agreement tests only
   ocl-icd-opencl-dev opencl-headers  # the OpenCL backend (ICD loader and headers)
   pocl-opencl-icd clinfo  # OpenCL on the CPU: the OpenCL tests run for real without a GPU
+  cyclonedds-dev cyclonedds-tools  # raymapd's DDS I/O (C API; idlc is in -tools)
+  libsystemd-dev systemd  # sd_notify for Type=notify; systemd-analyze lints the unit in the tests
+  libboost-dev            # Boost.Lockfree SPSC queues (header-only)
   clang-format
 )
 missing=()

@@ -56,11 +56,6 @@ bool parseNumber(std::string_view text, double& value) noexcept {
   return !text.empty() && error == std::errc() && stop == end;
 }
 
-Quaternion normalised(const Quaternion& q) noexcept {
-  const double norm = std::sqrt(q.dot(q));
-  return {q.w / norm, q.x / norm, q.y / norm, q.z / norm};
-}
-
 }  // namespace
 
 Vec3d Quaternion::rotate(Vec3d v) const noexcept {
@@ -217,18 +212,39 @@ std::optional<Pose> Trajectory::poseAt(double time_s, std::size_t& segment_hint)
   }
   const TrajectorySample& b = samples_[i + 1];  // exists: time_s < endTime() here
   const double f = (time_s - a.time_s) / (b.time_s - a.time_s);
+  // Orientations are the identity throughout when the file has none, so nlerp keeps them so.
+  return interpolate(Pose{a.position, a.orientation}, Pose{b.position, b.orientation}, f);
+}
+
+Quaternion normalised(const Quaternion& q) noexcept {
+  const double norm = std::sqrt(q.dot(q));
+  return {q.w / norm, q.x / norm, q.y / norm, q.z / norm};
+}
+
+Quaternion multiply(const Quaternion& a, const Quaternion& b) noexcept {
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+}
+
+Pose compose(const Pose& a_b, const Pose& b_c) noexcept {
+  return Pose{a_b.transform(b_c.position), multiply(a_b.orientation, b_c.orientation)};
+}
+
+Pose interpolate(const Pose& a, const Pose& b, double f) noexcept {
+  if (f == 0.0) {
+    return a;  // exact, free of interpolation rounding
+  }
   Pose pose;
   pose.position = a.position + (b.position - a.position) * f;
-  if (has_orientation_) {
-    // q and -q are the same rotation; flip b onto a's hemisphere so nlerp takes the short arc.
-    const double sign = a.orientation.dot(b.orientation) < 0.0 ? -1.0 : 1.0;
-    const Quaternion& qa = a.orientation;
-    const Quaternion& qb = b.orientation;
-    const double wa = 1.0 - f;
-    const double wb = f * sign;
-    pose.orientation = normalised({wa * qa.w + wb * qb.w, wa * qa.x + wb * qb.x,
-                                   wa * qa.y + wb * qb.y, wa * qa.z + wb * qb.z});
-  }
+  // q and -q are the same rotation; flip b onto a's hemisphere so nlerp takes the short arc.
+  const double sign = a.orientation.dot(b.orientation) < 0.0 ? -1.0 : 1.0;
+  const Quaternion& qa = a.orientation;
+  const Quaternion& qb = b.orientation;
+  const double wa = 1.0 - f;
+  const double wb = f * sign;
+  pose.orientation = normalised(
+      {wa * qa.w + wb * qb.w, wa * qa.x + wb * qb.x, wa * qa.y + wb * qb.y, wa * qa.z + wb * qb.z});
   return pose;
 }
 

@@ -45,6 +45,17 @@ struct Pose {
   Vec3d transform(Vec3d p_body) const noexcept { return position + orientation.rotate(p_body); }
 };
 
+/// @brief The Hamilton product a * b: the rotation b followed by a.
+Quaternion multiply(const Quaternion& a, const Quaternion& b) noexcept;
+/// @brief `q` scaled to unit length. @pre q is not zero
+Quaternion normalised(const Quaternion& q) noexcept;
+/// @brief The pose of frame c in frame a from a_b (b in a) and b_c (c in b): p_a = a_b(b_c(p_c)).
+Pose compose(const Pose& a_b, const Pose& b_c) noexcept;
+/// @brief The pose a fraction f in [0, 1] of the way from `a` to `b`: position linearly,
+/// orientation by normalised linear interpolation along the shorter arc (nlerp; close to slerp
+/// for the small steps between pose samples). f = 0 gives `a` exactly.
+Pose interpolate(const Pose& a, const Pose& b, double f) noexcept;
+
 /// @brief Time-ordered poses of the sensor body, with interpolation in between: position
 /// linearly, orientation by normalised linear quaternion interpolation along the shorter arc
 /// (nlerp; close to slerp for the small steps between trajectory samples). Immutable after

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
-# src/heightmap, src/sim <- src/io, src/gpu <- src/opencl, src/cuda <- tools. Includes are written relative to the repository root, so grep can tell.
+# src/heightmap, src/sim <- src/io, src/gpu <- src/opencl, src/cuda <- src/dds <- src/pipeline <-
+# src/service <- tools; src/config (YAML reading) depends on core only. Includes are written relative to the repository root, so grep can tell.
 set -euo pipefail
 root=${1:-.}
 cd "$root"
@@ -22,6 +23,10 @@ check src/map 'src/io|src/sim|tools/|tests/' 'the map does not know files or too
 check src/heightmap 'src/io|src/sim|src/gpu|src/opencl|src/cuda|tools/|tests/' 'height maps read the map only; writers live in src/io'
 check src/io 'src/sim|tools/|tests/' 'file formats do not know scenes or tools'
 check src/sim 'src/io|tools/|tests/' 'scenes produce rays, not files'
+check src/config 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|platform/|tools/|tests/' 'configuration reading depends only on core'
+check src/dds 'src/sim|src/gpu|src/opencl|src/cuda|src/pipeline|src/service|tools/|tests/' 'DDS I/O knows messages, not the pipeline'
+check src/pipeline 'src/sim|src/opencl|src/cuda|src/service|tools/|tests/' 'the pipeline runs any backend through src/map/backend.hpp'
+check src/service 'src/sim|tools/|tests/' 'the service does not know scenes or tools'
 check kernels/device 'src/|platform/|tools/|tests/' 'device code depends only on kernels/'
 check src/gpu 'src/io|src/sim|src/opencl|src/cuda|tools/|tests/' 'shared device-backend logic is API-agnostic'
 check src/opencl 'src/sim|src/cuda|tools/|tests/' 'a backend does not know scenes, tools or the other API'

@@ -12,9 +12,17 @@
 #include "src/map/backend.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
-#include "tools/raymap/backend_choice.hpp"
+#include "src/service/backend_choice.hpp"
 
 namespace raymap::cli {
+
+// Backend creation is shared with raymapd (src/service/backend_choice.hpp).
+using service::availableBackends;
+using service::BackendChoice;
+using service::createBackend;
+using service::CreatedBackend;
+using service::CreatedHeightmapGenerator;
+using service::createHeightmapGenerator;
 
 /// @brief Everything `raymap populate` needs besides output paths.
 struct PopulateOptions {

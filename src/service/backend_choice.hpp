@@ -11,7 +11,7 @@
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 
-namespace raymap::cli {
+namespace raymap::service {
 
 /// @brief The backend options of the mapping commands (--backend and friends).
 struct BackendChoice {
@@ -49,4 +49,4 @@ Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& 
 /// @brief The backends this build has, e.g. {"cpu", "opencl", "cuda"}.
 std::vector<std::string> availableBackends();
 
-}  // namespace raymap::cli
+}  // namespace raymap::service

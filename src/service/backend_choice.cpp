@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Backend creation for the command line.
-#include "tools/raymap/backend_choice.hpp"
+// Backend creation for the command line and the service.
+#include "src/service/backend_choice.hpp"
 
 #include <vector>
 
@@ -14,7 +14,7 @@
 #include "src/cuda/cuda_heightmap.hpp"
 #endif
 
-namespace raymap::cli {
+namespace raymap::service {
 namespace {
 
 Result<std::unique_ptr<Backend>> createCpu(VoxelMap& map, const BackendChoice& choice) {
@@ -160,9 +160,9 @@ Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice)
   return created;
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::service
 
-namespace raymap::cli {
+namespace raymap::service {
 
 Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& choice) {
   CreatedHeightmapGenerator created;
@@ -184,4 +184,4 @@ Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& 
   return created;
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::service

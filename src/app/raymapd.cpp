@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymapd: the real-time height-map service. Reads its configuration, starts the service and
+// runs until SIGTERM or SIGINT (systemd stop, Ctrl-C). The only code of the service that exits.
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "platform/clock.hpp"
+#include "platform/signals.hpp"
+#include "src/service/daemon_config.hpp"
+#include "src/service/log.hpp"
+#include "src/service/service.hpp"
+
+namespace {
+
+constexpr int kExitRuntime = 1;
+constexpr int kExitConfig = 2;
+
+int checkConfig(const std::string& path) {
+  auto config = raymap::service::loadDaemonConfig(path);
+  if (!config) {
+    std::fprintf(stderr, "%s\n", config.error().message.c_str());
+    return kExitConfig;
+  }
+  const raymap::service::DaemonConfig& c = config.value();
+  std::printf("%s: ok (backend %s, %zu sensor%s, height map %g m at %g Hz on %s, domain %u)\n",
+              path.c_str(), c.backend.name.c_str(), c.sensors.size(),
+              c.sensors.size() == 1 ? "" : "s", c.heightmap.size_m, c.heightmap.rate_hz,
+              c.dds.grid_map_topic.c_str(), c.dds.domain);
+  return 0;
+}
+
+int run(const std::string& path) {
+  using raymap::service::LogLevel;
+  using raymap::service::logLine;
+  // Block the shutdown signals before any thread starts: every thread inherits the mask and
+  // only this one receives them (sigtimedwait below).
+  raymap::platform::ShutdownSignals signals = raymap::platform::ShutdownSignals::install();
+  auto config = raymap::service::loadDaemonConfig(path);
+  if (!config) {
+    logLine(LogLevel::kError, "%s", config.error().message.c_str());
+    return kExitConfig;
+  }
+  auto service = raymap::service::Service::create(config.value());
+  if (!service) {
+    logLine(LogLevel::kError, "%s", service.error().message.c_str());
+    return kExitConfig;
+  }
+  service.value()->start();
+  int signal = 0;
+  while (signal == 0) {
+    signal = signals.waitNs(1000000000);
+  }
+  const std::int64_t stop_started = raymap::platform::monotonicNowNs();
+  logLine(LogLevel::kInfo, "signal %d: stopping", signal);
+  service.value()->stop();
+  if (auto saved = service.value()->saveMapIfConfigured(); !saved) {
+    logLine(LogLevel::kError, "could not save the map: %s", saved.error().message.c_str());
+    return kExitRuntime;
+  }
+  logLine(LogLevel::kInfo, "stopped in %.0f ms",
+          static_cast<double>(raymap::platform::monotonicNowNs() - stop_started) / 1e6);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"raymapd: lidar point clouds in, robot-centric height maps out, over DDS"};
+  std::string config_path;
+  std::string check_path;
+  app.add_option("--config", config_path, "configuration file (YAML), e.g. config/cpu.yaml");
+  app.add_option("--check-config", check_path,
+                 "validate a configuration file, print a summary and exit (0 = valid)");
+  app.set_version_flag("--version", "raymapd 0.1.0");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (!check_path.empty()) {
+      return checkConfig(check_path);
+    }
+    if (config_path.empty()) {
+      std::fprintf(stderr, "raymapd: --config FILE is required (see --help)\n");
+      return kExitConfig;
+    }
+    return run(config_path);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "raymapd: error: %s\n", e.what());
+    return kExitRuntime;
+  }
+}

@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The integrator (the pipeline's scheduler): takes decoded scans, deskews them into world-frame
+// rays with interpolated poses, forms batches by size or deadline and feeds the backend.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "platform/pi_mutex.hpp"
+#include "src/map/backend.hpp"
+#include "src/map/ray_preparer.hpp"
+#include "src/map/voxel_map.hpp"
+#include "src/pipeline/pipeline_stats.hpp"
+#include "src/pipeline/pose_history.hpp"
+#include "src/pipeline/pose_update.hpp"
+#include "src/pipeline/scan_mailbox.hpp"
+
+namespace raymap::pipeline {
+
+/// @brief Fixed settings of the integrator (from the configuration).
+struct IntegratorSettings {
+  std::uint32_t batch_rays = 16384;          ///< rays per backend call
+  std::int64_t batch_deadline_ns = 5000000;  ///< a partial batch waits at most this long
+  std::int64_t pose_wait_ns = 200000000;     ///< a scan waits this long for poses
+  std::int64_t pose_hold_ns = 20000000;      ///< newest pose used this far beyond it
+  std::uint32_t pose_history = 4096;
+};
+
+/// @brief Per-sensor settings: extrinsic (until tf_static replaces it) and ray limits.
+struct SensorSettings {
+  io::Pose extrinsic;  ///< sensor in the base frame
+  RayFilter filter;    ///< min/max range
+};
+
+/// @brief Moves scans from the mailbox into the map.
+///
+/// Design: runs on one thread (the integrator). Poses arrive through `poses` (SPSC, from the
+/// ingest thread) into a PoseHistory it owns. A scan is taken from the mailbox once poses cover
+/// its last point (or dropped after pose_wait_ns), converted point by point into world-frame rays
+/// (the pose interpolated at each distinct point time: deskewing), and the rays go into a batch.
+/// A batch is integrated when full, at the end of a scan under per-scan semantics, or when no
+/// scan waits and its oldest ray is batch_deadline_ns old. Each backend call holds `map_mutex`
+/// (shared with the publisher, which moves the window and reads the map), so a batch's size
+/// bounds how long the publisher can wait. Arrival times of scans whose last ray went into the
+/// map go to `integrated` (for the latency measure).
+///
+/// Thread-safety: one thread. @rt step(): allocates: no; blocks: on map_mutex only.
+class Integrator {
+ public:
+  /// Allocates the batch buffers (start-up). @pre every argument outlives the integrator.
+  Integrator(VoxelMap& map, Backend& backend, platform::PiMutex& map_mutex, ScanMailbox& mailbox,
+             PoseQueue& poses, ArrivalQueue& integrated, LatestPosition& latest,
+             const IntegratorSettings& settings, std::vector<SensorSettings> sensors,
+             PipelineStats& stats);
+
+  /// @brief Does the work that is due at `now_ns` (monotonic).
+  /// @return the monotonic time at which it wants to run again even without a new scan (a batch
+  /// deadline or a pose wait), or INT64_MAX when only a new scan or pose can give it work.
+  std::int64_t step(std::int64_t now_ns) noexcept;
+  /// @brief Integrates whatever the batch holds (shutdown).
+  void flush(std::int64_t now_ns) noexcept;
+
+  /// @brief The pose history (integrator thread only; other threads read LatestPosition).
+  const PoseHistory& poses() const noexcept { return history_; }
+
+ private:
+  void drainPoses() noexcept;
+  /// Converts points of the current scan into the batch until it is done or the batch is full.
+  /// @return true when the scan is finished.
+  bool convertScan() noexcept;
+  void integrateBatch(std::int64_t now_ns) noexcept;
+
+  VoxelMap& map_;
+  Backend& backend_;
+  platform::PiMutex& map_mutex_;
+  ScanMailbox& mailbox_;
+  PoseQueue& pose_queue_;
+  ArrivalQueue& integrated_;
+  LatestPosition& latest_;
+  IntegratorSettings settings_;
+  std::vector<SensorSettings> sensors_;
+  std::vector<RayPreparer> preparers_;  // one per sensor (its range limits)
+  PipelineStats& stats_;
+  PoseHistory history_;
+  bool per_scan_ = false;
+
+  // The scan being converted (taken from the mailbox), and where it is.
+  ScanSlot* scan_ = nullptr;
+  std::int64_t scan_first_wait_ns_ = 0;  // when it first waited for poses
+  std::int64_t scan_start_ns_ = 0;       // time of its earliest and latest point
+  std::int64_t scan_end_ns_ = 0;
+  std::uint32_t scan_cursor_ = 0;
+  std::int64_t last_point_time_ns_ = INT64_MIN;  // cache: pose of the last point time
+  io::Pose last_sensor_pose_;
+
+  // The batch: rays of possibly several scans, all from one sensor (range limits differ).
+  std::vector<Ray> rays_;
+  std::vector<PreparedRay> prepared_;
+  std::uint32_t batch_size_ = 0;
+  std::uint32_t batch_sensor_ = 0;
+  std::int64_t batch_first_ns_ = 0;      // arrival of the first scan in the batch
+  std::vector<std::int64_t> completed_;  // arrivals of scans whose last ray is in the batch
+  std::uint32_t completed_count_ = 0;
+  std::int64_t scan_stamp_pending_ = 0;  // newest header stamp among the completed scans
+};
+
+}  // namespace raymap::pipeline

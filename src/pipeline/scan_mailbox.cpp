@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// ScanMailbox: slot states moved by compare-and-swap (see the header's design note).
+#include "src/pipeline/scan_mailbox.hpp"
+
+#include "src/core/assert.hpp"
+
+namespace raymap::pipeline {
+
+ScanMailbox::ScanMailbox(std::uint32_t slots, std::uint32_t max_points)
+    : slot_count_(slots),
+      max_points_(max_points),
+      entries_(std::make_unique<Entry[]>(slots)),
+      points_(std::make_unique<dds::ScanPoint[]>(std::size_t{slots} * max_points)) {
+  RAYMAP_EXPECTS(slots >= 2 && max_points >= 1);
+  for (std::uint32_t i = 0; i < slots; ++i) {
+    entries_[i].slot.buffer =
+        std::span<dds::ScanPoint>(points_.get() + std::size_t{i} * max_points, max_points);
+  }
+}
+
+ScanMailbox::Entry& ScanMailbox::entryOf(ScanSlot* slot) noexcept {
+  for (std::uint32_t i = 0; i < slot_count_; ++i) {
+    if (&entries_[i].slot == slot) {
+      return entries_[i];
+    }
+  }
+  RAYMAP_EXPECTS(false && "slot does not belong to this mailbox");
+  return entries_[0];
+}
+
+std::uint32_t ScanMailbox::oldestReady() const noexcept {
+  std::uint32_t best = slot_count_;
+  std::uint64_t best_sequence = 0;
+  for (std::uint32_t i = 0; i < slot_count_; ++i) {
+    if (entries_[i].state.load(std::memory_order_acquire) != kReady) {
+      continue;
+    }
+    const std::uint64_t sequence = entries_[i].sequence.load(std::memory_order_relaxed);
+    if (best == slot_count_ || sequence < best_sequence) {
+      best = i;
+      best_sequence = sequence;
+    }
+  }
+  return best;
+}
+
+ScanSlot* ScanMailbox::acquire() noexcept {
+  // Each failed CAS means the consumer just took that slot; it holds at most one, so a few
+  // rounds always settle. The bound keeps the producer wait-free against a misbehaving consumer.
+  for (std::uint32_t attempt = 0; attempt < 4 * slot_count_ + 4; ++attempt) {
+    for (std::uint32_t i = 0; i < slot_count_; ++i) {
+      std::uint32_t expected = kFree;
+      if (entries_[i].state.compare_exchange_strong(expected, kWriting,
+                                                    std::memory_order_acquire)) {
+        return &entries_[i].slot;
+      }
+    }
+    const std::uint32_t oldest = oldestReady();
+    if (oldest == slot_count_) {
+      continue;  // nothing ready either: the consumer is releasing one right now
+    }
+    std::uint32_t expected = kReady;
+    if (entries_[oldest].state.compare_exchange_strong(expected, kWriting,
+                                                       std::memory_order_acquire)) {
+      dropped_oldest_.fetch_add(1, std::memory_order_relaxed);
+      return &entries_[oldest].slot;
+    }
+  }
+  return nullptr;
+}
+
+void ScanMailbox::publish(ScanSlot* slot) noexcept {
+  Entry& entry = entryOf(slot);
+  RAYMAP_EXPECTS(entry.state.load(std::memory_order_relaxed) == kWriting);
+  const std::uint64_t sequence = next_sequence_.load(std::memory_order_relaxed);
+  slot->sequence = sequence;
+  entry.sequence.store(sequence, std::memory_order_relaxed);
+  next_sequence_.store(sequence + 1, std::memory_order_relaxed);
+  entry.state.store(kReady, std::memory_order_release);
+}
+
+void ScanMailbox::abandon(ScanSlot* slot) noexcept {
+  Entry& entry = entryOf(slot);
+  RAYMAP_EXPECTS(entry.state.load(std::memory_order_relaxed) == kWriting);
+  entry.state.store(kFree, std::memory_order_release);
+}
+
+ScanSlot* ScanMailbox::take() noexcept {
+  for (std::uint32_t attempt = 0; attempt < 4 * slot_count_ + 4; ++attempt) {
+    const std::uint32_t oldest = oldestReady();
+    if (oldest == slot_count_) {
+      return nullptr;
+    }
+    std::uint32_t expected = kReady;
+    if (entries_[oldest].state.compare_exchange_strong(expected, kReading,
+                                                       std::memory_order_acquire)) {
+      return &entries_[oldest].slot;
+    }
+    // The producer took it back as the oldest: look again.
+  }
+  return nullptr;
+}
+
+void ScanMailbox::release(ScanSlot* slot) noexcept {
+  Entry& entry = entryOf(slot);
+  RAYMAP_EXPECTS(entry.state.load(std::memory_order_relaxed) == kReading);
+  entry.state.store(kFree, std::memory_order_release);
+}
+
+std::uint32_t ScanMailbox::waiting() const noexcept {
+  std::uint32_t n = 0;
+  for (std::uint32_t i = 0; i < slot_count_; ++i) {
+    n += entries_[i].state.load(std::memory_order_relaxed) == kReady ? 1u : 0u;
+  }
+  return n;
+}
+
+}  // namespace raymap::pipeline

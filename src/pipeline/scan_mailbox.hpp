@@ -1,0 +1,105 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The hand-over of decoded scans from the DDS ingest thread to the integrator: a fixed set of
+// preallocated scan buffers passed between exactly one producer and one consumer without locks,
+// dropping the oldest waiting scan when the consumer falls behind.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <span>
+
+#include "src/dds/point_cloud.hpp"
+
+namespace raymap::pipeline {
+
+/// @brief One scan buffer: a decoded point cloud (sensor frame) and where it came from.
+/// Owned by the mailbox; whoever holds it (see ScanMailbox) may read and write it freely.
+struct ScanSlot {
+  dds::CloudHeader header{};         ///< stamp, frame and counts as decoded
+  std::uint32_t sensor = 0;          ///< index of the sensor in the configuration
+  std::int64_t arrival_ns = 0;       ///< monotonic clock when the message was taken from DDS
+  std::uint64_t sequence = 0;        ///< order of publication (set by ScanMailbox::publish)
+  std::span<dds::ScanPoint> buffer;  ///< the slot's whole capacity
+  /// The decoded points: the first header.points of buffer.
+  std::span<const dds::ScanPoint> points() const noexcept { return buffer.first(header.points); }
+};
+
+/// @brief A bounded single-producer single-consumer mailbox of scan buffers with a drop-oldest
+/// overflow policy.
+///
+/// Design: `slots` buffers, each with an atomic state. Ownership moves by compare-and-swap, so
+/// producer and consumer never wait for each other and never touch a slot the other holds:
+///
+///      producer                                  consumer
+///   free --acquire--> writing --publish--> ready --take--> reading --release--> free
+///                        ^                   |
+///                        +--- acquire when no slot is free: the oldest ready slot
+///                             (lowest sequence) is taken back and counted as dropped
+///
+/// publish() stores the sequence and then the state with release order; take() reads the state
+/// with acquire order, so the consumer sees the whole scan. The consumer takes ready slots in
+/// sequence order (oldest first). Capacity: with the consumer holding one slot, slots - 1 scans
+/// can wait; at least 2 slots.
+///
+/// Thread-safety: exactly one producer thread calls acquire/publish/abandon, exactly one consumer
+/// thread calls take/release; counters may be read from any thread.
+/// @rt every method: lock-free (bounded retries), allocates: no, blocks: no.
+class ScanMailbox {
+ public:
+  /// @brief Allocates `slots` buffers of `max_points` points each (start-up only).
+  /// @pre slots >= 2, max_points >= 1
+  ScanMailbox(std::uint32_t slots, std::uint32_t max_points);
+  ScanMailbox(const ScanMailbox&) = delete;
+  ScanMailbox& operator=(const ScanMailbox&) = delete;
+
+  // ---- producer ----
+  /// @brief A slot to decode the next scan into: a free one, else the oldest waiting scan
+  /// (dropped, counted). nullptr only when the consumer holds every other slot (never with
+  /// slots >= 2 and a consumer that holds at most one). @rt producer thread.
+  ScanSlot* acquire() noexcept;
+  /// @brief Hands an acquired slot to the consumer. @rt producer thread.
+  void publish(ScanSlot* slot) noexcept;
+  /// @brief Returns an acquired slot unused (the message was malformed). @rt producer thread.
+  void abandon(ScanSlot* slot) noexcept;
+
+  // ---- consumer ----
+  /// @brief The oldest published scan, or nullptr when none waits. @rt consumer thread.
+  ScanSlot* take() noexcept;
+  /// @brief Gives a taken slot back for reuse. @rt consumer thread.
+  void release(ScanSlot* slot) noexcept;
+
+  // ---- any thread ----
+  std::uint32_t capacity() const noexcept { return slot_count_; }
+  std::uint32_t maxPoints() const noexcept { return max_points_; }
+  /// @brief Scans published and not yet taken (a snapshot).
+  std::uint32_t waiting() const noexcept;
+  /// @brief Scans overwritten before the consumer took them (the overflow counter).
+  std::uint64_t droppedOldest() const noexcept {
+    return dropped_oldest_.load(std::memory_order_relaxed);
+  }
+  /// @brief Scans published so far.
+  std::uint64_t published() const noexcept {
+    return next_sequence_.load(std::memory_order_relaxed);
+  }
+
+ private:
+  enum State : std::uint32_t { kFree = 0, kWriting = 1, kReady = 2, kReading = 3 };
+  struct Entry {
+    std::atomic<std::uint32_t> state{kFree};
+    std::atomic<std::uint64_t> sequence{0};
+    ScanSlot slot;
+  };
+  Entry& entryOf(ScanSlot* slot) noexcept;
+  /// Index of the ready entry with the lowest sequence, or slot_count_ when none is ready.
+  std::uint32_t oldestReady() const noexcept;
+
+  std::uint32_t slot_count_;
+  std::uint32_t max_points_;
+  std::unique_ptr<Entry[]> entries_;
+  std::unique_ptr<dds::ScanPoint[]> points_;
+  std::atomic<std::uint64_t> next_sequence_{0};  // written by the producer only
+  std::atomic<std::uint64_t> dropped_oldest_{0};
+};
+
+}  // namespace raymap::pipeline

@@ -1,0 +1,341 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymapd's YAML configuration: section readers over the checked reader of src/config, then the
+// checks that span sections.
+#include "src/service/daemon_config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "src/config/yaml_reader.hpp"
+
+namespace raymap::service {
+namespace {
+
+using config::Context;
+using config::Fields;
+using config::formatNumber;
+
+std::string text(Fields& f, const std::string& key, const std::string& fallback) {
+  const YAML::Node value = f.get(key);
+  if (!value.IsDefined()) {
+    return fallback;
+  }
+  if (!value.IsScalar()) {
+    f.check(false, key, "expected a text value");
+    return fallback;
+  }
+  return value.Scalar();
+}
+
+bool flag(Fields& f, const std::string& key, bool fallback) {
+  const YAML::Node value = f.get(key);
+  bool result = fallback;
+  if (value.IsDefined() && (!value.IsScalar() || !YAML::convert<bool>::decode(value, result))) {
+    f.check(false, key, "expected true or false");
+  }
+  return result;
+}
+
+/// A DDS topic name: non-empty, no spaces; ROS 2 topics carry the "rt/" prefix.
+std::string topic(Fields& f, const std::string& key, const std::string& fallback) {
+  std::string name = text(f, key, fallback);
+  f.check(!name.empty() && name.find_first_of(" \t") == std::string::npos, key,
+          "must be a DDS topic name without spaces, e.g. rt/points (got '" + name + "')");
+  return name;
+}
+
+std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::string>& choices,
+                     std::size_t fallback) {
+  return f.has(key) ? f.choice(key, choices) : fallback;
+}
+
+void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& save_on_exit) {
+  Fields f(ctx, node, "map");
+  f.knownKeys({"resolution", "region_voxels", "window", "semantics", "voxel_mean",
+               "hit_probability", "miss_probability", "clamp_min", "clamp_max", "save_on_exit"});
+  map.policy = StorePolicy::kRolling;
+  map.geometry.resolution = f.positive("resolution", MapGeometry::kDefaultResolution);
+  map.geometry.region_voxels =
+      f.integer<std::int32_t>("region_voxels", MapGeometry::kDefaultRegionVoxels,
+                              MapGeometry::kMinRegionVoxels, MapGeometry::kMaxRegionVoxels);
+  if (f.has("window")) {
+    const YAML::Node w = f.get("window");
+    const std::string path = f.path("window");
+    if (!w.IsSequence() || w.size() != 3) {
+      ctx.fail(w, path, "expected [x, y, z]: the rolling window in regions per axis");
+    } else {
+      map.window_regions = {config::toInteger<std::int32_t>(ctx, w[0], path + "[0]", 1, 256),
+                            config::toInteger<std::int32_t>(ctx, w[1], path + "[1]", 1, 256),
+                            config::toInteger<std::int32_t>(ctx, w[2], path + "[2]", 1, 256)};
+    }
+  } else {
+    map.window_regions = {8, 8, 3};
+  }
+  map.semantics = choiceOr(f, "semantics", {"per-ray", "per-scan"}, 0) == 0 ? Semantics::kPerRay
+                                                                            : Semantics::kPerScan;
+  map.voxel_mean = flag(f, "voxel_mean", true);
+  const auto probability = [&](const char* key, double fallback) {
+    const double p = f.number(key, fallback);
+    f.check(p > 0.0 && p < 1.0, key, "must be a probability strictly between 0 and 1");
+    return p;
+  };
+  const double hit = probability("hit_probability", OccupancyParams::kDefaultHitProbability);
+  const double miss = probability("miss_probability", OccupancyParams::kDefaultMissProbability);
+  f.check(hit > 0.5, "hit_probability", "must be above 0.5 (a hit raises occupancy)");
+  f.check(miss < 0.5, "miss_probability", "must be below 0.5 (a miss lowers occupancy)");
+  map.occupancy.hit = logOdds(hit);
+  map.occupancy.miss = logOdds(miss);
+  map.occupancy.clamp_min =
+      static_cast<float>(f.number("clamp_min", double{OccupancyParams::kDefaultClampMin}));
+  map.occupancy.clamp_max =
+      static_cast<float>(f.number("clamp_max", double{OccupancyParams::kDefaultClampMax}));
+  f.check(map.occupancy.clamp_min < 0.0f && map.occupancy.clamp_max > 0.0f, "clamp_max",
+          "clamp_min must be below 0 and clamp_max above 0 (log-odds)");
+  save_on_exit = text(f, "save_on_exit", "");
+  map.prefault = true;  // a service touches its pool once at start-up, not in the loop
+}
+
+void readBackend(Context& ctx, const YAML::Node& node, BackendChoice& backend) {
+  Fields f(ctx, node, "backend");
+  f.knownKeys({"name", "threads", "fallback", "opencl_platform", "opencl_device", "cuda_device",
+               "gpu_cache_mb"});
+  static const std::vector<std::string> kNames = {"cpu", "opencl", "cuda"};
+  backend.name = kNames[choiceOr(f, "name", kNames, 0)];
+  const std::vector<std::string> available = availableBackends();
+  if (std::find(available.begin(), available.end(), backend.name) == available.end()) {
+    f.check(false, "name",
+            "this build has no " + backend.name + " backend (rebuild with it, or use cpu)");
+  }
+  backend.threads = f.integer<unsigned>("threads", 0u, 0u, 256u);
+  backend.fallback_cpu = choiceOr(f, "fallback", {"none", "cpu"}, 0) == 1;
+  backend.opencl_platform = text(f, "opencl_platform", "");
+  backend.opencl_device = text(f, "opencl_device", "");
+  backend.cuda_device = f.integer<int>("cuda_device", 0, 0, 64);
+  backend.gpu_cache_bytes =
+      std::uint64_t{f.integer<std::uint32_t>("gpu_cache_mb", 0u, 0u, 1u << 20)} << 20;
+}
+
+void readPose(Context& ctx, const YAML::Node& node, PoseConfig& pose) {
+  Fields f(ctx, node, "pose");
+  f.knownKeys({"source", "topic", "world_frame", "base_frame", "history", "max_wait_s", "hold_s"});
+  pose.source = choiceOr(f, "source", {"odometry", "tf"}, 0) == 0 ? PoseConfig::Source::kOdometry
+                                                                  : PoseConfig::Source::kTf;
+  pose.odometry_topic = topic(f, "topic", pose.odometry_topic);
+  pose.world_frame = text(f, "world_frame", pose.world_frame);
+  pose.base_frame = text(f, "base_frame", pose.base_frame);
+  f.check(!pose.world_frame.empty() && pose.world_frame.size() < 64, "world_frame",
+          "must be 1 to 63 characters");
+  f.check(!pose.base_frame.empty() && pose.base_frame.size() < 64, "base_frame",
+          "must be 1 to 63 characters");
+  pose.history = f.integer<std::uint32_t>("history", pose.history, 16u, 1u << 20);
+  pose.max_wait_s = f.positive("max_wait_s", pose.max_wait_s, true);
+  pose.hold_s = f.positive("hold_s", pose.hold_s, true);
+}
+
+io::Pose readExtrinsic(Context& ctx, const YAML::Node& node, const std::string& path) {
+  Fields f(ctx, node, path);
+  f.knownKeys({"translation", "rotation"});
+  io::Pose pose;
+  if (f.has("translation")) {
+    pose.position = f.vec3("translation");
+  }
+  if (f.has("rotation")) {
+    const std::vector<double> q =
+        config::toNumbers(ctx, f.get("rotation"), f.path("rotation"), 4, "[w, x, y, z]");
+    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!ctx.failed() && norm < 1e-6) {
+      ctx.fail(f.get("rotation"), f.path("rotation"), "is not a rotation (zero quaternion)");
+    } else if (!ctx.failed()) {
+      pose.orientation = io::normalised({q[0], q[1], q[2], q[3]});
+    }
+  }
+  return pose;
+}
+
+void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>& sensors) {
+  if (!node.IsDefined()) {
+    sensors.push_back(SensorConfig{});
+    return;
+  }
+  if (!node.IsSequence() || node.size() == 0) {
+    ctx.fail(node, "sensors", "expected a list of at least one sensor (- topic: rt/points ...)");
+    return;
+  }
+  std::set<std::string> topics;
+  for (std::size_t i = 0; i < node.size() && !ctx.failed(); ++i) {
+    const std::string path = config::item("sensors", i);
+    Fields f(ctx, node[i], path);
+    f.knownKeys({"name", "topic", "frame", "extrinsic", "min_range", "max_range", "max_points",
+                 "time_field"});
+    SensorConfig s;
+    s.name = text(f, "name", "lidar" + std::to_string(i));
+    s.topic = topic(f, "topic", s.topic);
+    f.check(topics.insert(s.topic).second, "topic", "two sensors on one topic");
+    s.frame = text(f, "frame", "");
+    f.check(s.frame.size() < 64, "frame", "must be shorter than 64 characters");
+    if (f.has("extrinsic")) {
+      s.extrinsic = readExtrinsic(ctx, f.get("extrinsic"), f.path("extrinsic"));
+    }
+    s.min_range_m = f.positive("min_range", s.min_range_m, true);
+    s.max_range_m = f.positive("max_range", s.max_range_m);
+    f.check(s.max_range_m > s.min_range_m, "max_range", "must exceed min_range");
+    s.max_points = f.integer<std::uint32_t>("max_points", s.max_points, 1u, 1u << 24);
+    s.time_field = text(f, "time_field", s.time_field);
+    f.check(!s.time_field.empty() && s.time_field.size() < 32, "time_field",
+            "must be auto, none or a field name shorter than 32 characters");
+    sensors.push_back(s);
+  }
+}
+
+void readHeightmap(Context& ctx, const YAML::Node& node, HeightmapConfig& hm) {
+  Fields f(ctx, node, "heightmap");
+  f.knownKeys({"rate_hz", "size", "mode", "min_clearance", "floor_depth", "ceiling_height",
+               "virtual_surfaces", "base_height", "publish_lead_s"});
+  hm.rate_hz = f.positive("rate_hz", hm.rate_hz);
+  f.check(hm.rate_hz <= 100.0, "rate_hz", "must be at most 100");
+  hm.size_m = f.positive("size", hm.size_m);
+  hm.mode = choiceOr(f, "mode", {"planar", "fill"}, 0) == 0 ? heightmap::HeightmapMode::kPlanar
+                                                            : heightmap::HeightmapMode::kFill;
+  hm.min_clearance_m = f.positive("min_clearance", hm.min_clearance_m, true);
+  if (f.has("floor_depth")) {
+    hm.floor_depth_m = f.positive("floor_depth", std::nullopt, true);
+  }
+  if (f.has("ceiling_height")) {
+    hm.ceiling_height_m = f.positive("ceiling_height", std::nullopt, true);
+  }
+  hm.virtual_surfaces = flag(f, "virtual_surfaces", hm.virtual_surfaces);
+  hm.base_height_m = f.number("base_height", hm.base_height_m);
+  hm.publish_lead_s = f.positive("publish_lead_s", hm.publish_lead_s, true);
+  f.check(hm.publish_lead_s < 0.9 / hm.rate_hz, "publish_lead_s",
+          "must be shorter than 90 % of the publish period (1 / rate_hz)");
+}
+
+void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
+  Fields f(ctx, node, "dds");
+  f.knownKeys({"domain", "cyclonedds_uri", "grid_map_topic", "diagnostics_topic",
+               "diagnostics_rate_hz", "voxels_topic", "voxels_rate_hz", "voxels_max_points"});
+  dds.domain = f.integer<std::uint32_t>("domain", 0u, 0u, 232u);
+  dds.cyclonedds_uri = text(f, "cyclonedds_uri", "");
+  dds.grid_map_topic = topic(f, "grid_map_topic", dds.grid_map_topic);
+  dds.diagnostics_topic = topic(f, "diagnostics_topic", dds.diagnostics_topic);
+  dds.diagnostics_rate_hz = f.positive("diagnostics_rate_hz", dds.diagnostics_rate_hz);
+  f.check(dds.diagnostics_rate_hz <= 10.0, "diagnostics_rate_hz", "must be at most 10");
+  dds.voxels_topic = f.has("voxels_topic") ? topic(f, "voxels_topic", "") : "";
+  dds.voxels_rate_hz = f.positive("voxels_rate_hz", dds.voxels_rate_hz);
+  f.check(dds.voxels_rate_hz <= 5.0, "voxels_rate_hz", "must be at most 5");
+  dds.voxels_max_points =
+      f.integer<std::uint32_t>("voxels_max_points", dds.voxels_max_points, 1u, 1u << 24);
+}
+
+void readQueues(Context& ctx, const YAML::Node& node, QueueConfig& q) {
+  Fields f(ctx, node, "queues");
+  f.knownKeys({"scan_slots", "pose_queue", "batch_rays", "batch_deadline_s"});
+  q.scan_slots = f.integer<std::uint32_t>("scan_slots", q.scan_slots, 1u, 256u);
+  q.pose_queue = f.integer<std::uint32_t>("pose_queue", q.pose_queue, 16u, 1u << 20);
+  q.batch_rays = f.integer<std::uint32_t>("batch_rays", q.batch_rays, 256u, 1u << 22);
+  q.batch_deadline_s = f.positive("batch_deadline_s", q.batch_deadline_s);
+}
+
+void readThread(Context& ctx, const YAML::Node& node, const std::string& path, ThreadConfig& t) {
+  if (!node.IsDefined()) {
+    return;
+  }
+  Fields f(ctx, node, path);
+  f.knownKeys({"priority", "cpus"});
+  t.priority = f.integer<int>("priority", t.priority, 0, 99);
+  if (f.has("cpus")) {
+    const YAML::Node cpus = f.get("cpus");
+    if (!cpus.IsSequence()) {
+      ctx.fail(cpus, f.path("cpus"), "expected a list of CPU numbers, e.g. [2, 3] ([] = any)");
+      return;
+    }
+    t.cpus.clear();
+    for (std::size_t i = 0; i < cpus.size(); ++i) {
+      t.cpus.push_back(
+          config::toInteger<int>(ctx, cpus[i], config::item(f.path("cpus"), i), 0, 63));
+    }
+  }
+}
+
+void readRealtime(Context& ctx, const YAML::Node& node, RealtimeConfig& rt) {
+  Fields f(ctx, node, "realtime");
+  f.knownKeys({"lock_memory", "ingest", "integrator", "publisher"});
+  rt.lock_memory = flag(f, "lock_memory", rt.lock_memory);
+  readThread(ctx, f.get("ingest"), f.path("ingest"), rt.ingest);
+  readThread(ctx, f.get("integrator"), f.path("integrator"), rt.integrator);
+  readThread(ctx, f.get("publisher"), f.path("publisher"), rt.publisher);
+}
+
+Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
+  Context ctx(name);
+  DaemonConfig config;
+  config.path = name;
+  Fields top(ctx, root, "");
+  top.knownKeys({"map", "backend", "pose", "sensors", "heightmap", "dds", "queues", "realtime"});
+  const auto section = [&](const char* key) {
+    const YAML::Node node = top.get(key);
+    return node.IsDefined() && !node.IsNull() ? node : YAML::Node(YAML::NodeType::Map);
+  };
+  if (!ctx.failed()) readMap(ctx, section("map"), config.map, config.save_map_on_exit);
+  if (!ctx.failed()) readBackend(ctx, section("backend"), config.backend);
+  if (!ctx.failed()) readPose(ctx, section("pose"), config.pose);
+  if (!ctx.failed()) readSensors(ctx, top.get("sensors"), config.sensors);
+  if (!ctx.failed()) readHeightmap(ctx, section("heightmap"), config.heightmap);
+  if (!ctx.failed()) readDds(ctx, section("dds"), config.dds);
+  if (!ctx.failed()) readQueues(ctx, section("queues"), config.queues);
+  if (!ctx.failed()) readRealtime(ctx, section("realtime"), config.realtime);
+  if (ctx.failed()) {
+    return Unexpected(ctx.error());
+  }
+  // Checks across sections.
+  if (auto valid = config.map.validate(); !valid) {
+    return fail(ErrorCode::kInvalidArgument, name + ": map: " + valid.error().message);
+  }
+  const double extent = config.map.geometry.regionExtent();
+  const double window_x = extent * config.map.window_regions.x;
+  const double window_y = extent * config.map.window_regions.y;
+  // The window is centred on the robot to the nearest region, so the map is inside it when it
+  // is smaller than the window by one region.
+  if (config.heightmap.size_m > std::min(window_x, window_y) - extent) {
+    return fail(
+        ErrorCode::kInvalidArgument,
+        name + ": heightmap.size: " + formatNumber(config.heightmap.size_m) +
+            " m does not fit the rolling window (map.window x, y = " + formatNumber(window_x) +
+            " x " + formatNumber(window_y) + " m; the map must be at least one region (" +
+            formatNumber(extent) + " m) smaller)");
+  }
+  if (!config.save_map_on_exit.empty() && config.save_map_on_exit.back() == '/') {
+    return fail(ErrorCode::kInvalidArgument,
+                name + ": map.save_on_exit: must be a file name, not a directory");
+  }
+  return config;
+}
+
+}  // namespace
+
+Result<DaemonConfig> parseDaemonConfig(const std::string& text, const std::string& name) {
+  try {
+    return parse(YAML::Load(text), name);
+  } catch (const YAML::Exception& e) {
+    return fail(ErrorCode::kFormat,
+                name + ": line " + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  }
+}
+
+Result<DaemonConfig> loadDaemonConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return fail(ErrorCode::kIo, path + ": cannot open the configuration file");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseDaemonConfig(text.str(), path);
+}
+
+}  // namespace raymap::service

@@ -1,0 +1,116 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The configuration of raymapd: one YAML file read and validated at start-up. Every error names
+// the file, the line, the key and the reason.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "src/core/error.hpp"
+#include "src/heightmap/heightmap_plan.hpp"
+#include "src/io/trajectory.hpp"
+#include "src/map/voxel_map.hpp"
+#include "src/service/backend_choice.hpp"
+
+namespace raymap::service {
+
+/// @brief One lidar (or depth camera) publishing sensor_msgs/PointCloud2.
+struct SensorConfig {
+  std::string name = "lidar";
+  std::string topic = "rt/points";  ///< DDS topic ("rt/" + the ROS topic name)
+  /// Frame of the points. Empty: whatever the message's header.frame_id says. tf_static
+  /// transforms from the base frame to this frame override `extrinsic` when they arrive.
+  std::string frame;
+  io::Pose extrinsic;                 ///< sensor in the base frame (metres; quaternion w, x, y, z)
+  double min_range_m = 0.5;           ///< shorter returns are the robot itself: dropped
+  double max_range_m = 20.0;          ///< longer rays clear free space up to here only
+  std::uint32_t max_points = 262144;  ///< larger clouds are dropped whole (and counted)
+  /// Per-point time field: "auto" (t, time, timestamp by their usual types), "none" or a name.
+  std::string time_field = "auto";
+};
+
+/// @brief Where the robot's pose comes from.
+struct PoseConfig {
+  enum class Source : std::uint8_t { kOdometry, kTf };
+  Source source = Source::kOdometry;
+  std::string odometry_topic = "rt/odom";  ///< nav_msgs/Odometry (source: odometry)
+  std::string world_frame = "odom";        ///< the map's frame; GridMaps are published in it
+  std::string base_frame = "base_link";    ///< the robot body the pose describes
+  std::uint32_t history = 4096;            ///< poses kept for deskewing (ring)
+  double max_wait_s = 0.2;  ///< a scan waits this long for poses to cover it, then is dropped
+  double hold_s = 0.02;     ///< beyond the newest pose, up to this long, the newest is used
+};
+
+/// @brief The published height map.
+struct HeightmapConfig {
+  double rate_hz = 5.0;
+  double size_m = 20.0;
+  heightmap::HeightmapMode mode = heightmap::HeightmapMode::kPlanar;
+  double min_clearance_m = 0.5;
+  std::optional<double> floor_depth_m;
+  std::optional<double> ceiling_height_m;
+  bool virtual_surfaces = false;
+  /// Height of the base frame above the ground (metres): the search reference is base z minus it.
+  double base_height_m = 0.0;
+  /// The map is generated this long before each publish instant, which is then kept exactly.
+  double publish_lead_s = 0.015;
+};
+
+/// @brief DDS: domain, Cyclone configuration, output topics.
+struct DdsConfig {
+  std::uint32_t domain = 0;  ///< = ROS_DOMAIN_ID of the ROS 2 side
+  /// Cyclone DDS configuration (a file:// URI or XML); empty: the CYCLONEDDS_URI environment.
+  std::string cyclonedds_uri;
+  std::string grid_map_topic = "rt/height_map";
+  std::string diagnostics_topic = "rt/diagnostics";
+  double diagnostics_rate_hz = 1.0;
+  std::string voxels_topic;  ///< occupied voxels as PointCloud2; empty: off
+  double voxels_rate_hz = 1.0;
+  std::uint32_t voxels_max_points = 200000;
+};
+
+/// @brief Buffers between the threads.
+struct QueueConfig {
+  std::uint32_t scan_slots = 4;     ///< decoded scans waiting for the integrator (+1 in use)
+  std::uint32_t pose_queue = 1024;  ///< pose messages waiting for the integrator
+  std::uint32_t batch_rays =
+      16384;  ///< rays per backend call (bounds how long a batch holds the map)
+  double batch_deadline_s =
+      0.005;  ///< a partial batch is integrated once its oldest ray is this old
+};
+
+/// @brief Scheduling of one thread.
+struct ThreadConfig {
+  int priority = 0;       ///< SCHED_FIFO 1..99; 0 = normal scheduling
+  std::vector<int> cpus;  ///< CPU affinity; empty = any
+};
+
+struct RealtimeConfig {
+  bool lock_memory = true;  ///< mlockall when RLIMIT_MEMLOCK allows it
+  ThreadConfig ingest{40, {}};
+  ThreadConfig integrator{30, {}};
+  ThreadConfig publisher{60, {}};
+};
+
+/// @brief Everything raymapd reads from its YAML file.
+struct DaemonConfig {
+  std::string path;  ///< the file it came from
+  MapConfig map;     ///< always the rolling policy
+  BackendChoice backend;
+  PoseConfig pose;
+  std::vector<SensorConfig> sensors;
+  HeightmapConfig heightmap;
+  DdsConfig dds;
+  QueueConfig queues;
+  RealtimeConfig realtime;
+  std::string save_map_on_exit;  ///< map file written (atomically) at shutdown; empty: none
+};
+
+/// @brief Reads and validates a configuration file.
+Result<DaemonConfig> loadDaemonConfig(const std::string& path);
+/// @brief Same, from text (`name` stands for the file in messages).
+Result<DaemonConfig> parseDaemonConfig(const std::string& text, const std::string& name);
+
+}  // namespace raymap::service

@@ -1,0 +1,676 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Service: start-up wiring and the four thread loops (see the header's design note).
+#include "src/service/service.hpp"
+
+#include <atomic>
+#include <cerrno>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <thread>
+#include <vector>
+
+#include "platform/clock.hpp"
+#include "platform/notify.hpp"
+#include "platform/pi_mutex.hpp"
+#include "platform/rt.hpp"
+#include "platform/wakeup.hpp"
+#include "src/dds/diagnostics_message.hpp"
+#include "src/dds/entities.hpp"
+#include "src/dds/grid_map_message.hpp"
+#include "src/dds/point_cloud.hpp"
+#include "src/dds/point_cloud_message.hpp"
+#include "src/dds/pose.hpp"
+#include "src/dds/topic_types.hpp"
+#include "src/io/map_file.hpp"
+#include "src/pipeline/heightmap_cycle.hpp"
+#include "src/pipeline/integrator.hpp"
+#include "src/pipeline/scan_mailbox.hpp"
+#include "src/service/diagnostics_reporter.hpp"
+#include "src/service/log.hpp"
+
+namespace raymap::service {
+namespace {
+
+constexpr std::int64_t kNsPerS = 1000000000;
+constexpr int kTfPerMessage = 64;  // transforms decoded per TFMessage
+constexpr int kTakePerWake = 16;   // samples taken per reader per wake-up
+
+std::int64_t seconds(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
+
+std::uint64_t cpuMask(const std::vector<int>& cpus) {
+  std::uint64_t mask = 0;
+  for (int cpu : cpus) {
+    mask |= std::uint64_t{1} << cpu;
+  }
+  return mask;
+}
+
+// Waitset tokens: sensors are 0..n-1; the pose readers follow.
+constexpr std::intptr_t kOdometryToken = 1000;
+constexpr std::intptr_t kTfToken = 1001;
+constexpr std::intptr_t kTfStaticToken = 1002;
+
+}  // namespace
+
+struct Service::Impl {
+  DaemonConfig config;
+  std::optional<VoxelMap> map;
+  CreatedBackend backend;
+  std::unique_ptr<heightmap::HeightmapGenerator> generator;
+  platform::PiMutex map_mutex;
+  std::unique_ptr<pipeline::ScanMailbox> mailbox;
+  std::unique_ptr<pipeline::PoseQueue> poses;
+  std::unique_ptr<pipeline::ArrivalQueue> arrivals;
+  pipeline::LatestPosition latest;
+  pipeline::PipelineStats stats;
+  std::unique_ptr<pipeline::Integrator> integrator;
+  std::unique_ptr<pipeline::HeightmapCycle> cycle;
+
+  // DDS (destroyed before the participant: members are destroyed in reverse order).
+  std::optional<dds::Participant> participant;
+  std::vector<dds::RawReader> cloud_readers;
+  std::optional<dds::RawReader> odometry_reader;
+  std::optional<dds::RawReader> tf_reader;
+  std::optional<dds::RawReader> tf_static_reader;
+  std::optional<dds::Waitset> waitset;
+  std::optional<dds::Writer> grid_map_writer;
+  std::optional<dds::Writer> diagnostics_writer;
+  std::optional<dds::Writer> voxels_writer;
+  std::unique_ptr<dds::GridMapMessage> grid_map_message;
+  std::unique_ptr<dds::PointCloudMessage> voxels_message;
+  std::vector<float> voxels_xyz;
+  std::unique_ptr<DiagnosticsReporter> reporter;
+
+  // Ingest-thread state: decode options per sensor (their time-field names live in config).
+  std::vector<dds::CloudDecodeOptions> decode_options;
+  std::vector<char> sensor_frames_learned;  // per sensor: frame seen first (64 chars each)
+
+  platform::SystemdNotifier notifier;
+  platform::Wakeup integrator_wakeup;
+  platform::Wakeup diagnostics_wakeup;  // stop() cuts the diagnostics period short
+  std::atomic<bool> stopping{false};
+  std::vector<std::thread> threads;
+  RealtimeReport realtime;
+  std::vector<std::string> thread_rt;  // per thread: outcome text, written at thread start
+  std::atomic<int> rt_refusals{0};
+  std::atomic<std::int64_t> last_publish_ns{0};
+
+  void applyThreadSettings(const char* name, const ThreadConfig& t);
+  void ingestLoop();
+  void integratorLoop();
+  void publisherLoop();
+  void diagnosticsLoop();
+  void onCloud(std::uint32_t sensor, std::span<const std::byte> cdr);
+  void onOdometry(std::span<const std::byte> cdr);
+  void onTf(std::span<const std::byte> cdr, bool is_static);
+  void publishVoxels(std::int64_t stamp_ns);
+};
+
+// ---------------------------------------------------------------- start-up
+
+Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
+  auto impl = std::make_unique<Impl>();
+  impl->config = config;
+  const std::string& file = config.path;
+
+  if (!config.dds.cyclonedds_uri.empty()) {
+    // Read by Cyclone when the participant's domain is created below.
+    ::setenv("CYCLONEDDS_URI", config.dds.cyclonedds_uri.c_str(), 1);
+  }
+  auto map = VoxelMap::create(config.map);
+  if (!map) {
+    return fail(map.error().code, file + ": map: " + map.error().message);
+  }
+  impl->map.emplace(std::move(map).value());
+  VoxelMap& m = *impl->map;
+  m.setWindowCentre({0.0, 0.0, 0.0});
+
+  auto backend = createBackend(m, config.backend);
+  if (!backend) {
+    return fail(backend.error().code, file + ": backend: " + backend.error().message);
+  }
+  impl->backend = std::move(backend).value();
+  if (!impl->backend.fallback_warning.empty()) {
+    logLine(LogLevel::kWarning, "%s", impl->backend.fallback_warning.c_str());
+  }
+  if (!impl->backend.startup_warning.empty()) {
+    logLine(LogLevel::kWarning, "%s", impl->backend.startup_warning.c_str());
+  }
+  // The height map runs where the integration runs (a CPU fallback takes both to the CPU).
+  BackendChoice generator_choice = config.backend;
+  generator_choice.name = impl->backend.backend->name();
+  auto generator = createHeightmapGenerator(generator_choice);
+  if (!generator) {
+    return fail(generator.error().code, file + ": backend: " + generator.error().message);
+  }
+  impl->generator = std::move(generator).value().generator;
+
+  // The height-map request, checked once here so that the cycle cannot fail on it later.
+  heightmap::HeightmapOptions options;
+  options.size = config.heightmap.size_m;
+  options.mode = config.heightmap.mode;
+  options.min_clearance = config.heightmap.min_clearance_m;
+  options.floor_depth = config.heightmap.floor_depth_m;
+  options.ceiling_height = config.heightmap.ceiling_height_m;
+  options.virtual_surfaces = config.heightmap.virtual_surfaces;
+  options.use_voxel_mean = config.map.voxel_mean;
+  heightmap::HeightmapPlan plan;
+  if (auto planned = heightmap::planHeightmap(m, options, plan); !planned) {
+    return fail(ErrorCode::kInvalidArgument, file + ": heightmap: " + planned.error().message);
+  }
+
+  // Buffers.
+  std::uint32_t max_points = 1;
+  for (const SensorConfig& s : config.sensors) {
+    max_points = std::max(max_points, s.max_points);
+  }
+  impl->mailbox = std::make_unique<pipeline::ScanMailbox>(config.queues.scan_slots + 1, max_points);
+  impl->poses = std::make_unique<pipeline::PoseQueue>(config.queues.pose_queue);
+  impl->arrivals = std::make_unique<pipeline::ArrivalQueue>(4096);
+  pipeline::IntegratorSettings settings;
+  settings.batch_rays = config.queues.batch_rays;
+  settings.batch_deadline_ns = seconds(config.queues.batch_deadline_s);
+  settings.pose_wait_ns = seconds(config.pose.max_wait_s);
+  settings.pose_hold_ns = seconds(config.pose.hold_s);
+  settings.pose_history = config.pose.history;
+  std::vector<pipeline::SensorSettings> sensors;
+  for (const SensorConfig& s : config.sensors) {
+    pipeline::SensorSettings ss;
+    ss.extrinsic = s.extrinsic;
+    ss.filter.min_range_m = s.min_range_m;
+    ss.filter.max_range_m = s.max_range_m;
+    sensors.push_back(ss);
+    dds::CloudDecodeOptions decode;
+    const std::string& field = impl->config.sensors[sensors.size() - 1].time_field;
+    decode.time_field = field == "auto" ? nullptr : field.c_str();
+    impl->decode_options.push_back(decode);
+  }
+  impl->sensor_frames_learned.assign(config.sensors.size() * 64, '\0');
+  impl->integrator = std::make_unique<pipeline::Integrator>(
+      m, *impl->backend.backend, impl->map_mutex, *impl->mailbox, *impl->poses, *impl->arrivals,
+      impl->latest, settings, std::move(sensors), impl->stats);
+  impl->cycle = std::make_unique<pipeline::HeightmapCycle>(
+      m, *impl->backend.backend, impl->map_mutex, *impl->generator, options,
+      config.heightmap.base_height_m, impl->latest, *impl->arrivals, impl->stats);
+  impl->grid_map_message =
+      std::make_unique<dds::GridMapMessage>(plan.grid.cells_x, plan.grid.cells_y);
+
+  // DDS.
+  auto participant = dds::Participant::create(config.dds.domain);
+  if (!participant) {
+    return fail(participant.error().code, file + ": dds.domain: " + participant.error().message);
+  }
+  impl->participant.emplace(std::move(participant).value());
+  const dds::Participant& pp = *impl->participant;
+  auto waitset = dds::Waitset::create(pp);
+  if (!waitset) {
+    return Unexpected(waitset.error());
+  }
+  impl->waitset.emplace(std::move(waitset).value());
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    auto reader = dds::RawReader::create(pp, config.sensors[i].topic.c_str(),
+                                         dds::pointCloud2Type(), dds::Reliability::kBestEffort,
+                                         static_cast<std::int32_t>(config.queues.scan_slots));
+    if (!reader) {
+      return fail(reader.error().code,
+                  file + ": sensors[" + std::to_string(i) + "].topic: " + reader.error().message);
+    }
+    impl->cloud_readers.push_back(std::move(reader).value());
+    if (auto attached = impl->waitset->attach(impl->cloud_readers.back().handle(),
+                                              static_cast<std::intptr_t>(i));
+        !attached) {
+      return Unexpected(attached.error());
+    }
+  }
+  const auto poseReader = [&](const std::string& topic, const dds_topic_descriptor_t* type,
+                              std::intptr_t token, const char* key,
+                              std::optional<dds::RawReader>& out) -> Expected<void, Error> {
+    auto reader =
+        dds::RawReader::create(pp, topic.c_str(), type, dds::Reliability::kBestEffort, 256);
+    if (!reader) {
+      return fail(reader.error().code, file + ": " + key + ": " + reader.error().message);
+    }
+    out.emplace(std::move(reader).value());
+    return impl->waitset->attach(out->handle(), token);
+  };
+  if (config.pose.source == PoseConfig::Source::kOdometry) {
+    if (auto r = poseReader(config.pose.odometry_topic, dds::odometryType(), kOdometryToken,
+                            "pose.topic", impl->odometry_reader);
+        !r) {
+      return Unexpected(r.error());
+    }
+  } else {
+    if (auto r =
+            poseReader("rt/tf", dds::tfMessageType(), kTfToken, "pose.source", impl->tf_reader);
+        !r) {
+      return Unexpected(r.error());
+    }
+  }
+  if (auto r = poseReader("rt/tf_static", dds::tfMessageType(), kTfStaticToken, "pose.source",
+                          impl->tf_static_reader);
+      !r) {
+    return Unexpected(r.error());
+  }
+  auto grid_writer =
+      dds::Writer::create(pp, config.dds.grid_map_topic.c_str(), dds::GridMapMessage::descriptor(),
+                          dds::Reliability::kReliable, 1);
+  if (!grid_writer) {
+    return fail(grid_writer.error().code,
+                file + ": dds.grid_map_topic: " + grid_writer.error().message);
+  }
+  impl->grid_map_writer.emplace(std::move(grid_writer).value());
+  auto diag_writer =
+      dds::Writer::create(pp, config.dds.diagnostics_topic.c_str(),
+                          dds::DiagnosticsMessage::descriptor(), dds::Reliability::kReliable, 1);
+  if (!diag_writer) {
+    return fail(diag_writer.error().code,
+                file + ": dds.diagnostics_topic: " + diag_writer.error().message);
+  }
+  impl->diagnostics_writer.emplace(std::move(diag_writer).value());
+  if (!config.dds.voxels_topic.empty()) {
+    auto voxels =
+        dds::Writer::create(pp, config.dds.voxels_topic.c_str(),
+                            dds::PointCloudMessage::descriptor(), dds::Reliability::kReliable, 1);
+    if (!voxels) {
+      return fail(voxels.error().code, file + ": dds.voxels_topic: " + voxels.error().message);
+    }
+    impl->voxels_writer.emplace(std::move(voxels).value());
+    impl->voxels_message = std::make_unique<dds::PointCloudMessage>(config.dds.voxels_max_points);
+    impl->voxels_xyz.resize(std::size_t{config.dds.voxels_max_points} * 3);
+  }
+  impl->reporter = std::make_unique<DiagnosticsReporter>(
+      impl->stats, *impl->mailbox, *impl->poses, impl->backend.backend->name(),
+      impl->backend.backend->deviceName(), config.heightmap.rate_hz);
+  impl->thread_rt.assign(4, "not started");
+  return std::unique_ptr<Service>(new Service(std::move(impl)));
+}
+
+Service::Service(std::unique_ptr<Impl> impl) noexcept : impl_(std::move(impl)) {}
+
+Service::~Service() { stop(); }
+
+const RealtimeReport& Service::realtime() const noexcept { return impl_->realtime; }
+
+std::string Service::describe() const {
+  const DaemonConfig& c = impl_->config;
+  std::string sensors;
+  for (const SensorConfig& s : c.sensors) {
+    sensors += (sensors.empty() ? "" : ", ") + s.topic;
+  }
+  const std::string device = impl_->backend.backend->deviceName();
+  char line[512];
+  std::snprintf(
+      line, sizeof(line),
+      "backend %s%s%s; clouds from %s; pose from %s; height map %.0f x %.0f m at %g Hz "
+      "on %s (domain %u)",
+      impl_->backend.backend->name(), device.empty() ? "" : " on ", device.c_str(), sensors.c_str(),
+      c.pose.source == PoseConfig::Source::kOdometry ? c.pose.odometry_topic.c_str() : "rt/tf",
+      c.heightmap.size_m, c.heightmap.size_m, c.heightmap.rate_hz, c.dds.grid_map_topic.c_str(),
+      c.dds.domain);
+  return line;
+}
+
+// ---------------------------------------------------------------- threads
+
+void Service::Impl::applyThreadSettings(const char* name, const ThreadConfig& t) {
+  platform::nameCurrentThread(name);
+  platform::RtRequest request;
+  request.priority = t.priority;
+  request.cpu_mask = cpuMask(t.cpus);
+  const platform::RtStatus status = platform::applyRealtime(request);
+  if (status.scheduling == platform::RtOutcome::kRefused ||
+      status.affinity == platform::RtOutcome::kRefused) {
+    rt_refusals.fetch_add(1);
+  }
+  // Start-up of the thread: not yet in its loop, so the log line is fine here.
+  if (status.scheduling == platform::RtOutcome::kRefused) {
+    logLine(LogLevel::kWarning,
+            "%s thread: SCHED_FIFO priority %d refused (%s): running with normal scheduling. "
+            "Give the service CAP_SYS_NICE or LimitRTPRIO, and no CPU accounting options in "
+            "its unit (RT group scheduling).",
+            name, t.priority, std::strerror(status.scheduling_errno));
+  }
+  if (status.affinity == platform::RtOutcome::kRefused) {
+    logLine(LogLevel::kWarning, "%s thread: CPU affinity refused (%s): running on any CPU", name,
+            std::strerror(status.affinity_errno));
+  }
+}
+
+void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr) {
+  stats.clouds_received.add();
+  pipeline::ScanSlot* slot = mailbox->acquire();
+  if (slot == nullptr) {
+    stats.clouds_malformed.add();  // unreachable with >= 2 slots; never block
+    return;
+  }
+  auto decoded = dds::decodePointCloud2(cdr, slot->buffer, decode_options[sensor]);
+  if (!decoded) {
+    mailbox->abandon(slot);
+    if (decoded.error() == dds::CloudError::kTooManyPoints) {
+      stats.clouds_too_large.add();
+    } else {
+      stats.clouds_malformed.add();
+    }
+    stats.last_cloud_error.store(static_cast<std::uint32_t>(decoded.error()) + 1,
+                                 std::memory_order_relaxed);
+    return;
+  }
+  const SensorConfig& s = config.sensors[sensor];
+  char* learned = &sensor_frames_learned[std::size_t{sensor} * 64];
+  if (!s.frame.empty() && std::strcmp(decoded.value().frame_id, s.frame.c_str()) != 0) {
+    mailbox->abandon(slot);  // its extrinsic would be wrong
+    stats.clouds_unknown_frame.add();
+    return;
+  }
+  if (learned[0] == '\0') {
+    std::memcpy(learned, decoded.value().frame_id, 64);
+  }
+  slot->header = decoded.value();
+  slot->sensor = sensor;
+  slot->arrival_ns = platform::monotonicNowNs();
+  stats.points_received.add(slot->header.points);
+  mailbox->publish(slot);
+  integrator_wakeup.notify();
+}
+
+void Service::Impl::onOdometry(std::span<const std::byte> cdr) {
+  auto odometry = dds::decodeOdometry(cdr);
+  if (!odometry) {
+    stats.poses_malformed.add();
+    return;
+  }
+  const dds::StampedTransform& t = odometry.value();
+  pipeline::PoseUpdate update;
+  update.stamp_ns = t.stamp_ns;
+  update.pose = io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
+  update.kind = pipeline::PoseUpdate::kBaseInWorld;
+  if (!poses->push(update)) {
+    stats.poses_dropped.add();
+    return;
+  }
+  stats.poses_received.add();
+  integrator_wakeup.notify();
+}
+
+void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static) {
+  std::array<dds::StampedTransform, kTfPerMessage> transforms;
+  auto count = dds::decodeTfMessage(cdr, transforms);
+  if (!count) {
+    stats.poses_malformed.add();
+    return;
+  }
+  for (std::uint32_t i = 0; i < count.value(); ++i) {
+    const dds::StampedTransform& t = transforms[i];
+    pipeline::PoseUpdate update;
+    update.stamp_ns = t.stamp_ns;
+    update.pose = io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
+    bool used = false;
+    if (!is_static && std::strcmp(t.parent, config.pose.world_frame.c_str()) == 0 &&
+        std::strcmp(t.child, config.pose.base_frame.c_str()) == 0) {
+      update.kind = pipeline::PoseUpdate::kBaseInWorld;
+      used = true;
+    } else if (std::strcmp(t.parent, config.pose.base_frame.c_str()) == 0) {
+      for (std::uint32_t s = 0; s < config.sensors.size(); ++s) {
+        const char* frame = config.sensors[s].frame.empty()
+                                ? &sensor_frames_learned[std::size_t{s} * 64]
+                                : config.sensors[s].frame.c_str();
+        if (frame[0] != '\0' && std::strcmp(t.child, frame) == 0) {
+          update.kind = pipeline::PoseUpdate::kSensorExtrinsic;
+          update.sensor = s;
+          used = true;
+          break;
+        }
+      }
+    }
+    if (!used) {
+      stats.tf_ignored.add();
+      continue;
+    }
+    if (!poses->push(update)) {
+      stats.poses_dropped.add();
+      continue;
+    }
+    stats.poses_received.add();
+  }
+  integrator_wakeup.notify();
+}
+
+void Service::Impl::ingestLoop() {
+  applyThreadSettings("raymap-ingest", config.realtime.ingest);
+  std::array<std::intptr_t, 64> triggered{};
+  while (!stopping.load(std::memory_order_acquire)) {
+    const int n = waitset->wait(100000000, triggered);  // 100 ms: re-checks `stopping`
+    for (int k = 0; k < n; ++k) {
+      const std::intptr_t token = triggered[static_cast<std::size_t>(k)];
+      if (token >= 0 && token < static_cast<std::intptr_t>(cloud_readers.size())) {
+        const auto sensor = static_cast<std::uint32_t>(token);
+        cloud_readers[sensor].takeEach(
+            [&](std::span<const std::byte> cdr, std::int64_t) { onCloud(sensor, cdr); },
+            kTakePerWake);
+      } else if (token == kOdometryToken) {
+        odometry_reader->takeEach(
+            [&](std::span<const std::byte> cdr, std::int64_t) { onOdometry(cdr); }, 256);
+      } else if (token == kTfToken) {
+        tf_reader->takeEach([&](std::span<const std::byte> cdr, std::int64_t) { onTf(cdr, false); },
+                            256);
+      } else if (token == kTfStaticToken) {
+        tf_static_reader->takeEach(
+            [&](std::span<const std::byte> cdr, std::int64_t) { onTf(cdr, true); }, 256);
+      }
+    }
+  }
+}
+
+void Service::Impl::integratorLoop() {
+  applyThreadSettings("raymap-integr", config.realtime.integrator);
+  constexpr std::int64_t kIdleCheckNs = 100000000;  // re-checks `stopping`
+  while (!stopping.load(std::memory_order_acquire)) {
+    const std::int64_t now = platform::monotonicNowNs();
+    const std::int64_t next = integrator->step(now);
+    const std::int64_t wake = std::min(next, now + kIdleCheckNs);
+    integrator_wakeup.waitUntilMonotonicNs(wake);
+  }
+  integrator->flush(platform::monotonicNowNs());
+}
+
+void Service::Impl::publishVoxels(std::int64_t stamp_ns) {
+  // Only while someone listens: walking the window is not free.
+  if (!voxels_writer || voxels_writer->matchedReaders() == 0) {
+    return;
+  }
+  std::size_t n = 0;
+  const std::size_t capacity = voxels_xyz.size() / 3;
+  {
+    std::lock_guard<platform::PiMutex> lock(map_mutex);
+    const VoxelMap& m = *map;
+    const RegionStore& store = m.store();
+    const std::uint32_t per_region = m.geometry().voxelsPerRegion();
+    const int layer = m.occupancyLayer();
+    const float threshold = m.occupancy().threshold;
+    for (std::uint32_t slot = 0; slot < store.capacity() && n < capacity; ++slot) {
+      if (!store.inUse(slot)) {
+        continue;
+      }
+      const Vec3i region = store.coordOf(slot);
+      const float* occupancy = store.layerData<float>(slot, layer);
+      for (std::uint32_t i = 0; i < per_region && n < capacity; ++i) {
+        const float value = occupancy[i];
+        if (std::isfinite(value) && value > threshold) {
+          const Vec3d c = m.voxelCentre(m.voxelAt(region, i));
+          voxels_xyz[3 * n + 0] = static_cast<float>(c.x);
+          voxels_xyz[3 * n + 1] = static_cast<float>(c.y);
+          voxels_xyz[3 * n + 2] = static_cast<float>(c.z);
+          ++n;
+        }
+      }
+    }
+  }
+  voxels_message->fill(std::span<const float>(voxels_xyz.data(), 3 * n), stamp_ns,
+                       config.pose.world_frame.c_str());
+  (void)voxels_writer->write(voxels_message->sample());
+}
+
+void Service::Impl::publisherLoop() {
+  applyThreadSettings("raymap-publish", config.realtime.publisher);
+  const std::int64_t period = seconds(1.0 / config.heightmap.rate_hz);
+  const std::int64_t lead = seconds(config.heightmap.publish_lead_s);
+  const std::int64_t voxels_every =
+      std::max<std::int64_t>(1, std::llround(config.heightmap.rate_hz / config.dds.voxels_rate_hz));
+  // Publish instants are t0 + k * period on the monotonic clock: absolute deadlines do not
+  // drift, whatever each cycle costs.
+  std::int64_t next = platform::monotonicNowNs() + period;
+  std::int64_t previous_publish = 0;
+  std::int64_t cycle_index = 0;
+  while (!stopping.load(std::memory_order_acquire)) {
+    platform::sleepUntilMonotonicNs(next - lead);
+    if (stopping.load(std::memory_order_acquire)) {
+      break;
+    }
+    auto generated = cycle->generate();
+    bool healthy = true;
+    if (generated) {
+      grid_map_message->fill(
+          cycle->heightMap(),
+          cycle->dataStampNs() != 0 ? cycle->dataStampNs() : platform::realtimeNowNs(),
+          config.pose.world_frame.c_str());
+    } else if (generated.error() != pipeline::CycleError::kNoPose) {
+      stats.heightmap_errors.add();
+      healthy = false;
+    }
+    const std::int64_t before_publish = platform::monotonicNowNs();
+    if (before_publish > next) {
+      stats.cycles_late.add();
+    }
+    platform::sleepUntilMonotonicNs(next);
+    if (generated) {
+      const std::int64_t now = platform::monotonicNowNs();
+      if (grid_map_writer->write(grid_map_message->sample())) {
+        stats.maps_published.add();
+        if (previous_publish != 0) {
+          const std::int64_t error = std::llabs(now - previous_publish - period);
+          stats.period_error_us.record(static_cast<std::uint64_t>(error / 1000));
+        }
+        previous_publish = now;
+        last_publish_ns.store(now, std::memory_order_relaxed);
+        cycle->recordPublished(now);
+      } else {
+        healthy = false;
+      }
+      if (++cycle_index % voxels_every == 0) {
+        publishVoxels(cycle->dataStampNs());
+      }
+    } else {
+      previous_publish = 0;  // a gap is not a period
+    }
+    // The watchdog hears from the service only after a cycle that did its job on time.
+    if (healthy) {
+      notifier.watchdog();
+    }
+    next += period;
+    const std::int64_t now = platform::monotonicNowNs();
+    if (now > next) {
+      // Missed whole periods (the machine stalled): skip them instead of bursting.
+      const std::int64_t missed = (now - next) / period + 1;
+      stats.cycles_late.add(static_cast<std::uint64_t>(missed));
+      next += missed * period;
+      previous_publish = 0;
+    }
+  }
+}
+
+void Service::Impl::diagnosticsLoop() {
+  platform::nameCurrentThread("raymap-diag");
+  const std::int64_t period = seconds(1.0 / config.dds.diagnostics_rate_hz);
+  std::int64_t next = platform::monotonicNowNs() + period;
+  while (!stopping.load(std::memory_order_acquire)) {
+    diagnostics_wakeup.waitUntilMonotonicNs(next);
+    next += period;
+    if (stopping.load(std::memory_order_acquire)) {
+      break;
+    }
+    const std::int64_t now = platform::monotonicNowNs();
+    reporter->update(now, realtime);
+    (void)diagnostics_writer->write(reporter->message(platform::realtimeNowNs()));
+    notifier.status(reporter->statusLine());
+    reporter->logChanges();
+  }
+}
+
+void Service::start() {
+  Impl& s = *impl_;
+  // Memory: every pool exists now; lock it in RAM where the limit allows.
+  if (s.config.realtime.lock_memory) {
+    const platform::MemoryLockStatus lock = platform::lockMemory();
+    s.realtime.memory_locked = lock.locked;
+    s.realtime.memory_lock_errno = lock.error_no;
+    if (!lock.locked) {
+      logLine(
+          LogLevel::kWarning,
+          "memory not locked (%s; RLIMIT_MEMLOCK %s): page faults may stall the real-time "
+          "threads. Set LimitMEMLOCK=infinity in the unit.",
+          std::strerror(lock.error_no),
+          lock.limit_bytes == std::numeric_limits<std::uint64_t>::max() ? "unlimited" : "finite");
+    }
+  }
+  s.threads.emplace_back([&s] { s.ingestLoop(); });
+  s.threads.emplace_back([&s] { s.integratorLoop(); });
+  s.threads.emplace_back([&s] { s.publisherLoop(); });
+  s.threads.emplace_back([&s] { s.diagnosticsLoop(); });
+  // Wait briefly for the threads to apply their scheduling, so READY carries the outcome.
+  for (int i = 0; i < 50 && s.threads.size() == 4; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const RealtimeConfig& rt = s.config.realtime;
+  const bool requested =
+      rt.ingest.priority > 0 || rt.integrator.priority > 0 || rt.publisher.priority > 0;
+  s.realtime.degraded = s.rt_refusals.load() > 0 || (rt.lock_memory && !s.realtime.memory_locked);
+  char summary[256];
+  std::snprintf(summary, sizeof(summary), "%s%s; memory %s",
+                !requested                 ? "normal scheduling (none requested)"
+                : s.rt_refusals.load() > 0 ? "REAL-TIME REFUSED: normal scheduling"
+                                           : "SCHED_FIFO",
+                requested && s.rt_refusals.load() == 0 ? " as configured" : "",
+                s.realtime.memory_locked ? "locked" : "NOT locked");
+  s.realtime.summary = summary;
+  char status[512];
+  std::snprintf(status, sizeof(status), "mapping: %s, %g Hz; %s", s.backend.backend->name(),
+                s.config.heightmap.rate_hz, summary);
+  s.notifier.ready(status);
+  logLine(s.realtime.degraded ? LogLevel::kWarning : LogLevel::kInfo, "started: %s",
+          describe().c_str());
+  logLine(s.realtime.degraded ? LogLevel::kWarning : LogLevel::kInfo, "real time: %s", summary);
+}
+
+void Service::stop() {
+  if (!impl_) {
+    return;
+  }
+  Impl& s = *impl_;
+  if (s.threads.empty()) {
+    return;
+  }
+  s.notifier.stopping();
+  s.stopping.store(true, std::memory_order_release);
+  s.waitset->wake();
+  s.integrator_wakeup.notify();
+  s.diagnostics_wakeup.notify();
+  for (std::thread& t : s.threads) {
+    t.join();
+  }
+  s.threads.clear();
+  (void)s.backend.backend->synchronise();
+}
+
+Expected<void, Error> Service::saveMapIfConfigured() {
+  const std::string& path = impl_->config.save_map_on_exit;
+  if (path.empty()) {
+    return {};
+  }
+  return io::saveMap(*impl_->map, path);
+}
+
+}  // namespace raymap::service

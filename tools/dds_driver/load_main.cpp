@@ -1,0 +1,194 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymap-load: drives a running raymapd like a robot would (a simulated lidar driver publishing
+// PointCloud2 and odometry over DDS) and measures what comes back (GridMap period at the
+// subscriber, the service's own latency and drop counters from its diagnostics). Prints JSON.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "platform/clock.hpp"
+#include "src/sim/scene_file.hpp"
+#include "tools/dds_driver/ros_endpoints.hpp"
+#include "tools/dds_driver/simulated_lidar.hpp"
+
+namespace {
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) {
+    return 0.0;
+  }
+  std::sort(v.begin(), v.end());
+  const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  return v[std::min(v.size() - 1, i == 0 ? 0 : i - 1)];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace raymap;
+  CLI::App app{"raymap-load: publish a simulated lidar to raymapd and measure its GridMaps"};
+  std::string scene_path = "config/scenes/yard.yaml";
+  int beams = 128;
+  int columns = 1024;
+  double scan_rate = 10.0;
+  double duration = 10.0;
+  double warmup = 2.0;
+  bool moving = false;
+  int distinct = 8;
+  std::uint32_t domain = 0;
+  std::string points_topic = "rt/points";
+  std::string odom_topic = "rt/odom";
+  std::string grid_topic = "rt/height_map";
+  std::string diag_topic = "rt/diagnostics";
+  std::string frame = "lidar";
+  double period_nominal_s = 0.2;
+  app.add_option("--scene", scene_path, "scene file (its lidar and path are the defaults)");
+  app.add_option("--beams", beams, "lidar beams (128: an Ouster OS-1-128)");
+  app.add_option("--columns", columns, "lidar columns per revolution");
+  app.add_option("--scan-rate", scan_rate, "scans per second");
+  app.add_option("--duration", duration, "seconds measured (after the warm-up)");
+  app.add_option("--warmup", warmup, "seconds published before measuring");
+  app.add_flag("--moving", moving, "follow the scene's path (default: stay at its start)");
+  app.add_option("--distinct", distinct, "static: distinct scans cycled (noise differs)");
+  app.add_option("--domain", domain, "DDS domain");
+  app.add_option("--points-topic", points_topic);
+  app.add_option("--odom-topic", odom_topic);
+  app.add_option("--grid-topic", grid_topic);
+  app.add_option("--diagnostics-topic", diag_topic);
+  app.add_option("--frame", frame, "frame_id of the clouds");
+  app.add_option("--map-period", period_nominal_s, "raymapd's publish period, seconds");
+  CLI11_PARSE(app, argc, argv);
+
+  auto scene_file = sim::loadSceneFile(scene_path);
+  if (!scene_file) {
+    std::fprintf(stderr, "raymap-load: %s\n", scene_file.error().message.c_str());
+    return 2;
+  }
+  sim::SimulationConfig simulation = scene_file.value().simulation;
+  simulation.lidar.beams = beams;
+  simulation.lidar.columns = columns;
+  simulation.lidar.scan_period_s = 1.0 / scan_rate;
+  if (!moving) {
+    const sim::SensorPose start = simulation.path.at(simulation.path.startTime());
+    simulation.path = sim::SensorPath::fromPoses({start}).value();
+  }
+  driver::SimulatedLidar lidar(scene_file.value().scene, simulation);
+
+  auto participant = dds::Participant::create(domain);
+  if (!participant) {
+    std::fprintf(stderr, "raymap-load: %s\n", participant.error().message.c_str());
+    return 1;
+  }
+  auto publisher = driver::DriverPublisher::create(participant.value(), points_topic, odom_topic,
+                                                   lidar.pointsPerScan());
+  auto grids = driver::GridMapListener::create(participant.value(), grid_topic);
+  auto diagnostics = driver::DiagnosticsListener::create(participant.value(), diag_topic);
+  if (!publisher || !grids || !diagnostics) {
+    std::fprintf(stderr, "raymap-load: cannot create the DDS endpoints\n");
+    return 1;
+  }
+
+  // Static: precompute a few scans and cycle them (the publisher must not be the bottleneck).
+  std::vector<std::vector<dds::ScanPoint>> scans(moving ? 1 : static_cast<std::size_t>(distinct));
+  std::vector<std::vector<std::uint16_t>> rings(scans.size());
+  if (!moving) {
+    for (std::size_t k = 0; k < scans.size(); ++k) {
+      lidar.scan(k, scans[k], rings[k]);
+    }
+  }
+  // Wait for raymapd's readers (discovery).
+  for (int i = 0; i < 100 && publisher.value()->matchedCloudReaders() == 0; ++i) {
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 50000000);
+  }
+  const std::int64_t period = static_cast<std::int64_t>(std::llround(1e9 / scan_rate));
+  const std::int64_t t0 = platform::monotonicNowNs();
+  const std::int64_t stamp0 = platform::realtimeNowNs();
+  const std::int64_t measure_from = t0 + static_cast<std::int64_t>(warmup * 1e9);
+  const std::int64_t end = measure_from + static_cast<std::int64_t>(duration * 1e9);
+  constexpr std::int64_t kOdometryPeriod = 10000000;  // 100 Hz
+  std::int64_t next_scan = t0 + period;
+  std::int64_t next_odometry = t0;
+  std::uint64_t scan_index = 0;
+  std::uint64_t published = 0;
+  std::uint64_t points = 0;
+  std::vector<driver::ReceivedGridMap> received;
+  std::vector<std::int64_t> arrivals;
+  while (platform::monotonicNowNs() < end) {
+    const std::int64_t now = platform::monotonicNowNs();
+    while (next_odometry <= now) {
+      const double t = static_cast<double>(next_odometry - t0) * 1e-9;
+      publisher.value()->publishOdometry(stamp0 + (next_odometry - t0), lidar.poseAt(t), "odom",
+                                         "base_link");
+      next_odometry += kOdometryPeriod;
+    }
+    if (next_scan <= now) {
+      // Scan k covers [k T, (k + 1) T) and is published when it is complete, like a driver.
+      const std::size_t slot = moving ? 0 : scan_index % scans.size();
+      if (moving) {
+        lidar.scan(scan_index, scans[0], rings[0]);
+      }
+      publisher.value()->publishCloud(scans[slot], rings[slot],
+                                      stamp0 + static_cast<std::int64_t>(scan_index) * period,
+                                      frame.c_str());
+      if (now >= measure_from) {
+        ++published;
+        points += scans[slot].size();
+      }
+      ++scan_index;
+      next_scan += period;
+    }
+    received.clear();
+    grids.value()->poll(0, received);
+    for (const auto& r : received) {
+      if (r.arrival_ns >= measure_from) {
+        arrivals.push_back(r.arrival_ns);
+      }
+    }
+    diagnostics.value()->poll();
+    const std::int64_t wake = std::min({next_scan, next_odometry, now + 2000000});
+    platform::sleepUntilMonotonicNs(wake);
+  }
+  // One more diagnostics report covers the end of the run.
+  const std::int64_t settle = platform::monotonicNowNs() + 1200000000;
+  while (platform::monotonicNowNs() < settle) {
+    diagnostics.value()->poll();
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 50000000);
+  }
+
+  std::vector<double> errors_ms;
+  double mean_period_ms = 0.0;
+  for (std::size_t i = 1; i < arrivals.size(); ++i) {
+    const double p = static_cast<double>(arrivals[i] - arrivals[i - 1]) * 1e-6;
+    errors_ms.push_back(std::fabs(p - period_nominal_s * 1e3));
+  }
+  if (arrivals.size() >= 2) {
+    mean_period_ms = static_cast<double>(arrivals.back() - arrivals.front()) * 1e-6 /
+                     static_cast<double>(arrivals.size() - 1);
+  }
+  const auto& d = *diagnostics.value();
+  const auto value = [&](const char* key) { return d.number(key).value_or(-1.0); };
+  std::printf(
+      "{\n  \"scan_rate_hz\": %g,\n  \"points_per_scan\": %u,\n  \"scans_published\": %llu,\n"
+      "  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  \"map_period_mean_ms\": %.3f,\n"
+      "  \"map_period_error_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
+      "  \"raymapd\": {\"latency_p50_ms\": %.1f, \"latency_p99_ms\": %.1f, "
+      "\"latency_max_ms\": %.1f, \"clouds_received\": %.0f, \"clouds_dropped_overflow\": %.0f, "
+      "\"scans_dropped_no_pose\": %.0f, \"clouds_malformed\": %.0f, \"scans_integrated\": %.0f, "
+      "\"rays_integrated\": %.0f, \"cycles_late\": %.0f, \"period_error_max_ms\": %.3f}\n}\n",
+      scan_rate, lidar.pointsPerScan(), static_cast<unsigned long long>(published),
+      static_cast<double>(points) / duration, arrivals.size(), mean_period_ms,
+      quantile(errors_ms, 0.5), quantile(errors_ms, 0.99), quantile(errors_ms, 1.0),
+      value("raymapd: height map/latency_p50_ms_total"),
+      value("raymapd: height map/latency_p99_ms_total"),
+      value("raymapd: height map/latency_max_ms_total"), value("raymapd: pipeline/clouds_received"),
+      value("raymapd: pipeline/clouds_dropped_overflow"),
+      value("raymapd: pipeline/scans_dropped_no_pose"), value("raymapd: pipeline/clouds_malformed"),
+      value("raymapd: pipeline/scans_integrated"), value("raymapd: pipeline/rays_integrated"),
+      value("raymapd: height map/cycles_late"),
+      value("raymapd: height map/period_error_max_ms_total"));
+  return 0;
+}
