@@ -1,0 +1,305 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The RAII entity owners over Cyclone's C API and the QoS that ROS 2 peers match.
+#include "src/dds/entities.hpp"
+
+#include <string>
+
+#include <dds/ddsi/ddsi_serdata.h>
+
+namespace raymap::dds {
+namespace {
+
+std::string describe(const char* what, const char* topic_name, dds_return_t code) {
+  std::string message = what;
+  if (topic_name != nullptr) {
+    message += " for topic \"";
+    message += topic_name;
+    message += "\"";
+  }
+  message += ": ";
+  message += dds_strretcode(code);
+  return message;
+}
+
+void deleteEntity(dds_entity_t entity) noexcept {
+  if (entity > 0) {
+    // ALREADY_DELETED when the participant went first: nothing left to do.
+    static_cast<void>(dds_delete(entity));
+  }
+}
+
+/// The QoS both sides share: keep-last depth, volatile, XCDR1, and the reliability asked for.
+dds_qos_t* makeQos(Reliability reliability, std::int32_t depth) {
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos,
+                       reliability == Reliability::kReliable ? DDS_RELIABILITY_RELIABLE
+                                                             : DDS_RELIABILITY_BEST_EFFORT,
+                       DDS_MSECS(100));
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, depth);
+  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+  // ROS 2 (rmw_cyclonedds) accepts only XCDR1; an XCDR2 writer does not match its readers.
+  dds_data_representation_id_t xcdr1[1] = {DDS_DATA_REPRESENTATION_XCDR1};
+  dds_qset_data_representation(qos, 1, xcdr1);
+  return qos;
+}
+
+/// Creates the topic of a reader or writer; `*topic` is set on success.
+Result<void> createTopic(const Participant& participant, const char* topic_name,
+                         const dds_topic_descriptor_t* descriptor, std::int32_t depth,
+                         dds_entity_t* topic) {
+  if (topic_name == nullptr || descriptor == nullptr || depth < 1) {
+    return fail(ErrorCode::kInvalidArgument,
+                "dds: a topic needs a name, a type and a history depth >= 1");
+  }
+  const dds_entity_t created =
+      dds_create_topic(participant.handle(), descriptor, topic_name, nullptr, nullptr);
+  if (created < 0) {
+    return fail(ErrorCode::kInvalidArgument, describe("dds_create_topic", topic_name, created));
+  }
+  *topic = created;
+  return {};
+}
+
+}  // namespace
+
+// ---- Participant ----
+
+Result<Participant> Participant::create(std::uint32_t domain_id) {
+  if (domain_id >= DDS_DOMAIN_DEFAULT) {
+    return fail(ErrorCode::kInvalidArgument, "dds: domain id out of range");
+  }
+  const dds_entity_t handle = dds_create_participant(domain_id, nullptr, nullptr);
+  if (handle < 0) {
+    return fail(ErrorCode::kIo,
+                describe("dds_create_participant (check CYCLONEDDS_URI)", nullptr, handle));
+  }
+  return Participant(handle);
+}
+
+Participant& Participant::operator=(Participant&& other) noexcept {
+  if (this != &other) {
+    deleteEntity(handle_);
+    handle_ = std::exchange(other.handle_, 0);
+  }
+  return *this;
+}
+
+Participant::~Participant() { deleteEntity(handle_); }
+
+// ---- RawReader ----
+
+Result<RawReader> RawReader::create(const Participant& participant, const char* topic_name,
+                                    const dds_topic_descriptor_t* descriptor,
+                                    Reliability reliability, std::int32_t depth) {
+  dds_entity_t topic = 0;
+  if (auto created = createTopic(participant, topic_name, descriptor, depth, &topic); !created) {
+    return Unexpected(std::move(created).error());
+  }
+  dds_qos_t* qos = makeQos(reliability, depth);
+  const dds_entity_t reader = dds_create_reader(participant.handle(), topic, qos, nullptr);
+  dds_delete_qos(qos);
+  if (reader < 0) {
+    deleteEntity(topic);
+    return fail(ErrorCode::kInvalidArgument, describe("dds_create_reader", topic_name, reader));
+  }
+  return RawReader(topic, reader);
+}
+
+RawReader& RawReader::operator=(RawReader&& other) noexcept {
+  if (this != &other) {
+    deleteEntity(reader_);
+    deleteEntity(topic_);
+    topic_ = std::exchange(other.topic_, 0);
+    reader_ = std::exchange(other.reader_, 0);
+  }
+  return *this;
+}
+
+RawReader::~RawReader() {
+  deleteEntity(reader_);
+  deleteEntity(topic_);
+}
+
+int RawReader::take(SampleFn fn, void* context, int max_samples) noexcept {
+  // Samples are taken in small batches into a stack array: no allocation on our side.
+  constexpr int kBatch = 16;
+  struct ddsi_serdata* samples[kBatch];
+  dds_sample_info_t infos[kBatch];
+  int delivered = 0;
+  int remaining = max_samples;
+  while (remaining > 0) {
+    const int batch = remaining < kBatch ? remaining : kBatch;
+    for (int i = 0; i < batch; ++i) {
+      samples[i] = nullptr;
+    }
+    const dds_return_t taken =
+        dds_takecdr(reader_, samples, static_cast<std::uint32_t>(batch), infos, DDS_ANY_STATE);
+    if (taken < 0) {
+      return delivered > 0 ? delivered : taken;
+    }
+    for (int i = 0; i < taken; ++i) {
+      struct ddsi_serdata* sample = samples[i];
+      if (infos[i].valid_data) {
+        // The default serdata is one contiguous block: the 4-byte encapsulation header followed
+        // by the payload, and ddsi_serdata_size() counts both. to_ser_ref hands out a reference
+        // to it (no copy, no allocation).
+        const std::uint32_t size = ddsi_serdata_size(sample);
+        ddsrt_iovec_t ref{};
+        struct ddsi_serdata* held = ddsi_serdata_to_ser_ref(sample, 0, size, &ref);
+        if (held != nullptr) {
+          fn(context,
+             std::span<const std::byte>(static_cast<const std::byte*>(ref.iov_base),
+                                        static_cast<std::size_t>(ref.iov_len)),
+             infos[i].source_timestamp);
+          ddsi_serdata_to_ser_unref(held, &ref);
+          ++delivered;
+        }
+      }
+      ddsi_serdata_unref(sample);
+    }
+    remaining -= taken;
+    if (taken < batch) {
+      break;
+    }
+  }
+  return delivered;
+}
+
+std::uint32_t RawReader::matchedWriters() const noexcept {
+  dds_subscription_matched_status_t status{};
+  if (dds_get_subscription_matched_status(reader_, &status) < 0) {
+    return 0;
+  }
+  return status.current_count;
+}
+
+// ---- Writer ----
+
+Result<Writer> Writer::create(const Participant& participant, const char* topic_name,
+                              const dds_topic_descriptor_t* descriptor, Reliability reliability,
+                              std::int32_t depth) {
+  dds_entity_t topic = 0;
+  if (auto created = createTopic(participant, topic_name, descriptor, depth, &topic); !created) {
+    return Unexpected(std::move(created).error());
+  }
+  dds_qos_t* qos = makeQos(reliability, depth);
+  dds_qset_writer_data_lifecycle(qos, false);  // no autodispose, as rmw_cyclonedds
+  const dds_entity_t writer = dds_create_writer(participant.handle(), topic, qos, nullptr);
+  dds_delete_qos(qos);
+  if (writer < 0) {
+    deleteEntity(topic);
+    return fail(ErrorCode::kInvalidArgument, describe("dds_create_writer", topic_name, writer));
+  }
+  return Writer(topic, writer);
+}
+
+Writer& Writer::operator=(Writer&& other) noexcept {
+  if (this != &other) {
+    deleteEntity(writer_);
+    deleteEntity(topic_);
+    topic_ = std::exchange(other.topic_, 0);
+    writer_ = std::exchange(other.writer_, 0);
+  }
+  return *this;
+}
+
+Writer::~Writer() {
+  deleteEntity(writer_);
+  deleteEntity(topic_);
+}
+
+Expected<void, DdsError> Writer::write(const void* sample) noexcept {
+  const dds_return_t code = dds_write(writer_, sample);
+  if (code < 0) {
+    return Unexpected(ddsErrorFromReturnCode(code));
+  }
+  return {};
+}
+
+Expected<void, DdsError> Writer::writeWithTimestamp(const void* sample,
+                                                    std::int64_t source_timestamp_ns) noexcept {
+  const dds_return_t code = dds_write_ts(writer_, sample, source_timestamp_ns);
+  if (code < 0) {
+    return Unexpected(ddsErrorFromReturnCode(code));
+  }
+  return {};
+}
+
+std::uint32_t Writer::matchedReaders() const noexcept {
+  dds_publication_matched_status_t status{};
+  if (dds_get_publication_matched_status(writer_, &status) < 0) {
+    return 0;
+  }
+  return status.current_count;
+}
+
+// ---- Waitset ----
+
+Result<Waitset> Waitset::create(const Participant& participant) {
+  const dds_entity_t waitset = dds_create_waitset(participant.handle());
+  if (waitset < 0) {
+    return fail(ErrorCode::kInvalidArgument, describe("dds_create_waitset", nullptr, waitset));
+  }
+  // Attached to itself, the waitset triggers on dds_waitset_set_trigger: that is wake().
+  const dds_return_t attached = dds_waitset_attach(waitset, waitset, kWakeToken);
+  if (attached < 0) {
+    deleteEntity(waitset);
+    return fail(ErrorCode::kInvalidArgument, describe("dds_waitset_attach", nullptr, attached));
+  }
+  return Waitset(waitset);
+}
+
+Waitset& Waitset::operator=(Waitset&& other) noexcept {
+  if (this != &other) {
+    deleteEntity(waitset_);
+    waitset_ = std::exchange(other.waitset_, 0);
+  }
+  return *this;
+}
+
+Waitset::~Waitset() { deleteEntity(waitset_); }
+
+Result<void> Waitset::attach(dds_entity_t reader, std::intptr_t token) {
+  if (token == kWakeToken) {
+    return fail(ErrorCode::kInvalidArgument, "dds: Waitset::attach token kWakeToken is reserved");
+  }
+  const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
+  if (condition < 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                describe("dds_create_readcondition", nullptr, condition));
+  }
+  const dds_return_t attached = dds_waitset_attach(waitset_, condition, token);
+  if (attached < 0) {
+    deleteEntity(condition);
+    return fail(ErrorCode::kInvalidArgument, describe("dds_waitset_attach", nullptr, attached));
+  }
+  return {};
+}
+
+int Waitset::wait(std::int64_t timeout_ns, std::span<std::intptr_t> triggered) noexcept {
+  constexpr std::size_t kMaxTriggered = 16;
+  dds_attach_t tokens[kMaxTriggered];
+  const dds_return_t count =
+      dds_waitset_wait(waitset_, tokens, kMaxTriggered, timeout_ns < 0 ? 0 : timeout_ns);
+  if (count <= 0) {
+    return count;
+  }
+  const std::size_t reported = static_cast<std::size_t>(count) < kMaxTriggered
+                                   ? static_cast<std::size_t>(count)
+                                   : kMaxTriggered;
+  std::size_t written = 0;
+  for (std::size_t i = 0; i < reported; ++i) {
+    if (tokens[i] == kWakeToken) {
+      static_cast<void>(dds_waitset_set_trigger(waitset_, false));
+    }
+    if (written < triggered.size()) {
+      triggered[written] = tokens[i];
+      ++written;
+    }
+  }
+  return static_cast<int>(written);
+}
+
+void Waitset::wake() noexcept { static_cast<void>(dds_waitset_set_trigger(waitset_, true)); }
+
+}  // namespace raymap::dds

@@ -1,0 +1,187 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// RAII owners of Cyclone DDS entities: participant, raw-CDR reader, writer and waitset, with the
+// QoS that ROS 2 peers match (XCDR1, keyless topics, volatile, no autodispose).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <type_traits>
+#include <utility>
+
+#include <dds/dds.h>
+
+#include "src/core/error.hpp"
+#include "src/core/expected.hpp"
+#include "src/dds/dds_error.hpp"
+
+namespace raymap::dds {
+
+/// @brief Owns a domain participant (dds_delete on destruction deletes every entity created
+/// under it). Configuration comes from CYCLONEDDS_URI as usual: the service sets that variable
+/// from its YAML before it creates the participant. Readers, writers and waitsets created from a
+/// participant must be destroyed before it (their handles are then already deleted; their
+/// destructors tolerate that).
+/// Thread-safety: handle() from any thread; creation and destruction from one thread.
+class Participant {
+ public:
+  /// @brief Creates a participant on `domain_id` (0..232 like ROS_DOMAIN_ID). Start-up only
+  /// (allocates, starts Cyclone's threads, may take tens of milliseconds).
+  static Result<Participant> create(std::uint32_t domain_id);
+
+  Participant(Participant&& other) noexcept : handle_(std::exchange(other.handle_, 0)) {}
+  Participant& operator=(Participant&& other) noexcept;
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+  ~Participant();
+
+  dds_entity_t handle() const noexcept { return handle_; }
+
+ private:
+  explicit Participant(dds_entity_t handle) noexcept : handle_(handle) {}
+  dds_entity_t handle_ = 0;
+};
+
+/// Reliability QoS. Subscribe to sensor data best effort (matches best-effort and reliable
+/// writers, e.g. rclcpp's SensorDataQoS); publish maps reliable (matches both kinds of reader).
+enum class Reliability : std::uint8_t { kBestEffort, kReliable };
+
+/// @brief Called once per sample by RawReader::take.
+/// @param context the pointer given to take()
+/// @param cdr the serialized sample including its 4-byte encapsulation header (readable with
+///        CdrReader / decodePointCloud2); valid only during the call
+/// @param source_timestamp_ns the writer's source timestamp (DDS time, nanoseconds)
+using SampleFn = void (*)(void* context, std::span<const std::byte> cdr,
+                          std::int64_t source_timestamp_ns);
+
+/// @brief A keep-last reader that hands out samples as serialized XCDR1 bytes, never
+/// deserialised into heap-allocated structs (dds_takecdr + ddsi_serdata_to_ser_ref: the bytes
+/// are Cyclone's own receive buffer, so a 2 MB cloud is not copied).
+/// Thread-safety: take() from one thread at a time; handle() from any.
+class RawReader {
+ public:
+  /// @brief Creates a topic and a reader on it. Start-up only (allocates).
+  /// @param topic_name the DDS name in full, e.g. "rt/points" for ROS's /points
+  /// @param descriptor the idlc type (e.g. pointCloud2Type() from src/dds/topic_types.hpp)
+  /// @param depth KEEP_LAST history depth (>= 1)
+  static Result<RawReader> create(const Participant& participant, const char* topic_name,
+                                  const dds_topic_descriptor_t* descriptor, Reliability reliability,
+                                  std::int32_t depth);
+
+  RawReader(RawReader&& other) noexcept
+      : topic_(std::exchange(other.topic_, 0)), reader_(std::exchange(other.reader_, 0)) {}
+  RawReader& operator=(RawReader&& other) noexcept;
+  RawReader(const RawReader&) = delete;
+  RawReader& operator=(const RawReader&) = delete;
+  ~RawReader();
+
+  dds_entity_t handle() const noexcept { return reader_; }
+
+  /// @brief Takes up to `max_samples` samples (oldest first) and calls `fn` for each one with
+  /// valid data (disposal/unregistration notices are taken and skipped).
+  /// @return how many samples were passed to `fn` (0 when none), or a negative dds_return_t
+  /// @rt allocates: no on our side (Cyclone frees the taken samples); blocks: on Cyclone's
+  /// reader lock only (held briefly by its receive thread).
+  int take(SampleFn fn, void* context, int max_samples) noexcept;
+
+  /// @brief take() with a callable `f(std::span<const std::byte> cdr, std::int64_t
+  /// source_timestamp_ns)`; the callable must not throw.
+  template <class F>
+  int takeEach(F&& f, int max_samples) noexcept {
+    return take(
+        [](void* context, std::span<const std::byte> cdr, std::int64_t source_timestamp_ns) {
+          (*static_cast<std::remove_reference_t<F>*>(context))(cdr, source_timestamp_ns);
+        },
+        static_cast<void*>(&f), max_samples);
+  }
+
+  /// @brief Writers currently matched (dds_get_subscription_matched_status).
+  std::uint32_t matchedWriters() const noexcept;
+
+ private:
+  RawReader(dds_entity_t topic, dds_entity_t reader) noexcept : topic_(topic), reader_(reader) {}
+  dds_entity_t topic_ = 0;
+  dds_entity_t reader_ = 0;
+};
+
+/// @brief A keep-last, volatile writer: XCDR1 data representation, autodispose off (as
+/// rmw_cyclonedds), so ROS 2 readers of the same type name match it.
+/// Thread-safety: write() from one thread at a time (Cyclone locks internally).
+class Writer {
+ public:
+  /// @brief Creates a topic and a writer on it. Start-up only (allocates).
+  /// @param topic_name the DDS name in full, e.g. "rt/elevation_map"
+  /// @param depth KEEP_LAST history depth (>= 1); a keep-last writer never blocks on readers
+  static Result<Writer> create(const Participant& participant, const char* topic_name,
+                               const dds_topic_descriptor_t* descriptor, Reliability reliability,
+                               std::int32_t depth);
+
+  Writer(Writer&& other) noexcept
+      : topic_(std::exchange(other.topic_, 0)), writer_(std::exchange(other.writer_, 0)) {}
+  Writer& operator=(Writer&& other) noexcept;
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+  ~Writer();
+
+  dds_entity_t handle() const noexcept { return writer_; }
+
+  /// @brief Serialises and sends `sample` (an idlc struct of the writer's type, e.g.
+  /// GridMapMessage::sample()), stamped with the current time.
+  /// @rt allocates: no on our side, but Cyclone allocates the serialized copy and its
+  /// retransmit-history entry inside dds_write (see the measurement in the tests); call it from
+  /// a publishing thread, not from a hard-deadline loop. blocks: on Cyclone's writer lock.
+  Expected<void, DdsError> write(const void* sample) noexcept;
+  /// @brief write() with an explicit source timestamp (nanoseconds since the epoch).
+  Expected<void, DdsError> writeWithTimestamp(const void* sample,
+                                              std::int64_t source_timestamp_ns) noexcept;
+
+  /// @brief Readers currently matched (dds_get_publication_matched_status). @rt allocates: no.
+  std::uint32_t matchedReaders() const noexcept;
+
+ private:
+  Writer(dds_entity_t topic, dds_entity_t writer) noexcept : topic_(topic), writer_(writer) {}
+  dds_entity_t topic_ = 0;
+  dds_entity_t writer_ = 0;
+};
+
+/// @brief A waitset over readers (each attached with a read condition, so it stays triggered
+/// while the reader holds samples) plus a wake-up trigger for shutdown.
+/// Thread-safety: wait() from one thread; wake() from any thread (also while wait() runs).
+class Waitset {
+ public:
+  /// The token wait() reports after wake().
+  static constexpr std::intptr_t kWakeToken = -1;
+
+  /// @brief Creates a waitset. Start-up only (allocates).
+  static Result<Waitset> create(const Participant& participant);
+
+  Waitset(Waitset&& other) noexcept : waitset_(std::exchange(other.waitset_, 0)) {}
+  Waitset& operator=(Waitset&& other) noexcept;
+  Waitset(const Waitset&) = delete;
+  Waitset& operator=(const Waitset&) = delete;
+  ~Waitset();
+
+  dds_entity_t handle() const noexcept { return waitset_; }
+
+  /// @brief Attaches a reader (RawReader::handle()): wait() reports `token` while the reader
+  /// has samples. `token` must not be kWakeToken. Start-up only (allocates a read condition,
+  /// owned by the reader).
+  Result<void> attach(dds_entity_t reader, std::intptr_t token);
+
+  /// @brief Blocks until a reader has data, wake() was called, or `timeout_ns` passed.
+  /// @param[out] triggered the tokens of the triggered entities (at most its size)
+  /// @return the number of tokens written (0 on timeout), or a negative dds_return_t. A wake()
+  /// is reported once as kWakeToken and then reset.
+  /// @rt allocates: no; blocks: yes, up to timeout_ns.
+  int wait(std::int64_t timeout_ns, std::span<std::intptr_t> triggered) noexcept;
+
+  /// @brief Makes a running or the next wait() return with kWakeToken.
+  /// @rt allocates: no; blocks: no (a short internal lock).
+  void wake() noexcept;
+
+ private:
+  explicit Waitset(dds_entity_t waitset) noexcept : waitset_(waitset) {}
+  dds_entity_t waitset_ = 0;
+};
+
+}  // namespace raymap::dds

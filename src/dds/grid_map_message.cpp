@@ -1,0 +1,147 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The preallocated GridMap message: every sequence points into buffers owned by the Impl, with
+// _release false so that Cyclone never frees them.
+#include "src/dds/grid_map_message.hpp"
+
+#include <cstring>
+#include <vector>
+
+#include "grid_map_msgs.h"
+
+#include "src/core/assert.hpp"
+#include "src/dds/topic_types.hpp"
+
+namespace raymap::dds {
+namespace {
+
+constexpr std::size_t kLayers = 4;
+constexpr std::int64_t kNsPerSecond = 1'000'000'000;
+
+/// idlc declares strings as char*; the message only reads them.
+char* mutableText(const char* text) noexcept {
+  return const_cast<char*>(text);  // NOLINT(cppcoreguidelines-pro-type-const-cast): C API
+}
+
+}  // namespace
+
+/// Design: one heap block per message, so that moving a GridMapMessage moves a pointer and the
+/// addresses inside `msg` stay valid. Only fill() writes it; Writer::write() reads it.
+struct GridMapMessage::Impl {
+  int cells_x = 0;
+  int cells_y = 0;
+  grid_map_msgs_msg_dds__GridMap_ msg{};
+  char frame_id[64] = {};
+  char* layer_names[kLayers] = {};
+  char* basic_layers[1] = {};
+  std_msgs_msg_dds__Float32MultiArray_ arrays[kLayers]{};
+  std_msgs_msg_dds__MultiArrayDimension_ dims[kLayers][2]{};
+  std::vector<float> data[kLayers];
+};
+
+GridMapMessage::GridMapMessage(int cells_x, int cells_y) : impl_(std::make_unique<Impl>()) {
+  RAYMAP_EXPECTS(cells_x > 0 && cells_y > 0);
+  Impl& m = *impl_;
+  m.cells_x = cells_x;
+  m.cells_y = cells_y;
+  const auto size_x = static_cast<std::uint32_t>(cells_x);
+  const auto size_y = static_cast<std::uint32_t>(cells_y);
+  const std::size_t cells = std::size_t{size_x} * size_y;
+
+  m.msg.header.frame_id = m.frame_id;
+  m.msg.info.pose.orientation.w = 1.0;
+  for (std::size_t i = 0; i < kLayers; ++i) {
+    m.layer_names[i] = mutableText(kLayerNames[i]);
+    m.data[i].assign(cells, 0.0F);
+    auto& dims = m.dims[i];
+    dims[0].label = mutableText("column_index");
+    dims[0].size = size_y;
+    dims[0].stride = static_cast<std::uint32_t>(cells);
+    dims[1].label = mutableText("row_index");
+    dims[1].size = size_x;
+    dims[1].stride = size_x;
+    auto& array = m.arrays[i];
+    array.layout.dim._buffer = dims;
+    array.layout.dim._length = 2;
+    array.layout.dim._maximum = 2;
+    array.layout.dim._release = false;
+    array.layout.data_offset = 0;
+    array.data._buffer = m.data[i].data();
+    array.data._length = static_cast<std::uint32_t>(cells);
+    array.data._maximum = static_cast<std::uint32_t>(cells);
+    array.data._release = false;
+  }
+  m.basic_layers[0] = m.layer_names[0];
+  m.msg.layers._buffer = m.layer_names;
+  m.msg.layers._length = kLayers;
+  m.msg.layers._maximum = kLayers;
+  m.msg.layers._release = false;
+  m.msg.basic_layers._buffer = m.basic_layers;
+  m.msg.basic_layers._length = 1;
+  m.msg.basic_layers._maximum = 1;
+  m.msg.basic_layers._release = false;
+  m.msg.data._buffer = m.arrays;
+  m.msg.data._length = kLayers;
+  m.msg.data._maximum = kLayers;
+  m.msg.data._release = false;
+  m.msg.outer_start_index = 0;
+  m.msg.inner_start_index = 0;
+}
+
+GridMapMessage::GridMapMessage(GridMapMessage&&) noexcept = default;
+GridMapMessage& GridMapMessage::operator=(GridMapMessage&&) noexcept = default;
+GridMapMessage::~GridMapMessage() = default;
+
+void GridMapMessage::fill(const heightmap::HeightMap& map, std::int64_t stamp_ns,
+                          const char* frame_id) noexcept {
+  RAYMAP_EXPECTS(impl_ != nullptr);
+  Impl& m = *impl_;
+  RAYMAP_EXPECTS(map.cells_x == m.cells_x && map.cells_y == m.cells_y);
+  const std::size_t cells = map.cellCount();
+  RAYMAP_EXPECTS(map.elevation.size() == cells && map.clearance.size() == cells &&
+                 map.kind.size() == cells && map.observed_count.size() == cells);
+
+  // header: floor division, so that a stamp before the epoch still has 0 <= nanosec < 1e9
+  std::int64_t sec = stamp_ns / kNsPerSecond;
+  std::int64_t nanosec = stamp_ns % kNsPerSecond;
+  if (nanosec < 0) {
+    nanosec += kNsPerSecond;
+    sec -= 1;
+  }
+  m.msg.header.stamp.sec = static_cast<std::int32_t>(sec);
+  m.msg.header.stamp.nanosec = static_cast<std::uint32_t>(nanosec);
+  std::size_t length = 0;
+  if (frame_id != nullptr) {
+    while (length + 1 < sizeof(m.frame_id) && frame_id[length] != '\0') {
+      m.frame_id[length] = frame_id[length];
+      ++length;
+    }
+  }
+  m.frame_id[length] = '\0';
+
+  // geometry: pose = the grid centre
+  m.msg.info.resolution = map.resolution;
+  m.msg.info.length_x = map.cells_x * map.resolution;
+  m.msg.info.length_y = map.cells_y * map.resolution;
+  m.msg.info.pose.position.x = map.centre_x;
+  m.msg.info.pose.position.y = map.centre_y;
+  m.msg.info.pose.position.z = 0.0;
+
+  // layers: HeightMap is column-major with (0, 0) at +x/+y, as grid_map
+  std::memcpy(m.data[0].data(), map.elevation.data(), cells * sizeof(float));
+  std::memcpy(m.data[1].data(), map.clearance.data(), cells * sizeof(float));
+  float* kind = m.data[2].data();
+  float* observed = m.data[3].data();
+  for (std::size_t i = 0; i < cells; ++i) {
+    kind[i] = static_cast<float>(map.kind[i]);
+    observed[i] = static_cast<float>(map.observed_count[i]);
+  }
+}
+
+const void* GridMapMessage::sample() const noexcept { return &impl_->msg; }
+
+const dds_topic_descriptor_t* GridMapMessage::descriptor() noexcept { return gridMapType(); }
+
+int GridMapMessage::cellsX() const noexcept { return impl_->cells_x; }
+int GridMapMessage::cellsY() const noexcept { return impl_->cells_y; }
+
+}  // namespace raymap::dds

@@ -1,0 +1,74 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The malloc interposition behind AllocationScope: glibc lets an executable replace malloc,
+// free, calloc and realloc; ours count and forward to glibc's own (__libc_*).
+#include "tests/unit/dds/alloc_counter.hpp"
+
+#include <cstddef>
+
+namespace raymap::dds::test {
+namespace {
+thread_local std::uint64_t t_allocations = 0;
+thread_local int t_scopes = 0;
+}  // namespace
+
+#if defined(RAYMAP_SANITIZED_BUILD)
+bool allocationCountingAvailable() noexcept { return false; }
+void noteAllocation() noexcept {}
+#else
+bool allocationCountingAvailable() noexcept { return true; }
+void noteAllocation() noexcept {
+  if (t_scopes > 0) {
+    ++t_allocations;
+  }
+}
+#endif
+
+AllocationScope::AllocationScope() noexcept : start_(t_allocations) { ++t_scopes; }
+AllocationScope::~AllocationScope() { --t_scopes; }
+std::uint64_t AllocationScope::count() const noexcept { return t_allocations - start_; }
+
+}  // namespace raymap::dds::test
+
+#if !defined(RAYMAP_SANITIZED_BUILD)
+extern "C" {
+// glibc's allocator entry points (exported for exactly this use).
+void* __libc_malloc(std::size_t size);  // NOLINT(bugprone-reserved-identifier): glibc's name
+void __libc_free(void* p);              // NOLINT(bugprone-reserved-identifier): glibc's name
+void* __libc_calloc(std::size_t n,
+                    std::size_t size);            // NOLINT(bugprone-reserved-identifier)
+void* __libc_realloc(void* p, std::size_t size);  // NOLINT(bugprone-reserved-identifier)
+void* __libc_memalign(std::size_t alignment,
+                      std::size_t size);  // NOLINT(bugprone-reserved-identifier)
+
+void* malloc(std::size_t size) noexcept {
+  raymap::dds::test::noteAllocation();
+  return __libc_malloc(size);
+}
+void free(void* p) noexcept { __libc_free(p); }
+void* calloc(std::size_t n, std::size_t size) noexcept {
+  raymap::dds::test::noteAllocation();
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size) noexcept {
+  raymap::dds::test::noteAllocation();
+  return __libc_realloc(p, size);
+}
+void* memalign(std::size_t alignment, std::size_t size) noexcept {
+  raymap::dds::test::noteAllocation();
+  return __libc_memalign(alignment, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) noexcept {
+  raymap::dds::test::noteAllocation();
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t size) noexcept {
+  raymap::dds::test::noteAllocation();
+  void* p = __libc_memalign(alignment, size);
+  if (p == nullptr) {
+    return 12;  // ENOMEM
+  }
+  *out = p;
+  return 0;
+}
+}
+#endif
