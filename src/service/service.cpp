@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "platform/allocation_scope.hpp"
 #include "platform/clock.hpp"
 #include "platform/notify.hpp"
 #include "platform/pi_mutex.hpp"
@@ -443,13 +444,22 @@ void Service::Impl::ingestLoop() {
   applyThreadSettings("raymap-ingest", config.realtime.ingest);
   std::array<std::intptr_t, 64> triggered{};
   while (!stopping.load(std::memory_order_acquire)) {
-    const int n = waitset->wait(100000000, triggered);  // 100 ms: re-checks `stopping`
+    platform::RealtimeScope steady;
+    int n = 0;
+    {
+      platform::ForeignScope dds;
+      n = waitset->wait(100000000, triggered);  // 100 ms: re-checks `stopping`
+    }
     for (int k = 0; k < n; ++k) {
       const std::intptr_t token = triggered[static_cast<std::size_t>(k)];
       if (token >= 0 && token < static_cast<std::intptr_t>(cloud_readers.size())) {
         const auto sensor = static_cast<std::uint32_t>(token);
+        platform::ForeignScope dds;  // dds_takecdr; our callback counts again
         cloud_readers[sensor].takeEach(
-            [&](std::span<const std::byte> cdr, std::int64_t) { onCloud(sensor, cdr); },
+            [&](std::span<const std::byte> cdr, std::int64_t) {
+              platform::RealtimeScope ours;
+              onCloud(sensor, cdr);
+            },
             kTakePerWake);
       } else if (token == kOdometryToken) {
         odometry_reader->takeEach(
@@ -458,8 +468,13 @@ void Service::Impl::ingestLoop() {
         tf_reader->takeEach([&](std::span<const std::byte> cdr, std::int64_t) { onTf(cdr, false); },
                             256);
       } else if (token == kTfStaticToken) {
+        platform::ForeignScope dds;
         tf_static_reader->takeEach(
-            [&](std::span<const std::byte> cdr, std::int64_t) { onTf(cdr, true); }, 256);
+            [&](std::span<const std::byte> cdr, std::int64_t) {
+              platform::RealtimeScope ours;
+              onTf(cdr, true);
+            },
+            256);
       }
     }
   }
@@ -469,6 +484,7 @@ void Service::Impl::integratorLoop() {
   applyThreadSettings("raymap-integr", config.realtime.integrator);
   constexpr std::int64_t kIdleCheckNs = 100000000;  // re-checks `stopping`
   while (!stopping.load(std::memory_order_acquire)) {
+    platform::RealtimeScope steady;
     const std::int64_t now = platform::monotonicNowNs();
     const std::int64_t next = integrator->step(now);
     const std::int64_t wake = std::min(next, now + kIdleCheckNs);
@@ -479,7 +495,7 @@ void Service::Impl::integratorLoop() {
 
 void Service::Impl::publishVoxels(std::int64_t stamp_ns) {
   // Only while someone listens: walking the window is not free.
-  if (!voxels_writer || voxels_writer->matchedReaders() == 0) {
+  if (!voxels_writer || voxels_writer->matchedReaders() == 0) {  // no allocation: a status read
     return;
   }
   std::size_t n = 0;
@@ -511,6 +527,7 @@ void Service::Impl::publishVoxels(std::int64_t stamp_ns) {
   }
   voxels_message->fill(std::span<const float>(voxels_xyz.data(), 3 * n), stamp_ns,
                        config.pose.world_frame.c_str());
+  platform::ForeignScope dds;
   (void)voxels_writer->write(voxels_message->sample());
 }
 
@@ -525,7 +542,13 @@ void Service::Impl::publisherLoop() {
   std::int64_t next = platform::monotonicNowNs() + period;
   std::int64_t previous_publish = 0;
   std::int64_t cycle_index = 0;
+  bool first_cycle = true;
   while (!stopping.load(std::memory_order_acquire)) {
+    // The first successful cycle sizes the plan and the layers; every later one allocates nothing.
+    std::optional<platform::RealtimeScope> steady;
+    if (!first_cycle) {
+      steady.emplace();
+    }
     platform::sleepUntilMonotonicNs(next - lead);
     if (stopping.load(std::memory_order_acquire)) {
       break;
@@ -533,6 +556,7 @@ void Service::Impl::publisherLoop() {
     auto generated = cycle->generate();
     bool healthy = true;
     if (generated) {
+      first_cycle = false;
       grid_map_message->fill(
           cycle->heightMap(),
           cycle->dataStampNs() != 0 ? cycle->dataStampNs() : platform::realtimeNowNs(),
@@ -548,7 +572,12 @@ void Service::Impl::publisherLoop() {
     platform::sleepUntilMonotonicNs(next);
     if (generated) {
       const std::int64_t now = platform::monotonicNowNs();
-      if (grid_map_writer->write(grid_map_message->sample())) {
+      bool written = false;
+      {
+        platform::ForeignScope dds;  // Cyclone serialises into its own buffer
+        written = grid_map_writer->write(grid_map_message->sample()).has_value();
+      }
+      if (written) {
         stats.maps_published.add();
         if (previous_publish != 0) {
           const std::int64_t error = std::llabs(now - previous_publish - period);
@@ -592,9 +621,14 @@ void Service::Impl::diagnosticsLoop() {
     if (stopping.load(std::memory_order_acquire)) {
       break;
     }
+    platform::RealtimeScope steady;
     const std::int64_t now = platform::monotonicNowNs();
     reporter->update(now, realtime);
-    (void)diagnostics_writer->write(reporter->message(platform::realtimeNowNs()));
+    const void* sample = reporter->message(platform::realtimeNowNs());
+    {
+      platform::ForeignScope dds;
+      (void)diagnostics_writer->write(sample);
+    }
     notifier.status(reporter->statusLine());
     reporter->logChanges();
   }

@@ -15,6 +15,7 @@
 #include "src/map/ray_preparer.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tests/heightmap/heightmap_generators.hpp"
+#include "tests/support/scene_truth.hpp"
 
 namespace raymap {
 namespace {
@@ -68,39 +69,9 @@ const MappedScene& mappedScene(const std::string& name, std::int32_t region_voxe
   return *cache.emplace(key, std::move(scene)).first->second;
 }
 
-/// The true surface of a cell, when it is unambiguous: the same surface (height within a quarter
-/// voxel, so ramps count) at the cell's centre, its corners and the centres of its 8 neighbours.
-/// Cells at object edges are left out: lidar noise puts an object's side into the next column.
 std::optional<sim::TrueSurface> unambiguousTruth(const sim::Scene& scene, const HeightMap& h, int i,
                                                  int j, double reference) {
-  const Vec3d c = h.cellCentre(i, j);
-  const auto truth = sim::trueSurface(scene, c.x, c.y, reference, kMinClearance);
-  if (!truth) {
-    return std::nullopt;
-  }
-  const double r = h.resolution;
-  for (const auto& [dx, dy] : {std::pair{-1.0, -1.0},
-                               {-1.0, 0.0},
-                               {-1.0, 1.0},
-                               {0.0, -1.0},
-                               {0.0, 1.0},
-                               {1.0, -1.0},
-                               {1.0, 0.0},
-                               {1.0, 1.0},
-                               {-0.49, -0.49},
-                               {-0.49, 0.49},
-                               {0.49, -0.49},
-                               {0.49, 0.49}}) {
-    const auto other =
-        sim::trueSurface(scene, c.x + dx * r, c.y + dy * r, reference, kMinClearance);
-    if (!other || std::abs(other->height - truth->height) > 0.25 * r ||
-        std::isinf(other->clearance) != std::isinf(truth->clearance) ||
-        (!std::isinf(truth->clearance) &&
-         std::abs(other->clearance - truth->clearance) > 0.25 * r)) {
-      return std::nullopt;
-    }
-  }
-  return truth;
+  return test::unambiguousTruth(scene, h.cellCentre(i, j), h.resolution, reference, kMinClearance);
 }
 
 /// Distance (x, y) from a cell to the nearest sensor position, metres.

@@ -12,6 +12,7 @@
 
 #include "platform/clock.hpp"
 #include "src/sim/scene_file.hpp"
+#include "tools/dds_driver/lidar_playback.hpp"
 #include "tools/dds_driver/ros_endpoints.hpp"
 #include "tools/dds_driver/simulated_lidar.hpp"
 
@@ -38,7 +39,7 @@ int main(int argc, char** argv) {
   double duration = 10.0;
   double warmup = 2.0;
   bool moving = false;
-  int distinct = 8;
+  int distinct = 4;
   std::uint32_t domain = 0;
   std::string points_topic = "rt/points";
   std::string odom_topic = "rt/odom";
@@ -92,55 +93,32 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  // Static: precompute a few scans and cycle them (the publisher must not be the bottleneck).
-  std::vector<std::vector<dds::ScanPoint>> scans(moving ? 1 : static_cast<std::size_t>(distinct));
-  std::vector<std::vector<std::uint16_t>> rings(scans.size());
-  if (!moving) {
-    for (std::size_t k = 0; k < scans.size(); ++k) {
-      lidar.scan(k, scans[k], rings[k]);
-    }
-  }
+  driver::PlaybackOptions options;
+  options.scan_rate_hz = scan_rate;
+  options.distinct_scans = distinct;
+  options.frame = frame.c_str();
+  driver::LidarPlayback playback(lidar, *publisher.value(), options);
   // Wait for raymapd's readers (discovery).
   for (int i = 0; i < 100 && publisher.value()->matchedCloudReaders() == 0; ++i) {
     platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 50000000);
   }
-  const std::int64_t period = static_cast<std::int64_t>(std::llround(1e9 / scan_rate));
   const std::int64_t t0 = platform::monotonicNowNs();
-  const std::int64_t stamp0 = platform::realtimeNowNs();
+  playback.start(t0, platform::realtimeNowNs());
   const std::int64_t measure_from = t0 + static_cast<std::int64_t>(warmup * 1e9);
   const std::int64_t end = measure_from + static_cast<std::int64_t>(duration * 1e9);
-  constexpr std::int64_t kOdometryPeriod = 10000000;  // 100 Hz
-  std::int64_t next_scan = t0 + period;
-  std::int64_t next_odometry = t0;
-  std::uint64_t scan_index = 0;
-  std::uint64_t published = 0;
-  std::uint64_t points = 0;
+  std::uint64_t scans_before = 0;
+  std::uint64_t points_before = 0;
+  bool measuring = false;
   std::vector<driver::ReceivedGridMap> received;
   std::vector<std::int64_t> arrivals;
   while (platform::monotonicNowNs() < end) {
     const std::int64_t now = platform::monotonicNowNs();
-    while (next_odometry <= now) {
-      const double t = static_cast<double>(next_odometry - t0) * 1e-9;
-      publisher.value()->publishOdometry(stamp0 + (next_odometry - t0), lidar.poseAt(t), "odom",
-                                         "base_link");
-      next_odometry += kOdometryPeriod;
+    if (!measuring && now >= measure_from) {
+      measuring = true;
+      scans_before = playback.scansPublished();
+      points_before = playback.pointsPublished();
     }
-    if (next_scan <= now) {
-      // Scan k covers [k T, (k + 1) T) and is published when it is complete, like a driver.
-      const std::size_t slot = moving ? 0 : scan_index % scans.size();
-      if (moving) {
-        lidar.scan(scan_index, scans[0], rings[0]);
-      }
-      publisher.value()->publishCloud(scans[slot], rings[slot],
-                                      stamp0 + static_cast<std::int64_t>(scan_index) * period,
-                                      frame.c_str());
-      if (now >= measure_from) {
-        ++published;
-        points += scans[slot].size();
-      }
-      ++scan_index;
-      next_scan += period;
-    }
+    const std::int64_t due = playback.publishDue(now);
     received.clear();
     grids.value()->poll(0, received);
     for (const auto& r : received) {
@@ -149,9 +127,10 @@ int main(int argc, char** argv) {
       }
     }
     diagnostics.value()->poll();
-    const std::int64_t wake = std::min({next_scan, next_odometry, now + 2000000});
-    platform::sleepUntilMonotonicNs(wake);
+    platform::sleepUntilMonotonicNs(std::min(due, now + 2000000));
   }
+  const std::uint64_t published = playback.scansPublished() - scans_before;
+  const std::uint64_t points = playback.pointsPublished() - points_before;
   // One more diagnostics report covers the end of the run.
   const std::int64_t settle = platform::monotonicNowNs() + 1200000000;
   while (platform::monotonicNowNs() < settle) {

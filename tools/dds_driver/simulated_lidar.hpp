@@ -27,6 +27,8 @@ class SimulatedLidar {
   /// @brief The base (= sensor) pose in the world at `time_s` after the path's start.
   io::Pose poseAt(double time_s) const;
   double scanPeriod() const noexcept { return config_.lidar.scan_period_s; }
+  /// @brief True when the path has more than one pose (every scan differs in where it looks).
+  bool moving() const noexcept { return config_.path.knots().size() > 1; }
   std::uint32_t pointsPerScan() const noexcept;
   const sim::Scene& scene() const noexcept { return scene_; }
 

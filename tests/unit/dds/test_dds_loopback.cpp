@@ -22,7 +22,7 @@
 #include "src/dds/point_cloud.hpp"
 #include "src/dds/point_cloud_message.hpp"
 #include "src/dds/topic_types.hpp"
-#include "tests/unit/dds/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 
 namespace raymap::dds {
@@ -404,7 +404,7 @@ TEST_F(DdsLoopback, WaitsetReportsDataAndWake) {
 }
 
 TEST_F(DdsLoopback, MessagesFillWithoutAllocatingAndWhatCycloneDoes) {
-  if (!test::allocationCountingAvailable()) {
+  if (!raymap::test::allocationCountingAvailable()) {
     GTEST_SKIP() << "allocation counting is off in sanitizer builds";
   }
   const heightmap::HeightMap map = makeMap();
@@ -427,7 +427,7 @@ TEST_F(DdsLoopback, MessagesFillWithoutAllocatingAndWhatCycloneDoes) {
 
   std::uint64_t fill_allocations = 0;
   {
-    test::AllocationScope scope;
+    raymap::test::AllocationScope scope;
     grid.fill(map, 1, "map");
     diagnostics.begin(1);
     const int s = diagnostics.addStatus(kDiagnosticOk, "a", "b", "c");
@@ -439,7 +439,7 @@ TEST_F(DdsLoopback, MessagesFillWithoutAllocatingAndWhatCycloneDoes) {
 
   std::uint64_t write_allocations = 0;
   {
-    test::AllocationScope scope;
+    raymap::test::AllocationScope scope;
     ASSERT_TRUE(writer->write(cloud.sample()).has_value());
     write_allocations = scope.count();
   }
@@ -448,7 +448,7 @@ TEST_F(DdsLoopback, MessagesFillWithoutAllocatingAndWhatCycloneDoes) {
   std::uint64_t take_allocations = 0;
   int taken = 0;
   {
-    test::AllocationScope scope;
+    raymap::test::AllocationScope scope;
     taken = raw->takeEach([](std::span<const std::byte>, std::int64_t) {}, 4);
     take_allocations = scope.count();
   }

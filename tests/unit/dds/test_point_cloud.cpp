@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "src/dds/point_cloud.hpp"
-#include "tests/unit/dds/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 
 namespace raymap::dds {
@@ -506,12 +506,12 @@ TEST(DecodePointCloud2Fuzz, RandomMutationsNeverCrash) {
 }
 
 TEST(DecodePointCloud2, DoesNotAllocate) {
-  if (!test::allocationCountingAvailable()) {
+  if (!raymap::test::allocationCountingAvailable()) {
     GTEST_SKIP() << "allocation counting is off in sanitizer builds";
   }
   const std::vector<std::byte> bytes = encodeCloud(makeOusterCloud(64, 4, false));
   std::vector<ScanPoint> out(256);
-  test::AllocationScope scope;
+  raymap::test::AllocationScope scope;
 
   auto result = decodePointCloud2(bytes, out, {});
 

@@ -1,15 +1,23 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The malloc interposition behind AllocationScope: glibc lets an executable replace malloc,
 // free, calloc and realloc; ours count and forward to glibc's own (__libc_*).
-#include "tests/unit/dds/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 
+#include <atomic>
 #include <cstddef>
 
-namespace raymap::dds::test {
+#include "platform/allocation_scope.hpp"
+
+namespace raymap::test {
 namespace {
 thread_local std::uint64_t t_allocations = 0;
 thread_local int t_scopes = 0;
+std::atomic<std::uint64_t> g_realtime_allocations{0};
 }  // namespace
+
+std::uint64_t realtimeAllocations() noexcept {
+  return g_realtime_allocations.load(std::memory_order_relaxed);
+}
 
 #if defined(RAYMAP_SANITIZED_BUILD)
 bool allocationCountingAvailable() noexcept { return false; }
@@ -20,6 +28,9 @@ void noteAllocation() noexcept {
   if (t_scopes > 0) {
     ++t_allocations;
   }
+  if (platform::inRealtimeScope()) {
+    g_realtime_allocations.fetch_add(1, std::memory_order_relaxed);
+  }
 }
 #endif
 
@@ -27,7 +38,7 @@ AllocationScope::AllocationScope() noexcept : start_(t_allocations) { ++t_scopes
 AllocationScope::~AllocationScope() { --t_scopes; }
 std::uint64_t AllocationScope::count() const noexcept { return t_allocations - start_; }
 
-}  // namespace raymap::dds::test
+}  // namespace raymap::test
 
 #if !defined(RAYMAP_SANITIZED_BUILD)
 extern "C" {
@@ -41,28 +52,28 @@ void* __libc_memalign(std::size_t alignment,
                       std::size_t size);  // NOLINT(bugprone-reserved-identifier)
 
 void* malloc(std::size_t size) noexcept {
-  raymap::dds::test::noteAllocation();
+  raymap::test::noteAllocation();
   return __libc_malloc(size);
 }
 void free(void* p) noexcept { __libc_free(p); }
 void* calloc(std::size_t n, std::size_t size) noexcept {
-  raymap::dds::test::noteAllocation();
+  raymap::test::noteAllocation();
   return __libc_calloc(n, size);
 }
 void* realloc(void* p, std::size_t size) noexcept {
-  raymap::dds::test::noteAllocation();
+  raymap::test::noteAllocation();
   return __libc_realloc(p, size);
 }
 void* memalign(std::size_t alignment, std::size_t size) noexcept {
-  raymap::dds::test::noteAllocation();
+  raymap::test::noteAllocation();
   return __libc_memalign(alignment, size);
 }
 void* aligned_alloc(std::size_t alignment, std::size_t size) noexcept {
-  raymap::dds::test::noteAllocation();
+  raymap::test::noteAllocation();
   return __libc_memalign(alignment, size);
 }
 int posix_memalign(void** out, std::size_t alignment, std::size_t size) noexcept {
-  raymap::dds::test::noteAllocation();
+  raymap::test::noteAllocation();
   void* p = __libc_memalign(alignment, size);
   if (p == nullptr) {
     return 12;  // ENOMEM

@@ -1,16 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Counts heap allocations made by the calling thread (malloc family interposed in this test
-// executable), to check the "allocates: no" contracts of src/dds.
+// Counts heap allocations (malloc family interposed in the test executables that link this):
+// per thread inside an AllocationScope, and across all threads inside platform::RealtimeScope.
 #pragma once
 
 #include <cstdint>
 
-namespace raymap::dds::test {
+namespace raymap::test {
 
 /// @brief False in sanitizer builds, where the sanitizer owns malloc and nothing is counted.
 bool allocationCountingAvailable() noexcept;
 
 /// @brief Counts malloc/calloc/realloc/memalign calls of this thread while alive.
+/// @brief Allocations made so far, on any thread, inside a platform::RealtimeScope (and not in a
+/// ForeignScope): the steady-state loops of the service, which must make none.
+std::uint64_t realtimeAllocations() noexcept;
+
 class AllocationScope {
  public:
   AllocationScope() noexcept;
@@ -23,4 +27,4 @@ class AllocationScope {
   std::uint64_t start_;
 };
 
-}  // namespace raymap::dds::test
+}  // namespace raymap::test

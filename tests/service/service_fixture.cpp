@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The raymapd tests' shared set-up.
+#include "tests/service/service_fixture.hpp"
+
+#include <algorithm>
+
+#include <unistd.h>
+
+#include "platform/clock.hpp"
+
+namespace raymap::test {
+
+std::uint32_t uniqueDomain() {
+  static std::uint32_t next = 0;
+  return 200 + (static_cast<std::uint32_t>(::getpid()) % 10) * 3 + (next++ % 3);
+}
+
+std::string serviceConfig(std::uint32_t domain, const std::string& extra,
+                          std::uint32_t scan_slots) {
+  std::string text =
+      "map: {resolution: 0.1, window: [6, 6, 3]}\n"
+      "backend: {name: cpu, threads: 2}\n"
+      "pose: {source: odometry, topic: rt/odom, world_frame: odom, base_frame: base_link}\n"
+      "sensors:\n"
+      "  - {name: lidar, topic: rt/points, frame: lidar, min_range: 0.3, max_range: 20,\n"
+      "     max_points: 70000}\n"
+      "heightmap: {rate_hz: 5, size: 12, base_height: 1.2}\n"
+      "dds: {domain: " +
+      std::to_string(domain) +
+      ", voxels_topic: rt/raymap/occupied_voxels}\n"
+      "queues: {scan_slots: " +
+      std::to_string(scan_slots) + "}\n";
+  return text + extra;
+}
+
+driver::SimulatedLidar yardLidar(int beams, int columns, bool moving) {
+  auto file = sim::loadSceneFile(std::string(RAYMAP_SCENES_DIR) + "/yard.yaml");
+  EXPECT_TRUE(file.has_value());
+  sim::SimulationConfig simulation = file.value().simulation;
+  simulation.lidar.beams = beams;
+  simulation.lidar.columns = columns;
+  if (!moving) {
+    simulation.path =
+        sim::SensorPath::fromPoses({simulation.path.at(simulation.path.startTime())}).value();
+  }
+  return driver::SimulatedLidar(file.value().scene, simulation);
+}
+
+RosSide::RosSide(std::uint32_t domain, std::uint32_t max_points) {
+  auto pub = dds::Participant::create(domain);
+  auto sub = dds::Participant::create(domain);
+  EXPECT_TRUE(pub.has_value() && sub.has_value());
+  publisher_participant.emplace(std::move(pub).value());
+  subscriber_participant.emplace(std::move(sub).value());
+  publisher = std::move(driver::DriverPublisher::create(*publisher_participant, "rt/points",
+                                                        "rt/odom", max_points))
+                  .value();
+  grid_maps =
+      std::move(driver::GridMapListener::create(*subscriber_participant, "rt/height_map")).value();
+  diagnostics =
+      std::move(driver::DiagnosticsListener::create(*subscriber_participant, "rt/diagnostics"))
+          .value();
+}
+
+bool RosSide::waitForService(double timeout_s) {
+  const std::int64_t end = platform::monotonicNowNs() + static_cast<std::int64_t>(timeout_s * 1e9);
+  while (platform::monotonicNowNs() < end) {
+    if (publisher->matchedCloudReaders() > 0 && grid_maps->matchedWriters() > 0) {
+      return true;
+    }
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 20000000);
+  }
+  return false;
+}
+
+void RosSide::play(const driver::SimulatedLidar& lidar, driver::PlaybackOptions options,
+                   double seconds, std::vector<driver::ReceivedGridMap>& maps) {
+  driver::LidarPlayback playback(lidar, *publisher, options);
+  const std::int64_t t0 = platform::monotonicNowNs();
+  playback.start(t0, platform::realtimeNowNs());
+  const std::int64_t end = t0 + static_cast<std::int64_t>(seconds * 1e9);
+  for (std::int64_t now = t0; now < end; now = platform::monotonicNowNs()) {
+    const std::int64_t due = playback.publishDue(now);
+    grid_maps->poll(0, maps);
+    diagnostics->poll();
+    platform::sleepUntilMonotonicNs(std::min(due, now + 2000000));
+  }
+}
+
+void RosSide::settle(double seconds, std::vector<driver::ReceivedGridMap>* maps) {
+  const std::int64_t end = platform::monotonicNowNs() + static_cast<std::int64_t>(seconds * 1e9);
+  std::vector<driver::ReceivedGridMap> ignored;
+  while (platform::monotonicNowNs() < end) {
+    grid_maps->poll(20000000, maps != nullptr ? *maps : ignored);
+    diagnostics->poll();
+  }
+}
+
+}  // namespace raymap::test

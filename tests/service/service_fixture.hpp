@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What the raymapd tests share: a unique DDS domain per test, a configuration written for it,
+// and the ROS-like endpoints (a simulated lidar driver, GridMap and diagnostics subscribers).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/dds/entities.hpp"
+#include "src/sim/scene_file.hpp"
+#include "tests/support/temp_dir.hpp"
+#include "tools/dds_driver/lidar_playback.hpp"
+#include "tools/dds_driver/ros_endpoints.hpp"
+#include "tools/dds_driver/simulated_lidar.hpp"
+
+namespace raymap::test {
+
+/// @brief A DDS domain no other test uses at the same time (tests of this folder run serially,
+/// other test executables use 100 + pid % 100).
+std::uint32_t uniqueDomain();
+
+/// @brief raymapd configuration for the tests: CPU backend, 12 m height map at 5 Hz, one lidar on
+/// rt/points in frame "lidar", odometry on rt/odom; `extra` is appended (YAML sections that are
+/// not already present).
+std::string serviceConfig(std::uint32_t domain, const std::string& extra = "",
+                          std::uint32_t scan_slots = 4);
+
+/// @brief The yard scene with its lidar set to `beams` x `columns`, moving along its path or not.
+driver::SimulatedLidar yardLidar(int beams, int columns, bool moving);
+
+/// @brief The test's side of the DDS graph, in its own participants (the publisher and the
+/// subscribers are independent of each other, like separate ROS nodes).
+struct RosSide {
+  explicit RosSide(std::uint32_t domain, std::uint32_t max_points);
+  std::optional<dds::Participant> publisher_participant;
+  std::optional<dds::Participant> subscriber_participant;
+  std::unique_ptr<driver::DriverPublisher> publisher;
+  std::unique_ptr<driver::GridMapListener> grid_maps;
+  std::unique_ptr<driver::DiagnosticsListener> diagnostics;
+  /// @brief Waits until raymapd's reader and writer are matched (discovery), up to `timeout_s`.
+  bool waitForService(double timeout_s);
+  /// @brief Plays `lidar` for `seconds`, collecting GridMaps and diagnostics meanwhile.
+  void play(const driver::SimulatedLidar& lidar, driver::PlaybackOptions options, double seconds,
+            std::vector<driver::ReceivedGridMap>& maps);
+  /// @brief Polls diagnostics for `seconds` (reports come at 1 Hz).
+  void settle(double seconds, std::vector<driver::ReceivedGridMap>* maps = nullptr);
+};
+
+}  // namespace raymap::test

@@ -1,0 +1,278 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymapd end to end, as separate processes on loopback DDS: a ROS-like lidar driver publishes,
+// raymapd maps, an independent subscriber decodes the GridMaps; systemd's notify protocol is
+// checked with a fake notify socket.
+#include <cmath>
+#include <fstream>
+#include <numeric>
+
+#include "sensor_msgs.h"
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include "platform/clock.hpp"
+#include "src/sim/scene.hpp"
+#include "tests/service/daemon_process.hpp"
+#include "tests/service/service_fixture.hpp"
+#include "tests/support/cli_runner.hpp"
+#include "tests/support/fake_notify_socket.hpp"
+#include "tests/support/scene_truth.hpp"
+
+namespace raymap::test {
+namespace {
+
+struct RunningDaemon {
+  TempDir dir;
+  FakeNotifySocket notify;
+  std::unique_ptr<DaemonProcess> process;
+
+  RunningDaemon(const std::string& config_text, bool watchdog) {
+    const std::string config = dir.file("raymapd.yaml");
+    std::ofstream(config) << config_text;
+    std::vector<std::string> env = {"NOTIFY_SOCKET=" + notify.path()};
+    if (watchdog) {
+      env.push_back("WATCHDOG_USEC=1000000");  // WatchdogSec=1s: pings needed < 0.5 s apart
+    }
+    process = std::make_unique<DaemonProcess>(
+        RAYMAPD_PATH, std::vector<std::string>{"--config", config}, env, dir.file("raymapd.log"));
+  }
+  std::string log() const { return readFile(dir.file("raymapd.log")); }
+};
+
+double meanPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::size_t skip) {
+  if (maps.size() < skip + 2) {
+    return 0.0;
+  }
+  return static_cast<double>(maps.back().arrival_ns - maps[skip].arrival_ns) * 1e-6 /
+         static_cast<double>(maps.size() - 1 - skip);
+}
+
+TEST(Raymapd, PublishesDecodableGridMapsAtFiveHertzWithTrueHeightsUnderSystemd) {
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(serviceConfig(domain), true);
+  // READY=1 only once everything is created and the threads run.
+  const auto ready = daemon.notify.waitFor("READY=1", std::chrono::seconds(10));
+  ASSERT_TRUE(ready.has_value()) << daemon.log();
+  EXPECT_TRUE(ready->value("STATUS").has_value());
+
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(10.0)) << daemon.log();
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/true);
+  driver::PlaybackOptions options;
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, options, 6.0, maps);
+
+  // Rate: 5 Hz within 2 % over the run, from the subscriber's arrival times.
+  ASSERT_GE(maps.size(), 20u) << daemon.log();
+  const double period = meanPeriodMs(maps, 2);
+  EXPECT_NEAR(period, 200.0, 4.0);
+
+  // The bytes decoded as grid_map_msgs/GridMap (Cyclone's own deserialiser): layout and layers.
+  const driver::ReceivedGridMap& last = maps.back();
+  EXPECT_EQ(last.frame_id, "odom");
+  EXPECT_DOUBLE_EQ(last.resolution, 0.1);
+  EXPECT_NEAR(last.length_x, 12.0, 1e-9);
+  EXPECT_NEAR(last.length_y, 12.0, 1e-9);
+  ASSERT_EQ(last.layers,
+            (std::vector<std::string>{"elevation", "clearance", "kind", "observed_count"}));
+  EXPECT_EQ(last.basic_layers, std::vector<std::string>{"elevation"});
+  ASSERT_EQ(last.dim_labels, (std::vector<std::string>{"column_index", "row_index"}));
+  EXPECT_EQ(last.dim_sizes, (std::vector<std::uint32_t>{120, 120}));
+  EXPECT_EQ(last.dim_strides, (std::vector<std::uint32_t>{14400, 120}));
+  ASSERT_EQ(last.data.size(), 4u);
+  for (const auto& layer : last.data) {
+    ASSERT_EQ(layer.size(), 14400u);
+  }
+  // The robot ended at the path's end, (4, 0): the map is centred there (to the cell).
+  EXPECT_NEAR(last.centre_x, 4.0, 0.1);
+  EXPECT_NEAR(last.centre_y, 0.0, 0.1);
+
+  // Heights: every surface cell against the scene's exact surface (grid_map order: column-major,
+  // (0, 0) at the +x/+y corner).
+  const std::vector<float>& elevation = *last.layer("elevation");
+  const std::vector<float>& kind = *last.layer("kind");
+  int surfaces = 0;
+  int within = 0;
+  for (int j = 0; j < 120; ++j) {
+    for (int i = 0; i < 120; ++i) {
+      const std::size_t c = static_cast<std::size_t>(i + j * 120);
+      if (kind[c] != 1.0f) {  // RM_HM_SURFACE
+        continue;
+      }
+      const double x = last.centre_x + (60 - i - 0.5) * 0.1;
+      const double y = last.centre_y + (60 - j - 0.5) * 0.1;
+      const auto truth = unambiguousTruth(lidar.scene(), {x, y, 0.0}, 0.1, 0.0, 0.5);
+      if (!truth) {
+        continue;  // an object's edge: lidar noise puts its side into the next column
+      }
+      ++surfaces;
+      if (truth && std::fabs(static_cast<double>(elevation[c]) - truth->height) <= 0.1) {
+        ++within;
+      }
+    }
+  }
+  EXPECT_GE(surfaces, 14400 / 4) << "too little of the map observed";
+  EXPECT_GE(within, surfaces * 95 / 100) << within << " of " << surfaces;
+
+  // Watchdog: pinged after successful cycles, at least twice per WatchdogSec.
+  const auto pings = daemon.notify.collectFor(std::chrono::milliseconds(1500));
+  EXPECT_LT(FakeNotifySocket::maxGap(pings, "WATCHDOG=1"), std::chrono::milliseconds(500));
+
+  // SIGTERM: STOPPING=1 and a clean exit within 1 s.
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value()) << daemon.log();
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+  EXPECT_LT(stopped->second, std::chrono::milliseconds(1000));
+  EXPECT_TRUE(daemon.notify.waitFor("STOPPING=1", std::chrono::seconds(1)).has_value());
+}
+
+/// A PointCloud2 with one x/y/z field set: fields[i] = (name, offset, datatype), everything else
+/// as given. `data` is what the message carries.
+struct BadCloud {
+  std::vector<std::string> names;
+  std::vector<sensor_msgs_msg_dds__PointField_> fields;
+  std::vector<std::uint8_t> data;
+  sensor_msgs_msg_dds__PointCloud2_ msg{};
+
+  BadCloud(std::vector<std::tuple<std::string, std::uint32_t, std::uint8_t>> layout,
+           std::uint32_t width, std::uint32_t height, std::uint32_t point_step,
+           std::size_t data_bytes) {
+    for (const auto& [name, offset, type] : layout) {
+      names.push_back(name);
+      (void)offset;
+      (void)type;
+    }
+    for (std::size_t i = 0; i < layout.size(); ++i) {
+      sensor_msgs_msg_dds__PointField_ f{};
+      f.name = names[i].data();
+      f.offset = std::get<1>(layout[i]);
+      f.datatype = std::get<2>(layout[i]);
+      f.count = 1;
+      fields.push_back(f);
+    }
+    data.assign(data_bytes, 0x3f);
+    msg.header.frame_id = const_cast<char*>("lidar");  // NOLINT: read-only for dds_write
+    msg.width = width;
+    msg.height = height;
+    msg.point_step = point_step;
+    msg.row_step = width * point_step;
+    msg.fields._buffer = fields.data();
+    msg.fields._length = msg.fields._maximum = static_cast<std::uint32_t>(fields.size());
+    msg.data._buffer = data.data();
+    msg.data._length = msg.data._maximum = static_cast<std::uint32_t>(data.size());
+  }
+};
+
+TEST(Raymapd, CountsAndDropsMalformedCloudsAndKeepsPublishing) {
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(serviceConfig(domain), false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(10.0));
+  constexpr std::uint8_t kInt8 = 1;
+  constexpr std::uint8_t kFloat32 = 7;
+  std::vector<BadCloud> bad;
+  // x as INT8: a wrong field type.
+  bad.emplace_back(
+      std::vector<std::tuple<std::string, std::uint32_t, std::uint8_t>>{
+          {"x", 0, kInt8}, {"y", 4, kFloat32}, {"z", 8, kFloat32}},
+      10, 1, 16, 160);
+  // Truncated: 10 points declared, 3 carried.
+  bad.emplace_back(
+      std::vector<std::tuple<std::string, std::uint32_t, std::uint8_t>>{
+          {"x", 0, kFloat32}, {"y", 4, kFloat32}, {"z", 8, kFloat32}},
+      10, 1, 16, 48);
+  // point_step smaller than the fields.
+  bad.emplace_back(
+      std::vector<std::tuple<std::string, std::uint32_t, std::uint8_t>>{
+          {"x", 0, kFloat32}, {"y", 4, kFloat32}, {"z", 8, kFloat32}},
+      10, 1, 8, 80);
+  // Absurd size: 2^31 x 2 points in 64 bytes.
+  bad.emplace_back(
+      std::vector<std::tuple<std::string, std::uint32_t, std::uint8_t>>{
+          {"x", 0, kFloat32}, {"y", 4, kFloat32}, {"z", 8, kFloat32}},
+      0x80000000u, 2, 16, 64);
+  // No z field.
+  bad.emplace_back(
+      std::vector<std::tuple<std::string, std::uint32_t, std::uint8_t>>{{"x", 0, kFloat32},
+                                                                        {"y", 4, kFloat32}},
+      10, 1, 16, 160);
+  constexpr int kRepeats = 4;
+  for (int r = 0; r < kRepeats; ++r) {
+    for (BadCloud& b : bad) {
+      ASSERT_TRUE(ros.publisher->cloudWriter().write(&b.msg).has_value());
+      platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 5000000);
+    }
+  }
+  // Then good data: the service still maps and publishes.
+  const driver::SimulatedLidar lidar = yardLidar(16, 512, false);
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, driver::PlaybackOptions{}, 3.0, maps);
+  ros.settle(1.5, &maps);
+  EXPECT_TRUE(daemon.process->running()) << daemon.log();
+  const auto malformed = ros.diagnostics->number("raymapd: pipeline/clouds_malformed");
+  const auto too_large = ros.diagnostics->number("raymapd: pipeline/clouds_too_large");
+  ASSERT_TRUE(malformed.has_value()) << "no diagnostics received";
+  // Loopback best effort delivers these small messages; allow a loss or two all the same.
+  EXPECT_GE(*malformed + too_large.value_or(0.0), 0.8 * static_cast<double>(bad.size() * kRepeats));
+  EXPECT_GT(ros.diagnostics->number("raymapd: pipeline/scans_integrated").value_or(0.0), 10.0);
+  EXPECT_GE(maps.size(), 15u);
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
+TEST(Raymapd, OverflowAtTenTimesTheInputRateDropsOldestScansAndPublishesOnTime) {
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(serviceConfig(domain, "", /*scan_slots=*/2), false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(10.0));
+  // A 10 Hz lidar played at 100 Hz: 32 x 1024 points per scan, 3.3 M points/s.
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, false);
+  driver::PlaybackOptions options;
+  options.scan_rate_hz = 100.0;
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, options, 5.0, maps);
+  ros.settle(1.2, &maps);
+  EXPECT_TRUE(daemon.process->running()) << daemon.log();
+  const double dropped =
+      ros.diagnostics->number("raymapd: pipeline/clouds_dropped_overflow").value_or(0.0);
+  const double received = ros.diagnostics->number("raymapd: pipeline/clouds_received").value_or(0);
+  const double integrated =
+      ros.diagnostics->number("raymapd: pipeline/scans_integrated").value_or(0.0);
+  EXPECT_GT(dropped, 0.0) << "100 Hz of 32k-point scans should overflow 2 slots";
+  EXPECT_GT(integrated, 0.0);
+  EXPECT_LE(integrated + dropped, received);  // every received cloud is counted once
+  EXPECT_LE(ros.diagnostics->number("raymapd: pipeline/scan_queue_depth").value_or(99.0), 2.0);
+  // Still on time: 5 Hz within 2 %.
+  ASSERT_GE(maps.size(), 20u);
+  EXPECT_NEAR(meanPeriodMs(maps, 2), 200.0, 4.0);
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
+TEST(Raymapd, CheckConfigAcceptsTheProfilesAndNamesTheKeyOfAnError) {
+  const auto [ok, ok_text] = runToCompletion(
+      RAYMAPD_PATH, {"--check-config", std::string(RAYMAP_CONFIG_DIR) + "/cpu.yaml"});
+  EXPECT_EQ(ok, 0) << ok_text;
+  EXPECT_NE(ok_text.find("ok"), std::string::npos);
+  TempDir dir;
+  const std::string bad = dir.file("bad.yaml");
+  std::ofstream(bad) << "heightmap:\n  rate_hz: 5\n  sise: 20\n";
+  const auto [status, text] = runToCompletion(RAYMAPD_PATH, {"--check-config", bad});
+  EXPECT_EQ(status, 2);
+  EXPECT_NE(text.find("bad.yaml"), std::string::npos) << text;
+  EXPECT_NE(text.find("heightmap.sise"), std::string::npos) << text;
+  EXPECT_NE(text.find("unknown key"), std::string::npos) << text;
+  const auto [missing, missing_text] =
+      runToCompletion(RAYMAPD_PATH, {"--config", dir.file("absent.yaml")});
+  EXPECT_EQ(missing, 2);
+  EXPECT_NE(missing_text.find("absent.yaml"), std::string::npos) << missing_text;
+}
+
+}  // namespace
+}  // namespace raymap::test
