@@ -153,6 +153,7 @@ std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
       }
       scan_cursor_ = 0;
       scan_first_wait_ns_ = 0;
+      last_point_time_ns_ = INT64_MIN;  // the cached pose belongs to the previous scan's sensor
       float t_min = 0.0f;
       float t_max = 0.0f;
       for (const dds::ScanPoint& p : scan_->points()) {
@@ -178,6 +179,15 @@ std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
       }
       const std::int64_t give_up = scan_first_wait_ns_ + settings_.pose_wait_ns;
       if (now_ns < give_up) {
+        // Earlier scans already in the batch do not wait for this one's poses.
+        if (batch_size_ > 0 || completed_count_ > 0) {
+          const std::int64_t due = batch_first_ns_ + settings_.batch_deadline_ns;
+          if (now_ns >= due) {
+            integrateBatch(now_ns);
+          } else {
+            return std::min(give_up, due);
+          }
+        }
         return give_up;  // new poses wake the thread earlier
       }
       stats_.scans_no_pose.add();
@@ -201,7 +211,7 @@ std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
     scan_stamp_pending_ = std::max(scan_stamp_pending_, scan_->header.stamp_ns);
     mailbox_.release(scan_);
     scan_ = nullptr;
-    if (per_scan_ || completed_count_ == completed_.size()) {
+    if (per_scan_ || completed_count_ == completed_.size() || batch_size_ == rays_.size()) {
       integrateBatch(now_ns);
     }
   }

@@ -91,12 +91,24 @@ ScanSlot* ScanMailbox::take() noexcept {
     if (oldest == slot_count_) {
       return nullptr;
     }
+    Entry& entry = entries_[oldest];
+    const std::uint64_t sequence = entry.sequence.load(std::memory_order_relaxed);
     std::uint32_t expected = kReady;
-    if (entries_[oldest].state.compare_exchange_strong(expected, kReading,
-                                                       std::memory_order_acquire)) {
-      return &entries_[oldest].slot;
+    if (entry.state.compare_exchange_strong(expected, kReading, std::memory_order_acquire)) {
+      // Two races make the claimed scan not the oldest, and both are undone by handing it back
+      // as ready and looking again: between the scan and the CAS the producer dropped this scan
+      // and published a newer one in the same slot (ABA); or the scan passed a slot while the
+      // producer was still writing a scan older than this one.
+      const std::uint32_t older = oldestReady();
+      const bool still_oldest =
+          older == slot_count_ ||
+          entries_[older].sequence.load(std::memory_order_relaxed) > sequence;
+      if (entry.sequence.load(std::memory_order_relaxed) == sequence && still_oldest) {
+        return &entry.slot;
+      }
+      entry.state.store(kReady, std::memory_order_release);
     }
-    // The producer took it back as the oldest: look again.
+    // Otherwise the producer took it back as the oldest: look again.
   }
   return nullptr;
 }

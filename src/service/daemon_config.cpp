@@ -226,7 +226,10 @@ void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
   dds.diagnostics_topic = topic(f, "diagnostics_topic", dds.diagnostics_topic);
   dds.diagnostics_rate_hz = f.positive("diagnostics_rate_hz", dds.diagnostics_rate_hz);
   f.check(dds.diagnostics_rate_hz <= 10.0, "diagnostics_rate_hz", "must be at most 10");
-  dds.voxels_topic = f.has("voxels_topic") ? topic(f, "voxels_topic", "") : "";
+  dds.voxels_topic = text(f, "voxels_topic", "");  // empty: off
+  if (!dds.voxels_topic.empty()) {
+    dds.voxels_topic = topic(f, "voxels_topic", "");
+  }
   dds.voxels_rate_hz = f.positive("voxels_rate_hz", dds.voxels_rate_hz);
   f.check(dds.voxels_rate_hz <= 5.0, "voxels_rate_hz", "must be at most 5");
   dds.voxels_max_points =

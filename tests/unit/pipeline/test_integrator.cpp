@@ -1,0 +1,536 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Integrator on a real rolling VoxelMap and the CPU backend: deskewing with interpolated poses,
+// extrinsics, waiting for and dropping scans without poses, no-return points, batching and the
+// arrivals of completed scans. The test plays the ingest thread (mailbox and pose queue).
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "platform/pi_mutex.hpp"
+#include "src/map/cpu_backend.hpp"
+#include "src/map/voxel_map.hpp"
+#include "src/pipeline/integrator.hpp"
+#include "src/pipeline/pipeline_stats.hpp"
+#include "src/pipeline/pose_update.hpp"
+#include "src/pipeline/scan_mailbox.hpp"
+#include "tests/support/test_rays.hpp"
+
+namespace raymap::pipeline {
+namespace {
+
+constexpr std::int64_t kMs = 1000000;
+constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
+constexpr std::int64_t kStamp = 1000 * kMs;  // header.stamp of the scans (pose clock)
+constexpr std::int64_t kNow = 5000 * kMs;    // monotonic "now" of the integrator thread
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// A yaw of `radians` about +z.
+io::Quaternion yaw(double radians) {
+  return {std::cos(0.5 * radians), 0.0, 0.0, std::sin(0.5 * radians)};
+}
+
+io::Pose makePose(Vec3d position, io::Quaternion orientation = {}) {
+  io::Pose p;
+  p.position = position;
+  p.orientation = orientation;
+  return p;
+}
+
+/// The point in the frame of `pose` that `pose` maps to `p_world`.
+Vec3d toLocal(const io::Pose& pose, Vec3d p_world) {
+  const io::Quaternion& q = pose.orientation;
+  const io::Quaternion inverse{q.w, -q.x, -q.y, -q.z};
+  return inverse.rotate(p_world - pose.position);
+}
+
+dds::ScanPoint scanPoint(Vec3d p_sensor, float time_s = 0.0f, std::uint32_t flags = 0) {
+  return dds::ScanPoint{static_cast<float>(p_sensor.x),
+                        static_cast<float>(p_sensor.y),
+                        static_cast<float>(p_sensor.z),
+                        time_s,
+                        1.0f,
+                        flags};
+}
+
+SensorSettings sensorAt(const io::Pose& extrinsic = {}) {
+  SensorSettings s;
+  s.extrinsic = extrinsic;
+  s.filter.min_range_m = 0.2;
+  s.filter.max_range_m = 10.0;
+  return s;
+}
+
+IntegratorSettings defaultSettings() {
+  IntegratorSettings s;
+  s.batch_rays = 1024;
+  s.batch_deadline_ns = 5 * kMs;
+  s.pose_wait_ns = 50 * kMs;
+  s.pose_hold_ns = 20 * kMs;
+  s.pose_history = 64;
+  return s;
+}
+
+/// The pipeline around one integrator, as raymapd wires it: 0.1 m voxels, 1.6 m regions, a
+/// rolling window of 6 x 6 x 2 regions (9.6 x 9.6 x 3.2 m) centred on the origin.
+struct Rig {
+  explicit Rig(const IntegratorSettings& settings = defaultSettings(),
+               std::vector<SensorSettings> sensors = {sensorAt()},
+               Semantics semantics = Semantics::kPerRay)
+      : map(test::makeMap(mapConfig(semantics))),
+        backend(test::cpuBackend(map, 1)),
+        mailbox(4, 4096),
+        poses(256),
+        arrivals(64),
+        integrator(prepared(map), *backend, mutex, mailbox, poses, arrivals, latest, settings,
+                   std::move(sensors), stats) {}
+
+  static MapConfig mapConfig(Semantics semantics) {
+    MapConfig c;
+    c.geometry.resolution = 0.1;
+    c.geometry.region_voxels = 16;
+    c.policy = StorePolicy::kRolling;
+    c.window_regions = {6, 6, 2};
+    c.semantics = semantics;
+    return c;
+  }
+  static VoxelMap& prepared(VoxelMap& m) {
+    m.setWindowCentre({0.0, 0.0, 0.0});  // the publisher's job in raymapd
+    return m;
+  }
+
+  void pushPose(std::int64_t stamp_ns, const io::Pose& base_in_world) {
+    PoseUpdate u;
+    u.stamp_ns = stamp_ns;
+    u.pose = base_in_world;
+    u.kind = PoseUpdate::kBaseInWorld;
+    ASSERT_TRUE(poses.push(u));
+  }
+  void pushExtrinsic(std::uint32_t sensor, const io::Pose& sensor_in_base) {
+    PoseUpdate u;
+    u.pose = sensor_in_base;
+    u.sensor = sensor;
+    u.kind = PoseUpdate::kSensorExtrinsic;
+    ASSERT_TRUE(poses.push(u));
+  }
+  /// Publishes a scan as the ingest thread does.
+  void publishScan(std::int64_t stamp_ns, const std::vector<dds::ScanPoint>& points,
+                   std::uint32_t sensor = 0, std::int64_t arrival_ns = kNow) {
+    ScanSlot* slot = mailbox.acquire();
+    ASSERT_NE(slot, nullptr);
+    ASSERT_LE(points.size(), slot->buffer.size());
+    slot->header = dds::CloudHeader{};
+    slot->header.stamp_ns = stamp_ns;
+    slot->header.points = static_cast<std::uint32_t>(points.size());
+    slot->header.width = slot->header.points;
+    slot->header.height = 1;
+    slot->header.has_time = true;
+    slot->sensor = sensor;
+    slot->arrival_ns = arrival_ns;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      slot->buffer[i] = points[i];
+    }
+    mailbox.publish(slot);
+  }
+  VoxelState stateAt(Vec3d p_world) const { return map.state(map.voxelOf(p_world)); }
+  std::vector<std::int64_t> drainArrivals() {
+    std::vector<std::int64_t> out;
+    std::int64_t a = 0;
+    while (arrivals.pop(a)) {
+      out.push_back(a);
+    }
+    return out;
+  }
+
+  VoxelMap map;
+  std::unique_ptr<Backend> backend;
+  platform::PiMutex mutex;
+  ScanMailbox mailbox;
+  PoseQueue poses;
+  ArrivalQueue arrivals;
+  LatestPosition latest;
+  PipelineStats stats;
+  Integrator integrator;
+};
+
+/// A point straight ahead of an identity-posed sensor at the centre of a wall voxel.
+const Vec3d kWall{3.05, 0.05, 0.05};
+
+TEST(Integrator, DeskewsEveryPointWithThePoseAtItsTime) {
+  auto rig = std::make_unique<Rig>();
+  // The base moves 1 m along x and turns 90 degrees left during the 125 ms scan. Times are exact
+  // in float (0, 1/16 s, 1/8 s) so that the interpolated poses are known exactly.
+  const io::Pose start = makePose({0.0, 0.0, 0.0});
+  const io::Pose middle =
+      io::interpolate(start, makePose({1.0, 0.0, 0.0}, yaw(std::numbers::pi / 2)), 0.5);
+  const io::Pose end = makePose({1.0, 0.0, 0.0}, yaw(std::numbers::pi / 2));
+  rig->pushPose(kStamp, start);
+  rig->pushPose(kStamp + 125 * kMs, end);
+  // Three wall voxels at x = 3.0..3.1, one seen at each instant.
+  const Vec3d w0{3.05, 0.05, 0.05};
+  const Vec3d w1{3.05, 1.05, 0.05};
+  const Vec3d w2{3.05, -1.05, 0.05};
+  const Vec3d p0 = toLocal(start, w0);
+  const Vec3d p1 = toLocal(middle, w1);
+  const Vec3d p2 = toLocal(end, w2);
+  rig->publishScan(kStamp, {scanPoint(p0, 0.0f), scanPoint(p1, 0.0625f), scanPoint(p2, 0.125f)});
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 3u);
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 0u);
+  EXPECT_EQ(rig->stateAt(w0), VoxelState::kOccupied);
+  EXPECT_EQ(rig->stateAt(w1), VoxelState::kOccupied);
+  EXPECT_EQ(rig->stateAt(w2), VoxelState::kOccupied);
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 3u) << "hits only at the three wall voxels";
+  // Without deskewing (every point with the pose at the header stamp, or at the scan's end) the
+  // hits would land here instead.
+  EXPECT_NE(rig->stateAt(start.transform(p1)), VoxelState::kOccupied);
+  EXPECT_NE(rig->stateAt(start.transform(p2)), VoxelState::kOccupied);
+  EXPECT_NE(rig->stateAt(end.transform(p0)), VoxelState::kOccupied);
+  // The ray of each point starts where the sensor was at that point's time: the voxels between
+  // the interpolated origin and the wall are free.
+  EXPECT_EQ(rig->stateAt({2.05, 0.05, 0.05}), VoxelState::kFree);
+  EXPECT_EQ(rig->stateAt(middle.position + (w1 - middle.position) * 0.5), VoxelState::kFree);
+}
+
+TEST(Integrator, StaticExtrinsicPlacesTheSensorOnTheBase) {
+  // Sensor 0.5 m forward, 1 m left, 0.2 m up, turned 180 degrees about z.
+  const io::Pose extrinsic = makePose({0.5, 1.0, 0.2}, yaw(std::numbers::pi));
+  auto rig =
+      std::make_unique<Rig>(defaultSettings(), std::vector<SensorSettings>{sensorAt(extrinsic)});
+  const io::Pose base = makePose({0.0, 0.0, 0.0});
+  rig->pushPose(kStamp, base);
+  const Vec3d p = toLocal(io::compose(base, extrinsic), kWall);
+
+  rig->publishScan(kStamp, {scanPoint(p)});
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stateAt(kWall), VoxelState::kOccupied);
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 1u);
+  // The ray starts at the sensor: half way to the wall is free.
+  EXPECT_EQ(rig->stateAt(Vec3d{0.5, 1.0, 0.2} + (kWall - Vec3d{0.5, 1.0, 0.2}) * 0.5),
+            VoxelState::kFree);
+}
+
+TEST(Integrator, ExtrinsicUpdateTakesEffectForLaterScans) {
+  auto rig = std::make_unique<Rig>();
+  const io::Pose base = makePose({0.0, 0.0, 0.0});
+  rig->pushPose(kStamp, base);
+  rig->pushPose(kStamp + 200 * kMs, base);
+  // Scan 1 with the configured (identity) extrinsic.
+  rig->publishScan(kStamp, {scanPoint(kWall)});
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+  ASSERT_EQ(rig->stateAt(kWall), VoxelState::kOccupied);
+
+  // tf_static arrives: the sensor is 1 m left of the base, turned 180 degrees.
+  const io::Pose extrinsic = makePose({0.0, 1.0, 0.0}, yaw(std::numbers::pi));
+  rig->pushExtrinsic(0, extrinsic);
+  const Vec3d target{-2.05, 2.05, 0.05};
+  const Vec3d p = toLocal(io::compose(base, extrinsic), target);
+  // Scan 2 at the same point time as scan 1: a pose cached for that time must not be reused.
+  rig->publishScan(kStamp, {scanPoint(p)});
+  rig->integrator.step(kNow + 10 * kMs);
+  rig->integrator.flush(kNow + 10 * kMs);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
+  EXPECT_EQ(rig->stateAt(target), VoxelState::kOccupied);
+  EXPECT_NE(rig->stateAt(base.transform(p)), VoxelState::kOccupied)
+      << "scan 2 used the old extrinsic";
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 2u);
+}
+
+TEST(Integrator, ExtrinsicOfAnUnknownSensorIsIgnored) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->pushExtrinsic(7, makePose({0.0, 3.0, 0.0}));
+
+  rig->publishScan(kStamp, {scanPoint(kWall)});
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stateAt(kWall), VoxelState::kOccupied);
+}
+
+// Regression: the cached sensor pose was keyed by point time alone, so two lidars whose clouds
+// carry the same header stamp placed the second sensor's points with the first's extrinsic.
+TEST(Integrator, TwoSensorsWithTheSameStampUseTheirOwnExtrinsics) {
+  const io::Pose front = makePose({0.3, 0.0, 0.0});
+  const io::Pose rear = makePose({-0.3, 0.0, 0.0}, yaw(std::numbers::pi));
+  auto rig = std::make_unique<Rig>(defaultSettings(),
+                                   std::vector<SensorSettings>{sensorAt(front), sensorAt(rear)});
+  const io::Pose base = makePose({0.0, 0.0, 0.0});
+  rig->pushPose(kStamp, base);
+  const Vec3d front_target{3.05, 0.05, 0.05};
+  const Vec3d rear_target{-3.05, -1.05, 0.05};
+  const Vec3d p_front = toLocal(io::compose(base, front), front_target);
+  const Vec3d p_rear = toLocal(io::compose(base, rear), rear_target);
+
+  rig->publishScan(kStamp, {scanPoint(p_front)}, 0);
+  rig->publishScan(kStamp, {scanPoint(p_rear)}, 1);
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
+  EXPECT_EQ(rig->stateAt(front_target), VoxelState::kOccupied);
+  EXPECT_EQ(rig->stateAt(rear_target), VoxelState::kOccupied)
+      << "the rear sensor's point was placed with another pose";
+  EXPECT_NE(rig->stateAt(io::compose(base, front).transform(p_rear)), VoxelState::kOccupied)
+      << "the rear sensor's point was placed with the front sensor's extrinsic";
+}
+
+TEST(Integrator, ScanWithoutPosesWaitsThenIsDropped) {
+  auto rig = std::make_unique<Rig>();  // pose_wait 50 ms
+  rig->publishScan(kStamp, {scanPoint(kWall)});
+
+  const std::int64_t wake = rig->integrator.step(kNow);
+  EXPECT_EQ(wake, kNow + 50 * kMs);
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 0u);
+  EXPECT_EQ(rig->mailbox.waiting(), 0u) << "the integrator holds the scan while it waits";
+  EXPECT_EQ(rig->integrator.step(kNow + 49 * kMs), kNow + 50 * kMs) << "the wait is not renewed";
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 0u);
+
+  EXPECT_EQ(rig->integrator.step(kNow + 50 * kMs), kNever);
+
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 0u);
+  EXPECT_TRUE(rig->drainArrivals().empty());
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 0u);
+  // The slot went back: every slot takes a scan again without dropping one.
+  for (std::uint32_t i = 0; i < rig->mailbox.capacity(); ++i) {
+    rig->publishScan(kStamp, {scanPoint(kWall)});
+  }
+  EXPECT_EQ(rig->mailbox.droppedOldest(), 0u);
+}
+
+TEST(Integrator, ScanWaitsForPosesThatArriveLater) {
+  auto rig = std::make_unique<Rig>();  // hold 20 ms
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  // The last point is 100 ms after the only pose: not covered yet.
+  rig->publishScan(kStamp, {scanPoint(kWall, 0.0f), scanPoint({3.05, 1.05, 0.05}, 0.1f)});
+  const std::int64_t wake = rig->integrator.step(kNow);
+  ASSERT_EQ(wake, kNow + 50 * kMs);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 0u);
+
+  rig->pushPose(kStamp + 100 * kMs, makePose({0.0, 0.0, 0.0}));
+  rig->integrator.step(kNow + 10 * kMs);
+  rig->integrator.flush(kNow + 10 * kMs);
+
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 0u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stateAt(kWall), VoxelState::kOccupied);
+  EXPECT_EQ(rig->stateAt({3.05, 1.05, 0.05}), VoxelState::kOccupied);
+}
+
+TEST(Integrator, NewestPoseIsHeldForPointsJustBeyondIt) {
+  auto rig = std::make_unique<Rig>();  // hold 20 ms
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+
+  rig->publishScan(kStamp, {scanPoint(kWall, 0.015f)});
+  EXPECT_EQ(rig->integrator.step(kNow), kNow + 5 * kMs) << "batched: due at its deadline";
+  rig->integrator.step(kNow + 5 * kMs);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stateAt(kWall), VoxelState::kOccupied);
+}
+
+TEST(Integrator, ScanOlderThanThePoseHistoryIsDroppedAtOnce) {
+  IntegratorSettings settings = defaultSettings();
+  settings.pose_history = 4;
+  auto rig = std::make_unique<Rig>(settings);
+  for (int i = 0; i < 10; ++i) {  // the history keeps 60..90 ms
+    rig->pushPose(kStamp + i * 10 * kMs, makePose({0.0, 0.0, 0.0}));
+  }
+  rig->publishScan(kStamp + 20 * kMs, {scanPoint(kWall)});
+
+  EXPECT_EQ(rig->integrator.step(kNow), kNever) << "no wait: older poses never come";
+
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 0u);
+  EXPECT_EQ(rig->integrator.poses().oldestStamp(), kStamp + 60 * kMs);
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 0u);
+}
+
+TEST(Integrator, NoReturnPointsAreCountedAndNotIntegrated) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  dds::ScanPoint no_return{kNaN, kNaN, kNaN, 0.0f, 0.0f, dds::kPointNoReturn};
+  rig->publishScan(kStamp, {scanPoint(kWall), no_return, scanPoint({3.05, 1.05, 0.05}), no_return,
+                            scanPoint({3.05, -1.05, 0.05})});
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.points_no_return.get(), 2u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 3u);
+  EXPECT_EQ(rig->stats.rays_rejected.get(), 0u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 3u);
+}
+
+TEST(Integrator, RaysShorterThanTheMinimumRangeAreRejected) {
+  auto rig = std::make_unique<Rig>();  // min range 0.2 m
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(kStamp, {scanPoint(kWall), scanPoint({0.1, 0.0, 0.0})});
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.rays_rejected.get(), 1u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+}
+
+TEST(Integrator, ArrivalsOfCompletedScansAreQueuedAfterTheirRaysAreInTheMap) {
+  auto rig = std::make_unique<Rig>();  // deadline 5 ms
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->pushPose(kStamp + 100 * kMs, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(kStamp, {scanPoint(kWall)}, 0, kNow - 2 * kMs);
+  rig->publishScan(kStamp + 50 * kMs, {scanPoint({3.05, 1.05, 0.05})}, 0, kNow - kMs);
+
+  const std::int64_t due = rig->integrator.step(kNow);
+  EXPECT_EQ(due, kNow - 2 * kMs + 5 * kMs) << "the first scan's arrival plus the deadline";
+  EXPECT_TRUE(rig->drainArrivals().empty()) << "nothing is in the map yet";
+  EXPECT_EQ(rig->stats.batches.get(), 0u);
+
+  EXPECT_EQ(rig->integrator.step(due), kNever);
+
+  EXPECT_EQ(rig->stats.batches.get(), 1u) << "both scans in one batch";
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
+  EXPECT_EQ(rig->drainArrivals(), (std::vector<std::int64_t>{kNow - 2 * kMs, kNow - kMs}));
+  EXPECT_EQ(rig->stats.newest_scan_stamp_ns.load(), kStamp + 50 * kMs);
+}
+
+TEST(Integrator, BatchesAreSplitAtBatchRays) {
+  IntegratorSettings settings = defaultSettings();
+  settings.batch_rays = 4;
+  auto rig = std::make_unique<Rig>(settings);
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  std::vector<dds::ScanPoint> points;
+  for (int i = 0; i < 10; ++i) {
+    points.push_back(scanPoint({3.05, -1.95 + 0.4 * i, 0.05}));
+  }
+  rig->publishScan(kStamp, points);
+
+  const std::int64_t due = rig->integrator.step(kNow);
+
+  EXPECT_EQ(rig->stats.batches.get(), 2u) << "two full batches of 4 at once";
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 8u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 0u) << "the scan's last rays are not in yet";
+  EXPECT_TRUE(rig->drainArrivals().empty());
+  EXPECT_EQ(due, kNow + 5 * kMs);
+
+  rig->integrator.step(due);
+
+  EXPECT_EQ(rig->stats.batches.get(), 3u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 10u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->drainArrivals().size(), 1u);
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 10u);
+}
+
+// Regression: a scan of exactly batch_rays (or a multiple) left a full batch waiting for the
+// deadline.
+TEST(Integrator, FullBatchIsIntegratedWithoutWaitingForTheDeadline) {
+  IntegratorSettings settings = defaultSettings();
+  settings.batch_rays = 4;
+  auto rig = std::make_unique<Rig>(settings);
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  std::vector<dds::ScanPoint> points;
+  for (int i = 0; i < 4; ++i) {
+    points.push_back(scanPoint({3.05, -1.95 + 0.4 * i, 0.05}));
+  }
+  rig->publishScan(kStamp, points);
+
+  rig->integrator.step(kNow);
+
+  EXPECT_EQ(rig->stats.batches.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+}
+
+TEST(Integrator, SensorChangeClosesTheBatch) {
+  auto rig =
+      std::make_unique<Rig>(defaultSettings(), std::vector<SensorSettings>{sensorAt(), sensorAt()});
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->pushPose(kStamp + 100 * kMs, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(kStamp, {scanPoint(kWall)}, 0);
+  rig->publishScan(kStamp + 10 * kMs, {scanPoint({3.05, 1.05, 0.05})}, 1);
+
+  rig->integrator.step(kNow);
+
+  EXPECT_EQ(rig->stats.batches.get(), 1u) << "sensor 0's batch went in when sensor 1's came";
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  rig->integrator.step(kNow + 5 * kMs);
+  EXPECT_EQ(rig->stats.batches.get(), 2u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
+}
+
+TEST(Integrator, PerScanSemanticsIntegrateEachScanInOneCallAtOnce) {
+  IntegratorSettings settings = defaultSettings();
+  settings.batch_rays = 4;  // smaller than a scan: per-scan batches hold a whole scan anyway
+  auto rig =
+      std::make_unique<Rig>(settings, std::vector<SensorSettings>{sensorAt()}, Semantics::kPerScan);
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->pushPose(kStamp + 100 * kMs, makePose({0.0, 0.0, 0.0}));
+  std::vector<dds::ScanPoint> points;
+  for (int i = 0; i < 10; ++i) {
+    points.push_back(scanPoint({3.05, -1.95 + 0.4 * i, 0.05}));
+  }
+  rig->publishScan(kStamp, points);
+  rig->publishScan(kStamp + 50 * kMs, points);
+
+  EXPECT_EQ(rig->integrator.step(kNow), kNever) << "nothing left for a deadline";
+
+  EXPECT_EQ(rig->stats.batches.get(), 2u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 20u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
+  EXPECT_EQ(rig->drainArrivals().size(), 2u);
+  EXPECT_EQ(rig->map.summarise().voxels_occupied, 10u);
+}
+
+// Regression: while a scan waited for poses, step() returned the pose give-up time without
+// looking at the pending batch: an earlier, complete scan stayed out of the map (and its arrival
+// out of the latency queue) up to pose_wait_ns instead of batch_deadline_ns.
+TEST(Integrator, PendingBatchMeetsItsDeadlineWhileTheNextScanWaitsForPoses) {
+  auto rig = std::make_unique<Rig>();  // deadline 5 ms, pose wait 50 ms, hold 20 ms
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(kStamp, {scanPoint(kWall)}, 0, kNow);
+  rig->publishScan(kStamp + 100 * kMs, {scanPoint({3.05, 1.05, 0.05})}, 0, kNow);
+
+  const std::int64_t wake = rig->integrator.step(kNow);
+  EXPECT_LE(wake, kNow + 5 * kMs) << "the first scan's batch is due before the pose give-up";
+  rig->integrator.step(kNow + 5 * kMs);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->drainArrivals().size(), 1u);
+  EXPECT_EQ(rig->stateAt(kWall), VoxelState::kOccupied);
+}
+
+TEST(Integrator, PosesFeedTheHistoryAndTheLatestPosition) {
+  auto rig = std::make_unique<Rig>();
+  std::int64_t stamp = 0;
+  Vec3d position;
+  ASSERT_FALSE(rig->latest.load(&stamp, &position));
+  rig->pushPose(kStamp, makePose({1.0, 2.0, 3.0}));
+  rig->pushPose(kStamp + 10 * kMs, makePose({4.0, 5.0, 6.0}));
+  rig->pushPose(kStamp + 5 * kMs, makePose({9.0, 9.0, 9.0}));  // out of order: ignored
+
+  EXPECT_EQ(rig->integrator.step(kNow), kNever) << "no scan: nothing to wake for";
+
+  EXPECT_EQ(rig->stats.poses_out_of_order.get(), 1u);
+  EXPECT_EQ(rig->integrator.poses().size(), 2u);
+  ASSERT_TRUE(rig->latest.load(&stamp, &position));
+  EXPECT_EQ(stamp, kStamp + 10 * kMs);
+  EXPECT_EQ(position, (Vec3d{4.0, 5.0, 6.0}));
+}
+
+}  // namespace
+}  // namespace raymap::pipeline

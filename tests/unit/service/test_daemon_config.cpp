@@ -1,0 +1,358 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymapd's configuration: defaults, the shipped profiles, and errors that name the file, the key
+// and the reason.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/service/backend_choice.hpp"
+#include "src/service/daemon_config.hpp"
+
+namespace raymap::service {
+namespace {
+
+constexpr const char* kName = "robot.yaml";
+
+/// config/ of this checkout (this file is tests/unit/service/ of it).
+std::filesystem::path configDir() {
+  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().parent_path() /
+         "config";
+}
+
+bool haveBackend(const std::string& name) {
+  const std::vector<std::string> available = availableBackends();
+  return std::find(available.begin(), available.end(), name) != available.end();
+}
+
+/// Parses `text` expecting an error; returns its message ("" and a test failure when it parsed).
+std::string errorOf(const std::string& text) {
+  auto result = parseDaemonConfig(text, kName);
+  EXPECT_FALSE(result) << "accepted:\n" << text;
+  return result ? std::string() : result.error().message;
+}
+
+/// Expects the error message of `text` to name the file, `key` and `reason`.
+void expectError(const std::string& text, const std::string& key, const std::string& reason) {
+  SCOPED_TRACE(text);
+  const std::string message = errorOf(text);
+  EXPECT_NE(message.find(kName), std::string::npos) << message;
+  EXPECT_NE(message.find(key), std::string::npos) << "key '" << key << "' not in: " << message;
+  EXPECT_NE(message.find(reason), std::string::npos)
+      << "reason '" << reason << "' not in: " << message;
+}
+
+TEST(DaemonConfig, EmptyMappingGivesTheDefaults) {
+  auto result = parseDaemonConfig("{}\n", kName);
+
+  ASSERT_TRUE(result) << result.error().message;
+  const DaemonConfig& c = result.value();
+  EXPECT_EQ(c.path, kName);
+  EXPECT_EQ(c.map.policy, StorePolicy::kRolling);
+  EXPECT_EQ(c.map.geometry.resolution, MapGeometry::kDefaultResolution);
+  EXPECT_EQ(c.map.geometry.region_voxels, MapGeometry::kDefaultRegionVoxels);
+  EXPECT_EQ(c.map.window_regions, (Vec3i{8, 8, 3}));
+  EXPECT_EQ(c.map.semantics, Semantics::kPerRay);
+  EXPECT_TRUE(c.map.voxel_mean);
+  EXPECT_TRUE(c.map.prefault);
+  EXPECT_EQ(c.backend.name, "cpu");
+  EXPECT_FALSE(c.backend.fallback_cpu);
+  EXPECT_EQ(c.pose.source, PoseConfig::Source::kOdometry);
+  EXPECT_EQ(c.pose.odometry_topic, "rt/odom");
+  EXPECT_EQ(c.pose.history, 4096u);
+  ASSERT_EQ(c.sensors.size(), 1u);
+  EXPECT_EQ(c.sensors[0].topic, "rt/points");
+  EXPECT_EQ(c.sensors[0].min_range_m, 0.5);
+  EXPECT_EQ(c.sensors[0].max_range_m, 20.0);
+  EXPECT_EQ(c.sensors[0].time_field, "auto");
+  EXPECT_EQ(c.heightmap.rate_hz, 5.0);
+  EXPECT_EQ(c.heightmap.size_m, 20.0);
+  EXPECT_FALSE(c.heightmap.floor_depth_m.has_value());
+  EXPECT_EQ(c.dds.domain, 0u);
+  EXPECT_EQ(c.dds.grid_map_topic, "rt/height_map");
+  EXPECT_TRUE(c.dds.voxels_topic.empty());
+  EXPECT_EQ(c.queues.scan_slots, 4u);
+  EXPECT_EQ(c.queues.batch_rays, 16384u);
+  EXPECT_TRUE(c.realtime.lock_memory);
+  EXPECT_EQ(c.realtime.ingest.priority, 40);
+  EXPECT_EQ(c.realtime.integrator.priority, 30);
+  EXPECT_EQ(c.realtime.publisher.priority, 60);
+  EXPECT_TRUE(c.save_map_on_exit.empty());
+}
+
+TEST(DaemonConfig, EmptySectionsGiveTheDefaults) {
+  auto result = parseDaemonConfig("map:\nbackend:\npose:\nheightmap:\n", kName);
+
+  ASSERT_TRUE(result) << result.error().message;
+  EXPECT_EQ(result->map.window_regions, (Vec3i{8, 8, 3}));
+  EXPECT_EQ(result->backend.name, "cpu");
+}
+
+TEST(DaemonConfig, CpuProfileParses) {
+  auto result = loadDaemonConfig((configDir() / "cpu.yaml").string());
+
+  ASSERT_TRUE(result) << result.error().message;
+  const DaemonConfig& c = result.value();
+  EXPECT_EQ(c.map.window_regions, (Vec3i{10, 10, 4}));
+  EXPECT_EQ(c.backend.name, "cpu");
+  EXPECT_EQ(c.backend.threads, 0u);
+  ASSERT_EQ(c.sensors.size(), 1u);
+  EXPECT_EQ(c.sensors[0].name, "lidar");
+  EXPECT_EQ(c.sensors[0].max_points, 262144u);
+  EXPECT_EQ(c.sensors[0].extrinsic.orientation.w, 1.0);
+  EXPECT_EQ(c.dds.voxels_topic, "rt/raymap/occupied_voxels");
+  EXPECT_EQ(c.heightmap.publish_lead_s, 0.015);
+  EXPECT_TRUE(c.realtime.ingest.cpus.empty());
+  EXPECT_NE(c.path.find("cpu.yaml"), std::string::npos);
+}
+
+/// A profile for a device backend: parses where this build has the backend, else the error names
+/// backend.name.
+void expectProfile(const std::string& file, const std::string& backend) {
+  SCOPED_TRACE(file);
+  auto result = loadDaemonConfig((configDir() / file).string());
+  if (!haveBackend(backend)) {
+    ASSERT_FALSE(result) << file << " parsed without a " << backend << " backend";
+    EXPECT_NE(result.error().message.find(file), std::string::npos) << result.error().message;
+    EXPECT_NE(result.error().message.find("backend.name"), std::string::npos)
+        << result.error().message;
+    EXPECT_NE(result.error().message.find(backend), std::string::npos) << result.error().message;
+    return;
+  }
+  ASSERT_TRUE(result) << result.error().message;
+  EXPECT_EQ(result->backend.name, backend);
+  EXPECT_TRUE(result->backend.fallback_cpu);
+}
+
+TEST(DaemonConfig, NucOpenClProfileParsesOrNamesTheMissingBackend) {
+  expectProfile("nuc-opencl.yaml", "opencl");
+  auto result = loadDaemonConfig((configDir() / "nuc-opencl.yaml").string());
+  if (result) {
+    EXPECT_EQ(result->pose.source, PoseConfig::Source::kTf);
+    ASSERT_EQ(result->sensors.size(), 1u);
+    EXPECT_EQ(result->sensors[0].frame, "os_sensor");
+    EXPECT_EQ(result->realtime.integrator.cpus, (std::vector<int>{2, 3}));
+  }
+}
+
+TEST(DaemonConfig, JetsonCudaProfileParsesOrNamesTheMissingBackend) {
+  expectProfile("jetson-cuda.yaml", "cuda");
+  auto result = loadDaemonConfig((configDir() / "jetson-cuda.yaml").string());
+  if (result) {
+    ASSERT_EQ(result->sensors.size(), 2u);
+    EXPECT_EQ(result->sensors[1].topic, "rt/rear/points");
+    EXPECT_EQ(result->sensors[1].extrinsic.orientation.z, 1.0);
+    EXPECT_EQ(result->backend.gpu_cache_bytes, std::uint64_t{512} << 20);
+  }
+}
+
+TEST(DaemonConfig, DeviceProfilesParseOnTheCpuBackend) {
+  // Whatever this build has: with backend.name switched to cpu every other key must be valid.
+  for (const char* file : {"nuc-opencl.yaml", "jetson-cuda.yaml"}) {
+    SCOPED_TRACE(file);
+    auto loaded = loadDaemonConfig((configDir() / file).string());
+    if (loaded) {
+      continue;
+    }
+    std::ifstream in(configDir() / file);
+    ASSERT_TRUE(in) << file;
+    std::string text;
+    for (std::string line; std::getline(in, line);) {
+      text += line + "\n";
+    }
+    for (const char* name : {"name: opencl", "name: cuda"}) {
+      const std::size_t at = text.find(name);
+      if (at != std::string::npos) {
+        text.replace(at, std::string(name).size(), "name: cpu");
+      }
+    }
+    auto result = parseDaemonConfig(text, file);
+    EXPECT_TRUE(result) << result.error().message;
+  }
+}
+
+TEST(DaemonConfig, MissingFileIsAnIoErrorNamingIt) {
+  auto result = loadDaemonConfig("/nonexistent/raymapd.yaml");
+
+  ASSERT_FALSE(result);
+  EXPECT_EQ(result.error().code, ErrorCode::kIo);
+  EXPECT_NE(result.error().message.find("/nonexistent/raymapd.yaml"), std::string::npos)
+      << result.error().message;
+  EXPECT_NE(result.error().message.find("cannot open"), std::string::npos);
+}
+
+TEST(DaemonConfig, InvalidYamlNamesTheLine) {
+  const std::string message = errorOf("map:\n  resolution: 0.1\n  window: [1, 2\nbackend: {}\n");
+
+  EXPECT_NE(message.find(kName), std::string::npos) << message;
+  EXPECT_NE(message.find("not valid YAML"), std::string::npos) << message;
+  EXPECT_NE(message.find("line "), std::string::npos) << message;
+}
+
+TEST(DaemonConfig, InvalidYamlReportsTheRightLine) {
+  // A tab where YAML wants spaces, on line 3.
+  const std::string message = errorOf("map:\n  resolution: 0.1\n\tregion_voxels: 16\n");
+
+  EXPECT_NE(message.find("line 3"), std::string::npos) << message;
+}
+
+TEST(DaemonConfig, UnknownKeysAreTyposNotIgnored) {
+  expectError("mapp:\n  resolution: 0.1\n", "mapp", "unknown key");
+  expectError("map:\n  resolutoin: 0.1\n", "map.resolutoin", "unknown key");
+  expectError("sensors:\n  - topic: rt/a\n    max_rang: 5\n", "sensors[0].max_rang", "unknown key");
+  expectError("sensors:\n  - extrinsic: {translaton: [0, 0, 0]}\n",
+              "sensors[0].extrinsic.translaton", "unknown key");
+  expectError("realtime:\n  ingest: {priority: 10, cpu: [1]}\n", "realtime.ingest.cpu",
+              "unknown key");
+  // The list of known keys helps to fix the typo.
+  EXPECT_NE(errorOf("map:\n  resolutoin: 0.1\n").find("resolution"), std::string::npos);
+}
+
+TEST(DaemonConfig, ErrorsGiveTheLineOfTheKey) {
+  const std::string message = errorOf("map:\n  resolution: 0.1\n  resolutoin: 0.1\n");
+
+  EXPECT_NE(message.find("line 3"), std::string::npos) << message;
+}
+
+TEST(DaemonConfig, WrongTypesAreNamed) {
+  expectError("map: 5\n", "map", "expected a mapping");
+  expectError("map:\n  resolution: fine\n", "map.resolution", "expected a number");
+  expectError("map:\n  voxel_mean: maybe\n", "map.voxel_mean", "expected true or false");
+  expectError("map:\n  window: [8, 8]\n", "map.window", "expected [x, y, z]");
+  expectError("map:\n  semantics: sometimes\n", "map.semantics", "per-ray or per-scan");
+  expectError("queues:\n  scan_slots: 2.5\n", "queues.scan_slots", "expected an integer");
+  expectError("backend:\n  name: [cpu]\n", "backend.name", "must be cpu, opencl or cuda");
+  expectError("pose:\n  source: gps\n", "pose.source", "must be odometry or tf");
+  expectError("sensors:\n  topic: rt/points\n", "sensors", "expected a list");
+  expectError("sensors: []\n", "sensors", "at least one sensor");
+  expectError("sensors:\n  - topic: rt/my points\n", "sensors[0].topic", "without spaces");
+  expectError("sensors:\n  - extrinsic: {rotation: [0, 0, 0, 0]}\n",
+              "sensors[0].extrinsic.rotation", "zero quaternion");
+  expectError("sensors:\n  - extrinsic: {translation: [1, 2]}\n",
+              "sensors[0].extrinsic.translation", "[x, y, z]");
+  expectError("realtime:\n  publisher: {cpus: 3}\n", "realtime.publisher.cpus", "expected a list");
+}
+
+TEST(DaemonConfig, ValuesOutOfRangeAreNamed) {
+  expectError("heightmap:\n  rate_hz: 0\n", "heightmap.rate_hz", "must be > 0");
+  expectError("heightmap:\n  rate_hz: 1000\n", "heightmap.rate_hz", "at most 100");
+  expectError("sensors:\n  - max_range: -1\n", "sensors[0].max_range", "must be > 0");
+  expectError("sensors:\n  - min_range: 5\n    max_range: 2\n", "sensors[0].max_range",
+              "must exceed min_range");
+  expectError("map:\n  hit_probability: 0.4\n", "map.hit_probability", "above 0.5");
+  expectError("map:\n  hit_probability: 1.0\n", "map.hit_probability", "between 0 and 1");
+  expectError("map:\n  miss_probability: 0.6\n", "map.miss_probability", "below 0.5");
+  expectError("map:\n  region_voxels: 2\n", "map.region_voxels", "from 4 to 128");
+  expectError("map:\n  window: [8, 0, 3]\n", "map.window[1]", "from 1 to 256");
+  expectError("realtime:\n  ingest: {priority: 120}\n", "realtime.ingest.priority", "from 0 to 99");
+  expectError("realtime:\n  integrator: {cpus: [-1]}\n", "realtime.integrator.cpus[0]",
+              "from 0 to 63");
+  expectError("queues:\n  scan_slots: 0\n", "queues.scan_slots", "from 1 to 256");
+  expectError("queues:\n  batch_rays: 10\n", "queues.batch_rays", "from 256");
+  expectError("dds:\n  domain: 300\n", "dds.domain", "from 0 to 232");
+  expectError("pose:\n  max_wait_s: -0.1\n", "pose.max_wait_s", "must be >= 0");
+  expectError("map:\n  resolution: .nan\n", "map.resolution", "finite");
+}
+
+TEST(DaemonConfig, HeightMapMustFitTheWindow) {
+  // Default window: 8 x 8 regions of 3.2 m = 25.6 m; the map must be a region smaller.
+  expectError("heightmap:\n  size: 25\n", "heightmap.size", "does not fit the rolling window");
+  EXPECT_TRUE(parseDaemonConfig("heightmap:\n  size: 22.4\n", kName));
+  EXPECT_TRUE(parseDaemonConfig("map:\n  window: [12, 12, 3]\nheightmap:\n  size: 25\n", kName));
+}
+
+TEST(DaemonConfig, TwoSensorsOnOneTopicAreRefused) {
+  expectError("sensors:\n  - topic: rt/points\n  - topic: rt/points\n", "sensors[1].topic",
+              "two sensors on one topic");
+  EXPECT_TRUE(parseDaemonConfig("sensors:\n  - topic: rt/a\n  - topic: rt/b\n", kName));
+}
+
+TEST(DaemonConfig, PublishLeadMustBeShorterThanThePeriod) {
+  expectError("heightmap:\n  rate_hz: 10\n  publish_lead_s: 0.1\n", "heightmap.publish_lead_s",
+              "publish period");
+  expectError("heightmap:\n  rate_hz: 10\n  publish_lead_s: 0.2\n", "heightmap.publish_lead_s",
+              "publish period");
+  EXPECT_TRUE(parseDaemonConfig("heightmap:\n  rate_hz: 10\n  publish_lead_s: 0.05\n", kName));
+}
+
+TEST(DaemonConfig, DuplicateKeysAreRefused) {
+  expectError("map:\n  resolution: 0.1\n  resolution: 0.2\n", "map.resolution", "duplicate key");
+}
+
+TEST(DaemonConfig, SaveOnExitMustNameAFile) {
+  expectError("map:\n  save_on_exit: /var/lib/raymapd/\n", "map.save_on_exit", "file name");
+  auto ok = parseDaemonConfig("map:\n  save_on_exit: /var/lib/raymapd/last.rmap\n", kName);
+  ASSERT_TRUE(ok) << ok.error().message;
+  EXPECT_EQ(ok->save_map_on_exit, "/var/lib/raymapd/last.rmap");
+}
+
+TEST(DaemonConfig, UnavailableBackendIsNamed) {
+  for (const char* name : {"opencl", "cuda"}) {
+    if (haveBackend(name)) {
+      continue;
+    }
+    expectError(std::string("backend:\n  name: ") + name + "\n", "backend.name",
+                std::string("no ") + name + " backend");
+  }
+}
+
+TEST(DaemonConfig, ValuesAreRead) {
+  auto result = parseDaemonConfig(
+      "map:\n"
+      "  resolution: 0.05\n"
+      "  region_voxels: 16\n"
+      "  window: [20, 20, 6]\n"
+      "  semantics: per-scan\n"
+      "pose:\n"
+      "  source: tf\n"
+      "  history: 128\n"
+      "  max_wait_s: 0.1\n"
+      "sensors:\n"
+      "  - name: front\n"
+      "    topic: rt/front\n"
+      "    extrinsic: {translation: [0.1, 0.2, 0.3], rotation: [0, 0, 0, 2]}\n"
+      "    min_range: 0\n"
+      "    time_field: t\n"
+      "heightmap:\n"
+      "  size: 10\n"
+      "  mode: fill\n"
+      "  floor_depth: 0\n"
+      "queues:\n"
+      "  scan_slots: 8\n"
+      "  batch_rays: 4096\n"
+      "realtime:\n"
+      "  lock_memory: false\n"
+      "  ingest: {priority: 0, cpus: [0, 63]}\n",
+      kName);
+
+  ASSERT_TRUE(result) << result.error().message;
+  const DaemonConfig& c = result.value();
+  EXPECT_EQ(c.map.geometry.resolution, 0.05);
+  EXPECT_EQ(c.map.geometry.region_voxels, 16);
+  EXPECT_EQ(c.map.window_regions, (Vec3i{20, 20, 6}));
+  EXPECT_EQ(c.map.semantics, Semantics::kPerScan);
+  EXPECT_EQ(c.pose.source, PoseConfig::Source::kTf);
+  EXPECT_EQ(c.pose.history, 128u);
+  EXPECT_EQ(c.pose.max_wait_s, 0.1);
+  ASSERT_EQ(c.sensors.size(), 1u);
+  EXPECT_EQ(c.sensors[0].name, "front");
+  EXPECT_EQ(c.sensors[0].extrinsic.position, (Vec3d{0.1, 0.2, 0.3}));
+  EXPECT_EQ(c.sensors[0].extrinsic.orientation.z, 1.0) << "normalised";
+  EXPECT_EQ(c.sensors[0].min_range_m, 0.0);
+  EXPECT_EQ(c.sensors[0].time_field, "t");
+  EXPECT_EQ(c.heightmap.mode, heightmap::HeightmapMode::kFill);
+  ASSERT_TRUE(c.heightmap.floor_depth_m.has_value());
+  EXPECT_EQ(*c.heightmap.floor_depth_m, 0.0);
+  EXPECT_EQ(c.queues.scan_slots, 8u);
+  EXPECT_EQ(c.queues.batch_rays, 4096u);
+  EXPECT_FALSE(c.realtime.lock_memory);
+  EXPECT_EQ(c.realtime.ingest.priority, 0);
+  EXPECT_EQ(c.realtime.ingest.cpus, (std::vector<int>{0, 63}));
+  EXPECT_EQ(c.realtime.integrator.priority, 30) << "default kept";
+}
+
+}  // namespace
+}  // namespace raymap::service
