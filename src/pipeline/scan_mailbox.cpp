@@ -100,9 +100,8 @@ ScanSlot* ScanMailbox::take() noexcept {
       // and published a newer one in the same slot (ABA); or the scan passed a slot while the
       // producer was still writing a scan older than this one.
       const std::uint32_t older = oldestReady();
-      const bool still_oldest =
-          older == slot_count_ ||
-          entries_[older].sequence.load(std::memory_order_relaxed) > sequence;
+      const bool still_oldest = older == slot_count_ ||
+                                entries_[older].sequence.load(std::memory_order_relaxed) > sequence;
       if (entry.sequence.load(std::memory_order_relaxed) == sequence && still_oldest) {
         return &entry.slot;
       }
