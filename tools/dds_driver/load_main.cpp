@@ -152,13 +152,14 @@ int main(int argc, char** argv) {
   const auto value = [&](const char* key) { return d.number(key).value_or(-1.0); };
   std::printf(
       "{\n  \"scan_rate_hz\": %g,\n  \"points_per_scan\": %u,\n  \"scans_published\": %llu,\n"
-      "  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  \"map_period_mean_ms\": %.3f,\n"
+      "  \"scans_published_total\": %llu,\n  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  \"map_period_mean_ms\": %.3f,\n"
       "  \"map_period_error_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
       "  \"raymapd\": {\"latency_p50_ms\": %.1f, \"latency_p99_ms\": %.1f, "
       "\"latency_max_ms\": %.1f, \"clouds_received\": %.0f, \"clouds_dropped_overflow\": %.0f, "
       "\"scans_dropped_no_pose\": %.0f, \"clouds_malformed\": %.0f, \"scans_integrated\": %.0f, "
       "\"rays_integrated\": %.0f, \"cycles_late\": %.0f, \"period_error_max_ms\": %.3f}\n}\n",
       scan_rate, lidar.pointsPerScan(), static_cast<unsigned long long>(published),
+      static_cast<unsigned long long>(playback.scansPublished()),
       static_cast<double>(points) / duration, arrivals.size(), mean_period_ms,
       quantile(errors_ms, 0.5), quantile(errors_ms, 0.99), quantile(errors_ms, 1.0),
       value("raymapd: height map/latency_p50_ms_total"),
