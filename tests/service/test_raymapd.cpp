@@ -11,6 +11,7 @@
 #include <signal.h>
 
 #include "platform/clock.hpp"
+#include "src/dds/topic_types.hpp"
 #include "src/sim/scene.hpp"
 #include "tests/service/daemon_process.hpp"
 #include "tests/service/service_fixture.hpp"
@@ -38,6 +39,43 @@ struct RunningDaemon {
   }
   std::string log() const { return readFile(dir.file("raymapd.log")); }
 };
+
+struct HeightCheck {
+  int surfaces = 0;  ///< surface cells with an unambiguous truth
+  int within = 0;    ///< of those, within one voxel of it
+};
+
+/// Every surface cell of a received GridMap (grid_map order: column-major, (0, 0) at the +x/+y
+/// corner) against the scene's exact surface (reference: the ground, clearance 0.5 m).
+HeightCheck checkHeights(const driver::ReceivedGridMap& map, const sim::Scene& scene) {
+  HeightCheck check;
+  const std::vector<float>* elevation = map.layer("elevation");
+  const std::vector<float>* kind = map.layer("kind");
+  if (elevation == nullptr || kind == nullptr) {
+    return check;
+  }
+  const auto cells_x = static_cast<int>(std::lround(map.length_x / map.resolution));
+  const auto cells_y = static_cast<int>(std::lround(map.length_y / map.resolution));
+  for (int j = 0; j < cells_y; ++j) {
+    for (int i = 0; i < cells_x; ++i) {
+      const std::size_t c = static_cast<std::size_t>(i + j * cells_x);
+      if ((*kind)[c] != 1.0f) {  // RM_HM_SURFACE
+        continue;
+      }
+      const double x = map.centre_x + (0.5 * cells_x - i - 0.5) * map.resolution;
+      const double y = map.centre_y + (0.5 * cells_y - j - 0.5) * map.resolution;
+      const auto truth = unambiguousTruth(scene, {x, y, 0.0}, map.resolution, 0.0, 0.5);
+      if (!truth) {
+        continue;  // an object's edge: lidar noise puts its side into the next column
+      }
+      ++check.surfaces;
+      if (std::fabs(static_cast<double>((*elevation)[c]) - truth->height) <= map.resolution) {
+        ++check.within;
+      }
+    }
+  }
+  return check;
+}
 
 double meanPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::size_t skip) {
   if (maps.size() < skip + 2) {
@@ -87,32 +125,11 @@ TEST(Raymapd, PublishesDecodableGridMapsAtFiveHertzWithTrueHeightsUnderSystemd) 
   EXPECT_NEAR(last.centre_x, 4.0, 0.1);
   EXPECT_NEAR(last.centre_y, 0.0, 0.1);
 
-  // Heights: every surface cell against the scene's exact surface (grid_map order: column-major,
-  // (0, 0) at the +x/+y corner).
-  const std::vector<float>& elevation = *last.layer("elevation");
-  const std::vector<float>& kind = *last.layer("kind");
-  int surfaces = 0;
-  int within = 0;
-  for (int j = 0; j < 120; ++j) {
-    for (int i = 0; i < 120; ++i) {
-      const std::size_t c = static_cast<std::size_t>(i + j * 120);
-      if (kind[c] != 1.0f) {  // RM_HM_SURFACE
-        continue;
-      }
-      const double x = last.centre_x + (60 - i - 0.5) * 0.1;
-      const double y = last.centre_y + (60 - j - 0.5) * 0.1;
-      const auto truth = unambiguousTruth(lidar.scene(), {x, y, 0.0}, 0.1, 0.0, 0.5);
-      if (!truth) {
-        continue;  // an object's edge: lidar noise puts its side into the next column
-      }
-      ++surfaces;
-      if (truth && std::fabs(static_cast<double>(elevation[c]) - truth->height) <= 0.1) {
-        ++within;
-      }
-    }
-  }
-  EXPECT_GE(surfaces, 14400 / 4) << "too little of the map observed";
-  EXPECT_GE(within, surfaces * 95 / 100) << within << " of " << surfaces;
+  // Heights: every surface cell against the scene's exact surface.
+  const HeightCheck heights = checkHeights(last, lidar.scene());
+  EXPECT_GE(heights.surfaces, 14400 / 4) << "too little of the map observed";
+  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
+      << heights.within << " of " << heights.surfaces;
 
   // Watchdog: pinged after successful cycles, at least twice per WatchdogSec.
   const auto pings = daemon.notify.collectFor(std::chrono::milliseconds(1500));
@@ -250,6 +267,66 @@ TEST(Raymapd, OverflowAtTenTimesTheInputRateDropsOldestScansAndPublishesOnTime) 
   // Still on time: 5 Hz within 2 %.
   ASSERT_GE(maps.size(), 20u);
   EXPECT_NEAR(meanPeriodMs(maps, 2), 200.0, 4.0);
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
+TEST(Raymapd, TakesThePoseFromTfAndPublishesOccupiedVoxelsWhileSubscribed) {
+  const std::uint32_t domain = uniqueDomain();
+  std::string config = serviceConfig(domain);
+  config.replace(config.find("source: odometry"), 16, "source: tf");
+  RunningDaemon daemon(config, false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  auto voxels = dds::RawReader::create(*ros.subscriber_participant, "rt/raymap/occupied_voxels",
+                                       dds::pointCloud2Type(), dds::Reliability::kReliable, 4);
+  ASSERT_TRUE(voxels.has_value());
+  ASSERT_TRUE(ros.waitForService(10.0));
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
+  driver::PlaybackOptions options;
+  options.pose_as_tf = true;
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, options, 3.0, maps);
+  ros.settle(1.2, &maps);
+
+  // The map follows the TF pose: centred on the path's start (-6, -1), to the cell.
+  ASSERT_GE(maps.size(), 10u) << daemon.log();
+  EXPECT_NEAR(maps.back().centre_x, -6.0, 0.1);
+  EXPECT_NEAR(maps.back().centre_y, -1.0, 0.1);
+  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
+  EXPECT_GE(heights.surfaces, 1000);
+  EXPECT_GE(heights.within, heights.surfaces * 95 / 100);
+  EXPECT_GT(ros.diagnostics->number("raymapd: pipeline/poses_received").value_or(0.0), 100.0);
+
+  // Occupied voxels at 1 Hz while this reader is matched: voxel centres on the scene's surfaces.
+  std::vector<dds::ScanPoint> points(200000);
+  int clouds = 0;
+  std::uint32_t occupied = 0;
+  std::uint32_t on_grid = 0;
+  voxels->takeEach(
+      [&](std::span<const std::byte> cdr, std::int64_t) {
+        auto header = dds::decodePointCloud2(cdr, points, dds::CloudDecodeOptions{});
+        if (!header) {
+          return;
+        }
+        ++clouds;
+        occupied = header.value().points;
+        on_grid = 0;
+        for (std::uint32_t k = 0; k < occupied; ++k) {
+          const double fx = static_cast<double>(points[k].x) / 0.1;
+          const double fy = static_cast<double>(points[k].y) / 0.1;
+          on_grid += std::fabs(fx - std::floor(fx) - 0.5) < 1e-3 &&
+                             std::fabs(fy - std::floor(fy) - 0.5) < 1e-3
+                         ? 1u
+                         : 0u;
+        }
+      },
+      16);
+  EXPECT_GE(clouds, 1);
+  EXPECT_GT(occupied, 1000u);
+  EXPECT_EQ(on_grid, occupied);
   const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
   ASSERT_TRUE(stopped.has_value());
   EXPECT_EQ(stopped->first, 0) << daemon.log();

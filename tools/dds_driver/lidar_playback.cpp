@@ -33,8 +33,13 @@ std::int64_t LidarPlayback::publishDue(std::int64_t now) {
   // Odometry first: a scan's poses are out before the scan, as with a live localisation stack.
   while (next_odometry_ <= now) {
     const double t = static_cast<double>(next_odometry_ - t0_) * 1e-9;
-    publisher_.publishOdometry(stamp0_ + (next_odometry_ - t0_), lidar_.poseAt(t),
-                               options_.world_frame, options_.base_frame);
+    if (options_.pose_as_tf) {
+      publisher_.publishTf(stamp0_ + (next_odometry_ - t0_), lidar_.poseAt(t), options_.world_frame,
+                           options_.base_frame);
+    } else {
+      publisher_.publishOdometry(stamp0_ + (next_odometry_ - t0_), lidar_.poseAt(t),
+                                 options_.world_frame, options_.base_frame);
+    }
     next_odometry_ += odometry_period_;
   }
   if (next_scan_ <= now) {

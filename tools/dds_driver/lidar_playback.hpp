@@ -17,6 +17,7 @@ struct PlaybackOptions {
   /// differs); a moving one simulates each scan when it is due.
   int distinct_scans = 4;
   double odometry_rate_hz = 100.0;
+  bool pose_as_tf = false;      ///< the pose on rt/tf instead of nav_msgs/Odometry on rt/odom
   const char* frame = "lidar";  ///< frame_id of the clouds (= base: identity extrinsic)
   const char* world_frame = "odom";
   const char* base_frame = "base_link";

@@ -152,7 +152,8 @@ int main(int argc, char** argv) {
   const auto value = [&](const char* key) { return d.number(key).value_or(-1.0); };
   std::printf(
       "{\n  \"scan_rate_hz\": %g,\n  \"points_per_scan\": %u,\n  \"scans_published\": %llu,\n"
-      "  \"scans_published_total\": %llu,\n  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  \"map_period_mean_ms\": %.3f,\n"
+      "  \"scans_published_total\": %llu,\n  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  "
+      "\"map_period_mean_ms\": %.3f,\n"
       "  \"map_period_error_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
       "  \"raymapd\": {\"latency_p50_ms\": %.1f, \"latency_p99_ms\": %.1f, "
       "\"latency_max_ms\": %.1f, \"clouds_received\": %.0f, \"clouds_dropped_overflow\": %.0f, "

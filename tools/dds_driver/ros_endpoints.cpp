@@ -8,6 +8,7 @@
 #include "diagnostic_msgs.h"
 #include "grid_map_msgs.h"
 #include "nav_msgs.h"
+#include "tf2_msgs.h"
 
 #include "platform/clock.hpp"
 #include "src/dds/topic_types.hpp"
@@ -68,6 +69,12 @@ Result<std::unique_ptr<DriverPublisher>> DriverPublisher::create(
     return Unexpected(odometry.error());
   }
   p->odometry_writer_.emplace(std::move(odometry).value());
+  auto tf = dds::Writer::create(participant, "rt/tf", dds::tfMessageType(),
+                                dds::Reliability::kReliable, 100);
+  if (!tf) {
+    return Unexpected(tf.error());
+  }
+  p->tf_writer_.emplace(std::move(tf).value());
   dds::CloudLayout layout;
   layout.intensity = true;
   layout.time = true;
@@ -93,6 +100,21 @@ void DriverPublisher::publishOdometry(std::int64_t stamp_ns, const io::Pose& pos
   m.pose.pose.orientation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
                              pose.orientation.w};
   (void)odometry_writer_->write(&m);
+}
+
+void DriverPublisher::publishTf(std::int64_t stamp_ns, const io::Pose& pose,
+                                const char* world_frame, const char* base_frame) {
+  geometry_msgs_msg_dds__TransformStamped_ t{};
+  setStamp(t.header.stamp, stamp_ns);
+  t.header.frame_id = const_cast<char*>(world_frame);  // NOLINT: read-only for dds_write
+  t.child_frame_id = const_cast<char*>(base_frame);    // NOLINT: read-only for dds_write
+  t.transform.translation = {pose.position.x, pose.position.y, pose.position.z};
+  t.transform.rotation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
+                          pose.orientation.w};
+  tf2_msgs_msg_dds__TFMessage_ m{};
+  m.transforms._buffer = &t;
+  m.transforms._length = m.transforms._maximum = 1;
+  (void)tf_writer_->write(&m);
 }
 
 // ---------------------------------------------------------------- GridMap

@@ -32,6 +32,10 @@ class DriverPublisher {
                     std::int64_t stamp_ns, const char* frame_id);
   void publishOdometry(std::int64_t stamp_ns, const io::Pose& pose, const char* world_frame,
                        const char* base_frame);
+  /// @brief The same pose as one transform world -> base on `rt/tf` (as a localisation stack
+  /// broadcasts it).
+  void publishTf(std::int64_t stamp_ns, const io::Pose& pose, const char* world_frame,
+                 const char* base_frame);
   /// @brief The cloud writer, to send hand-built (e.g. deliberately malformed) PointCloud2
   /// samples (sensor_msgs_msg_dds__PointCloud2_) in tests.
   dds::Writer& cloudWriter() noexcept { return *cloud_writer_; }
@@ -41,6 +45,7 @@ class DriverPublisher {
   DriverPublisher() = default;
   std::optional<dds::Writer> cloud_writer_;
   std::optional<dds::Writer> odometry_writer_;
+  std::optional<dds::Writer> tf_writer_;
   std::unique_ptr<dds::PointCloudMessage> cloud_;
 };
 
