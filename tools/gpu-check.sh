@@ -115,6 +115,10 @@ ctest --test-dir "$build" -L heightmap --output-on-failure >"$out/ctest-heightma
   tests_status=$?
 grep -E "tests passed|tests failed" "$out/ctest-heightmap.log" || true
 tools/bench/run-heightmap-benchmarks.sh "$data" "$out" "$build"
+echo "== raymapd on CUDA (Ouster-like input over loopback DDS, see docs/benchmarks.md)"
+DURATION=15 tools/bench/run-daemon-benchmarks.sh "$build" "cuda cpu" "10 20 30" \
+  >"$out/raymapd.jsonl" 2>"$out/raymapd.log" || tests_status=$?
+cat "$out/raymapd.jsonl"
 if [ "$tests_status" != 0 ]; then
   echo "gpu-check: CUDA tests failed (see $out/ctest-cuda.log)" >&2
   exit 1
