@@ -76,10 +76,14 @@ TEST(DecodeOdometry, EveryTruncationIsRefused) {
 }
 
 TEST(DecodeTfMessage, WritesWhatFitsAndChecksTheRest) {
-  std::vector<TestPose> poses(3);
-  poses[0].child = "a";
-  poses[1].child = "b";
-  poses[2].child = "c";
+  // NOTE: built by push_back, not by assigning to poses[i].child: GCC 12 at -O3 reports a false
+  // -Wrestrict overlap inside std::string's assignment in the indexed form.
+  std::vector<TestPose> poses;
+  for (const char* child : {"a", "b", "c"}) {
+    TestPose pose;
+    pose.child = std::string(child);
+    poses.push_back(pose);
+  }
   poses[2].t[0] = -5.0;
   std::vector<StampedTransform> out(2);
 
