@@ -4,7 +4,6 @@
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
-#include <new>
 #include <optional>
 #include <string>
 #include <utility>
@@ -14,24 +13,8 @@
 
 #include "platform/clock.hpp"
 #include "platform/notify.hpp"
+#include "tests/support/alloc_counter.hpp"
 #include "tests/support/fake_notify_socket.hpp"
-
-// Counts operator new calls in this executable, so a test can assert that a section makes none.
-// NOTE(platform): malloc itself cannot be counted without replacing the C allocator; the
-// notifier calls no libc function that allocates (sendmsg, strlen, strcspn).
-namespace {
-std::atomic<long> g_news{0};
-}  // namespace
-
-void* operator new(std::size_t bytes) {
-  g_news.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(bytes == 0 ? 1 : bytes)) {
-    return p;
-  }
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t /*bytes*/) noexcept { std::free(p); }
 
 namespace raymap::platform {
 namespace {
@@ -174,17 +157,22 @@ TEST(SystemdNotifier, ReachesAnAbstractSocket) {
 TEST(SystemdNotifier, CallsDoNotAllocate) {
   test::FakeNotifySocket fake;
   SystemdNotifier notifier(fake.path().c_str(), 1'000'000'000);
-  const long before = g_news.load();
-
-  for (int i = 0; i < 100; ++i) {
-    notifier.ready("up");
-    notifier.watchdog();
-    notifier.status("status");
-    notifier.stopping();
+  if (!test::allocationCountingAvailable()) {
+    GTEST_SKIP() << "sanitizer build: the sanitizer owns malloc";
   }
-  const long after = g_news.load();
+  std::uint64_t allocations = 0;
+  {
+    test::AllocationScope scope;  // malloc family, this thread
+    for (int i = 0; i < 100; ++i) {
+      notifier.ready("up");
+      notifier.watchdog();
+      notifier.status("status");
+      notifier.stopping();
+    }
+    allocations = scope.count();
+  }
 
-  EXPECT_EQ(after - before, 0);
+  EXPECT_EQ(allocations, 0u);
   EXPECT_TRUE(fake.waitFor("STOPPING=1", kWait).has_value());
 }
 
