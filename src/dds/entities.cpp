@@ -29,14 +29,16 @@ void deleteEntity(dds_entity_t entity) noexcept {
 }
 
 /// The QoS both sides share: keep-last depth, volatile, XCDR1, and the reliability asked for.
-dds_qos_t* makeQos(Reliability reliability, std::int32_t depth) {
+dds_qos_t* makeQos(Reliability reliability, std::int32_t depth, Durability durability) {
   dds_qos_t* qos = dds_create_qos();
   dds_qset_reliability(qos,
                        reliability == Reliability::kReliable ? DDS_RELIABILITY_RELIABLE
                                                              : DDS_RELIABILITY_BEST_EFFORT,
                        DDS_MSECS(100));
   dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, depth);
-  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
+  dds_qset_durability(qos, durability == Durability::kTransientLocal
+                               ? DDS_DURABILITY_TRANSIENT_LOCAL
+                               : DDS_DURABILITY_VOLATILE);
   // ROS 2 (rmw_cyclonedds) accepts only XCDR1; an XCDR2 writer does not match its readers.
   dds_data_representation_id_t xcdr1[1] = {DDS_DATA_REPRESENTATION_XCDR1};
   dds_qset_data_representation(qos, 1, xcdr1);
@@ -90,12 +92,13 @@ Participant::~Participant() { deleteEntity(handle_); }
 
 Result<RawReader> RawReader::create(const Participant& participant, const char* topic_name,
                                     const dds_topic_descriptor_t* descriptor,
-                                    Reliability reliability, std::int32_t depth) {
+                                    Reliability reliability, std::int32_t depth,
+                                    Durability durability) {
   dds_entity_t topic = 0;
   if (auto created = createTopic(participant, topic_name, descriptor, depth, &topic); !created) {
     return Unexpected(std::move(created).error());
   }
-  dds_qos_t* qos = makeQos(reliability, depth);
+  dds_qos_t* qos = makeQos(reliability, depth, durability);
   const dds_entity_t reader = dds_create_reader(participant.handle(), topic, qos, nullptr);
   dds_delete_qos(qos);
   if (reader < 0) {
@@ -177,12 +180,12 @@ std::uint32_t RawReader::matchedWriters() const noexcept {
 
 Result<Writer> Writer::create(const Participant& participant, const char* topic_name,
                               const dds_topic_descriptor_t* descriptor, Reliability reliability,
-                              std::int32_t depth) {
+                              std::int32_t depth, Durability durability) {
   dds_entity_t topic = 0;
   if (auto created = createTopic(participant, topic_name, descriptor, depth, &topic); !created) {
     return Unexpected(std::move(created).error());
   }
-  dds_qos_t* qos = makeQos(reliability, depth);
+  dds_qos_t* qos = makeQos(reliability, depth, durability);
   dds_qset_writer_data_lifecycle(qos, false);  // no autodispose, as rmw_cyclonedds
   const dds_entity_t writer = dds_create_writer(participant.handle(), topic, qos, nullptr);
   dds_delete_qos(qos);

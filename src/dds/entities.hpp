@@ -45,6 +45,10 @@ class Participant {
 /// Reliability QoS. Subscribe to sensor data best effort (matches best-effort and reliable
 /// writers, e.g. rclcpp's SensorDataQoS); publish maps reliable (matches both kinds of reader).
 enum class Reliability : std::uint8_t { kBestEffort, kReliable };
+/// Durability: volatile (only samples written after matching), or transient-local (a late
+/// reader also gets the writer's kept history: how ROS 2 latches /tf_static and maps). A
+/// transient-local reader matches only transient-local writers.
+enum class Durability : std::uint8_t { kVolatile, kTransientLocal };
 
 /// @brief Called once per sample by RawReader::take.
 /// @param context the pointer given to take()
@@ -66,7 +70,8 @@ class RawReader {
   /// @param depth KEEP_LAST history depth (>= 1)
   static Result<RawReader> create(const Participant& participant, const char* topic_name,
                                   const dds_topic_descriptor_t* descriptor, Reliability reliability,
-                                  std::int32_t depth);
+                                  std::int32_t depth,
+                                  Durability durability = Durability::kVolatile);
 
   RawReader(RawReader&& other) noexcept
       : topic_(std::exchange(other.topic_, 0)), reader_(std::exchange(other.reader_, 0)) {}
@@ -114,7 +119,7 @@ class Writer {
   /// @param depth KEEP_LAST history depth (>= 1); a keep-last writer never blocks on readers
   static Result<Writer> create(const Participant& participant, const char* topic_name,
                                const dds_topic_descriptor_t* descriptor, Reliability reliability,
-                               std::int32_t depth);
+                               std::int32_t depth, Durability durability = Durability::kVolatile);
 
   Writer(Writer&& other) noexcept
       : topic_(std::exchange(other.topic_, 0)), writer_(std::exchange(other.writer_, 0)) {}

@@ -251,10 +251,20 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
       return Unexpected(r.error());
     }
   }
-  if (auto r = poseReader("rt/tf_static", dds::tfMessageType(), kTfStaticToken, "pose.source",
-                          impl->tf_static_reader);
-      !r) {
-    return Unexpected(r.error());
+  {
+    // ROS latches /tf_static (reliable, transient-local): a reader of the same kind also gets the
+    // transforms published before raymapd started (or restarted).
+    auto reader =
+        dds::RawReader::create(pp, "rt/tf_static", dds::tfMessageType(),
+                               dds::Reliability::kReliable, 100, dds::Durability::kTransientLocal);
+    if (!reader) {
+      return fail(reader.error().code, file + ": rt/tf_static: " + reader.error().message);
+    }
+    impl->tf_static_reader.emplace(std::move(reader).value());
+    if (auto attached = impl->waitset->attach(impl->tf_static_reader->handle(), kTfStaticToken);
+        !attached) {
+      return Unexpected(attached.error());
+    }
   }
   auto grid_writer =
       dds::Writer::create(pp, config.dds.grid_map_topic.c_str(), dds::GridMapMessage::descriptor(),

@@ -332,6 +332,36 @@ TEST(Raymapd, TakesThePoseFromTfAndPublishesOccupiedVoxelsWhileSubscribed) {
   EXPECT_EQ(stopped->first, 0) << daemon.log();
 }
 
+TEST(Raymapd, UsesTheLatchedTfStaticExtrinsicPublishedBeforeItStarted) {
+  const std::uint32_t domain = uniqueDomain();
+  // The lidar sits 0.5 m above base_link; only /tf_static says so (the YAML's extrinsic is the
+  // identity), and it is published before raymapd exists, as a robot's static_transform_publisher
+  // runs before a restarted service.
+  RosSide ros(domain, 70000);
+  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.5}, {}}, "base_link", "lidar");
+  std::string config = serviceConfig(domain);
+  config.replace(config.find("base_height: 1.2"), 16, "base_height: 0.7");
+  RunningDaemon daemon(config, false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  ASSERT_TRUE(ros.waitForService(10.0));
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
+  driver::PlaybackOptions options;
+  options.sensor_in_base = {0.0, 0.0, 0.5};  // the published base pose is 0.5 m below the lidar
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, options, 3.0, maps);
+  ros.settle(0.5, &maps);
+  ASSERT_GE(maps.size(), 10u) << daemon.log();
+  // With the extrinsic ignored every surface would come out 0.5 m low.
+  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
+  EXPECT_GE(heights.surfaces, 1000);
+  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
+      << heights.within << " of " << heights.surfaces;
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
 TEST(Raymapd, CheckConfigAcceptsTheProfilesAndNamesTheKeyOfAnError) {
   const auto [ok, ok_text] = runToCompletion(
       RAYMAPD_PATH, {"--check-config", std::string(RAYMAP_CONFIG_DIR) + "/cpu.yaml"});

@@ -33,12 +33,14 @@ std::int64_t LidarPlayback::publishDue(std::int64_t now) {
   // Odometry first: a scan's poses are out before the scan, as with a live localisation stack.
   while (next_odometry_ <= now) {
     const double t = static_cast<double>(next_odometry_ - t0_) * 1e-9;
+    io::Pose base = lidar_.poseAt(t);
+    base.position = base.position - base.orientation.rotate(options_.sensor_in_base);
     if (options_.pose_as_tf) {
-      publisher_.publishTf(stamp0_ + (next_odometry_ - t0_), lidar_.poseAt(t), options_.world_frame,
+      publisher_.publishTf(stamp0_ + (next_odometry_ - t0_), base, options_.world_frame,
                            options_.base_frame);
     } else {
-      publisher_.publishOdometry(stamp0_ + (next_odometry_ - t0_), lidar_.poseAt(t),
-                                 options_.world_frame, options_.base_frame);
+      publisher_.publishOdometry(stamp0_ + (next_odometry_ - t0_), base, options_.world_frame,
+                                 options_.base_frame);
     }
     next_odometry_ += odometry_period_;
   }

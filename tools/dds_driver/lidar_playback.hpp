@@ -17,7 +17,10 @@ struct PlaybackOptions {
   /// differs); a moving one simulates each scan when it is due.
   int distinct_scans = 4;
   double odometry_rate_hz = 100.0;
-  bool pose_as_tf = false;      ///< the pose on rt/tf instead of nav_msgs/Odometry on rt/odom
+  bool pose_as_tf = false;  ///< the pose on rt/tf instead of nav_msgs/Odometry on rt/odom
+  /// Where the lidar sits on the base (metres, base frame; no rotation): the published pose is
+  /// the base's, this far from the simulated sensor.
+  Vec3d sensor_in_base{0.0, 0.0, 0.0};
   const char* frame = "lidar";  ///< frame_id of the clouds (= base: identity extrinsic)
   const char* world_frame = "odom";
   const char* base_frame = "base_link";

@@ -75,6 +75,13 @@ Result<std::unique_ptr<DriverPublisher>> DriverPublisher::create(
     return Unexpected(tf.error());
   }
   p->tf_writer_.emplace(std::move(tf).value());
+  auto tf_static =
+      dds::Writer::create(participant, "rt/tf_static", dds::tfMessageType(),
+                          dds::Reliability::kReliable, 1, dds::Durability::kTransientLocal);
+  if (!tf_static) {
+    return Unexpected(tf_static.error());
+  }
+  p->tf_static_writer_.emplace(std::move(tf_static).value());
   dds::CloudLayout layout;
   layout.intensity = true;
   layout.time = true;
@@ -102,19 +109,32 @@ void DriverPublisher::publishOdometry(std::int64_t stamp_ns, const io::Pose& pos
   (void)odometry_writer_->write(&m);
 }
 
-void DriverPublisher::publishTf(std::int64_t stamp_ns, const io::Pose& pose,
-                                const char* world_frame, const char* base_frame) {
+namespace {
+
+void writeTransform(dds::Writer& writer, std::int64_t stamp_ns, const io::Pose& pose,
+                    const char* parent, const char* child) {
   geometry_msgs_msg_dds__TransformStamped_ t{};
   setStamp(t.header.stamp, stamp_ns);
-  t.header.frame_id = const_cast<char*>(world_frame);  // NOLINT: read-only for dds_write
-  t.child_frame_id = const_cast<char*>(base_frame);    // NOLINT: read-only for dds_write
+  t.header.frame_id = const_cast<char*>(parent);  // NOLINT: read-only for dds_write
+  t.child_frame_id = const_cast<char*>(child);    // NOLINT: read-only for dds_write
   t.transform.translation = {pose.position.x, pose.position.y, pose.position.z};
   t.transform.rotation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
                           pose.orientation.w};
   tf2_msgs_msg_dds__TFMessage_ m{};
   m.transforms._buffer = &t;
   m.transforms._length = m.transforms._maximum = 1;
-  (void)tf_writer_->write(&m);
+  (void)writer.write(&m);
+}
+
+}  // namespace
+
+void DriverPublisher::publishTf(std::int64_t stamp_ns, const io::Pose& pose,
+                                const char* world_frame, const char* base_frame) {
+  writeTransform(*tf_writer_, stamp_ns, pose, world_frame, base_frame);
+}
+
+void DriverPublisher::publishTfStatic(const io::Pose& pose, const char* parent, const char* child) {
+  writeTransform(*tf_static_writer_, 0, pose, parent, child);
 }
 
 // ---------------------------------------------------------------- GridMap

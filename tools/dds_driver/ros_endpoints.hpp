@@ -36,6 +36,9 @@ class DriverPublisher {
   /// broadcasts it).
   void publishTf(std::int64_t stamp_ns, const io::Pose& pose, const char* world_frame,
                  const char* base_frame);
+  /// @brief One static transform parent -> child on `rt/tf_static`, latched (reliable,
+  /// transient-local, as ROS's static_transform_publisher): late readers get it too.
+  void publishTfStatic(const io::Pose& pose, const char* parent, const char* child);
   /// @brief The cloud writer, to send hand-built (e.g. deliberately malformed) PointCloud2
   /// samples (sensor_msgs_msg_dds__PointCloud2_) in tests.
   dds::Writer& cloudWriter() noexcept { return *cloud_writer_; }
@@ -46,6 +49,7 @@ class DriverPublisher {
   std::optional<dds::Writer> cloud_writer_;
   std::optional<dds::Writer> odometry_writer_;
   std::optional<dds::Writer> tf_writer_;
+  std::optional<dds::Writer> tf_static_writer_;
   std::unique_ptr<dds::PointCloudMessage> cloud_;
 };
 
