@@ -9,12 +9,11 @@
 #include "diagnostic_msgs.h"
 
 #include "src/core/assert.hpp"
+#include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
 namespace raymap::dds {
 namespace {
-
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 
 void copyText(char* slot, std::size_t slot_bytes, const char* text) noexcept {
   std::size_t length = 0;
@@ -85,14 +84,7 @@ DiagnosticsMessage::~DiagnosticsMessage() = default;
 
 void DiagnosticsMessage::begin(std::int64_t stamp_ns) noexcept {
   Impl& m = *impl_;
-  std::int64_t sec = stamp_ns / kNsPerSecond;
-  std::int64_t nanosec = stamp_ns % kNsPerSecond;
-  if (nanosec < 0) {
-    nanosec += kNsPerSecond;
-    sec -= 1;
-  }
-  m.msg.header.stamp.sec = static_cast<std::int32_t>(sec);
-  m.msg.header.stamp.nanosec = static_cast<std::uint32_t>(nanosec);
+  setRosTime(m.msg.header.stamp, stamp_ns);
   m.msg.status._length = 0;
 }
 

@@ -9,13 +9,13 @@
 #include "grid_map_msgs.h"
 
 #include "src/core/assert.hpp"
+#include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
 namespace raymap::dds {
 namespace {
 
 constexpr std::size_t kLayers = 4;
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 
 /// idlc declares strings as char*; the message only reads them.
 char* mutableText(const char* text) noexcept {
@@ -100,15 +100,7 @@ void GridMapMessage::fill(const heightmap::HeightMap& map, std::int64_t stamp_ns
   RAYMAP_EXPECTS(map.elevation.size() == cells && map.clearance.size() == cells &&
                  map.kind.size() == cells && map.observed_count.size() == cells);
 
-  // header: floor division, so that a stamp before the epoch still has 0 <= nanosec < 1e9
-  std::int64_t sec = stamp_ns / kNsPerSecond;
-  std::int64_t nanosec = stamp_ns % kNsPerSecond;
-  if (nanosec < 0) {
-    nanosec += kNsPerSecond;
-    sec -= 1;
-  }
-  m.msg.header.stamp.sec = static_cast<std::int32_t>(sec);
-  m.msg.header.stamp.nanosec = static_cast<std::uint32_t>(nanosec);
+  setRosTime(m.msg.header.stamp, stamp_ns);
   std::size_t length = 0;
   if (frame_id != nullptr) {
     while (length + 1 < sizeof(m.frame_id) && frame_id[length] != '\0') {

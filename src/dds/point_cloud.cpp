@@ -8,11 +8,10 @@
 #include <string_view>
 
 #include "src/dds/cdr_reader.hpp"
+#include "src/dds/ros_time.hpp"
 
 namespace raymap::dds {
 namespace {
-
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 
 /// A field of the cloud that the decoder uses.
 struct Field {
@@ -299,7 +298,7 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
   }
 
   CloudHeader header{};
-  header.stamp_ns = std::int64_t{sec} * kNsPerSecond + std::int64_t{nanosec};
+  header.stamp_ns = nanosecondsOf(sec, nanosec);
   if (!frame_id.empty()) {  // an empty view may have a null data()
     std::memcpy(header.frame_id, frame_id.data(), frame_id.size());
   }

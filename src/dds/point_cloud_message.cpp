@@ -12,12 +12,12 @@
 #include "sensor_msgs.h"
 
 #include "src/core/assert.hpp"
+#include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
 namespace raymap::dds {
 namespace {
 
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 constexpr std::size_t kMaxFields = 6;
 
 // The data is written in host order and published with is_bigendian = false.
@@ -52,14 +52,7 @@ struct PointCloudMessage::Impl {
   /// Sets the header and sizes for `count` points; returns the data pointer.
   std::uint8_t* begin(std::size_t count, std::int64_t stamp_ns, const char* frame) noexcept {
     RAYMAP_EXPECTS(count <= capacity && count % layout.rows == 0);
-    std::int64_t sec = stamp_ns / kNsPerSecond;
-    std::int64_t nanosec = stamp_ns % kNsPerSecond;
-    if (nanosec < 0) {
-      nanosec += kNsPerSecond;
-      sec -= 1;
-    }
-    msg.header.stamp.sec = static_cast<std::int32_t>(sec);
-    msg.header.stamp.nanosec = static_cast<std::uint32_t>(nanosec);
+    setRosTime(msg.header.stamp, stamp_ns);
     std::size_t length = 0;
     if (frame != nullptr) {
       while (length + 1 < sizeof(frame_id) && frame[length] != '\0') {

@@ -7,11 +7,11 @@
 #include <string_view>
 
 #include "src/dds/cdr_reader.hpp"
+#include "src/dds/ros_time.hpp"
 
 namespace raymap::dds {
 namespace {
 
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
 /// Below this norm a quaternion carries no usable rotation.
 constexpr double kMinQuaternionNorm = 1e-6;
 
@@ -37,7 +37,7 @@ bool readHeader(CdrReader& reader, std::int64_t& stamp_ns, std::string_view& fra
   if (!reader.readI32(sec) || !reader.readU32(nanosec) || !reader.readString(frame_id)) {
     return false;
   }
-  stamp_ns = std::int64_t{sec} * kNsPerSecond + std::int64_t{nanosec};
+  stamp_ns = nanosecondsOf(sec, nanosec);
   return true;
 }
 

@@ -96,8 +96,8 @@ struct Service::Impl {
   std::atomic<bool> stopping{false};
   std::vector<std::thread> threads;
   RealtimeReport realtime;
-  std::vector<std::string> thread_rt;  // per thread: outcome text, written at thread start
   std::atomic<int> rt_refusals{0};
+  std::atomic<int> threads_set_up{0};  // threads past their scheduling set-up (start() waits)
   std::atomic<std::int64_t> last_publish_ns{0};
 
   void applyThreadSettings(const char* name, const ThreadConfig& t);
@@ -296,7 +296,6 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   impl->reporter = std::make_unique<DiagnosticsReporter>(
       impl->stats, *impl->mailbox, *impl->poses, impl->backend.backend->name(),
       impl->backend.backend->deviceName(), config.heightmap.rate_hz);
-  impl->thread_rt.assign(4, "not started");
   return std::unique_ptr<Service>(new Service(std::move(impl)));
 }
 
@@ -349,6 +348,7 @@ void Service::Impl::applyThreadSettings(const char* name, const ThreadConfig& t)
     logLine(LogLevel::kWarning, "%s thread: CPU affinity refused (%s): running on any CPU", name,
             std::strerror(status.affinity_errno));
   }
+  threads_set_up.fetch_add(1, std::memory_order_release);
 }
 
 void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr) {
@@ -664,8 +664,9 @@ void Service::start() {
   s.threads.emplace_back([&s] { s.integratorLoop(); });
   s.threads.emplace_back([&s] { s.publisherLoop(); });
   s.threads.emplace_back([&s] { s.diagnosticsLoop(); });
-  // Wait briefly for the threads to apply their scheduling, so READY carries the outcome.
-  for (int i = 0; i < 50 && s.threads.size() == 4; ++i) {
+  // Wait (at most 1 s) for the three real-time threads to apply their scheduling, so that READY
+  // and the log carry the outcome.
+  for (int i = 0; i < 500 && s.threads_set_up.load(std::memory_order_acquire) < 3; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   const RealtimeConfig& rt = s.config.realtime;

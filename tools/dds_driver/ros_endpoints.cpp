@@ -11,21 +11,11 @@
 #include "tf2_msgs.h"
 
 #include "platform/clock.hpp"
+#include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
 namespace raymap::driver {
 namespace {
-
-void setStamp(builtin_interfaces_msg_dds__Time_& t, std::int64_t stamp_ns) {
-  const std::int64_t sec =
-      stamp_ns >= 0 ? stamp_ns / 1000000000 : -((-stamp_ns + 999999999) / 1000000000);
-  t.sec = static_cast<std::int32_t>(sec);
-  t.nanosec = static_cast<std::uint32_t>(stamp_ns - sec * 1000000000);
-}
-
-std::int64_t stampOf(const builtin_interfaces_msg_dds__Time_& t) {
-  return std::int64_t{t.sec} * 1000000000 + t.nanosec;
-}
 
 Expected<dds_entity_t, Error> reliableReader(const dds::Participant& participant,
                                              const std::string& topic_name,
@@ -100,7 +90,7 @@ void DriverPublisher::publishCloud(std::span<const dds::ScanPoint> points,
 void DriverPublisher::publishOdometry(std::int64_t stamp_ns, const io::Pose& pose,
                                       const char* world_frame, const char* base_frame) {
   nav_msgs_msg_dds__Odometry_ m{};
-  setStamp(m.header.stamp, stamp_ns);
+  dds::setRosTime(m.header.stamp, stamp_ns);
   m.header.frame_id = const_cast<char*>(world_frame);  // NOLINT: read-only for dds_write
   m.child_frame_id = const_cast<char*>(base_frame);    // NOLINT: read-only for dds_write
   m.pose.pose.position = {pose.position.x, pose.position.y, pose.position.z};
@@ -114,7 +104,7 @@ namespace {
 void writeTransform(dds::Writer& writer, std::int64_t stamp_ns, const io::Pose& pose,
                     const char* parent, const char* child) {
   geometry_msgs_msg_dds__TransformStamped_ t{};
-  setStamp(t.header.stamp, stamp_ns);
+  dds::setRosTime(t.header.stamp, stamp_ns);
   t.header.frame_id = const_cast<char*>(parent);  // NOLINT: read-only for dds_write
   t.child_frame_id = const_cast<char*>(child);    // NOLINT: read-only for dds_write
   t.transform.translation = {pose.position.x, pose.position.y, pose.position.z};
@@ -194,7 +184,7 @@ int GridMapListener::poll(std::int64_t timeout_ns, std::vector<ReceivedGridMap>&
       const auto* m = static_cast<const grid_map_msgs_msg_dds__GridMap_*>(samples[0]);
       ReceivedGridMap r;
       r.arrival_ns = arrival;
-      r.stamp_ns = stampOf(m->header.stamp);
+      r.stamp_ns = dds::nanosecondsOf(m->header.stamp.sec, m->header.stamp.nanosec);
       r.frame_id = m->header.frame_id != nullptr ? m->header.frame_id : "";
       r.resolution = m->info.resolution;
       r.length_x = m->info.length_x;
