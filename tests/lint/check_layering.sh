@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
 # src/heightmap, src/sim <- src/io, src/gpu <- src/opencl, src/cuda <- src/dds <- src/pipeline <-
-# src/service <- tools; src/config (YAML reading) depends on core only. Includes are written relative to the repository root, so grep can tell.
+# src/service <- tools; src/config (YAML reading) and src/record (the record log format) depend
+# on core only. Includes are written relative to the repository root, so grep can tell.
 set -euo pipefail
 root=${1:-.}
 cd "$root"
@@ -24,6 +25,7 @@ check src/heightmap 'src/io|src/sim|src/gpu|src/opencl|src/cuda|tools/|tests/' '
 check src/io 'src/sim|tools/|tests/' 'file formats do not know scenes or tools'
 check src/sim 'src/io|tools/|tests/' 'scenes produce rays, not files'
 check src/config 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|platform/|tools/|tests/' 'configuration reading depends only on core'
+check src/record 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|platform/|tools/|tests/' 'the log format knows bytes, not DDS'
 check src/dds 'src/sim|src/gpu|src/opencl|src/cuda|src/pipeline|src/service|tools/|tests/' 'DDS I/O knows messages, not the pipeline'
 check src/pipeline 'src/sim|src/opencl|src/cuda|src/service|tools/|tests/' 'the pipeline runs any backend through src/map/backend.hpp'
 check src/service 'src/sim|tools/|tests/' 'the service does not know scenes or tools'
