@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The idlc descriptors behind src/dds/topic_types.hpp.
+// The idlc descriptors behind src/dds/topic_types.hpp and the name conversions of rmw_cyclonedds.
 #include "src/dds/topic_types.hpp"
+
+#include <array>
+#include <vector>
 
 #include "diagnostic_msgs.h"
 #include "grid_map_msgs.h"
@@ -22,6 +25,86 @@ const dds_topic_descriptor_t* gridMapType() noexcept {
 }
 const dds_topic_descriptor_t* diagnosticArrayType() noexcept {
   return &diagnostic_msgs_msg_dds__DiagnosticArray__desc;
+}
+
+namespace {
+
+// The DDS names are spelled out (not read from m_typename) so that the table is a constant; a
+// unit test checks each against its descriptor's m_typename.
+constexpr std::array<KnownTopicType, 5> kKnownTypes = {{
+    {"sensor_msgs::msg::dds_::PointCloud2_", "sensor_msgs/msg/PointCloud2",
+     &sensor_msgs_msg_dds__PointCloud2__desc},
+    {"nav_msgs::msg::dds_::Odometry_", "nav_msgs/msg/Odometry", &nav_msgs_msg_dds__Odometry__desc},
+    {"tf2_msgs::msg::dds_::TFMessage_", "tf2_msgs/msg/TFMessage",
+     &tf2_msgs_msg_dds__TFMessage__desc},
+    {"grid_map_msgs::msg::dds_::GridMap_", "grid_map_msgs/msg/GridMap",
+     &grid_map_msgs_msg_dds__GridMap__desc},
+    {"diagnostic_msgs::msg::dds_::DiagnosticArray_", "diagnostic_msgs/msg/DiagnosticArray",
+     &diagnostic_msgs_msg_dds__DiagnosticArray__desc},
+}};
+
+/// rmw_cyclonedds prefixes every ROS topic with this (ROS_TOPIC_PREFIX in namespace_prefix.hpp).
+constexpr std::string_view kRosTopicPrefix = "rt";
+
+}  // namespace
+
+std::span<const KnownTopicType> knownTopicTypes() noexcept { return kKnownTypes; }
+
+const KnownTopicType* findTopicType(std::string_view dds_or_ros_name) noexcept {
+  for (const KnownTopicType& type : kKnownTypes) {
+    if (dds_or_ros_name == type.dds_name || dds_or_ros_name == type.ros_name) {
+      return &type;
+    }
+  }
+  return nullptr;
+}
+
+std::string ddsTopicName(std::string_view name) {
+  if (name.starts_with('/')) {
+    std::string dds(kRosTopicPrefix);
+    dds += name;
+    return dds;
+  }
+  return std::string(name);
+}
+
+std::string rosTopicName(std::string_view dds_name) {
+  if (dds_name.size() > kRosTopicPrefix.size() + 1 && dds_name.starts_with(kRosTopicPrefix) &&
+      dds_name[kRosTopicPrefix.size()] == '/') {
+    return std::string(dds_name.substr(kRosTopicPrefix.size()));
+  }
+  return {};
+}
+
+std::string rosTypeName(std::string_view dds_type_name) {
+  // rmw builds "<pkg>::msg::dds_::<Msg>_" (MessageTypeSupport_impl.hpp): at least three parts
+  // before the name, the last of them "dds_", and the name ending in '_'.
+  std::vector<std::string_view> parts;
+  std::string_view rest = dds_type_name;
+  for (;;) {
+    const std::size_t separator = rest.find("::");
+    parts.push_back(rest.substr(0, separator));
+    if (separator == std::string_view::npos) {
+      break;
+    }
+    rest.remove_prefix(separator + 2);
+  }
+  if (parts.size() < 4 || parts[parts.size() - 2] != "dds_" || parts.back().size() < 2 ||
+      !parts.back().ends_with('_')) {
+    return std::string(dds_type_name);
+  }
+  std::string ros;
+  for (std::size_t i = 0; i + 2 < parts.size(); ++i) {
+    if (parts[i].empty()) {
+      return std::string(dds_type_name);
+    }
+    ros += parts[i];
+    ros += '/';
+  }
+  std::string_view name = parts.back();
+  name.remove_suffix(1);
+  ros += name;
+  return ros;
 }
 
 }  // namespace raymap::dds

@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The idlc type descriptors of the ROS 2 messages raymapd reads and writes, without exposing the
-// generated C headers.
+// generated C headers, and the registry of these types by DDS and ROS name.
 #pragma once
+
+#include <span>
+#include <string>
+#include <string_view>
 
 #include <dds/dds.h>
 
@@ -17,5 +21,36 @@ const dds_topic_descriptor_t* tfMessageType() noexcept;
 const dds_topic_descriptor_t* gridMapType() noexcept;
 /// diagnostic_msgs::msg::dds_::DiagnosticArray_
 const dds_topic_descriptor_t* diagnosticArrayType() noexcept;
+
+/// @brief A message type raymap can read: its name on the wire, its ROS 2 name and the idlc
+/// descriptor a reader of it needs. Static data; the pointers live as long as the program.
+struct KnownTopicType {
+  const char* dds_name;  ///< e.g. "sensor_msgs::msg::dds_::PointCloud2_" (what DDS discovery shows)
+  const char* ros_name;  ///< e.g. "sensor_msgs/msg/PointCloud2" (what `ros2 topic list -t` shows)
+  const dds_topic_descriptor_t* descriptor;  ///< idlc's descriptor; its m_typename == dds_name
+};
+
+/// @brief The types raymap knows: PointCloud2, Odometry, TFMessage, GridMap, DiagnosticArray (in
+/// that order). @rt allocates: no; thread: any.
+std::span<const KnownTopicType> knownTopicTypes() noexcept;
+
+/// @brief Looks a type up by its DDS name ("grid_map_msgs::msg::dds_::GridMap_") or its ROS name
+/// ("grid_map_msgs/msg/GridMap"); exact, case-sensitive match.
+/// @return the entry, or nullptr when raymap does not know the type
+/// @rt allocates: no; thread: any.
+const KnownTopicType* findTopicType(std::string_view dds_or_ros_name) noexcept;
+
+/// @brief The DDS topic of a ROS topic name, as rmw_cyclonedds names it: "/height_map" ->
+/// "rt/height_map". A name that already starts with "rt/" and any other name (taken to be a DDS
+/// topic name already, e.g. from `raymap topics`) are returned unchanged.
+std::string ddsTopicName(std::string_view name);
+
+/// @brief The ROS topic of a DDS topic: "rt/height_map" -> "/height_map"; "" for a topic
+/// outside the ROS "rt/" convention (services' rq/ and rr/ topics included).
+std::string rosTopicName(std::string_view dds_name);
+
+/// @brief The ROS form of a DDS type name that follows the rmw convention
+/// ("pkg::msg::dds_::Name_" -> "pkg/msg/Name"); any other name is returned unchanged.
+std::string rosTypeName(std::string_view dds_type_name);
 
 }  // namespace raymap::dds

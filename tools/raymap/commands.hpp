@@ -26,6 +26,10 @@ void addSimulateCommand(CLI::App& app, int* exit_code);
 /// Present in every build; lists OpenCL and CUDA devices, says why an API has none, and exits 1
 /// only when neither has a device.
 void addDevicesCommand(CLI::App& app, int* exit_code);
+/// `raymap topics`: the DDS/ROS 2 topics seen on a domain (built-in discovery topics).
+void addTopicsCommand(CLI::App& app, int* exit_code);
+/// `raymap echo TOPIC`: the messages of one topic of a known type, human-readable or JSON Lines.
+void addEchoCommand(CLI::App& app, int* exit_code);
 
 /// @brief Prints "raymap <command>: error: <message>" on stderr.
 void printError(const std::string& command, const std::string& message);

@@ -38,10 +38,14 @@ std::string jsonQuote(std::string_view text) {
 }
 
 void JsonObject::key(std::string_view k) {
-  body_ += empty_ ? "\n  " : ",\n  ";
+  if (style_ == JsonStyle::kCompact) {
+    body_ += empty_ ? "" : ",";
+  } else {
+    body_ += empty_ ? "\n  " : ",\n  ";
+  }
   empty_ = false;
   body_ += jsonQuote(k);
-  body_ += ": ";
+  body_ += style_ == JsonStyle::kCompact ? ":" : ": ";
 }
 
 JsonObject& JsonObject::add(std::string_view k, std::string_view value) {
@@ -82,6 +86,10 @@ JsonObject& JsonObject::add(std::string_view k, bool value) {
 
 JsonObject& JsonObject::raw(std::string_view k, std::string_view json) {
   key(k);
+  if (style_ == JsonStyle::kCompact) {
+    body_ += json;
+    return *this;
+  }
   // Indent nested lines one level further.
   for (const char c : json) {
     body_ += c;
@@ -92,6 +100,11 @@ JsonObject& JsonObject::raw(std::string_view k, std::string_view json) {
   return *this;
 }
 
-std::string JsonObject::str() const { return "{" + body_ + (empty_ ? "}" : "\n}"); }
+std::string JsonObject::str() const {
+  if (style_ == JsonStyle::kCompact) {
+    return "{" + body_ + "}";
+  }
+  return "{" + body_ + (empty_ ? "}" : "\n}");
+}
 
 }  // namespace raymap::cli

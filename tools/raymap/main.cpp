@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   addDemoCommand(app, &exit_code);
   addSimulateCommand(app, &exit_code);
   addDevicesCommand(app, &exit_code);
+  addTopicsCommand(app, &exit_code);
+  addEchoCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

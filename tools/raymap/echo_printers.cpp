@@ -1,0 +1,542 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Per-type rendering for `raymap echo`: GridMap, PointCloud2, DiagnosticArray, Odometry and
+// TFMessage, each decoded from its CDR bytes with the decoders of src/dds.
+#include "tools/raymap/echo_printers.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <vector>
+
+#include "src/dds/cdr_reader.hpp"
+#include "src/dds/diagnostics_decode.hpp"
+#include "src/dds/grid_map_decode.hpp"
+#include "src/dds/point_cloud.hpp"
+#include "src/dds/pose.hpp"
+#include "src/dds/ros_time.hpp"
+#include "tools/raymap/dds_cli.hpp"
+#include "tools/raymap/json_writer.hpp"
+
+namespace raymap::cli {
+namespace {
+
+void appendFormat(std::string& out, const char* format, ...) __attribute__((format(printf, 2, 3)));
+
+/// printf onto the end of `out`, whatever the length (wire strings may be long).
+void appendFormat(std::string& out, const char* format, ...) {
+  va_list args;
+  va_start(args, format);
+  va_list again;
+  va_copy(again, args);
+  const int n = std::vsnprintf(nullptr, 0, format, args);
+  va_end(args);
+  if (n > 0) {
+    const std::size_t start = out.size();
+    out.resize(start + static_cast<std::size_t>(n) + 1);
+    std::vsnprintf(out.data() + start, static_cast<std::size_t>(n) + 1, format, again);
+    out.resize(start + static_cast<std::size_t>(n));  // drop vsnprintf's NUL
+  }
+  va_end(again);
+}
+
+/// A wire string for the human form: quoted when empty or when it holds spaces, so that the
+/// fields of a line stay apart.
+std::string humanText(std::string_view text) {
+  std::string safe = printableText(text, true);
+  if (safe.empty() || safe.find(' ') != std::string::npos) {
+    return "\"" + safe + "\"";
+  }
+  return safe;
+}
+
+std::string jsonText(std::string_view text) { return jsonQuote(printableText(text, false)); }
+
+std::string jsonArray(const std::vector<std::string>& items) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    out += i == 0 ? "" : ",";
+    out += items[i];
+  }
+  out += "]";
+  return out;
+}
+
+/// The keys every JSON line has, in this order.
+JsonObject jsonCommon(const EchoSample& sample, std::int64_t stamp_ns) {
+  JsonObject j(JsonStyle::kCompact);
+  j.add("topic", sample.topic)
+      .add("type", sample.type->ros_name)
+      .add("index", sample.index)
+      .add("arrival_unix_ns", sample.arrival_unix_ns)
+      .add("arrival_monotonic_ns", sample.arrival_monotonic_ns)
+      .add("source_timestamp_ns", sample.source_timestamp_ns)
+      .add("stamp_ns", stamp_ns)
+      .add("bytes", static_cast<std::uint64_t>(sample.cdr.size()));
+  return j;
+}
+
+/// "#3 rt/height_map grid_map_msgs/msg/GridMap stamp 1700000000.250000000"
+std::string humanFirstLine(const EchoSample& sample, std::int64_t stamp_ns) {
+  std::string out;
+  appendFormat(out, "#%llu %s %s stamp %s", static_cast<unsigned long long>(sample.index),
+               printableText(sample.topic, true).c_str(), sample.type->ros_name,
+               stampText(stamp_ns).c_str());
+  return out;
+}
+
+std::string jsonXyz(double x, double y, double z) {
+  JsonObject j(JsonStyle::kCompact);
+  j.add("x", x).add("y", y).add("z", z);
+  return j.str();
+}
+
+std::string jsonQuaternion(double w, double x, double y, double z) {
+  JsonObject j(JsonStyle::kCompact);
+  j.add("w", w).add("x", x).add("y", y).add("z", z);
+  return j.str();
+}
+
+// ---------------------------------------------------------------- GridMap
+
+const char* describe(dds::GridMapError error) {
+  switch (error) {
+    case dds::GridMapError::kTruncated:
+      return "the bytes end before the message does";
+    case dds::GridMapError::kBadEncapsulation:
+      return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
+    case dds::GridMapError::kMalformed:
+      return "a string without its terminating NUL";
+    case dds::GridMapError::kLayerCountMismatch:
+      return "data does not hold one array per layer name";
+    case dds::GridMapError::kLayoutMismatch:
+      return "a layer's array does not have two dimensions whose sizes match its data";
+  }
+  return "unknown error";
+}
+
+Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
+  auto decoded = dds::decodeGridMap(sample.cdr);
+  if (!decoded) {
+    return fail(ErrorCode::kFormat,
+                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+  }
+  const dds::DecodedGridMap& map = *decoded;
+  std::vector<dds::LayerStats> stats;
+  stats.reserve(map.data.size());
+  for (const dds::GridMapLayerData& array : map.data) {
+    // decodeGridMap checked data_offset + cells == data.size()
+    stats.push_back(dds::layerStats(std::span<const float>(array.data).subspan(array.data_offset)));
+  }
+  const long cells_x = map.resolution > 0.0 ? std::lround(map.length_x / map.resolution) : 0;
+  const long cells_y = map.resolution > 0.0 ? std::lround(map.length_y / map.resolution) : 0;
+  if (format == EchoFormat::kJsonLines) {
+    std::vector<std::string> layers;
+    for (std::size_t i = 0; i < map.layers.size(); ++i) {
+      JsonObject layer(JsonStyle::kCompact);
+      layer.raw("name", jsonText(map.layers[i]))
+          .add("cells", stats[i].cells)
+          .add("finite", stats[i].finite)
+          .add("min", static_cast<double>(stats[i].min))
+          .add("max", static_cast<double>(stats[i].max));
+      layers.push_back(layer.str());
+    }
+    std::vector<std::string> basic;
+    for (const std::string& name : map.basic_layers) {
+      basic.push_back(jsonText(name));
+    }
+    JsonObject j = jsonCommon(sample, map.stamp_ns);
+    j.raw("frame", jsonText(map.frame_id))
+        .add("resolution", map.resolution)
+        .add("length_x", map.length_x)
+        .add("length_y", map.length_y)
+        .add("cells_x", static_cast<std::int64_t>(cells_x))
+        .add("cells_y", static_cast<std::int64_t>(cells_y))
+        .add("centre_x", map.centre_x)
+        .add("centre_y", map.centre_y)
+        .add("centre_z", map.centre_z)
+        .raw("layers", jsonArray(layers))
+        .raw("basic_layers", jsonArray(basic))
+        .add("outer_start_index", static_cast<std::uint64_t>(map.outer_start_index))
+        .add("inner_start_index", static_cast<std::uint64_t>(map.inner_start_index));
+    return j.str() + "\n";
+  }
+  std::string out = humanFirstLine(sample, map.stamp_ns);
+  appendFormat(out, " frame %s\n", humanText(map.frame_id).c_str());
+  appendFormat(out, "  resolution %g m, %g x %g m (%ld x %ld cells), centre (%g, %g, %g) m\n",
+               map.resolution, map.length_x, map.length_y, cells_x, cells_y, map.centre_x,
+               map.centre_y, map.centre_z);
+  std::string names;
+  for (const std::string& name : map.layers) {
+    names += (names.empty() ? "" : ", ") + humanText(name);
+  }
+  std::string basic;
+  for (const std::string& name : map.basic_layers) {
+    basic += (basic.empty() ? "" : ", ") + humanText(name);
+  }
+  appendFormat(out, "  layers %s (basic: %s)\n", names.empty() ? "none" : names.c_str(),
+               basic.empty() ? "none" : basic.c_str());
+  std::size_t width = 0;
+  for (const std::string& name : map.layers) {
+    width = std::max(width, humanText(name).size());
+  }
+  for (std::size_t i = 0; i < map.layers.size(); ++i) {
+    const dds::LayerStats& s = stats[i];
+    appendFormat(out, "    %-*s %llu / %llu finite", static_cast<int>(width),
+                 humanText(map.layers[i]).c_str(), static_cast<unsigned long long>(s.finite),
+                 static_cast<unsigned long long>(s.cells));
+    if (s.finite > 0) {
+      appendFormat(out, ", min %.6g, max %.6g", static_cast<double>(s.min),
+                   static_cast<double>(s.max));
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- PointCloud2
+
+struct CloudField {
+  std::string name;
+  std::uint32_t offset = 0;
+  std::uint8_t datatype = 0;
+  std::uint32_t count = 0;
+};
+
+/// Everything of a PointCloud2 but its point data, which is only sized.
+struct CloudInfo {
+  std::int64_t stamp_ns = 0;
+  std::string frame_id;
+  std::uint32_t height = 0;
+  std::uint32_t width = 0;
+  std::vector<CloudField> fields;
+  bool is_bigendian = false;
+  std::uint32_t point_step = 0;
+  std::uint32_t row_step = 0;
+  std::uint32_t data_bytes = 0;
+  bool is_dense = false;
+};
+
+/// Reads the header and layout of a PointCloud2 (decodePointCloud2 needs x/y/z; echo shows any
+/// cloud). false: truncated or malformed (`malformed` tells which).
+bool readCloudInfo(std::span<const std::byte> cdr, CloudInfo& info, bool& malformed) {
+  dds::CdrReader reader(cdr);
+  std::int32_t sec = 0;
+  std::uint32_t nanosec = 0;
+  std::string_view frame;
+  std::uint32_t field_count = 0;
+  // A PointField takes at least 16 bytes: name length, offset, datatype (+3 padding), count.
+  constexpr std::size_t kMinFieldBytes = 16;
+  bool read = reader.readI32(sec) && reader.readU32(nanosec) && reader.readString(frame) &&
+              reader.readU32(info.height) && reader.readU32(info.width) &&
+              reader.readSequenceLength(field_count, kMinFieldBytes);
+  if (read) {
+    info.fields.resize(field_count);
+    for (CloudField& field : info.fields) {
+      std::string_view name;
+      if (!reader.readString(name) || !reader.readU32(field.offset) ||
+          !reader.readU8(field.datatype) || !reader.readU32(field.count)) {
+        read = false;
+        break;
+      }
+      field.name.assign(name);
+    }
+  }
+  std::span<const std::byte> data;
+  read = read && reader.readBool(info.is_bigendian) && reader.readU32(info.point_step) &&
+         reader.readU32(info.row_step) && reader.readSequenceLength(info.data_bytes, 1) &&
+         reader.readBytes(info.data_bytes, data) && reader.readBool(info.is_dense);
+  malformed = reader.malformed();
+  if (!read) {
+    return false;
+  }
+  info.frame_id.assign(frame);
+  info.stamp_ns = dds::nanosecondsOf(sec, nanosec);
+  return true;
+}
+
+const char* datatypeName(std::uint8_t datatype) {
+  switch (static_cast<dds::PointFieldType>(datatype)) {
+    case dds::PointFieldType::kInt8:
+      return "int8";
+    case dds::PointFieldType::kUInt8:
+      return "uint8";
+    case dds::PointFieldType::kInt16:
+      return "int16";
+    case dds::PointFieldType::kUInt16:
+      return "uint16";
+    case dds::PointFieldType::kInt32:
+      return "int32";
+    case dds::PointFieldType::kUInt32:
+      return "uint32";
+    case dds::PointFieldType::kFloat32:
+      return "float32";
+    case dds::PointFieldType::kFloat64:
+      return "float64";
+  }
+  return "unknown";
+}
+
+/// Errors after which the cloud is still worth showing (its header and layout are sound); the
+/// points are then not counted, and the reason is shown instead.
+bool layoutOnlyError(dds::CloudError error) {
+  return error == dds::CloudError::kMissingXyz || error == dds::CloudError::kBadFieldType ||
+         error == dds::CloudError::kFrameIdTooLong || error == dds::CloudError::kMissingTimeField;
+}
+
+Result<std::string> formatPointCloud(const EchoSample& sample, EchoFormat format) {
+  if (sample.cdr.size() < 4 || !dds::CdrReader(sample.cdr).ok()) {
+    return fail(ErrorCode::kFormat,
+                "bad_encapsulation: not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)");
+  }
+  CloudInfo info;
+  bool malformed = false;
+  if (!readCloudInfo(sample.cdr, info, malformed)) {
+    return fail(ErrorCode::kFormat, malformed ? "malformed: a string without its terminating NUL"
+                                              : "truncated: the bytes end before the message does");
+  }
+  // Count valid and no-return points with raymapd's own decoder (NaN or (0, 0, 0) = no return).
+  // Room only for a cloud whose data really holds width x height points: anything else is
+  // refused by the decoder before it would need the room.
+  const std::uint64_t points = std::uint64_t{info.width} * info.height;
+  const bool consistent =
+      info.point_step > 0 && points * info.point_step <= std::uint64_t{info.data_bytes};
+  std::vector<dds::ScanPoint> scratch(consistent ? points : 0);
+  dds::CloudDecodeOptions options;
+  options.intensity_field = nullptr;  // not shown; a strange intensity type must not hide points
+  const auto decoded = dds::decodePointCloud2(sample.cdr, scratch, options);
+  std::string points_note;
+  if (!decoded) {
+    if (!layoutOnlyError(decoded.error())) {
+      return fail(ErrorCode::kFormat, std::string(dds::toString(decoded.error())) +
+                                          ": the cloud's layout does not match its data");
+    }
+    points_note = dds::toString(decoded.error());
+  }
+  if (format == EchoFormat::kJsonLines) {
+    std::vector<std::string> fields;
+    for (const CloudField& field : info.fields) {
+      JsonObject f(JsonStyle::kCompact);
+      f.raw("name", jsonText(field.name))
+          .add("type", datatypeName(field.datatype))
+          .add("offset", static_cast<std::uint64_t>(field.offset))
+          .add("count", static_cast<std::uint64_t>(field.count));
+      fields.push_back(f.str());
+    }
+    JsonObject j = jsonCommon(sample, info.stamp_ns);
+    j.raw("frame", jsonText(info.frame_id))
+        .add("width", static_cast<std::uint64_t>(info.width))
+        .add("height", static_cast<std::uint64_t>(info.height))
+        .add("point_step", static_cast<std::uint64_t>(info.point_step))
+        .add("row_step", static_cast<std::uint64_t>(info.row_step))
+        .add("is_bigendian", info.is_bigendian)
+        .add("is_dense", info.is_dense)
+        .raw("fields", jsonArray(fields))
+        .add("points", points);
+    if (decoded) {
+      j.add("valid_points", static_cast<std::uint64_t>(decoded->points - decoded->no_return))
+          .add("no_return", static_cast<std::uint64_t>(decoded->no_return));
+    } else {
+      j.raw("valid_points", "null").raw("no_return", "null").add("points_error", points_note);
+    }
+    return j.str() + "\n";
+  }
+  std::string out = humanFirstLine(sample, info.stamp_ns);
+  appendFormat(out, " frame %s\n", humanText(info.frame_id).c_str());
+  appendFormat(out, "  %u x %u points, point_step %u, row_step %u%s%s\n", info.width, info.height,
+               info.point_step, info.row_step, info.is_bigendian ? ", big endian" : "",
+               info.is_dense ? ", dense" : "");
+  std::string fields;
+  for (const CloudField& field : info.fields) {
+    fields += fields.empty() ? "" : " ";
+    fields += humanText(field.name) + ":" + datatypeName(field.datatype);
+    if (field.count != 1) {
+      fields += "[" + std::to_string(field.count) + "]";
+    }
+  }
+  appendFormat(out, "  fields %s\n", fields.empty() ? "none" : fields.c_str());
+  if (decoded) {
+    appendFormat(out, "  %u valid points, %u no return\n", decoded->points - decoded->no_return,
+                 decoded->no_return);
+  } else {
+    appendFormat(out, "  points not counted: %s\n", points_note.c_str());
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- DiagnosticArray
+
+const char* describe(dds::DiagnosticsError error) {
+  switch (error) {
+    case dds::DiagnosticsError::kTruncated:
+      return "the bytes end before the message does";
+    case dds::DiagnosticsError::kBadEncapsulation:
+      return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
+    case dds::DiagnosticsError::kMalformed:
+      return "a string without its terminating NUL";
+  }
+  return "unknown error";
+}
+
+Result<std::string> formatDiagnostics(const EchoSample& sample, EchoFormat format) {
+  auto decoded = dds::decodeDiagnosticArray(sample.cdr);
+  if (!decoded) {
+    return fail(ErrorCode::kFormat,
+                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+  }
+  const dds::DecodedDiagnostics& array = *decoded;
+  if (format == EchoFormat::kJsonLines) {
+    std::vector<std::string> statuses;
+    for (const dds::DecodedDiagnosticStatus& status : array.statuses) {
+      JsonObject values(JsonStyle::kCompact);
+      for (const dds::DiagnosticKeyValue& pair : status.values) {
+        values.raw(printableText(pair.key, false), jsonText(pair.value));
+      }
+      JsonObject s(JsonStyle::kCompact);
+      s.add("level", static_cast<std::uint64_t>(status.level))
+          .add("level_name", dds::diagnosticLevelName(status.level))
+          .raw("name", jsonText(status.name))
+          .raw("message", jsonText(status.message))
+          .raw("hardware_id", jsonText(status.hardware_id))
+          .raw("values", values.str());
+      statuses.push_back(s.str());
+    }
+    JsonObject j = jsonCommon(sample, array.stamp_ns);
+    j.raw("frame", jsonText(array.frame_id)).raw("statuses", jsonArray(statuses));
+    return j.str() + "\n";
+  }
+  std::string out = humanFirstLine(sample, array.stamp_ns);
+  appendFormat(out, ", %zu status%s\n", array.statuses.size(),
+               array.statuses.size() == 1 ? "" : "es");
+  for (const dds::DecodedDiagnosticStatus& status : array.statuses) {
+    appendFormat(out, "  %-6s %s: %s\n", dds::diagnosticLevelName(status.level),
+                 printableText(status.name, true).c_str(),
+                 printableText(status.message, true).c_str());
+    if (!status.values.empty()) {
+      std::string pairs;
+      for (const dds::DiagnosticKeyValue& pair : status.values) {
+        pairs += pairs.empty() ? "" : " ";
+        pairs += humanText(pair.key) + "=" + humanText(pair.value);
+      }
+      out += "         " + pairs + "\n";
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- Odometry and TFMessage
+
+const char* describe(dds::PoseError error) {
+  switch (error) {
+    case dds::PoseError::kTruncated:
+      return "the bytes end before the message does";
+    case dds::PoseError::kBadEncapsulation:
+      return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
+    case dds::PoseError::kMalformed:
+      return "a string without its terminating NUL";
+    case dds::PoseError::kFrameIdTooLong:
+      return "a frame id of 64 characters or more";
+    case dds::PoseError::kBadQuaternion:
+      return "a rotation that is not finite or has zero norm";
+    case dds::PoseError::kBadTranslation:
+      return "a translation that is not finite";
+  }
+  return "unknown error";
+}
+
+std::string jsonTransform(const dds::StampedTransform& t, bool with_stamp) {
+  JsonObject j(JsonStyle::kCompact);
+  if (with_stamp) {
+    j.add("stamp_ns", t.stamp_ns);
+  }
+  j.raw("frame", jsonText(t.parent))
+      .raw("child_frame", jsonText(t.child))
+      .raw("position", jsonXyz(t.tx, t.ty, t.tz))
+      .raw("orientation", jsonQuaternion(t.qw, t.qx, t.qy, t.qz));
+  return j.str();
+}
+
+std::string humanTransform(const dds::StampedTransform& t) {
+  std::string out;
+  appendFormat(
+      out, "%s -> %s position (%.6g, %.6g, %.6g) m orientation (w %.4f, x %.4f, y %.4f, z %.4f)",
+      humanText(t.parent).c_str(), humanText(t.child).c_str(), t.tx, t.ty, t.tz, t.qw, t.qx, t.qy,
+      t.qz);
+  return out;
+}
+
+Result<std::string> formatOdometry(const EchoSample& sample, EchoFormat format) {
+  const auto decoded = dds::decodeOdometry(sample.cdr);
+  if (!decoded) {
+    return fail(ErrorCode::kFormat,
+                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+  }
+  const dds::StampedTransform& t = *decoded;
+  if (format == EchoFormat::kJsonLines) {
+    JsonObject j = jsonCommon(sample, t.stamp_ns);
+    j.raw("frame", jsonText(t.parent))
+        .raw("child_frame", jsonText(t.child))
+        .raw("position", jsonXyz(t.tx, t.ty, t.tz))
+        .raw("orientation", jsonQuaternion(t.qw, t.qx, t.qy, t.qz));
+    return j.str() + "\n";
+  }
+  return humanFirstLine(sample, t.stamp_ns) + "\n  " + humanTransform(t) + "\n";
+}
+
+Result<std::string> formatTfMessage(const EchoSample& sample, EchoFormat format) {
+  // A TransformStamped takes at least 64 bytes (stamp, frame lengths, seven doubles), so this
+  // has room for every transform of the message.
+  constexpr std::size_t kMinTransformBytes = 64;
+  std::vector<dds::StampedTransform> transforms(sample.cdr.size() / kMinTransformBytes + 1);
+  const auto decoded = dds::decodeTfMessage(sample.cdr, transforms);
+  if (!decoded) {
+    return fail(ErrorCode::kFormat,
+                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+  }
+  transforms.resize(*decoded);
+  // TFMessage has no header: its stamp is the first transform's (0 when empty).
+  const std::int64_t stamp_ns = transforms.empty() ? 0 : transforms.front().stamp_ns;
+  if (format == EchoFormat::kJsonLines) {
+    std::vector<std::string> items;
+    for (const dds::StampedTransform& t : transforms) {
+      items.push_back(jsonTransform(t, true));
+    }
+    JsonObject j = jsonCommon(sample, stamp_ns);
+    j.raw("transforms", jsonArray(items));
+    return j.str() + "\n";
+  }
+  std::string out = humanFirstLine(sample, stamp_ns);
+  appendFormat(out, ", %zu transform%s\n", transforms.size(), transforms.size() == 1 ? "" : "s");
+  for (const dds::StampedTransform& t : transforms) {
+    out += "  " + humanTransform(t) + " stamp " + stampText(t.stamp_ns) + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<std::string> formatSample(const EchoSample& sample, EchoFormat format) {
+  if (sample.type == nullptr) {
+    return fail(ErrorCode::kInvalidArgument, "no type to decode the message with");
+  }
+  const dds_topic_descriptor_t* type = sample.type->descriptor;
+  if (type == dds::gridMapType()) {
+    return formatGridMap(sample, format);
+  }
+  if (type == dds::pointCloud2Type()) {
+    return formatPointCloud(sample, format);
+  }
+  if (type == dds::diagnosticArrayType()) {
+    return formatDiagnostics(sample, format);
+  }
+  if (type == dds::odometryType()) {
+    return formatOdometry(sample, format);
+  }
+  if (type == dds::tfMessageType()) {
+    return formatTfMessage(sample, format);
+  }
+  return fail(ErrorCode::kUnsupported,
+              std::string("no printer for ") + sample.type->ros_name + " (a raymap bug)");
+}
+
+}  // namespace raymap::cli
