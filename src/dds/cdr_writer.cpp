@@ -30,8 +30,8 @@ struct EntityGuard {
 /// type, so it is the same object the real writer's topic uses.
 Result<const ddsi_sertype*> probeSertype(const Participant& participant,
                                          const dds_topic_descriptor_t* descriptor) {
-  EntityGuard topic{dds_create_topic(participant.handle(), descriptor, kProbeTopic, nullptr,
-                                     nullptr)};
+  EntityGuard topic{
+      dds_create_topic(participant.handle(), descriptor, kProbeTopic, nullptr, nullptr)};
   if (topic.entity < 0) {
     return fail(ErrorCode::kIo, std::string(kProbeTopic) + ": cannot create the probe topic: " +
                                     dds_strretcode(topic.entity));
@@ -54,8 +54,8 @@ Result<const ddsi_sertype*> probeSertype(const Participant& participant,
   const dds_return_t written = dds_write(writer.entity, sample);
   std::free(sample);
   if (written < 0) {
-    return fail(ErrorCode::kIo, std::string(kProbeTopic) + ": probe write failed: " +
-                                    dds_strretcode(written));
+    return fail(ErrorCode::kIo,
+                std::string(kProbeTopic) + ": probe write failed: " + dds_strretcode(written));
   }
   ddsi_serdata* taken = nullptr;
   dds_sample_info_t info;
@@ -75,8 +75,7 @@ Result<CdrWriter> CdrWriter::create(const Participant& participant, const char* 
                                     const dds_topic_descriptor_t* descriptor,
                                     Reliability reliability, std::int32_t depth,
                                     Durability durability) {
-  auto writer = Writer::create(participant, topic_name, descriptor, reliability, depth,
-                               durability);
+  auto writer = Writer::create(participant, topic_name, descriptor, reliability, depth, durability);
   if (!writer) {
     return Unexpected(std::move(writer).error());
   }

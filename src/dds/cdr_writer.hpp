@@ -36,8 +36,8 @@ class CdrWriter {
  public:
   /// @brief Creates the topic, the writer and the sertype probe. Start-up only.
   static Result<CdrWriter> create(const Participant& participant, const char* topic_name,
-                                  const dds_topic_descriptor_t* descriptor,
-                                  Reliability reliability, std::int32_t depth,
+                                  const dds_topic_descriptor_t* descriptor, Reliability reliability,
+                                  std::int32_t depth,
                                   Durability durability = Durability::kVolatile);
   CdrWriter(CdrWriter&& other) noexcept;
   CdrWriter& operator=(CdrWriter&& other) noexcept;

@@ -3,6 +3,7 @@
 #include "tests/service/service_fixture.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 
 #include <unistd.h>
 
@@ -11,6 +12,10 @@
 namespace raymap::test {
 
 std::uint32_t uniqueDomain() {
+  // Every test pins Cyclone DDS to loopback (tests/CMakeLists.txt sets it); without it the
+  // traffic would leave the machine and large clouds would meet the default socket buffer.
+  EXPECT_NE(std::getenv("CYCLONEDDS_URI"), nullptr)
+      << "CYCLONEDDS_URI is not set: run the tests through ctest";
   static std::uint32_t next = 0;
   return 200 + (static_cast<std::uint32_t>(::getpid()) % 10) * 3 + (next++ % 3);
 }

@@ -80,6 +80,12 @@ Result<std::unique_ptr<DriverPublisher>> DriverPublisher::create(
   return p;
 }
 
+void DriverPublisher::reserveCloud(std::uint32_t points) {
+  if (points > cloud_->capacity()) {
+    cloud_ = std::make_unique<dds::PointCloudMessage>(points, cloud_->layout());
+  }
+}
+
 void DriverPublisher::publishCloud(std::span<const dds::ScanPoint> points,
                                    std::span<const std::uint16_t> rings, std::int64_t stamp_ns,
                                    const char* frame_id) {

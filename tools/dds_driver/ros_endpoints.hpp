@@ -28,6 +28,9 @@ class DriverPublisher {
                                                          const std::string& cloud_topic,
                                                          const std::string& odometry_topic,
                                                          std::uint32_t max_points);
+  /// @brief Grows the preallocated cloud to hold `points` (allocates; never shrinks).
+  void reserveCloud(std::uint32_t points);
+  /// @pre points.size() <= the capacity (create()'s max_points or reserveCloud())
   void publishCloud(std::span<const dds::ScanPoint> points, std::span<const std::uint16_t> rings,
                     std::int64_t stamp_ns, const char* frame_id);
   void publishOdometry(std::int64_t stamp_ns, const io::Pose& pose, const char* world_frame,

@@ -31,6 +31,11 @@ void addTopicsCommand(CLI::App& app, int* exit_code);
 /// `raymap echo TOPIC`: the messages of one topic of a known type, human-readable or JSON Lines.
 void addEchoCommand(CLI::App& app, int* exit_code);
 
+/// `raymap replay`: recorded data published over DDS like a live robot's sensors.
+void addReplayCommand(CLI::App& app, int* exit_code);
+/// `raymap record`: DDS topics recorded as raw CDR into a log.
+void addRecordCommand(CLI::App& app, int* exit_code);
+
 /// @brief Prints "raymap <command>: error: <message>" on stderr.
 void printError(const std::string& command, const std::string& message);
 

@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
   addDevicesCommand(app, &exit_code);
   addTopicsCommand(app, &exit_code);
   addEchoCommand(app, &exit_code);
+  addReplayCommand(app, &exit_code);
+  addRecordCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -24,11 +24,9 @@ std::vector<std::vector<std::byte>> receive(RawReader& reader, std::size_t count
   std::vector<std::vector<std::byte>> samples;
   const auto end = std::chrono::steady_clock::now() + timeout;
   while (samples.size() < count && std::chrono::steady_clock::now() < end) {
-    reader.takeEach(
-        [&samples](std::span<const std::byte> cdr, std::int64_t) {
-          samples.emplace_back(cdr.begin(), cdr.end());
-        },
-        16);
+    reader.takeEach([&samples](std::span<const std::byte> cdr,
+                               std::int64_t) { samples.emplace_back(cdr.begin(), cdr.end()); },
+                    16);
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   return samples;

@@ -1,0 +1,264 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Hardware-in-the-loop replay end to end: `raymap replay` publishes a simulated drive (and the
+// shared Ouster scans) into raymapd, an independent subscriber collects the GridMaps, and each
+// is compared with the offline `raymap populate` + `raymap heightmap` of the same scans.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include "platform/clock.hpp"
+#include "src/io/ray_source.hpp"
+#include "tests/replay/replay_harness.hpp"
+#include "tests/service/service_fixture.hpp"
+#include "tests/support/cli_runner.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace raymap::test {
+namespace {
+
+constexpr double kScanPeriod = 0.1;  // the yard lidar: 10 Hz
+// raymapd's test configuration ranges (serviceConfig), for the offline map too.
+const std::vector<std::string> kRanges = {"--min-range", "0.3", "--max-range", "20"};
+
+/// The yard drive (32 x 1024 lidar, 4 m/s along its path): `scans` scans as a ray-cloud PLY.
+std::string simulateYard(const TempDir& dir, int scans) {
+  const std::string path = dir.file("yard" + std::to_string(scans) + ".ply");
+  const RunResult r = runRaymap({"simulate", std::string(RAYMAP_SCENES_DIR) + "/yard.yaml",
+                                 "--rays", path, "--scans", std::to_string(scans), "-q"});
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  return path;
+}
+
+/// A configuration on `backend`, with diagnostics often enough to follow a short replay.
+std::string configFor(std::uint32_t domain, const std::string& backend) {
+  std::string text = serviceConfig(domain);
+  if (backend != "cpu") {
+    const std::string cpu = "backend: {name: cpu, threads: 2}";
+    text.replace(text.find(cpu), cpu.size(), "backend: {name: " + backend + "}");
+    // PoCL generates on the same two cores as everything else: give it the documented lead.
+    const std::string heightmap = "heightmap: {rate_hz: 5, size: 12, base_height: 1.2}";
+    text.replace(text.find(heightmap), heightmap.size(),
+                 "heightmap: {rate_hz: 5, size: 12, base_height: 1.2, publish_lead_s: 0.05}");
+  }
+  return text;
+}
+
+double meanPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::size_t first) {
+  if (maps.size() < first + 2) {
+    return 0.0;
+  }
+  return static_cast<double>(maps.back().arrival_ns - maps[first].arrival_ns) * 1e-6 /
+         static_cast<double>(maps.size() - 1 - first);
+}
+
+double diagnostic(const Watcher& w, const std::string& key) {
+  return w.diagnostics->number(key).value_or(-1.0);
+}
+
+/// What one replay of a file into raymapd gave.
+struct ReplayRun {
+  std::string stats;  // raymap replay --stats-json
+  int replay_exit = -1;
+};
+
+/// Starts raymapd on `backend`, replays `input` at the recorded rate, and collects until the
+/// diagnostics account for every cloud (or a timeout). Skips when the backend is unavailable.
+ReplayRun replayIntoDaemon(const TempDir& dir, std::uint32_t domain,
+                           const std::vector<std::string>& extra_args, Watcher& watcher) {
+  ReplayRun run;
+  watcher.collect(10.0, [&] { return watcher.grid_maps->matchedWriters() > 0; });
+  if (watcher.grid_maps->matchedWriters() == 0) {
+    return run;
+  }
+  std::vector<std::string> args = {
+      "replay", "--domain", std::to_string(domain), "--stats-json", dir.file("replay.json"), "-q"};
+  args.insert(args.end(), extra_args.begin(), extra_args.end());
+  auto replay = startRaymap(args, dir.file("replay.log"));
+  watcher.collect(120.0, [&] { return !replay->running(); });
+  const auto status = replay->stop(SIGTERM, std::chrono::milliseconds(100));
+  run.replay_exit = status ? status->first : -1;
+  run.stats = readFile(dir.file("replay.json"));
+  // Diagnostics come at 1 Hz: wait for a report that has every cloud processed.
+  const double clouds = jsonNumber(run.stats, "clouds").value_or(-1.0);
+  watcher.collect(4.0, [&] {
+    return diagnostic(watcher, "raymapd: pipeline/scans_integrated") >= clouds &&
+           diagnostic(watcher, "raymapd: height map/maps_published") > 0;
+  });
+  watcher.collect(0.5);  // a GridMap or two with the last scan in it
+  return run;
+}
+
+class ReplayOnBackend : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ReplayOnBackend, GridMapsEqualTheOfflineHeightmapAtTheSameInstantsWithNothingDropped) {
+  const std::string backend = GetParam();
+  TempDir dir;
+  const int scans = 25;  // the whole drive, 2.5 s
+  const std::string input = simulateYard(dir, scans);
+  const std::uint32_t domain = uniqueDomain();
+  Daemon daemon(dir, configFor(domain, backend));
+  Watcher watcher(domain);
+  const ReplayRun run = replayIntoDaemon(dir, domain, {input}, watcher);
+  if (run.replay_exit == -1 && !daemon.process->running()) {
+    if (backend != "cpu" && daemon.log().find("OpenCL") != std::string::npos) {
+      GTEST_SKIP() << "no OpenCL device: " << daemon.log();
+    }
+    FAIL() << "raymapd did not start: " << daemon.log();
+  }
+  ASSERT_EQ(run.replay_exit, 0) << readFile(dir.file("replay.log"));
+  ASSERT_EQ(jsonNumber(run.stats, "clouds"), scans) << run.stats;
+  const double points = jsonNumber(run.stats, "points").value();
+  const auto stamp_zero = static_cast<std::int64_t>(jsonNumber(run.stats, "stamp_zero_ns").value());
+
+  // Nothing dropped at the recorded rate: every cloud received and integrated, every point
+  // either integrated, rejected by the range limits, or a no-return.
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/clouds_received"), scans) << daemon.log();
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/scans_integrated"), scans);
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/clouds_dropped_overflow"), 0);
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/scans_dropped_no_pose"), 0);
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/clouds_malformed"), 0);
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/rays_integrated") +
+                diagnostic(watcher, "raymapd: pipeline/rays_rejected") +
+                diagnostic(watcher, "raymapd: pipeline/points_no_return"),
+            points);
+  // Rate and latency at the recorded rate.
+  ASSERT_GE(watcher.maps.size(), 12U);
+  EXPECT_NEAR(meanPeriodMs(watcher.maps, 2), 200.0, 4.0);
+  const double latency_p99 = diagnostic(watcher, "raymapd: height map/latency_p99_ms_total");
+  EXPECT_GT(latency_p99, 0.0);
+  EXPECT_LE(latency_p99, 400.0) << "scan arrival to the first GridMap containing it";
+
+  // The GridMaps against the offline height map of the scans each one covers (its stamp is the
+  // newest integrated scan's): a third of the way, two thirds, and the last.
+  const auto scansCovered = [&](const driver::ReceivedGridMap& m) {
+    return std::lround(static_cast<double>(m.stamp_ns - stamp_zero) * 1e-9 / kScanPeriod) + 1;
+  };
+  std::vector<const driver::ReceivedGridMap*> instants;
+  for (const long at_least : {8L, 16L}) {
+    for (const driver::ReceivedGridMap& m : watcher.maps) {
+      if (scansCovered(m) >= at_least) {
+        instants.push_back(&m);
+        break;
+      }
+    }
+  }
+  instants.push_back(&watcher.maps.back());
+  ASSERT_EQ(instants.size(), 3U);
+  EXPECT_EQ(scansCovered(*instants.back()), scans) << "the last GridMap has every scan";
+  for (const driver::ReceivedGridMap* m : instants) {
+    const long covered = scansCovered(*m);
+    const std::string prefix =
+        covered == scans ? input : simulateYard(dir, static_cast<int>(covered));
+    // raymapd centres on the base (the sensor, 1.2 m up) minus base_height 1.2.
+    const OfflineHeights offline =
+        offlineHeights(dir, prefix, kRanges, m->centre_x, m->centre_y, 0.0, 12.0);
+    const Agreement a = compare(*m, offline);
+    SCOPED_TRACE("GridMap covering " + std::to_string(covered) + " scans");
+    EXPECT_GE(a.surface_both, 2000) << "too little observed in common";
+    EXPECT_GE(a.fraction(), 0.99) << a.within_voxel << " of " << a.surface_both;
+    // The same cells are observed: surfaces in one map and not the other are rare.
+    EXPECT_LE(std::abs(a.surface_online - a.surface_offline), a.surface_both / 50)
+        << a.surface_online << " online, " << a.surface_offline << " offline";
+    std::printf(
+        "%s after %ld scans: %d surface cells in both, %d within one voxel; %d online, "
+        "%d offline\n",
+        GetParam().c_str(), covered, a.surface_both, a.within_voxel, a.surface_online,
+        a.surface_offline);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, ReplayOnBackend, ::testing::Values("cpu", "opencl"),
+                         [](const auto& test_info) { return test_info.param; });
+
+TEST(Replay, RaymapdKilledMidReplayPublishesAgainWithinTwoSecondsOfItsRestart) {
+  TempDir dir;
+  const std::string input = simulateYard(dir, 25);
+  const std::uint32_t domain = uniqueDomain();
+  const std::string config = configFor(domain, "cpu");
+  auto first = std::make_unique<Daemon>(dir, config, "first");
+  Watcher watcher(domain);
+  watcher.collect(10.0, [&] { return watcher.grid_maps->matchedWriters() > 0; });
+  auto replay = startRaymap({"replay", input, "--loop", "--domain", std::to_string(domain), "-q"},
+                            dir.file("replay.log"));
+  watcher.collect(3.0);
+  ASSERT_GE(watcher.maps.size(), 8U) << first->log() << readFile(dir.file("replay.log"));
+
+  // SIGKILL, as an OOM kill or a crash would: no clean shutdown, nothing saved.
+  ASSERT_TRUE(first->process->stop(SIGKILL, std::chrono::milliseconds(2000)).has_value());
+  watcher.collect(0.3);  // a map already on the wire may still arrive
+  watcher.maps.clear();
+  watcher.collect(1.0);
+  EXPECT_TRUE(watcher.maps.empty()) << "GridMaps from a killed raymapd";
+
+  // systemd's Restart=on-failure starts a new one; the replay never stopped.
+  const std::int64_t restarted = platform::monotonicNowNs();
+  Daemon second(dir, config, "second");
+  watcher.collect(5.0, [&] { return !watcher.maps.empty(); });
+  ASSERT_FALSE(watcher.maps.empty()) << second.log();
+  const double resumed_s = static_cast<double>(watcher.maps.front().arrival_ns - restarted) * 1e-9;
+  EXPECT_LE(resumed_s, 2.0) << second.log();
+  std::printf("first GridMap %.3f s after the restart\n", resumed_s);
+  // And it goes on at 5 Hz.
+  watcher.maps.clear();
+  watcher.collect(2.0);
+  EXPECT_GE(watcher.maps.size(), 9U);
+  const auto stopped = replay->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << readFile(dir.file("replay.log"));
+}
+
+TEST(Replay, SharedOusterScansGiveTheOfflineHeightmap) {
+  const std::filesystem::path data = sharedDataDir();
+  if (data.empty()) {
+    GTEST_SKIP() << "../shared/data is absent";
+  }
+  const std::string input = (data / "ouster/ouster_os1_lb_n3_raycloud.ply.gz").string();
+  // Where the sensor is at the end (the last ray's origin): raymapd centres the map there.
+  auto source = io::openRaySource(input, {});
+  ASSERT_TRUE(source.has_value());
+  std::vector<Ray> rays(65536);
+  Ray last;
+  for (;;) {
+    const auto n = source.value()->read(rays);
+    ASSERT_TRUE(n.has_value());
+    if (n.value() == 0) {
+      break;
+    }
+    for (std::size_t i = 0; i < n.value(); ++i) {
+      if (rays[i].time_s >= last.time_s) {
+        last = rays[i];
+      }
+    }
+  }
+  TempDir dir;
+  const std::uint32_t domain = uniqueDomain();
+  std::string config = configFor(domain, "cpu");
+  const std::string points = "max_points: 70000";
+  config.replace(config.find(points), points.size(), "max_points: 262144");
+  Daemon daemon(dir, config);
+  Watcher watcher(domain);
+  const ReplayRun run = replayIntoDaemon(dir, domain, {input}, watcher);
+  ASSERT_EQ(run.replay_exit, 0) << readFile(dir.file("replay.log")) << daemon.log();
+  const double clouds = jsonNumber(run.stats, "clouds").value_or(0.0);
+  EXPECT_EQ(clouds, 3.0) << run.stats;
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/clouds_received"), clouds) << daemon.log();
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/scans_integrated"), clouds);
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/scans_dropped_no_pose"), 0);
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/clouds_dropped_overflow"), 0);
+  ASSERT_FALSE(watcher.maps.empty());
+  const driver::ReceivedGridMap& final_map = watcher.maps.back();
+  const OfflineHeights offline = offlineHeights(dir, input, kRanges, final_map.centre_x,
+                                                final_map.centre_y, last.origin.z - 1.2, 12.0);
+  const Agreement a = compare(final_map, offline);
+  std::printf("Ouster: %d surface cells in both maps, %d within one voxel\n", a.surface_both,
+              a.within_voxel);
+  EXPECT_GE(a.surface_both, 1000);
+  EXPECT_GE(a.fraction(), 0.99) << a.within_voxel << " of " << a.surface_both;
+}
+
+}  // namespace
+}  // namespace raymap::test

@@ -1,0 +1,219 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap replay`: recorded data published over DDS as the sensors and localisation of a live
+// robot would (docs/cli.md).
+#include <cstdio>
+#include <memory>
+
+#include "src/dds/topic_types.hpp"
+#include "tools/raymap/cli_options.hpp"
+#include "tools/raymap/commands.hpp"
+#include "tools/raymap/dds_cli.hpp"
+#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/replay_session.hpp"
+
+namespace raymap::cli {
+namespace {
+
+struct ReplayFlags {
+  std::vector<std::string> inputs;
+  std::string rate = "1";
+  bool loop = false;
+  double start = 0.0;
+  double duration = 0.0;
+  int domain = -1;  // -1: $ROS_DOMAIN_ID, else 0
+  std::string trajectory;
+  std::string sensor_offset = "0,0,0";
+  double scan_period = io::RaySourceOptions::kDefaultScanPeriod;
+  std::string cloud_topic = "/points";
+  std::string odometry_topic = "/odom";
+  std::string pose = "odometry";
+  bool no_tf_static = false;
+  std::string frame = "lidar";
+  std::string world_frame = "odom";
+  std::string base_frame = "base_link";
+  double pose_rate = 100.0;
+  double wait = 10.0;
+  std::string diagnostics_topic = "/diagnostics";
+  unsigned max_ahead = 2;
+  std::string stats_json;
+  bool quiet = false;
+};
+
+Result<ReplayOptions> toOptions(const ReplayFlags& f) {
+  ReplayOptions o;
+  o.inputs = f.inputs;
+  if (f.rate == "max") {
+    o.rate = 0.0;
+  } else {
+    try {
+      std::size_t used = 0;
+      o.rate = std::stod(f.rate, &used);
+      if (used != f.rate.size() || !(o.rate > 0.0)) {
+        throw std::invalid_argument(f.rate);
+      }
+    } catch (const std::exception&) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "--rate: '" + f.rate + "' is not a positive number or 'max'");
+    }
+  }
+  if (f.start < 0.0 || f.duration < 0.0) {
+    return fail(ErrorCode::kInvalidArgument, "--start and --duration must not be negative");
+  }
+  if (!(f.pose_rate > 0.0) || f.pose_rate > 10000.0) {
+    return fail(ErrorCode::kInvalidArgument, "--pose-rate: must be in (0, 10000] Hz");
+  }
+  o.loop = f.loop;
+  o.start_s = f.start;
+  o.duration_s = f.duration;
+  auto domain = domainFromOptionOrEnvironment(f.domain);
+  if (!domain) {
+    return Unexpected(std::move(domain).error());
+  }
+  o.domain = domain.value();
+  o.source.trajectory_path = f.trajectory;
+  o.source.scan_period_s = f.scan_period;
+  auto offset = parseVector(f.sensor_offset, "--sensor-offset");
+  if (!offset) {
+    return Unexpected(offset.error());
+  }
+  o.source.sensor_offset = *offset;
+  o.cloud_topic = dds::ddsTopicName(f.cloud_topic);
+  o.odometry_topic = dds::ddsTopicName(f.odometry_topic);
+  o.diagnostics_topic = dds::ddsTopicName(f.diagnostics_topic);
+  o.pose_odometry = f.pose == "odometry" || f.pose == "both";
+  o.pose_tf = f.pose == "tf" || f.pose == "both";
+  o.tf_static = !f.no_tf_static;
+  o.frame = f.frame;
+  o.world_frame = f.world_frame;
+  o.base_frame = f.base_frame;
+  o.pose_period_s = 1.0 / f.pose_rate;
+  o.wait_s = f.wait;
+  o.max_ahead = f.max_ahead;
+  o.progress = !f.quiet;
+  return o;
+}
+
+std::string statsJson(const ReplayStats& s) {
+  JsonObject json;
+  json.add("passes", s.passes)
+      .add("clouds", s.scans)
+      .add("points", s.points)
+      .add("poses", s.poses)
+      .add("log_messages", s.messages)
+      .add("log_messages_undecodable", s.undecodable)
+      .add("logs_truncated", s.truncated_logs)
+      .add("origin_conflicts", s.origin_conflicts)
+      .add("feedback_timeouts", s.feedback_timeouts)
+      .add("data_seconds", s.data_seconds)
+      .add("wall_seconds", s.wall_seconds)
+      .add("max_late_ms", s.max_late_ms)
+      .add("stamp_zero_ns", s.stamp_zero_ns);
+  std::string warnings = "[";
+  for (std::size_t i = 0; i < s.warnings.size(); ++i) {
+    warnings += (i == 0 ? "" : ", ") + jsonQuote(s.warnings[i]);
+  }
+  json.raw("warnings", warnings + "]");
+  return json.str();
+}
+
+int runReplay(const ReplayFlags& flags) {
+  auto options = toOptions(flags);
+  if (!options) {
+    printError("replay", options.error().message);
+    return kExitUsage;
+  }
+  if (!flags.stats_json.empty() && flags.stats_json != "-") {
+    if (auto writable = checkWritable(flags.stats_json, "--stats-json"); !writable) {
+      printError("replay", writable.error().message);
+      return kExitFailure;
+    }
+  }
+  // Before the participant starts Cyclone's threads, so they inherit the blocked mask and
+  // Ctrl-C / SIGTERM reach the replay loop (which then stops cleanly) and nothing else.
+  const platform::ShutdownSignals signals = platform::ShutdownSignals::install();
+  auto session = ReplaySession::create(*options, signals);
+  if (!session) {
+    printError("replay", session.error().message);
+    return kExitFailure;
+  }
+  auto stats = session.value()->run();
+  if (!stats) {
+    printError("replay", stats.error().message);
+    return kExitFailure;
+  }
+  for (const std::string& warning : stats.value().warnings) {
+    std::fprintf(stderr, "raymap replay: warning: %s\n", warning.c_str());
+  }
+  if (!flags.stats_json.empty()) {
+    const std::string json = statsJson(stats.value());
+    if (flags.stats_json == "-") {
+      std::printf("%s\n", json.c_str());
+    } else if (auto written = writeTextFile(flags.stats_json, json); !written) {
+      printError("replay", written.error().message);
+      return kExitFailure;
+    }
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void addReplayCommand(CLI::App& app, int* exit_code) {
+  auto f = std::make_shared<ReplayFlags>();
+  CLI::App* c = app.add_subcommand(
+      "replay", "Publish recorded data over DDS as a lidar driver and localisation would");
+  c->add_option("inputs", f->inputs,
+                "Ray-cloud PLY, point-cloud PLY (with --trajectory) or raymap record logs, "
+                "played one after another")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--rate", f->rate,
+                "Data seconds per second (2 = twice as fast), or 'max': as fast as raymapd "
+                "keeps up (paced by its diagnostics)")
+      ->capture_default_str();
+  c->add_flag("--loop", f->loop, "Start over after the last input, until interrupted");
+  c->add_option("--start", f->start, "Skip this many seconds of each input")->capture_default_str();
+  c->add_option("--duration", f->duration, "Play this many seconds of each input (0 = all)")
+      ->capture_default_str();
+  c->add_option("--domain", f->domain, "DDS domain (default: $ROS_DOMAIN_ID, else 0)")
+      ->check(CLI::Range(0, kMaxDomainId));
+  c->add_option("--trajectory", f->trajectory,
+                "Point clouds: sensor trajectory, lines 'time x y z [qw qx qy qz]'");
+  c->add_option("--sensor-offset", f->sensor_offset,
+                "Sensor position in the trajectory's body frame, metres: x,y,z")
+      ->capture_default_str();
+  c->add_option("--scan-period", f->scan_period,
+                "Without a 'scan' property: seconds per scan (<= 0: one scan)")
+      ->capture_default_str();
+  c->add_option("--cloud-topic", f->cloud_topic, "PointCloud2 topic (ROS or DDS name)")
+      ->capture_default_str();
+  c->add_option("--odom-topic", f->odometry_topic, "nav_msgs/Odometry topic")
+      ->capture_default_str();
+  c->add_option("--pose", f->pose, "odometry, tf (world -> base on /tf) or both")
+      ->check(CLI::IsMember({"odometry", "tf", "both"}))
+      ->capture_default_str();
+  c->add_flag("--no-tf-static", f->no_tf_static,
+              "Do not latch the identity base -> sensor transform on /tf_static");
+  c->add_option("--frame", f->frame, "frame_id of the clouds (the sensor frame)")
+      ->capture_default_str();
+  c->add_option("--world-frame", f->world_frame, "Parent frame of the pose")->capture_default_str();
+  c->add_option("--base-frame", f->base_frame, "Child frame of the pose")->capture_default_str();
+  c->add_option("--pose-rate", f->pose_rate, "Pose samples per second of data (Hz)")
+      ->capture_default_str();
+  c->add_option("--wait", f->wait,
+                "Seconds to wait for a subscriber before publishing (data sent before a "
+                "subscriber matches is lost)")
+      ->capture_default_str();
+  c->add_option("--diagnostics-topic", f->diagnostics_topic,
+                "--rate max: where raymapd reports its progress")
+      ->capture_default_str();
+  c->add_option("--max-ahead", f->max_ahead,
+                "--rate max: clouds published but not yet processed by raymapd")
+      ->check(CLI::Range(1u, 64u))
+      ->capture_default_str();
+  c->add_option("--stats-json", f->stats_json, "Write what was published as JSON ('-' = stdout)");
+  c->add_flag("-q,--quiet", f->quiet, "No progress line");
+  c->callback([f, exit_code] { *exit_code = runReplay(*f); });
+}
+
+}  // namespace raymap::cli

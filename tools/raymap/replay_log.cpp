@@ -1,0 +1,139 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// ReplaySession::playLog: the messages of a raymap record log written back unchanged, on their
+// recorded topics and QoS, at their recorded spacing.
+#include <cstring>
+
+#include "src/dds/topic_types.hpp"
+#include "src/record/record_log_reader.hpp"
+#include "tools/raymap/replay_session.hpp"
+
+namespace raymap::cli {
+namespace {
+
+constexpr std::int32_t kLogWriterDepth = 16;
+
+bool isPointCloud(const std::string& type) {
+  return type == "sensor_msgs::msg::dds_::PointCloud2_";
+}
+
+}  // namespace
+
+Result<dds::CdrWriter*> ReplaySession::logWriter(const std::string& topic, const std::string& type,
+                                                 bool reliable, bool transient_local) {
+  if (auto found = log_writers_.find(topic); found != log_writers_.end()) {
+    return &found->second;
+  }
+  const dds::KnownTopicType* known = dds::findTopicType(type);
+  if (known == nullptr) {
+    return nullptr;  // a type this raymap cannot publish (a newer recorder): skipped
+  }
+  auto writer = dds::CdrWriter::create(
+      *participant_, topic.c_str(), known->descriptor,
+      reliable ? dds::Reliability::kReliable : dds::Reliability::kBestEffort, kLogWriterDepth,
+      transient_local ? dds::Durability::kTransientLocal : dds::Durability::kVolatile);
+  if (!writer) {
+    return Unexpected(std::move(writer).error());
+  }
+  return &log_writers_.emplace(topic, std::move(writer).value()).first->second;
+}
+
+Result<void> ReplaySession::playLog(const std::string& path) {
+  // One pass over the file first: every topic's writer exists before the first message, so
+  // discovery is done when the data starts, and the summary gives the progress total.
+  auto summary = record::RecordLogReader::summarize(path);
+  if (!summary) {
+    return Unexpected(std::move(summary).error());
+  }
+  std::map<std::uint32_t, dds::CdrWriter*> writers;  // log topic id -> writer, nullptr = skip
+  dds::CdrWriter* first_cloud_writer = nullptr;
+  std::string first_cloud_topic;
+  for (const record::LogTopic& topic : summary.value().topics) {
+    auto writer =
+        logWriter(topic.name, topic.type, topic.reliability == record::LogReliability::kReliable,
+                  topic.durability == record::LogDurability::kTransientLocal);
+    if (!writer) {
+      return Unexpected(std::move(writer).error());
+    }
+    writers[topic.id] = writer.value();
+    if (writer.value() == nullptr) {
+      stats_.warnings.push_back(path + ": topic " + topic.name + " has type " + topic.type +
+                                ", which this raymap cannot publish: its messages are skipped");
+    } else if (first_cloud_writer == nullptr && isPointCloud(topic.type)) {
+      first_cloud_writer = writer.value();
+      first_cloud_topic = topic.name;
+    }
+  }
+  if (first_cloud_writer != nullptr &&
+      !waitForSubscriber([first_cloud_writer] { return first_cloud_writer->matchedReaders(); },
+                         first_cloud_topic)) {
+    return {};
+  }
+
+  auto opened = record::RecordLogReader::open(path);
+  if (!opened) {
+    return Unexpected(std::move(opened).error());
+  }
+  record::RecordLogReader& reader = *opened.value();
+  std::optional<std::int64_t> first_receive_ns;
+  double played_until_s = pass_offset_s_;
+  std::map<std::uint32_t, bool> warned_undecodable;
+  for (;;) {
+    auto next = reader.next();
+    if (!next) {
+      return Unexpected(std::move(next).error());
+    }
+    if (!next.value()) {
+      break;
+    }
+    const record::LogMessage& message = *next.value();
+    if (!first_receive_ns) {
+      first_receive_ns = message.receive_monotonic_ns;
+    }
+    const double t = static_cast<double>(message.receive_monotonic_ns - *first_receive_ns) * 1e-9;
+    if (t < options_.start_s) {
+      continue;
+    }
+    if (options_.duration_s > 0.0 && t >= options_.start_s + options_.duration_s) {
+      break;
+    }
+    dds::CdrWriter* writer = writers[message.topic_id];
+    if (writer == nullptr) {
+      continue;
+    }
+    const record::LogTopic* topic = reader.topic(message.topic_id);
+    const bool cloud = topic != nullptr && isPointCloud(topic->type);
+    if (cloud && !waitForRoom()) {
+      return {};
+    }
+    const double replay_s = pass_offset_s_ + t - options_.start_s;
+    if (!clock_.waitUntil(replay_s)) {
+      return {};
+    }
+    if (!writer->write(message.cdr).has_value()) {
+      ++stats_.undecodable;
+      if (!warned_undecodable[message.topic_id]) {
+        warned_undecodable[message.topic_id] = true;
+        stats_.warnings.push_back(path + ": message " + std::to_string(reader.messagesRead()) +
+                                  " on " + (topic != nullptr ? topic->name : "?") +
+                                  " is not a valid " + (topic != nullptr ? topic->type : "?") +
+                                  " or could not be sent: skipped (and any more like it)");
+      }
+      continue;
+    }
+    ++stats_.messages;
+    stats_.scans += cloud ? 1 : 0;
+    stats_.data_seconds += std::max(0.0, replay_s - played_until_s);
+    played_until_s = std::max(played_until_s, replay_s);
+    reportProgress(reader.progress(), path);
+  }
+  if (reader.truncation()) {
+    ++stats_.truncated_logs;
+    stats_.warnings.push_back(
+        path + ": the recording was interrupted: " + reader.truncation()->what + "; replayed the " +
+        std::to_string(reader.truncation()->complete_messages) + " complete messages before it");
+  }
+  pass_offset_s_ = played_until_s + kGapBetweenInputs_s;
+  return {};
+}
+
+}  // namespace raymap::cli

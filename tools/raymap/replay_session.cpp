@@ -1,0 +1,280 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// ReplaySession: passes over the inputs, ray files published as driver scans and poses, flow
+// control for --rate max, progress.
+#include "tools/raymap/replay_session.hpp"
+
+#include <cinttypes>
+#include <cstdio>
+
+#include <unistd.h>
+
+#include "platform/clock.hpp"
+#include "src/record/record_log_reader.hpp"
+#include "tools/raymap/commands.hpp"
+
+namespace raymap::cli {
+namespace {
+
+/// --rate max: a subscriber that reports no progress for this long is not waited for.
+constexpr double kFeedbackTimeout_s = 2.0;
+
+/// The counters of raymapd's "raymapd: pipeline" status that account for every received cloud.
+constexpr const char* kProcessedKeys[] = {
+    "raymapd: pipeline/scans_integrated",        "raymapd: pipeline/scans_dropped_no_pose",
+    "raymapd: pipeline/clouds_dropped_overflow", "raymapd: pipeline/clouds_malformed",
+    "raymapd: pipeline/clouds_too_large",        "raymapd: pipeline/clouds_wrong_frame"};
+
+std::optional<double> processedClouds(const driver::DiagnosticsListener& diagnostics) {
+  double sum = 0.0;
+  for (const char* key : kProcessedKeys) {
+    const auto value = diagnostics.number(key);
+    if (!value) {
+      return std::nullopt;
+    }
+    sum += *value;
+  }
+  return sum;
+}
+
+}  // namespace
+
+ReplaySession::ReplaySession(const ReplayOptions& options, platform::ShutdownSignals signals)
+    : options_(options), clock_(options.rate, signals) {}
+
+Result<std::unique_ptr<ReplaySession>> ReplaySession::create(const ReplayOptions& options,
+                                                             platform::ShutdownSignals signals) {
+  std::unique_ptr<ReplaySession> s(new ReplaySession(options, signals));
+  auto participant = dds::Participant::create(options.domain);
+  if (!participant) {
+    return Unexpected(std::move(participant).error());
+  }
+  s->participant_.emplace(std::move(participant).value());
+  bool any_ray_file = false;
+  for (const std::string& input : options.inputs) {
+    any_ray_file = any_ray_file || !record::looksLikeRecordLog(input);
+  }
+  if (any_ray_file) {
+    auto driver = driver::DriverPublisher::create(*s->participant_, options.cloud_topic,
+                                                  options.odometry_topic, 1);
+    if (!driver) {
+      return Unexpected(std::move(driver).error());
+    }
+    s->driver_ = std::move(driver).value();
+  }
+  if (options.rate <= 0.0) {
+    // The progress reports come from another participant, as from any other node.
+    auto feedback_participant = dds::Participant::create(options.domain);
+    if (!feedback_participant) {
+      return Unexpected(std::move(feedback_participant).error());
+    }
+    s->feedback_participant_.emplace(std::move(feedback_participant).value());
+    auto feedback =
+        driver::DiagnosticsListener::create(*s->feedback_participant_, options.diagnostics_topic);
+    if (!feedback) {
+      return Unexpected(std::move(feedback).error());
+    }
+    s->feedback_ = std::move(feedback).value();
+  }
+  return s;
+}
+
+bool ReplaySession::waitForSubscriber(const std::function<std::uint32_t()>& matched,
+                                      const std::string& topic) {
+  if (waited_for_subscriber_) {
+    return true;
+  }
+  waited_for_subscriber_ = true;
+  const std::int64_t end =
+      platform::monotonicNowNs() + static_cast<std::int64_t>(options_.wait_s * 1e9);
+  bool waited = false;
+  while (matched() == 0 && platform::monotonicNowNs() < end) {
+    if (!waited && options_.progress) {
+      std::fprintf(stderr, "raymap replay: waiting up to %.0f s for a subscriber of %s\n",
+                   options_.wait_s, topic.c_str());
+    }
+    waited = true;
+    if (!clock_.sleepFor(0.02)) {
+      return false;
+    }
+  }
+  if (matched() == 0) {
+    stats_.warnings.push_back("no subscriber of " + topic + " after " +
+                              std::to_string(options_.wait_s) + " s: publishing anyway");
+  } else if (waited) {
+    // Matched from the writer's side; give the reader's side a moment to match too.
+    return clock_.sleepFor(0.2);
+  }
+  return true;
+}
+
+bool ReplaySession::waitForRoom() {
+  if (!feedback_) {
+    return true;
+  }
+  const std::int64_t start = platform::monotonicNowNs();
+  std::optional<double>& baseline = processed_baseline_;
+  for (;;) {
+    feedback_->poll();
+    const auto processed = processedClouds(*feedback_);
+    if (processed && !baseline) {
+      baseline = *processed - static_cast<double>(stats_.scans);
+    }
+    if (processed &&
+        static_cast<double>(stats_.scans) - (*processed - *baseline) < options_.max_ahead) {
+      return true;
+    }
+    if (static_cast<double>(platform::monotonicNowNs() - start) * 1e-9 >
+        (baseline ? kFeedbackTimeout_s : options_.wait_s)) {
+      ++stats_.feedback_timeouts;
+      if (!baseline) {
+        stats_.warnings.push_back("--rate max: no progress report on " +
+                                  options_.diagnostics_topic +
+                                  " (is raymapd running?): publishing unpaced");
+        feedback_.reset();
+      }
+      return true;
+    }
+    if (!clock_.sleepFor(0.002)) {
+      return false;
+    }
+  }
+}
+
+void ReplaySession::reportProgress(double file_fraction, const std::string& name, bool final_line) {
+  if (!options_.progress) {
+    return;
+  }
+  static const bool terminal = ::isatty(STDERR_FILENO) != 0;
+  const std::int64_t now = platform::monotonicNowNs();
+  const std::int64_t every = terminal ? 500'000'000 : 10'000'000'000;
+  if (!final_line && now - last_progress_ns_ < every) {
+    return;
+  }
+  last_progress_ns_ = now;
+  if (final_line) {
+    std::fprintf(stderr,
+                 "%sraymap replay: finished %" PRIu64 " pass%s: %" PRIu64
+                 " clouds, %.1f M points, "
+                 "%" PRIu64 " poses, %" PRIu64
+                 " log messages; %.1f s of data in %.1f s, late max "
+                 "%.0f ms\n",
+                 terminal ? "\r" : "", stats_.passes, stats_.passes == 1 ? "" : "es", stats_.scans,
+                 static_cast<double>(stats_.points) * 1e-6, stats_.poses, stats_.messages,
+                 stats_.data_seconds, clock_.elapsed(), clock_.maxLateMs());
+  } else {
+    std::fprintf(stderr,
+                 "%sraymap replay: %s %3.0f%% | pass %" PRIu64 " | %" PRIu64
+                 " clouds, %.1f M "
+                 "points, %" PRIu64 " poses, %" PRIu64
+                 " log messages | %.1f s of data in %.1f s "
+                 "| late max %.0f ms%s",
+                 terminal ? "\r" : "", name.c_str(), 100.0 * file_fraction, stats_.passes + 1,
+                 stats_.scans, static_cast<double>(stats_.points) * 1e-6, stats_.poses,
+                 stats_.messages, stats_.data_seconds, clock_.elapsed(), clock_.maxLateMs(),
+                 terminal ? "   " : "\n");
+  }
+  std::fflush(stderr);
+}
+
+Result<void> ReplaySession::playRayFile(const std::string& path) {
+  auto opened = io::openRaySource(path, options_.source);
+  if (!opened) {
+    return Unexpected(std::move(opened).error());
+  }
+  ScanReader reader(std::move(opened).value());
+  driver::DriverPublisher& driver = *driver_;
+  if (!waitForSubscriber([&driver] { return driver.matchedCloudReaders(); },
+                         options_.cloud_topic)) {
+    return {};
+  }
+  if (options_.tf_static) {
+    driver.publishTfStatic(io::Pose{}, options_.base_frame.c_str(), options_.frame.c_str());
+  }
+  std::optional<double> t_zero;            // the file time where the played window starts
+  double played_until_s = pass_offset_s_;  // replay time of the last cloud of this file
+  for (;;) {
+    auto more = reader.next(scan_);
+    if (!more) {
+      return Unexpected(std::move(more).error());
+    }
+    if (!more.value()) {
+      break;
+    }
+    if (!t_zero) {
+      t_zero = scan_.t_first_s + options_.start_s;
+    }
+    if (scan_.t_first_s < *t_zero) {
+      continue;  // before --start
+    }
+    if (options_.duration_s > 0.0 && scan_.t_first_s >= *t_zero + options_.duration_s) {
+      break;
+    }
+    const std::int64_t stamp_of_zero = clock_.stampAt(pass_offset_s_);
+    toDriverScan(scan_, stamp_of_zero, *t_zero, options_.pose_period_s, driver_scan_);
+    stats_.origin_conflicts += driver_scan_.origin_conflicts;
+    const auto replayTime = [&](std::int64_t stamp_ns) {
+      return pass_offset_s_ + static_cast<double>(stamp_ns - stamp_of_zero) * 1e-9;
+    };
+    // Poses first, each when it is due, then the cloud once its sweep is complete.
+    for (const PoseKnot& knot : driver_scan_.knots) {
+      if (!clock_.waitUntil(replayTime(knot.stamp_ns))) {
+        return {};
+      }
+      io::Pose pose;
+      pose.position = knot.position;
+      if (options_.pose_odometry) {
+        driver.publishOdometry(knot.stamp_ns, pose, options_.world_frame.c_str(),
+                               options_.base_frame.c_str());
+      }
+      if (options_.pose_tf) {
+        driver.publishTf(knot.stamp_ns, pose, options_.world_frame.c_str(),
+                         options_.base_frame.c_str());
+      }
+      ++stats_.poses;
+    }
+    if (!waitForRoom()) {
+      return {};
+    }
+    const double cloud_time = replayTime(driver_scan_.knots.back().stamp_ns);
+    if (!clock_.waitUntil(cloud_time)) {
+      return {};
+    }
+    driver.reserveCloud(static_cast<std::uint32_t>(driver_scan_.points.size()));
+    driver.publishCloud(driver_scan_.points, {}, driver_scan_.stamp_ns, options_.frame.c_str());
+    ++stats_.scans;
+    stats_.points += driver_scan_.points.size();
+    stats_.data_seconds += cloud_time - played_until_s;
+    played_until_s = cloud_time;
+    reportProgress(reader.progress(), path);
+  }
+  pass_offset_s_ = std::max(pass_offset_s_, played_until_s) + kGapBetweenInputs_s;
+  return {};
+}
+
+Result<ReplayStats> ReplaySession::run() {
+  clock_.start();
+  stats_.stamp_zero_ns = clock_.stampAt(0.0);
+  do {
+    for (const std::string& input : options_.inputs) {
+      auto played = record::looksLikeRecordLog(input) ? playLog(input) : playRayFile(input);
+      if (!played) {
+        return Unexpected(std::move(played).error());
+      }
+      if (clock_.stopped()) {
+        break;
+      }
+    }
+    if (!clock_.stopped()) {
+      ++stats_.passes;
+    }
+  } while (options_.loop && !clock_.stopped());
+  // Best-effort samples still in flight when the participant goes are lost: a moment for the
+  // last cloud to leave.
+  (void)clock_.sleepFor(0.2);
+  stats_.wall_seconds = clock_.elapsed();
+  stats_.max_late_ms = clock_.maxLateMs();
+  reportProgress(1.0, "", true);
+  return stats_;
+}
+
+}  // namespace raymap::cli

@@ -1,0 +1,112 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap replay`: recorded data published over DDS as a lidar driver and a localisation stack
+// would, from ray files (PLY) or raymap record logs.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "src/core/error.hpp"
+#include "src/dds/cdr_writer.hpp"
+#include "src/dds/entities.hpp"
+#include "src/io/ray_source.hpp"
+#include "tools/dds_driver/ros_endpoints.hpp"
+#include "tools/raymap/replay_clock.hpp"
+#include "tools/raymap/replay_scans.hpp"
+
+namespace raymap::cli {
+
+/// Between the end of one input (or pass) and the start of the next, in replay time: keeps
+/// stamps strictly increasing and reads as a short pause of the sensor. Seconds.
+inline constexpr double kGapBetweenInputs_s = 0.1;
+
+/// @brief How to replay (options of `raymap replay`, documented in docs/cli.md).
+struct ReplayOptions {
+  std::vector<std::string> inputs;
+  double rate = 1.0;        ///< data seconds per second; 0 = as fast as the subscriber keeps up
+  bool loop = false;        ///< start over after the last input, until stopped
+  double start_s = 0.0;     ///< skip this much of each input's data
+  double duration_s = 0.0;  ///< then play this much of it (0 = to the end)
+  std::uint32_t domain = 0;
+  // Ray files: what is published, and how.
+  io::RaySourceOptions source;
+  std::string cloud_topic = "rt/points";
+  std::string odometry_topic = "rt/odom";
+  bool pose_odometry = true;  ///< nav_msgs/Odometry on odometry_topic
+  bool pose_tf = false;       ///< tf2_msgs/TFMessage world -> base on rt/tf
+  bool tf_static = true;      ///< base -> sensor frame, identity, latched on rt/tf_static
+  std::string frame = "lidar";
+  std::string world_frame = "odom";
+  std::string base_frame = "base_link";
+  double pose_period_s = 0.01;  ///< odometry about every 10 ms (100 Hz), like a state estimator
+  // Start and flow control.
+  double wait_s = 10.0;  ///< wait this long for a subscriber of the first published topic
+  std::string diagnostics_topic = "rt/diagnostics";  ///< --rate max: raymapd's progress
+  std::uint32_t max_ahead = 2;  ///< --rate max: scans published but not yet processed
+  bool progress = true;
+};
+
+/// @brief What a replay did (the --stats-json keys, docs/cli.md).
+struct ReplayStats {
+  std::uint64_t passes = 0;       ///< complete passes over all inputs
+  std::uint64_t scans = 0;        ///< point clouds published (ray files and logs)
+  std::uint64_t points = 0;       ///< points in them (ray files)
+  std::uint64_t poses = 0;        ///< odometry / TF pose samples published (ray files)
+  std::uint64_t messages = 0;     ///< messages published from logs (clouds included)
+  std::uint64_t undecodable = 0;  ///< log messages that were not their topic's type (skipped)
+  std::uint64_t origin_conflicts = 0;
+  std::uint64_t truncated_logs = 0;
+  std::uint64_t feedback_timeouts = 0;  ///< --rate max: no progress report for 2 s
+  double data_seconds = 0.0;            ///< recorded time played
+  double wall_seconds = 0.0;
+  double max_late_ms = 0.0;
+  /// The stamp of replay time zero (ns since the epoch): a ray file's first scan is stamped
+  /// with it (after --start), so a subscriber can tell which scans a stamp covers.
+  std::int64_t stamp_zero_ns = 0;
+  std::vector<std::string> warnings;
+};
+
+/// @brief One replay: the DDS endpoints, the clock and the statistics. Not thread-safe.
+class ReplaySession {
+ public:
+  static Result<std::unique_ptr<ReplaySession>> create(const ReplayOptions& options,
+                                                       platform::ShutdownSignals signals);
+  /// @brief Plays every input once per pass, passes until done (or forever with --loop).
+  Result<ReplayStats> run();
+
+ private:
+  explicit ReplaySession(const ReplayOptions& options, platform::ShutdownSignals signals);
+  Result<void> playRayFile(const std::string& path);
+  Result<void> playLog(const std::string& path);
+  Result<dds::CdrWriter*> logWriter(const std::string& topic, const std::string& type,
+                                    bool reliable, bool transient_local);
+  /// Waits (once per session, up to --wait) for a subscriber: data sent before discovery
+  /// completes is lost on best-effort topics.
+  bool waitForSubscriber(const std::function<std::uint32_t()>& matched, const std::string& topic);
+  /// --rate max: blocks until the subscriber has processed all but max_ahead clouds.
+  bool waitForRoom();
+  void reportProgress(double file_fraction, const std::string& name, bool final_line = false);
+
+  ReplayOptions options_;
+  ReplayClock clock_;
+  std::optional<dds::Participant> participant_;
+  std::unique_ptr<driver::DriverPublisher> driver_;
+  std::optional<dds::Participant> feedback_participant_;
+  std::unique_ptr<driver::DiagnosticsListener> feedback_;
+  std::map<std::string, dds::CdrWriter> log_writers_;
+  ReplayStats stats_;
+  double pass_offset_s_ = 0.0;  ///< replay time at which the current input starts
+  bool waited_for_subscriber_ = false;
+  /// --rate max: the subscriber's processed-cloud count minus our clouds, at the first report.
+  std::optional<double> processed_baseline_;
+  std::int64_t last_progress_ns_ = 0;
+  RecordedScan scan_;
+  DriverScan driver_scan_;
+};
+
+}  // namespace raymap::cli
