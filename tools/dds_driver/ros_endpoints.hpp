@@ -46,6 +46,11 @@ class DriverPublisher {
   /// samples (sensor_msgs_msg_dds__PointCloud2_) in tests.
   dds::Writer& cloudWriter() noexcept { return *cloud_writer_; }
   std::uint32_t matchedCloudReaders() const noexcept { return cloud_writer_->matchedReaders(); }
+  /// @brief Readers of the odometry topic, and of rt/tf.
+  std::uint32_t matchedOdometryReaders() const noexcept {
+    return odometry_writer_->matchedReaders();
+  }
+  std::uint32_t matchedTfReaders() const noexcept { return tf_writer_->matchedReaders(); }
 
  private:
   DriverPublisher() = default;

@@ -40,7 +40,8 @@ constexpr double kPollS = 0.05;
 std::string knownTypeList() {
   std::string list;
   for (const dds::KnownTopicType& type : dds::knownTopicTypes()) {
-    list += (list.empty() ? "" : ", ") + std::string(type.ros_name);
+    list += list.empty() ? "" : ", ";
+    list += type.ros_name;
   }
   return list;
 }

@@ -158,7 +158,8 @@ class Recorder {
         if (warned_.insert(e.topic + "\n" + e.type).second) {
           std::string names;
           for (const dds::KnownTopicType& t : dds::knownTopicTypes()) {
-            names += std::string(names.empty() ? "" : ", ") + t.ros_name;
+            names += names.empty() ? "" : ", ";
+            names += t.ros_name;
           }
           std::fprintf(stderr,
                        "raymap record: warning: %s has type %s, which raymap cannot record "

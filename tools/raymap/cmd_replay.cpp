@@ -110,7 +110,8 @@ std::string statsJson(const ReplayStats& s) {
       .add("stamp_zero_ns", s.stamp_zero_ns);
   std::string warnings = "[";
   for (std::size_t i = 0; i < s.warnings.size(); ++i) {
-    warnings += (i == 0 ? "" : ", ") + jsonQuote(s.warnings[i]);
+    warnings += i == 0 ? "" : ", ";
+    warnings += jsonQuote(s.warnings[i]);
   }
   json.raw("warnings", warnings + "]");
   return json.str();

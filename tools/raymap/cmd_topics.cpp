@@ -57,7 +57,8 @@ std::string durabilityText(const TopicSummary& s) {
 std::string rosTypesText(const std::vector<std::string>& types) {
   std::string text;
   for (const std::string& type : types) {
-    text += (text.empty() ? "" : " | ") + printableText(dds::rosTypeName(type), true);
+    text += text.empty() ? "" : " | ";
+    text += printableText(dds::rosTypeName(type), true);
   }
   return text;
 }
@@ -68,7 +69,8 @@ void printJson(const std::map<std::string, TopicSummary>& topics) {
   for (const auto& [name, s] : topics) {
     std::string types = "[";
     for (std::size_t i = 0; i < s.types.size(); ++i) {
-      types += (i == 0 ? "" : ",") + jsonQuote(printableText(dds::rosTypeName(s.types[i]), false));
+      types += i == 0 ? "" : ",";
+      types += jsonQuote(printableText(dds::rosTypeName(s.types[i]), false));
     }
     types += "]";
     const std::string ros_topic = dds::rosTopicName(name);

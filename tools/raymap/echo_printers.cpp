@@ -168,11 +168,13 @@ Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
                map.centre_y, map.centre_z);
   std::string names;
   for (const std::string& name : map.layers) {
-    names += (names.empty() ? "" : ", ") + humanText(name);
+    names += names.empty() ? "" : ", ";
+    names += humanText(name);
   }
   std::string basic;
   for (const std::string& name : map.basic_layers) {
-    basic += (basic.empty() ? "" : ", ") + humanText(name);
+    basic += basic.empty() ? "" : ", ";
+    basic += humanText(name);
   }
   appendFormat(out, "  layers %s (basic: %s)\n", names.empty() ? "none" : names.c_str(),
                basic.empty() ? "none" : basic.c_str());

@@ -3,6 +3,7 @@
 // control for --rate max, progress.
 #include "tools/raymap/replay_session.hpp"
 
+#include <algorithm>
 #include <cinttypes>
 #include <cstdio>
 
@@ -100,9 +101,15 @@ bool ReplaySession::waitForSubscriber(const std::function<std::uint32_t()>& matc
   if (matched() == 0) {
     stats_.warnings.push_back("no subscriber of " + topic + " after " +
                               std::to_string(options_.wait_s) + " s: publishing anyway");
-  } else if (waited) {
-    // Matched from the writer's side; give the reader's side a moment to match too.
-    return clock_.sleepFor(0.2);
+  } else if (waited && !clock_.sleepFor(0.2)) {
+    // (Matched from the writer's side; the pause lets the reader's side match too.)
+    return false;
+  }
+  if (stats_.scans + stats_.poses + stats_.messages == 0) {
+    // Time zero is when publishing starts: the wait does not make the first data late (and
+    // then sent in a burst that overflows a subscriber's queue).
+    clock_.start();
+    stats_.stamp_zero_ns = clock_.stampAt(0.0);
   }
   return true;
 }
@@ -183,8 +190,15 @@ Result<void> ReplaySession::playRayFile(const std::string& path) {
   }
   ScanReader reader(std::move(opened).value());
   driver::DriverPublisher& driver = *driver_;
-  if (!waitForSubscriber([&driver] { return driver.matchedCloudReaders(); },
-                         options_.cloud_topic)) {
+  // The clouds' subscriber, and its pose source: scans whose poses were lost in discovery
+  // would be dropped.
+  const bool tf_only = options_.pose_tf && !options_.pose_odometry;
+  if (!waitForSubscriber(
+          [&driver, tf_only] {
+            return std::min(driver.matchedCloudReaders(),
+                            tf_only ? driver.matchedTfReaders() : driver.matchedOdometryReaders());
+          },
+          options_.cloud_topic)) {
     return {};
   }
   if (options_.tf_static) {
