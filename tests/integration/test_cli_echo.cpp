@@ -18,6 +18,7 @@
 
 #include "grid_map_msgs.h"
 #include "std_msgs.h"
+#include "tf2_msgs.h"
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
@@ -446,6 +447,31 @@ TEST_F(CliEcho, EchoReportsUndecodableMessagesAndCarriesOn) {
     EXPECT_TRUE(parseJson(line).has_value()) << line;
   }
   EXPECT_NE(r.err.find(std::to_string(errors) + " undecodable"), std::string::npos) << r.err;
+}
+
+TEST(CliEchoLatched, ShowsATfStaticTransformPublishedBeforeEchoStarted) {
+  // A static_transform_publisher: reliable, transient-local, one message long before echo.
+  // 20..39: no other test publishes there (the empty-domain tests use 80..99).
+  const std::uint32_t domain = 20U + static_cast<std::uint32_t>(getpid() % 20);
+  auto participant = dds::Participant::create(domain);
+  ASSERT_TRUE(participant.has_value());
+  auto writer =
+      dds::Writer::create(participant.value(), "rt/tf_static", dds::tfMessageType(),
+                          dds::Reliability::kReliable, 1, dds::Durability::kTransientLocal);
+  ASSERT_TRUE(writer.has_value());
+  geometry_msgs_msg_dds__TransformStamped_ t{};
+  t.header.frame_id = const_cast<char*>("base_link");  // NOLINT: read-only for dds_write
+  t.child_frame_id = const_cast<char*>("lidar");       // NOLINT: read-only for dds_write
+  t.transform.translation = {0.1, 0.0, 1.2};
+  t.transform.rotation = {0.0, 0.0, 0.0, 1.0};
+  tf2_msgs_msg_dds__TFMessage_ m{};
+  m.transforms._buffer = &t;
+  m.transforms._length = m.transforms._maximum = 1;
+  ASSERT_TRUE(writer.value().write(&m).has_value());
+  const RunResult r = runRaymap({"echo", "/tf_static", "--domain", std::to_string(domain),
+                                 "--count", "1", "--wait", "5", "--duration", "5", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("\"lidar\""), std::string::npos) << describe(r);
 }
 
 TEST_F(CliEcho, EchoWithoutAPublisherFailsWithinTheWait) {

@@ -122,11 +122,17 @@ int runEcho(const EchoFlags& flags) {
   }
   // Best effort as soon as one writer is best effort: a reliable reader would not match it,
   // and a best-effort reader matches reliable writers too.
+  // Transient-local only when every writer is (a latched /tf_static: its history arrives too);
+  // such a reader would not match a volatile writer.
   dds::Reliability reliability = writer->reliability;
+  dds::Durability durability = dds::Durability::kTransientLocal;
   for (const dds::DiscoveredEndpoint& other : discovery->endpoints()) {
     if (other.is_writer && other.topic == topic) {
       if (other.reliability == dds::Reliability::kBestEffort) {
         reliability = dds::Reliability::kBestEffort;
+      }
+      if (other.durability != dds::Durability::kTransientLocal) {
+        durability = dds::Durability::kVolatile;
       }
       if (other.type != writer->type) {
         std::fprintf(stderr,
@@ -136,9 +142,8 @@ int runEcho(const EchoFlags& flags) {
       }
     }
   }
-  // Volatile: a volatile reader matches writers of every durability.
   auto reader = dds::RawReader::create(*participant, topic.c_str(), type->descriptor, reliability,
-                                       kReaderDepth, dds::Durability::kVolatile);
+                                       kReaderDepth, durability);
   if (!reader) {
     printError("echo", reader.error().message);
     return kExitFailure;

@@ -206,6 +206,11 @@ Result<void> ReplaySession::playRayFile(const std::string& path) {
   }
   std::optional<double> t_zero;            // the file time where the played window starts
   double played_until_s = pass_offset_s_;  // replay time of the last cloud of this file
+  // Replay times of the last scan's start and the spacing of scan starts: the next input (or
+  // pass) starts one spacing after the last scan started, so a looped 10 Hz file stays a 10 Hz
+  // stream with a constant phase, as a sensor that kept running.
+  std::optional<double> last_scan_start_s;
+  std::optional<double> scan_spacing_s;
   for (;;) {
     auto more = reader.next(scan_);
     if (!more) {
@@ -259,9 +264,19 @@ Result<void> ReplaySession::playRayFile(const std::string& path) {
     stats_.points += driver_scan_.points.size();
     stats_.data_seconds += cloud_time - played_until_s;
     played_until_s = cloud_time;
+    const double scan_start = replayTime(driver_scan_.stamp_ns);
+    if (last_scan_start_s) {
+      scan_spacing_s = scan_start - *last_scan_start_s;
+    }
+    last_scan_start_s = scan_start;
     reportProgress(reader.progress(), path);
   }
-  pass_offset_s_ = std::max(pass_offset_s_, played_until_s) + kGapBetweenInputs_s;
+  if (last_scan_start_s && scan_spacing_s && *scan_spacing_s > 0.0 &&
+      *last_scan_start_s + *scan_spacing_s > played_until_s) {
+    pass_offset_s_ = *last_scan_start_s + *scan_spacing_s;
+  } else {
+    pass_offset_s_ = std::max(pass_offset_s_, played_until_s) + kGapBetweenInputs_s;
+  }
   return {};
 }
 

@@ -21,8 +21,10 @@
 
 namespace raymap::cli {
 
-/// Between the end of one input (or pass) and the start of the next, in replay time: keeps
-/// stamps strictly increasing and reads as a short pause of the sensor. Seconds.
+/// Between the end of one input (or pass) and the start of the next, in replay time, when the
+/// input's scan spacing is unknown (one scan) or logs: keeps stamps strictly increasing and reads
+/// as a short pause of the sensor. Seconds. Ray files with several scans continue one scan
+/// spacing after their last scan started instead.
 inline constexpr double kGapBetweenInputs_s = 0.1;
 
 /// @brief How to replay (options of `raymap replay`, documented in docs/cli.md).
