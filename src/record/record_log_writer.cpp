@@ -35,10 +35,9 @@ constexpr std::size_t kMaxStringBytes = std::numeric_limits<std::uint16_t>::max(
 /// Flushes the directory entry of a rename to disk. Best effort: some file systems refuse fsync
 /// on a directory (EINVAL), and the data itself is already safe by then.
 void syncDirectoryOf(const std::string& path) {
-  std::string dir = std::filesystem::path(path).parent_path().string();
-  if (dir.empty()) {
-    dir = ".";
-  }
+  // (Initialised once, not assigned: GCC 12 at -O3 flags `dir = "."` with a false -Wrestrict.)
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  const std::string dir = parent.empty() ? std::string(".") : parent.string();
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd >= 0) {
     static_cast<void>(::fsync(fd));
