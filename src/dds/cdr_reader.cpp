@@ -80,6 +80,15 @@ bool CdrReader::readU64(std::uint64_t& out) noexcept { return readPrimitive(out)
 bool CdrReader::readF32(float& out) noexcept { return readPrimitive(out); }
 bool CdrReader::readF64(double& out) noexcept { return readPrimitive(out); }
 
+bool CdrReader::readString(std::string& out) {
+  std::string_view view;
+  if (!readString(view)) {
+    return false;
+  }
+  out.assign(view);
+  return true;
+}
+
 bool CdrReader::readString(std::string_view& out) noexcept {
   std::uint32_t length = 0;
   if (!readU32(length)) {

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 
 namespace raymap::dds {
@@ -56,6 +57,9 @@ class CdrReader {
   /// @brief A string; `out` views the bytes inside the buffer, without the NUL. A zero length
   /// (which some writers send for "") reads as an empty string.
   bool readString(std::string_view& out) noexcept;
+  /// @brief readString() copied into `out`, for decoders that keep what they read.
+  /// @rt allocates: yes (the copy); not for the real-time path.
+  bool readString(std::string& out);
   /// @brief A sequence length. Fails when `count * min_element_bytes` cannot fit in what is left,
   /// so an absurd count is rejected before any loop runs over it.
   bool readSequenceLength(std::uint32_t& count, std::size_t min_element_bytes) noexcept;

@@ -18,25 +18,16 @@ namespace {
 constexpr std::size_t kMinKeyValueBytes = 8;
 constexpr std::size_t kMinStatusBytes = 16;
 
-bool readString(CdrReader& reader, std::string& out) {
-  std::string_view view;
-  if (!reader.readString(view)) {
-    return false;
-  }
-  out.assign(view);
-  return true;
-}
-
 bool readStatus(CdrReader& reader, DecodedDiagnosticStatus& out) {
   std::uint32_t values = 0;
-  if (!reader.readU8(out.level) || !readString(reader, out.name) ||
-      !readString(reader, out.message) || !readString(reader, out.hardware_id) ||
+  if (!reader.readU8(out.level) || !reader.readString(out.name) ||
+      !reader.readString(out.message) || !reader.readString(out.hardware_id) ||
       !reader.readSequenceLength(values, kMinKeyValueBytes)) {
     return false;
   }
   out.values.resize(values);
   for (DiagnosticKeyValue& pair : out.values) {
-    if (!readString(reader, pair.key) || !readString(reader, pair.value)) {
+    if (!reader.readString(pair.key) || !reader.readString(pair.value)) {
       return false;
     }
   }
@@ -82,8 +73,7 @@ Expected<DecodedDiagnostics, DiagnosticsError> decodeDiagnosticArray(
   std::int32_t sec = 0;
   std::uint32_t nanosec = 0;
   std::uint32_t statuses = 0;
-  bool read = reader.readI32(sec) && reader.readU32(nanosec) &&
-              readString(reader, array.frame_id) &&
+  bool read = reader.readI32(sec) && reader.readU32(nanosec) && reader.readString(array.frame_id) &&
               reader.readSequenceLength(statuses, kMinStatusBytes);
   if (read) {
     array.statuses.resize(statuses);

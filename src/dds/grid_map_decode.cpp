@@ -24,15 +24,6 @@ Unexpected<GridMapError> readFailure(const CdrReader& reader) {
   return Unexpected(reader.malformed() ? GridMapError::kMalformed : GridMapError::kTruncated);
 }
 
-bool readString(CdrReader& reader, std::string& out) {
-  std::string_view view;
-  if (!reader.readString(view)) {
-    return false;
-  }
-  out.assign(view);
-  return true;
-}
-
 bool readStrings(CdrReader& reader, std::vector<std::string>& out) {
   std::uint32_t count = 0;
   if (!reader.readSequenceLength(count, kMinStringBytes)) {
@@ -40,7 +31,7 @@ bool readStrings(CdrReader& reader, std::vector<std::string>& out) {
   }
   out.resize(count);
   for (std::string& text : out) {
-    if (!readString(reader, text)) {
+    if (!reader.readString(text)) {
       return false;
     }
   }
@@ -54,8 +45,7 @@ bool readArray(CdrReader& reader, GridMapLayerData& out) {
   }
   out.dims.resize(dims);
   for (GridMapArrayDim& dim : out.dims) {
-    if (!readString(reader, dim.label) || !reader.readU32(dim.size) ||
-        !reader.readU32(dim.stride)) {
+    if (!reader.readString(dim.label) || !reader.readU32(dim.size) || !reader.readU32(dim.stride)) {
       return false;
     }
   }
@@ -107,7 +97,7 @@ Expected<DecodedGridMap, GridMapError> decodeGridMap(std::span<const std::byte> 
   DecodedGridMap map;
   std::int32_t sec = 0;
   std::uint32_t nanosec = 0;
-  if (!reader.readI32(sec) || !reader.readU32(nanosec) || !readString(reader, map.frame_id)) {
+  if (!reader.readI32(sec) || !reader.readU32(nanosec) || !reader.readString(map.frame_id)) {
     return readFailure(reader);
   }
   map.stamp_ns = nanosecondsOf(sec, nanosec);
