@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <vector>
 
 #include <unistd.h>
 
@@ -139,7 +140,9 @@ class Recorder {
  private:
   /// Starts recording requested topics that now have a writer of a type raymap knows.
   Result<void> discover() {
-    for (const dds::DiscoveredEndpoint& e : discovery_->endpoints()) {
+    // One read of the built-in topics per round: the QoS check below scans the same list.
+    const std::vector<dds::DiscoveredEndpoint> endpoints = discovery_->endpoints();
+    for (const dds::DiscoveredEndpoint& e : endpoints) {
       if (!e.is_writer || requested_.count(e.topic) == 0) {
         continue;
       }
@@ -172,7 +175,7 @@ class Recorder {
       // writer, a transient-local one only transient-local writers. Replay republishes with
       // the same QoS.
       bool all_reliable = true, all_latched = true;
-      for (const dds::DiscoveredEndpoint& w : discovery_->endpoints()) {
+      for (const dds::DiscoveredEndpoint& w : endpoints) {
         if (w.is_writer && w.topic == e.topic && w.type == e.type) {
           all_reliable = all_reliable && w.reliability == dds::Reliability::kReliable;
           all_latched = all_latched && w.durability == dds::Durability::kTransientLocal;

@@ -45,6 +45,7 @@ Result<void> ReplaySession::playLog(const std::string& path) {
     return Unexpected(std::move(summary).error());
   }
   std::map<std::uint32_t, dds::CdrWriter*> writers;  // log topic id -> writer, nullptr = skip
+  std::map<std::uint32_t, bool> clouds;              // log topic id -> carries PointCloud2
   dds::CdrWriter* first_cloud_writer = nullptr;
   std::string first_cloud_topic;
   for (const record::LogTopic& topic : summary.value().topics) {
@@ -55,6 +56,7 @@ Result<void> ReplaySession::playLog(const std::string& path) {
       return Unexpected(std::move(writer).error());
     }
     writers[topic.id] = writer.value();
+    clouds[topic.id] = isPointCloud(topic.type);
     if (writer.value() == nullptr) {
       stats_.warnings.push_back(path + ": topic " + topic.name + " has type " + topic.type +
                                 ", which this raymap cannot publish: its messages are skipped");
@@ -101,7 +103,7 @@ Result<void> ReplaySession::playLog(const std::string& path) {
       continue;
     }
     const record::LogTopic* topic = reader.topic(message.topic_id);
-    const bool cloud = topic != nullptr && isPointCloud(topic->type);
+    const bool cloud = clouds[message.topic_id];
     if (cloud && !waitForRoom()) {
       return {};
     }
