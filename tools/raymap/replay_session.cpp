@@ -16,6 +16,11 @@
 namespace raymap::cli {
 namespace {
 
+/// A writer sees its subscriber before that subscriber has matched the writer, and a best-effort
+/// reader drops what arrives before. The pause after the writer-side match covers the reader's
+/// side, with room for a loaded machine (0.2 s lost the first cloud under ASan in CI).
+constexpr double kReaderSideMatch_s = 1.0;
+
 /// --rate max: a subscriber that reports no progress for this long is not waited for.
 constexpr double kFeedbackTimeout_s = 2.0;
 
@@ -101,8 +106,7 @@ bool ReplaySession::waitForSubscriber(const std::function<std::uint32_t()>& matc
   if (matched() == 0) {
     stats_.warnings.push_back("no subscriber of " + topic + " after " +
                               std::to_string(options_.wait_s) + " s: publishing anyway");
-  } else if (waited && !clock_.sleepFor(0.2)) {
-    // (Matched from the writer's side; the pause lets the reader's side match too.)
+  } else if (waited && !clock_.sleepFor(kReaderSideMatch_s)) {
     return false;
   }
   if (stats_.scans + stats_.poses + stats_.messages == 0) {
