@@ -32,6 +32,11 @@ RAYMAP_FN rm_i32 rm_span_walk_delta(const rm_span_walk* s, rm_i32 axis) {
   return axis == 0 ? s->step_x : (axis == 1 ? s->step_y : s->step_z);
 }
 
+/* The current voxel relative to the walk's start voxel. */
+RAYMAP_FN rm_vec3i rm_span_walk_voxel(const rm_span_walk* s) {
+  return rm_vec3i_make(s->walk.x, s->walk.y, s->walk.z);
+}
+
 /* Moves to the next voxel of the span and returns its index. Precondition: a voxel remains. */
 RAYMAP_FN rm_u32 rm_span_walk_advance(rm_span_walk* s) {
   s->index += rm_span_walk_delta(s, rm_line_walk_step(&s->walk));

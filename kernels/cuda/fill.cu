@@ -22,7 +22,7 @@ cudaError_t launchFill(cudaStream_t stream, std::uint32_t* dst, std::size_t word
   if (words == 0) {
     return cudaSuccess;
   }
-  if (pattern.count == 0 || pattern.count > 8 || words % pattern.count != 0) {
+  if (pattern.count == 0 || pattern.count > 16 || words % pattern.count != 0) {
     return cudaErrorInvalidValue;
   }
   constexpr unsigned kThreads = 256;

@@ -40,10 +40,10 @@ cudaError_t launchOccupancyKernel(OccupancyKernelId kernel, cudaStream_t stream,
                                   unsigned block_threads, const OccupancyKernelBuffers& buffers,
                                   const rm_integrate_params& params) noexcept;
 
-/// A voxel's clear value: up to 8 words (LayerSpec::kMaxWordsPerVoxel), passed by value.
+/// A voxel's clear value: up to 16 words (LayerSpec::kMaxWordsPerVoxel), passed by value.
 struct FillPattern {
-  std::uint32_t words[8] = {};
-  unsigned count = 1;  ///< words per voxel, 1 to 8
+  std::uint32_t words[16] = {};
+  unsigned count = 1;  ///< words per voxel, 1 to 16
 };
 
 /// @brief Enqueues setting `words` 32-bit words from `dst` (device memory) on to `pattern`

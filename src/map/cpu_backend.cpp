@@ -31,6 +31,9 @@ class CpuBackend final : public Backend {
     ctx_.region_voxels = map.geometry().region_voxels;
     ctx_.params = map.occupancy().toKernel();
     ctx_.per_scan = map.semantics() == Semantics::kPerScan;
+    ctx_.ndt = isNdt(map.mode());
+    ctx_.ndt_params =
+        map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
     if (threads > 1) {
       parallel_.emplace(threads, map.store().capacity(), expected_batch_rays);
     }

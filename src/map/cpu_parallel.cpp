@@ -271,13 +271,26 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
           span.first = (rec.flags & kFirst) != 0u;
           span.last = (rec.flags & kLast) != 0u;
           ws.voxels_visited +=
-              missSpan(ctx, record.walk, record.sample_is_start, span, regionLayers(map, rec.slot));
+              missSpan(ctx, record.walk, record.sample_is_start, rays[r].flags, span,
+                       regionLayers(map, rec.slot));
         }
         const PreparedRay& ray = rays[r];
         if ((ray.flags & RM_RAY_END_HIT) != 0u && record.sample_slot != RegionStore::kNoSlot &&
-            owner_[record.sample_slot] == w) {
+            owner_[record.sample_slot] == w && !ctx.ndt) {
           applySampleHit(ray, regionLayers(map, record.sample_slot), record.sample_index,
                          ctx.per_scan, ctx.params);
+          ++ws.voxels_visited;
+        }
+      }
+    }
+    if (ctx.ndt) {
+      // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
+      for (std::size_t r = 0; r < rays.size(); ++r) {
+        const RayRecord& record = rays_[r];
+        if ((rays[r].flags & RM_RAY_END_HIT) != 0u && record.sample_slot != RegionStore::kNoSlot &&
+            owner_[record.sample_slot] == w) {
+          applyNdtHit(rays[r], regionLayers(map, record.sample_slot), record.sample_index,
+                      ctx.params, ctx.ndt_params);
           ++ws.voxels_visited;
         }
       }

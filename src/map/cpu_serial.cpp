@@ -60,9 +60,9 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
         continue;
       }
       stats.voxels_visited +=
-          missSpan(ctx, walk.voxelRay(), sample_is_start, span, regionLayers(map, *slot));
+          missSpan(ctx, walk.voxelRay(), sample_is_start, ray.flags, span, regionLayers(map, *slot));
     }
-    if ((ray.flags & RM_RAY_END_HIT) != 0u) {
+    if ((ray.flags & RM_RAY_END_HIT) != 0u && !ctx.ndt) {
       const auto [region, index] = walk.sampleCell();
       auto slot = acquire(map, cache, region);
       if (!slot) {
@@ -70,6 +70,23 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
       }
       if (*slot != RegionStore::kNoSlot) {
         applySampleHit(ray, regionLayers(map, *slot), index, ctx.per_scan, ctx.params);
+        ++stats.voxels_visited;
+      }
+    }
+  }
+  if (ctx.ndt) {
+    // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
+    for (const PreparedRay& ray : rays) {
+      if ((ray.flags & RM_RAY_END_HIT) == 0u) {
+        continue;
+      }
+      const auto [region, index] = sampleCellOf(ray, ctx.region_voxels);
+      auto slot = acquire(map, cache, region);
+      if (!slot) {
+        return Unexpected(slot.error());
+      }
+      if (*slot != RegionStore::kNoSlot) {
+        applyNdtHit(ray, regionLayers(map, *slot), index, ctx.params, ctx.ndt_params);
         ++stats.voxels_visited;
       }
     }

@@ -5,10 +5,12 @@
 
 #include <array>
 #include <cstdint>
+#include <type_traits>
 #include <utility>
 
 #include "kernels/common/key_math.h"
 #include "kernels/common/line_walk.h"
+#include "kernels/common/ndt.h"
 #include "kernels/common/occupancy.h"
 #include "kernels/common/ray.h"
 #include "kernels/common/scan_mark.h"
@@ -21,7 +23,8 @@
 
 namespace raymap::detail {
 
-/// @brief Calls visit(index) for each voxel of `span` (index inside the span's region), leaving out
+/// @brief Calls visit(index) for each voxel of `span` (index inside the span's region), or
+/// visit(index, voxel) with the voxel relative to the walk's start voxel, leaving out
 /// the ray's sample voxel, which the caller updates by its own rule. `ray` holds the ray's walk
 /// constants; sample_is_start says whether the sample voxel is where the walk starts (reverse).
 /// Returns the voxels visited. @rt allocates: no.
@@ -36,9 +39,17 @@ inline std::uint32_t walkSpan(const rm_line_walk_ray& ray, bool sample_is_start,
   if (count == 0) {
     return 0;
   }
-  visit(static_cast<std::uint32_t>(walk.index));
-  for (std::int32_t k = 1; k < count; ++k) {
-    visit(rm_span_walk_advance(&walk));
+  if constexpr (std::is_invocable_v<Visit, std::uint32_t, rm_vec3i>) {
+    visit(static_cast<std::uint32_t>(walk.index), rm_span_walk_voxel(&walk));
+    for (std::int32_t k = 1; k < count; ++k) {
+      const std::uint32_t index = rm_span_walk_advance(&walk);
+      visit(index, rm_span_walk_voxel(&walk));
+    }
+  } else {
+    visit(static_cast<std::uint32_t>(walk.index));
+    for (std::int32_t k = 1; k < count; ++k) {
+      visit(rm_span_walk_advance(&walk));
+    }
   }
   return static_cast<std::uint32_t>(count);
 }
@@ -72,6 +83,34 @@ struct RegionLayers {
   float* occupancy = nullptr;
   rm_voxel_mean* mean = nullptr;
   std::uint32_t* marks = nullptr;
+  rm_ndt_voxel* ndt = nullptr;
+  rm_ndt_hit_miss* hit_miss = nullptr;
+  rm_ndt_intensity* intensity = nullptr;
+};
+
+/// NDT miss (kernels/common/ndt.h): each crossing lowers the occupancy by how squarely the ray
+/// meets the voxel's Gaussian; NDT-TM also counts the pass.
+struct NdtMiss {
+  float* occupancy;
+  const rm_ndt_voxel* ndt;
+  rm_ndt_hit_miss* hit_miss;  ///< null for NDT-OM
+  const rm_line_walk_ray* ray;
+  int sample_is_start;
+  int has_sample;  ///< the ray ends in a return (RM_RAY_END_HIT)
+  rm_occupancy_params occupancy_params;
+  rm_ndt_params params;
+  void operator()(std::uint32_t i, rm_vec3i voxel) const noexcept {
+    rm_vec3f origin;
+    rm_vec3f sample;
+    rm_ndt_ray_in_voxel(ray, sample_is_start, voxel, &origin, &sample);
+    int is_miss = 0;
+    occupancy[i] =
+        rm_ndt_miss(occupancy[i], &ndt[i], origin, sample, has_sample, occupancy_params, params,
+                    &is_miss);
+    if (hit_miss != nullptr) {
+      rm_ndt_count_miss(&hit_miss[i], is_miss);
+    }
+  }
 };
 
 /// @brief Applies a ray's hit to its sample voxel (index `i` of region `layers`). Per-scan hits
@@ -82,6 +121,22 @@ inline void applySampleHit(const rm_prepared_ray& ray, const RegionLayers& layer
   if (!per_scan) {
     layers.occupancy[i] = rm_occupancy_hit(layers.occupancy[i], params);
   }
+  if (layers.mean != nullptr) {
+    rm_voxel_mean& m = layers.mean[i];
+    m.packed = rm_mean_fold(m.packed, m.count, ray.sample_local);
+    m.count = rm_mean_count_increment(m.count);
+  }
+}
+
+/// @brief NDT hit of a ray's sample (kernels/common/ndt.h): occupancy, Gaussian, NDT-TM counts
+/// and intensity, and the voxel mean.
+/// @pre ray.flags has RM_RAY_END_HIT.
+inline void applyNdtHit(const rm_prepared_ray& ray, const RegionLayers& layers, std::uint32_t i,
+                        const rm_occupancy_params& params, const rm_ndt_params& ndt) noexcept {
+  rm_ndt_hit(&layers.occupancy[i], &layers.ndt[i],
+             layers.hit_miss != nullptr ? &layers.hit_miss[i] : nullptr,
+             layers.intensity != nullptr ? &layers.intensity[i] : nullptr,
+             rm_ndt_origin_at_sample(ray), ray.sample_local, ray.intensity, params, ndt);
   if (layers.mean != nullptr) {
     rm_voxel_mean& m = layers.mean[i];
     m.packed = rm_mean_fold(m.packed, m.count, ray.sample_local);
@@ -105,6 +160,9 @@ struct IntegrationContext {
   rm_occupancy_params params{};
   bool per_scan = false;
   std::uint32_t sequence = 0;  ///< scan sequence of this batch (per-scan semantics)
+  /// NDT maps: a batch's misses all come before its hits (see kernels/common/ndt.h).
+  bool ndt = false;
+  rm_ndt_params ndt_params{};
 };
 
 /// @brief Pointers to the layers of the region in `slot`.
@@ -118,13 +176,29 @@ inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexce
   if (map.scanMarkLayer() >= 0) {
     layers.marks = store.layerData<std::uint32_t>(slot, map.scanMarkLayer());
   }
+  if (map.ndtLayer() >= 0) {
+    layers.ndt = store.layerData<rm_ndt_voxel>(slot, map.ndtLayer());
+  }
+  if (map.hitMissLayer() >= 0) {
+    layers.hit_miss = store.layerData<rm_ndt_hit_miss>(slot, map.hitMissLayer());
+  }
+  if (map.intensityLayer() >= 0) {
+    layers.intensity = store.layerData<rm_ndt_intensity>(slot, map.intensityLayer());
+  }
   return layers;
 }
 
 /// @brief Walks one span with the semantics' miss rule; returns the voxels visited.
+/// `ray_flags`: the prepared ray's RM_RAY_* flags.
 inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_ray& ray,
-                              bool sample_is_start, const RaySpan& span,
+                              bool sample_is_start, std::uint32_t ray_flags, const RaySpan& span,
                               const RegionLayers& layers) noexcept {
+  if (ctx.ndt) {
+    return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
+                    NdtMiss{layers.occupancy, layers.ndt, layers.hit_miss, &ray,
+                            sample_is_start ? 1 : 0, (ray_flags & RM_RAY_END_HIT) != 0u ? 1 : 0,
+                            ctx.params, ctx.ndt_params});
+  }
   if (ctx.per_scan) {
     return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
                     PerScanMiss{layers.occupancy, layers.marks, ctx.sequence, ctx.params});

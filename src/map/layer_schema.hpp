@@ -19,15 +19,18 @@ enum class LayerKind : std::uint8_t {
   kOccupancy = 1,  ///< float log-odds, +inf = unobserved (kernels/common/occupancy.h)
   kVoxelMean = 2,  ///< packed sub-voxel mean + count (kernels/common/voxel_mean.h)
   kScanMark = 3,   ///< per-scan scratch marks (kernels/common/scan_mark.h); never saved
+  kNdt = 4,        ///< NDT Gaussian: mean, square-root covariance, count (kernels/common/ndt.h)
+  kHitMiss = 5,    ///< NDT-TM hit and miss counts (kernels/common/ndt.h)
+  kIntensity = 6,  ///< NDT-TM intensity mean and variance (kernels/common/ndt.h)
 };
 
 /// @brief Static description of a layer type.
 struct LayerSpec {
-  static constexpr std::uint32_t kMaxWordsPerVoxel = 8;
+  static constexpr std::uint32_t kMaxWordsPerVoxel = 16;
 
   LayerKind kind;
   std::string_view name;          ///< stable name, used in files and tools
-  std::uint32_t bytes_per_voxel;  ///< multiple of 4, at most 32
+  std::uint32_t bytes_per_voxel;  ///< multiple of 4, at most 64
   /// Value of a voxel nobody has touched, as 32-bit words (little-endian order of the struct).
   std::array<std::uint32_t, kMaxWordsPerVoxel> clear_words;
   bool saved;             ///< written to map files

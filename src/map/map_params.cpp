@@ -2,6 +2,7 @@
 // Validation of map parameters.
 #include "src/map/map_params.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -36,6 +37,80 @@ Expected<void, Error> OccupancyParams::validate() const {
                     " / " + number(probability(clamp_max)) + ")");
   }
   return {};
+}
+
+const char* toString(MapMode mode) noexcept {
+  switch (mode) {
+    case MapMode::kOccupancy:
+      return "occupancy";
+    case MapMode::kNdtOm:
+      return "ndt-om";
+    case MapMode::kNdtTm:
+      return "ndt-tm";
+  }
+  return "?";
+}
+
+std::optional<MapMode> mapModeFromName(std::string_view name) noexcept {
+  for (MapMode mode : {MapMode::kOccupancy, MapMode::kNdtOm, MapMode::kNdtTm}) {
+    if (name == toString(mode)) {
+      return mode;
+    }
+  }
+  return std::nullopt;
+}
+
+double NdtParams::adaptationRate(const OccupancyParams& occupancy) const noexcept {
+  if (adaptation_rate) {
+    return *adaptation_rate;
+  }
+  const double p_miss = probability(occupancy.miss);
+  return std::clamp(kAdaptationScale * (1.0 - 2.0 * p_miss), 0.0, 1.0);
+}
+
+Expected<void, Error> NdtParams::validate() const {
+  if (!std::isfinite(sensor_noise) || !(sensor_noise > 0.0)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "ndt sensor-noise must be a positive distance in metres (got " +
+                    number(sensor_noise) + ")");
+  }
+  if (!std::isfinite(regulariser) || !(regulariser > 0.0) || regulariser > 1.0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "ndt regulariser must be in (0, 1] voxel edges (got " + number(regulariser) + ")");
+  }
+  if (sample_threshold < 1) {
+    return fail(ErrorCode::kInvalidArgument, "ndt sample-threshold must be at least 1");
+  }
+  if (!(reinit_probability > 0.0) || !(reinit_probability < 0.5)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "ndt reinit-probability must be in (0, 0.5) (got " + number(reinit_probability) +
+                    ")");
+  }
+  if (adaptation_rate && (!std::isfinite(*adaptation_rate) || *adaptation_rate < 0.0 ||
+                          *adaptation_rate > 1.0)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "ndt adaptation-rate must be in [0, 1] (got " + number(*adaptation_rate) + ")");
+  }
+  if (!std::isfinite(initial_intensity_variance) || !(initial_intensity_variance >= 0.0)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "ndt initial-intensity-variance must be non-negative (got " +
+                    number(initial_intensity_variance) + ")");
+  }
+  return {};
+}
+
+rm_ndt_params NdtParams::toKernel(double resolution, const OccupancyParams& occupancy,
+                                  MapMode mode) const noexcept {
+  rm_ndt_params p{};
+  p.sensor_noise = static_cast<float>(sensor_noise / resolution);
+  p.regulariser = static_cast<float>(regulariser);
+  p.adaptation_rate = static_cast<float>(adaptationRate(occupancy));
+  p.reinit_threshold = logOdds(reinit_probability);
+  p.reinit_count = reinit_count;
+  p.sample_threshold = sample_threshold;
+  p.initial_intensity_variance = static_cast<float>(initial_intensity_variance);
+  p.traversability = mode == MapMode::kNdtTm ? 1u : 0u;
+  return p;
 }
 
 const char* toString(Semantics semantics) noexcept {

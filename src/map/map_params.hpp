@@ -4,7 +4,10 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
+#include "kernels/common/ndt.h"
 #include "kernels/common/occupancy.h"
 #include "src/core/error.hpp"
 
@@ -51,6 +54,58 @@ struct OccupancyParams {
     return rm_occupancy_params{hit, miss, clamp_min, clamp_max, threshold};
   }
   friend bool operator==(const OccupancyParams&, const OccupancyParams&) = default;
+};
+
+/// @brief What a map models in each voxel.
+enum class MapMode : std::uint8_t {
+  kOccupancy = 0,  ///< log-odds occupancy (and the voxel mean)
+  kNdtOm = 1,      ///< NDT-OM: occupancy whose misses are shaped by a Gaussian of the samples
+  kNdtTm = 2,      ///< NDT-TM: NDT-OM plus hit/miss counts (permeability) and intensity statistics
+};
+
+const char* toString(MapMode mode) noexcept;
+/// @brief "occupancy", "ndt-om", "ndt-tm" (as the tools spell them).
+std::optional<MapMode> mapModeFromName(std::string_view name) noexcept;
+inline bool isNdt(MapMode mode) noexcept { return mode != MapMode::kOccupancy; }
+
+/// @brief NDT-OM / NDT-TM parameters (kernels/common/ndt.h has the rules), in metres and
+/// probabilities. Value type; validated with validate().
+struct NdtParams {
+  static constexpr double kDefaultSensorNoise = 0.05;  // metres
+  static constexpr double kDefaultRegulariser = 0.1;   // voxel edges
+  static constexpr std::uint32_t kDefaultSampleThreshold = 4;
+  static constexpr double kDefaultReinitProbability = 0.2;
+  static constexpr std::uint32_t kDefaultReinitCount = 100;
+  static constexpr double kDefaultInitialIntensityVariance = 1.0;
+  static constexpr double kAdaptationScale = 2.0;
+
+  /// Range noise of the sensor (sigma), metres.
+  double sensor_noise = kDefaultSensorNoise;
+  /// Sigma added on every axis where a Gaussian is inverted, as a fraction of the voxel edge
+  /// (OHM's seed of 0.1 voxel): a flat surfel stays invertible.
+  double regulariser = kDefaultRegulariser;
+  /// Samples a voxel needs before its Gaussian shapes the misses; one value on every backend
+  /// (OHM used 3 on the CPU and 4 on the GPU). 4: the fewest that can span three dimensions.
+  std::uint32_t sample_threshold = kDefaultSampleThreshold;
+  /// A voxel whose occupancy probability fell below this, with reinit_count samples, restarts its
+  /// Gaussian at the next hit (a transient object has gone).
+  double reinit_probability = kDefaultReinitProbability;
+  std::uint32_t reinit_count = kDefaultReinitCount;
+  /// How strongly a ray through a surfel lowers its occupancy, in [0,1]. Unset: from the miss
+  /// probability, alpha = clamp(2 (1 - 2 p_miss), 0, 1) (0.2 for p_miss = 0.45), so a ray straight
+  /// through a surfel counts about twice a plain miss.
+  std::optional<double> adaptation_rate;
+  /// NDT-TM: variance of the intensity after the first sample (sensor intensity units squared).
+  double initial_intensity_variance = kDefaultInitialIntensityVariance;
+
+  /// @brief The adaptation rate in effect for a map with these occupancy parameters.
+  double adaptationRate(const OccupancyParams& occupancy) const noexcept;
+  /// @brief Checks ranges; names the parameter at fault.
+  Expected<void, Error> validate() const;
+  /// @brief The kernel parameters, in voxel units for a map of `resolution` metres.
+  rm_ndt_params toKernel(double resolution, const OccupancyParams& occupancy,
+                         MapMode mode) const noexcept;
+  friend bool operator==(const NdtParams&, const NdtParams&) = default;
 };
 
 /// @brief How rays of one scan combine.

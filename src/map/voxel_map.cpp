@@ -32,6 +32,13 @@ LayerSchema MapConfig::schema() const {
   if (semantics == Semantics::kPerScan) {
     (void)schema.add(LayerKind::kScanMark);
   }
+  if (isNdt(mode)) {
+    (void)schema.add(LayerKind::kNdt);
+  }
+  if (mode == MapMode::kNdtTm) {
+    (void)schema.add(LayerKind::kHitMiss);
+    (void)schema.add(LayerKind::kIntensity);
+  }
   return schema;
 }
 
@@ -51,6 +58,21 @@ Expected<void, Error> MapConfig::validate() const {
   }
   if (auto ok = occupancy.validate(); !ok) {
     return ok;
+  }
+  if (isNdt(mode)) {
+    if (auto ok = ndt.validate(); !ok) {
+      return ok;
+    }
+    if (semantics != Semantics::kPerRay) {
+      return fail(ErrorCode::kInvalidArgument,
+                  std::string(toString(mode)) +
+                      " maps need per-ray semantics (each ray's miss depends on where it crosses "
+                      "a voxel's Gaussian; per-scan marks would drop all but one)");
+    }
+    if (!occupancy_layer) {
+      return fail(ErrorCode::kInvalidArgument,
+                  std::string(toString(mode)) + " maps need the occupancy layer");
+    }
   }
   if (policy == StorePolicy::kRolling) {
     if (window_regions.x < 1 || window_regions.y < 1 || window_regions.z < 1 ||
@@ -100,6 +122,9 @@ VoxelMap::VoxelMap(MapConfig config, RegionStore store) noexcept
   occupancy_layer_ = schema.indexOf(LayerKind::kOccupancy);
   mean_layer_ = schema.indexOf(LayerKind::kVoxelMean);
   scan_mark_layer_ = schema.indexOf(LayerKind::kScanMark);
+  ndt_layer_ = schema.indexOf(LayerKind::kNdt);
+  hit_miss_layer_ = schema.indexOf(LayerKind::kHitMiss);
+  intensity_layer_ = schema.indexOf(LayerKind::kIntensity);
 }
 
 Vec3i VoxelMap::voxelOf(Vec3d p) const noexcept {
@@ -246,6 +271,30 @@ rm_voxel_mean VoxelMap::mean(Vec3i voxel) const noexcept {
     return rm_voxel_mean{0u, 0u};
   }
   return store_.layerData<rm_voxel_mean>(at->first, mean_layer_)[at->second];
+}
+
+rm_ndt_voxel VoxelMap::ndt(Vec3i voxel) const noexcept {
+  const auto at = locate(voxel);
+  if (!at || ndt_layer_ < 0) {
+    return rm_ndt_voxel{};
+  }
+  return store_.layerData<rm_ndt_voxel>(at->first, ndt_layer_)[at->second];
+}
+
+rm_ndt_hit_miss VoxelMap::hitMiss(Vec3i voxel) const noexcept {
+  const auto at = locate(voxel);
+  if (!at || hit_miss_layer_ < 0) {
+    return rm_ndt_hit_miss{};
+  }
+  return store_.layerData<rm_ndt_hit_miss>(at->first, hit_miss_layer_)[at->second];
+}
+
+rm_ndt_intensity VoxelMap::intensity(Vec3i voxel) const noexcept {
+  const auto at = locate(voxel);
+  if (!at || intensity_layer_ < 0) {
+    return rm_ndt_intensity{};
+  }
+  return store_.layerData<rm_ndt_intensity>(at->first, intensity_layer_)[at->second];
 }
 
 MapSummary VoxelMap::summarise() const noexcept {

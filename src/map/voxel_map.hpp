@@ -34,7 +34,9 @@ struct MapConfig {
   MapGeometry geometry;
   OccupancyParams occupancy;
   Semantics semantics = Semantics::kPerRay;
-  bool voxel_mean = true;  ///< keep the voxel-mean layer
+  MapMode mode = MapMode::kOccupancy;  ///< NDT modes add the NDT layers (per-ray semantics only)
+  NdtParams ndt;                       ///< used by the NDT modes
+  bool voxel_mean = true;              ///< keep the voxel-mean layer
   /// Keep the occupancy layer. Every map built today has it; a map without it (layers that need
   /// no occupancy, e.g. a distance field) answers occupancy queries with "unobserved", and what
   /// needs occupancy (integration, height maps, occupied/free export) refuses it with an error.
@@ -86,6 +88,10 @@ class VoxelMap {
   int occupancyLayer() const noexcept { return occupancy_layer_; }
   int meanLayer() const noexcept { return mean_layer_; }           ///< -1 without voxel means
   int scanMarkLayer() const noexcept { return scan_mark_layer_; }  ///< -1 for per-ray maps
+  int ndtLayer() const noexcept { return ndt_layer_; }             ///< -1 unless NDT
+  int hitMissLayer() const noexcept { return hit_miss_layer_; }    ///< -1 unless NDT-TM
+  int intensityLayer() const noexcept { return intensity_layer_; }  ///< -1 unless NDT-TM
+  MapMode mode() const noexcept { return config_.mode; }
 
   // ---- keys (world frame, metres) ----
   /// @brief Global voxel holding a world point: floor(p / resolution) per axis. @pre voxelInRange
@@ -134,6 +140,11 @@ class VoxelMap {
   VoxelState state(Vec3i voxel) const noexcept;
   /// @brief Voxel mean of a voxel (zero count when absent or without the layer).
   rm_voxel_mean mean(Vec3i voxel) const noexcept;
+  /// @brief NDT Gaussian of a voxel (count 0 when absent or without the layer).
+  rm_ndt_voxel ndt(Vec3i voxel) const noexcept;
+  /// @brief NDT-TM hit/miss counts and intensity of a voxel (zero when absent).
+  rm_ndt_hit_miss hitMiss(Vec3i voxel) const noexcept;
+  rm_ndt_intensity intensity(Vec3i voxel) const noexcept;
   MapSummary summarise() const noexcept;
 
   /// @brief Provenance stored with the map (source file, ray counts, ranges...), in order.
@@ -153,6 +164,9 @@ class VoxelMap {
   int occupancy_layer_ = -1;
   int mean_layer_ = -1;
   int scan_mark_layer_ = -1;
+  int ndt_layer_ = -1;
+  int hit_miss_layer_ = -1;
+  int intensity_layer_ = -1;
   Vec3i window_min_{};
   std::uint32_t scan_sequence_ = 0;
   std::uint64_t regions_recycled_ = 0;

@@ -227,9 +227,20 @@ class OpenClBackend final : public gpu::StagedBackend {
 
   bool fillLayer(int layer, std::size_t device_offset, std::size_t bytes,
                  const LayerSpec& spec) noexcept override {
+    // OpenCL fills with patterns of 1 to 128 bytes, powers of two only: a voxel of another size
+    // (the 40-byte NDT voxel) whose words are all equal is filled with one word.
+    std::size_t pattern_bytes = spec.bytes_per_voxel;
+    if ((pattern_bytes & (pattern_bytes - 1)) != 0) {
+      for (std::uint32_t w = 1; w < spec.bytes_per_voxel / 4u; ++w) {
+        if (spec.clear_words[w] != spec.clear_words[0]) {
+          return false;
+        }
+      }
+      pattern_bytes = 4;
+    }
     return clEnqueueFillBuffer(ctx_.queue.get(), layers_[static_cast<std::size_t>(layer)].get(),
-                               spec.clear_words.data(), spec.bytes_per_voxel, device_offset, bytes,
-                               0, nullptr, nullptr) == CL_SUCCESS;
+                               spec.clear_words.data(), pattern_bytes, device_offset, bytes, 0,
+                               nullptr, nullptr) == CL_SUCCESS;
   }
 
   bool finish() noexcept override { return clFinish(ctx_.queue.get()) == CL_SUCCESS; }
