@@ -86,10 +86,10 @@ class VoxelMap {
   const RegionStore& store() const noexcept { return store_; }
 
   int occupancyLayer() const noexcept { return occupancy_layer_; }
-  int meanLayer() const noexcept { return mean_layer_; }           ///< -1 without voxel means
-  int scanMarkLayer() const noexcept { return scan_mark_layer_; }  ///< -1 for per-ray maps
-  int ndtLayer() const noexcept { return ndt_layer_; }             ///< -1 unless NDT
-  int hitMissLayer() const noexcept { return hit_miss_layer_; }    ///< -1 unless NDT-TM
+  int meanLayer() const noexcept { return mean_layer_; }            ///< -1 without voxel means
+  int scanMarkLayer() const noexcept { return scan_mark_layer_; }   ///< -1 for per-ray maps
+  int ndtLayer() const noexcept { return ndt_layer_; }              ///< -1 unless NDT
+  int hitMissLayer() const noexcept { return hit_miss_layer_; }     ///< -1 unless NDT-TM
   int intensityLayer() const noexcept { return intensity_layer_; }  ///< -1 unless NDT-TM
   MapMode mode() const noexcept { return config_.mode; }
 
