@@ -54,7 +54,8 @@ typedef struct rm_ndt_voxel {
   rm_u32 count; /* samples in the Gaussian (since its last reinitialisation); saturates */
 } rm_ndt_voxel;
 
-/* NDT-TM: reflections and pass-throughs of a voxel (8 bytes); permeability = miss / (hit + miss). */
+/* NDT-TM: reflections and pass-throughs of a voxel (8 bytes); permeability = miss / (hit + miss).
+ */
 typedef struct rm_ndt_hit_miss {
   rm_u32 hit;
   rm_u32 miss;
@@ -70,11 +71,11 @@ typedef struct rm_ndt_intensity {
 /* Parameters, converted to voxel units by the host (src/map/map_params.hpp has the defaults in
  * metres and probabilities). */
 typedef struct rm_ndt_params {
-  float sensor_noise;     /* sigma of a range measurement, voxel units (0.05 m by default) */
-  float regulariser;      /* r: sigma added to every axis where the inverse is needed, voxel units */
-  float adaptation_rate;  /* alpha in [0,1]: how much a ray through the surfel lowers occupancy */
-  float reinit_threshold; /* log-odds: a voxel below it with reinit_count samples starts afresh */
-  rm_u32 reinit_count;    /* samples a Gaussian needs before it can be reinitialised */
+  float sensor_noise;    /* sigma of a range measurement, voxel units (0.05 m by default) */
+  float regulariser;     /* r: sigma added to every axis where the inverse is needed, voxel units */
+  float adaptation_rate; /* alpha in [0,1]: how much a ray through the surfel lowers occupancy */
+  float reinit_threshold;  /* log-odds: a voxel below it with reinit_count samples starts afresh */
+  rm_u32 reinit_count;     /* samples a Gaussian needs before it can be reinitialised */
   rm_u32 sample_threshold; /* samples before the Gaussian shapes misses (fewer: a plain miss) */
   float initial_intensity_variance; /* intensity variance after the first sample */
   rm_u32 traversability;            /* 1: NDT-TM (hit/miss counts and intensity), 0: NDT-OM */
@@ -244,8 +245,8 @@ RAYMAP_FN void rm_ndt_ray_in_voxel(const rm_line_walk_ray* ray, int sample_is_st
                                    rm_vec3f* origin, rm_vec3f* sample) {
   rm_vec3f q = rm_vec3f_make(RM_F32(voxel.x), RM_F32(voxel.y), RM_F32(voxel.z));
   rm_vec3f start = rm_ndt_sub(ray->start, q);
-  rm_vec3f end = rm_vec3f_make(start.x + ray->extent.x, start.y + ray->extent.y,
-                               start.z + ray->extent.z);
+  rm_vec3f end =
+      rm_vec3f_make(start.x + ray->extent.x, start.y + ray->extent.y, start.z + ray->extent.z);
   *origin = sample_is_start ? end : start;
   *sample = sample_is_start ? start : end;
 }
@@ -265,13 +266,13 @@ RAYMAP_FN int rm_ndt_shapes_misses(rm_u32 count, rm_ndt_params p) {
 }
 
 /* NDT miss: a ray from `origin` to `sample` (voxel frame) passes through a voxel whose occupancy
- * is `value`; has_sample is 0 when the ray's end is not a return (RM_RAY_END_HIT unset). Returns the new occupancy. Unobserved voxels and voxels with fewer than
- * sample_threshold samples take a plain miss; otherwise
- *   p_update = 1/2 - alpha/2 p_gaussian (1 - p_sample),  value += logit(p_update),
- * so a ray beside the surfel (p_gaussian ~ 0) or ending on it (p_sample ~ 1) changes nothing and
- * a ray straight through it lowers the log-odds by up to logit(1/2 - alpha/2). *is_miss (NDT-TM)
- * says whether the pass counts as a miss of the voxel: it does unless the ray crossed the surfel
- * (p_gaussian (1 - p_sample) >= alpha/2). */
+ * is `value`; has_sample is 0 when the ray's end is not a return (RM_RAY_END_HIT unset). Returns
+ * the new occupancy. Unobserved voxels and voxels with fewer than sample_threshold samples take a
+ * plain miss; otherwise p_update = 1/2 - alpha/2 p_gaussian (1 - p_sample),  value +=
+ * logit(p_update), so a ray beside the surfel (p_gaussian ~ 0) or ending on it (p_sample ~ 1)
+ * changes nothing and a ray straight through it lowers the log-odds by up to logit(1/2 - alpha/2).
+ * *is_miss (NDT-TM) says whether the pass counts as a miss of the voxel: it does unless the ray
+ * crossed the surfel (p_gaussian (1 - p_sample) >= alpha/2). */
 RAYMAP_FN float rm_ndt_miss(float value, const rm_ndt_voxel* v, rm_vec3f origin, rm_vec3f sample,
                             int has_sample, rm_occupancy_params occ, rm_ndt_params p,
                             int* is_miss) {
@@ -296,8 +297,8 @@ RAYMAP_FN float rm_ndt_miss(float value, const rm_ndt_voxel* v, rm_vec3f origin,
  * free (value below reinit_threshold) although its Gaussian holds reinit_count samples: the
  * surface it described has gone (a transient object). `value` is the occupancy before the hit. */
 RAYMAP_FN int rm_ndt_reinitialises(float value, const rm_ndt_voxel* v, rm_ndt_params p) {
-  return v->count == 0u || (rm_occupancy_observed(value) && value < p.reinit_threshold &&
-                            v->count >= p.reinit_count);
+  return v->count == 0u ||
+         (rm_occupancy_observed(value) && value < p.reinit_threshold && v->count >= p.reinit_count);
 }
 
 /* NDT hit of one sample `sample` (voxel frame) of a ray from `origin`, with return intensity

@@ -120,7 +120,8 @@ Samples makeSamples(Shape shape, int count, std::uint64_t seed) {
         break;
       }
       case Shape::kAnisotropic:
-        out.push_back({0.5 + 0.2 * g(rng), 0.5 + 0.05 * g(rng) + 0.1 * g(rng), 0.5 + 0.01 * g(rng)});
+        out.push_back(
+            {0.5 + 0.2 * g(rng), 0.5 + 0.05 * g(rng) + 0.1 * g(rng), 0.5 + 0.01 * g(rng)});
         break;
     }
   }
@@ -136,7 +137,8 @@ class SquareRootCovariance : public ::testing::TestWithParam<CovarianceCase> {};
 
 TEST_P(SquareRootCovariance, MatchesTheDoubleBatchCovarianceOfTheSameSamples) {
   const CovarianceCase& c = GetParam();
-  const Samples samples = makeSamples(c.shape, c.count, 1234u + static_cast<std::uint64_t>(c.count));
+  const Samples samples =
+      makeSamples(c.shape, c.count, 1234u + static_cast<std::uint64_t>(c.count));
   const rm_ndt_voxel v = foldAll(samples);
   ASSERT_EQ(v.count, static_cast<std::uint32_t>(c.count));
   EXPECT_LE(relativeError(v, samples), 1e-4) << shapeName(c.shape) << " x" << c.count;
@@ -215,8 +217,8 @@ float fullErosion() {
 
 TEST(NdtMiss, DefaultsFollowTheMissProbability) {
   const rm_ndt_params p = ndtParams(0.1);
-  EXPECT_NEAR(p.adaptation_rate, 0.2f, 1e-6f);   // 2 (1 - 2 * 0.45)
-  EXPECT_NEAR(p.sensor_noise, 0.5f, 1e-6f);      // 0.05 m at 0.1 m voxels
+  EXPECT_NEAR(p.adaptation_rate, 0.2f, 1e-6f);       // 2 (1 - 2 * 0.45)
+  EXPECT_NEAR(p.sensor_noise, 0.5f, 1e-6f);          // 0.05 m at 0.1 m voxels
   EXPECT_NEAR(p.reinit_threshold, -1.3863f, 1e-4f);  // logit(0.2)
   EXPECT_EQ(p.sample_threshold, 4u);
   EXPECT_EQ(p.reinit_count, 100u);
@@ -269,14 +271,14 @@ TEST(NdtMiss, YoungOrUnobservedVoxelsTakeAPlainMiss) {
   const rm_ndt_params p = ndtParams();
   int is_miss = 0;
   const rm_ndt_voxel empty{};
-  EXPECT_FLOAT_EQ(rm_ndt_miss(RM_OCC_UNOBSERVED, &empty, {0, 0, -5}, {0, 0, 5}, 1, occ, p, &is_miss),
-                  occ.miss);
+  EXPECT_FLOAT_EQ(
+      rm_ndt_miss(RM_OCC_UNOBSERVED, &empty, {0, 0, -5}, {0, 0, 5}, 1, occ, p, &is_miss), occ.miss);
   EXPECT_EQ(is_miss, 1);
   const rm_ndt_voxel young = foldAll(makeSamples(Shape::kPlanar, 3, 1));  // below 4 samples
   // Even a ray far beside it: too few samples to know where the surface is.
-  EXPECT_FLOAT_EQ(rm_ndt_miss(1.0f, &young, {-20, 0.95f, 0.95f}, {20, 0.95f, 0.95f}, 1, occ, p,
-                              &is_miss),
-                  1.0f + occ.miss);
+  EXPECT_FLOAT_EQ(
+      rm_ndt_miss(1.0f, &young, {-20, 0.95f, 0.95f}, {20, 0.95f, 0.95f}, 1, occ, p, &is_miss),
+      1.0f + occ.miss);
 }
 
 TEST(NdtMiss, RaysWithoutAReturnErodeUpToTheirEnd) {
@@ -376,15 +378,15 @@ TEST(NdtTm, PassesBesideASurfelCountAsMissesAndHitsOnItAsHits) {
   hm = {5, 1};
   rm_ndt_intensity in{10.0f, 1.0f};
   float value = 2.0f;
-  rm_ndt_hit(&value, &wall, &hm, &in, {0.5f, 0.5f, -20.0f}, {0.5f, 0.5f, 0.5f}, 10.0f,
-             occupancy(), ndtParams());
+  rm_ndt_hit(&value, &wall, &hm, &in, {0.5f, 0.5f, -20.0f}, {0.5f, 0.5f, 0.5f}, 10.0f, occupancy(),
+             ndtParams());
   EXPECT_EQ(hm.hit, 6u);
   EXPECT_EQ(hm.miss, 1u);
   // A first hit starts the counts afresh.
   rm_ndt_voxel fresh{};
   value = RM_OCC_UNOBSERVED;
-  rm_ndt_hit(&value, &fresh, &hm, &in, {0.5f, 0.5f, -20.0f}, {0.5f, 0.5f, 0.5f}, 3.0f,
-             occupancy(), ndtParams());
+  rm_ndt_hit(&value, &fresh, &hm, &in, {0.5f, 0.5f, -20.0f}, {0.5f, 0.5f, 0.5f}, 3.0f, occupancy(),
+             ndtParams());
   EXPECT_EQ(hm.hit, 1u);
   EXPECT_EQ(hm.miss, 0u);
   EXPECT_FLOAT_EQ(in.mean, 3.0f);
