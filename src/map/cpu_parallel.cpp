@@ -270,9 +270,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
               rm_vec3i_make(rec.box_lo.x + n - 1, rec.box_lo.y + n - 1, rec.box_lo.z + n - 1);
           span.first = (rec.flags & kFirst) != 0u;
           span.last = (rec.flags & kLast) != 0u;
-          ws.voxels_visited +=
-              missSpan(ctx, record.walk, record.sample_is_start, rays[r].flags, span,
-                       regionLayers(map, rec.slot));
+          ws.voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, rays[r].flags,
+                                        span, regionLayers(map, rec.slot));
         }
         const PreparedRay& ray = rays[r];
         if ((ray.flags & RM_RAY_END_HIT) != 0u && record.sample_slot != RegionStore::kNoSlot &&

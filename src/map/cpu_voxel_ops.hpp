@@ -104,9 +104,8 @@ struct NdtMiss {
     rm_vec3f sample;
     rm_ndt_ray_in_voxel(ray, sample_is_start, voxel, &origin, &sample);
     int is_miss = 0;
-    occupancy[i] =
-        rm_ndt_miss(occupancy[i], &ndt[i], origin, sample, has_sample, occupancy_params, params,
-                    &is_miss);
+    occupancy[i] = rm_ndt_miss(occupancy[i], &ndt[i], origin, sample, has_sample, occupancy_params,
+                               params, &is_miss);
     if (hit_miss != nullptr) {
       rm_ndt_count_miss(&hit_miss[i], is_miss);
     }
@@ -194,10 +193,10 @@ inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_
                               bool sample_is_start, std::uint32_t ray_flags, const RaySpan& span,
                               const RegionLayers& layers) noexcept {
   if (ctx.ndt) {
-    return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
-                    NdtMiss{layers.occupancy, layers.ndt, layers.hit_miss, &ray,
-                            sample_is_start ? 1 : 0, (ray_flags & RM_RAY_END_HIT) != 0u ? 1 : 0,
-                            ctx.params, ctx.ndt_params});
+    return walkSpan(
+        ray, sample_is_start, span, ctx.region_voxels,
+        NdtMiss{layers.occupancy, layers.ndt, layers.hit_miss, &ray, sample_is_start ? 1 : 0,
+                (ray_flags & RM_RAY_END_HIT) != 0u ? 1 : 0, ctx.params, ctx.ndt_params});
   }
   if (ctx.per_scan) {
     return walkSpan(ray, sample_is_start, span, ctx.region_voxels,

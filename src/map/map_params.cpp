@@ -82,12 +82,11 @@ Expected<void, Error> NdtParams::validate() const {
     return fail(ErrorCode::kInvalidArgument, "ndt sample-threshold must be at least 1");
   }
   if (!(reinit_probability > 0.0) || !(reinit_probability < 0.5)) {
-    return fail(ErrorCode::kInvalidArgument,
-                "ndt reinit-probability must be in (0, 0.5) (got " + number(reinit_probability) +
-                    ")");
+    return fail(ErrorCode::kInvalidArgument, "ndt reinit-probability must be in (0, 0.5) (got " +
+                                                 number(reinit_probability) + ")");
   }
-  if (adaptation_rate && (!std::isfinite(*adaptation_rate) || *adaptation_rate < 0.0 ||
-                          *adaptation_rate > 1.0)) {
+  if (adaptation_rate &&
+      (!std::isfinite(*adaptation_rate) || *adaptation_rate < 0.0 || *adaptation_rate > 1.0)) {
     return fail(ErrorCode::kInvalidArgument,
                 "ndt adaptation-rate must be in [0, 1] (got " + number(*adaptation_rate) + ")");
   }
