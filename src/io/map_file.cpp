@@ -58,6 +58,14 @@ constexpr std::size_t kMaxInfoItems = 4096;
 constexpr std::size_t kMaxInfoKeyBytes = 1024;
 constexpr std::size_t kMaxInfoValueBytes = std::size_t{1} << 20;
 constexpr std::size_t kMaxLayerNameBytes = 64;
+
+// Version 2 appends the map mode and the NDT parameters to the header body (after the region
+// count, so every version-1 offset is unchanged). The block carries its own size so that a damaged
+// or foreign block is named as such instead of being read as other fields.
+constexpr std::uint32_t kFirstVersionWithMode = 2;
+constexpr std::uint16_t kNdtBlockBytes = 5 * 8 + 3 * 4;  // 5 f64, 3 u32 (docs/map-format.md)
+constexpr std::uint32_t kNdtFlagAdaptationRate = 1u;     // adaptation rate given, not derived
+constexpr std::uint32_t kNdtKnownFlags = kNdtFlagAdaptationRate;
 constexpr std::uint64_t kMaxRegions = std::numeric_limits<std::uint32_t>::max() / 4u;
 
 // ---- little-endian encoding, byte by byte (correct whatever the host's byte order) ----
@@ -303,6 +311,47 @@ std::string describeLayer(std::size_t index, std::uint8_t kind, const std::strin
          "')";
 }
 
+/// Version 2: the map mode and the NDT block. `malformed` builds the error (it names the file and
+/// the header offset).
+template <class Malformed>
+Expected<void, Error> readModeAndNdt(ByteReader& body, MapConfig& config,
+                                     const Malformed& malformed) {
+  std::uint8_t mode = 0;
+  std::uint8_t reserved = 0;
+  std::uint16_t block_bytes = 0;
+  if (!body.u8(mode) || !body.u8(reserved) || !body.u16(block_bytes)) {
+    return malformed("map mode runs past the header");
+  }
+  if (mode > static_cast<std::uint8_t>(MapMode::kNdtTm) || reserved != 0) {
+    return malformed("unknown map mode " + std::to_string(mode));
+  }
+  if (block_bytes != kNdtBlockBytes) {
+    return malformed("NDT parameter block of " + std::to_string(block_bytes) + " bytes (expected " +
+                     std::to_string(kNdtBlockBytes) + ")");
+  }
+  NdtParams& ndt = config.ndt;
+  double adaptation_rate = 0.0;
+  std::uint32_t flags = 0;
+  if (!body.f64(ndt.sensor_noise) || !body.f64(ndt.regulariser) ||
+      !body.f64(ndt.reinit_probability) || !body.f64(adaptation_rate) ||
+      !body.f64(ndt.initial_intensity_variance) || !body.u32(ndt.sample_threshold) ||
+      !body.u32(ndt.reinit_count) || !body.u32(flags)) {
+    return malformed("NDT parameters run past the header");
+  }
+  if ((flags & ~kNdtKnownFlags) != 0) {
+    return malformed("unknown NDT flags " + std::to_string(flags));
+  }
+  ndt.adaptation_rate.reset();
+  if ((flags & kNdtFlagAdaptationRate) != 0) {
+    ndt.adaptation_rate = adaptation_rate;
+  }
+  config.mode = static_cast<MapMode>(mode);
+  if (auto ok = ndt.validate(); !ok) {
+    return malformed("bad NDT parameters: " + ok.error().message);
+  }
+  return {};
+}
+
 /// Parses and checks the header; on success the reader is at the first region block.
 Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   if (file.size() == 0) {
@@ -442,16 +491,6 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   config.occupancy_layer =
       std::any_of(parsed.layers.begin(), parsed.layers.end(),
                   [](const LayerSpec& spec) { return spec.kind == LayerKind::kOccupancy; });
-  // The voxels are only meaningful with the layers the parameters imply, in that order.
-  const std::vector<LayerSpec> expected = savedLayersOf(config.schema());
-  bool layers_match = expected.size() == parsed.layers.size();
-  for (std::size_t i = 0; layers_match && i < expected.size(); ++i) {
-    layers_match = expected[i].kind == parsed.layers[i].kind;
-  }
-  if (!layers_match) {
-    return malformed("the saved layers do not match the map parameters");
-  }
-
   std::uint32_t info_count = 0;
   if (!body.u32(info_count)) {
     return malformed("info count runs past the header");
@@ -474,6 +513,27 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   }
   if (!body.u64(out.region_count)) {
     return malformed("region count runs past the header");
+  }
+  if (version >= kFirstVersionWithMode) {
+    if (auto ok = readModeAndNdt(body, config, malformed); !ok) {
+      return Unexpected(ok.error());
+    }
+  }  // else a version-1 file: an occupancy map, whose NDT parameters stay at their defaults
+  if (isNdt(config.mode) && config.semantics != Semantics::kPerRay) {
+    return malformed(std::string(toString(config.mode)) + " map with per-scan semantics");
+  }
+  if (isNdt(config.mode) && !config.occupancy_layer) {
+    return malformed(std::string(toString(config.mode)) + " map without an occupancy layer");
+  }
+  // The voxels are only meaningful with the layers the parameters imply, in that order.
+  const std::vector<LayerSpec> expected = savedLayersOf(config.schema());
+  bool layers_match = expected.size() == parsed.layers.size();
+  for (std::size_t i = 0; layers_match && i < expected.size(); ++i) {
+    layers_match = expected[i].kind == parsed.layers[i].kind;
+  }
+  if (!layers_match) {
+    return malformed("the saved layers do not match the map parameters (" +
+                     std::string(toString(config.mode)) + " map)");
   }
   if (body.remaining() != 0) {
     return malformed(std::to_string(body.remaining()) + " unexpected bytes at the end");
@@ -743,6 +803,19 @@ std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSp
     body.raw(value);
   }
   body.u64(map.store().size());
+  // Version 2: mode and NDT parameters (written for every mode, so a config round-trips whole).
+  const NdtParams& ndt = config.ndt;
+  body.u8(static_cast<std::uint8_t>(config.mode));
+  body.u8(0);  // reserved
+  body.u16(kNdtBlockBytes);
+  body.f64(ndt.sensor_noise);
+  body.f64(ndt.regulariser);
+  body.f64(ndt.reinit_probability);
+  body.f64(ndt.adaptation_rate.value_or(0.0));
+  body.f64(ndt.initial_intensity_variance);
+  body.u32(ndt.sample_threshold);
+  body.u32(ndt.reinit_count);
+  body.u32(ndt.adaptation_rate ? kNdtFlagAdaptationRate : 0u);
 
   ByteWriter header;
   for (const std::uint8_t b : kMagic) {

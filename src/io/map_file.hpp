@@ -13,13 +13,15 @@
 
 namespace raymap::io {
 
-inline constexpr std::uint32_t kMapFormatVersion = 1;
+/// 1: occupancy maps. 2: adds the map mode and the NDT parameters (version-1 files still load, as
+/// occupancy maps).
+inline constexpr std::uint32_t kMapFormatVersion = 2;
 
 /// @brief The header of a map file: everything except the voxels.
 struct MapFileHeader {
   std::uint32_t format_version = kMapFormatVersion;
-  /// Geometry, occupancy, semantics, voxel mean. Policy is always global; the memory budget holds
-  /// exactly region_count regions (at least one).
+  /// Geometry, occupancy, semantics, voxel mean, mode and NDT parameters. Policy is always global;
+  /// the memory budget holds exactly region_count regions (at least one).
   MapConfig config;
   std::vector<LayerKind> saved_layers;  ///< layers stored per region, in order
   std::uint64_t region_count = 0;

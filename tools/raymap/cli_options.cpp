@@ -4,9 +4,11 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
+#include <utility>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -16,6 +18,89 @@
 #include "src/map/cpu_backend.hpp"
 
 namespace raymap::cli {
+
+namespace {
+
+void addNdtOptions(CLI::App& c, MappingFlags& f) {
+  char text[160];
+  const auto help = [&text](const char* what, double value) {
+    std::snprintf(text, sizeof(text), "NDT: %s (default %g)", what, value);
+    return std::string(text);
+  };
+  c.add_option("--ndt-sensor-noise", f.ndt_sensor_noise,
+               help("range noise of the sensor (sigma), metres", NdtParams::kDefaultSensorNoise));
+  c.add_option("--ndt-regulariser", f.ndt_regulariser,
+               help("sigma added where a Gaussian is inverted, voxel edges, (0, 1]",
+                    NdtParams::kDefaultRegulariser));
+  c.add_option("--ndt-sample-threshold", f.ndt_sample_threshold,
+               help("samples before a voxel's Gaussian shapes its misses",
+                    NdtParams::kDefaultSampleThreshold));
+  c.add_option("--ndt-reinit-probability", f.ndt_reinit_probability,
+               help("a voxel below this occupancy probability restarts its Gaussian, (0, 0.5)",
+                    NdtParams::kDefaultReinitProbability));
+  c.add_option(
+      "--ndt-reinit-count", f.ndt_reinit_count,
+      help("samples a Gaussian needs before it can restart", NdtParams::kDefaultReinitCount));
+  c.add_option("--ndt-adaptation-rate", f.ndt_adaptation_rate,
+               "NDT: how strongly a ray through a surfel lowers its occupancy, [0, 1] (default: "
+               "from the miss probability, clamp(2 (1 - 2 p_miss), 0, 1) = 0.2 for 0.45)");
+  c.add_option("--ndt-initial-intensity-variance", f.ndt_initial_intensity_variance,
+               help("NDT-TM: intensity variance after a voxel's first sample, intensity units^2",
+                    NdtParams::kDefaultInitialIntensityVariance));
+}
+
+/// --mode and the --ndt-* options into config (after the semantics are set).
+Expected<void, Error> applyMode(const MappingFlags& f, MapConfig& config) {
+  const std::optional<MapMode> mode = mapModeFromName(f.mode);
+  if (!mode) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--mode: unknown mode '" + f.mode + "' (expected occupancy, ndt-om or ndt-tm)");
+  }
+  config.mode = *mode;
+  const std::pair<bool, const char*> given[] = {
+      {f.ndt_sensor_noise.has_value(), "--ndt-sensor-noise"},
+      {f.ndt_regulariser.has_value(), "--ndt-regulariser"},
+      {f.ndt_sample_threshold.has_value(), "--ndt-sample-threshold"},
+      {f.ndt_reinit_probability.has_value(), "--ndt-reinit-probability"},
+      {f.ndt_reinit_count.has_value(), "--ndt-reinit-count"},
+      {f.ndt_adaptation_rate.has_value(), "--ndt-adaptation-rate"},
+      {f.ndt_initial_intensity_variance.has_value(), "--ndt-initial-intensity-variance"}};
+  if (!isNdt(*mode)) {
+    for (const auto& [set, name] : given) {
+      if (set) {
+        return fail(ErrorCode::kInvalidArgument,
+                    std::string(name) + " applies only to --mode ndt-om or ndt-tm");
+      }
+    }
+    return {};
+  }
+  if (config.semantics != Semantics::kPerRay) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--mode " + f.mode +
+                    " needs --semantics ray: each ray's miss depends on where it crosses a "
+                    "voxel's Gaussian, and per-scan semantics keep one update per voxel");
+  }
+  NdtParams& ndt = config.ndt;
+  ndt.sensor_noise = f.ndt_sensor_noise.value_or(ndt.sensor_noise);
+  ndt.regulariser = f.ndt_regulariser.value_or(ndt.regulariser);
+  ndt.sample_threshold = f.ndt_sample_threshold.value_or(ndt.sample_threshold);
+  ndt.reinit_probability = f.ndt_reinit_probability.value_or(ndt.reinit_probability);
+  ndt.reinit_count = f.ndt_reinit_count.value_or(ndt.reinit_count);
+  if (f.ndt_adaptation_rate) {
+    ndt.adaptation_rate = *f.ndt_adaptation_rate;
+  }
+  ndt.initial_intensity_variance =
+      f.ndt_initial_intensity_variance.value_or(ndt.initial_intensity_variance);
+  if (auto ok = ndt.validate(); !ok) {
+    // NdtParams names the parameter as "ndt sensor-noise"; the user typed --ndt-sensor-noise.
+    std::string message = ok.error().message;
+    message[3] = '-';
+    return fail(ErrorCode::kInvalidArgument, std::string("--") + message);
+  }
+  return {};
+}
+
+}  // namespace
 
 void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--trajectory", f.trajectory,
@@ -46,6 +131,13 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "occupied wins")
       ->check(CLI::IsMember({"ray", "scan"}))
       ->capture_default_str();
+  c.add_option("--mode", f.mode,
+               "occupancy: log-odds occupancy; ndt-om: occupancy whose misses follow each voxel's "
+               "Gaussian (NDT-OM); ndt-tm: NDT-OM plus hit/miss counts and intensity (NDT-TM). "
+               "NDT needs --semantics ray")
+      ->check(CLI::IsMember({"occupancy", "ndt-om", "ndt-tm"}))
+      ->capture_default_str();
+  addNdtOptions(c, f);
   c.add_option("--backend", f.backend, "Integration backend: cpu, opencl or cuda")
       ->check(CLI::IsMember({"cpu", "opencl", "cuda"}))
       ->capture_default_str();
@@ -229,6 +321,9 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
     if (!ok) {
       return Unexpected(ok.error());
     }
+  }
+  if (auto ok = applyMode(f, o.map); !ok) {
+    return Unexpected(ok.error());
   }
   if (auto ok = o.map.validate(); !ok) {
     return Unexpected(ok.error());

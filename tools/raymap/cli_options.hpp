@@ -27,6 +27,15 @@ struct MappingFlags {
   std::optional<double> clamp_max;
   std::optional<double> threshold;
   std::string semantics = "ray";
+  std::string mode = "occupancy";  ///< occupancy, ndt-om or ndt-tm
+  // NDT parameters (unset: NdtParams defaults); only with --mode ndt-om / ndt-tm.
+  std::optional<double> ndt_sensor_noise;
+  std::optional<double> ndt_regulariser;
+  std::optional<std::uint32_t> ndt_sample_threshold;
+  std::optional<double> ndt_reinit_probability;
+  std::optional<std::uint32_t> ndt_reinit_count;
+  std::optional<double> ndt_adaptation_rate;
+  std::optional<double> ndt_initial_intensity_variance;
   std::string backend = "cpu";
   unsigned threads = 0;
   std::string opencl_platform;

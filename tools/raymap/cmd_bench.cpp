@@ -16,11 +16,13 @@
 namespace raymap::cli {
 namespace {
 
+constexpr const char* kDefaultSemanticsList = "ray,scan";
+
 struct BenchFlags {
   std::string input;
   MappingFlags mapping;
   std::string threads_list = "1,0";
-  std::string semantics_list = "ray,scan";
+  std::string semantics_list = kDefaultSemanticsList;
   int repeat = 3;
   bool steady_state = false;
   std::string json;
@@ -71,8 +73,27 @@ int runBench(const BenchFlags& f) {
     }
     rays.insert(rays.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(*n));
   }
+  if (const std::string warning = inputWarning(base->map.mode, (*source)->info());
+      !warning.empty()) {
+    std::fprintf(stderr, "bench: warning: %s\n", warning.c_str());
+  }
+  // NDT maps integrate per ray only: the default list shrinks to "ray"; an explicit "scan" is an
+  // error rather than a silently skipped run.
+  std::string semantics_list = f.semantics_list;
+  if (isNdt(base->map.mode)) {
+    if (semantics_list == kDefaultSemanticsList) {
+      semantics_list = "ray";
+    }
+    for (const std::string& semantics : splitComma(semantics_list)) {
+      if (semantics == "scan") {
+        printError(command, std::string("--semantics-list: --mode ") + toString(base->map.mode) +
+                                " maps need per-ray semantics; use --semantics-list ray");
+        return kExitUsage;
+      }
+    }
+  }
   std::string runs = "[";
-  for (const std::string& semantics : splitComma(f.semantics_list)) {
+  for (const std::string& semantics : splitComma(semantics_list)) {
     if (semantics != "ray" && semantics != "scan") {
       printError(command, "--semantics-list: unknown semantics '" + semantics + "'");
       return kExitUsage;
@@ -173,7 +194,8 @@ void addBenchCommand(CLI::App& app, int* exit_code) {
   addMappingOptions(*c, flags->mapping);
   c->add_option("--threads-list", flags->threads_list, "Thread counts to run, e.g. 1,2,0 (0 = all)")
       ->capture_default_str();
-  c->add_option("--semantics-list", flags->semantics_list, "Semantics to run: ray, scan or both")
+  c->add_option("--semantics-list", flags->semantics_list,
+                "Semantics to run: ray, scan or both (NDT --mode: ray only)")
       ->capture_default_str();
   c->add_option("--repeat", flags->repeat, "Runs per configuration (the median is reported)")
       ->check(CLI::Range(1, 100))

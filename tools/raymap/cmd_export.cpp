@@ -2,10 +2,12 @@
 // `raymap export`: a map as a point cloud for any viewer.
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
+#include "src/io/ndt_export.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 
@@ -16,10 +18,62 @@ struct ExportFlags {
   std::string map;
   std::string ply;
   std::string mode = "occupied";
+  double sigmas = io::NdtExportOptions::kDefaultSigmas;
+  std::optional<double> min_axis;
+  std::optional<std::string> colour;
   bool quiet = false;
 };
 
+int runNdtExport(const ExportFlags& f) {
+  const char* command = "export";
+  io::NdtExportOptions options;
+  options.sigmas = f.sigmas;
+  options.min_axis_m = f.min_axis;
+  if (f.colour) {
+    auto colour = io::ndtColourFromString(*f.colour);
+    if (!colour) {
+      printError(command, "--colour: " + colour.error().message);
+      return kExitUsage;
+    }
+    options.colour = *colour;
+  }
+  if (auto ok = options.validate(); !ok) {
+    printError(command, ok.error().message);
+    return kExitUsage;
+  }
+  if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
+  }
+  auto map = io::loadMap(f.map);
+  if (!map) {
+    printError(command, map.error().message);
+    return kExitFailure;
+  }
+  const bool points = f.mode == "ndt-points";
+  auto count = points ? io::exportNdtPoints(*map, options, f.ply)
+                      : io::exportNdtEllipsoids(*map, options, f.ply);
+  if (!count) {
+    printError(command, f.map + ": " + count.error().message);
+    return kExitFailure;
+  }
+  if (!f.quiet) {
+    std::printf("wrote %s %s (%g sigma, coloured by %s) to %s\n", withCommas(*count).c_str(),
+                points ? "NDT means with normals" : "NDT ellipsoids", options.sigmas,
+                io::toString(options.colour), f.ply.c_str());
+  }
+  return kExitOk;
+}
+
 int runExport(const ExportFlags& f) {
+  if (f.mode == "ndt" || f.mode == "ndt-points") {
+    return runNdtExport(f);
+  }
+  if (f.colour || f.min_axis || f.sigmas != io::NdtExportOptions::kDefaultSigmas) {
+    printError("export",
+               "--colour, --sigmas and --min-axis apply only to --mode ndt or ndt-points");
+    return kExitUsage;
+  }
   auto mode = io::exportModeFromString(f.mode);
   if (!mode) {
     printError("export", mode.error().message);
@@ -50,13 +104,23 @@ int runExport(const ExportFlags& f) {
 
 void addExportCommand(CLI::App& app, int* exit_code) {
   auto flags = std::make_shared<ExportFlags>();
-  CLI::App* c = app.add_subcommand("export", "Write a map's voxels as a point-cloud PLY");
+  CLI::App* c = app.add_subcommand(
+      "export", "Write a map's voxels as a point-cloud PLY, or its NDT Gaussians as ellipsoids");
   c->add_option("map", flags->map, "Map file (.rmap)")->required();
-  c->add_option("--ply", flags->ply, "Point cloud to write")->required();
+  c->add_option("--ply", flags->ply, "PLY file to write")->required();
   c->add_option("--mode", flags->mode,
                 "occupied: occupied voxels at their voxel mean; free: free voxel centres; "
-                "mean: every voxel with samples, at its mean")
+                "mean: every voxel with samples, at its mean; ndt: a triangle-mesh ellipsoid per "
+                "occupied NDT Gaussian; ndt-points: the Gaussians' means with normals")
       ->capture_default_str();
+  c->add_option("--sigmas", flags->sigmas, "NDT: ellipsoid half-axes in standard deviations")
+      ->capture_default_str();
+  c->add_option("--min-axis", flags->min_axis,
+                "NDT: smallest ellipsoid half-axis, metres (default 0.05 voxel edges), so flat "
+                "surfels stay visible");
+  c->add_option("--colour", flags->colour,
+                "NDT: height (default), or for ndt-tm maps intensity or permeability; blue (low) "
+                "- cyan - green - yellow - red (high)");
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   c->callback([flags, exit_code] { *exit_code = runExport(*flags); });
 }

@@ -22,12 +22,48 @@ std::string vectorJson(Vec3d v) {
   return buffer;
 }
 
+/// The NDT parameters as stored, plus the adaptation rate in effect (given or derived).
+JsonObject ndtJson(const MapConfig& c) {
+  const NdtParams& n = c.ndt;
+  JsonObject j;
+  j.add("sensor_noise_m", n.sensor_noise)
+      .add("regulariser_voxels", n.regulariser)
+      .add("sample_threshold", n.sample_threshold)
+      .add("reinit_probability", n.reinit_probability)
+      .add("reinit_count", n.reinit_count)
+      .add("adaptation_rate", n.adaptationRate(c.occupancy))
+      .add("adaptation_rate_source", n.adaptation_rate ? "given" : "from miss probability")
+      .add("initial_intensity_variance", n.initial_intensity_variance);
+  return j;
+}
+
+void printNdt(const MapConfig& c) {
+  const NdtParams& n = c.ndt;
+  std::printf(
+      "ndt            sensor noise %g m, regulariser %g voxel, sample threshold %u, "
+      "adaptation rate %g (%s)\n",
+      n.sensor_noise, n.regulariser, n.sample_threshold, n.adaptationRate(c.occupancy),
+      n.adaptation_rate ? "given" : "from miss probability");
+  std::printf("               reinitialise below p = %g after %u samples", n.reinit_probability,
+              n.reinit_count);
+  if (c.mode == MapMode::kNdtTm) {
+    std::printf("; initial intensity variance %g", n.initial_intensity_variance);
+  }
+  std::printf("\n");
+}
+
 int runInfo(const InfoFlags& f) {
+  auto header = io::readMapHeader(f.map);
+  if (!header) {
+    printError("info", header.error().message);
+    return kExitFailure;
+  }
   auto map = io::loadMap(f.map);
   if (!map) {
     printError("info", map.error().message);
     return kExitFailure;
   }
+  const std::uint32_t version = header->format_version;
   const MapConfig& c = map->config();
   const MapSummary s = map->summarise();
   const OccupancyParams& o = c.occupancy;
@@ -35,7 +71,11 @@ int runInfo(const InfoFlags& f) {
   const LayerSchema& schema = map->store().schema();
   for (int i = 0; i < schema.size(); ++i) {
     if (schema.at(i).saved) {
-      layers += (layers.empty() ? "" : ", ") + std::string(schema.at(i).name);
+      if (!layers.empty()) {
+        layers += ", ";
+      }
+      layers += schema.at(i).name;
+      layers += " (" + std::to_string(schema.at(i).bytes_per_voxel) + " B)";
     }
   }
   const std::uint64_t bytes_per_region = schema.bytesPerRegion(c.geometry.voxelsPerRegion());
@@ -58,20 +98,39 @@ int runInfo(const InfoFlags& f) {
       }
     }
     layer_array += "]";
+    std::string layer_details = "[";
+    for (int i = 0; i < schema.size(); ++i) {
+      if (schema.at(i).saved) {
+        JsonObject layer;
+        layer.add("name", schema.at(i).name)
+            .add("bytes_per_voxel", schema.at(i).bytes_per_voxel)
+            .add("version", unsigned{schema.at(i).version});
+        if (layer_details.size() > 1) {
+          layer_details += ", ";
+        }
+        layer_details += layer.str();
+      }
+    }
+    layer_details += "]";
     JsonObject info;
     for (const auto& [key, value] : map->info()) {
       info.add(key, value);
     }
     JsonObject j;
     j.add("path", f.map)
-        .add("format_version", io::kMapFormatVersion)
+        .add("format_version", version)
         .add("resolution", c.geometry.resolution)
         .add("region_voxels", c.geometry.region_voxels)
         .add("region_extent", c.geometry.regionExtent())
         .add("semantics", toString(c.semantics))
+        .add("mode", toString(c.mode))
         .raw("occupancy", params.str())
         .raw("layers", layer_array)
-        .add("regions", s.regions)
+        .raw("layer_details", layer_details);
+    if (isNdt(c.mode)) {
+      j.raw("ndt", ndtJson(c).str());
+    }
+    j.add("regions", s.regions)
         .add("memory_bytes", s.regions * bytes_per_region)
         .add("voxels_free", s.voxels_free)
         .add("voxels_occupied", s.voxels_occupied)
@@ -83,10 +142,11 @@ int runInfo(const InfoFlags& f) {
     std::printf("%s\n", j.str().c_str());
     return kExitOk;
   }
-  std::printf("map            %s (format %u)\n", f.map.c_str(), io::kMapFormatVersion);
+  std::printf("map            %s (format %u)\n", f.map.c_str(), version);
   std::printf("resolution     %g m, regions of %d^3 voxels (%g m)\n", c.geometry.resolution,
               c.geometry.region_voxels, c.geometry.regionExtent());
   std::printf("semantics      %s\n", toString(c.semantics));
+  std::printf("mode           %s\n", toString(c.mode));
   std::printf(
       "occupancy      hit %.4g, miss %.4g, clamps %.4g / %.4g, threshold %.4g"
       " (log-odds %+.4f %+.4f %+.4f %+.4f %+.4f)\n",
@@ -94,7 +154,10 @@ int runInfo(const InfoFlags& f) {
       probability(o.threshold), static_cast<double>(o.hit), static_cast<double>(o.miss),
       static_cast<double>(o.clamp_min), static_cast<double>(o.clamp_max),
       static_cast<double>(o.threshold));
-  std::printf("layers         %s\n", layers.c_str());
+  if (isNdt(c.mode)) {
+    printNdt(c);
+  }
+  std::printf("layers         %s per voxel\n", layers.c_str());
   std::printf("regions        %s (%.1f MiB in memory)\n", withCommas(s.regions).c_str(),
               static_cast<double>(s.regions * bytes_per_region) / (1024.0 * 1024.0));
   std::printf("voxels         %s free, %s occupied, %s unobserved in stored regions\n",

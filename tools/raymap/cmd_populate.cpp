@@ -45,10 +45,11 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
   std::printf("\n               %s clipped to max range, %s without return, %s scans\n",
               withCommas(r.rays.rays_clipped).c_str(), withCommas(r.rays.rays_no_return).c_str(),
               withCommas(r.scans).c_str());
-  std::printf("map            %s free, %s occupied voxels in %s regions (%.3g m, %s semantics)\n",
-              withCommas(r.summary.voxels_free).c_str(),
-              withCommas(r.summary.voxels_occupied).c_str(), withCommas(r.summary.regions).c_str(),
-              o.map.geometry.resolution, toString(o.map.semantics));
+  std::printf(
+      "map            %s free, %s occupied voxels in %s regions (%.3g m, %s semantics, %s)\n",
+      withCommas(r.summary.voxels_free).c_str(), withCommas(r.summary.voxels_occupied).c_str(),
+      withCommas(r.summary.regions).c_str(), o.map.geometry.resolution, toString(o.map.semantics),
+      toString(o.map.mode));
   if (r.device.empty()) {
     std::printf("integration    %.3f s, %.3g M rays/s (%s, %u threads); reading %.3f s\n",
                 r.integrate_seconds, rate / 1e6, r.backend_name.c_str(), r.threads, r.read_seconds);
@@ -101,7 +102,8 @@ int runPopulate(const PopulateFlags& f) {
     printError(command, report.error().message);
     return kExitFailure;
   }
-  for (const std::string* warning : {&report->fallback_warning, &report->startup_warning}) {
+  for (const std::string* warning :
+       {&report->fallback_warning, &report->startup_warning, &report->input_warning}) {
     if (!warning->empty()) {
       std::fprintf(stderr, "raymap populate: warning: %s\n", warning->c_str());
     }
@@ -169,7 +171,8 @@ std::string withCommas(std::uint64_t value) {
 void addPopulateCommand(CLI::App& app, int* exit_code) {
   auto flags = std::make_shared<PopulateFlags>();
   CLI::App* c = app.add_subcommand(
-      "populate", "Build an occupancy map from a ray-cloud PLY or a point cloud + trajectory");
+      "populate",
+      "Build an occupancy or NDT map from a ray-cloud PLY or a point cloud + trajectory");
   c->add_option("input", flags->input, "Input file (.ply or .ply.gz)")->required();
   addMappingOptions(*c, flags->mapping);
   c->add_option("-o,--output", flags->output, "Map file to write (.rmap)");

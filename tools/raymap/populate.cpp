@@ -188,12 +188,14 @@ Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& op
     return Unexpected(source_or.error());
   }
   io::RaySource& source = **source_or;
+  const std::string warning = inputWarning(map.mode(), source.info());
   auto report = integrateStream(
       map, options, [&](std::span<Ray> out) { return source.read(out); },
       [&] { return source.progress(); });
   if (!report) {
     return report;
   }
+  report->input_warning = warning;
   map.setInfo("source", options.input);
   map.setInfo("rays_in", std::to_string(report->rays.rays_in));
   map.setInfo("rays_integrated", std::to_string(report->rays.rays_accepted));
@@ -205,6 +207,15 @@ Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& op
   return report;
 }
 
+std::string inputWarning(MapMode mode, const io::RaySourceInfo& input) {
+  if (mode != MapMode::kNdtTm || input.has_intensity) {
+    return {};
+  }
+  return input.path +
+         " has no 'intensity' property: the ndt-tm intensity layer records 0 for every sample "
+         "(hit/miss counts and the Gaussians are unaffected)";
+}
+
 std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
   JsonObject j;
   const double rate = r.integrate_seconds > 0
@@ -213,6 +224,7 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
   j.add("input", options.input)
       .add("mapper", "raymap")
       .add("semantics", toString(options.map.semantics))
+      .add("mode", toString(options.map.mode))
       .add("resolution", options.map.geometry.resolution)
       .add("region_voxels", options.map.geometry.region_voxels)
       .add("min_range", options.filter.min_range_m)
@@ -266,6 +278,9 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
   }
   if (!r.startup_warning.empty()) {
     j.add("backend_warning", r.startup_warning);
+  }
+  if (!r.input_warning.empty()) {
+    j.add("input_warning", r.input_warning);
   }
   j.add("peak_rss_bytes", r.peak_rss_bytes);
   return j.str();

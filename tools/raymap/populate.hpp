@@ -45,6 +45,7 @@ struct PopulateReport {
   std::string device;            ///< device backends: the device in words
   std::string fallback_warning;  ///< the requested device failed; the CPU mapped instead
   std::string startup_warning;   ///< a non-fatal start-up problem of the backend
+  std::string input_warning;     ///< the input lacks something the map uses (NDT-TM intensity)
   unsigned threads = 0;
   std::uint64_t scans = 0;        ///< runs of equal scan index seen
   std::uint64_t scans_split = 0;  ///< per-scan: scans larger than a batch, integrated in parts
@@ -70,6 +71,10 @@ Result<PopulateReport> integrateStream(
 /// @brief Opens options.input and integrates it (integrateStream over a RaySource); records
 /// provenance in the map's info.
 Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& options);
+
+/// @brief The warning for an input that lacks what the map mode uses (empty when none): NDT-TM
+/// maps keep intensity statistics, and a file without an `intensity` property gives 0 for all.
+std::string inputWarning(MapMode mode, const io::RaySourceInfo& input);
 
 /// @brief The statistics JSON of a run (keys documented in docs/cli.md).
 std::string statsJson(const PopulateReport& report, const PopulateOptions& options);

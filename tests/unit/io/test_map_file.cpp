@@ -33,6 +33,8 @@ constexpr std::size_t kIndexEntryBytes = 20;
 // Offsets inside the header body (see docs/map-format.md).
 constexpr std::size_t kBodyLayerCount = 34;
 constexpr std::size_t kBodyFirstLayerKind = 36;
+// Version 2 ends the body with the map mode (4 bytes) and the 52-byte NDT block.
+constexpr std::size_t kBodyModeAndNdtBytes = 4 + 52;
 
 std::vector<std::uint8_t> readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -686,7 +688,7 @@ TEST_F(DamagedMapFile, AnUnknownLayerKindIsUnsupported) {
 TEST_F(DamagedMapFile, AnImpossibleRegionCountFailsBeforeAllocating) {
   // Arrange: the header claims 2^29 regions (its checksum made to match).
   std::vector<std::uint8_t> bad = good_;
-  const std::size_t count_at = kPrefixBytes + headerBodyBytes(bad) - 8;
+  const std::size_t count_at = kPrefixBytes + headerBodyBytes(bad) - kBodyModeAndNdtBytes - 8;
   ASSERT_EQ(getLe(bad, count_at, 8), 3u);
   putLe(bad, count_at, std::uint64_t{1} << 29, 8);
   resealHeader(bad);
@@ -792,7 +794,7 @@ TEST_F(DamagedMapFile, ANewerVersionIsUnsupported) {
 
   // Assert
   EXPECT_EQ(error.code, ErrorCode::kUnsupported);
-  EXPECT_EQ(error.message, bad_path_ + ": map format version 7 is newer than this raymap (1)");
+  EXPECT_EQ(error.message, bad_path_ + ": map format version 7 is newer than this raymap (2)");
   ASSERT_FALSE(header.has_value());
   EXPECT_EQ(header.error().message, error.message);
 }

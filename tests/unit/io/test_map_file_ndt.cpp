@@ -1,0 +1,331 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Map files of NDT-OM / NDT-TM maps: the mode, every NDT parameter and the NDT layers round-trip;
+// version-1 files load as occupancy maps; damaged NDT sections fail with the file named.
+#include <bit>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/io/map_file.hpp"
+#include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
+
+namespace raymap::io {
+namespace {
+
+using test::TempDir;
+
+// ---- file bytes (docs/map-format.md) ----
+
+constexpr std::size_t kPrefixBytes = 16;
+// The version-2 tail of the header body: mode, reserved, block size, then the NDT block.
+constexpr std::size_t kModeAndNdtBytes = 4 + 52;
+// Offsets inside that tail.
+constexpr std::size_t kTailMode = 0;
+constexpr std::size_t kTailBlockBytes = 2;
+constexpr std::size_t kTailSensorNoise = 4;
+constexpr std::size_t kTailFlags = 4 + 52 - 4;
+
+std::vector<std::uint8_t> readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+
+void writeBytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+  std::filesystem::remove(path);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+}
+
+std::uint64_t getLe(const std::vector<std::uint8_t>& bytes, std::size_t at, int count) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < count; ++i) {
+    v |= std::uint64_t{bytes.at(at + static_cast<std::size_t>(i))} << (8 * i);
+  }
+  return v;
+}
+
+void putLe(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint64_t v, int count) {
+  for (int i = 0; i < count; ++i) {
+    bytes.at(at + static_cast<std::size_t>(i)) = static_cast<std::uint8_t>(v >> (8 * i));
+  }
+}
+
+/// CRC-32 (IEEE, reflected), written out so that tests can forge files with matching checksums.
+std::uint32_t crc32(const std::uint8_t* data, std::size_t size) {
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (std::size_t i = 0; i < size; ++i) {
+    crc ^= data[i];
+    for (int bit = 0; bit < 8; ++bit) {
+      crc = (crc & 1u) != 0 ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
+    }
+  }
+  return ~crc;
+}
+
+std::size_t bodyBytes(const std::vector<std::uint8_t>& bytes) {
+  return static_cast<std::size_t>(getLe(bytes, 12, 4));
+}
+
+/// File offset of the version-2 tail of the header body.
+std::size_t tailOffset(const std::vector<std::uint8_t>& bytes) {
+  return kPrefixBytes + bodyBytes(bytes) - kModeAndNdtBytes;
+}
+
+void resealHeader(std::vector<std::uint8_t>& bytes) {
+  const std::size_t covered = kPrefixBytes + bodyBytes(bytes);
+  putLe(bytes, covered, crc32(bytes.data(), covered), 4);
+}
+
+/// Rewrites a version-2 file as version 1 wrote it: no mode, no NDT block. The block offsets in
+/// the index and footer move with the header.
+std::vector<std::uint8_t> asVersion1(const std::vector<std::uint8_t>& v2) {
+  std::vector<std::uint8_t> v1 = v2;
+  const std::size_t tail = tailOffset(v1);
+  v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(tail),
+           v1.begin() + static_cast<std::ptrdiff_t>(tail + kModeAndNdtBytes));
+  putLe(v1, 8, 1, 4);
+  putLe(v1, 12, bodyBytes(v2) - kModeAndNdtBytes, 4);
+  resealHeader(v1);
+  // Footer: region count at +4, index offset at +12; index entries: coord (12) + offset (8).
+  const std::size_t footer = v1.size() - 24;
+  const std::size_t count = static_cast<std::size_t>(getLe(v1, footer + 4, 8));
+  const std::size_t index = static_cast<std::size_t>(getLe(v1, footer + 12, 8)) - kModeAndNdtBytes;
+  putLe(v1, footer + 12, index, 8);
+  putLe(v1, footer + 20, crc32(v1.data() + footer, 20), 4);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t at = index + 4 + i * 20 + 12;
+    putLe(v1, at, getLe(v1, at, 8) - kModeAndNdtBytes, 8);
+  }
+  const std::size_t index_bytes = 4 + count * 20;
+  putLe(v1, index + index_bytes, crc32(v1.data() + index, index_bytes), 4);
+  return v1;
+}
+
+// ---- maps ----
+
+MapConfig ndtConfig(MapMode mode) {
+  MapConfig config;
+  config.geometry.resolution = 0.2;
+  config.geometry.region_voxels = 8;
+  config.mode = mode;
+  config.ndt.sensor_noise = 0.031;
+  config.ndt.regulariser = 0.25;
+  config.ndt.sample_threshold = 6;
+  config.ndt.reinit_probability = 0.15;
+  config.ndt.reinit_count = 77;
+  config.ndt.adaptation_rate = 0.35;
+  config.ndt.initial_intensity_variance = 2.5;
+  config.memory_budget_bytes = std::uint64_t{16} << 20;
+  return config;
+}
+
+VoxelMap integratedMap(const MapConfig& config) {
+  VoxelMap map = test::makeMap(config);
+  auto backend = test::cpuBackend(map, 1);
+  std::vector<Ray> rays = test::cubeRoomRays(config.geometry.resolution, 12);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    rays[i].intensity = static_cast<float>(i % 97);
+  }
+  test::integrate(map, *backend, rays);
+  return map;
+}
+
+/// Every saved layer of every region is bit-identical.
+void expectSameSavedLayers(const VoxelMap& expected, const VoxelMap& actual) {
+  ASSERT_EQ(actual.store().size(), expected.store().size());
+  const LayerSchema& schema = expected.store().schema();
+  expected.store().forEachRegion([&](std::uint32_t slot, Vec3i coord) {
+    const std::uint32_t other = actual.store().find(coord);
+    ASSERT_NE(other, RegionStore::kNoSlot);
+    for (int l = 0; l < schema.size(); ++l) {
+      const int other_layer = actual.store().schema().indexOf(schema.at(l).kind);
+      ASSERT_GE(other_layer, 0) << schema.at(l).name;
+      EXPECT_EQ(
+          std::memcmp(actual.store().layerBytes(other, other_layer),
+                      expected.store().layerBytes(slot, l), expected.store().layerRegionBytes(l)),
+          0)
+          << "layer " << schema.at(l).name;
+    }
+  });
+}
+
+class NdtMapFile : public ::testing::TestWithParam<MapMode> {};
+
+TEST_P(NdtMapFile, RoundTripsModeParametersAndNdtLayers) {
+  // Arrange
+  const MapConfig config = ndtConfig(GetParam());
+  const VoxelMap map = integratedMap(config);
+  TempDir dir;
+  const std::string path = dir.file("ndt.rmap");
+
+  // Act
+  ASSERT_TRUE(saveMap(map, path).has_value());
+  auto header = readMapHeader(path);
+  auto loaded = loadMap(path);
+
+  // Assert
+  ASSERT_TRUE(header.has_value()) << header.error().message;
+  EXPECT_EQ(header->config.mode, GetParam());
+  EXPECT_EQ(header->config.ndt, config.ndt);
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_EQ(loaded->mode(), GetParam());
+  EXPECT_EQ(loaded->config().ndt, config.ndt);
+  EXPECT_TRUE(loaded->store().schema() == config.schema());
+  EXPECT_GE(loaded->ndtLayer(), 0);
+  EXPECT_EQ(loaded->hitMissLayer() >= 0, GetParam() == MapMode::kNdtTm);
+  EXPECT_EQ(loaded->intensityLayer() >= 0, GetParam() == MapMode::kNdtTm);
+  expectSameSavedLayers(map, *loaded);
+  EXPECT_GT(loaded->summarise().voxels_occupied, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothNdtModes, NdtMapFile,
+                         ::testing::Values(MapMode::kNdtOm, MapMode::kNdtTm));
+
+TEST(NdtMapFileParams, AnUnsetAdaptationRateStaysUnset) {
+  // Arrange: derived from the miss probability, which must stay so after a reload.
+  MapConfig config = ndtConfig(MapMode::kNdtOm);
+  config.ndt.adaptation_rate.reset();
+  const VoxelMap map = test::makeMap(config);
+  TempDir dir;
+  const std::string path = dir.file("derived.rmap");
+
+  // Act
+  ASSERT_TRUE(saveMap(map, path).has_value());
+  auto header = readMapHeader(path);
+
+  // Assert
+  ASSERT_TRUE(header.has_value()) << header.error().message;
+  EXPECT_FALSE(header->config.ndt.adaptation_rate.has_value());
+  EXPECT_EQ(header->config.ndt, config.ndt);
+}
+
+TEST(NdtMapFileParams, AVersion1FileLoadsAsAnOccupancyMap) {
+  // Arrange
+  MapConfig config = ndtConfig(MapMode::kOccupancy);
+  config.ndt = NdtParams{};
+  const VoxelMap map = integratedMap(config);
+  TempDir dir;
+  const std::string path = dir.file("v1.rmap");
+  ASSERT_TRUE(saveMap(map, path).has_value());
+  writeBytes(path, asVersion1(readBytes(path)));
+
+  // Act
+  auto loaded = loadMap(path);
+
+  // Assert
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_EQ(loaded->mode(), MapMode::kOccupancy);
+  EXPECT_EQ(loaded->config().ndt, NdtParams{});
+  expectSameSavedLayers(map, *loaded);
+}
+
+// ---- damaged NDT sections ----
+
+class DamagedNdtFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const VoxelMap map = integratedMap(ndtConfig(MapMode::kNdtTm));
+    ASSERT_TRUE(saveMap(map, good_path_).has_value());
+    good_ = readBytes(good_path_);
+    tail_ = tailOffset(good_);
+    ASSERT_EQ(good_.at(tail_ + kTailMode), 2u);
+  }
+
+  /// Loads `bad` (after resealing its header) and returns the error.
+  Error loadFails(std::vector<std::uint8_t> bad) {
+    resealHeader(bad);
+    writeBytes(bad_path_, bad);
+    auto loaded = loadMap(bad_path_);
+    EXPECT_FALSE(loaded.has_value());
+    if (loaded.has_value()) {
+      return Error{};
+    }
+    EXPECT_EQ(loaded.error().message.rfind(bad_path_ + ": ", 0), 0u) << loaded.error().message;
+    return loaded.error();
+  }
+
+  TempDir dir_;
+  const std::string good_path_ = dir_.file("good.rmap");
+  const std::string bad_path_ = dir_.file("bad.rmap");
+  std::vector<std::uint8_t> good_;
+  std::size_t tail_ = 0;
+};
+
+TEST_F(DamagedNdtFile, AnUnknownModeIsNamed) {
+  std::vector<std::uint8_t> bad = good_;
+  bad[tail_ + kTailMode] = 9;
+  const Error error = loadFails(bad);
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_NE(error.message.find("unknown map mode 9"), std::string::npos) << error.message;
+}
+
+TEST_F(DamagedNdtFile, AModeThatDisagreesWithTheLayersIsRejected) {
+  // ndt-om declares fewer layers than the ndt-tm file holds.
+  std::vector<std::uint8_t> bad = good_;
+  bad[tail_ + kTailMode] = 1;
+  const Error error = loadFails(bad);
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_NE(error.message.find("saved layers do not match"), std::string::npos) << error.message;
+}
+
+TEST_F(DamagedNdtFile, AWrongBlockSizeIsNamed) {
+  std::vector<std::uint8_t> bad = good_;
+  putLe(bad, tail_ + kTailBlockBytes, 60, 2);
+  const Error error = loadFails(bad);
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_NE(error.message.find("NDT parameter block of 60 bytes"), std::string::npos)
+      << error.message;
+}
+
+TEST_F(DamagedNdtFile, AnOutOfRangeParameterIsNamed) {
+  std::vector<std::uint8_t> bad = good_;
+  putLe(bad, tail_ + kTailSensorNoise, std::bit_cast<std::uint64_t>(-1.0), 8);
+  const Error error = loadFails(bad);
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_NE(error.message.find("sensor-noise"), std::string::npos) << error.message;
+}
+
+TEST_F(DamagedNdtFile, UnknownFlagsAreRejected) {
+  std::vector<std::uint8_t> bad = good_;
+  putLe(bad, tail_ + kTailFlags, 0x80000001u, 4);
+  const Error error = loadFails(bad);
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_NE(error.message.find("unknown NDT flags"), std::string::npos) << error.message;
+}
+
+TEST_F(DamagedNdtFile, ABodyCutInsideTheNdtBlockIsNamed) {
+  // The body (and its CRC) end 20 bytes into the NDT block.
+  std::vector<std::uint8_t> bad(good_.begin(),
+                                good_.begin() + static_cast<std::ptrdiff_t>(tail_ + 24));
+  bad.resize(bad.size() + 4 + 4096, 0);  // CRC, then stand-ins for the regions
+  putLe(bad, 12, tail_ + 24 - kPrefixBytes, 4);
+  const Error error = loadFails(bad);
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_NE(error.message.find("NDT parameters run past the header"), std::string::npos)
+      << error.message;
+}
+
+TEST_F(DamagedNdtFile, AFileCutInTheNdtLayersIsTruncated) {
+  // Arrange: cut halfway through the file (inside the region blocks that hold the NDT layers).
+  std::vector<std::uint8_t> bad(good_.begin(),
+                                good_.begin() + static_cast<std::ptrdiff_t>(good_.size() / 2));
+  writeBytes(bad_path_, bad);
+
+  // Act
+  auto loaded = loadMap(bad_path_);
+
+  // Assert
+  ASSERT_FALSE(loaded.has_value());
+  EXPECT_EQ(loaded.error().code, ErrorCode::kTruncated) << loaded.error().message;
+  EXPECT_EQ(loaded.error().message.rfind(bad_path_ + ": ", 0), 0u) << loaded.error().message;
+}
+
+}  // namespace
+}  // namespace raymap::io
