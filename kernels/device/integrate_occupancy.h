@@ -36,28 +36,13 @@
 #include "../common/scan_mark.h"
 #include "../common/span_walk.h"
 #include "../common/voxel_mean.h"
+#include "counters.h"
 #include "device.h"
-
-/* Compare-and-swap attempts per miss before the update is given up (and counted). */
-#define RM_CAS_RETRY_LIMIT 64
 
 /* A tagged occupancy word: a quiet NaN whose low 22 bits hold the hit group (occupancy values
  * are never NaN: rays are validated, and +inf marks "unobserved"). */
 #define RM_TAG_BITS 0x7FC00000u
 #define RM_TAG_GROUP_MASK (RM_TAG_MAX_GROUPS - 1u)
-
-#if defined(RM_HAVE_INT64_ATOMICS)
-typedef rm_u64 rm_counter;
-RM_DEVICE_FN void rm_count(RM_ATOMIC_GLOBAL rm_counter* counters, rm_u32 which, rm_u32 amount) {
-  (void)rm_atomic_add_u64(counters + which, (rm_u64)amount);
-}
-#else
-/* 32-bit counters: the host sizes batches so that no bucket can wrap within one batch. */
-typedef rm_u32 rm_counter;
-RM_DEVICE_FN void rm_count(RM_ATOMIC_GLOBAL rm_counter* counters, rm_u32 which, rm_u32 amount) {
-  (void)rm_atomic_add_u32(counters + which, amount);
-}
-#endif
 
 RM_DEVICE_FN int rm_is_tag(rm_u32 word) { return (word & RM_TAG_BITS) == RM_TAG_BITS; }
 

@@ -11,6 +11,7 @@
 
 #include "kernels/common/batch.h"
 #include "kernels/cuda/launch.h"
+#include "kernels/cuda/ndt_launch.h"
 #include "src/cuda/cuda_devices.hpp"
 #include "src/cuda/cuda_handles.hpp"
 #include "src/gpu/staged_backend.hpp"
@@ -18,6 +19,7 @@
 namespace raymap {
 namespace {
 
+using gpu::NdtKernel;
 using gpu::OccupancyKernel;
 
 /// Device buffers of one staging set, its page-locked counter read-back and its end event.
@@ -224,6 +226,27 @@ class CudaBackend final : public gpu::StagedBackend {
                                                      : cuda::OccupancyKernelId::kApplyHitGroups;
     return cuda::launchOccupancyKernel(id, stream_.get(), block_threads_, buffers, p) ==
            cudaSuccess;
+  }
+
+  bool launchNdt(NdtKernel kernel, unsigned set, const rm_integrate_params& p,
+                 const rm_ndt_params& ndt) noexcept override {
+    const DeviceBatch& b = batches_[set];
+    const VoxelMap& m = map();
+    cuda::NdtKernelBuffers buffers;
+    buffers.rays = typed<const rm_prepared_ray>(b.rays);
+    buffers.spans = typed<const rm_span_record>(b.spans);
+    buffers.groups = typed<const rm_hit_group>(b.groups);
+    buffers.hit_rays = typed<const std::uint32_t>(b.hit_rays);
+    buffers.occupancy = static_cast<std::uint32_t*>(layerOr(m.occupancyLayer()));
+    buffers.ndt = static_cast<rm_ndt_voxel*>(layerOr(m.ndtLayer()));
+    buffers.hit_miss = static_cast<rm_ndt_hit_miss*>(layerOr(m.hitMissLayer()));
+    buffers.intensity = static_cast<rm_ndt_intensity*>(layerOr(m.intensityLayer()));
+    buffers.means = static_cast<rm_voxel_mean*>(layerOr(m.meanLayer()));
+    buffers.counters = typed<unsigned long long>(b.counters);
+    const cuda::NdtKernelId id = kernel == NdtKernel::kIntegrateSpans
+                                     ? cuda::NdtKernelId::kIntegrateSpans
+                                     : cuda::NdtKernelId::kApplyHitGroups;
+    return cuda::launchNdtKernel(id, stream_.get(), block_threads_, buffers, p, ndt) == cudaSuccess;
   }
 
   bool endBatch(unsigned set) noexcept override {

@@ -10,6 +10,9 @@ namespace {
 static_assert(sizeof(rm_span_record) == 32, "device ABI");
 static_assert(sizeof(rm_hit_group) == 16, "device ABI");
 static_assert(sizeof(rm_integrate_params) == 48, "device ABI");
+static_assert(sizeof(rm_ndt_params) == 32, "device ABI");
+static_assert(sizeof(rm_ndt_voxel) == 40, "device ABI");
+static_assert(sizeof(rm_ndt_hit_miss) == 8 && sizeof(rm_ndt_intensity) == 8, "device ABI");
 
 using Clock = std::chrono::steady_clock;
 
@@ -27,12 +30,16 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
       limits_(batchLimits(map, options)),
       planner_(map, cache_ ? &*cache_ : nullptr, *this, limits_),
       sets_{StagingSet(staging_memory), StagingSet(staging_memory)},
-      wide_counters_(wide_counters) {
+      wide_counters_(wide_counters),
+      ndt_(isNdt(map.mode())) {
   params_.occupancy = map.occupancy().toKernel();
   params_.region_voxels = map.geometry().region_voxels;
   params_.voxels_per_region = map.store().voxelsPerRegion();
   params_.per_scan = map.semantics() == Semantics::kPerScan ? 1u : 0u;
   params_.has_mean = map.meanLayer() >= 0 ? 1u : 0u;
+  if (ndt_) {
+    ndt_params_ = map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
+  }
   stats_.cache_slots = layerRegions();
   for (StagingSet& set : sets_) {
     planner_.reserve(set.arrays);
@@ -181,14 +188,19 @@ Expected<void, IntegrateError> StagedBackend::retire(unsigned set) noexcept {
   return {};
 }
 
-bool StagedBackend::launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept {
-  if (items == 0) {
-    return true;
-  }
+rm_integrate_params StagedBackend::launchParams(unsigned set, std::size_t items) const noexcept {
   rm_integrate_params p = params_;
   p.item_count = static_cast<std::uint32_t>(items);
   p.group_count = static_cast<std::uint32_t>(sets_[set].arrays.groups.size());
-  return launch(kernel, set, p);
+  return p;
+}
+
+bool StagedBackend::launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept {
+  return items == 0 || launch(kernel, set, launchParams(set, items));
+}
+
+bool StagedBackend::launchNdtOver(NdtKernel kernel, unsigned set, std::size_t items) noexcept {
+  return items == 0 || launchNdt(kernel, set, launchParams(set, items), ndt_params_);
 }
 
 Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
@@ -197,7 +209,12 @@ Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
   stats_.bytes_to_device +=
       a.rays.size() * sizeof(PreparedRay) + a.spans.size() * sizeof(rm_span_record) +
       a.groups.size() * sizeof(rm_hit_group) + a.hit_rays.size() * sizeof(std::uint32_t);
-  if (params_.per_scan != 0u) {
+  if (ndt_) {
+    // All misses of the batch against the Gaussians as they were, then the hits voxel by voxel
+    // in ray order (kernels/common/ndt.h); no scratch, no tags.
+    ok = ok && launchNdtOver(NdtKernel::kIntegrateSpans, set, a.spans.size()) &&
+         launchNdtOver(NdtKernel::kApplyHitGroups, set, a.groups.size());
+  } else if (params_.per_scan != 0u) {
     // Hits first: the scan mark they leave makes the misses skip those voxels (occupied wins).
     ok = ok && launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size()) &&
          launchOver(OccupancyKernel::kIntegrateSpans, set, a.spans.size());

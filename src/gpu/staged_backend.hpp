@@ -13,6 +13,7 @@
 #include <span>
 
 #include "kernels/common/batch.h"
+#include "kernels/common/ndt.h"
 #include "src/gpu/batch_plan.hpp"
 #include "src/gpu/device_options.hpp"
 #include "src/gpu/device_region_cache.hpp"
@@ -27,6 +28,13 @@ enum class OccupancyKernel : std::uint8_t {
   kTagHitGroups,    ///< per-ray semantics: tag the voxels with samples before the misses
   kIntegrateSpans,  ///< one work-item per span record: the misses (and per-scan marks)
   kApplyHitGroups,  ///< one work-item per voxel with samples: hits (and, per ray, the replay)
+};
+
+/// The kernels of the NDT-OM / NDT-TM integration (kernels/device/integrate_ndt.h), launched in
+/// this order: the batch's misses against the Gaussians as they were, then its hits per voxel.
+enum class NdtKernel : std::uint8_t {
+  kIntegrateSpans,  ///< one work-item per span record: NDT misses (and NDT-TM miss counts)
+  kApplyHitGroups,  ///< one work-item per voxel with samples: its hits folded in ray order
 };
 
 /// @brief A device backend over an API-specific queue of copies and kernels.
@@ -84,6 +92,10 @@ class StagedBackend : public Backend, private RegionTransfer {
   /// Runs `kernel` over params.item_count work-items on set `set`'s buffers (items > 0).
   virtual bool launch(OccupancyKernel kernel, unsigned set,
                       const rm_integrate_params& params) noexcept = 0;
+  /// NDT maps: runs `kernel` over params.item_count work-items on set `set`'s buffers and the
+  /// map's NDT layers (items > 0).
+  virtual bool launchNdt(NdtKernel kernel, unsigned set, const rm_integrate_params& params,
+                         const rm_ndt_params& ndt_params) noexcept = 0;
   /// Reads set `set`'s counters back, marks the end of its batch and starts the device.
   virtual bool endBatch(unsigned set) noexcept = 0;
   /// Waits for set `set`'s batch; its RM_COUNTER_COUNT counter words (64-bit if wide, else
@@ -117,6 +129,9 @@ class StagedBackend : public Backend, private RegionTransfer {
   /// Enqueues the batch planned into `set`: copies, kernels in the semantics' order, read-back.
   Expected<void, IntegrateError> submit(unsigned set) noexcept;
   bool launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept;
+  bool launchNdtOver(NdtKernel kernel, unsigned set, std::size_t items) noexcept;
+  /// The batch's launch parameters for `items` work-items.
+  rm_integrate_params launchParams(unsigned set, std::size_t items) const noexcept;
 
   struct StagingSet {
     explicit StagingSet(std::pmr::memory_resource* memory) : arrays(memory) {}
@@ -134,6 +149,8 @@ class StagedBackend : public Backend, private RegionTransfer {
   unsigned next_set_ = 0;
   bool wide_counters_;
   rm_integrate_params params_{};
+  bool ndt_;                    // the map is NDT-OM or NDT-TM: the NDT kernels, per-ray batches
+  rm_ndt_params ndt_params_{};  // NDT maps: the rules' parameters in voxel units
   BackendStats stats_;
 };
 

@@ -14,10 +14,12 @@
 namespace raymap {
 namespace kernels {
 extern const char* const kIntegrateOccupancySource;  // embedded at build time
+extern const char* const kIntegrateNdtSource;        // embedded at build time
 }  // namespace kernels
 
 namespace {
 
+using gpu::NdtKernel;
 using gpu::OccupancyKernel;
 
 // Work-group size for the kernels (clamped to the device maximum).
@@ -57,18 +59,24 @@ class OpenClBackend final : public gpu::StagedBackend {
     const std::string options_text =
         std::string("-cl-std=CL1.2") + (int64_counters_ ? " -DRM_HAVE_INT64_ATOMICS=1" : "") +
         (options.extra_build_options.empty() ? "" : " " + options.extra_build_options);
-    auto program = opencl::buildProgram(ctx_, kernels::kIntegrateOccupancySource, options_text,
-                                        options.program_cache);
+    // A map is integrated by one program: the occupancy kernels, or the NDT ones for NDT maps.
+    const bool ndt = isNdt(map().mode());
+    auto program = opencl::buildProgram(
+        ctx_, ndt ? kernels::kIntegrateNdtSource : kernels::kIntegrateOccupancySource, options_text,
+        options.program_cache);
     if (!program) {
       return Unexpected(program.error());
     }
     program_warning_ = program->warning;
     program_ = std::move(program->program);
-    if (auto ok = opencl::createKernels(program_, {{&span_kernel_, "rm_integrate_spans"},
-                                                   {&hit_kernel_, "rm_apply_hit_groups"},
-                                                   {&tag_kernel_, "rm_tag_hit_groups"}});
-        !ok) {
-      return ok;
+    auto kernels_made =
+        ndt ? opencl::createKernels(program_, {{&span_kernel_, "rm_ndt_integrate_spans"},
+                                               {&hit_kernel_, "rm_ndt_apply_hit_groups"}})
+            : opencl::createKernels(program_, {{&span_kernel_, "rm_integrate_spans"},
+                                               {&hit_kernel_, "rm_apply_hit_groups"},
+                                               {&tag_kernel_, "rm_tag_hit_groups"}});
+    if (!kernels_made) {
+      return kernels_made;
     }
     if (auto ok = allocateLayers(); !ok) {
       return ok;
@@ -187,10 +195,37 @@ class OpenClBackend final : public gpu::StagedBackend {
                      layerOr(map().scanMarkLayer()), b.scratch.get(), p, b.counters.get());
         break;
     }
+    return ok && enqueue(k, p.item_count);
+  }
+
+  bool launchNdt(NdtKernel kernel, unsigned set, const rm_integrate_params& p,
+                 const rm_ndt_params& ndt) noexcept override {
+    const DeviceBatch& b = batches_[set];
+    const VoxelMap& m = map();
+    cl_kernel k = nullptr;
+    bool ok = false;
+    switch (kernel) {
+      case NdtKernel::kIntegrateSpans:
+        k = span_kernel_.get();
+        ok = setArgs(k, b.rays.get(), b.spans.get(), layerOr(m.occupancyLayer()),
+                     layerOr(m.ndtLayer()), layerOr(m.hitMissLayer()), p, ndt, b.counters.get());
+        break;
+      case NdtKernel::kApplyHitGroups:
+        k = hit_kernel_.get();
+        ok = setArgs(k, b.rays.get(), b.groups.get(), b.hit_rays.get(), layerOr(m.occupancyLayer()),
+                     layerOr(m.ndtLayer()), layerOr(m.hitMissLayer()), layerOr(m.intensityLayer()),
+                     layerOr(m.meanLayer()), p, ndt, b.counters.get());
+        break;
+    }
+    return ok && enqueue(k, p.item_count);
+  }
+
+  /// Enqueues `k` over `items` work-items, rounded up to whole work-groups.
+  bool enqueue(cl_kernel k, std::uint32_t items) noexcept {
     const std::size_t local = local_size_;
-    const std::size_t global = (p.item_count + local - 1) / local * local;
-    return ok && clEnqueueNDRangeKernel(ctx_.queue.get(), k, 1, nullptr, &global, &local, 0,
-                                        nullptr, nullptr) == CL_SUCCESS;
+    const std::size_t global = (items + local - 1) / local * local;
+    return clEnqueueNDRangeKernel(ctx_.queue.get(), k, 1, nullptr, &global, &local, 0, nullptr,
+                                  nullptr) == CL_SUCCESS;
   }
 
   bool endBatch(unsigned set) noexcept override {
@@ -279,7 +314,7 @@ class OpenClBackend final : public gpu::StagedBackend {
   opencl::ProgramHandle program_;
   opencl::KernelHandle span_kernel_;
   opencl::KernelHandle hit_kernel_;
-  opencl::KernelHandle tag_kernel_;
+  opencl::KernelHandle tag_kernel_;           // occupancy maps with per-ray semantics only
   std::vector<opencl::BufferHandle> layers_;  // one per schema layer
   opencl::BufferHandle dummy_;
   std::array<DeviceBatch, kStagingSets> batches_;

@@ -1,0 +1,40 @@
+/* SPDX-License-Identifier: BSD-3-Clause */
+/* The entry points of the NDT-OM / NDT-TM integration, written once for OpenCL C 1.2 and CUDA
+ * through the qualifiers of device.h: kernels/opencl/integrate_ndt.cl and
+ * kernels/cuda/integrate_ndt.cu are this header and nothing more (plus, in CUDA, the host
+ * launcher). One work-item per span record (misses), then one per hit group (hits); the host
+ * rounds the work-item count up to whole work-groups, so each entry point checks its index.
+ * Layers a map lacks (NDT-TM's hit_miss and intensity in NDT-OM, the mean) are bound to a small
+ * placeholder and never read (ndt_params.traversability, params.has_mean). */
+#ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H
+#define RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H
+
+#include "integrate_ndt.h"
+
+RM_KERNEL void rm_ndt_integrate_spans(const RM_GLOBAL rm_prepared_ray* rays,
+                                      const RM_GLOBAL rm_span_record* spans,
+                                      RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                      const RM_GLOBAL rm_ndt_voxel* ndt,
+                                      RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_integrate_params params,
+                                      rm_ndt_params ndt_params,
+                                      RM_ATOMIC_GLOBAL rm_counter* counters) {
+  rm_u32 id = rm_global_id();
+  if (id < params.item_count) {
+    rm_ndt_integrate_span(id, rays, spans, occupancy, ndt, hit_miss, params, ndt_params, counters);
+  }
+}
+
+RM_KERNEL void rm_ndt_apply_hit_groups(
+    const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_hit_group* groups,
+    const RM_GLOBAL rm_u32* hit_rays, RM_GLOBAL rm_u32* occupancy, RM_GLOBAL rm_ndt_voxel* ndt,
+    RM_GLOBAL rm_ndt_hit_miss* hit_miss, RM_GLOBAL rm_ndt_intensity* intensity,
+    RM_GLOBAL rm_voxel_mean* means, rm_integrate_params params, rm_ndt_params ndt_params,
+    RM_ATOMIC_GLOBAL rm_counter* counters) {
+  rm_u32 id = rm_global_id();
+  if (id < params.item_count) {
+    rm_ndt_apply_hit_group(id, rays, groups, hit_rays, occupancy, ndt, hit_miss, intensity, means,
+                           params, ndt_params, counters);
+  }
+}
+
+#endif /* RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H */
