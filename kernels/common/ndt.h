@@ -279,7 +279,14 @@ RAYMAP_FN float rm_ndt_miss(float value, const rm_ndt_voxel* v, rm_vec3f origin,
   rm_ndt_ray_fit fit;
   float product;
   float p_update;
-  if (!rm_occupancy_observed(value) || !rm_ndt_shapes_misses(v->count, p)) {
+  if (!rm_occupancy_observed(value) || (p.traversability == 0u && value <= occ.clamp_min)) {
+    /* Unobserved: a plain miss. At the lower clamp no miss can change the value, so NDT-OM does
+     * not read the Gaussian (most voxels a ray crosses are free space at the clamp, and the
+     * 40-byte Gaussian costs a cache line per voxel); NDT-TM still needs it to count the pass. */
+    *is_miss = 1;
+    return rm_occupancy_miss(value, occ);
+  }
+  if (!rm_ndt_shapes_misses(v->count, p)) {
     *is_miss = 1;
     return rm_occupancy_miss(value, occ);
   }
@@ -291,6 +298,16 @@ RAYMAP_FN float rm_ndt_miss(float value, const rm_ndt_voxel* v, rm_vec3f origin,
   *is_miss = product < 0.5f * p.adaptation_rate;
   p_update = 0.5f - 0.5f * p.adaptation_rate * product;
   return RM_FMAXF(value + RM_LOGF(p_update / (1.0f - p_update)), occ.clamp_min);
+}
+
+/* Whether a miss is a plain one for certain, from the occupancy and a count that bounds the
+ * Gaussian's from above (the voxel-mean layer's count: every sample, where the Gaussian's count
+ * restarts on reinitialisation), without reading the 40-byte Gaussian. Most voxels a ray crosses
+ * are free space that no sample fell in: this keeps the miss to the layers a plain miss reads. */
+RAYMAP_FN int rm_ndt_miss_is_plain(float value, rm_u32 count_bound, rm_occupancy_params occ,
+                                   rm_ndt_params p) {
+  return !rm_occupancy_observed(value) || count_bound < p.sample_threshold ||
+         (p.traversability == 0u && value <= occ.clamp_min);
 }
 
 /* Whether a hit reinitialises the Gaussian: there is none yet, or the voxel has become likely

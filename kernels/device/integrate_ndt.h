@@ -97,12 +97,22 @@ RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_r
     rm_vec3f sample;
     rm_ndt_miss_source source;
     int is_miss = 0;
+    rm_u32 old;
+    float value;
     rm_ndt_ray_in_voxel(&walk_ray, frame.sample_is_start, rm_span_walk_voxel(&walk), &origin,
                         &sample);
-    source.gaussian.count = ndt[i].count;
+    old = rm_load_u32(occupancy + i);
+    value = rm_as_float(old);
+    /* The Gaussian's count is read only where it can matter: an unobserved voxel has none, and
+     * NDT-OM leaves a voxel at the lower clamp there whatever its Gaussian. Misses only lower
+     * values during this launch, so a voxel that needs no Gaussian now needs none on a retry. */
+    source.gaussian.count =
+        rm_occupancy_observed(value) && (np.traversability != 0u || value > p.occupancy.clamp_min)
+            ? ndt[i].count
+            : 0u;
     source.loaded = 0;
-    if (!rm_ndt_miss_atomic(occupancy + i, rm_load_u32(occupancy + i), ndt + i, &source, origin,
-                            sample, has_sample, p.occupancy, np, &is_miss)) {
+    if (!rm_ndt_miss_atomic(occupancy + i, old, ndt + i, &source, origin, sample, has_sample,
+                            p.occupancy, np, &is_miss)) {
       dropped += 1u;
     } else if (np.traversability != 0u && is_miss) {
       /* The miss count of voxel i is hit_miss[2 i + 1] (rm_ndt_hit_miss). It saturates like

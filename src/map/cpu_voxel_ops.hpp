@@ -92,6 +92,7 @@ struct RegionLayers {
 /// meets the voxel's Gaussian; NDT-TM also counts the pass.
 struct NdtMiss {
   float* occupancy;
+  const rm_voxel_mean* mean;  ///< null without the mean layer (its count spares the Gaussian)
   const rm_ndt_voxel* ndt;
   rm_ndt_hit_miss* hit_miss;  ///< null for NDT-OM
   const rm_line_walk_ray* ray;
@@ -99,7 +100,26 @@ struct NdtMiss {
   int has_sample;  ///< the ray ends in a return (RM_RAY_END_HIT)
   rm_occupancy_params occupancy_params;
   rm_ndt_params params;
-  void operator()(std::uint32_t i, rm_vec3i voxel) const noexcept {
+  /// The common case inline (free space: a plain miss from the occupancy and the mean count),
+  /// the Gaussian out of line.
+  [[gnu::always_inline]] void operator()(std::uint32_t i, rm_vec3i voxel) const noexcept {
+    const float value = occupancy[i];
+    // Checked in the order of the data they need: the clamp needs only the occupancy word.
+    const bool plain = !rm_occupancy_observed(value) ||
+                       (params.traversability == 0u && value <= occupancy_params.clamp_min) ||
+                       (mean != nullptr && mean[i].count < params.sample_threshold);
+    if (plain) {
+      occupancy[i] = rm_occupancy_miss(value, occupancy_params);
+      if (hit_miss != nullptr) {
+        rm_ndt_count_miss(&hit_miss[i], 1);
+      }
+      return;
+    }
+    shaped(i, voxel);
+  }
+
+ private:
+  [[gnu::noinline]] void shaped(std::uint32_t i, rm_vec3i voxel) const noexcept {
     rm_vec3f origin;
     rm_vec3f sample;
     rm_ndt_ray_in_voxel(ray, sample_is_start, voxel, &origin, &sample);
@@ -193,10 +213,10 @@ inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_
                               bool sample_is_start, std::uint32_t ray_flags, const RaySpan& span,
                               const RegionLayers& layers) noexcept {
   if (ctx.ndt) {
-    return walkSpan(
-        ray, sample_is_start, span, ctx.region_voxels,
-        NdtMiss{layers.occupancy, layers.ndt, layers.hit_miss, &ray, sample_is_start ? 1 : 0,
-                (ray_flags & RM_RAY_END_HIT) != 0u ? 1 : 0, ctx.params, ctx.ndt_params});
+    return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
+                    NdtMiss{layers.occupancy, layers.mean, layers.ndt, layers.hit_miss, &ray,
+                            sample_is_start ? 1 : 0, (ray_flags & RM_RAY_END_HIT) != 0u ? 1 : 0,
+                            ctx.params, ctx.ndt_params});
   }
   if (ctx.per_scan) {
     return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
