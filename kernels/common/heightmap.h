@@ -35,11 +35,16 @@
  * toward the seed), else of the parent's two side neighbours in ring k - 1 that have one, else
  * the parent's own reference. So stairs and ramps are followed outward from the robot, and all
  * cells of a ring are independent: one launch per ring on a device, the same order on the CPU,
- * the same result. */
+ * the same result.
+ *
+ * Normals (RM_HM_FLAG_NORMALS, maps with an NDT layer): a surface cell's normal is the normal of
+ * the Gaussian of the voxel its elevation comes from (ndt_normal.h: unit, world frame, pointing
+ * up, NaN unless the Gaussian is valid). Virtual, vacant and unknown cells have NaN normals. */
 #ifndef RAYMAP_KERNELS_COMMON_HEIGHTMAP_H
 #define RAYMAP_KERNELS_COMMON_HEIGHTMAP_H
 
 #include "key_math.h"
+#include "ndt_normal.h"
 #include "occupancy.h"
 #include "portable.h"
 #include "voxel_mean.h"
@@ -51,13 +56,16 @@
 #define RM_HM_VACANT 3u
 
 /* Parameter flags. */
-#define RM_HM_FLAG_VIRTUAL 1 /* look for virtual surfaces */
-#define RM_HM_FLAG_MEAN 2    /* surface heights from the voxel mean (needs RM_HM_FLAG_SAMPLES) */
-#define RM_HM_FLAG_FILL 4    /* flood-fill mode (else planar) */
-#define RM_HM_FLAG_SAMPLES 8 /* the mean layer is present: read sample counts from it */
+#define RM_HM_FLAG_VIRTUAL 1  /* look for virtual surfaces */
+#define RM_HM_FLAG_MEAN 2     /* surface heights from the voxel mean (needs RM_HM_FLAG_SAMPLES) */
+#define RM_HM_FLAG_FILL 4     /* flood-fill mode (else planar) */
+#define RM_HM_FLAG_SAMPLES 8  /* the mean layer is present: read sample counts from it */
+#define RM_HM_FLAG_NORMALS 16 /* the NDT layer is present: write the normal layers */
 
 /* Region table entry of a region the map does not hold (all its voxels are unobserved). */
 #define RM_HM_NO_REGION 0xFFFFFFFFu
+/* Voxel index of a candidate without a voxel of its own (virtual surfaces, no candidate). */
+#define RM_HM_NO_VOXEL 0xFFFFFFFFu
 
 /* Everything a column search needs; a plain struct passed by value to kernels. */
 typedef struct rm_heightmap_params {
@@ -76,16 +84,17 @@ typedef struct rm_heightmap_params {
   rm_i32 box_z_max; /* highest global voxel z of the box */
   rm_i32 seed_i;    /* flood-fill seed cell */
   rm_i32 seed_j;
-  rm_i32 flags;             /* RM_HM_FLAG_* */
-  rm_i32 region_shift;      /* log2(region_voxels) when it is a power of two, else -1 */
-  float resolution;         /* voxel edge, metres */
-  float inverse_resolution; /* 1 / resolution: search limits are multiplied by it (a float
-                             * product is correctly rounded on every device; a quotient is not) */
-  float reference_z;        /* planar reference / fill seed reference, metres */
-  float floor_depth;        /* metres searched below the reference */
-  float ceiling_height;     /* metres searched above the reference */
-  float min_clearance;      /* metres */
-  float occupied_threshold; /* log-odds: occupied when value >= threshold */
+  rm_i32 flags;              /* RM_HM_FLAG_* */
+  rm_i32 region_shift;       /* log2(region_voxels) when it is a power of two, else -1 */
+  float resolution;          /* voxel edge, metres */
+  float inverse_resolution;  /* 1 / resolution: search limits are multiplied by it (a float
+                              * product is correctly rounded on every device; a quotient is not) */
+  float reference_z;         /* planar reference / fill seed reference, metres */
+  float floor_depth;         /* metres searched below the reference */
+  float ceiling_height;      /* metres searched above the reference */
+  float min_clearance;       /* metres */
+  float occupied_threshold;  /* log-odds: occupied when value >= threshold */
+  rm_u32 normal_min_samples; /* samples an NDT Gaussian needs for a normal (RM_HM_FLAG_NORMALS) */
 } rm_heightmap_params;
 
 /* The result of one column search. */
@@ -94,6 +103,8 @@ typedef struct rm_heightmap_cell {
   float clearance; /* metres; +inf when open above; NaN unless surface or virtual */
   rm_u32 kind;     /* RM_HM_* */
   rm_u32 samples;  /* samples in the surface voxel (voxel mean count); 0 otherwise */
+  rm_u32 voxel;    /* the surface voxel in the uploaded layers (slot * region voxels + local
+                    * index), or RM_HM_NO_VOXEL */
 } rm_heightmap_cell;
 
 /* Region coordinate of a voxel coordinate: a shift when the region size is a power of two (the
@@ -152,12 +163,14 @@ RAYMAP_FN rm_i32 rm_hm_lowest_bit(rm_u32 x) {
  * region index r (or RM_HM_NO_REGION); `masks` holds r's column masks at
  * (r * region_voxels^2 + column) * words + w; `region_slots[r]` is r's slot in `mean` (the
  * voxel-mean layer, indexed slot * voxels-per-region + local index; read only with
- * RM_HM_FLAG_MEAN). */
+ * RM_HM_FLAG_MEAN); `ndt` is the NDT layer, indexed likewise (read only with RM_HM_FLAG_NORMALS).
+ */
 typedef struct rm_hm_sources {
   RAYMAP_GLOBAL const rm_u32* table;
   RAYMAP_GLOBAL const rm_u32* region_slots;
   RAYMAP_GLOBAL const rm_hm_mask* masks;
   RAYMAP_GLOBAL const rm_voxel_mean* mean;
+  RAYMAP_GLOBAL const rm_ndt_voxel* ndt;
 } rm_hm_sources;
 
 /* A candidate waiting for the next occupied voxel above it, which fixes its clearance. */
@@ -165,6 +178,7 @@ typedef struct rm_hm_candidate {
   float height;
   rm_u32 kind; /* RM_HM_SURFACE, RM_HM_VIRTUAL, or RM_HM_UNKNOWN for none */
   rm_u32 samples;
+  rm_u32 voxel; /* as rm_heightmap_cell.voxel */
 } rm_hm_candidate;
 
 RAYMAP_FN rm_hm_candidate rm_hm_no_candidate(void) {
@@ -172,6 +186,7 @@ RAYMAP_FN rm_hm_candidate rm_hm_no_candidate(void) {
   c.height = 0.0f;
   c.kind = RM_HM_UNKNOWN;
   c.samples = 0u;
+  c.voxel = RM_HM_NO_VOXEL;
   return c;
 }
 
@@ -193,6 +208,7 @@ RAYMAP_FN void rm_hm_offer(rm_heightmap_cell* best, float* best_distance, rm_hm_
     best->clearance = clearance;
     best->kind = c.kind;
     best->samples = c.samples;
+    best->voxel = c.voxel;
   }
 }
 
@@ -212,6 +228,7 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
   best.clearance = RM_F32(NAN);
   best.kind = RM_HM_UNKNOWN;
   best.samples = 0u;
+  best.voxel = RM_HM_NO_VOXEL;
   float best_distance = RM_INF;
 
   const float res = p.resolution;
@@ -351,9 +368,10 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
           }
           real.kind = underside ? RM_HM_UNKNOWN : RM_HM_SURFACE;
           real.height = (RM_F32(ze) + 0.5f) * res;
+          real.voxel =
+              src.region_slots[region] * voxels_per_region + column + RM_U32(ze - rz * n) * plane;
           if (samples_on) {
-            const rm_voxel_mean mv = src.mean[src.region_slots[region] * voxels_per_region +
-                                              column + RM_U32(ze - rz * n) * plane];
+            const rm_voxel_mean mv = src.mean[real.voxel];
             if (mean_on && mv.count > 0u) {
               real.height = (RM_F32(ze) + rm_mean_decode(mv.packed, mv.count).z) * res;
             }
@@ -367,6 +385,7 @@ RAYMAP_FN rm_heightmap_cell rm_heightmap_column(rm_heightmap_params p, rm_hm_sou
           hidden.kind = RM_HM_VIRTUAL;
           hidden.height = height;
           hidden.samples = 0u;
+          hidden.voxel = RM_HM_NO_VOXEL;
         }
         gap_has_virtual = 1;
       }
@@ -493,21 +512,41 @@ RAYMAP_FN float rm_hm_fill_reference(rm_heightmap_params p, RAYMAP_GLOBAL const 
 }
 
 /* The output layers of a generation (column-major, cells_x * cells_y each). `reference` holds
- * the reference each cell was searched around (flood fill reads its parents' values). */
+ * the reference each cell was searched around (flood fill reads its parents' values). The normal
+ * layers are written only with RM_HM_FLAG_NORMALS. */
 typedef struct rm_hm_layers {
   RAYMAP_GLOBAL float* elevation;
   RAYMAP_GLOBAL float* clearance;
   RAYMAP_GLOBAL rm_u32* kind;
   RAYMAP_GLOBAL rm_u32* samples;
   RAYMAP_GLOBAL float* reference;
+  RAYMAP_GLOBAL float* normal_x;
+  RAYMAP_GLOBAL float* normal_y;
+  RAYMAP_GLOBAL float* normal_z;
 } rm_hm_layers;
 
-RAYMAP_FN void rm_hm_store(rm_hm_layers out, rm_i32 index, rm_heightmap_cell c, float reference) {
+RAYMAP_FN void rm_hm_store(rm_heightmap_params p, rm_hm_sources src, rm_hm_layers out, rm_i32 index,
+                           rm_heightmap_cell c, float reference) {
   out.elevation[index] = c.elevation;
   out.clearance[index] = c.clearance;
   out.kind[index] = c.kind;
   out.samples[index] = c.samples;
   out.reference[index] = reference;
+  if ((p.flags & RM_HM_FLAG_NORMALS) != 0) {
+    /* Once per cell, for the winning candidate only: the eigen-solve costs more than the search's
+     * bit operations. */
+    rm_vec3f n;
+    n.x = RM_F32(NAN);
+    n.y = n.x;
+    n.z = n.x;
+    if (c.kind == RM_HM_SURFACE && c.voxel != RM_HM_NO_VOXEL) {
+      const rm_ndt_voxel g = src.ndt[c.voxel];
+      n = rm_ndt_normal(g.s, g.count, p.normal_min_samples);
+    }
+    out.normal_x[index] = n.x;
+    out.normal_y[index] = n.y;
+    out.normal_z[index] = n.z;
+  }
 }
 
 /* Planar mode, work-item g of cells_x * cells_y (x fastest, so neighbouring items read
@@ -521,7 +560,7 @@ RAYMAP_FN void rm_hm_planar_item(rm_heightmap_params p, rm_hm_sources src, rm_hm
   const rm_i32 j = RM_I32(g / RM_U32(p.cells_x));
   const rm_heightmap_cell c =
       rm_heightmap_column(p, src, rm_hm_voxel_x(p, i), rm_hm_voxel_y(p, j), p.reference_z);
-  rm_hm_store(out, RM_I32(g), c, p.reference_z);
+  rm_hm_store(p, src, out, RM_I32(g), c, p.reference_z);
 }
 
 /* Flood fill, work-item g of ring k (rm_hm_ring_size(k) items); ring k - 1 must be complete. */
@@ -545,7 +584,7 @@ RAYMAP_FN void rm_hm_fill_item(rm_heightmap_params p, rm_hm_sources src, rm_hm_l
              : rm_hm_fill_reference(p, out.elevation, out.kind, out.reference, i, j, di, dj, k);
   const rm_heightmap_cell c =
       rm_heightmap_column(p, src, rm_hm_voxel_x(p, i), rm_hm_voxel_y(p, j), reference);
-  rm_hm_store(out, i + j * p.cells_x, c, reference);
+  rm_hm_store(p, src, out, i + j * p.cells_x, c, reference);
 }
 
 #endif /* RAYMAP_KERNELS_COMMON_HEIGHTMAP_H */

@@ -29,8 +29,8 @@ cudaError_t launchHeightmapPlanar(cudaStream_t stream, unsigned block_threads,
   }
   const unsigned blocks = (items + block_threads - 1) / block_threads;
   rm_heightmap_planar<<<blocks, block_threads, 0, stream>>>(
-      params, b.table, b.region_slots, b.masks, b.mean, b.elevation, b.clearance, b.kind, b.samples,
-      b.reference);
+      params, b.table, b.region_slots, b.masks, b.mean, b.ndt, b.elevation, b.clearance, b.kind,
+      b.samples, b.reference, b.normal_x, b.normal_y, b.normal_z);
   return cudaGetLastError();
 }
 
@@ -40,8 +40,8 @@ cudaError_t launchHeightmapFillRing(cudaStream_t stream, unsigned block_threads,
   const unsigned items = rm_hm_ring_size(ring);
   const unsigned blocks = (items + block_threads - 1) / block_threads;
   rm_heightmap_fill_ring<<<blocks, block_threads, 0, stream>>>(
-      params, b.table, b.region_slots, b.masks, b.mean, b.elevation, b.clearance, b.kind, b.samples,
-      b.reference, ring);
+      params, b.table, b.region_slots, b.masks, b.mean, b.ndt, b.elevation, b.clearance, b.kind,
+      b.samples, b.reference, b.normal_x, b.normal_y, b.normal_z, ring);
   return cudaGetLastError();
 }
 

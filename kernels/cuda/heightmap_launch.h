@@ -18,11 +18,15 @@ struct HeightmapKernelBuffers {
   const float* occupancy = nullptr;             ///< occupancy layer of the uploaded regions
   rm_hm_mask* masks = nullptr;                  ///< column masks (built by launchHeightmapMasks)
   const rm_voxel_mean* mean = nullptr;          ///< mean layer (read only with RM_HM_FLAG_MEAN)
+  const rm_ndt_voxel* ndt = nullptr;            ///< NDT layer (read only with RM_HM_FLAG_NORMALS)
   float* elevation = nullptr;
   float* clearance = nullptr;
   std::uint32_t* kind = nullptr;
   std::uint32_t* samples = nullptr;
   float* reference = nullptr;
+  float* normal_x = nullptr;  ///< written only with RM_HM_FLAG_NORMALS
+  float* normal_y = nullptr;
+  float* normal_z = nullptr;
 };
 
 /// @brief Enqueues building the column masks of `region_count` uploaded regions.

@@ -14,25 +14,31 @@
 
 RM_DEVICE_FN rm_hm_layers rm_hm_make_layers(RM_GLOBAL float* elevation, RM_GLOBAL float* clearance,
                                             RM_GLOBAL rm_u32* kind, RM_GLOBAL rm_u32* samples,
-                                            RM_GLOBAL float* reference) {
+                                            RM_GLOBAL float* reference, RM_GLOBAL float* normal_x,
+                                            RM_GLOBAL float* normal_y, RM_GLOBAL float* normal_z) {
   rm_hm_layers out;
   out.elevation = elevation;
   out.clearance = clearance;
   out.kind = kind;
   out.samples = samples;
   out.reference = reference;
+  out.normal_x = normal_x;
+  out.normal_y = normal_y;
+  out.normal_z = normal_z;
   return out;
 }
 
 RM_DEVICE_FN rm_hm_sources rm_hm_make_sources(const RM_GLOBAL rm_u32* table,
                                               const RM_GLOBAL rm_u32* region_slots,
                                               const RM_GLOBAL rm_hm_mask* masks,
-                                              const RM_GLOBAL rm_voxel_mean* mean) {
+                                              const RM_GLOBAL rm_voxel_mean* mean,
+                                              const RM_GLOBAL rm_ndt_voxel* ndt) {
   rm_hm_sources src;
   src.table = table;
   src.region_slots = region_slots;
   src.masks = masks;
   src.mean = mean;
+  src.ndt = ndt;
   return src;
 }
 
@@ -43,27 +49,28 @@ RM_KERNEL void rm_heightmap_masks(rm_heightmap_params params, const RM_GLOBAL rm
   rm_hm_mask_item(params, region_slots, occupancy, masks, region_count, rm_global_id());
 }
 
-RM_KERNEL void rm_heightmap_planar(rm_heightmap_params params, const RM_GLOBAL rm_u32* table,
-                                   const RM_GLOBAL rm_u32* region_slots,
-                                   const RM_GLOBAL rm_hm_mask* masks,
-                                   const RM_GLOBAL rm_voxel_mean* mean, RM_GLOBAL float* elevation,
-                                   RM_GLOBAL float* clearance, RM_GLOBAL rm_u32* kind,
-                                   RM_GLOBAL rm_u32* samples, RM_GLOBAL float* reference) {
-  rm_hm_planar_item(params, rm_hm_make_sources(table, region_slots, masks, mean),
-                    rm_hm_make_layers(elevation, clearance, kind, samples, reference),
+RM_KERNEL void rm_heightmap_planar(
+    rm_heightmap_params params, const RM_GLOBAL rm_u32* table, const RM_GLOBAL rm_u32* region_slots,
+    const RM_GLOBAL rm_hm_mask* masks, const RM_GLOBAL rm_voxel_mean* mean,
+    const RM_GLOBAL rm_ndt_voxel* ndt, RM_GLOBAL float* elevation, RM_GLOBAL float* clearance,
+    RM_GLOBAL rm_u32* kind, RM_GLOBAL rm_u32* samples, RM_GLOBAL float* reference,
+    RM_GLOBAL float* normal_x, RM_GLOBAL float* normal_y, RM_GLOBAL float* normal_z) {
+  rm_hm_planar_item(params, rm_hm_make_sources(table, region_slots, masks, mean, ndt),
+                    rm_hm_make_layers(elevation, clearance, kind, samples, reference, normal_x,
+                                      normal_y, normal_z),
                     rm_global_id());
 }
 
-RM_KERNEL void rm_heightmap_fill_ring(rm_heightmap_params params, const RM_GLOBAL rm_u32* table,
-                                      const RM_GLOBAL rm_u32* region_slots,
-                                      const RM_GLOBAL rm_hm_mask* masks,
-                                      const RM_GLOBAL rm_voxel_mean* mean,
-                                      RM_GLOBAL float* elevation, RM_GLOBAL float* clearance,
-                                      RM_GLOBAL rm_u32* kind, RM_GLOBAL rm_u32* samples,
-                                      RM_GLOBAL float* reference, rm_i32 ring) {
-  rm_hm_fill_item(params, rm_hm_make_sources(table, region_slots, masks, mean),
-                  rm_hm_make_layers(elevation, clearance, kind, samples, reference), ring,
-                  rm_global_id());
+RM_KERNEL void rm_heightmap_fill_ring(
+    rm_heightmap_params params, const RM_GLOBAL rm_u32* table, const RM_GLOBAL rm_u32* region_slots,
+    const RM_GLOBAL rm_hm_mask* masks, const RM_GLOBAL rm_voxel_mean* mean,
+    const RM_GLOBAL rm_ndt_voxel* ndt, RM_GLOBAL float* elevation, RM_GLOBAL float* clearance,
+    RM_GLOBAL rm_u32* kind, RM_GLOBAL rm_u32* samples, RM_GLOBAL float* reference,
+    RM_GLOBAL float* normal_x, RM_GLOBAL float* normal_y, RM_GLOBAL float* normal_z, rm_i32 ring) {
+  rm_hm_fill_item(params, rm_hm_make_sources(table, region_slots, masks, mean, ndt),
+                  rm_hm_make_layers(elevation, clearance, kind, samples, reference, normal_x,
+                                    normal_y, normal_z),
+                  ring, rm_global_id());
 }
 
 #endif /* RAYMAP_KERNELS_DEVICE_HEIGHTMAP_KERNELS_H */

@@ -69,11 +69,15 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     k.occupancy = buffers_[kOccupancyBuffer].as<const float>();
     k.masks = buffers_[kMasksBuffer].as<rm_hm_mask>();
     k.mean = buffers_[kMeanBuffer].as<const rm_voxel_mean>();
+    k.ndt = buffers_[kNdtBuffer].as<const rm_ndt_voxel>();
     k.elevation = buffers_[kElevationBuffer].as<float>();
     k.clearance = buffers_[kClearanceBuffer].as<float>();
     k.kind = buffers_[kKindBuffer].as<std::uint32_t>();
     k.samples = buffers_[kObservedCountBuffer].as<std::uint32_t>();
     k.reference = buffers_[kReferenceBuffer].as<float>();
+    k.normal_x = buffers_[kNormalXBuffer].as<float>();
+    k.normal_y = buffers_[kNormalYBuffer].as<float>();
+    k.normal_z = buffers_[kNormalZBuffer].as<float>();
     const rm_heightmap_params& p = plan.params;
     status = cuda::launchHeightmapMasks(s, block_threads_, k, p,
                                         static_cast<std::uint32_t>(plan.region_slots.size()));

@@ -15,7 +15,8 @@
 namespace raymap::dds {
 namespace {
 
-constexpr std::size_t kLayers = 4;
+constexpr std::size_t kBaseLayers = 4;
+constexpr std::size_t kLayers = kBaseLayers + 3;  // at most: with the normal layers
 
 /// idlc declares strings as char*; the message only reads them.
 char* mutableText(const char* text) noexcept {
@@ -29,6 +30,7 @@ char* mutableText(const char* text) noexcept {
 struct GridMapMessage::Impl {
   int cells_x = 0;
   int cells_y = 0;
+  std::size_t layer_count = kBaseLayers;
   grid_map_msgs_msg_dds__GridMap_ msg{};
   char frame_id[64] = {};
   char* layer_names[kLayers] = {};
@@ -38,19 +40,22 @@ struct GridMapMessage::Impl {
   std::vector<float> data[kLayers];
 };
 
-GridMapMessage::GridMapMessage(int cells_x, int cells_y) : impl_(std::make_unique<Impl>()) {
+GridMapMessage::GridMapMessage(int cells_x, int cells_y, bool with_normals)
+    : impl_(std::make_unique<Impl>()) {
   RAYMAP_EXPECTS(cells_x > 0 && cells_y > 0);
   Impl& m = *impl_;
   m.cells_x = cells_x;
   m.cells_y = cells_y;
+  m.layer_count = with_normals ? kLayers : kBaseLayers;
   const auto size_x = static_cast<std::uint32_t>(cells_x);
   const auto size_y = static_cast<std::uint32_t>(cells_y);
   const std::size_t cells = std::size_t{size_x} * size_y;
 
   m.msg.header.frame_id = m.frame_id;
   m.msg.info.pose.orientation.w = 1.0;
-  for (std::size_t i = 0; i < kLayers; ++i) {
-    m.layer_names[i] = mutableText(kLayerNames[i]);
+  for (std::size_t i = 0; i < m.layer_count; ++i) {
+    m.layer_names[i] =
+        mutableText(i < kBaseLayers ? kLayerNames[i] : kNormalLayerNames[i - kBaseLayers]);
     m.data[i].assign(cells, 0.0F);
     auto& dims = m.dims[i];
     dims[0].label = mutableText("column_index");
@@ -72,16 +77,16 @@ GridMapMessage::GridMapMessage(int cells_x, int cells_y) : impl_(std::make_uniqu
   }
   m.basic_layers[0] = m.layer_names[0];
   m.msg.layers._buffer = m.layer_names;
-  m.msg.layers._length = kLayers;
-  m.msg.layers._maximum = kLayers;
+  m.msg.layers._length = static_cast<std::uint32_t>(m.layer_count);
+  m.msg.layers._maximum = static_cast<std::uint32_t>(m.layer_count);
   m.msg.layers._release = false;
   m.msg.basic_layers._buffer = m.basic_layers;
   m.msg.basic_layers._length = 1;
   m.msg.basic_layers._maximum = 1;
   m.msg.basic_layers._release = false;
   m.msg.data._buffer = m.arrays;
-  m.msg.data._length = kLayers;
-  m.msg.data._maximum = kLayers;
+  m.msg.data._length = static_cast<std::uint32_t>(m.layer_count);
+  m.msg.data._maximum = static_cast<std::uint32_t>(m.layer_count);
   m.msg.data._release = false;
   m.msg.outer_start_index = 0;
   m.msg.inner_start_index = 0;
@@ -127,6 +132,13 @@ void GridMapMessage::fill(const heightmap::HeightMap& map, std::int64_t stamp_ns
     kind[i] = static_cast<float>(map.kind[i]);
     observed[i] = static_cast<float>(map.observed_count[i]);
   }
+  if (m.layer_count > kBaseLayers) {
+    RAYMAP_EXPECTS(map.has_normals && map.normal_x.size() == cells &&
+                   map.normal_y.size() == cells && map.normal_z.size() == cells);
+    std::memcpy(m.data[4].data(), map.normal_x.data(), cells * sizeof(float));
+    std::memcpy(m.data[5].data(), map.normal_y.data(), cells * sizeof(float));
+    std::memcpy(m.data[6].data(), map.normal_z.data(), cells * sizeof(float));
+  }
 }
 
 const void* GridMapMessage::sample() const noexcept { return &impl_->msg; }
@@ -135,5 +147,6 @@ const dds_topic_descriptor_t* GridMapMessage::descriptor() noexcept { return gri
 
 int GridMapMessage::cellsX() const noexcept { return impl_->cells_x; }
 int GridMapMessage::cellsY() const noexcept { return impl_->cells_y; }
+bool GridMapMessage::withNormals() const noexcept { return impl_->layer_count > kBaseLayers; }
 
 }  // namespace raymap::dds

@@ -18,6 +18,7 @@ void prepareOutput(const HeightmapPlan& plan, HeightMap& out) {
   out.centre_y = g.centre_y;
   out.reference_z = g.reference_z;
   out.mode = g.mode;
+  out.has_normals = g.has_normals;
   out.resizeLayers();
 }
 
@@ -38,10 +39,15 @@ class CpuHeightmapGenerator final : public HeightmapGenerator {
     if (map.meanLayer() >= 0 && store.capacity() > 0) {
       mean = store.layerData<const rm_voxel_mean>(0, map.meanLayer());
     }
+    const rm_ndt_voxel* ndt = nullptr;
+    if (map.ndtLayer() >= 0 && store.capacity() > 0) {
+      ndt = store.layerData<const rm_ndt_voxel>(0, map.ndtLayer());
+    }
     const rm_hm_sources sources{plan.region_table.data(), plan.region_slots.data(), masks_.data(),
-                                mean};
-    const rm_hm_layers layers{out.elevation.data(), out.clearance.data(), out.kind.data(),
-                              out.observed_count.data(), out.reference.data()};
+                                mean, ndt};
+    const rm_hm_layers layers{out.elevation.data(),      out.clearance.data(), out.kind.data(),
+                              out.observed_count.data(), out.reference.data(), out.normal_x.data(),
+                              out.normal_y.data(),       out.normal_z.data()};
     if ((p.flags & RM_HM_FLAG_FILL) != 0) {
       const rm_i32 rings = rm_hm_ring_count(p);
       for (rm_i32 k = 0; k < rings; ++k) {

@@ -17,6 +17,8 @@ const char* toString(DeviceBuffer buffer) noexcept {
       return "occupancy layer";
     case kMeanBuffer:
       return "voxel-mean layer";
+    case kNdtBuffer:
+      return "NDT layer";
     case kElevationBuffer:
       return "elevation";
     case kClearanceBuffer:
@@ -27,6 +29,12 @@ const char* toString(DeviceBuffer buffer) noexcept {
       return "observed count";
     case kReferenceBuffer:
       return "reference";
+    case kNormalXBuffer:
+      return "normal_x";
+    case kNormalYBuffer:
+      return "normal_y";
+    case kNormalZBuffer:
+      return "normal_z";
     case kDeviceBufferCount:
       break;
   }
@@ -39,6 +47,8 @@ void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan) {
   with_mean = (p.flags & RM_HM_FLAG_SAMPLES) != 0 && map.meanLayer() >= 0;
   occupancy_region_bytes = store.layerRegionBytes(map.occupancyLayer());
   mean_region_bytes = with_mean ? store.layerRegionBytes(map.meanLayer()) : 0;
+  with_ndt = (p.flags & RM_HM_FLAG_NORMALS) != 0 && map.ndtLayer() >= 0;
+  ndt_region_bytes = with_ndt ? store.layerRegionBytes(map.ndtLayer()) : 0;
   region_slots.resize(std::max<std::size_t>(plan.region_slots.size(), 1));
   for (std::size_t r = 0; r < region_slots.size(); ++r) {
     region_slots[r] = static_cast<std::uint32_t>(r);
@@ -54,9 +64,13 @@ void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan) {
                         sizeof(rm_hm_mask);
   bytes[kOccupancyBuffer] = regions * occupancy_region_bytes;
   bytes[kMeanBuffer] = regions * mean_region_bytes;
+  bytes[kNdtBuffer] = regions * ndt_region_bytes;
   for (const DeviceBuffer layer :
        {kElevationBuffer, kClearanceBuffer, kKindBuffer, kObservedCountBuffer, kReferenceBuffer}) {
     bytes[layer] = cells * 4;
+  }
+  for (const DeviceBuffer layer : {kNormalXBuffer, kNormalYBuffer, kNormalZBuffer}) {
+    bytes[layer] = with_ndt ? cells * 4 : 0;
   }
   for (std::size_t& b : bytes) {
     b = std::max<std::size_t>(b, 8);

@@ -19,11 +19,15 @@ enum DeviceBuffer : std::uint8_t {
   kMasksBuffer,        ///< column masks, written by the mask kernel
   kOccupancyBuffer,    ///< occupancy layer of the regions under the box, packed in plan order
   kMeanBuffer,         ///< voxel-mean layer, likewise (a placeholder without means)
+  kNdtBuffer,          ///< NDT layer, likewise (a placeholder without normals)
   kElevationBuffer,    ///< the output layers of HeightMap, in this order
   kClearanceBuffer,
   kKindBuffer,
   kObservedCountBuffer,
   kReferenceBuffer,
+  kNormalXBuffer,  ///< the normal layers (placeholders without normals)
+  kNormalYBuffer,
+  kNormalZBuffer,
   kDeviceBufferCount
 };
 
@@ -36,12 +40,15 @@ struct DeviceUpload {
   std::vector<std::uint32_t> region_slots;  ///< 0, 1, ... (what kRegionSlotsBuffer holds)
   std::size_t occupancy_region_bytes = 0;   ///< one region of the occupancy layer
   std::size_t mean_region_bytes = 0;        ///< one region of the mean layer; 0: not uploaded
+  std::size_t ndt_region_bytes = 0;         ///< one region of the NDT layer; 0: not uploaded
   bool with_mean = false;
+  bool with_ndt = false;  ///< the plan writes normals: the NDT layer is uploaded
 
   /// @brief Fills the sizes for `plan` on `map`. @rt allocates only when the plan grows.
   void prepare(const VoxelMap& map, const HeightmapPlan& plan);
 
-  /// @brief Calls read(buffer, host_target) for each output layer of `out` (cells * 4 bytes).
+  /// @brief Calls read(buffer, host_target) for each output layer of `out` (cells * 4 bytes); the
+  /// normal layers only when `out` has them.
   template <class Read>
   static void forEachOutput(HeightMap& out, Read&& read) {
     read(kElevationBuffer, static_cast<void*>(out.elevation.data()));
@@ -49,10 +56,15 @@ struct DeviceUpload {
     read(kKindBuffer, static_cast<void*>(out.kind.data()));
     read(kObservedCountBuffer, static_cast<void*>(out.observed_count.data()));
     read(kReferenceBuffer, static_cast<void*>(out.reference.data()));
+    if (out.has_normals) {
+      read(kNormalXBuffer, static_cast<void*>(out.normal_x.data()));
+      read(kNormalYBuffer, static_cast<void*>(out.normal_y.data()));
+      read(kNormalZBuffer, static_cast<void*>(out.normal_z.data()));
+    }
   }
 
   /// @brief Calls copy(buffer, device_offset, host_source, bytes) for every host-to-device copy:
-  /// the table, the slot list, then each region's occupancy (and mean) layer.
+  /// the table, the slot list, then each region's occupancy (and mean, and NDT) layer.
   template <class Copy>
   void forEachCopy(const VoxelMap& map, const HeightmapPlan& plan, Copy&& copy) const {
     copy(kTableBuffer, 0, plan.region_table.data(), plan.region_table.size() * 4);
@@ -64,6 +76,10 @@ struct DeviceUpload {
       if (with_mean) {
         copy(kMeanBuffer, r * mean_region_bytes,
              store.layerBytes(plan.region_slots[r], map.meanLayer()), mean_region_bytes);
+      }
+      if (with_ndt) {
+        copy(kNdtBuffer, r * ndt_region_bytes,
+             store.layerBytes(plan.region_slots[r], map.ndtLayer()), ndt_region_bytes);
       }
     }
   }

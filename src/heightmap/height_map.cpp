@@ -46,6 +46,10 @@ void HeightMap::resizeLayers() {
   kind.resize(n);
   observed_count.resize(n);
   reference.resize(n);
+  const std::size_t normals = has_normals ? n : 0;
+  normal_x.resize(normals);
+  normal_y.resize(normals);
+  normal_z.resize(normals);
 }
 
 }  // namespace raymap::heightmap

@@ -37,8 +37,11 @@ std::string_view toString(HeightmapMode mode) noexcept;
 /// Layers (names as published): `elevation` (world z of the supporting surface, NaN when none),
 /// `clearance` (free height above it up to the next occupied voxel, +inf when open up to the top
 /// of the searched box, NaN when no surface), `kind` (CellKind), `observed_count` (samples in the
-/// surface voxel). `reference` is the height each column was searched around (diagnostics; in
-/// planar mode the request's reference everywhere).
+/// surface voxel), and on maps with an NDT layer `normal_x`, `normal_y`, `normal_z` (the unit
+/// normal of the surface voxel's Gaussian, world frame, pointing up: z >= 0; NaN where the cell is
+/// no surface or the Gaussian gives no valid normal, see kernels/common/ndt_normal.h). Without an
+/// NDT layer the normal vectors are empty. `reference` is the height each column was searched
+/// around (diagnostics; in planar mode the request's reference everywhere).
 ///
 /// Thread-safety: a plain value; no internal synchronisation.
 struct HeightMap {
@@ -49,11 +52,15 @@ struct HeightMap {
   double centre_y = 0.0;     ///< world y of the grid's geometric centre, metres
   double reference_z = 0.0;  ///< the requested reference height, metres
   HeightmapMode mode = HeightmapMode::kPlanar;
+  bool has_normals = false;  ///< the normal layers are present (the map has an NDT layer)
   std::vector<float> elevation;
   std::vector<float> clearance;
   std::vector<std::uint32_t> kind;
   std::vector<std::uint32_t> observed_count;
   std::vector<float> reference;
+  std::vector<float> normal_x;  ///< empty unless has_normals
+  std::vector<float> normal_y;
+  std::vector<float> normal_z;
 
   std::size_t cellCount() const noexcept {
     return static_cast<std::size_t>(cells_x) * static_cast<std::size_t>(cells_y);
@@ -70,8 +77,8 @@ struct HeightMap {
   /// @brief The cell holding world point (x, y), metres; false when outside the grid.
   bool cellOf(double x, double y, int* i, int* j) const noexcept;
   CellKind kindAt(int i, int j) const noexcept { return static_cast<CellKind>(kind[index(i, j)]); }
-  /// @brief Sizes every layer for cells_x * cells_y cells (keeps capacity: no allocation when the
-  /// size does not grow).
+  /// @brief Sizes every layer for cells_x * cells_y cells, the normal layers to 0 cells unless
+  /// has_normals (keeps capacity: no allocation when the size does not grow).
   void resizeLayers();
 };
 

@@ -135,7 +135,8 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   p.flags = (o.virtual_surfaces ? RM_HM_FLAG_VIRTUAL : 0) |
             (map.meanLayer() >= 0 ? RM_HM_FLAG_SAMPLES : 0) |
             (o.use_voxel_mean && map.meanLayer() >= 0 ? RM_HM_FLAG_MEAN : 0) |
-            (o.mode == HeightmapMode::kFill ? RM_HM_FLAG_FILL : 0);
+            (o.mode == HeightmapMode::kFill ? RM_HM_FLAG_FILL : 0) |
+            (map.ndtLayer() >= 0 ? RM_HM_FLAG_NORMALS : 0);
   p.resolution = static_cast<float>(res);
   p.inverse_resolution = static_cast<float>(1.0 / res);
   p.reference_z = static_cast<float>(o.centre.z);
@@ -143,6 +144,7 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   p.ceiling_height = static_cast<float>(ceiling_height);
   p.min_clearance = static_cast<float>(o.min_clearance);
   p.occupied_threshold = map.occupancy().threshold;
+  p.normal_min_samples = map.config().ndt.sample_threshold;
 
   const auto table_size = static_cast<std::size_t>(p.regions_x) *
                           static_cast<std::size_t>(p.regions_y) *
@@ -174,6 +176,7 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   g.centre_y = (y_min + 0.5 * cells) * res;
   g.reference_z = o.centre.z;
   g.mode = o.mode;
+  g.has_normals = map.ndtLayer() >= 0;
   return {};
 }
 

@@ -56,6 +56,12 @@ Expected<void, Error> checkLayers(const std::string& path, const HeightMap& map)
                     std::to_string(map.clearance.size()) + " / " + std::to_string(map.kind.size()) +
                     " cells (elevation / clearance / kind), expected " + std::to_string(n));
   }
+  if (map.has_normals &&
+      (map.normal_x.size() != n || map.normal_y.size() != n || map.normal_z.size() != n)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "cannot write '" + path + "': the height map's normal layers hold " +
+                    std::to_string(map.normal_x.size()) + " cells, expected " + std::to_string(n));
+  }
   return {};
 }
 
@@ -501,7 +507,10 @@ Expected<void, Error> writeHeightmapCsv(const std::string& path, const HeightMap
   if (!file.has_value()) {
     return Unexpected(std::move(file).error());
   }
-  std::string out = "x,y,elevation,clearance,kind\n";
+  // The normal columns only when the map has them, so that occupancy maps' files stay as before.
+  const bool normals = map.has_normals;
+  std::string out = normals ? "x,y,elevation,clearance,kind,normal_x,normal_y,normal_z\n"
+                            : "x,y,elevation,clearance,kind\n";
   out.reserve(kCsvFlushBytes + 256);
   for (int j = 0; j < map.cells_y; ++j) {
     for (int i = 0; i < map.cells_x; ++i) {
@@ -516,6 +525,12 @@ Expected<void, Error> writeHeightmapCsv(const std::string& path, const HeightMap
       appendNumber(out, static_cast<double>(map.clearance[k]));
       out += ',';
       out += heightmap::toString(static_cast<CellKind>(map.kind[k]));
+      if (normals) {
+        for (const std::vector<float>* layer : {&map.normal_x, &map.normal_y, &map.normal_z}) {
+          out += ',';
+          appendNumber(out, static_cast<double>((*layer)[k]));
+        }
+      }
       out += '\n';
       if (out.size() >= kCsvFlushBytes) {
         if (auto written = file->write(out); !written.has_value()) {

@@ -15,7 +15,9 @@ namespace raymap::io {
 /// @brief Writes one line per cell, in storage order (index i + j * cells_x), after the header
 /// `x,y,elevation,clearance,kind`. x, y: the cell centre (world frame, metres, `%.4f`);
 /// elevation, clearance: metres, `%.4f`, or `nan` / `inf`; kind: `surface`, `virtual`, `vacant`
-/// or `unknown`. Written through a temporary file and rename.
+/// or `unknown`. When the map has normals (map.has_normals) three more columns follow,
+/// `normal_x,normal_y,normal_z` (unit vector, world frame, `%.4f` or `nan`). Written through a
+/// temporary file and rename.
 /// @return nothing, or an Error naming the path (kInvalidArgument when the layers do not hold
 /// cells_x * cells_y cells, kIo when the file cannot be written).
 Expected<void, Error> writeHeightmapCsv(const std::string& path, const heightmap::HeightMap& map);

@@ -18,6 +18,8 @@ extern const char* const kHeightmapSource;  // embedded at build time
 namespace {
 
 constexpr std::size_t kWorkGroup = 64;
+/// rm_heightmap_fill_ring's `ring`: after the parameter block and its 13 buffers.
+constexpr cl_uint kFillRingArgument = 14;
 
 class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
  public:
@@ -85,18 +87,19 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     }
     const bool fill = (p.flags & RM_HM_FLAG_FILL) != 0;
     cl_kernel search = fill ? fill_.get() : planar_.get();
-    if (auto ok = setArguments(
-            search, p,
-            {kTableBuffer, kRegionSlotsBuffer, kMasksBuffer, kMeanBuffer, kElevationBuffer,
-             kClearanceBuffer, kKindBuffer, kObservedCountBuffer, kReferenceBuffer},
-            nullptr);
+    if (auto ok =
+            setArguments(search, p,
+                         {kTableBuffer, kRegionSlotsBuffer, kMasksBuffer, kMeanBuffer, kNdtBuffer,
+                          kElevationBuffer, kClearanceBuffer, kKindBuffer, kObservedCountBuffer,
+                          kReferenceBuffer, kNormalXBuffer, kNormalYBuffer, kNormalZBuffer},
+                         nullptr);
         !ok) {
       return ok;
     }
     if (fill) {
       const rm_i32 rings = rm_hm_ring_count(p);
       for (rm_i32 k = 0; k < rings && status == CL_SUCCESS; ++k) {
-        status = clSetKernelArg(search, 10, sizeof k, &k);
+        status = clSetKernelArg(search, kFillRingArgument, sizeof k, &k);
         if (status == CL_SUCCESS) {
           status = launch(search, rm_hm_ring_size(k));
         }

@@ -197,8 +197,8 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   impl->cycle = std::make_unique<pipeline::HeightmapCycle>(
       m, *impl->backend.backend, impl->map_mutex, *impl->generator, options,
       config.heightmap.base_height_m, impl->latest, *impl->arrivals, impl->stats);
-  impl->grid_map_message =
-      std::make_unique<dds::GridMapMessage>(plan.grid.cells_x, plan.grid.cells_y);
+  impl->grid_map_message = std::make_unique<dds::GridMapMessage>(
+      plan.grid.cells_x, plan.grid.cells_y, plan.grid.has_normals);
 
   // DDS.
   auto participant = dds::Participant::create(config.dds.domain);

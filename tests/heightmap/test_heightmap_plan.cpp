@@ -125,8 +125,8 @@ HeightmapPlan planOrFail(const VoxelMap& map, const HeightmapOptions& o) {
 }
 
 void expectSamePlan(const HeightmapPlan& a, const HeightmapPlan& b) {
-  // rm_heightmap_params is 24 four-byte fields: no padding, so bytes compare the values.
-  static_assert(sizeof(rm_heightmap_params) == 24 * 4);
+  // rm_heightmap_params is 25 four-byte fields: no padding, so bytes compare the values.
+  static_assert(sizeof(rm_heightmap_params) == 25 * 4);
   EXPECT_EQ(std::memcmp(&a.params, &b.params, sizeof a.params), 0);
   EXPECT_EQ(a.region_table, b.region_table);
   EXPECT_EQ(a.region_slots, b.region_slots);

@@ -150,7 +150,11 @@ int runHeightmap(const HeightmapFlags& f) {
   std::uint64_t counts[4] = {};
   float lowest = INFINITY;
   float highest = -INFINITY;
+  std::uint64_t normal_cells = 0;  // NDT maps only: surface cells with a valid normal
   for (std::size_t n = 0; n < result.cellCount(); ++n) {
+    if (result.has_normals && !std::isnan(result.normal_z[n])) {
+      ++normal_cells;
+    }
     counts[std::min<std::uint32_t>(result.kind[n], 3)] += 1;
     if (result.kind[n] == RM_HM_SURFACE) {
       lowest = std::min(lowest, result.elevation[n]);
@@ -183,6 +187,9 @@ int runHeightmap(const HeightmapFlags& f) {
       j.add("elevation_min_m", static_cast<double>(lowest))
           .add("elevation_max_m", static_cast<double>(highest));
     }
+    if (result.has_normals) {
+      j.add("normal_cells", normal_cells);
+    }
     std::printf("%s\n", j.str().c_str());
   } else if (!f.quiet) {
     std::printf(
@@ -195,6 +202,9 @@ int runHeightmap(const HeightmapFlags& f) {
         withCommas(counts[RM_HM_VACANT]).c_str(), withCommas(counts[RM_HM_UNKNOWN]).c_str());
     if (counts[RM_HM_SURFACE] > 0) {
       std::printf("; elevation %s .. %s m", number(lowest).c_str(), number(highest).c_str());
+    }
+    if (result.has_normals) {
+      std::printf("; %s with normals", withCommas(normal_cells).c_str());
     }
     std::printf("\ngenerated in %.2f ms on %s%s\n", 1e3 * median, generator.deviceName().c_str(),
                 f.repeat > 1 ? " (median)" : "");

@@ -149,6 +149,41 @@ TEST(DecodeGridMap, WhatGridMapMessageSendsDecodesToTheHeightMap) {
   EXPECT_EQ(decoded->inner_start_index, 0);
 }
 
+TEST(DecodeGridMap, AMessageWithNormalsCarriesTheNormalLayers) {
+  heightmap::HeightMap map = makeMap();
+  map.has_normals = true;
+  map.resizeLayers();
+  for (std::size_t i = 0; i < map.cellCount(); ++i) {
+    map.normal_x[i] = 0.01F * static_cast<float>(i);
+    map.normal_y[i] = -0.02F * static_cast<float>(i);
+    map.normal_z[i] = 1.0F - 0.01F * static_cast<float>(i);
+  }
+  map.normal_x[4] = std::numeric_limits<float>::quiet_NaN();
+  GridMapMessage message(map.cells_x, map.cells_y, true);
+  EXPECT_TRUE(message.withNormals());
+  message.fill(map, 1, "odom");
+  auto bytes =
+      test::cyclonesBytes("rt/decode_test_grid_map_normals", gridMapType(), {message.sample()});
+  ASSERT_FALSE(bytes.empty());
+
+  const auto decoded = decodeGridMap(bytes.front());
+
+  ASSERT_TRUE(decoded.has_value()) << toString(decoded.error());
+  ASSERT_EQ(decoded->layers.size(), 7U);
+  ASSERT_EQ(decoded->data.size(), 7U);
+  const std::vector<float>* normals[3] = {&map.normal_x, &map.normal_y, &map.normal_z};
+  for (std::size_t n = 0; n < 3; ++n) {
+    EXPECT_EQ(decoded->layers[4 + n], GridMapMessage::kNormalLayerNames[n]);
+    ASSERT_EQ(decoded->data[4 + n].data.size(), map.cellCount());
+    for (std::size_t i = 0; i < map.cellCount(); ++i) {
+      EXPECT_TRUE(sameBits(decoded->data[4 + n].data[i], (*normals[n])[i])) << n << " " << i;
+    }
+  }
+  EXPECT_EQ(decoded->layers[4], "normal_x");  // elevation_mapping's names
+  EXPECT_EQ(decoded->layers[5], "normal_y");
+  EXPECT_EQ(decoded->layers[6], "normal_z");
+}
+
 TEST(DecodeGridMap, ReadsBothByteOrders) {
   for (const bool little_endian : {true, false}) {
     HandMap hand;
