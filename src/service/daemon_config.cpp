@@ -55,10 +55,33 @@ std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::s
   return f.has(key) ? f.choice(key, choices) : fallback;
 }
 
+/// map.ndt: the NDT-OM / NDT-TM parameters (docs/raymapd.md), checked by NdtParams::validate.
+void readNdt(Context& ctx, const YAML::Node& node, const std::string& path, NdtParams& ndt) {
+  Fields f(ctx, node, path);
+  f.knownKeys({"sensor_noise", "regulariser", "sample_threshold", "reinit_probability",
+               "reinit_count", "adaptation_rate", "initial_intensity_variance"});
+  ndt.sensor_noise = f.number("sensor_noise", NdtParams::kDefaultSensorNoise);
+  ndt.regulariser = f.number("regulariser", NdtParams::kDefaultRegulariser);
+  ndt.sample_threshold = f.integer<std::uint32_t>(
+      "sample_threshold", NdtParams::kDefaultSampleThreshold, 1u, 1'000'000u);
+  ndt.reinit_probability = f.number("reinit_probability", NdtParams::kDefaultReinitProbability);
+  ndt.reinit_count =
+      f.integer<std::uint32_t>("reinit_count", NdtParams::kDefaultReinitCount, 1u, 1'000'000'000u);
+  if (f.has("adaptation_rate")) {
+    ndt.adaptation_rate = f.number("adaptation_rate");
+  }
+  ndt.initial_intensity_variance =
+      f.number("initial_intensity_variance", NdtParams::kDefaultInitialIntensityVariance);
+  if (auto ok = ndt.validate(); !ok) {
+    ctx.fail(node, path, ok.error().message);
+  }
+}
+
 void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& save_on_exit) {
   Fields f(ctx, node, "map");
   f.knownKeys({"resolution", "region_voxels", "window", "semantics", "voxel_mean",
-               "hit_probability", "miss_probability", "clamp_min", "clamp_max", "save_on_exit"});
+               "hit_probability", "miss_probability", "clamp_min", "clamp_max", "save_on_exit",
+               "mode", "ndt"});
   map.policy = StorePolicy::kRolling;
   map.geometry.resolution = f.positive("resolution", MapGeometry::kDefaultResolution);
   map.geometry.region_voxels =
@@ -80,6 +103,13 @@ void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& 
   map.semantics = choiceOr(f, "semantics", {"per-ray", "per-scan"}, 0) == 0 ? Semantics::kPerRay
                                                                             : Semantics::kPerScan;
   map.voxel_mean = flag(f, "voxel_mean", true);
+  static const std::vector<std::string> kModes = {"occupancy", "ndt-om", "ndt-tm"};
+  map.mode = *mapModeFromName(kModes[choiceOr(f, "mode", kModes, 0)]);
+  f.check(!isNdt(map.mode) || map.semantics == Semantics::kPerRay, "mode",
+          "NDT maps need semantics: per-ray");
+  if (f.has("ndt")) {
+    readNdt(ctx, f.get("ndt"), f.path("ndt"), map.ndt);
+  }
   const auto probability = [&](const char* key, double fallback) {
     const double p = f.number(key, fallback);
     f.check(p > 0.0 && p < 1.0, key, "must be a probability strictly between 0 and 1");

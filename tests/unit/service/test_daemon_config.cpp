@@ -217,6 +217,26 @@ TEST(DaemonConfig, ErrorsGiveTheLineOfTheKey) {
   EXPECT_NE(message.find("line 3"), std::string::npos) << message;
 }
 
+TEST(DaemonConfig, NdtModeAndParametersParseAndAreChecked) {
+  auto parsed = parseDaemonConfig(
+      "map:\n  mode: ndt-tm\n  ndt:\n    sensor_noise: 0.03\n    sample_threshold: 6\n"
+      "    adaptation_rate: 0.3\n",
+      kName);
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  EXPECT_EQ(parsed->map.mode, MapMode::kNdtTm);
+  EXPECT_DOUBLE_EQ(parsed->map.ndt.sensor_noise, 0.03);
+  EXPECT_EQ(parsed->map.ndt.sample_threshold, 6u);
+  ASSERT_TRUE(parsed->map.ndt.adaptation_rate.has_value());
+  EXPECT_DOUBLE_EQ(*parsed->map.ndt.adaptation_rate, 0.3);
+  EXPECT_EQ(parseDaemonConfig("map: {}\n", kName)->map.mode, MapMode::kOccupancy);
+
+  expectError("map:\n  mode: ndt\n", "map.mode", "occupancy, ndt-om or ndt-tm");
+  expectError("map:\n  mode: ndt-om\n  semantics: per-scan\n", "map.mode", "per-ray");
+  expectError("map:\n  mode: ndt-om\n  ndt: {sensor_nois: 0.1}\n", "map.ndt.sensor_nois",
+              "unknown key");
+  expectError("map:\n  mode: ndt-om\n  ndt: {sensor_noise: -1}\n", "map.ndt", "sensor-noise");
+}
+
 TEST(DaemonConfig, WrongTypesAreNamed) {
   expectError("map: 5\n", "map", "expected a mapping");
   expectError("map:\n  resolution: fine\n", "map.resolution", "expected a number");
