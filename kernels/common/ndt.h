@@ -300,16 +300,6 @@ RAYMAP_FN float rm_ndt_miss(float value, const rm_ndt_voxel* v, rm_vec3f origin,
   return RM_FMAXF(value + RM_LOGF(p_update / (1.0f - p_update)), occ.clamp_min);
 }
 
-/* Whether a miss is a plain one for certain, from the occupancy and a count that bounds the
- * Gaussian's from above (the voxel-mean layer's count: every sample, where the Gaussian's count
- * restarts on reinitialisation), without reading the 40-byte Gaussian. Most voxels a ray crosses
- * are free space that no sample fell in: this keeps the miss to the layers a plain miss reads. */
-RAYMAP_FN int rm_ndt_miss_is_plain(float value, rm_u32 count_bound, rm_occupancy_params occ,
-                                   rm_ndt_params p) {
-  return !rm_occupancy_observed(value) || count_bound < p.sample_threshold ||
-         (p.traversability == 0u && value <= occ.clamp_min);
-}
-
 /* Whether a hit reinitialises the Gaussian: there is none yet, or the voxel has become likely
  * free (value below reinit_threshold) although its Gaussian holds reinit_count samples: the
  * surface it described has gone (a transient object). `value` is the occupancy before the hit. */
@@ -366,7 +356,9 @@ RAYMAP_FN void rm_ndt_hit(float* value, rm_ndt_voxel* v, rm_ndt_hit_miss* hit_mi
   *value = rm_occupancy_hit(*value, occ);
 }
 
-/* NDT-TM: counts a pass-through reported by rm_ndt_miss. */
+/* NDT-TM: counts a pass-through reported by rm_ndt_miss. Callers count the passes of voxels that
+ * hold a sample (count > 0) only: the first hit restarts the counts (rm_ndt_hit), so passes before
+ * it would be dropped anyway, and free space is spared a write per voxel crossed. */
 RAYMAP_FN void rm_ndt_count_miss(rm_ndt_hit_miss* hit_miss, int is_miss) {
   if (is_miss && hit_miss->miss != 0xFFFFFFFFu) {
     hit_miss->miss += 1u;

@@ -114,7 +114,8 @@ RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_r
     if (!rm_ndt_miss_atomic(occupancy + i, old, ndt + i, &source, origin, sample, has_sample,
                             p.occupancy, np, &is_miss)) {
       dropped += 1u;
-    } else if (np.traversability != 0u && is_miss) {
+    } else if (np.traversability != 0u && is_miss && source.gaussian.count > 0u) {
+      /* Passes count from a voxel's first sample on: its first hit restarts the counts. */
       /* The miss count of voxel i is hit_miss[2 i + 1] (rm_ndt_hit_miss). It saturates like
        * rm_ndt_count_miss; the check and the add are not one atomic step, which matters only
        * within a few counts of 2^32. */

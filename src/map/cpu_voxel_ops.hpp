@@ -105,14 +105,15 @@ struct NdtMiss {
   [[gnu::always_inline]] void operator()(std::uint32_t i, rm_vec3i voxel) const noexcept {
     const float value = occupancy[i];
     // Checked in the order of the data they need: the clamp needs only the occupancy word.
-    const bool plain = !rm_occupancy_observed(value) ||
-                       (params.traversability == 0u && value <= occupancy_params.clamp_min) ||
-                       (mean != nullptr && mean[i].count < params.sample_threshold);
-    if (plain) {
+    if (!rm_occupancy_observed(value) ||
+        (params.traversability == 0u && value <= occupancy_params.clamp_min)) {
       occupancy[i] = rm_occupancy_miss(value, occupancy_params);
-      if (hit_miss != nullptr) {
-        rm_ndt_count_miss(&hit_miss[i], 1);
-      }
+      return;  // unobserved: no sample yet; NDT-OM at the clamp: nothing can change
+    }
+    const std::uint32_t samples = mean != nullptr ? mean[i].count : ndt[i].count;
+    if (samples < params.sample_threshold) {
+      occupancy[i] = rm_occupancy_miss(value, occupancy_params);
+      countPass(i, samples, 1);
       return;
     }
     shaped(i, voxel);
@@ -126,7 +127,13 @@ struct NdtMiss {
     int is_miss = 0;
     occupancy[i] = rm_ndt_miss(occupancy[i], &ndt[i], origin, sample, has_sample, occupancy_params,
                                params, &is_miss);
-    if (hit_miss != nullptr) {
+    countPass(i, ndt[i].count, is_miss);
+  }
+
+  /// NDT-TM counts passes from a voxel's first sample on: its first hit restarts the counts
+  /// (rm_ndt_hit), so passes before it would be dropped anyway.
+  void countPass(std::uint32_t i, std::uint32_t samples, int is_miss) const noexcept {
+    if (hit_miss != nullptr && samples > 0u) {
       rm_ndt_count_miss(&hit_miss[i], is_miss);
     }
   }

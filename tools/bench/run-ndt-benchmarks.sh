@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Reproduces the NDT table of docs/benchmarks.md: occupancy, NDT-OM and NDT-TM throughput on the
+# same rays and backend (per-ray semantics, 0.1 m, 20 m max range, OctoMap's probabilities), on
+# the CPU backend (1 thread and all cores) and on OpenCL when a platform exists, fresh maps and
+# steady state.
+#   tools/bench/run-ndt-benchmarks.sh [DATA_DIR] [OUT_DIR] [extra raymap options...]
+# Needs the release build (built here).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+data=${1:-../shared/data}
+out=${2:-build/bench-results}
+shift $(($# > 2 ? 2 : $#))
+repeat=${RAYMAP_BENCH_REPEAT:-5}
+mkdir -p "$out"
+cmake --preset release >/dev/null
+cmake --build --preset release --target raymap >/dev/null
+bin=build/release/tools
+common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --repeat "$repeat"
+  --semantics-list ray)
+
+source tools/bench/bench-lib.sh
+
+summary="$out/ndt-summary.md"
+{
+  machine_line "repeat $repeat"
+  echo
+  echo "| data | backend | map | occupancy (rays/s) | NDT-OM (rays/s) | NDT-TM (rays/s) | NDT-OM / occupancy | NDT-TM / NDT-OM | updates dropped (OM / TM) |"
+  echo "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | --- |"
+} >"$summary"
+
+# row NAME INPUT LABEL MAP_LABEL [raymap options]
+row() {
+  local name=$1 input=$2 label=$3 map=$4
+  shift 4
+  local rates=() dropped=()
+  for mode in occupancy ndt-om ndt-tm; do
+    local f="$out/ndt-$name-$label-$map-$mode.json"
+    "$bin/raymap" bench "$input" "${common[@]}" --mode "$mode" "$@" --json "$f" 2>/dev/null
+    rates+=("$(value rays_per_second "$f")")
+    dropped+=("$(value updates_dropped "$f" || echo 0)")
+  done
+  printf '| %s | %s | %s | %.0f | %.0f | %.0f | %.2f | %.2f | %s / %s |\n' "$name" "$label" "$map" \
+    "${rates[0]}" "${rates[1]}" "${rates[2]}" \
+    "$(awk -v a="${rates[1]}" -v b="${rates[0]}" 'BEGIN { print a / b }')" \
+    "$(awk -v a="${rates[2]}" -v b="${rates[1]}" 'BEGIN { print a / b }')" \
+    "${dropped[1]:-0}" "${dropped[2]:-0}" >>"$summary"
+}
+
+run() {  # run NAME INPUT [options]
+  local name=$1 input=$2
+  shift 2
+  for map in fresh steady; do
+    local steady=()
+    if [ "$map" = steady ]; then steady=(--steady-state); fi
+    row "$name" "$input" "cpu-1" "$map" "$@" "${steady[@]}" --threads-list 1
+    row "$name" "$input" "cpu-$(nproc)" "$map" "$@" "${steady[@]}" --threads-list 0
+    if "$bin/raymap" devices 2>/dev/null | grep -qi opencl; then
+      row "$name" "$input" "opencl" "$map" "$@" "${steady[@]}" --backend opencl
+    fi
+  done
+}
+
+run ouster "$data/ouster/ouster_os1_lb_n3_raycloud.ply.gz" "$@"
+cat "$summary"
