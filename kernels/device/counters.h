@@ -1,11 +1,13 @@
 /* SPDX-License-Identifier: BSD-3-Clause */
 /* What every integration kernel shares about bounded atomic updates and their counters: the
- * compare-and-swap retry bound, and the batch counters (voxel visits in RM_COUNTER_BUCKETS
- * buckets, updates given up in RM_COUNTER_DROPPED; layout in kernels/common/batch.h). */
+ * compare-and-swap retry bound, the plain miss by compare-and-swap, and the batch counters (voxel
+ * visits in RM_COUNTER_BUCKETS buckets, updates given up in RM_COUNTER_DROPPED; layout in
+ * kernels/common/batch.h). */
 #ifndef RAYMAP_KERNELS_DEVICE_COUNTERS_H
 #define RAYMAP_KERNELS_DEVICE_COUNTERS_H
 
 #include "../common/batch.h"
+#include "../common/occupancy.h"
 #include "device.h"
 
 /* Compare-and-swap attempts per miss before the update is given up (and counted). */
@@ -23,5 +25,26 @@ RM_DEVICE_FN void rm_count(RM_ATOMIC_GLOBAL rm_counter* counters, rm_u32 which, 
   (void)rm_atomic_add_u32(counters + which, amount);
 }
 #endif
+
+/* Applies a plain miss to an occupancy word (occupancy: an untagged one) whose last seen bits are
+ * `old`, with bounded compare-and-swap. Returns 0 when the update was given up. */
+RM_DEVICE_FN int rm_occupancy_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
+                                          rm_occupancy_params p) {
+  int attempt;
+  for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
+    float value = rm_as_float(old);
+    float updated = rm_occupancy_miss(value, p);
+    rm_u32 seen;
+    if (updated == value) {
+      return 1;
+    }
+    seen = rm_atomic_cas_u32(word, old, rm_as_u32(updated));
+    if (seen == old) {
+      return 1;
+    }
+    old = seen;
+  }
+  return 0;
+}
 
 #endif /* RAYMAP_KERNELS_DEVICE_COUNTERS_H */

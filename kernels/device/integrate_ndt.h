@@ -72,6 +72,41 @@ RM_DEVICE_FN int rm_ndt_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
   return 0;
 }
 
+/* NDT-TM: one more pass through voxel i (passes count from a voxel's first sample on: its first
+ * hit restarts the counts). The miss count is hit_miss[2 i + 1] (rm_ndt_hit_miss); it saturates
+ * like rm_ndt_count_miss, though the check and the add are not one atomic step, which matters
+ * only within a few counts of 2^32. */
+RM_DEVICE_FN void rm_ndt_count_pass(RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_u32 i) {
+  RM_ATOMIC_GLOBAL rm_u32* misses = hit_miss + 2u * i + 1u;
+  if (rm_load_u32(misses) != 0xFFFFFFFFu) {
+    (void)rm_atomic_add_u32(misses, 1u);
+  }
+}
+
+/* The miss of a voxel whose Gaussian shapes it (observed, >= sample_threshold samples), with
+ * bounded compare-and-swap from the occupancy bits `old`. Returns 1 when it was given up. */
+RM_DEVICE_FN rm_u32 rm_ndt_shaped_miss(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
+                                       const RM_GLOBAL rm_ndt_voxel* ndt,
+                                       RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_u32 i,
+                                       const rm_line_walk_ray* walk_ray, int sample_is_start,
+                                       rm_vec3i voxel, int has_sample, rm_occupancy_params occ,
+                                       rm_ndt_params np) {
+  rm_vec3f origin;
+  rm_vec3f sample;
+  rm_ndt_miss_source source;
+  int is_miss = 0;
+  rm_ndt_ray_in_voxel(walk_ray, sample_is_start, voxel, &origin, &sample);
+  source.gaussian.count = ndt->count;
+  source.loaded = 0;
+  if (!rm_ndt_miss_atomic(word, old, ndt, &source, origin, sample, has_sample, occ, np, &is_miss)) {
+    return 1u;
+  }
+  if (np.traversability != 0u && is_miss) {
+    rm_ndt_count_pass(hit_miss, i);
+  }
+  return 0u;
+}
+
 /* Launch 1. Work-item `id`: walks span `id` and applies the NDT miss to each voxel it crosses;
  * NDT-TM (p.traversability) counts the passes that are misses in hit_miss. */
 RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
@@ -93,37 +128,30 @@ RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_r
   rm_i32 k;
   for (k = 0; k < count; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
-    rm_vec3f origin;
-    rm_vec3f sample;
-    rm_ndt_miss_source source;
-    int is_miss = 0;
-    rm_u32 old;
-    float value;
-    rm_ndt_ray_in_voxel(&walk_ray, frame.sample_is_start, rm_span_walk_voxel(&walk), &origin,
-                        &sample);
-    old = rm_load_u32(occupancy + i);
-    value = rm_as_float(old);
-    /* The Gaussian's count is read only where it can matter: an unobserved voxel has none, and
-     * NDT-OM leaves a voxel at the lower clamp there whatever its Gaussian. Misses only lower
-     * values during this launch, so a voxel that needs no Gaussian now needs none on a retry. */
-    source.gaussian.count =
-        rm_occupancy_observed(value) && (np.traversability != 0u || value > p.occupancy.clamp_min)
-            ? ndt[i].count
-            : 0u;
-    source.loaded = 0;
-    if (!rm_ndt_miss_atomic(occupancy + i, old, ndt + i, &source, origin, sample, has_sample,
-                            p.occupancy, np, &is_miss)) {
-      dropped += 1u;
-    } else if (np.traversability != 0u && is_miss && source.gaussian.count > 0u) {
-      /* Passes count from a voxel's first sample on: its first hit restarts the counts. */
-      /* The miss count of voxel i is hit_miss[2 i + 1] (rm_ndt_hit_miss). It saturates like
-       * rm_ndt_count_miss; the check and the add are not one atomic step, which matters only
-       * within a few counts of 2^32. */
-      RM_ATOMIC_GLOBAL rm_u32* misses = hit_miss + 2u * i + 1u;
-      if (rm_load_u32(misses) != 0xFFFFFFFFu) {
-        (void)rm_atomic_add_u32(misses, 1u);
-      }
+    rm_u32 old = rm_load_u32(occupancy + i);
+    float value = rm_as_float(old);
+    rm_u32 samples;
+    /* Free space first, inline and without the Gaussian (as on the CPU): an unobserved voxel
+     * has none, NDT-OM leaves a voxel at the lower clamp whatever its Gaussian, and one with
+     * fewer samples than the threshold takes a plain miss. Misses only lower values during this
+     * launch and the Gaussians do not change in it, so the choice holds on a retry. */
+    if (!rm_occupancy_observed(value) ||
+        (np.traversability == 0u && value <= p.occupancy.clamp_min)) {
+      dropped += rm_occupancy_miss_atomic(occupancy + i, old, p.occupancy) ? 0u : 1u;
+      continue;
     }
+    samples = ndt[i].count;
+    if (samples < np.sample_threshold) {
+      if (!rm_occupancy_miss_atomic(occupancy + i, old, p.occupancy)) {
+        dropped += 1u;
+      } else if (np.traversability != 0u && samples > 0u) {
+        rm_ndt_count_pass(hit_miss, i);
+      }
+      continue;
+    }
+    dropped += rm_ndt_shaped_miss(occupancy + i, old, ndt + i, hit_miss, i, &walk_ray,
+                                  frame.sample_is_start, rm_span_walk_voxel(&walk), has_sample,
+                                  p.occupancy, np);
   }
   if (count > 0) {
     rm_count(counters, id % RM_COUNTER_BUCKETS, RM_U32(count));

@@ -52,27 +52,6 @@ RM_DEVICE_FN rm_u32 rm_runs_offset(rm_hit_group group, rm_u32 g, rm_integrate_pa
   return p.group_count + group.first + g;
 }
 
-/* Applies a miss to an untagged occupancy word whose last seen bits are `old`, with bounded
- * compare-and-swap. Returns 0 when the update was given up. */
-RM_DEVICE_FN int rm_occupancy_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
-                                          rm_occupancy_params p) {
-  int attempt;
-  for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
-    float value = rm_as_float(old);
-    float updated = rm_occupancy_miss(value, p);
-    rm_u32 seen;
-    if (updated == value) {
-      return 1;
-    }
-    seen = rm_atomic_cas_u32(word, old, rm_as_u32(updated));
-    if (seen == old) {
-      return 1;
-    }
-    old = seen;
-  }
-  return 0;
-}
-
 /* Number of the group's hit rays that come before `ray` (the rays are sorted). */
 RM_DEVICE_FN rm_u32 rm_hits_before(const RM_GLOBAL rm_u32* hit_rays, rm_hit_group group,
                                    rm_u32 ray) {
