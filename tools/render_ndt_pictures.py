@@ -2,13 +2,13 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Renders the README's side-by-side picture of occupancy, NDT-OM and NDT-TM maps of the same data.
 
-A side view (looking along +y, world frame, metres) of a slab of the maps: occupied voxels of the
+A side view (looking along +y, or +x with --along x; world frame, metres) of a slab of the maps: occupied voxels of the
 occupancy map as voxel squares coloured by height, and the NDT ellipsoids that `raymap export
 --mode ndt --ply` writes, NDT-OM coloured by height and NDT-TM by permeability (the exporter's
 colours). Needs python3-matplotlib (and numpy).
 
   tools/render_ndt_pictures.py OCCUPIED.ply NDT_OM.ply NDT_TM.ply OUT.png \
-      --y 0.0 --half-width 1.0 --x -12 12 --z -2 4
+      --along x --at 0.0 --half-width 1.0 --h -18 18 --z -3 6
 """
 
 import argparse
@@ -63,12 +63,13 @@ def read_ply(path):
 
 def voxel_squares(ax, path, args, resolution):
     v, _ = read_ply(path)
-    keep = (np.abs(v["y"] - args.y) < args.half_width) & (v["x"] >= args.x[0]) & \
-        (v["x"] <= args.x[1]) & (v["z"] >= args.z[0]) & (v["z"] <= args.z[1])
+    d, h = ("x", "y") if args.along == "x" else ("y", "x")
+    keep = (np.abs(v[d] - args.at) < args.half_width) & (v[h] >= args.h[0]) & \
+        (v[h] <= args.h[1]) & (v["z"] >= args.z[0]) & (v["z"] <= args.z[1])
     v = v[keep]
-    order = np.argsort(-v["y"])  # far first, near last
+    order = np.argsort(-v[d])  # far first, near last
     v = v[order]
-    x0 = np.floor(v["x"] / resolution) * resolution
+    x0 = np.floor(v[h] / resolution) * resolution
     z0 = np.floor(v["z"] / resolution) * resolution
     squares = np.stack([np.stack([x0, z0], 1), np.stack([x0 + resolution, z0], 1),
                         np.stack([x0 + resolution, z0 + resolution], 1),
@@ -85,13 +86,14 @@ def ellipsoids(ax, path, args):
     rgb = np.stack([v["red"], v["green"], v["blue"]], 1).reshape(
         count, VERTICES_PER_ELLIPSOID, 3)[:, 0, :] / 255.0
     centre = xyz.mean(axis=1)
-    keep = (np.abs(centre[:, 1] - args.y) < args.half_width) & (centre[:, 0] >= args.x[0]) & \
-        (centre[:, 0] <= args.x[1]) & (centre[:, 2] >= args.z[0]) & (centre[:, 2] <= args.z[1])
+    d, h = (0, 1) if args.along == "x" else (1, 0)
+    keep = (np.abs(centre[:, d] - args.at) < args.half_width) & (centre[:, h] >= args.h[0]) & \
+        (centre[:, h] <= args.h[1]) & (centre[:, 2] >= args.z[0]) & (centre[:, 2] <= args.z[1])
     xyz, rgb, centre = xyz[keep], rgb[keep], centre[keep]
-    order = np.argsort(-centre[:, 1])
+    order = np.argsort(-centre[:, d])  # far first, near last
     xyz, rgb = xyz[order], rgb[order]
     local = faces - faces.min()
-    triangles = xyz[:, local, :][:, :, :, [0, 2]].reshape(-1, 3, 2)  # x, z of each triangle
+    triangles = xyz[:, local, :][:, :, :, [h, 2]].reshape(-1, 3, 2)  # h, z of each triangle
     colours = np.repeat(rgb, len(local), axis=0)
     ax.add_collection(PolyCollection(triangles, facecolors=colours, edgecolors="none"))
     return len(xyz)
@@ -103,33 +105,41 @@ def main():
     parser.add_argument("ndt_om")
     parser.add_argument("ndt_tm")
     parser.add_argument("out")
-    parser.add_argument("--y", type=float, default=0.0, help="slab centre, metres")
+    parser.add_argument("--along", choices=["x", "y"], default="y", help="viewing direction")
+    parser.add_argument("--at", type=float, default=0.0, help="slab centre on that axis, metres")
     parser.add_argument("--half-width", type=float, default=1.0, help="slab half width, metres")
-    parser.add_argument("--x", type=float, nargs=2, default=[-12.0, 12.0])
+    parser.add_argument("--h", type=float, nargs=2, default=[-12.0, 12.0],
+                        help="horizontal range of the picture, metres")
     parser.add_argument("--z", type=float, nargs=2, default=[-2.0, 4.0])
     parser.add_argument("--resolution", type=float, default=0.1)
     parser.add_argument("--title", default="")
+    parser.add_argument("--columns", action="store_true", help="panels side by side")
     args = parser.parse_args()
 
-    width = args.x[1] - args.x[0]
+    width = args.h[1] - args.h[0]
     height = args.z[1] - args.z[0]
-    fig, axes = plt.subplots(3, 1, figsize=(12, 3 * 12 * height / width + 1.2), dpi=110)
+    if args.columns:  # side by side, for tall crops
+        fig, axes = plt.subplots(1, 3, figsize=(15, 5 * height / width + 1.0), dpi=110)
+    else:
+        fig, axes = plt.subplots(3, 1, figsize=(12, 3 * 12 * height / width + 1.2), dpi=110)
     panels = [
-        ("occupancy: occupied voxels, coloured by height", None),
-        ("NDT-OM: a 2-sigma ellipsoid per occupied voxel, coloured by height", args.ndt_om),
-        ("NDT-TM: the same ellipsoids coloured by permeability (blue 0 - red 1)", args.ndt_tm),
+        ("occupancy: occupied voxels,\ncoloured by height", None),
+        ("NDT-OM: a 2-sigma ellipsoid per\noccupied voxel, coloured by height", args.ndt_om),
+        ("NDT-TM: the same ellipsoids, coloured\nby permeability (blue 0 - red 1)", args.ndt_tm),
     ]
     for ax, (title, path) in zip(axes, panels):
         n = voxel_squares(ax, args.occupied, args, args.resolution) if path is None else \
             ellipsoids(ax, path, args)
         ax.set_title(f"{title} ({n:,})", fontsize=10)
-        ax.set_xlim(*args.x)
+        ax.set_xlim(*args.h)
         ax.set_ylim(*args.z)
         ax.set_aspect("equal")
         ax.set_facecolor("white")
         ax.tick_params(labelsize=8)
         ax.set_ylabel("z (m)", fontsize=8)
-    axes[-1].set_xlabel("x (m), looking along +y", fontsize=8)
+    other = "y" if args.along == "x" else "x"
+    for ax in axes if args.columns else axes[-1:]:
+        ax.set_xlabel(f"{other} (m), looking along +{args.along}", fontsize=8)
     if args.title:
         fig.suptitle(args.title, fontsize=11)
     fig.tight_layout()
