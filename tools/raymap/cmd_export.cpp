@@ -58,9 +58,14 @@ int runNdtExport(const ExportFlags& f) {
     return kExitFailure;
   }
   if (!f.quiet) {
-    std::printf("wrote %s %s (%g sigma, coloured by %s) to %s\n", withCommas(*count).c_str(),
-                points ? "NDT means with normals" : "NDT ellipsoids", options.sigmas,
-                io::toString(options.colour), f.ply.c_str());
+    if (points) {
+      std::printf("wrote %s NDT means with normals (coloured by %s) to %s\n",
+                  withCommas(*count).c_str(), io::toString(options.colour), f.ply.c_str());
+    } else {
+      std::printf("wrote %s NDT ellipsoids (%g sigma, coloured by %s) to %s\n",
+                  withCommas(*count).c_str(), options.sigmas, io::toString(options.colour),
+                  f.ply.c_str());
+    }
   }
   return kExitOk;
 }
