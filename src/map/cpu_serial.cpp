@@ -23,6 +23,29 @@ Expected<std::uint32_t, IntegrateError> acquire(VoxelMap& map, RegionSlotCache& 
   return *slot;
 }
 
+/// Calls apply(ray, layers, index) for the sample voxel of every ray with a hit, in ray order
+/// (regions created on demand; samples outside a rolling window are skipped).
+template <class Apply>
+Expected<void, IntegrateError> forEachSampleHit(VoxelMap& map, RegionSlotCache& cache,
+                                                std::int32_t region_voxels,
+                                                std::span<const PreparedRay> rays,
+                                                Apply&& apply) noexcept {
+  for (const PreparedRay& ray : rays) {
+    if ((ray.flags & RM_RAY_END_HIT) == 0u) {
+      continue;
+    }
+    const auto [region, index] = sampleCellOf(ray, region_voxels);
+    auto slot = acquire(map, cache, region);
+    if (!slot) {
+      return Unexpected(slot.error());
+    }
+    if (*slot != RegionStore::kNoSlot) {
+      apply(ray, regionLayers(map, *slot), index);
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
@@ -32,18 +55,13 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
   VoxelMap& map = *ctx.map;
   if (ctx.per_scan) {
     // Hits first: a voxel hit anywhere in the scan takes no miss from it (occupied wins).
-    for (const PreparedRay& ray : rays) {
-      if ((ray.flags & RM_RAY_END_HIT) == 0u) {
-        continue;
-      }
-      const auto [region, index] = sampleCellOf(ray, ctx.region_voxels);
-      auto slot = acquire(map, cache, region);
-      if (!slot) {
-        return Unexpected(slot.error());
-      }
-      if (*slot != RegionStore::kNoSlot) {
-        applyScanHit(regionLayers(map, *slot), index, ctx.sequence, ctx.params);
-      }
+    auto hits =
+        forEachSampleHit(map, cache, ctx.region_voxels, rays,
+                         [&](const PreparedRay&, const RegionLayers& layers, std::uint32_t index) {
+                           applyScanHit(layers, index, ctx.sequence, ctx.params);
+                         });
+    if (!hits) {
+      return hits;
     }
   }
   for (const PreparedRay& ray : rays) {
@@ -76,20 +94,12 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
   }
   if (ctx.ndt) {
     // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
-    for (const PreparedRay& ray : rays) {
-      if ((ray.flags & RM_RAY_END_HIT) == 0u) {
-        continue;
-      }
-      const auto [region, index] = sampleCellOf(ray, ctx.region_voxels);
-      auto slot = acquire(map, cache, region);
-      if (!slot) {
-        return Unexpected(slot.error());
-      }
-      if (*slot != RegionStore::kNoSlot) {
-        applyNdtHit(ray, regionLayers(map, *slot), index, ctx.params, ctx.ndt_params);
-        ++stats.voxels_visited;
-      }
-    }
+    return forEachSampleHit(
+        map, cache, ctx.region_voxels, rays,
+        [&](const PreparedRay& ray, const RegionLayers& layers, std::uint32_t index) {
+          applyNdtHit(ray, layers, index, ctx.params, ctx.ndt_params);
+          ++stats.voxels_visited;
+        });
   }
   return {};
 }
