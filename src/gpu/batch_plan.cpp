@@ -49,7 +49,9 @@ void BatchPlanner::revalidate() noexcept {
 Expected<std::uint32_t, IntegrateError> BatchPlanner::sharedRegion(
     std::uint32_t host_slot) noexcept {
   if (host_uninitialised_[host_slot] != 0) {
-    auto ok = transfer_->fillClear(host_slot);
+    // The device works in the host pool: a slot no region held before is still zero pages, and
+    // filling its zero layers (the 40-byte NDT Gaussians) would make every page resident.
+    auto ok = transfer_->fillClear(host_slot, map_->store().onZeroPages(host_slot));
     if (!ok) {
       return Unexpected(ok.error());
     }
@@ -85,7 +87,7 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
   }
   if (!placement->resident) {
     if (host_uninitialised_[host_slot] != 0) {
-      auto ok = transfer_->fillClear(placement->slot);
+      auto ok = transfer_->fillClear(placement->slot, /*zero_layers_clear=*/false);
       if (!ok) {
         return Unexpected(ok.error());
       }

@@ -36,8 +36,11 @@ class RegionTransfer {
   virtual Expected<void, IntegrateError> upload(std::uint32_t device_slot,
                                                 std::uint32_t host_slot) noexcept = 0;
   /// @brief Sets every voxel of device slot `device_slot` to its layer's clear value (a region
-  /// new to the map: nothing to copy).
-  virtual Expected<void, IntegrateError> fillClear(std::uint32_t device_slot) noexcept = 0;
+  /// new to the map: nothing to copy). `zero_layers_clear`: the slot's memory is known to be
+  /// zero already (a shared-memory slot on the OS's zero pages), so layers that clear to zero
+  /// are left alone and their pages are not touched.
+  virtual Expected<void, IntegrateError> fillClear(std::uint32_t device_slot,
+                                                   bool zero_layers_clear) noexcept = 0;
 };
 
 /// @brief One batch in host memory, ready to copy to the device. The arrays come from a memory

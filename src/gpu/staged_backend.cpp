@@ -133,9 +133,13 @@ Expected<void, IntegrateError> StagedBackend::upload(std::uint32_t device_slot,
   return copyRegion(device_slot, host_slot, /*to_device=*/true);
 }
 
-Expected<void, IntegrateError> StagedBackend::fillClear(std::uint32_t device_slot) noexcept {
+Expected<void, IntegrateError> StagedBackend::fillClear(std::uint32_t device_slot,
+                                                        bool zero_layers_clear) noexcept {
   const RegionStore& store = map_->store();
   for (int l = 0; l < store.schema().size(); ++l) {
+    if (zero_layers_clear && store.schema().at(l).clearsToZero()) {
+      continue;
+    }
     const std::size_t bytes = store.layerRegionBytes(l);
     if (!fillLayer(l, bytes * device_slot, bytes, store.schema().at(l))) {
       return Unexpected(IntegrateError::kDeviceFailure);

@@ -120,7 +120,8 @@ class StagedBackend : public Backend, private RegionTransfer {
                                           std::uint32_t host_slot) noexcept final;
   Expected<void, IntegrateError> upload(std::uint32_t device_slot,
                                         std::uint32_t host_slot) noexcept final;
-  Expected<void, IntegrateError> fillClear(std::uint32_t device_slot) noexcept final;
+  Expected<void, IntegrateError> fillClear(std::uint32_t device_slot,
+                                           bool zero_layers_clear) noexcept final;
 
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
                                             bool to_device) noexcept;

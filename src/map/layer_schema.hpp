@@ -35,6 +35,21 @@ struct LayerSpec {
   std::array<std::uint32_t, kMaxWordsPerVoxel> clear_words;
   bool saved;             ///< written to map files
   std::uint16_t version;  ///< bumped when the layer's encoding changes
+  /// Written at every voxel a ray crosses (occupancy, scan marks), so whole stretches of the
+  /// layer become resident: the region store backs it with huge pages. The other layers are
+  /// written only where samples land (near surfaces) and keep small pages, so a page of them
+  /// becomes resident (and is zeroed by the OS) only where a sample is.
+  bool dense;
+
+  /// @brief True when the clear value is all zero bits (memory the OS hands out is already clear).
+  bool clearsToZero() const noexcept {
+    for (std::uint32_t w = 0; w < bytes_per_voxel / 4u; ++w) {
+      if (clear_words[w] != 0u) {
+        return false;
+      }
+    }
+    return true;
+  }
 };
 
 /// @brief The spec of a known layer kind; nullopt for values this build does not know (a newer

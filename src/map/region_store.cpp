@@ -54,6 +54,13 @@ Result<RegionStore> RegionStore::create(const Config& config) {
                                        " regions: " + pool.error().message);
   }
   store.pool_ = std::move(pool).value();
+  for (int l = 0; l < config.schema.size(); ++l) {
+    if (config.schema.at(l).dense) {
+      const auto u = static_cast<std::size_t>(l);
+      store.pool_.adviseHugePages(store.layer_offset_[u],
+                                  store.layer_region_bytes_[u] * config.capacity);
+    }
+  }
   if (config.prefault) {
     store.pool_.prefault();
   }
@@ -127,14 +134,9 @@ Expected<std::uint32_t, StoreError> RegionStore::findOrCreateUncleared(Vec3i reg
 
 void RegionStore::clearRegion(std::uint32_t slot) noexcept {
   for (int l = 0; l < schema_.size(); ++l) {
-    const LayerSpec& spec = schema_.at(l);
-    bool all_zero = true;
-    for (std::size_t w = 0; w < spec.bytes_per_voxel / 4u; ++w) {
-      all_zero = all_zero && spec.clear_words[w] == 0u;
-    }
     // A slot's first use finds the OS's zero pages: zero-valued layers need no writes, and pages
     // that are never written (voxel means away from surfaces) never become resident.
-    if (!(all_zero && fresh_[slot] != 0)) {
+    if (!(schema_.at(l).clearsToZero() && fresh_[slot] != 0)) {
       clearLayer(slot, l);
     }
   }
@@ -145,11 +147,7 @@ void RegionStore::clearLayer(std::uint32_t slot, int layer) noexcept {
   const LayerSpec& spec = schema_.at(layer);
   std::byte* bytes = layerBytes(slot, layer);
   const std::size_t words = spec.bytes_per_voxel / 4u;
-  bool all_zero = true;
-  for (std::size_t w = 0; w < words; ++w) {
-    all_zero = all_zero && spec.clear_words[w] == 0u;
-  }
-  if (all_zero) {
+  if (spec.clearsToZero()) {
     std::memset(bytes, 0, layerRegionBytes(layer));
     return;
   }
@@ -169,6 +167,7 @@ void RegionStore::release(std::uint32_t slot) noexcept {
   RAYMAP_EXPECTS(slot < capacity_ && used_[slot] != 0);
   index_.erase(packCoord(coords_[slot]));
   used_[slot] = 0;
+  fresh_[slot] = 0;  // whoever held it (host or a device sharing the pool) may have written it
   free_slots_.push_back(slot);
   --size_;
 }

@@ -84,6 +84,10 @@ class RegionStore {
   void clear() noexcept;
 
   bool inUse(std::uint32_t slot) const noexcept { return used_[slot] != 0; }
+  /// @brief For a slot findOrCreateUncleared() has just created: true when no region held it
+  /// before, so its memory is still the OS's zero pages and its zero-valued layers
+  /// (LayerSpec::clearsToZero) need no clearing, on the host or on a device sharing the pool.
+  bool onZeroPages(std::uint32_t slot) const noexcept { return fresh_[slot] != 0; }
   Vec3i coordOf(std::uint32_t slot) const noexcept { return coords_[slot]; }
 
   /// @brief Start of layer `layer` (schema index) of the region in `slot`.

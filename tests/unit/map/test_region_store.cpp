@@ -75,6 +75,24 @@ TEST(RegionStore, RecycledSlotsStartClearAgain) {
   EXPECT_TRUE(std::isinf(store.layerData<float>(*b, 0)[17]));
 }
 
+// A device sharing the pool clears a new region itself (findOrCreateUncleared, then a fill that
+// skips zero layers on a slot still on zero pages) and writes into it; when that slot is
+// released and reused, its zero-valued layers must be cleared again, not trusted to be zero.
+TEST(RegionStore, ASlotWrittenWithoutAHostClearIsClearedWhenReused) {
+  RegionStore store = makeStore(1);
+  bool created = false;
+  auto a = store.findOrCreateUncleared({0, 0, 0}, &created);
+  ASSERT_TRUE(a && created);
+  EXPECT_TRUE(store.onZeroPages(*a));
+  store.layerData<std::uint32_t>(*a, 1)[2 * 5 + 1] = 7u;  // a mean count, written "by a device"
+  store.release(*a);
+  EXPECT_FALSE(store.onZeroPages(*a));
+  auto b = store.findOrCreate({1, 1, 1});
+  ASSERT_TRUE(b);
+  ASSERT_EQ(*b, *a);
+  EXPECT_EQ(store.layerData<std::uint32_t>(*b, 1)[2 * 5 + 1], 0u);
+}
+
 TEST(RegionStore, OutOfRangeCoordinatesAreRefused) {
   RegionStore store = makeStore(2);
   auto r = store.findOrCreate({RegionStore::kMaxRegionCoord + 1, 0, 0});
