@@ -2,6 +2,7 @@
 // PageBlock on Linux: anonymous private mappings.
 #include "platform/memory.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <string>
@@ -24,11 +25,6 @@ Result<PageBlock> PageBlock::create(std::size_t bytes) {
     return fail(ErrorCode::kCapacity, "cannot reserve " + std::to_string(rounded) +
                                           " bytes of memory: " + std::strerror(errno));
   }
-#if defined(MADV_HUGEPAGE)
-  // Voxel walks touch memory all over the pool; 2 MiB pages cut TLB misses. Advice only: where
-  // transparent huge pages are off this changes nothing.
-  (void)madvise(p, rounded, MADV_HUGEPAGE);
-#endif
   return PageBlock(static_cast<std::byte*>(p), rounded);
 }
 
@@ -52,6 +48,21 @@ void PageBlock::reset() noexcept {
     data_ = nullptr;
     size_ = 0;
   }
+}
+
+void PageBlock::adviseHugePages(std::size_t offset, std::size_t bytes) noexcept {
+#if defined(MADV_HUGEPAGE)
+  // madvise wants a page-aligned start: round the range inwards to whole pages.
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const std::size_t begin = (offset + page - 1) / page * page;
+  const std::size_t end = std::min(offset + bytes, size_) / page * page;
+  if (data_ != nullptr && begin < end) {
+    (void)madvise(data_ + begin, end - begin, MADV_HUGEPAGE);
+  }
+#else
+  (void)offset;
+  (void)bytes;
+#endif
 }
 
 void PageBlock::prefault() noexcept {
