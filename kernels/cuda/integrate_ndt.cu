@@ -18,7 +18,7 @@ cudaError_t launchNdtKernel(NdtKernelId kernel, cudaStream_t stream, unsigned bl
   switch (kernel) {
     case NdtKernelId::kIntegrateSpans:
       rm_ndt_integrate_spans<<<blocks, block_threads, 0, stream>>>(
-          b.rays, b.spans, b.occupancy, b.ndt, reinterpret_cast<std::uint32_t*>(b.hit_miss), params,
+          b.rays, b.spans, b.occupancy, b.ndt, b.means, reinterpret_cast<std::uint32_t*>(b.hit_miss), params,
           ndt_params, b.counters);
       break;
     case NdtKernelId::kApplyHitGroups:

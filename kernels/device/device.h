@@ -14,6 +14,7 @@
 #if defined(__OPENCL_C_VERSION__)
 /* ---- OpenCL C 1.2 ---- */
 #define RM_DEVICE_FN static inline
+#define RM_DEVICE_COLD_FN static __attribute__((noinline))
 #define RM_KERNEL __kernel
 #define RM_GLOBAL __global
 /* Memory updated by atomics from several work-items. */
@@ -45,6 +46,7 @@ RM_DEVICE_FN rm_u64 rm_atomic_cas_u64(RM_ATOMIC_GLOBAL rm_u64* p, rm_u64 expecte
 #elif defined(__CUDACC__)
 /* ---- CUDA ---- */
 #define RM_DEVICE_FN static inline __device__
+#define RM_DEVICE_COLD_FN static __noinline__ __device__
 #define RM_KERNEL extern "C" __global__
 #define RM_GLOBAL
 #define RM_ATOMIC_GLOBAL

@@ -208,7 +208,8 @@ class OpenClBackend final : public gpu::StagedBackend {
       case NdtKernel::kIntegrateSpans:
         k = span_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.spans.get(), layerOr(m.occupancyLayer()),
-                     layerOr(m.ndtLayer()), layerOr(m.hitMissLayer()), p, ndt, b.counters.get());
+                     layerOr(m.ndtLayer()), layerOr(m.meanLayer()), layerOr(m.hitMissLayer()), p,
+                     ndt, b.counters.get());
         break;
       case NdtKernel::kApplyHitGroups:
         k = hit_kernel_.get();
