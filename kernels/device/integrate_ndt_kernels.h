@@ -11,14 +11,11 @@
 
 #include "integrate_ndt.h"
 
-RM_KERNEL void rm_ndt_integrate_spans(const RM_GLOBAL rm_prepared_ray* rays,
-                                      const RM_GLOBAL rm_span_record* spans,
-                                      RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                      const RM_GLOBAL rm_ndt_voxel* ndt,
-                                      const RM_GLOBAL rm_voxel_mean* means,
-                                      RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_integrate_params params,
-                                      rm_ndt_params ndt_params,
-                                      RM_ATOMIC_GLOBAL rm_counter* counters) {
+RM_KERNEL void rm_ndt_integrate_spans(
+    const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
+    RM_ATOMIC_GLOBAL rm_u32* occupancy, const RM_GLOBAL rm_ndt_voxel* ndt,
+    const RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* hit_miss,
+    rm_integrate_params params, rm_ndt_params ndt_params, RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
     rm_ndt_integrate_span(id, rays, spans, occupancy, ndt, means, hit_miss, params, ndt_params,
