@@ -86,11 +86,11 @@ RM_DEVICE_FN void rm_ndt_count_pass(RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_u32 i)
 /* The miss of a voxel whose Gaussian shapes it (observed, >= sample_threshold samples), with
  * bounded compare-and-swap from the occupancy bits `old`. Returns 1 when it was given up. */
 RM_DEVICE_COLD_FN rm_u32 rm_ndt_shaped_miss(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
-                                       const RM_GLOBAL rm_ndt_voxel* ndt,
-                                       RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_u32 i,
-                                       const rm_line_walk_ray* walk_ray, int sample_is_start,
-                                       rm_vec3i voxel, int has_sample, rm_occupancy_params occ,
-                                       rm_ndt_params np) {
+                                            const RM_GLOBAL rm_ndt_voxel* ndt,
+                                            RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_u32 i,
+                                            const rm_line_walk_ray* walk_ray, int sample_is_start,
+                                            rm_vec3i voxel, int has_sample, rm_occupancy_params occ,
+                                            rm_ndt_params np) {
   rm_vec3f origin;
   rm_vec3f sample;
   rm_ndt_miss_source source;
