@@ -3,7 +3,9 @@
 # Reproduces the NDT table of docs/benchmarks.md: occupancy, NDT-OM and NDT-TM throughput on the
 # same rays and backend (per-ray semantics, 0.1 m, 20 m max range, OctoMap's probabilities), on
 # the CPU backend (1 thread and all cores) and on OpenCL when a platform exists, fresh maps and
-# steady state.
+# steady state. The three modes take turns, one timed run each per round, and each rate is the
+# median over the rounds: this VM's speed drifts by 15 % over a minute, and three back-to-back
+# blocks of runs would carry that drift into the ratios.
 #   tools/bench/run-ndt-benchmarks.sh [DATA_DIR] [OUT_DIR] [extra raymap options...]
 # Needs the release build (built here).
 set -euo pipefail
@@ -16,14 +18,13 @@ mkdir -p "$out"
 cmake --preset release >/dev/null
 cmake --build --preset release --target raymap >/dev/null
 bin=build/release/tools
-common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --repeat "$repeat"
-  --semantics-list ray)
+common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --repeat 1 --semantics-list ray)
 
 source tools/bench/bench-lib.sh
 
 summary="$out/ndt-summary.md"
 {
-  machine_line "repeat $repeat"
+  machine_line "$repeat rounds, modes interleaved, median"
   echo
   echo "| data | backend | map | occupancy (rays/s) | NDT-OM (rays/s) | NDT-TM (rays/s) | NDT-OM / occupancy | NDT-TM / NDT-OM | updates dropped (OM / TM) |"
   echo "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | --- |"
@@ -35,10 +36,20 @@ row() {
   shift 4
   local rates=() dropped=()
   for mode in occupancy ndt-om ndt-tm; do
-    local f="$out/ndt-$name-$label-$map-$mode.json"
-    "$bin/raymap" bench "$input" "${common[@]}" --mode "$mode" "$@" --json "$f" 2>/dev/null
-    rates+=("$(value rays_per_second "$f")")
-    dropped+=("$(value updates_dropped "$f" || echo 0)")
+    rm -f "$out/ndt-$name-$label-$map-$mode".*.json
+  done
+  for round in $(seq "$repeat"); do
+    for mode in occupancy ndt-om ndt-tm; do
+      "$bin/raymap" bench "$input" "${common[@]}" --mode "$mode" "$@" \
+        --json "$out/ndt-$name-$label-$map-$mode.$round.json" 2>/dev/null
+    done
+  done
+  for mode in occupancy ndt-om ndt-tm; do
+    local files=("$out/ndt-$name-$label-$map-$mode".*.json)
+    rates+=("$(for f in "${files[@]}"; do value rays_per_second "$f"; done | sort -g |
+      awk '{ v[NR] = $1 } END { print NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }')")
+    dropped+=("$(for f in "${files[@]}"; do value updates_dropped "$f" || echo 0; done |
+      awk '{ s += $1 } END { print s + 0 }')")
   done
   printf '| %s | %s | %s | %.0f | %.0f | %.0f | %.2f | %.2f | %s / %s |\n' "$name" "$label" "$map" \
     "${rates[0]}" "${rates[1]}" "${rates[2]}" \
