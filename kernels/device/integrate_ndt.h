@@ -134,11 +134,11 @@ RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_r
     float value = rm_as_float(old);
     rm_u32 samples;
     /* Free space first, inline and without the Gaussian (as on the CPU): an unobserved voxel
-     * has none, NDT-OM leaves a voxel at the lower clamp whatever its Gaussian, and one with
-     * fewer samples than the threshold takes a plain miss. Misses only lower values during this
-     * launch and the Gaussians do not change in it, so the choice holds on a retry. */
-    if (!rm_occupancy_observed(value) ||
-        (np.traversability == 0u && value <= p.occupancy.clamp_min)) {
+     * has none, and one with fewer samples than the threshold takes a plain miss. (NDT-OM's
+     * lower clamp is not tested separately: it made no difference on PoCL, and on the CPU the
+     * branch cost more than it saved.) The Gaussians do not change during this launch, so the
+     * choice holds on a retry. */
+    if (!rm_occupancy_observed(value)) {
       dropped += rm_occupancy_miss_atomic(occupancy + i, old, p.occupancy) ? 0u : 1u;
       continue;
     }

@@ -104,11 +104,13 @@ struct NdtMiss {
   /// the Gaussian out of line.
   [[gnu::always_inline]] void operator()(std::uint32_t i, rm_vec3i voxel) const noexcept {
     const float value = occupancy[i];
-    // Checked in the order of the data they need: the clamp needs only the occupancy word.
-    if (!rm_occupancy_observed(value) ||
-        (params.traversability == 0u && value <= occupancy_params.clamp_min)) {
+    // No test of NDT-OM's lower clamp here, though a clamped voxel cannot change: in a map still
+    // being built, clamped and unclamped voxels alternate along a ray and the branch is
+    // mispredicted so often that skipping the mean's count cost more than loading it (one
+    // thread, fresh map of the Ouster scans: 0.45 M rays/s with the test, 0.57 M without).
+    if (!rm_occupancy_observed(value)) {
       occupancy[i] = rm_occupancy_miss(value, occupancy_params);
-      return;  // unobserved: no sample yet; NDT-OM at the clamp: nothing can change
+      return;  // unobserved: no sample yet
     }
     const std::uint32_t samples = mean != nullptr ? mean[i].count : ndt[i].count;
     if (samples < params.sample_threshold) {
