@@ -55,7 +55,9 @@ std::size_t StagedBackend::counterBytes() const noexcept {
 }
 
 std::size_t StagedBackend::scratchWords() const noexcept {
-  return RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays);
+  // NDT maps need no tags or runs of misses (submit()); one word keeps the buffer valid (OpenCL
+  // refuses empty buffers) instead of about 3 MiB a staging set.
+  return ndt_ ? 1u : RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays);
 }
 
 Expected<void, IntegrateError> StagedBackend::integrate(

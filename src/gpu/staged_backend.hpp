@@ -74,7 +74,7 @@ class StagedBackend : public Backend, private RegionTransfer {
   std::uint32_t layerRegions() const noexcept;
   const BatchLimits& limits() const noexcept { return limits_; }
   std::size_t counterBytes() const noexcept;
-  /// 32-bit words of a set's scratch buffer.
+  /// 32-bit words of a set's scratch buffer (one for NDT maps, which do not use it).
   std::size_t scratchWords() const noexcept;
 
   // ---- what the API layer supplies; every call goes to the backend's one in-order queue ----
