@@ -34,11 +34,9 @@
 #include "ray.h"
 
 #if defined(__OPENCL_C_VERSION__)
-#define RM_SQRTF(x) sqrt(x)
 #define RM_EXPF(x) exp(x)
 #define RM_LOGF(x) log(x)
 #else
-#define RM_SQRTF(x) sqrtf(x)
 #define RM_EXPF(x) expf(x)
 #define RM_LOGF(x) logf(x)
 #endif

@@ -17,7 +17,9 @@ typedef uint rm_u32;
 #define RM_FABSF(x) fabs(x)
 #define RM_FMINF(a, b) fmin((a), (b))
 #define RM_FMAXF(a, b) fmax((a), (b))
+#define RM_SQRTF(x) sqrt(x)
 #define RM_INF INFINITY
+#define RM_NAN NAN
 
 #else
 /* ---- host C, host C++ and CUDA C++ ---- */
@@ -57,7 +59,9 @@ typedef uint32_t rm_u32;
  * validated finite, so the comparison form is exact here. */
 #define RM_FMINF(a, b) rm_minf((a), (b))
 #define RM_FMAXF(a, b) rm_maxf((a), (b))
+#define RM_SQRTF(x) sqrtf(x)
 #define RM_INF INFINITY
+#define RM_NAN NAN
 #endif
 
 /* Small vectors passed by value between the kernel helpers. Plain arrays-in-structs are legal in

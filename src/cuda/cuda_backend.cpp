@@ -328,6 +328,10 @@ Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
   if (map.occupancyLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument, "the CUDA backend needs an occupancy layer");
   }
+  if (map.traversalLayer() >= 0) {
+    return fail(ErrorCode::kUnsupported,
+                "decay-rate maps are integrated on the CPU backend only so far (--backend cpu)");
+  }
   if (auto ok = gpu::checkBatchOptions(options, "CUDA"); !ok) {
     return Unexpected(ok.error());
   }

@@ -487,10 +487,14 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
     out.saved_layers.push_back(spec->kind);
     parsed.layers.push_back(*spec);
   }
-  // A map saved without its occupancy layer says so by the layer list alone.
-  config.occupancy_layer =
-      std::any_of(parsed.layers.begin(), parsed.layers.end(),
-                  [](const LayerSpec& spec) { return spec.kind == LayerKind::kOccupancy; });
+  // A map saved without its occupancy layer, or with a traversal layer, says so by the layer
+  // list alone.
+  const auto has_layer = [&parsed](LayerKind kind) {
+    return std::any_of(parsed.layers.begin(), parsed.layers.end(),
+                       [kind](const LayerSpec& spec) { return spec.kind == kind; });
+  };
+  config.occupancy_layer = has_layer(LayerKind::kOccupancy);
+  config.decay_rate = has_layer(LayerKind::kTraversal);
   std::uint32_t info_count = 0;
   if (!body.u32(info_count)) {
     return malformed("info count runs past the header");

@@ -32,6 +32,7 @@ class CpuBackend final : public Backend {
     ctx_.params = map.occupancy().toKernel();
     ctx_.per_scan = map.semantics() == Semantics::kPerScan;
     ctx_.ndt = isNdt(map.mode());
+    ctx_.resolution = static_cast<float>(map.geometry().resolution);
     ctx_.ndt_params =
         map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
     if (threads > 1) {

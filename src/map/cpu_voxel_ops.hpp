@@ -8,6 +8,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "kernels/common/decay.h"
 #include "kernels/common/key_math.h"
 #include "kernels/common/line_walk.h"
 #include "kernels/common/ndt.h"
@@ -54,6 +55,36 @@ inline std::uint32_t walkSpan(const rm_line_walk_ray& ray, bool sample_is_start,
   return static_cast<std::uint32_t>(count);
 }
 
+/// @brief walkSpan() for decay-rate maps: also adds the metres of ray path inside each visited
+/// voxel, and inside the voxel the walk leaves out (the sample or end voxel, when this span holds
+/// it), to `traversal` (kernels/common/decay.h). @rt allocates: no.
+template <class Visit>
+inline std::uint32_t walkSpanAddingPath(const rm_line_walk_ray& ray, bool sample_is_start,
+                                        const RaySpan& span, std::int32_t region_voxels,
+                                        float* traversal, float ray_metres,
+                                        Visit&& visit) noexcept {
+  rm_span_walk walk;
+  const std::uint32_t flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
+  const int reverse = sample_is_start ? 1 : 0;
+  const std::int32_t count =
+      rm_span_walk_init(&walk, &ray, span.t0, span.t1, span.box_lo, region_voxels, flags, reverse);
+  if ((flags & (reverse != 0 ? RM_SPAN_FIRST : RM_SPAN_LAST)) != 0u) {
+    traversal[rm_decay_left_out_index(&ray, reverse, span.box_lo, region_voxels)] +=
+        rm_decay_left_out_metres(&walk, flags, reverse, ray_metres);
+  }
+  for (std::int32_t k = 0; k < count; ++k) {
+    const auto index =
+        k == 0 ? static_cast<std::uint32_t>(walk.index) : rm_span_walk_advance(&walk);
+    traversal[index] += rm_decay_voxel_metres(&walk.walk, ray_metres);
+    if constexpr (std::is_invocable_v<Visit, std::uint32_t, rm_vec3i>) {
+      visit(index, rm_span_walk_voxel(&walk));
+    } else {
+      visit(index);
+    }
+  }
+  return static_cast<std::uint32_t>(count);
+}
+
 /// Per-ray miss: every crossing lowers the occupancy.
 struct PerRayMiss {
   float* occupancy;
@@ -86,6 +117,7 @@ struct RegionLayers {
   rm_ndt_voxel* ndt = nullptr;
   rm_ndt_hit_miss* hit_miss = nullptr;
   rm_ndt_intensity* intensity = nullptr;
+  float* traversal = nullptr;  ///< decay rate: metres of ray path per voxel
 };
 
 /// NDT miss (kernels/common/ndt.h): each crossing lowers the occupancy by how squarely the ray
@@ -191,6 +223,7 @@ struct IntegrationContext {
   /// NDT maps: a batch's misses all come before its hits (see kernels/common/ndt.h).
   bool ndt = false;
   rm_ndt_params ndt_params{};
+  float resolution = 0.1f;  ///< voxel edge, metres (decay rate: path lengths in metres)
 };
 
 /// @brief Pointers to the layers of the region in `slot`.
@@ -213,6 +246,9 @@ inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexce
   if (map.intensityLayer() >= 0) {
     layers.intensity = store.layerData<rm_ndt_intensity>(slot, map.intensityLayer());
   }
+  if (map.traversalLayer() >= 0) {
+    layers.traversal = store.layerData<float>(slot, map.traversalLayer());
+  }
   return layers;
 }
 
@@ -221,18 +257,22 @@ inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexce
 inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_ray& ray,
                               bool sample_is_start, std::uint32_t ray_flags, const RaySpan& span,
                               const RegionLayers& layers) noexcept {
+  const auto walk = [&](auto&& miss) {
+    if (layers.traversal != nullptr) {
+      return walkSpanAddingPath(ray, sample_is_start, span, ctx.region_voxels, layers.traversal,
+                                rm_decay_ray_metres(&ray, ctx.resolution), miss);
+    }
+    return walkSpan(ray, sample_is_start, span, ctx.region_voxels, miss);
+  };
   if (ctx.ndt) {
-    return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
-                    NdtMiss{layers.occupancy, layers.mean, layers.ndt, layers.hit_miss, &ray,
-                            sample_is_start ? 1 : 0, (ray_flags & RM_RAY_END_HIT) != 0u ? 1 : 0,
-                            ctx.params, ctx.ndt_params});
+    return walk(NdtMiss{layers.occupancy, layers.mean, layers.ndt, layers.hit_miss, &ray,
+                        sample_is_start ? 1 : 0, (ray_flags & RM_RAY_END_HIT) != 0u ? 1 : 0,
+                        ctx.params, ctx.ndt_params});
   }
   if (ctx.per_scan) {
-    return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
-                    PerScanMiss{layers.occupancy, layers.marks, ctx.sequence, ctx.params});
+    return walk(PerScanMiss{layers.occupancy, layers.marks, ctx.sequence, ctx.params});
   }
-  return walkSpan(ray, sample_is_start, span, ctx.region_voxels,
-                  PerRayMiss{layers.occupancy, ctx.params});
+  return walk(PerRayMiss{layers.occupancy, ctx.params});
 }
 
 /// @brief Region and in-region index of a ray's sample voxel (integer divisions; the region walk

@@ -17,13 +17,14 @@ constexpr std::uint32_t kUnobservedBits = 0x7F800000u;
 static_assert(std::bit_cast<std::uint32_t>(std::numeric_limits<float>::infinity()) ==
               kUnobservedBits);
 
-constexpr std::array<LayerSpec, 6> kKnownLayers = {{
+constexpr std::array<LayerSpec, 7> kKnownLayers = {{
     {LayerKind::kOccupancy, "occupancy", 4, {kUnobservedBits}, true, 1, true},
     {LayerKind::kVoxelMean, "mean", 8, {0u, 0u}, true, 1, false},
     {LayerKind::kScanMark, "scan_mark", 4, {0u}, false, 1, true},
     {LayerKind::kNdt, "ndt", sizeof(rm_ndt_voxel), {}, true, 1, false},
     {LayerKind::kHitMiss, "hit_miss", sizeof(rm_ndt_hit_miss), {}, true, 1, false},
     {LayerKind::kIntensity, "intensity", sizeof(rm_ndt_intensity), {}, true, 1, false},
+    {LayerKind::kTraversal, "traversal", 4, {0u}, true, 1, true},
 }};
 static_assert(sizeof(rm_ndt_voxel) == 40 && sizeof(rm_ndt_hit_miss) == 8 &&
               sizeof(rm_ndt_intensity) == 8);

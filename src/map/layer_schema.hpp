@@ -22,6 +22,7 @@ enum class LayerKind : std::uint8_t {
   kNdt = 4,        ///< NDT Gaussian: mean, square-root covariance, count (kernels/common/ndt.h)
   kHitMiss = 5,    ///< NDT-TM hit and miss counts (kernels/common/ndt.h)
   kIntensity = 6,  ///< NDT-TM intensity mean and variance (kernels/common/ndt.h)
+  kTraversal = 7,  ///< decay rate: metres of ray path inside the voxel (kernels/common/decay.h)
 };
 
 /// @brief Static description of a layer type.

@@ -39,6 +39,9 @@ LayerSchema MapConfig::schema() const {
     (void)schema.add(LayerKind::kHitMiss);
     (void)schema.add(LayerKind::kIntensity);
   }
+  if (decay_rate) {
+    (void)schema.add(LayerKind::kTraversal);
+  }
   return schema;
 }
 
@@ -73,6 +76,15 @@ Expected<void, Error> MapConfig::validate() const {
       return fail(ErrorCode::kInvalidArgument,
                   std::string(toString(mode)) + " maps need the occupancy layer");
     }
+  }
+  if (decay_rate && !voxel_mean) {
+    return fail(ErrorCode::kInvalidArgument,
+                "decay-rate maps need the voxel-mean layer (its sample count over the traversal "
+                "is the rate)");
+  }
+  if (decay_rate && !occupancy_layer) {
+    return fail(ErrorCode::kInvalidArgument,
+                "decay-rate maps need the occupancy layer (they are integrated with it)");
   }
   if (policy == StorePolicy::kRolling) {
     if (window_regions.x < 1 || window_regions.y < 1 || window_regions.z < 1 ||
@@ -125,6 +137,7 @@ VoxelMap::VoxelMap(MapConfig config, RegionStore store) noexcept
   ndt_layer_ = schema.indexOf(LayerKind::kNdt);
   hit_miss_layer_ = schema.indexOf(LayerKind::kHitMiss);
   intensity_layer_ = schema.indexOf(LayerKind::kIntensity);
+  traversal_layer_ = schema.indexOf(LayerKind::kTraversal);
 }
 
 Vec3i VoxelMap::voxelOf(Vec3d p) const noexcept {
@@ -295,6 +308,14 @@ rm_ndt_intensity VoxelMap::intensity(Vec3i voxel) const noexcept {
     return rm_ndt_intensity{};
   }
   return store_.layerData<rm_ndt_intensity>(at->first, intensity_layer_)[at->second];
+}
+
+float VoxelMap::traversal(Vec3i voxel) const noexcept {
+  const auto at = locate(voxel);
+  if (!at || traversal_layer_ < 0) {
+    return 0.0f;
+  }
+  return store_.layerData<float>(at->first, traversal_layer_)[at->second];
 }
 
 MapSummary VoxelMap::summarise() const noexcept {

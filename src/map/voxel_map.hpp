@@ -37,6 +37,9 @@ struct MapConfig {
   MapMode mode = MapMode::kOccupancy;  ///< NDT modes add the NDT layers (per-ray semantics only)
   NdtParams ndt;                       ///< used by the NDT modes
   bool voxel_mean = true;              ///< keep the voxel-mean layer
+  /// Keep the traversal layer (metres of ray path per voxel) for decay rates: samples per metre
+  /// (kernels/common/decay.h). Needs the voxel mean (its count is the samples).
+  bool decay_rate = false;
   /// Keep the occupancy layer. Every map built today has it; a map without it (layers that need
   /// no occupancy, e.g. a distance field) answers occupancy queries with "unobserved", and what
   /// needs occupancy (integration, height maps, occupied/free export) refuses it with an error.
@@ -91,6 +94,7 @@ class VoxelMap {
   int ndtLayer() const noexcept { return ndt_layer_; }              ///< -1 unless NDT
   int hitMissLayer() const noexcept { return hit_miss_layer_; }     ///< -1 unless NDT-TM
   int intensityLayer() const noexcept { return intensity_layer_; }  ///< -1 unless NDT-TM
+  int traversalLayer() const noexcept { return traversal_layer_; }  ///< -1 unless decay rate
   MapMode mode() const noexcept { return config_.mode; }
 
   // ---- keys (world frame, metres) ----
@@ -145,6 +149,8 @@ class VoxelMap {
   /// @brief NDT-TM hit/miss counts and intensity of a voxel (zero when absent).
   rm_ndt_hit_miss hitMiss(Vec3i voxel) const noexcept;
   rm_ndt_intensity intensity(Vec3i voxel) const noexcept;
+  /// @brief Metres of ray path inside a voxel (0 where none, or without the traversal layer).
+  float traversal(Vec3i voxel) const noexcept;
   MapSummary summarise() const noexcept;
 
   /// @brief Provenance stored with the map (source file, ray counts, ranges...), in order.
@@ -167,6 +173,7 @@ class VoxelMap {
   int ndt_layer_ = -1;
   int hit_miss_layer_ = -1;
   int intensity_layer_ = -1;
+  int traversal_layer_ = -1;
   Vec3i window_min_{};
   std::uint32_t scan_sequence_ = 0;
   std::uint64_t regions_recycled_ = 0;

@@ -340,6 +340,10 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
   if (map.occupancyLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument, "the OpenCL backend needs an occupancy layer");
   }
+  if (map.traversalLayer() >= 0) {
+    return fail(ErrorCode::kUnsupported,
+                "decay-rate maps are integrated on the CPU backend only so far (--backend cpu)");
+  }
   if (auto ok = gpu::checkBatchOptions(options, "OpenCL"); !ok) {
     return Unexpected(ok.error());
   }
