@@ -5,8 +5,6 @@
 #include <bit>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -17,13 +15,19 @@
 
 #include "kernels/common/scan_mark.h"
 #include "src/io/map_file.hpp"
+#include "tests/support/file_bytes.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
 namespace raymap::io {
 namespace {
 
+using test::crc32;
+using test::getLe;
+using test::putLe;
+using test::readFileBytes;
 using test::TempDir;
+using test::writeFileBytes;
 
 // ---- file bytes (the layout of docs/map-format.md) ----
 
@@ -35,47 +39,6 @@ constexpr std::size_t kBodyLayerCount = 34;
 constexpr std::size_t kBodyFirstLayerKind = 36;
 // Version 2 ends the body with the map mode (4 bytes) and the 52-byte NDT block.
 constexpr std::size_t kBodyModeAndNdtBytes = 4 + 52;
-
-std::vector<std::uint8_t> readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
-}
-
-void writeBytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
-  // Unlink first: truncating a file with data makes ext4 flush it on close (auto_da_alloc),
-  // which would make the every-offset loops below take seconds.
-  std::filesystem::remove(path);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
-
-std::uint64_t getLe(const std::vector<std::uint8_t>& bytes, std::size_t at, int count) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < count; ++i) {
-    v |= std::uint64_t{bytes.at(at + static_cast<std::size_t>(i))} << (8 * i);
-  }
-  return v;
-}
-
-void putLe(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint64_t v, int count) {
-  for (int i = 0; i < count; ++i) {
-    bytes.at(at + static_cast<std::size_t>(i)) = static_cast<std::uint8_t>(v >> (8 * i));
-  }
-}
-
-/// CRC-32 (IEEE, reflected, as zlib computes it), written out so tests can forge files whose
-/// checksums are right but whose content is wrong.
-std::uint32_t crc32(const std::uint8_t* data, std::size_t size) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (std::size_t i = 0; i < size; ++i) {
-    crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 1u) != 0 ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
-    }
-  }
-  return ~crc;
-}
 
 std::size_t headerBodyBytes(const std::vector<std::uint8_t>& bytes) {
   return static_cast<std::size_t>(getLe(bytes, 12, 4));
@@ -416,7 +379,7 @@ TEST(MapFile, EqualMapsGiveEqualFilesWhateverTheirRegionOrder) {
   ASSERT_TRUE(saveMap(backward, dir.file("b.rmap")).has_value());
 
   // Assert
-  EXPECT_EQ(readBytes(dir.file("a.rmap")), readBytes(dir.file("b.rmap")));
+  EXPECT_EQ(readFileBytes(dir.file("a.rmap")), readFileBytes(dir.file("b.rmap")));
 }
 
 TEST(MapFile, MostlyUnobservedRegionsTakeLittleSpace) {
@@ -439,9 +402,9 @@ TEST(MapFile, MostlyUnobservedRegionsTakeLittleSpace) {
 
   // Assert: well under 2% of the voxels' size; an unobserved region shrinks more than 200-fold.
   EXPECT_LT(on_disk * 50u, in_memory) << on_disk << " bytes on disk for " << in_memory;
-  const std::vector<std::size_t> blocks = blockOffsets(readBytes(path));
+  const std::vector<std::size_t> blocks = blockOffsets(readFileBytes(path));
   ASSERT_EQ(blocks.size(), 18u);
-  const std::vector<std::uint8_t> bytes = readBytes(path);
+  const std::vector<std::uint8_t> bytes = readFileBytes(path);
   for (std::size_t i = 0; i < blocks.size(); ++i) {
     const auto x = static_cast<std::int32_t>(getLe(bytes, blocks[i] + 4, 4));
     if (x >= 5) {
@@ -521,7 +484,7 @@ class DamagedMapFile : public ::testing::Test {
     fillRegion(map, {4, 4, 4}, 3);
     map.setInfo("source", "test");
     ASSERT_TRUE(saveMap(map, good_path_).has_value());
-    good_ = readBytes(good_path_);
+    good_ = readFileBytes(good_path_);
     ASSERT_GT(good_.size(), 200u);
   }
 
@@ -534,8 +497,9 @@ class DamagedMapFile : public ::testing::Test {
 TEST_F(DamagedMapFile, EveryTruncationFailsAsTruncated) {
   for (std::size_t size = 0; size < good_.size(); ++size) {
     // Arrange
-    writeBytes(bad_path_, std::vector<std::uint8_t>(
-                              good_.begin(), good_.begin() + static_cast<std::ptrdiff_t>(size)));
+    writeFileBytes(bad_path_,
+                   std::vector<std::uint8_t>(good_.begin(),
+                                             good_.begin() + static_cast<std::ptrdiff_t>(size)));
 
     // Act
     auto loaded = loadMap(bad_path_);
@@ -557,8 +521,8 @@ TEST_F(DamagedMapFile, ATruncatedRegionIsNamed) {
   const std::vector<std::size_t> blocks = blockOffsets(good_);
   ASSERT_EQ(blocks.size(), 3u);
   const std::size_t cut = blocks[2] + 40;
-  writeBytes(bad_path_, std::vector<std::uint8_t>(
-                            good_.begin(), good_.begin() + static_cast<std::ptrdiff_t>(cut)));
+  writeFileBytes(bad_path_, std::vector<std::uint8_t>(
+                                good_.begin(), good_.begin() + static_cast<std::ptrdiff_t>(cut)));
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -574,7 +538,7 @@ TEST_F(DamagedMapFile, EveryFlippedByteFails) {
     // Arrange
     std::vector<std::uint8_t> bad = good_;
     bad[at] ^= 0xFFu;
-    writeBytes(bad_path_, bad);
+    writeFileBytes(bad_path_, bad);
 
     // Act
     auto loaded = loadMap(bad_path_);
@@ -589,7 +553,7 @@ TEST_F(DamagedMapFile, AFlippedHeaderByteIsAHeaderChecksumMismatch) {
   // Arrange: a byte of the resolution.
   std::vector<std::uint8_t> bad = good_;
   bad[kPrefixBytes + 3] ^= 0x10u;
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -605,7 +569,7 @@ TEST_F(DamagedMapFile, AFlippedPayloadByteNamesTheRegion) {
   ASSERT_EQ(blocks.size(), 3u);
   std::vector<std::uint8_t> bad = good_;
   bad[blocks[1] + 32 + 10] ^= 0x01u;
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -622,7 +586,7 @@ TEST_F(DamagedMapFile, AFlippedChecksumIsACorruption) {
   ASSERT_FALSE(blocks.empty());
   std::vector<std::uint8_t> bad = good_;
   bad[blocks[0] + 25] ^= 0x80u;
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -637,7 +601,7 @@ TEST_F(DamagedMapFile, TrailingBytesAreACorruption) {
   // Arrange
   std::vector<std::uint8_t> bad = good_;
   bad.push_back(0);
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -655,7 +619,7 @@ TEST_F(DamagedMapFile, ADuplicateRegionIsRejected) {
   std::copy_n(good_.begin() + static_cast<std::ptrdiff_t>(blocks[0] + 4), 12,
               bad.begin() + static_cast<std::ptrdiff_t>(blocks[1] + 4));
   putLe(bad, blocks[1] + 28, crc32(bad.data() + blocks[1], 28), 4);
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -673,7 +637,7 @@ TEST_F(DamagedMapFile, AnUnknownLayerKindIsUnsupported) {
   ASSERT_EQ(bad[kPrefixBytes + kBodyFirstLayerKind], 1u);
   bad[kPrefixBytes + kBodyFirstLayerKind] = 200;
   resealHeader(bad);
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -692,7 +656,7 @@ TEST_F(DamagedMapFile, AnImpossibleRegionCountFailsBeforeAllocating) {
   ASSERT_EQ(getLe(bad, count_at, 8), 3u);
   putLe(bad, count_at, std::uint64_t{1} << 29, 8);
   resealHeader(bad);
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -719,7 +683,7 @@ TEST_F(DamagedMapFile, ForgedHeaderFieldsNeverCrash) {
         continue;
       }
       resealHeader(bad);
-      writeBytes(bad_path_, bad);
+      writeFileBytes(bad_path_, bad);
 
       // Act
       auto loaded = loadMap(bad_path_);
@@ -754,7 +718,7 @@ TEST_F(DamagedMapFile, AZlibStreamOfTheWrongSizeIsRejected) {
   putLe(bad, blocks[2] + 20, stream.size(), 4);
   putLe(bad, blocks[2] + 24, crc32(stream.data(), stream.size()), 4);
   putLe(bad, blocks[2] + 28, crc32(bad.data() + blocks[2], 28), 4);
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -772,7 +736,7 @@ TEST_F(DamagedMapFile, AnOutOfRangeRegionCoordinateIsRejected) {
   std::vector<std::uint8_t> bad = good_;
   putLe(bad, blocks[0] + 4, 0x80000000u, 4);
   putLe(bad, blocks[0] + 28, crc32(bad.data() + blocks[0], 28), 4);
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -786,7 +750,7 @@ TEST_F(DamagedMapFile, ANewerVersionIsUnsupported) {
   // Arrange
   std::vector<std::uint8_t> bad = good_;
   putLe(bad, 8, 7, 4);
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -803,7 +767,7 @@ TEST_F(DamagedMapFile, AWrongMagicIsNotAMap) {
   // Arrange
   std::vector<std::uint8_t> bad = good_;
   bad[0] = 'X';
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   const Error error = expectLoadFails(bad_path_);
@@ -818,7 +782,7 @@ TEST(MapFileLoad, ATextFileIsNotAMap) {
   TempDir dir;
   const std::string path = dir.file("notes.txt");
   const std::string text = "ply\nformat ascii 1.0\nend_header\n";
-  writeBytes(path, std::vector<std::uint8_t>(text.begin(), text.end()));
+  writeFileBytes(path, std::vector<std::uint8_t>(text.begin(), text.end()));
 
   // Act
   const Error error = expectLoadFails(path);
@@ -831,7 +795,7 @@ TEST(MapFileLoad, AnEmptyFileFails) {
   // Arrange
   TempDir dir;
   const std::string path = dir.file("empty.rmap");
-  writeBytes(path, {});
+  writeFileBytes(path, {});
 
   // Act
   const Error error = expectLoadFails(path);

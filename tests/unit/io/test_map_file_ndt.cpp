@@ -3,22 +3,25 @@
 // version-1 files load as occupancy maps; damaged NDT sections fail with the file named.
 #include <bit>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "src/io/map_file.hpp"
+#include "tests/support/file_bytes.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
 namespace raymap::io {
 namespace {
 
+using test::crc32;
+using test::getLe;
+using test::putLe;
+using test::readFileBytes;
 using test::TempDir;
+using test::writeFileBytes;
 
 // ---- file bytes (docs/map-format.md) ----
 
@@ -30,44 +33,6 @@ constexpr std::size_t kTailMode = 0;
 constexpr std::size_t kTailBlockBytes = 2;
 constexpr std::size_t kTailSensorNoise = 4;
 constexpr std::size_t kTailFlags = 4 + 52 - 4;
-
-std::vector<std::uint8_t> readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
-}
-
-void writeBytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
-  std::filesystem::remove(path);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
-
-std::uint64_t getLe(const std::vector<std::uint8_t>& bytes, std::size_t at, int count) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < count; ++i) {
-    v |= std::uint64_t{bytes.at(at + static_cast<std::size_t>(i))} << (8 * i);
-  }
-  return v;
-}
-
-void putLe(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint64_t v, int count) {
-  for (int i = 0; i < count; ++i) {
-    bytes.at(at + static_cast<std::size_t>(i)) = static_cast<std::uint8_t>(v >> (8 * i));
-  }
-}
-
-/// CRC-32 (IEEE, reflected), written out so that tests can forge files with matching checksums.
-std::uint32_t crc32(const std::uint8_t* data, std::size_t size) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (std::size_t i = 0; i < size; ++i) {
-    crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 1u) != 0 ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
-    }
-  }
-  return ~crc;
-}
 
 std::size_t bodyBytes(const std::vector<std::uint8_t>& bytes) {
   return static_cast<std::size_t>(getLe(bytes, 12, 4));
@@ -214,7 +179,7 @@ TEST(NdtMapFileParams, AVersion1FileLoadsAsAnOccupancyMap) {
   TempDir dir;
   const std::string path = dir.file("v1.rmap");
   ASSERT_TRUE(saveMap(map, path).has_value());
-  writeBytes(path, asVersion1(readBytes(path)));
+  writeFileBytes(path, asVersion1(readFileBytes(path)));
 
   // Act
   auto loaded = loadMap(path);
@@ -233,7 +198,7 @@ class DamagedNdtFile : public ::testing::Test {
   void SetUp() override {
     const VoxelMap map = integratedMap(ndtConfig(MapMode::kNdtTm));
     ASSERT_TRUE(saveMap(map, good_path_).has_value());
-    good_ = readBytes(good_path_);
+    good_ = readFileBytes(good_path_);
     tail_ = tailOffset(good_);
     ASSERT_EQ(good_.at(tail_ + kTailMode), 2u);
   }
@@ -241,7 +206,7 @@ class DamagedNdtFile : public ::testing::Test {
   /// Loads `bad` (after resealing its header) and returns the error.
   Error loadFails(std::vector<std::uint8_t> bad) {
     resealHeader(bad);
-    writeBytes(bad_path_, bad);
+    writeFileBytes(bad_path_, bad);
     auto loaded = loadMap(bad_path_);
     EXPECT_FALSE(loaded.has_value());
     if (loaded.has_value()) {
@@ -316,7 +281,7 @@ TEST_F(DamagedNdtFile, AFileCutInTheNdtLayersIsTruncated) {
   // Arrange: cut halfway through the file (inside the region blocks that hold the NDT layers).
   std::vector<std::uint8_t> bad(good_.begin(),
                                 good_.begin() + static_cast<std::ptrdiff_t>(good_.size() / 2));
-  writeBytes(bad_path_, bad);
+  writeFileBytes(bad_path_, bad);
 
   // Act
   auto loaded = loadMap(bad_path_);

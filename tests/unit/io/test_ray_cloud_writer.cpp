@@ -3,8 +3,6 @@
 // AtomicFileWriter::patch it relies on.
 #include <bit>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
@@ -14,28 +12,18 @@
 #include "src/io/ray_cloud_writer.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/io/trajectory.hpp"
+#include "tests/support/file_bytes.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
 namespace raymap::io {
 namespace {
 
+using test::getLe;
+using test::readFileBytes;
 using test::TempDir;
 
 constexpr std::size_t kRecordBytes = 53;
-
-std::vector<std::uint8_t> readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
-}
-
-std::uint64_t le(const std::vector<std::uint8_t>& bytes, std::size_t at, int count) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < count; ++i) {
-    v |= std::uint64_t{bytes.at(at + static_cast<std::size_t>(i))} << (8 * i);
-  }
-  return v;
-}
 
 struct RayRecord {
   double x, y, z, time;
@@ -52,7 +40,7 @@ struct ParsedCloud {
 
 ParsedCloud parseCloud(const std::string& path) {
   ParsedCloud cloud;
-  cloud.bytes = readBytes(path);
+  cloud.bytes = readFileBytes(path);
   const std::string text(cloud.bytes.begin(), cloud.bytes.end());
   const std::string end = "end_header\n";
   const std::size_t end_at = text.find(end);
@@ -73,15 +61,15 @@ ParsedCloud parseCloud(const std::string& path) {
 RayRecord recordAt(const ParsedCloud& cloud, std::size_t index) {
   const std::size_t at = cloud.data_offset + index * kRecordBytes;
   RayRecord r{};
-  r.x = std::bit_cast<double>(le(cloud.bytes, at, 8));
-  r.y = std::bit_cast<double>(le(cloud.bytes, at + 8, 8));
-  r.z = std::bit_cast<double>(le(cloud.bytes, at + 16, 8));
-  r.time = std::bit_cast<double>(le(cloud.bytes, at + 24, 8));
-  r.nx = std::bit_cast<float>(static_cast<std::uint32_t>(le(cloud.bytes, at + 32, 4)));
-  r.ny = std::bit_cast<float>(static_cast<std::uint32_t>(le(cloud.bytes, at + 36, 4)));
-  r.nz = std::bit_cast<float>(static_cast<std::uint32_t>(le(cloud.bytes, at + 40, 4)));
-  r.intensity = std::bit_cast<float>(static_cast<std::uint32_t>(le(cloud.bytes, at + 44, 4)));
-  r.scan = static_cast<std::uint32_t>(le(cloud.bytes, at + 48, 4));
+  r.x = std::bit_cast<double>(getLe(cloud.bytes, at, 8));
+  r.y = std::bit_cast<double>(getLe(cloud.bytes, at + 8, 8));
+  r.z = std::bit_cast<double>(getLe(cloud.bytes, at + 16, 8));
+  r.time = std::bit_cast<double>(getLe(cloud.bytes, at + 24, 8));
+  r.nx = std::bit_cast<float>(static_cast<std::uint32_t>(getLe(cloud.bytes, at + 32, 4)));
+  r.ny = std::bit_cast<float>(static_cast<std::uint32_t>(getLe(cloud.bytes, at + 36, 4)));
+  r.nz = std::bit_cast<float>(static_cast<std::uint32_t>(getLe(cloud.bytes, at + 40, 4)));
+  r.intensity = std::bit_cast<float>(static_cast<std::uint32_t>(getLe(cloud.bytes, at + 44, 4)));
+  r.scan = static_cast<std::uint32_t>(getLe(cloud.bytes, at + 48, 4));
   r.alpha = cloud.bytes.at(at + 52);
   return r;
 }
@@ -281,7 +269,7 @@ TEST(AtomicFileWriter, PatchOverwritesInPlaceAndLaterWritesAppend) {
   ASSERT_TRUE(writer->commit().has_value());
 
   // Assert
-  const std::vector<std::uint8_t> bytes = readBytes(path);
+  const std::vector<std::uint8_t> bytes = readFileBytes(path);
   EXPECT_EQ(std::string(bytes.begin(), bytes.end()), "count=042;end");
   ASSERT_FALSE(beyond.has_value());
   EXPECT_EQ(beyond.error().code, ErrorCode::kInvalidArgument);

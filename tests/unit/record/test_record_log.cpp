@@ -1,15 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Record logs: exact round trips, crash behaviour (.partial, SIGKILL, cut-off files) and clean
 // errors for damaged, foreign and newer files. The file bytes are checked against the layout of
-// docs/record-format.md with a CRC-32 and byte walker written out here, not the library's.
+// docs/record-format.md with a byte walker written out here and the CRC-32 of
+// tests/support/file_bytes, not the library's.
 #include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <memory>
 #include <random>
 #include <string>
@@ -22,12 +21,20 @@
 #include "src/record/record_log.hpp"
 #include "src/record/record_log_reader.hpp"
 #include "src/record/record_log_writer.hpp"
+#include "tests/support/file_bytes.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::record {
 namespace {
 
+using test::appendLe;
+using test::Bytes;
+using test::crc32;
+using test::getLe;
+using test::putLe;
+using test::readFileBytes;
 using test::TempDir;
+using test::writeFileBytes;
 
 // ---- file bytes, independent of the library (docs/record-format.md) ----
 
@@ -37,54 +44,6 @@ constexpr std::size_t kPrefix = 28;      // MESSAGE: topic id and three timestam
 constexpr std::uint32_t kTopic = 1;
 constexpr std::uint32_t kMessage = 2;
 constexpr std::uint32_t kEnd = 3;
-
-using Bytes = std::vector<std::uint8_t>;
-
-Bytes readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), {});
-}
-
-void writeBytes(const std::string& path, const Bytes& bytes) {
-  // Unlink first: truncating a file with data makes ext4 flush it on close (auto_da_alloc),
-  // which would make the every-offset loops below slow.
-  std::filesystem::remove(path);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
-
-std::uint64_t getLe(const Bytes& bytes, std::size_t at, int count) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < count; ++i) {
-    v |= std::uint64_t{bytes.at(at + static_cast<std::size_t>(i))} << (8 * i);
-  }
-  return v;
-}
-
-void putLe(Bytes& bytes, std::size_t at, std::uint64_t v, int count) {
-  for (int i = 0; i < count; ++i) {
-    bytes.at(at + static_cast<std::size_t>(i)) = static_cast<std::uint8_t>(v >> (8 * i));
-  }
-}
-
-void appendLe(Bytes& bytes, std::uint64_t v, int count) {
-  bytes.resize(bytes.size() + static_cast<std::size_t>(count));
-  putLe(bytes, bytes.size() - static_cast<std::size_t>(count), v, count);
-}
-
-/// CRC-32 (IEEE, reflected, as zlib computes it), so tests can forge files whose checksums are
-/// right but whose content is wrong.
-std::uint32_t crc32(const std::uint8_t* data, std::size_t size) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (std::size_t i = 0; i < size; ++i) {
-    crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 1u) != 0 ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
-    }
-  }
-  return ~crc;
-}
 
 struct RecordAt {
   std::size_t offset;
@@ -306,7 +265,7 @@ TEST(RecordLog, FileBytesFollowTheDocumentedLayout) {
   const std::string path = dir.file("layout.rmlog");
   const Sample s = sample(1, 4, 5);
   recordLog(path, {s}, true);
-  const Bytes bytes = readBytes(path);
+  const Bytes bytes = readFileBytes(path);
 
   ASSERT_GE(bytes.size(), kHeader);
   EXPECT_EQ(std::string(bytes.begin(), bytes.begin() + 8), std::string("RMLOG\r\n\x1a", 8));
@@ -454,7 +413,7 @@ TEST(RecordLog, SigkilledRecorderLeavesEveryReturnedRecord) {
 TEST(RecordLog, CutAtEveryOffsetOfTheLastRecordReadsTheRestAndReportsTruncation) {
   TempDir dir;
   const auto samples = smallSamples(6);
-  const Bytes full = readBytes(recordLog(dir.file("cut.rmlog"), samples, /*close=*/false));
+  const Bytes full = readFileBytes(recordLog(dir.file("cut.rmlog"), samples, /*close=*/false));
   const auto all = records(full);
   ASSERT_EQ(all.back().kind, kMessage);
   const std::size_t last = all.back().offset;
@@ -464,7 +423,7 @@ TEST(RecordLog, CutAtEveryOffsetOfTheLastRecordReadsTheRestAndReportsTruncation)
 
   for (std::size_t cut = last; cut < full.size(); ++cut) {
     SCOPED_TRACE("cut at byte " + std::to_string(cut));
-    writeBytes(path, Bytes(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(cut)));
+    writeFileBytes(path, Bytes(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(cut)));
     auto reader = openOrFail(path);
     ASSERT_NE(reader, nullptr);
     EXPECT_EQ(readAll(*reader), before_last);
@@ -485,13 +444,13 @@ TEST(RecordLog, CutAtEveryOffsetOfTheLastRecordReadsTheRestAndReportsTruncation)
 TEST(RecordLog, CutInsideTheEndRecordKeepsEveryMessage) {
   TempDir dir;
   const auto samples = smallSamples(3);
-  const Bytes full = readBytes(recordLog(dir.file("end.rmlog"), samples, /*close=*/true));
+  const Bytes full = readFileBytes(recordLog(dir.file("end.rmlog"), samples, /*close=*/true));
   const RecordAt end = records(full).back();
   ASSERT_EQ(end.kind, kEnd);
   const std::string path = dir.file("end-cut.rmlog");
   for (std::size_t cut = end.offset + 1; cut < full.size(); ++cut) {
     SCOPED_TRACE("cut at byte " + std::to_string(cut));
-    writeBytes(path, Bytes(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(cut)));
+    writeFileBytes(path, Bytes(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(cut)));
     auto reader = openOrFail(path);
     ASSERT_NE(reader, nullptr);
     EXPECT_EQ(readAll(*reader), samples);
@@ -504,11 +463,11 @@ TEST(RecordLog, CutInsideTheEndRecordKeepsEveryMessage) {
 
 TEST(RecordLog, CutInsideTheFileHeaderIsAnErrorNotACrash) {
   TempDir dir;
-  const Bytes full = readBytes(recordLog(dir.file("h.rmlog"), smallSamples(1), true));
+  const Bytes full = readFileBytes(recordLog(dir.file("h.rmlog"), smallSamples(1), true));
   const std::string path = dir.file("h-cut.rmlog");
   for (std::size_t cut = 0; cut < kHeader; ++cut) {
     SCOPED_TRACE("cut at byte " + std::to_string(cut));
-    writeBytes(path, Bytes(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(cut)));
+    writeFileBytes(path, Bytes(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(cut)));
     auto reader = RecordLogReader::open(path);
     ASSERT_FALSE(reader);
     EXPECT_NE(reader.error().message.find(path), std::string::npos);
@@ -520,12 +479,12 @@ TEST(RecordLog, CutInsideTheFileHeaderIsAnErrorNotACrash) {
 TEST(RecordLog, ZeroFilledTailAfterPowerLossReadsAsTruncation) {
   TempDir dir;
   const auto samples = smallSamples(4);
-  Bytes bytes = readBytes(recordLog(dir.file("z.rmlog"), samples, false));
+  Bytes bytes = readFileBytes(recordLog(dir.file("z.rmlog"), samples, false));
   const std::size_t end_of_data = bytes.size();
   const std::size_t records_before = records(bytes).size();
   bytes.resize(bytes.size() + 5000, 0);
   const std::string path = dir.file("zeros.rmlog");
-  writeBytes(path, bytes);
+  writeFileBytes(path, bytes);
 
   auto reader = openOrFail(path);
   ASSERT_NE(reader, nullptr);
@@ -536,7 +495,7 @@ TEST(RecordLog, ZeroFilledTailAfterPowerLossReadsAsTruncation) {
 
   // Zeros followed by data are damage, not a lost tail.
   bytes.back() = 1;
-  writeBytes(path, bytes);
+  writeFileBytes(path, bytes);
   reader = openOrFail(path);
   ASSERT_NE(reader, nullptr);
   const Error error = firstError(*reader);
@@ -550,7 +509,7 @@ TEST(RecordLog, ZeroFilledTailAfterPowerLossReadsAsTruncation) {
 TEST(RecordLog, FlippedPayloadByteIsAChecksumErrorNamingFileRecordAndOffset) {
   TempDir dir;
   const auto samples = smallSamples(5);
-  const Bytes good = readBytes(recordLog(dir.file("p.rmlog"), samples, true));
+  const Bytes good = readFileBytes(recordLog(dir.file("p.rmlog"), samples, true));
   const auto all = records(good);
   const std::size_t index = 4;  // TOPIC, TOPIC, MESSAGE 0, MESSAGE 1, MESSAGE 2 <-
   ASSERT_EQ(all[index].kind, kMessage);
@@ -559,7 +518,7 @@ TEST(RecordLog, FlippedPayloadByteIsAChecksumErrorNamingFileRecordAndOffset) {
   for (std::size_t in_payload : {std::size_t{5}, kPrefix + 3}) {
     Bytes bad = good;
     bad[all[index].offset + kRecordHead + in_payload] ^= 0x10;
-    writeBytes(path, bad);
+    writeFileBytes(path, bad);
     auto reader = openOrFail(path);
     ASSERT_NE(reader, nullptr);
     std::uint64_t read = 0;
@@ -580,7 +539,7 @@ TEST(RecordLog, FlippedRecordHeaderByteIsAnErrorNamingFileRecordAndOffset) {
   TempDir dir;
   std::vector<Sample> samples = smallSamples(4);
   samples.push_back(sample(0, 99, 200'000));  // enough bytes behind for a longer length to fit
-  const Bytes good = readBytes(recordLog(dir.file("h.rmlog"), samples, true));
+  const Bytes good = readFileBytes(recordLog(dir.file("h.rmlog"), samples, true));
   const auto all = records(good);
   const std::size_t index = 3;
   ASSERT_EQ(all[index].kind, kMessage);
@@ -591,7 +550,7 @@ TEST(RecordLog, FlippedRecordHeaderByteIsAnErrorNamingFileRecordAndOffset) {
     // The top length byte with 0x80 makes the length impossible; every other flip leaves a
     // record whose checksum cannot match.
     bad[all[index].offset + byte] ^= byte == 7 ? 0x80 : 0x01;
-    writeBytes(path, bad);
+    writeFileBytes(path, bad);
     auto reader = openOrFail(path);
     ASSERT_NE(reader, nullptr);
     const Error error = firstError(*reader);
@@ -604,13 +563,13 @@ TEST(RecordLog, FlippedRecordHeaderByteIsAnErrorNamingFileRecordAndOffset) {
 
 TEST(RecordLog, FlippedFileHeaderByteIsAnErrorNamingTheFile) {
   TempDir dir;
-  const Bytes good = readBytes(recordLog(dir.file("f.rmlog"), smallSamples(2), true));
+  const Bytes good = readFileBytes(recordLog(dir.file("f.rmlog"), smallSamples(2), true));
   const std::string path = dir.file("f-bad.rmlog");
   for (std::size_t byte = 0; byte < kHeader; ++byte) {
     SCOPED_TRACE("file header byte " + std::to_string(byte));
     Bytes bad = good;
     bad[byte] ^= 0x01;
-    writeBytes(path, bad);
+    writeFileBytes(path, bad);
     auto reader = RecordLogReader::open(path);
     ASSERT_FALSE(reader);
     EXPECT_NE(reader.error().message.find(path), std::string::npos) << reader.error().message;
@@ -633,14 +592,14 @@ TEST(RecordLog, ForeignFilesAreNotRecordLogs) {
   const std::string partial = recordLog(dir.file("open.rmlog"), smallSamples(1), false);
   const std::string ply_header =
       "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n";
-  writeBytes(ply, Bytes(ply_header.begin(), ply_header.end()));
+  writeFileBytes(ply, Bytes(ply_header.begin(), ply_header.end()));
   std::mt19937 rng(7);
   std::string random_text;
   for (int i = 0; i < 500; ++i) {
     random_text.push_back(static_cast<char>('a' + rng() % 26));
   }
-  writeBytes(text, Bytes(random_text.begin(), random_text.end()));
-  writeBytes(empty, {});
+  writeFileBytes(text, Bytes(random_text.begin(), random_text.end()));
+  writeFileBytes(empty, {});
 
   for (const std::string& path : {ply, text, empty}) {
     SCOPED_TRACE(path);
@@ -664,11 +623,11 @@ TEST(RecordLog, ForeignFilesAreNotRecordLogs) {
 
 TEST(RecordLog, NewerVersionIsRefusedWithAClearMessage) {
   TempDir dir;
-  Bytes bytes = readBytes(recordLog(dir.file("v.rmlog"), smallSamples(1), true));
+  Bytes bytes = readFileBytes(recordLog(dir.file("v.rmlog"), smallSamples(1), true));
   putLe(bytes, 8, 2, 4);
   putLe(bytes, 28, crc32(bytes.data(), 28), 4);  // a genuine version-2 header
   const std::string path = dir.file("v2.rmlog");
-  writeBytes(path, bytes);
+  writeFileBytes(path, bytes);
 
   auto reader = RecordLogReader::open(path);
   ASSERT_FALSE(reader);
@@ -685,14 +644,14 @@ TEST(RecordLog, NewerVersionIsRefusedWithAClearMessage) {
 TEST(RecordLog, UnknownRecordKindWithAGoodChecksumIsSkipped) {
   TempDir dir;
   const auto samples = smallSamples(3);
-  Bytes bytes = readBytes(recordLog(dir.file("u.rmlog"), samples, true));
+  Bytes bytes = readFileBytes(recordLog(dir.file("u.rmlog"), samples, true));
   const auto all = records(bytes);
   ASSERT_EQ(all[3].kind, kMessage);
   // A kind from a newer writer between two messages, and an empty one right after the header.
   insertAt(bytes, all[3].offset, forgeRecord(77, {1, 2, 3, 4, 5}));
   insertAt(bytes, kHeader, forgeRecord(0xFFFFFFFFu, {}));
   const std::string path = dir.file("u-new.rmlog");
-  writeBytes(path, bytes);
+  writeFileBytes(path, bytes);
 
   auto reader = openOrFail(path);
   ASSERT_NE(reader, nullptr);
@@ -703,14 +662,14 @@ TEST(RecordLog, UnknownRecordKindWithAGoodChecksumIsSkipped) {
 
 TEST(RecordLog, MessageOnAnUndeclaredTopicIsAnError) {
   TempDir dir;
-  Bytes bytes = readBytes(recordLog(dir.file("t.rmlog"), smallSamples(3), true));
+  Bytes bytes = readFileBytes(recordLog(dir.file("t.rmlog"), smallSamples(3), true));
   const auto all = records(bytes);
   const std::size_t index = 3;
   ASSERT_EQ(all[index].kind, kMessage);
   putLe(bytes, all[index].offset + kRecordHead, 7, 4);  // topic id 7: never declared
   fixRecordCrc(bytes, all[index].offset);
   const std::string path = dir.file("t-bad.rmlog");
-  writeBytes(path, bytes);
+  writeFileBytes(path, bytes);
 
   auto reader = openOrFail(path);
   ASSERT_NE(reader, nullptr);
@@ -726,14 +685,14 @@ TEST(RecordLog, MessageOnAnUndeclaredTopicIsAnError) {
 
 TEST(RecordLog, MessageBeforeItsTopicRecordIsAnError) {
   TempDir dir;
-  Bytes bytes = readBytes(recordLog(dir.file("o.rmlog"), smallSamples(1), false));
+  Bytes bytes = readFileBytes(recordLog(dir.file("o.rmlog"), smallSamples(1), false));
   const auto all = records(bytes);  // TOPIC 0, TOPIC 1, MESSAGE on topic 0
   ASSERT_EQ(all.size(), 3u);
   Bytes message(bytes.begin() + static_cast<std::ptrdiff_t>(all[2].offset), bytes.end());
   bytes.resize(all[2].offset);
   insertAt(bytes, kHeader, message);  // the message now comes first
   const std::string path = dir.file("o-bad.rmlog");
-  writeBytes(path, bytes);
+  writeFileBytes(path, bytes);
 
   auto reader = openOrFail(path);
   ASSERT_NE(reader, nullptr);
@@ -743,7 +702,7 @@ TEST(RecordLog, MessageBeforeItsTopicRecordIsAnError) {
 
 TEST(RecordLog, MalformedTopicAndEndRecordsAreErrors) {
   TempDir dir;
-  const Bytes good = readBytes(recordLog(dir.file("m.rmlog"), smallSamples(2), true));
+  const Bytes good = readFileBytes(recordLog(dir.file("m.rmlog"), smallSamples(2), true));
   const auto all = records(good);
   const std::string path = dir.file("m-bad.rmlog");
   struct Case {
@@ -765,7 +724,7 @@ TEST(RecordLog, MalformedTopicAndEndRecordsAreErrors) {
     Bytes bad = good;
     putLe(bad, all[c.record].offset + kRecordHead + c.payload_offset, c.value, c.bytes);
     fixRecordCrc(bad, all[c.record].offset);
-    writeBytes(path, bad);
+    writeFileBytes(path, bad);
     auto reader = openOrFail(path);
     ASSERT_NE(reader, nullptr);
     const Error error = firstError(*reader);
@@ -777,7 +736,7 @@ TEST(RecordLog, MalformedTopicAndEndRecordsAreErrors) {
 
   Bytes trailing = good;  // bytes after END
   trailing.push_back(0x42);
-  writeBytes(path, trailing);
+  writeFileBytes(path, trailing);
   auto reader = openOrFail(path);
   ASSERT_NE(reader, nullptr);
   EXPECT_NE(firstError(*reader).message.find("followed by 1 more bytes"), std::string::npos);
@@ -847,11 +806,11 @@ TEST(RecordLog, SummarizeCountsMessagesPerTopicAndTimes) {
   EXPECT_FALSE(summary->truncation);
 
   // A cut-off copy: summarized up to the cut, with the truncation.
-  Bytes bytes = readBytes(path);
+  Bytes bytes = readFileBytes(path);
   const auto all = records(bytes);
   bytes.resize(all[all.size() - 2].offset + 5);  // inside the last message
   const std::string cut = dir.file("s-cut.rmlog");
-  writeBytes(cut, bytes);
+  writeFileBytes(cut, bytes);
   summary = RecordLogReader::summarize(cut);
   ASSERT_TRUE(summary) << summary.error().message;
   EXPECT_EQ(summary->messages_per_topic, (std::vector<std::uint64_t>{2, 2, 0}));
@@ -869,7 +828,7 @@ TEST(RecordLog, SummarizeCountsMessagesPerTopicAndTimes) {
 TEST(RecordLog, UnwritableDirectoryIsAnErrorNamingThePath) {
   TempDir dir;
   const std::string not_a_dir = dir.file("plain-file");
-  writeBytes(not_a_dir, {1});
+  writeFileBytes(not_a_dir, {1});
   for (const std::string& path : {dir.file("missing-dir/run.rmlog"), not_a_dir + "/run.rmlog"}) {
     SCOPED_TRACE(path);
     auto writer = RecordLogWriter::create(path);
@@ -885,13 +844,13 @@ TEST(RecordLog, ExistingPartialFileIsNeverOverwritten) {
   const std::string path = dir.file("twice.rmlog");
   const auto samples = smallSamples(2);
   recordLog(path, samples, /*close=*/false);
-  const Bytes before = readBytes(path + ".partial");
+  const Bytes before = readFileBytes(path + ".partial");
 
   auto second = RecordLogWriter::create(path);
   ASSERT_FALSE(second);
   EXPECT_NE(second.error().message.find(path + ".partial"), std::string::npos)
       << second.error().message;
-  EXPECT_EQ(readBytes(path + ".partial"), before);
+  EXPECT_EQ(readFileBytes(path + ".partial"), before);
 }
 
 TEST(RecordLog, WriterRejectsMisuse) {
