@@ -4,10 +4,13 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <tuple>
 #include <vector>
 
+#include "kernels/common/decay.h"
 #include "kernels/common/occupancy.h"
 #include "kernels/common/voxel_mean.h"
 #include "src/io/atomic_file.hpp"
@@ -15,8 +18,9 @@
 namespace raymap::io {
 namespace {
 
-// float x y z probability, uint count.
+// float x y z probability, uint count; kDecay adds float decay_rate traversal.
 constexpr std::size_t kRecordBytes = 5 * 4;
+constexpr std::size_t kDecayRecordBytes = 7 * 4;
 constexpr std::size_t kPointsPerChunk = 16384;
 // Written for voxels no ray observed (mean mode only): the prior, "unknown".
 constexpr float kUnobservedProbability = 0.5f;
@@ -25,12 +29,14 @@ struct Point {
   Vec3d p_world;  ///< metres
   float probability = 0.0f;
   std::uint32_t count = 0;
+  float decay_rate = 0.0f;  ///< kDecay: per metre
+  float traversal = 0.0f;   ///< kDecay: metres
 };
 
 /// Calls fn(point) for every voxel `mode` selects: regions in coordinate order (z, y, x), voxels
 /// in index order, so the output is deterministic.
 template <class Fn>
-void forEachPoint(const VoxelMap& map, ExportMode mode, Fn&& fn) {
+void forEachPoint(const VoxelMap& map, ExportMode mode, const ExportOptions& options, Fn&& fn) {
   const RegionStore& store = map.store();
   std::vector<std::pair<Vec3i, std::uint32_t>> regions;
   regions.reserve(store.size());
@@ -43,8 +49,11 @@ void forEachPoint(const VoxelMap& map, ExportMode mode, Fn&& fn) {
   const double resolution = map.geometry().resolution;
   const float threshold = map.occupancy().threshold;
   const int mean_layer = map.meanLayer();
+  const auto decay_threshold = static_cast<float>(options.decay_threshold);
   for (const auto& [region, slot] : regions) {
     const float* occupancy = store.layerData<float>(slot, map.occupancyLayer());
+    const float* traversal =
+        map.traversalLayer() >= 0 ? store.layerData<float>(slot, map.traversalLayer()) : nullptr;
     const rm_voxel_mean* means =
         mean_layer >= 0 ? store.layerData<rm_voxel_mean>(slot, mean_layer) : nullptr;
     std::uint32_t index = 0;
@@ -56,6 +65,8 @@ void forEachPoint(const VoxelMap& map, ExportMode mode, Fn&& fn) {
           const bool observed = rm_occupancy_observed(value) != 0;
           bool selected = false;
           bool at_mean = false;
+          const float metres = traversal != nullptr ? traversal[index] : 0.0f;
+          const float rate = rm_decay_rate(mean.count, metres);
           switch (mode) {
             case ExportMode::kOccupied:
               selected = rm_occupancy_occupied(value, threshold) != 0;
@@ -66,6 +77,10 @@ void forEachPoint(const VoxelMap& map, ExportMode mode, Fn&& fn) {
               break;
             case ExportMode::kMean:
               selected = mean.count > 0;
+              at_mean = true;
+              break;
+            case ExportMode::kDecay:
+              selected = rate >= decay_threshold;  // false for NaN: no ray entered the voxel
               at_mean = true;
               break;
           }
@@ -84,6 +99,8 @@ void forEachPoint(const VoxelMap& map, ExportMode mode, Fn&& fn) {
           point.probability =
               observed ? static_cast<float>(probability(value)) : kUnobservedProbability;
           point.count = mean.count;
+          point.decay_rate = std::min(rate, std::numeric_limits<float>::max());
+          point.traversal = metres;
           fn(point);
         }
       }
@@ -107,7 +124,9 @@ std::string headerText(const VoxelMap& map, ExportMode mode, std::uint64_t count
          "property float y\n"
          "property float z\n"
          "property float probability\n"
-         "property uint count\n"
+         "property uint count\n" +
+         (mode == ExportMode::kDecay ? "property float decay_rate\nproperty float traversal\n"
+                                     : "") +
          "end_header\n";
 }
 
@@ -121,13 +140,14 @@ void putF32(std::byte*& out, float v) noexcept { putU32(out, std::bit_cast<std::
 }  // namespace
 
 Result<ExportMode> exportModeFromString(const std::string& text) {
-  for (const ExportMode mode : {ExportMode::kOccupied, ExportMode::kFree, ExportMode::kMean}) {
+  for (const ExportMode mode :
+       {ExportMode::kOccupied, ExportMode::kFree, ExportMode::kMean, ExportMode::kDecay}) {
     if (text == toString(mode)) {
       return mode;
     }
   }
   return fail(ErrorCode::kInvalidArgument,
-              "unknown export mode '" + text + "' (expected occupied, free or mean)");
+              "unknown export mode '" + text + "' (expected occupied, free, mean or decay)");
 }
 
 const char* toString(ExportMode mode) noexcept {
@@ -138,20 +158,35 @@ const char* toString(ExportMode mode) noexcept {
       return "free";
     case ExportMode::kMean:
       return "mean";
+    case ExportMode::kDecay:
+      return "decay";
   }
   return "unknown";
 }
 
-Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std::string& path) {
+Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std::string& path,
+                                const ExportOptions& options) {
   if (map.occupancyLayer() < 0) {
     return fail(
         ErrorCode::kUnsupported,
         "the map has no occupancy layer: nothing to export as occupied, free or mean voxels");
   }
+  if (mode == ExportMode::kDecay) {
+    if (map.traversalLayer() < 0 || map.meanLayer() < 0) {
+      return fail(ErrorCode::kUnsupported,
+                  "the map has no traversal layer: decay rates need a map built with --mode "
+                  "decay or --decay-rate");
+    }
+    if (!std::isfinite(options.decay_threshold) || options.decay_threshold < 0.0) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "decay-rate threshold must be a finite number of reflections per metre >= 0");
+    }
+  }
+  const std::size_t record_bytes = mode == ExportMode::kDecay ? kDecayRecordBytes : kRecordBytes;
   // Count first so that the header is final before any point is written (one cheap extra pass
   // over the voxels instead of patching the file).
   std::uint64_t count = 0;
-  forEachPoint(map, mode, [&](const Point&) { ++count; });
+  forEachPoint(map, mode, options, [&](const Point&) { ++count; });
 
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {
@@ -161,7 +196,7 @@ Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std:
     return Unexpected(ok.error());
   }
   std::vector<std::byte> buffer;
-  buffer.reserve(kPointsPerChunk * kRecordBytes);
+  buffer.reserve(kPointsPerChunk * record_bytes);
   Expected<void, Error> status;
   const auto flush = [&]() {
     if (status && !buffer.empty()) {
@@ -169,16 +204,20 @@ Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std:
     }
     buffer.clear();
   };
-  forEachPoint(map, mode, [&](const Point& point) {
-    std::byte record[kRecordBytes];
+  forEachPoint(map, mode, options, [&](const Point& point) {
+    std::byte record[kDecayRecordBytes];
     std::byte* out = record;
     putF32(out, static_cast<float>(point.p_world.x));
     putF32(out, static_cast<float>(point.p_world.y));
     putF32(out, static_cast<float>(point.p_world.z));
     putF32(out, point.probability);
     putU32(out, point.count);
-    buffer.insert(buffer.end(), record, record + kRecordBytes);
-    if (buffer.size() >= kPointsPerChunk * kRecordBytes) {
+    if (mode == ExportMode::kDecay) {
+      putF32(out, point.decay_rate);
+      putF32(out, point.traversal);
+    }
+    buffer.insert(buffer.end(), record, record + record_bytes);
+    if (buffer.size() >= kPointsPerChunk * record_bytes) {
       flush();
     }
   });

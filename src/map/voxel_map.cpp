@@ -21,6 +21,14 @@ const char* toString(StorePolicy policy) noexcept {
   return policy == StorePolicy::kRolling ? "rolling" : "global";
 }
 
+std::string mapModeName(const MapConfig& config) {
+  if (!config.decay_rate) {
+    return toString(config.mode);
+  }
+  return config.mode == MapMode::kOccupancy ? std::string("decay")
+                                            : std::string(toString(config.mode)) + "+decay";
+}
+
 LayerSchema MapConfig::schema() const {
   LayerSchema schema;
   if (occupancy_layer) {

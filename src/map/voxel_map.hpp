@@ -58,6 +58,10 @@ struct MapConfig {
   std::uint64_t capacityRegions() const;
 };
 
+/// @brief The map's kind as the tools name it: "occupancy", "ndt-om", "ndt-tm", "decay"
+/// (occupancy with the traversal layer) or "<ndt mode>+decay".
+std::string mapModeName(const MapConfig& config);
+
 /// Occupancy state of a voxel.
 enum class VoxelState : std::uint8_t { kUnobserved, kFree, kOccupied };
 

@@ -51,12 +51,21 @@ void addNdtOptions(CLI::App& c, MappingFlags& f) {
 
 /// --mode and the --ndt-* options into config (after the semantics are set).
 Expected<void, Error> applyMode(const MappingFlags& f, MapConfig& config) {
-  const std::optional<MapMode> mode = mapModeFromName(f.mode);
+  // "decay" is occupancy plus the traversal layer; --decay-rate adds that layer to any mode.
+  const bool decay_mode = f.mode == "decay";
+  const std::optional<MapMode> mode =
+      decay_mode ? std::optional<MapMode>(MapMode::kOccupancy) : mapModeFromName(f.mode);
   if (!mode) {
-    return fail(ErrorCode::kInvalidArgument,
-                "--mode: unknown mode '" + f.mode + "' (expected occupancy, ndt-om or ndt-tm)");
+    return fail(ErrorCode::kInvalidArgument, "--mode: unknown mode '" + f.mode +
+                                                 "' (expected occupancy, ndt-om, ndt-tm or decay)");
   }
   config.mode = *mode;
+  config.decay_rate = decay_mode || f.decay_rate;
+  if (config.decay_rate && !config.voxel_mean) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--mode decay / --decay-rate need the voxel mean (its sample count over the "
+                "metres of ray path is the rate): drop --no-mean");
+  }
   const std::pair<bool, const char*> given[] = {
       {f.ndt_sensor_noise.has_value(), "--ndt-sensor-noise"},
       {f.ndt_regulariser.has_value(), "--ndt-regulariser"},
@@ -133,10 +142,13 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
       ->capture_default_str();
   c.add_option("--mode", f.mode,
                "occupancy: log-odds occupancy; ndt-om: occupancy whose misses follow each voxel's "
-               "Gaussian (NDT-OM); ndt-tm: NDT-OM plus hit/miss counts and intensity (NDT-TM). "
-               "NDT needs --semantics ray")
-      ->check(CLI::IsMember({"occupancy", "ndt-om", "ndt-tm"}))
+               "Gaussian (NDT-OM); ndt-tm: NDT-OM plus hit/miss counts and intensity (NDT-TM); "
+               "decay: occupancy plus the metres of ray path in each voxel, for decay rates "
+               "(samples per metre). NDT needs --semantics ray")
+      ->check(CLI::IsMember({"occupancy", "ndt-om", "ndt-tm", "decay"}))
       ->capture_default_str();
+  c.add_flag("--decay-rate", f.decay_rate,
+             "Keep the metres of ray path in each voxel (decay rates) with any --mode");
   addNdtOptions(c, f);
   c.add_option("--backend", f.backend, "Integration backend: cpu, opencl or cuda")
       ->check(CLI::IsMember({"cpu", "opencl", "cuda"}))

@@ -27,7 +27,8 @@ struct MappingFlags {
   std::optional<double> clamp_max;
   std::optional<double> threshold;
   std::string semantics = "ray";
-  std::string mode = "occupancy";  ///< occupancy, ndt-om or ndt-tm
+  std::string mode = "occupancy";  ///< occupancy, ndt-om, ndt-tm or decay (occupancy + decay)
+  bool decay_rate = false;         ///< --decay-rate: the traversal layer on any mode
   // NDT parameters (unset: NdtParams defaults); only with --mode ndt-om / ndt-tm.
   std::optional<double> ndt_sensor_noise;
   std::optional<double> ndt_regulariser;

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap export`: a map as a point cloud for any viewer.
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -21,6 +22,7 @@ struct ExportFlags {
   double sigmas = io::NdtExportOptions::kDefaultSigmas;
   std::optional<double> min_axis;
   std::optional<std::string> colour;
+  std::optional<double> threshold;  ///< decay: lowest rate exported, per metre
   bool quiet = false;
 };
 
@@ -84,6 +86,18 @@ int runExport(const ExportFlags& f) {
     printError("export", mode.error().message);
     return kExitUsage;
   }
+  io::ExportOptions options;
+  if (f.threshold) {
+    if (*mode != io::ExportMode::kDecay) {
+      printError("export", "--threshold applies only to --mode decay");
+      return kExitUsage;
+    }
+    if (!std::isfinite(*f.threshold) || *f.threshold < 0.0) {
+      printError("export", "--threshold: must be a finite rate >= 0 (reflections per metre)");
+      return kExitUsage;
+    }
+    options.decay_threshold = *f.threshold;
+  }
   if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
     printError("export", ok.error().message);
     return kExitFailure;
@@ -93,9 +107,9 @@ int runExport(const ExportFlags& f) {
     printError("export", map.error().message);
     return kExitFailure;
   }
-  auto count = io::exportPly(*map, *mode, f.ply);
+  auto count = io::exportPly(*map, *mode, f.ply, options);
   if (!count) {
-    printError("export", count.error().message);
+    printError("export", f.map + ": " + count.error().message);
     return kExitFailure;
   }
   if (!f.quiet) {
@@ -113,10 +127,13 @@ void addExportCommand(CLI::App& app, int* exit_code) {
       "export", "Write a map's voxels as a point-cloud PLY, or its NDT Gaussians as ellipsoids");
   c->add_option("map", flags->map, "Map file (.rmap)")->required();
   c->add_option("--ply", flags->ply, "PLY file to write")->required();
-  c->add_option("--mode", flags->mode,
-                "occupied: occupied voxels at their voxel mean; free: free voxel centres; "
-                "mean: every voxel with samples, at its mean; ndt: a triangle-mesh ellipsoid per "
-                "occupied NDT Gaussian; ndt-points: the Gaussians' means with normals")
+  c->add_option(
+       "--mode", flags->mode,
+       "occupied: occupied voxels at their voxel mean; free: free voxel centres; "
+       "mean: every voxel with samples, at its mean; decay: every voxel of a decay-rate map "
+       "whose rate (samples per metre of ray path) is at least --threshold; ndt: a "
+       "triangle-mesh ellipsoid per occupied NDT Gaussian; ndt-points: the Gaussians' "
+       "means with normals")
       ->capture_default_str();
   c->add_option("--sigmas", flags->sigmas, "NDT: ellipsoid half-axes in standard deviations")
       ->capture_default_str();
@@ -126,6 +143,9 @@ void addExportCommand(CLI::App& app, int* exit_code) {
   c->add_option("--colour", flags->colour,
                 "NDT: height (default), or for ndt-tm maps intensity or permeability; blue (low) "
                 "- cyan - green - yellow - red (high)");
+  c->add_option("--threshold", flags->threshold,
+                "decay: the lowest decay rate exported, reflections per metre (default 0: every "
+                "voxel a ray entered)");
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   c->callback([flags, exit_code] { *exit_code = runExport(*flags); });
 }

@@ -123,7 +123,7 @@ int runInfo(const InfoFlags& f) {
         .add("region_voxels", c.geometry.region_voxels)
         .add("region_extent", c.geometry.regionExtent())
         .add("semantics", toString(c.semantics))
-        .add("mode", toString(c.mode))
+        .add("mode", mapModeName(c))
         .raw("occupancy", params.str())
         .raw("layers", layer_array)
         .raw("layer_details", layer_details);
@@ -146,7 +146,7 @@ int runInfo(const InfoFlags& f) {
   std::printf("resolution     %g m, regions of %d^3 voxels (%g m)\n", c.geometry.resolution,
               c.geometry.region_voxels, c.geometry.regionExtent());
   std::printf("semantics      %s\n", toString(c.semantics));
-  std::printf("mode           %s\n", toString(c.mode));
+  std::printf("mode           %s\n", mapModeName(c).c_str());
   std::printf(
       "occupancy      hit %.4g, miss %.4g, clamps %.4g / %.4g, threshold %.4g"
       " (log-odds %+.4f %+.4f %+.4f %+.4f %+.4f)\n",

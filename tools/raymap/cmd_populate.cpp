@@ -49,7 +49,7 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
       "map            %s free, %s occupied voxels in %s regions (%.3g m, %s semantics, %s)\n",
       withCommas(r.summary.voxels_free).c_str(), withCommas(r.summary.voxels_occupied).c_str(),
       withCommas(r.summary.regions).c_str(), o.map.geometry.resolution, toString(o.map.semantics),
-      toString(o.map.mode));
+      mapModeName(o.map).c_str());
   if (r.device.empty()) {
     std::printf("integration    %.3f s, %.3g M rays/s (%s, %u threads); reading %.3f s\n",
                 r.integrate_seconds, rate / 1e6, r.backend_name.c_str(), r.threads, r.read_seconds);

@@ -224,7 +224,7 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
   j.add("input", options.input)
       .add("mapper", "raymap")
       .add("semantics", toString(options.map.semantics))
-      .add("mode", toString(options.map.mode))
+      .add("mode", mapModeName(options.map))
       .add("resolution", options.map.geometry.resolution)
       .add("region_voxels", options.map.geometry.region_voxels)
       .add("min_range", options.filter.min_range_m)

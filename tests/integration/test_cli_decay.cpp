@@ -1,0 +1,95 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Decay-rate maps through the raymap program: populate --mode decay (and --decay-rate with an NDT
+// mode), info, export --mode decay --threshold, and the errors for maps without the layer.
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/io/ray_cloud_writer.hpp"
+#include "tests/support/cli_runner.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace raymap::test {
+namespace {
+
+/// Rays along +x from the centre of voxel (0,0,0) to x = 1.55, 1.65, 2.35, 1.03 and 1.07 m: at
+/// 0.1 m, 24 voxels are entered and three have a rate of at least 4.5 per metre (voxel 10: 2
+/// samples over 0.4 m; 16: 1 over 0.15 m; 23: 1 over 0.05 m).
+void writeRays(const std::string& path) {
+  std::vector<Ray> rays;
+  for (const double end_x : {1.55, 1.65, 2.35, 1.03, 1.07}) {
+    Ray ray;
+    ray.origin = Vec3d{0.05, 0.05, 0.05};
+    ray.sample = Vec3d{end_x, 0.05, 0.05};
+    rays.push_back(ray);
+  }
+  auto writer = io::RayCloudWriter::open(path);
+  ASSERT_TRUE(writer.has_value()) << writer.error().message;
+  ASSERT_TRUE((*writer)->write(rays).has_value());
+  ASSERT_TRUE((*writer)->finish().has_value());
+}
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(CliDecay, PopulateInfoAndExportADecayRateMap) {
+  TempDir dir;
+  const std::string rays = dir.file("rays.ply");
+  const std::string map = dir.file("decay.rmap");
+  const std::string ply = dir.file("decay.ply");
+  writeRays(rays);
+
+  const RunResult populated = runRaymap(
+      {"populate", rays, "--output", map, "--mode", "decay", "--resolution", "0.1", "--quiet"});
+  ASSERT_EQ(populated.exit_code, 0) << describe(populated);
+  const RunResult info = runRaymap({"info", map});
+  ASSERT_EQ(info.exit_code, 0) << describe(info);
+  EXPECT_TRUE(has(info.out, "mode           decay")) << info.out;
+  EXPECT_TRUE(has(info.out, "traversal (4 B)")) << info.out;
+  const RunResult exported =
+      runRaymap({"export", map, "--mode", "decay", "--threshold", "4.5", "--ply", ply});
+  ASSERT_EQ(exported.exit_code, 0) << describe(exported);
+  EXPECT_TRUE(has(exported.out, "wrote 3 points (decay)")) << exported.out;
+  const std::string text = readFile(ply);
+  EXPECT_TRUE(has(text, "element vertex 3\n"));
+  EXPECT_TRUE(has(text, "property float decay_rate\n"));
+}
+
+TEST(CliDecay, DecayRateCombinesWithNdt) {
+  TempDir dir;
+  const std::string rays = dir.file("rays.ply");
+  const std::string map = dir.file("ndt.rmap");
+  writeRays(rays);
+  const RunResult populated =
+      runRaymap({"populate", rays, "--output", map, "--mode", "ndt-om", "--decay-rate", "--quiet"});
+  ASSERT_EQ(populated.exit_code, 0) << describe(populated);
+  const RunResult info = runRaymap({"info", map});
+  EXPECT_TRUE(has(info.out, "mode           ndt-om+decay")) << info.out;
+}
+
+TEST(CliDecay, ErrorsNameTheMapAndTheReason) {
+  TempDir dir;
+  const std::string rays = dir.file("rays.ply");
+  const std::string map = dir.file("plain.rmap");
+  writeRays(rays);
+  ASSERT_EQ(runRaymap({"populate", rays, "--output", map, "--quiet"}).exit_code, 0);
+  const RunResult no_layer =
+      runRaymap({"export", map, "--mode", "decay", "--ply", dir.file("x.ply")});
+  EXPECT_NE(no_layer.exit_code, 0);
+  EXPECT_TRUE(has(no_layer.err, map)) << no_layer.err;
+  EXPECT_TRUE(has(no_layer.err, "no traversal layer")) << no_layer.err;
+  const RunResult wrong_mode = runRaymap(
+      {"export", map, "--mode", "occupied", "--threshold", "2", "--ply", dir.file("y.ply")});
+  EXPECT_NE(wrong_mode.exit_code, 0);
+  EXPECT_TRUE(has(wrong_mode.err, "--threshold applies only to --mode decay")) << wrong_mode.err;
+  const RunResult no_mean =
+      runRaymap({"populate", rays, "--output", dir.file("z.rmap"), "--mode", "decay", "--no-mean"});
+  EXPECT_NE(no_mean.exit_code, 0);
+  EXPECT_TRUE(has(no_mean.err, "voxel mean")) << no_mean.err;
+  EXPECT_FALSE(has(readFile(map), "traversal")) << "the plain map was not touched";
+}
+
+}  // namespace
+}  // namespace raymap::test
