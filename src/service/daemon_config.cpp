@@ -81,7 +81,7 @@ void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& 
   Fields f(ctx, node, "map");
   f.knownKeys({"resolution", "region_voxels", "window", "semantics", "voxel_mean",
                "hit_probability", "miss_probability", "clamp_min", "clamp_max", "save_on_exit",
-               "mode", "ndt"});
+               "mode", "ndt", "decay_rate"});
   map.policy = StorePolicy::kRolling;
   map.geometry.resolution = f.positive("resolution", MapGeometry::kDefaultResolution);
   map.geometry.region_voxels =
@@ -103,6 +103,9 @@ void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& 
   map.semantics = choiceOr(f, "semantics", {"per-ray", "per-scan"}, 0) == 0 ? Semantics::kPerRay
                                                                             : Semantics::kPerScan;
   map.voxel_mean = flag(f, "voxel_mean", true);
+  map.decay_rate = flag(f, "decay_rate", false);
+  f.check(!map.decay_rate || map.voxel_mean, "decay_rate",
+          "needs voxel_mean: true (the voxel mean's sample count over the metres is the rate)");
   static const std::vector<std::string> kModes = {"occupancy", "ndt-om", "ndt-tm"};
   map.mode = *mapModeFromName(kModes[choiceOr(f, "mode", kModes, 0)]);
   f.check(!isNdt(map.mode) || map.semantics == Semantics::kPerRay, "mode",

@@ -237,6 +237,15 @@ TEST(DaemonConfig, NdtModeAndParametersParseAndAreChecked) {
   expectError("map:\n  mode: ndt-om\n  ndt: {sensor_noise: -1}\n", "map.ndt", "sensor-noise");
 }
 
+TEST(DaemonConfig, DecayRateIsAFlagThatNeedsTheVoxelMean) {
+  auto parsed = parseDaemonConfig("map:\n  mode: ndt-om\n  decay_rate: true\n", kName);
+  ASSERT_TRUE(parsed) << parsed.error().message;
+  EXPECT_TRUE(parsed->map.decay_rate);
+  EXPECT_FALSE(parseDaemonConfig("map: {}\n", kName)->map.decay_rate);
+  expectError("map:\n  decay_rate: true\n  voxel_mean: false\n", "map.decay_rate", "voxel_mean");
+  expectError("map:\n  decay_rate: often\n", "map.decay_rate", "expected true or false");
+}
+
 TEST(DaemonConfig, WrongTypesAreNamed) {
   expectError("map: 5\n", "map", "expected a mapping");
   expectError("map:\n  resolution: fine\n", "map.resolution", "expected a number");
