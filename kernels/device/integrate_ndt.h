@@ -134,22 +134,15 @@ RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_r
   rm_i32 count = rm_span_walk_init(&walk, &walk_ray, span.t0, span.t1, span.box_lo, p.region_voxels,
                                    span.flags, frame.sample_is_start);
   rm_i32 k;
-  float ray_metres = 0.0f;
   if (p.has_traversal != 0u) {
-    ray_metres = rm_decay_ray_metres(&walk_ray, p.resolution);
-    dropped += rm_traversal_add_left_out(traversal, base, &walk, &walk_ray, span,
-                                         frame.sample_is_start, p.region_voxels, ray_metres);
+    dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
+                                     frame.sample_is_start, p.region_voxels, p.resolution);
   }
   for (k = 0; k < count; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
-    rm_u32 old;
-    float value;
+    rm_u32 old = rm_load_u32(occupancy + i);
+    float value = rm_as_float(old);
     rm_u32 samples;
-    if (p.has_traversal != 0u) {
-      dropped += rm_traversal_add_voxel(traversal, i, &walk, ray_metres);
-    }
-    old = rm_load_u32(occupancy + i);
-    value = rm_as_float(old);
     /* Free space first, inline and without the Gaussian (as on the CPU): an unobserved voxel
      * has none, and one with fewer samples than the threshold takes a plain miss. (NDT-OM's
      * lower clamp is not tested separately: it made no difference on PoCL, and on the CPU the

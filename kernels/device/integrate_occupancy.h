@@ -103,17 +103,12 @@ RM_DEVICE_FN void rm_integrate_span(
                                    span.flags, frame.sample_is_start);
   rm_i32 k;
   rm_u32 miss_mark = rm_scan_mark_miss(p.sequence);
-  float ray_metres = 0.0f;
   if (p.has_traversal != 0u) {
-    ray_metres = rm_decay_ray_metres(&walk_ray, p.resolution);
-    dropped += rm_traversal_add_left_out(traversal, base, &walk, &walk_ray, span,
-                                         frame.sample_is_start, p.region_voxels, ray_metres);
+    dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
+                                     frame.sample_is_start, p.region_voxels, p.resolution);
   }
   for (k = 0; k < count; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
-    if (p.has_traversal != 0u) {
-      dropped += rm_traversal_add_voxel(traversal, i, &walk, ray_metres);
-    }
     if (p.per_scan != 0u) {
       /* The first miss of this scan wins the mark and is the only writer of the voxel. */
       if (rm_load_u32(marks + i) < miss_mark &&

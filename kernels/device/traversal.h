@@ -2,8 +2,8 @@
 /* Decay-rate maps on a device: what a span adds to the traversal layer (metres of ray path per
  * voxel), by the rules of kernels/common/decay.h, exactly what the CPU's walkSpanAddingPath
  * (src/map/cpu_voxel_ops.hpp) adds for the same span. Shared by the occupancy and NDT span
- * kernels, which call these only when rm_integrate_params.has_traversal is set (a uniform branch:
- * maps without the layer pay one test per voxel).
+ * kernels, which call rm_traversal_add_span only when rm_integrate_params.has_traversal is set (a
+ * uniform branch, once a span: maps without the layer run the miss loop they ran before).
  *
  * Every ray adds its path, whatever the semantics: per-scan marks elect one occupancy writer per
  * voxel and scan, but path length is physical and every ray's counts. Adds of many work-items to
@@ -46,6 +46,25 @@ RM_DEVICE_FN rm_u32 rm_traversal_add_left_out(RM_ATOMIC_GLOBAL rm_u32* traversal
 RM_DEVICE_FN rm_u32 rm_traversal_add_voxel(RM_ATOMIC_GLOBAL rm_u32* traversal, rm_u32 i,
                                            const rm_span_walk* s, float ray_metres) {
   return rm_float_add_atomic(traversal + i, rm_decay_voxel_metres(&s->walk, ray_metres)) ? 0u : 1u;
+}
+
+/* Everything span `span` adds to the traversal layer: the left-out voxel's part when the span
+ * holds it, and each of its `count` voxels' metres. Walks its own copy of `s` (as
+ * rm_span_walk_init left it), so the caller's miss loop stays as it is for maps without the layer
+ * (one uniform branch a span, none a voxel). Returns the adds given up. */
+RM_DEVICE_FN rm_u32 rm_traversal_add_span(RM_ATOMIC_GLOBAL rm_u32* traversal, rm_u32 base,
+                                          rm_span_walk s, rm_i32 count, const rm_line_walk_ray* ray,
+                                          rm_span_record span, int sample_is_start,
+                                          rm_i32 region_voxels, float resolution) {
+  float ray_metres = rm_decay_ray_metres(ray, resolution);
+  rm_u32 dropped = rm_traversal_add_left_out(traversal, base, &s, ray, span, sample_is_start,
+                                             region_voxels, ray_metres);
+  rm_i32 k;
+  for (k = 0; k < count; ++k) {
+    rm_u32 i = base + (k == 0 ? RM_U32(s.index) : rm_span_walk_advance(&s));
+    dropped += rm_traversal_add_voxel(traversal, i, &s, ray_metres);
+  }
+  return dropped;
 }
 
 #endif /* RAYMAP_KERNELS_DEVICE_TRAVERSAL_H */
