@@ -41,6 +41,8 @@ typedef struct rm_integrate_params {
   rm_u32 per_scan;          /* 1: per-scan semantics (scan marks), 0: per-ray */
   rm_u32 sequence;          /* scan sequence (per-scan semantics) */
   rm_u32 has_mean;          /* 1 when the map keeps the voxel-mean layer */
+  rm_u32 has_traversal;     /* 1 when the map keeps the traversal layer (decay rate, decay.h) */
+  float resolution;         /* voxel edge, metres (path lengths in the traversal layer) */
 } rm_integrate_params;
 
 /* Per-ray semantics: most hit groups in one batch. The device tags a voxel with samples with its

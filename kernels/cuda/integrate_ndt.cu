@@ -19,7 +19,8 @@ cudaError_t launchNdtKernel(NdtKernelId kernel, cudaStream_t stream, unsigned bl
     case NdtKernelId::kIntegrateSpans:
       rm_ndt_integrate_spans<<<blocks, block_threads, 0, stream>>>(
           b.rays, b.spans, b.occupancy, b.ndt, b.means,
-          reinterpret_cast<std::uint32_t*>(b.hit_miss), params, ndt_params, b.counters);
+          reinterpret_cast<std::uint32_t*>(b.hit_miss), b.traversal, params, ndt_params,
+          b.counters);
       break;
     case NdtKernelId::kApplyHitGroups:
       rm_ndt_apply_hit_groups<<<blocks, block_threads, 0, stream>>>(

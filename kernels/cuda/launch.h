@@ -17,7 +17,8 @@
 namespace raymap::cuda {
 
 /// Device buffers of one batch and the map layers the kernels update (device pointers). Absent
-/// layers (no voxel mean, per-ray semantics without scan marks) point at a small placeholder.
+/// layers (no voxel mean, per-ray semantics without scan marks, no traversal layer) point at a
+/// small placeholder.
 struct OccupancyKernelBuffers {
   const rm_prepared_ray* rays = nullptr;
   const rm_span_record* spans = nullptr;
@@ -27,6 +28,7 @@ struct OccupancyKernelBuffers {
   rm_voxel_mean* means = nullptr;
   std::uint32_t* marks = nullptr;
   std::uint32_t* scratch = nullptr;
+  std::uint32_t* traversal = nullptr;      // decay rate: float metres, added as bits
   unsigned long long* counters = nullptr;  // RM_COUNTER_COUNT 64-bit words
 };
 

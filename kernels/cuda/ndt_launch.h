@@ -16,8 +16,8 @@
 namespace raymap::cuda {
 
 /// Device buffers of one batch and the map layers the NDT kernels update (device pointers).
-/// Absent layers (NDT-TM's counts and intensity in an NDT-OM map, the voxel mean) point at a
-/// placeholder the kernels never read.
+/// Absent layers (NDT-TM's counts and intensity in an NDT-OM map, the voxel mean, the traversal
+/// layer) point at a placeholder the kernels never touch.
 struct NdtKernelBuffers {
   const rm_prepared_ray* rays = nullptr;
   const rm_span_record* spans = nullptr;
@@ -28,6 +28,7 @@ struct NdtKernelBuffers {
   rm_ndt_hit_miss* hit_miss = nullptr;
   rm_ndt_intensity* intensity = nullptr;
   rm_voxel_mean* means = nullptr;
+  std::uint32_t* traversal = nullptr;      ///< decay rate: float metres, added as bits
   unsigned long long* counters = nullptr;  ///< RM_COUNTER_COUNT 64-bit words
 };
 

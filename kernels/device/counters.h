@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: BSD-3-Clause */
 /* What every integration kernel shares about bounded atomic updates and their counters: the
- * compare-and-swap retry bound, the plain miss by compare-and-swap, and the batch counters (voxel
- * visits in RM_COUNTER_BUCKETS buckets, updates given up in RM_COUNTER_DROPPED; layout in
- * kernels/common/batch.h). */
+ * compare-and-swap retry bound, the plain miss and the float addition by compare-and-swap, and
+ * the batch counters (voxel visits in RM_COUNTER_BUCKETS buckets, updates given up in
+ * RM_COUNTER_DROPPED; layout in kernels/common/batch.h). */
 #ifndef RAYMAP_KERNELS_DEVICE_COUNTERS_H
 #define RAYMAP_KERNELS_DEVICE_COUNTERS_H
 
@@ -25,6 +25,35 @@ RM_DEVICE_FN void rm_count(RM_ATOMIC_GLOBAL rm_counter* counters, rm_u32 which, 
   (void)rm_atomic_add_u32(counters + which, amount);
 }
 #endif
+
+/* Adds `value` to the float whose bits are `word` (decay rate: metres of path to a voxel's
+ * traversal, kernels/common/decay.h). CUDA adds in one atomic; OpenCL 1.2 has no float atomics,
+ * so it adds by compare-and-swap on the bits, retried at most RM_CAS_RETRY_LIMIT times (each
+ * failure means another work-item's add went in). Returns 0 when the add was given up. Adding
+ * zero (a walk through a voxel's edge or corner) writes nothing. */
+RM_DEVICE_FN int rm_float_add_atomic(RM_ATOMIC_GLOBAL rm_u32* word, float value) {
+#if defined(RM_HAVE_FLOAT_ATOMIC_ADD)
+  if (value != 0.0f) {
+    rm_atomic_add_f32(word, value);
+  }
+  return 1;
+#else
+  rm_u32 old;
+  int attempt;
+  if (value == 0.0f) {
+    return 1;
+  }
+  old = rm_load_u32(word);
+  for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
+    rm_u32 seen = rm_atomic_cas_u32(word, old, rm_as_u32(rm_as_float(old) + value));
+    if (seen == old) {
+      return 1;
+    }
+    old = seen;
+  }
+  return 0;
+#endif
+}
 
 /* Applies a plain miss to an occupancy word (occupancy: an untagged one) whose last seen bits are
  * `old`, with bounded compare-and-swap. Returns 0 when the update was given up. */

@@ -67,6 +67,10 @@ RM_DEVICE_FN rm_u64 rm_atomic_add_u64(rm_u64* p, rm_u64 value) { return atomicAd
 RM_DEVICE_FN rm_u64 rm_atomic_cas_u64(rm_u64* p, rm_u64 expected, rm_u64 desired) {
   return atomicCAS(p, expected, desired);
 }
+/* Float addition in one hardware atomic, to a word that holds a float's bits. OpenCL 1.2 has
+ * none: counters.h adds by compare-and-swap there. */
+#define RM_HAVE_FLOAT_ATOMIC_ADD 1
+RM_DEVICE_FN void rm_atomic_add_f32(rm_u32* p, float value) { (void)atomicAdd((float*)p, value); }
 
 #else
 #error "kernels/device headers are device code: include them from .cl or .cu files only"

@@ -20,7 +20,10 @@
  *     counts, intensity and mean once, folds its samples in ray order with rm_ndt_hit (and
  *     rm_mean_fold) and writes them once. A covariance cannot be folded with single-word atomics,
  *     and the fold is sequential in ray order anyway; grouping per voxel on the host means every
- *     work-item has work (no idle work-item per duplicate sample, unlike one thread per ray). */
+ *     work-item has work (no idle work-item per duplicate sample, unlike one thread per ray).
+ *
+ * Decay-rate maps (p.has_traversal): launch 1 also adds each span's metres of path to the
+ * traversal layer (traversal.h), as the occupancy kernel does. */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_H
 
@@ -33,6 +36,7 @@
 #include "../common/voxel_mean.h"
 #include "counters.h"
 #include "device.h"
+#include "traversal.h"
 
 /* The part of a voxel's Gaussian the miss rule reads. Only the count is loaded at first: a voxel
  * that is unobserved or holds fewer than sample_threshold samples takes a plain miss, which does
@@ -109,13 +113,15 @@ RM_DEVICE_COLD_FN rm_u32 rm_ndt_shaped_miss(RM_ATOMIC_GLOBAL rm_u32* word, rm_u3
 
 /* Launch 1. Work-item `id`: walks span `id` and applies the NDT miss to each voxel it crosses
  * (means: the voxel-mean layer, read when p.has_mean);
- * NDT-TM (p.traversability) counts the passes that are misses in hit_miss. */
+ * NDT-TM (p.traversability) counts the passes that are misses in hit_miss; decay-rate maps
+ * (p.has_traversal) add the span's path to `traversal` (float metres as bits). */
 RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
                                         const RM_GLOBAL rm_span_record* spans,
                                         RM_ATOMIC_GLOBAL rm_u32* occupancy,
                                         const RM_GLOBAL rm_ndt_voxel* ndt,
                                         const RM_GLOBAL rm_voxel_mean* means,
-                                        RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_integrate_params p,
+                                        RM_ATOMIC_GLOBAL rm_u32* hit_miss,
+                                        RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params p,
                                         rm_ndt_params np, RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_span_record span = spans[id];
   rm_prepared_ray ray = rays[span.ray];
@@ -128,6 +134,10 @@ RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_r
   rm_i32 count = rm_span_walk_init(&walk, &walk_ray, span.t0, span.t1, span.box_lo, p.region_voxels,
                                    span.flags, frame.sample_is_start);
   rm_i32 k;
+  if (p.has_traversal != 0u) {
+    dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
+                                     frame.sample_is_start, p.region_voxels, p.resolution);
+  }
   for (k = 0; k < count; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
     rm_u32 old = rm_load_u32(occupancy + i);

@@ -4,8 +4,9 @@
  * kernels/cuda/integrate_ndt.cu are this header and nothing more (plus, in CUDA, the host
  * launcher). One work-item per span record (misses), then one per hit group (hits); the host
  * rounds the work-item count up to whole work-groups, so each entry point checks its index.
- * Layers a map lacks (NDT-TM's hit_miss and intensity in NDT-OM, the mean) are bound to a small
- * placeholder and never read (ndt_params.traversability, params.has_mean). */
+ * Layers a map lacks (NDT-TM's hit_miss and intensity in NDT-OM, the mean, the traversal layer)
+ * are bound to a small placeholder and never touched (ndt_params.traversability, params.has_mean,
+ * params.has_traversal). */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H
 
@@ -15,11 +16,12 @@ RM_KERNEL void rm_ndt_integrate_spans(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
     RM_ATOMIC_GLOBAL rm_u32* occupancy, const RM_GLOBAL rm_ndt_voxel* ndt,
     const RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* hit_miss,
-    rm_integrate_params params, rm_ndt_params ndt_params, RM_ATOMIC_GLOBAL rm_counter* counters) {
+    RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params params, rm_ndt_params ndt_params,
+    RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
-    rm_ndt_integrate_span(id, rays, spans, occupancy, ndt, means, hit_miss, params, ndt_params,
-                          counters);
+    rm_ndt_integrate_span(id, rays, spans, occupancy, ndt, means, hit_miss, traversal, params,
+                          ndt_params, counters);
   }
 }
 

@@ -25,7 +25,11 @@
  * and scan for the miss (a plain store). The result equals the CPU reference exactly.
  *
  * Voxel means: one work-item per voxel folds all of the batch's samples of that voxel in ray
- * order, so means match the CPU reference bit for bit and need no atomics. */
+ * order, so means match the CPU reference bit for bit and need no atomics.
+ *
+ * Decay-rate maps (p.has_traversal): rm_integrate_span also adds each span's metres of path to
+ * the traversal layer (traversal.h), in either semantics, with float atomics; the sums equal the
+ * CPU's up to rounding (the order of the adds differs). */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 
@@ -38,6 +42,7 @@
 #include "../common/voxel_mean.h"
 #include "counters.h"
 #include "device.h"
+#include "traversal.h"
 
 /* A tagged occupancy word: a quiet NaN whose low 22 bits hold the hit group (occupancy values
  * are never NaN: rays are validated, and +inf marks "unobserved"). */
@@ -79,15 +84,14 @@ RM_DEVICE_FN void rm_tag_hit_group(rm_u32 id, const RM_GLOBAL rm_hit_group* grou
   occupancy[i] = RM_TAG_BITS | id;
 }
 
-/* Work-item `id`: walks span `id` and applies the semantics' miss rule to its voxels. */
-RM_DEVICE_FN void rm_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
-                                    const RM_GLOBAL rm_span_record* spans,
-                                    const RM_GLOBAL rm_hit_group* groups,
-                                    const RM_GLOBAL rm_u32* hit_rays,
-                                    RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                    RM_ATOMIC_GLOBAL rm_u32* marks,
-                                    RM_ATOMIC_GLOBAL rm_u32* scratch, rm_integrate_params p,
-                                    RM_ATOMIC_GLOBAL rm_counter* counters) {
+/* Work-item `id`: walks span `id` and applies the semantics' miss rule to its voxels; decay-rate
+ * maps add the span's path to `traversal` (float metres as bits; unused without the layer). */
+RM_DEVICE_FN void rm_integrate_span(
+    rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
+    const RM_GLOBAL rm_hit_group* groups, const RM_GLOBAL rm_u32* hit_rays,
+    RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_ATOMIC_GLOBAL rm_u32* marks,
+    RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params p,
+    RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_span_record span = spans[id];
   rm_prepared_ray ray = rays[span.ray];
   rm_ray_walk_frame frame = rm_ray_walk_frame_make(ray);
@@ -99,6 +103,10 @@ RM_DEVICE_FN void rm_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* 
                                    span.flags, frame.sample_is_start);
   rm_i32 k;
   rm_u32 miss_mark = rm_scan_mark_miss(p.sequence);
+  if (p.has_traversal != 0u) {
+    dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
+                                     frame.sample_is_start, p.region_voxels, p.resolution);
+  }
   for (k = 0; k < count; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
     if (p.per_scan != 0u) {

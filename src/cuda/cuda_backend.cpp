@@ -219,6 +219,7 @@ class CudaBackend final : public gpu::StagedBackend {
     buffers.means = static_cast<rm_voxel_mean*>(layerOr(map().meanLayer()));
     buffers.marks = static_cast<std::uint32_t*>(layerOr(map().scanMarkLayer()));
     buffers.scratch = typed<std::uint32_t>(b.scratch);
+    buffers.traversal = static_cast<std::uint32_t*>(layerOr(map().traversalLayer()));
     buffers.counters = typed<unsigned long long>(b.counters);
     const cuda::OccupancyKernelId id =
         kernel == OccupancyKernel::kTagHitGroups     ? cuda::OccupancyKernelId::kTagHitGroups
@@ -242,6 +243,7 @@ class CudaBackend final : public gpu::StagedBackend {
     buffers.hit_miss = static_cast<rm_ndt_hit_miss*>(layerOr(m.hitMissLayer()));
     buffers.intensity = static_cast<rm_ndt_intensity*>(layerOr(m.intensityLayer()));
     buffers.means = static_cast<rm_voxel_mean*>(layerOr(m.meanLayer()));
+    buffers.traversal = static_cast<std::uint32_t*>(layerOr(m.traversalLayer()));
     buffers.counters = typed<unsigned long long>(b.counters);
     const cuda::NdtKernelId id = kernel == NdtKernel::kIntegrateSpans
                                      ? cuda::NdtKernelId::kIntegrateSpans
@@ -327,10 +329,6 @@ Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
                                                    const CudaBackendOptions& options) {
   if (map.occupancyLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument, "the CUDA backend needs an occupancy layer");
-  }
-  if (map.traversalLayer() >= 0) {
-    return fail(ErrorCode::kUnsupported,
-                "decay-rate maps are integrated on the CPU backend only so far (--backend cpu)");
   }
   if (auto ok = gpu::checkBatchOptions(options, "CUDA"); !ok) {
     return Unexpected(ok.error());

@@ -9,7 +9,7 @@ namespace {
 
 static_assert(sizeof(rm_span_record) == 32, "device ABI");
 static_assert(sizeof(rm_hit_group) == 16, "device ABI");
-static_assert(sizeof(rm_integrate_params) == 48, "device ABI");
+static_assert(sizeof(rm_integrate_params) == 56, "device ABI");
 static_assert(sizeof(rm_ndt_params) == 32, "device ABI");
 static_assert(sizeof(rm_ndt_voxel) == 40, "device ABI");
 static_assert(sizeof(rm_ndt_hit_miss) == 8 && sizeof(rm_ndt_intensity) == 8, "device ABI");
@@ -37,6 +37,9 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
   params_.voxels_per_region = map.store().voxelsPerRegion();
   params_.per_scan = map.semantics() == Semantics::kPerScan ? 1u : 0u;
   params_.has_mean = map.meanLayer() >= 0 ? 1u : 0u;
+  params_.has_traversal = map.traversalLayer() >= 0 ? 1u : 0u;
+  // As the CPU backend rounds it (IntegrationContext::resolution): equal per-voxel lengths.
+  params_.resolution = static_cast<float>(map.geometry().resolution);
   if (ndt_) {
     ndt_params_ = map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
   }

@@ -186,7 +186,7 @@ class OpenClBackend final : public gpu::StagedBackend {
         k = span_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.spans.get(), b.groups.get(), b.hit_rays.get(),
                      layerOr(map().occupancyLayer()), layerOr(map().scanMarkLayer()),
-                     b.scratch.get(), p, b.counters.get());
+                     b.scratch.get(), layerOr(map().traversalLayer()), p, b.counters.get());
         break;
       case OccupancyKernel::kApplyHitGroups:
         k = hit_kernel_.get();
@@ -208,8 +208,8 @@ class OpenClBackend final : public gpu::StagedBackend {
       case NdtKernel::kIntegrateSpans:
         k = span_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.spans.get(), layerOr(m.occupancyLayer()),
-                     layerOr(m.ndtLayer()), layerOr(m.meanLayer()), layerOr(m.hitMissLayer()), p,
-                     ndt, b.counters.get());
+                     layerOr(m.ndtLayer()), layerOr(m.meanLayer()), layerOr(m.hitMissLayer()),
+                     layerOr(m.traversalLayer()), p, ndt, b.counters.get());
         break;
       case NdtKernel::kApplyHitGroups:
         k = hit_kernel_.get();
@@ -339,10 +339,6 @@ Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
                                                      const OpenClBackendOptions& options) {
   if (map.occupancyLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument, "the OpenCL backend needs an occupancy layer");
-  }
-  if (map.traversalLayer() >= 0) {
-    return fail(ErrorCode::kUnsupported,
-                "decay-rate maps are integrated on the CPU backend only so far (--backend cpu)");
   }
   if (auto ok = gpu::checkBatchOptions(options, "OpenCL"); !ok) {
     return Unexpected(ok.error());
