@@ -29,19 +29,6 @@ constexpr double kTraversalRelative = 1e-4;
 constexpr double kTraversalAbsolute = 1e-6;  // metres, for sums near zero
 constexpr double kMinAgreement = 0.999;      // fraction of voxels with path within tolerance
 
-MapConfig decayConfig(Semantics semantics, MapMode mode = MapMode::kOccupancy,
-                      std::int32_t region_voxels = 16) {
-  MapConfig config = smallConfig(semantics, region_voxels);
-  config.mode = mode;
-  config.decay_rate = true;
-  config.memory_budget_bytes = std::uint64_t{2} << 30;
-  return config;
-}
-
-float rate(const VoxelMap& map, Vec3i voxel) {
-  return rm_decay_rate(map.mean(voxel).count, map.traversal(voxel));
-}
-
 /// Traversal and sample counts of two maps, voxel by voxel over the union of their regions.
 struct DecayComparison {
   std::uint64_t with_path = 0;      ///< voxels with path in either map
@@ -123,12 +110,12 @@ TEST(DeviceDecay, AVoxelCrossedByKnownPathsWithKnownHitsHasTheExactRate) {
       // Assert
       EXPECT_NEAR(map.traversal({10, 0, 0}), 0.4f, 1e-6f) << label;
       EXPECT_EQ(map.mean({10, 0, 0}).count, 2u) << label;
-      EXPECT_NEAR(rate(map, {10, 0, 0}), 5.0f, 1e-5f) << label;
+      EXPECT_NEAR(decayRate(map, {10, 0, 0}), 5.0f, 1e-5f) << label;
       EXPECT_NEAR(map.traversal({0, 0, 0}), 5 * 0.05f, 1e-6f) << label;
-      EXPECT_EQ(rate(map, {0, 0, 0}), 0.0f) << label;
+      EXPECT_EQ(decayRate(map, {0, 0, 0}), 0.0f) << label;
       EXPECT_NEAR(map.traversal({15, 0, 0}), 0.25f, 1e-6f) << label;
-      EXPECT_NEAR(rate(map, {15, 0, 0}), 4.0f, 1e-5f) << label;
-      EXPECT_TRUE(std::isnan(rate(map, {30, 0, 0}))) << label;
+      EXPECT_NEAR(decayRate(map, {15, 0, 0}), 4.0f, 1e-5f) << label;
+      EXPECT_TRUE(std::isnan(decayRate(map, {30, 0, 0}))) << label;
       EXPECT_NEAR(map.traversal({8, 0, 10}), 0.02f, 1e-6f) << label;
       EXPECT_EQ(map.mean({8, 0, 10}).count, 0u) << label;
       EXPECT_EQ(device->stats().updates_dropped, 0u) << label;

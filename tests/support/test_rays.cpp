@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "kernels/common/decay.h"
 #include "src/map/cpu_backend.hpp"
 
 namespace raymap::test {
@@ -97,6 +98,18 @@ MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels) {
   c.geometry.region_voxels = region_voxels;
   c.memory_budget_bytes = 256u << 20;
   return c;
+}
+
+MapConfig decayConfig(Semantics semantics, MapMode mode, std::int32_t region_voxels) {
+  MapConfig config = smallConfig(semantics, region_voxels);
+  config.mode = mode;
+  config.decay_rate = true;
+  config.memory_budget_bytes = std::uint64_t{2} << 30;
+  return config;
+}
+
+float decayRate(const VoxelMap& map, Vec3i voxel) {
+  return rm_decay_rate(map.mean(voxel).count, map.traversal(voxel));
 }
 
 std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan) {

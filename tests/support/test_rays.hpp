@@ -18,6 +18,13 @@ Ray makeRay(Vec3d origin, Vec3d sample, std::uint32_t flags = 0, std::uint64_t s
 /// @brief A small test map: `semantics`, regions of `region_voxels`^3 at 0.1 m, a 256 MiB pool.
 MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels = 8);
 
+/// @brief A decay-rate map (the traversal layer) of `mode` on smallConfig, with a 2 GiB pool.
+MapConfig decayConfig(Semantics semantics = Semantics::kPerRay, MapMode mode = MapMode::kOccupancy,
+                      std::int32_t region_voxels = 16);
+
+/// @brief A voxel's decay rate, reflections per metre (rm_decay_rate: NaN where no ray entered).
+float decayRate(const VoxelMap& map, Vec3i voxel);
+
 /// @brief Creates a map or fails the test.
 VoxelMap makeMap(const MapConfig& config);
 

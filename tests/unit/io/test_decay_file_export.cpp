@@ -22,18 +22,11 @@ namespace {
 
 using test::TempDir;
 
-MapConfig decayConfig() {
-  MapConfig config = test::smallConfig(Semantics::kPerRay, 16);
-  config.decay_rate = true;
-  config.memory_budget_bytes = std::uint64_t{1} << 30;
-  return config;
-}
-
 /// Rays along +x from the centre of voxel (0,0,0): five to x = 1.55, 1.65, 2.35, 1.03 and 1.07 m
 /// (tests/unit/map/test_decay_map.cpp works the lengths out: voxel (10,0,0) has 0.4 m and 2
 /// samples, rate 5).
 VoxelMap decayMap() {
-  VoxelMap map = test::makeMap(decayConfig());
+  VoxelMap map = test::makeMap(test::decayConfig());
   auto backend = test::cpuBackend(map, 1);
   std::vector<Ray> rays;
   for (const double end_x : {1.55, 1.65, 2.35, 1.03, 1.07}) {

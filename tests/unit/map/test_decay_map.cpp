@@ -16,18 +16,8 @@
 namespace raymap {
 namespace {
 
-MapConfig decayConfig(Semantics semantics = Semantics::kPerRay,
-                      MapMode mode = MapMode::kOccupancy) {
-  MapConfig config = test::smallConfig(semantics, 16);
-  config.mode = mode;
-  config.decay_rate = true;
-  config.memory_budget_bytes = std::uint64_t{2} << 30;
-  return config;
-}
-
-float rate(const VoxelMap& map, Vec3i voxel) {
-  return rm_decay_rate(map.mean(voxel).count, map.traversal(voxel));
-}
+using test::decayConfig;
+using test::decayRate;
 
 TEST(DecayMap, TheTraversalLayerIsOnlyInDecayRateMapsAndNeedsTheMean) {
   EXPECT_FALSE(test::smallConfig(Semantics::kPerRay).schema().has(LayerKind::kTraversal));
@@ -54,15 +44,15 @@ TEST(DecayMap, AVoxelCrossedByKnownPathsWithKnownHitsHasTheExactRate) {
     test::integrate(map, *backend, rays);
     EXPECT_NEAR(map.traversal({10, 0, 0}), 0.4f, 1e-6f);
     EXPECT_EQ(map.mean({10, 0, 0}).count, 2u);
-    EXPECT_NEAR(rate(map, {10, 0, 0}), 5.0f, 1e-5f);
+    EXPECT_NEAR(decayRate(map, {10, 0, 0}), 5.0f, 1e-5f);
     // The origin voxel holds 0.05 m of each ray (from x = 0.05 to its face at 0.1), no sample.
     EXPECT_NEAR(map.traversal({0, 0, 0}), 5 * 0.05f, 1e-6f);
-    EXPECT_EQ(rate(map, {0, 0, 0}), 0.0f);
+    EXPECT_EQ(decayRate(map, {0, 0, 0}), 0.0f);
     // The voxel of the 1.55 m sample: 0.1 m from the two longer rays, 0.05 m from its own.
     EXPECT_NEAR(map.traversal({15, 0, 0}), 0.25f, 1e-6f);
-    EXPECT_NEAR(rate(map, {15, 0, 0}), 4.0f, 1e-5f);
+    EXPECT_NEAR(decayRate(map, {15, 0, 0}), 4.0f, 1e-5f);
     // Beyond every ray: unknown.
-    EXPECT_TRUE(std::isnan(rate(map, {30, 0, 0})));
+    EXPECT_TRUE(std::isnan(decayRate(map, {30, 0, 0})));
   }
 }
 
@@ -74,7 +64,7 @@ TEST(DecayMap, ARayWithoutAReturnAddsItsPathToItsEndVoxelButNoSample) {
       std::vector<Ray>{test::makeRay({0.05, 0.05, 0.05}, {0.82, 0.05, 0.05}, kRayNoReturn)});
   EXPECT_NEAR(map.traversal({8, 0, 0}), 0.02f, 1e-6f);
   EXPECT_EQ(map.mean({8, 0, 0}).count, 0u);
-  EXPECT_EQ(rate(map, {8, 0, 0}), 0.0f);
+  EXPECT_EQ(decayRate(map, {8, 0, 0}), 0.0f);
 }
 
 // Every ray's voxel lengths add up to its length, whatever its direction, however many regions
