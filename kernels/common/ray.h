@@ -25,6 +25,7 @@ typedef struct rm_prepared_ray {
   rm_vec3f sample_local; /* sample inside sample_voxel, voxel units in [0,1] */
   rm_u32 flags;          /* RM_RAY_* */
   float intensity;       /* sensor intensity of the return, unitless as the sensor reports it */
+  float tsdf_end_m;      /* TSDF maps: signed distance at the sample end, metres (tsdf.h) */
 } rm_prepared_ray;
 
 /* The endpoints of a ray's walk in the walk frame (see line_walk.h): the walk starts at the origin,

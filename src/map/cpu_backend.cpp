@@ -33,6 +33,7 @@ class CpuBackend final : public Backend {
     ctx_.per_scan = map.semantics() == Semantics::kPerScan;
     ctx_.ndt = isNdt(map.mode());
     ctx_.resolution = static_cast<float>(map.geometry().resolution);
+    ctx_.tsdf_params = map.config().tsdf.toKernel(map.geometry().resolution);
     ctx_.ndt_params =
         map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
     if (threads > 1) {
@@ -86,8 +87,9 @@ Result<std::unique_ptr<Backend>> createCpuBackend(VoxelMap& map, const CpuBacken
                                                  std::to_string(CpuBackendOptions::kMaxThreads) +
                                                  " (got " + std::to_string(threads) + ")");
   }
-  if (map.occupancyLayer() < 0) {
-    return fail(ErrorCode::kInvalidArgument, "the CPU backend needs an occupancy layer");
+  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "the CPU backend needs an occupancy or a TSDF layer to integrate into");
   }
   return std::unique_ptr<Backend>(new CpuBackend(map, threads, options.expected_batch_rays));
 }

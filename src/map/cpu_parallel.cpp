@@ -271,7 +271,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
           span.first = (rec.flags & kFirst) != 0u;
           span.last = (rec.flags & kLast) != 0u;
           ws.voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, rays[r].flags,
-                                        span, regionLayers(map, rec.slot));
+                                        rays[r].tsdf_end_m, span, regionLayers(map, rec.slot));
         }
         const PreparedRay& ray = rays[r];
         if ((ray.flags & RM_RAY_END_HIT) != 0u && record.sample_slot != RegionStore::kNoSlot &&

@@ -77,8 +77,8 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
         ++stats.spans_outside_window;
         continue;
       }
-      stats.voxels_visited += missSpan(ctx, walk.voxelRay(), sample_is_start, ray.flags, span,
-                                       regionLayers(map, *slot));
+      stats.voxels_visited += missSpan(ctx, walk.voxelRay(), sample_is_start, ray.flags,
+                                       ray.tsdf_end_m, span, regionLayers(map, *slot));
     }
     if ((ray.flags & RM_RAY_END_HIT) != 0u && !ctx.ndt) {
       const auto [region, index] = walk.sampleCell();

@@ -16,6 +16,7 @@
 #include "kernels/common/ray.h"
 #include "kernels/common/scan_mark.h"
 #include "kernels/common/span_walk.h"
+#include "kernels/common/tsdf.h"
 #include "kernels/common/voxel_mean.h"
 #include "src/core/assert.hpp"
 #include "src/map/ray_region_walk.hpp"
@@ -116,6 +117,17 @@ struct PerScanMiss {
   }
 };
 
+/// TSDF update (kernels/common/tsdf.h): each crossed voxel fuses the ray's signed distance at
+/// its centre.
+struct TsdfUpdate {
+  rm_tsdf_voxel* tsdf;
+  rm_tsdf_ray ray;
+  rm_tsdf_params params;
+  void operator()(std::uint32_t i, rm_vec3i voxel) const noexcept {
+    rm_tsdf_update(&tsdf[i], rm_tsdf_sdf(&ray, voxel, params.resolution), params);
+  }
+};
+
 /// @brief Pointers to one region's layers (null for absent layers).
 struct RegionLayers {
   float* occupancy = nullptr;
@@ -125,6 +137,7 @@ struct RegionLayers {
   rm_ndt_hit_miss* hit_miss = nullptr;
   rm_ndt_intensity* intensity = nullptr;
   float* traversal = nullptr;  ///< decay rate: metres of ray path per voxel
+  rm_tsdf_voxel* tsdf = nullptr;
 };
 
 /// NDT miss (kernels/common/ndt.h): each crossing lowers the occupancy by how squarely the ray
@@ -230,14 +243,17 @@ struct IntegrationContext {
   /// NDT maps: a batch's misses all come before its hits (see kernels/common/ndt.h).
   bool ndt = false;
   rm_ndt_params ndt_params{};
-  float resolution = 0.1f;  ///< voxel edge, metres (decay rate: path lengths in metres)
+  float resolution = 0.1f;       ///< voxel edge, metres (decay rate: path lengths in metres)
+  rm_tsdf_params tsdf_params{};  ///< TSDF maps
 };
 
 /// @brief Pointers to the layers of the region in `slot`.
 inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexcept {
   const RegionStore& store = map.store();
   RegionLayers layers;
-  layers.occupancy = store.layerData<float>(slot, map.occupancyLayer());
+  if (map.occupancyLayer() >= 0) {
+    layers.occupancy = store.layerData<float>(slot, map.occupancyLayer());
+  }
   if (map.meanLayer() >= 0) {
     layers.mean = store.layerData<rm_voxel_mean>(slot, map.meanLayer());
   }
@@ -256,14 +272,24 @@ inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexce
   if (map.traversalLayer() >= 0) {
     layers.traversal = store.layerData<float>(slot, map.traversalLayer());
   }
+  if (map.tsdfLayer() >= 0) {
+    layers.tsdf = store.layerData<rm_tsdf_voxel>(slot, map.tsdfLayer());
+  }
   return layers;
 }
 
-/// @brief Walks one span with the semantics' miss rule; returns the voxels visited.
-/// `ray_flags`: the prepared ray's RM_RAY_* flags.
+/// @brief Walks one span with the semantics' miss rule (TSDF maps: the TSDF update); returns
+/// the voxels visited. `ray_flags`, `tsdf_end_m`: the prepared ray's RM_RAY_* flags and signed
+/// distance at its end.
 inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_ray& ray,
-                              bool sample_is_start, std::uint32_t ray_flags, const RaySpan& span,
-                              const RegionLayers& layers) noexcept {
+                              bool sample_is_start, std::uint32_t ray_flags, float tsdf_end_m,
+                              const RaySpan& span, const RegionLayers& layers) noexcept {
+  if (layers.tsdf != nullptr) {
+    return walkSpan(
+        ray, sample_is_start, span, ctx.region_voxels,
+        TsdfUpdate{layers.tsdf, rm_tsdf_ray_make(&ray, sample_is_start ? 1 : 0, tsdf_end_m),
+                   ctx.tsdf_params});
+  }
   const auto walk = [&](auto&& miss) {
     if (layers.traversal != nullptr) {
       return walkSpanAddingPath(ray, sample_is_start, span, ctx.region_voxels, layers.traversal,

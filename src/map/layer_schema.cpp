@@ -7,6 +7,7 @@
 #include <string>
 
 #include "kernels/common/ndt.h"
+#include "kernels/common/tsdf.h"
 #include "src/core/assert.hpp"
 
 namespace raymap {
@@ -17,7 +18,7 @@ constexpr std::uint32_t kUnobservedBits = 0x7F800000u;
 static_assert(std::bit_cast<std::uint32_t>(std::numeric_limits<float>::infinity()) ==
               kUnobservedBits);
 
-constexpr std::array<LayerSpec, 7> kKnownLayers = {{
+constexpr std::array<LayerSpec, 8> kKnownLayers = {{
     {LayerKind::kOccupancy, "occupancy", 4, {kUnobservedBits}, true, 1, true},
     {LayerKind::kVoxelMean, "mean", 8, {0u, 0u}, true, 1, false},
     {LayerKind::kScanMark, "scan_mark", 4, {0u}, false, 1, true},
@@ -25,6 +26,7 @@ constexpr std::array<LayerSpec, 7> kKnownLayers = {{
     {LayerKind::kHitMiss, "hit_miss", sizeof(rm_ndt_hit_miss), {}, true, 1, false},
     {LayerKind::kIntensity, "intensity", sizeof(rm_ndt_intensity), {}, true, 1, false},
     {LayerKind::kTraversal, "traversal", 4, {0u}, true, 1, true},
+    {LayerKind::kTsdf, "tsdf", sizeof(rm_tsdf_voxel), {0u, 0u}, true, 1, true},
 }};
 static_assert(sizeof(rm_ndt_voxel) == 40 && sizeof(rm_ndt_hit_miss) == 8 &&
               sizeof(rm_ndt_intensity) == 8);

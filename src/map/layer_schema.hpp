@@ -23,6 +23,7 @@ enum class LayerKind : std::uint8_t {
   kHitMiss = 5,    ///< NDT-TM hit and miss counts (kernels/common/ndt.h)
   kIntensity = 6,  ///< NDT-TM intensity mean and variance (kernels/common/ndt.h)
   kTraversal = 7,  ///< decay rate: metres of ray path inside the voxel (kernels/common/decay.h)
+  kTsdf = 8,       ///< signed distance (metres) and weight (kernels/common/tsdf.h)
 };
 
 /// @brief Static description of a layer type.

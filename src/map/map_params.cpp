@@ -47,12 +47,14 @@ const char* toString(MapMode mode) noexcept {
       return "ndt-om";
     case MapMode::kNdtTm:
       return "ndt-tm";
+    case MapMode::kTsdf:
+      return "tsdf";
   }
   return "?";
 }
 
 std::optional<MapMode> mapModeFromName(std::string_view name) noexcept {
-  for (MapMode mode : {MapMode::kOccupancy, MapMode::kNdtOm, MapMode::kNdtTm}) {
+  for (MapMode mode : {MapMode::kOccupancy, MapMode::kNdtOm, MapMode::kNdtTm, MapMode::kTsdf}) {
     if (name == toString(mode)) {
       return mode;
     }
@@ -109,6 +111,34 @@ rm_ndt_params NdtParams::toKernel(double resolution, const OccupancyParams& occu
   p.sample_threshold = sample_threshold;
   p.initial_intensity_variance = static_cast<float>(initial_intensity_variance);
   p.traversability = mode == MapMode::kNdtTm ? 1u : 0u;
+  return p;
+}
+
+Expected<void, Error> TsdfParams::validate(double resolution) const {
+  const double tau = truncationMetres(resolution);
+  const double eps = dropoffMetres(resolution);
+  if (!std::isfinite(tau) || !(tau > 0.0)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "tsdf truncation must be a positive distance in metres (got " + number(tau) + ")");
+  }
+  if (!std::isfinite(eps) || eps < 0.0 || !(eps < tau)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "tsdf dropoff must be a distance in metres from 0 to below the truncation " +
+                    number(tau) + " (got " + number(eps) + ")");
+  }
+  if (!std::isfinite(max_weight) || !(max_weight > 0.0)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "tsdf max-weight must be positive (got " + number(max_weight) + ")");
+  }
+  return {};
+}
+
+rm_tsdf_params TsdfParams::toKernel(double resolution) const noexcept {
+  rm_tsdf_params p{};
+  p.truncation = static_cast<float>(truncationMetres(resolution));
+  p.max_weight = static_cast<float>(max_weight);
+  p.dropoff = static_cast<float>(dropoffMetres(resolution));
+  p.resolution = static_cast<float>(resolution);
   return p;
 }
 

@@ -9,6 +9,7 @@
 
 #include "kernels/common/ndt.h"
 #include "kernels/common/occupancy.h"
+#include "kernels/common/tsdf.h"
 #include "src/core/error.hpp"
 
 namespace raymap {
@@ -61,12 +62,44 @@ enum class MapMode : std::uint8_t {
   kOccupancy = 0,  ///< log-odds occupancy (and the voxel mean)
   kNdtOm = 1,      ///< NDT-OM: occupancy whose misses are shaped by a Gaussian of the samples
   kNdtTm = 2,      ///< NDT-TM: NDT-OM plus hit/miss counts (permeability) and intensity statistics
+  kTsdf = 3,       ///< truncated signed distance field only (no occupancy layer)
 };
 
 const char* toString(MapMode mode) noexcept;
-/// @brief "occupancy", "ndt-om", "ndt-tm" (as the tools spell them).
+/// @brief "occupancy", "ndt-om", "ndt-tm", "tsdf" (as the tools spell them).
 std::optional<MapMode> mapModeFromName(std::string_view name) noexcept;
-inline bool isNdt(MapMode mode) noexcept { return mode != MapMode::kOccupancy; }
+inline bool isNdt(MapMode mode) noexcept {
+  return mode == MapMode::kNdtOm || mode == MapMode::kNdtTm;
+}
+
+/// @brief TSDF parameters (kernels/common/tsdf.h has the rules), metres. Value type; validated
+/// with validate(). Unset distances follow the resolution.
+struct TsdfParams {
+  static constexpr double kDefaultTruncationVoxels = 3.0;
+  static constexpr double kDefaultMaxWeight = 1.0e4;  // OHM's and Voxblox's
+  static constexpr double kDefaultDropoffVoxels = 1.0;
+
+  /// Truncation distance tau, metres: distances are kept within [-tau, tau], and rays are walked
+  /// on tau behind their sample. Unset: 3 voxel edges (tau should span a few voxels so the zero
+  /// crossing has a voxel on each side).
+  std::optional<double> truncation_m;
+  /// Largest voxel weight (rays): a voxel seen by more rays averages over the last ~max_weight.
+  double max_weight = kDefaultMaxWeight;
+  /// Drop-off distance eps, metres: behind the surface the ray weight falls linearly from 1 at
+  /// -eps to 0 at -tau (Voxblox). 0 = constant weight. Unset: 1 voxel edge (Voxblox's choice).
+  std::optional<double> dropoff_m;
+
+  double truncationMetres(double resolution) const noexcept {
+    return truncation_m.value_or(kDefaultTruncationVoxels * resolution);
+  }
+  double dropoffMetres(double resolution) const noexcept {
+    return dropoff_m.value_or(kDefaultDropoffVoxels * resolution);
+  }
+  /// @brief Checks tau > 0, 0 <= eps < tau and max_weight > 0; names the parameter at fault.
+  Expected<void, Error> validate(double resolution) const;
+  rm_tsdf_params toKernel(double resolution) const noexcept;
+  friend bool operator==(const TsdfParams&, const TsdfParams&) = default;
+};
 
 /// @brief NDT-OM / NDT-TM parameters (kernels/common/ndt.h has the rules), in metres and
 /// probabilities. Value type; validated with validate().

@@ -29,6 +29,6 @@ struct Ray {
 using PreparedRay = rm_prepared_ray;
 
 static_assert(std::is_trivially_copyable_v<PreparedRay>);
-static_assert(sizeof(PreparedRay) == 56, "PreparedRay is part of the device ABI");
+static_assert(sizeof(PreparedRay) == 60, "PreparedRay is part of the device ABI");
 
 }  // namespace raymap

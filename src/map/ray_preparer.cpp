@@ -6,6 +6,8 @@
 #include <cmath>
 #include <string>
 
+#include "kernels/common/tsdf.h"
+
 namespace raymap {
 namespace {
 
@@ -62,7 +64,11 @@ Expected<void, Error> RayFilter::validate() const {
 }
 
 RayPreparer::RayPreparer(const VoxelMap& map, const RayFilter& filter) noexcept
-    : map_(&map), filter_(filter), inv_resolution_(1.0 / map.geometry().resolution) {}
+    : map_(&map),
+      filter_(filter),
+      inv_resolution_(1.0 / map.geometry().resolution),
+      tsdf_(map.mode() == MapMode::kTsdf),
+      truncation_m_(map.config().tsdf.truncationMetres(map.geometry().resolution)) {}
 
 bool RayPreparer::toKey(Vec3d p, rm_vec3i* voxel, rm_vec3f* local) const noexcept {
   if (!map_->voxelInRange(p)) {
@@ -104,10 +110,24 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
     const bool no_return = (ray.flags & kRayNoReturn) != 0u;
     std::uint32_t end_flag = no_return ? 0u : RM_RAY_END_HIT;
     bool clipped = false;
+    // TSDF maps: signed distance at the ray's end, metres (kernels/common/tsdf.h). Rays that
+    // update free space only keep RM_TSDF_FREE.
+    double end_sdf = RM_TSDF_FREE;
     if (filter_.max_range_m > 0.0 && length > filter_.max_range_m) {
       sample = origin + (sample - origin) * (filter_.max_range_m / length);
       end_flag = 0u;
       clipped = true;
+    }
+    if (tsdf_ && end_flag != 0u) {
+      // The walk goes on tau behind the sample, so the negative side of the surface is updated;
+      // the sample voxel gets no hit (a TSDF map has no occupancy).
+      if (length > 0.0) {
+        sample = sample + (sample - origin) * (truncation_m_ / length);
+        end_sdf = -truncation_m_;
+      } else {
+        end_sdf = 0.0;
+      }
+      end_flag = 0u;
     }
     if (rolling) {
       auto [lo, hi] = map_->windowBounds();
@@ -127,6 +147,7 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
       }
       const Vec3d d = sample - origin;
       if (t1 < 1.0) {
+        end_sdf += (1.0 - t1) * d.norm();
         sample = origin + d * t1;
         end_flag = 0u;
         clipped = true;
@@ -164,8 +185,13 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
     ++progress.consumed;
     const std::uint32_t walk_flag = filter_.reverse ? RM_RAY_REVERSE : 0u;
     if (pieces == 1) {
-      out[progress.written++] = PreparedRay{origin_voxel, origin_local,         sample_voxel,
-                                            sample_local, end_flag | walk_flag, ray.intensity};
+      out[progress.written++] = PreparedRay{origin_voxel,
+                                            origin_local,
+                                            sample_voxel,
+                                            sample_local,
+                                            end_flag | walk_flag,
+                                            ray.intensity,
+                                            static_cast<float>(end_sdf)};
       continue;
     }
     const Vec3d d = sample - origin;
@@ -180,8 +206,15 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
       }
       // Inner pieces leave their end voxel to the next piece, which starts there.
       const std::uint32_t flags = (i == pieces ? end_flag : 0u) | walk_flag;
-      out[progress.written++] =
-          PreparedRay{a_voxel, a_local, b_voxel, b_local, flags, ray.intensity};
+      // A piece ends (1 - i / pieces) * kept before the whole ray's end.
+      const double piece_end_sdf = end_sdf + (1.0 - static_cast<double>(i) / pieces) * kept;
+      out[progress.written++] = PreparedRay{a_voxel,
+                                            a_local,
+                                            b_voxel,
+                                            b_local,
+                                            flags,
+                                            ray.intensity,
+                                            static_cast<float>(piece_end_sdf)};
       a_voxel = b_voxel;
       a_local = b_local;
     }

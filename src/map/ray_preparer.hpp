@@ -46,6 +46,8 @@ struct RayCounters {
 /// A ray with a real return gets RM_RAY_END_HIT. A clipped or no-return ray does not: it clears the
 /// voxels before its end voxel, which it only partly crosses (OctoMap's insertRay does the same);
 /// the inner pieces of a segmented ray leave their end voxel to the next piece, which starts there.
+/// TSDF maps: a ray with a return is walked on by the truncation distance behind its sample and
+/// gets no hit; every prepared ray carries its signed distance at its end (tsdf_end_m).
 /// Thread-safety: one preparer per thread. @rt prepare() allocates: no; throws: no.
 class RayPreparer {
  public:
@@ -71,6 +73,8 @@ class RayPreparer {
   const VoxelMap* map_;
   RayFilter filter_;
   double inv_resolution_;
+  bool tsdf_;            ///< TSDF map: rays with a return are extended by the truncation distance
+  double truncation_m_;  ///< TSDF truncation distance, metres
   RayCounters counters_;
 };
 

@@ -50,6 +50,9 @@ LayerSchema MapConfig::schema() const {
   if (decay_rate) {
     (void)schema.add(LayerKind::kTraversal);
   }
+  if (mode == MapMode::kTsdf) {
+    (void)schema.add(LayerKind::kTsdf);
+  }
   return schema;
 }
 
@@ -83,6 +86,20 @@ Expected<void, Error> MapConfig::validate() const {
     if (!occupancy_layer) {
       return fail(ErrorCode::kInvalidArgument,
                   std::string(toString(mode)) + " maps need the occupancy layer");
+    }
+  }
+  if (mode == MapMode::kTsdf) {
+    if (auto ok = tsdf.validate(geometry.resolution); !ok) {
+      return ok;
+    }
+    if (occupancy_layer || voxel_mean || decay_rate) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "tsdf maps hold the distance field only: no occupancy, voxel-mean or decay-rate "
+                  "layer (their rays are walked on behind the surface and take no hit)");
+    }
+    if (semantics != Semantics::kPerRay) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "tsdf maps need per-ray semantics (every ray's distance is averaged in)");
     }
   }
   if (decay_rate && !voxel_mean) {
@@ -146,6 +163,7 @@ VoxelMap::VoxelMap(MapConfig config, RegionStore store) noexcept
   hit_miss_layer_ = schema.indexOf(LayerKind::kHitMiss);
   intensity_layer_ = schema.indexOf(LayerKind::kIntensity);
   traversal_layer_ = schema.indexOf(LayerKind::kTraversal);
+  tsdf_layer_ = schema.indexOf(LayerKind::kTsdf);
 }
 
 Vec3i VoxelMap::voxelOf(Vec3d p) const noexcept {
@@ -324,6 +342,14 @@ float VoxelMap::traversal(Vec3i voxel) const noexcept {
     return 0.0f;
   }
   return store_.layerData<float>(at->first, traversal_layer_)[at->second];
+}
+
+rm_tsdf_voxel VoxelMap::tsdf(Vec3i voxel) const noexcept {
+  const auto at = locate(voxel);
+  if (!at || tsdf_layer_ < 0) {
+    return rm_tsdf_voxel{0.0f, 0.0f};
+  }
+  return store_.layerData<rm_tsdf_voxel>(at->first, tsdf_layer_)[at->second];
 }
 
 MapSummary VoxelMap::summarise() const noexcept {

@@ -36,7 +36,10 @@ struct MapConfig {
   Semantics semantics = Semantics::kPerRay;
   MapMode mode = MapMode::kOccupancy;  ///< NDT modes add the NDT layers (per-ray semantics only)
   NdtParams ndt;                       ///< used by the NDT modes
-  bool voxel_mean = true;              ///< keep the voxel-mean layer
+  /// Used by the TSDF mode, which needs occupancy_layer and voxel_mean false (forTsdf() sets
+  /// them).
+  TsdfParams tsdf;
+  bool voxel_mean = true;  ///< keep the voxel-mean layer
   /// Keep the traversal layer (metres of ray path per voxel) for decay rates: samples per metre
   /// (kernels/common/decay.h). Needs the voxel mean (its count is the samples).
   bool decay_rate = false;
@@ -52,6 +55,15 @@ struct MapConfig {
   bool prefault = false;  ///< touch all pool pages at creation (real-time users)
 
   Expected<void, Error> validate() const;
+  /// @brief This configuration as a TSDF-only map: mode kTsdf, no occupancy, mean or traversal.
+  MapConfig forTsdf() const {
+    MapConfig c = *this;
+    c.mode = MapMode::kTsdf;
+    c.occupancy_layer = false;
+    c.voxel_mean = false;
+    c.decay_rate = false;
+    return c;
+  }
   /// @brief The layer schema this configuration implies.
   LayerSchema schema() const;
   /// @brief Number of regions the pool will hold.
@@ -99,6 +111,7 @@ class VoxelMap {
   int hitMissLayer() const noexcept { return hit_miss_layer_; }     ///< -1 unless NDT-TM
   int intensityLayer() const noexcept { return intensity_layer_; }  ///< -1 unless NDT-TM
   int traversalLayer() const noexcept { return traversal_layer_; }  ///< -1 unless decay rate
+  int tsdfLayer() const noexcept { return tsdf_layer_; }            ///< -1 unless TSDF
   MapMode mode() const noexcept { return config_.mode; }
 
   // ---- keys (world frame, metres) ----
@@ -155,6 +168,9 @@ class VoxelMap {
   rm_ndt_intensity intensity(Vec3i voxel) const noexcept;
   /// @brief Metres of ray path inside a voxel (0 where none, or without the traversal layer).
   float traversal(Vec3i voxel) const noexcept;
+  /// @brief TSDF distance (metres) and weight of a voxel (weight 0 where never updated, or
+  /// without the layer).
+  rm_tsdf_voxel tsdf(Vec3i voxel) const noexcept;
   MapSummary summarise() const noexcept;
 
   /// @brief Provenance stored with the map (source file, ray counts, ranges...), in order.
@@ -178,6 +194,7 @@ class VoxelMap {
   int hit_miss_layer_ = -1;
   int intensity_layer_ = -1;
   int traversal_layer_ = -1;
+  int tsdf_layer_ = -1;
   Vec3i window_min_{};
   std::uint32_t scan_sequence_ = 0;
   std::uint64_t regions_recycled_ = 0;

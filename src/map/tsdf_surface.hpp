@@ -1,0 +1,31 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The surface of a TSDF map: its zero crossings between neighbouring voxels, as points.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "src/core/vec3.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap {
+
+/// @brief One zero crossing of the signed distance, world frame.
+struct TsdfSurfacePoint {
+  Vec3d p_world;        ///< metres, on the segment between the two voxel centres
+  float weight = 0.0f;  ///< the smaller weight of the two voxels
+  /// Unit vector along the distance gradient between the two voxels (the axis they share,
+  /// pointing from the negative to the positive side: out of the surface, towards the sensor).
+  Vec3d normal;
+};
+
+/// @brief Zero crossings of a TSDF map: for every pair of face-adjacent voxels both with weight
+/// >= min_weight, both distances inside the truncation band (|d| < tau: a jump from +tau to -tau
+/// is no measured surface), and of opposite signs (d >= 0 on one, d < 0 on the other), the point
+/// where the linear interpolation of the distance between their centres is zero. Each pair is
+/// reported once, in region order (z, y, x), so the output is deterministic.
+/// @pre map has a TSDF layer (VoxelMap::tsdfLayer() >= 0). Thread-safety: const; may run
+/// alongside other const queries. @rt allocates: yes (offline tool).
+std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_weight);
+
+}  // namespace raymap
