@@ -8,6 +8,7 @@
 
 #include "occupancy.h"
 #include "portable.h"
+#include "tsdf.h"
 
 /* The piece of one ray inside one region, with the device cache slot that holds the region.
  * Spans are produced by the host's coarse region walk; the device walks their voxels with
@@ -43,6 +44,8 @@ typedef struct rm_integrate_params {
   rm_u32 has_mean;          /* 1 when the map keeps the voxel-mean layer */
   rm_u32 has_traversal;     /* 1 when the map keeps the traversal layer (decay rate, decay.h) */
   float resolution;         /* voxel edge, metres (path lengths in the traversal layer) */
+  rm_u32 has_tsdf;          /* 1 for TSDF maps: spans update the TSDF layer only (tsdf.h) */
+  rm_tsdf_params tsdf;      /* TSDF maps */
 } rm_integrate_params;
 
 /* Per-ray semantics: most hit groups in one batch. The device tags a voxel with samples with its

@@ -23,7 +23,7 @@ cudaError_t launchOccupancyKernel(OccupancyKernelId kernel, cudaStream_t stream,
     case OccupancyKernelId::kIntegrateSpans:
       rm_integrate_spans<<<blocks, block_threads, 0, stream>>>(
           b.rays, b.spans, b.groups, b.hit_rays, b.occupancy, b.marks, b.scratch, b.traversal,
-          params, b.counters);
+          b.tsdf, params, b.counters);
       break;
     case OccupancyKernelId::kApplyHitGroups:
       rm_apply_hit_groups<<<blocks, block_threads, 0, stream>>>(b.rays, b.groups, b.hit_rays,

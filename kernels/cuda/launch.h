@@ -17,7 +17,8 @@
 namespace raymap::cuda {
 
 /// Device buffers of one batch and the map layers the kernels update (device pointers). Absent
-/// layers (no voxel mean, per-ray semantics without scan marks, no traversal layer) point at a
+/// layers (no voxel mean, per-ray semantics without scan marks, no traversal or TSDF layer, no
+/// occupancy in TSDF maps) point at a
 /// small placeholder.
 struct OccupancyKernelBuffers {
   const rm_prepared_ray* rays = nullptr;
@@ -29,6 +30,7 @@ struct OccupancyKernelBuffers {
   std::uint32_t* marks = nullptr;
   std::uint32_t* scratch = nullptr;
   std::uint32_t* traversal = nullptr;      // decay rate: float metres, added as bits
+  std::uint32_t* tsdf = nullptr;           // TSDF: (distance, weight) float pairs as bits
   unsigned long long* counters = nullptr;  // RM_COUNTER_COUNT 64-bit words
 };
 

@@ -32,6 +32,11 @@ RM_DEVICE_FN rm_u32 rm_atomic_max_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) 
 RM_DEVICE_FN rm_u32 rm_atomic_add_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
   return atomic_add(p, value);
 }
+RM_DEVICE_FN rm_u32 rm_atomic_xchg_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  return atomic_xchg(p, value);
+}
+/* Orders this work-item's global memory accesses before and after it. */
+RM_DEVICE_FN void rm_global_fence(void) { mem_fence(CLK_GLOBAL_MEM_FENCE); }
 #if defined(RM_HAVE_INT64_ATOMICS)
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 typedef ulong rm_u64;
@@ -41,6 +46,7 @@ RM_DEVICE_FN rm_u64 rm_atomic_add_u64(RM_ATOMIC_GLOBAL rm_u64* p, rm_u64 value) 
 RM_DEVICE_FN rm_u64 rm_atomic_cas_u64(RM_ATOMIC_GLOBAL rm_u64* p, rm_u64 expected, rm_u64 desired) {
   return atom_cmpxchg(p, expected, desired);
 }
+RM_DEVICE_FN rm_u64 rm_load_u64(RM_ATOMIC_GLOBAL rm_u64* p) { return *p; }
 #endif
 
 #elif defined(__CUDACC__)
@@ -63,6 +69,9 @@ RM_DEVICE_FN rm_u32 rm_atomic_cas_u32(rm_u32* p, rm_u32 expected, rm_u32 desired
 }
 RM_DEVICE_FN rm_u32 rm_atomic_max_u32(rm_u32* p, rm_u32 value) { return atomicMax(p, value); }
 RM_DEVICE_FN rm_u32 rm_atomic_add_u32(rm_u32* p, rm_u32 value) { return atomicAdd(p, value); }
+RM_DEVICE_FN rm_u32 rm_atomic_xchg_u32(rm_u32* p, rm_u32 value) { return atomicExch(p, value); }
+RM_DEVICE_FN void rm_global_fence(void) { __threadfence(); }
+RM_DEVICE_FN rm_u64 rm_load_u64(rm_u64* p) { return *(volatile rm_u64*)p; }
 RM_DEVICE_FN rm_u64 rm_atomic_add_u64(rm_u64* p, rm_u64 value) { return atomicAdd(p, value); }
 RM_DEVICE_FN rm_u64 rm_atomic_cas_u64(rm_u64* p, rm_u64 expected, rm_u64 desired) {
   return atomicCAS(p, expected, desired);

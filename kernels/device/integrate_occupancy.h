@@ -29,7 +29,10 @@
  *
  * Decay-rate maps (p.has_traversal): rm_integrate_span also adds each span's metres of path to
  * the traversal layer (traversal.h), in either semantics, with float atomics; the sums equal the
- * CPU's up to rounding (the order of the adds differs). */
+ * CPU's up to rounding (the order of the adds differs).
+ *
+ * TSDF maps (p.has_tsdf): no occupancy layer and no hits; rm_integrate_span fuses each ray into
+ * the TSDF layer of the voxels of its spans (tsdf.h), and that is the whole batch. */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 
@@ -43,6 +46,7 @@
 #include "counters.h"
 #include "device.h"
 #include "traversal.h"
+#include "tsdf.h"
 
 /* A tagged occupancy word: a quiet NaN whose low 22 bits hold the hit group (occupancy values
  * are never NaN: rays are validated, and +inf marks "unobserved"). */
@@ -85,13 +89,14 @@ RM_DEVICE_FN void rm_tag_hit_group(rm_u32 id, const RM_GLOBAL rm_hit_group* grou
 }
 
 /* Work-item `id`: walks span `id` and applies the semantics' miss rule to its voxels; decay-rate
- * maps add the span's path to `traversal` (float metres as bits; unused without the layer). */
+ * maps add the span's path to `traversal` (float metres as bits; unused without the layer); TSDF
+ * maps fuse the ray into `tsdf` (distance, weight float pairs as bits) instead of any miss. */
 RM_DEVICE_FN void rm_integrate_span(
     rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
     const RM_GLOBAL rm_hit_group* groups, const RM_GLOBAL rm_u32* hit_rays,
     RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_ATOMIC_GLOBAL rm_u32* marks,
-    RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params p,
-    RM_ATOMIC_GLOBAL rm_counter* counters) {
+    RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal,
+    RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_integrate_params p, RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_span_record span = spans[id];
   rm_prepared_ray ray = rays[span.ray];
   rm_ray_walk_frame frame = rm_ray_walk_frame_make(ray);
@@ -101,13 +106,19 @@ RM_DEVICE_FN void rm_integrate_span(
   rm_u32 dropped = 0u;
   rm_i32 count = rm_span_walk_init(&walk, &walk_ray, span.t0, span.t1, span.box_lo, p.region_voxels,
                                    span.flags, frame.sample_is_start);
+  rm_i32 misses = count;
   rm_i32 k;
   rm_u32 miss_mark = rm_scan_mark_miss(p.sequence);
-  if (p.has_traversal != 0u) {
+  if (p.has_tsdf != 0u) {
+    /* TSDF maps: the span's voxels take the TSDF update and no miss. */
+    dropped = rm_tsdf_span(tsdf, base, walk, count, &walk_ray, frame.sample_is_start,
+                           ray.tsdf_end_m, p.tsdf);
+    misses = 0;
+  } else if (p.has_traversal != 0u) {
     dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
                                      frame.sample_is_start, p.region_voxels, p.resolution);
   }
-  for (k = 0; k < count; ++k) {
+  for (k = 0; k < misses; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
     if (p.per_scan != 0u) {
       /* The first miss of this scan wins the mark and is the only writer of the voxel. */

@@ -4,8 +4,9 @@
  * kernels/cuda/integrate_occupancy.cu are this header and nothing more (plus, in CUDA, the host
  * launchers). One work-item per hit group (tag, apply) or per span record (integrate); the host
  * rounds the work-item count up to whole work-groups, so each entry point checks its index.
- * Layers a map lacks (scan marks per ray, the traversal layer without decay rates) are bound to a
- * small placeholder and never touched (params.per_scan, params.has_traversal). */
+ * Layers a map lacks (scan marks per ray, the traversal layer without decay rates, occupancy and
+ * TSDF layers each in the other's maps) are bound to a small placeholder and never touched
+ * (params.per_scan, params.has_traversal, params.has_tsdf). */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H
 
@@ -26,11 +27,12 @@ RM_KERNEL void rm_integrate_spans(const RM_GLOBAL rm_prepared_ray* rays,
                                   const RM_GLOBAL rm_u32* hit_rays,
                                   RM_ATOMIC_GLOBAL rm_u32* occupancy,
                                   RM_ATOMIC_GLOBAL rm_u32* marks, RM_ATOMIC_GLOBAL rm_u32* scratch,
-                                  RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params params,
+                                  RM_ATOMIC_GLOBAL rm_u32* traversal, RM_ATOMIC_GLOBAL rm_u32* tsdf,
+                                  rm_integrate_params params,
                                   RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
-    rm_integrate_span(id, rays, spans, groups, hit_rays, occupancy, marks, scratch, traversal,
+    rm_integrate_span(id, rays, spans, groups, hit_rays, occupancy, marks, scratch, traversal, tsdf,
                       params, counters);
   }
 }

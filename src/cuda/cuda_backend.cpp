@@ -220,6 +220,7 @@ class CudaBackend final : public gpu::StagedBackend {
     buffers.marks = static_cast<std::uint32_t*>(layerOr(map().scanMarkLayer()));
     buffers.scratch = typed<std::uint32_t>(b.scratch);
     buffers.traversal = static_cast<std::uint32_t*>(layerOr(map().traversalLayer()));
+    buffers.tsdf = static_cast<std::uint32_t*>(layerOr(map().tsdfLayer()));
     buffers.counters = typed<unsigned long long>(b.counters);
     const cuda::OccupancyKernelId id =
         kernel == OccupancyKernel::kTagHitGroups     ? cuda::OccupancyKernelId::kTagHitGroups
@@ -327,8 +328,9 @@ gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device) {
 
 Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
                                                    const CudaBackendOptions& options) {
-  if (map.occupancyLayer() < 0) {
-    return fail(ErrorCode::kInvalidArgument, "the CUDA backend needs an occupancy layer");
+  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "the CUDA backend needs an occupancy or a TSDF layer to integrate into");
   }
   if (auto ok = gpu::checkBatchOptions(options, "CUDA"); !ok) {
     return Unexpected(ok.error());

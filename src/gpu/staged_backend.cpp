@@ -9,7 +9,8 @@ namespace {
 
 static_assert(sizeof(rm_span_record) == 32, "device ABI");
 static_assert(sizeof(rm_hit_group) == 16, "device ABI");
-static_assert(sizeof(rm_integrate_params) == 56, "device ABI");
+static_assert(sizeof(rm_integrate_params) == 76, "device ABI");
+static_assert(sizeof(rm_tsdf_voxel) == 8, "device ABI");
 static_assert(sizeof(rm_ndt_params) == 32, "device ABI");
 static_assert(sizeof(rm_ndt_voxel) == 40, "device ABI");
 static_assert(sizeof(rm_ndt_hit_miss) == 8 && sizeof(rm_ndt_intensity) == 8, "device ABI");
@@ -40,6 +41,8 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
   params_.has_traversal = map.traversalLayer() >= 0 ? 1u : 0u;
   // As the CPU backend rounds it (IntegrationContext::resolution): equal per-voxel lengths.
   params_.resolution = static_cast<float>(map.geometry().resolution);
+  params_.has_tsdf = map.tsdfLayer() >= 0 ? 1u : 0u;
+  params_.tsdf = map.config().tsdf.toKernel(map.geometry().resolution);
   if (ndt_) {
     ndt_params_ = map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
   }
@@ -60,7 +63,7 @@ std::size_t StagedBackend::counterBytes() const noexcept {
 std::size_t StagedBackend::scratchWords() const noexcept {
   // NDT maps need no tags or runs of misses (submit()); one word keeps the buffer valid (OpenCL
   // refuses empty buffers) instead of about 3 MiB a staging set.
-  return ndt_ ? 1u : RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays);
+  return ndt_ || params_.has_tsdf != 0u ? 1u : RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays);
 }
 
 Expected<void, IntegrateError> StagedBackend::integrate(

@@ -186,7 +186,8 @@ class OpenClBackend final : public gpu::StagedBackend {
         k = span_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.spans.get(), b.groups.get(), b.hit_rays.get(),
                      layerOr(map().occupancyLayer()), layerOr(map().scanMarkLayer()),
-                     b.scratch.get(), layerOr(map().traversalLayer()), p, b.counters.get());
+                     b.scratch.get(), layerOr(map().traversalLayer()), layerOr(map().tsdfLayer()),
+                     p, b.counters.get());
         break;
       case OccupancyKernel::kApplyHitGroups:
         k = hit_kernel_.get();
@@ -337,8 +338,9 @@ gpu::DeviceMemoryLimits memoryLimits(const opencl::DeviceInfo& device) {
 
 Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
                                                      const OpenClBackendOptions& options) {
-  if (map.occupancyLayer() < 0) {
-    return fail(ErrorCode::kInvalidArgument, "the OpenCL backend needs an occupancy layer");
+  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "the OpenCL backend needs an occupancy or a TSDF layer to integrate into");
   }
   if (auto ok = gpu::checkBatchOptions(options, "OpenCL"); !ok) {
     return Unexpected(ok.error());

@@ -5,6 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
+#include <tuple>
+
+#include "tests/support/test_rays.hpp"
 
 namespace raymap::test {
 namespace {
@@ -22,6 +26,39 @@ Vec3d gradient(const std::function<double(Vec3d)>& truth, Vec3d p) {
 }
 
 }  // namespace
+
+MapConfig tsdfConfig(double max_weight) {
+  MapConfig config = smallConfig(Semantics::kPerRay, 16).forTsdf();
+  config.tsdf.max_weight = max_weight;
+  config.memory_budget_bytes = std::uint64_t{1} << 30;
+  return config;
+}
+
+TsdfComparison compareTsdf(const VoxelMap& a, const VoxelMap& b, double distance_m,
+                           double weight_relative) {
+  TsdfComparison result;
+  std::set<std::tuple<int, int, int>> regions;
+  a.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
+  b.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
+  for (const auto& [x, y, z] : regions) {
+    for (std::uint32_t i = 0; i < a.store().voxelsPerRegion(); ++i) {
+      const Vec3i voxel = a.voxelAt({x, y, z}, i);
+      const rm_tsdf_voxel va = a.tsdf(voxel);
+      const rm_tsdf_voxel vb = b.tsdf(voxel);
+      if (va.weight == 0.0f && vb.weight == 0.0f) {
+        continue;
+      }
+      ++result.updated;
+      const double dd = std::fabs(double(va.distance) - double(vb.distance));
+      const double dw = std::fabs(double(va.weight) - double(vb.weight));
+      result.max_distance_difference = std::max(result.max_distance_difference, dd);
+      result.max_weight_difference = std::max(result.max_weight_difference, dw);
+      const double larger = std::max(double(va.weight), double(vb.weight));
+      result.within += dd <= distance_m && dw <= weight_relative * larger + 1e-6 ? 1u : 0u;
+    }
+  }
+  return result;
+}
 
 void shootAt(const std::function<double(Vec3d)>& truth, Vec3d origin, Vec3d lo, Vec3d hi, int rays,
              std::uint64_t seed, std::vector<Ray>* out) {

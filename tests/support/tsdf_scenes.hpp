@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "src/map/ray.hpp"
+#include "src/map/voxel_map.hpp"
 
 namespace raymap::test {
 
@@ -24,6 +25,22 @@ struct TsdfScene {
   /// distances round the edges off). Everywhere for the plane and the sphere.
   std::function<bool(Vec3d)> checked = [](Vec3d) { return true; };
 };
+
+/// @brief A TSDF-only map at 0.1 m (regions of 16^3 voxels, a 1 GiB pool) with the default
+/// truncation (0.3 m) and drop-off (0.1 m) and the given maximum weight.
+MapConfig tsdfConfig(double max_weight = TsdfParams::kDefaultMaxWeight);
+
+/// @brief Two TSDF maps voxel by voxel over the union of their regions.
+struct TsdfComparison {
+  std::uint64_t updated = 0;             ///< voxels with weight in either map
+  std::uint64_t within = 0;              ///< of those: distance and weight within the tolerances
+  double max_distance_difference = 0.0;  ///< metres
+  double max_weight_difference = 0.0;
+};
+/// Tolerances: |distance difference| <= distance_m, |weight difference| <= weight_relative of
+/// the larger weight (plus 1e-6).
+TsdfComparison compareTsdf(const VoxelMap& a, const VoxelMap& b, double distance_m,
+                           double weight_relative);
 
 /// @brief The plane z = 0.537 m seen from 4 sensors 1.5 m above it (rays_per_sensor each).
 TsdfScene planeScene(int rays_per_sensor, std::uint64_t seed = 1);

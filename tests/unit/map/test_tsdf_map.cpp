@@ -21,12 +21,7 @@ namespace {
 
 constexpr double kResolution = 0.1;
 
-MapConfig tsdfConfig(double max_weight = TsdfParams::kDefaultMaxWeight) {
-  MapConfig config = test::smallConfig(Semantics::kPerRay, 16).forTsdf();
-  config.tsdf.max_weight = max_weight;
-  config.memory_budget_bytes = std::uint64_t{1} << 30;
-  return config;
-}
+using test::tsdfConfig;
 
 struct SceneCheck {
   std::size_t crossings = 0;

@@ -14,6 +14,7 @@
 #include "src/opencl/opencl_backend.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
+#include "tests/support/tsdf_scenes.hpp"
 
 namespace raymap {
 namespace {
@@ -54,6 +55,26 @@ TEST(OpenClBackend, ThirtyTwoBitCountersGiveTheSameMap) {
   const test::MapComparison cmp = test::compareMaps(a, b);
   EXPECT_EQ(cmp.exact_value, cmp.compared);
   EXPECT_EQ(wide->stats().voxels_visited, narrow->stats().voxels_visited);
+}
+
+// Without 64-bit atomics the (distance, weight) pair of a TSDF voxel is updated under a lock bit
+// in its weight word (kernels/device/tsdf.h): the same field as the CPU's, nothing dropped.
+TEST(OpenClBackend, TsdfWithoutSixtyFourBitAtomicsAgreesWithTheCpu) {
+  const test::TsdfScene scene = test::sphereScene(3000);
+  VoxelMap reference = test::makeMap(test::tsdfConfig());
+  auto cpu = test::cpuBackend(reference, 1);
+  test::integrate(reference, *cpu, scene.rays);
+  VoxelMap map = test::makeMap(test::tsdfConfig());
+  OpenClBackendOptions narrow_options;
+  narrow_options.force_32bit_atomics = true;
+  auto narrow = openClBackend(map, narrow_options);
+  REQUIRE_OPENCL(narrow);
+  test::integrate(map, *narrow, scene.rays);
+  ASSERT_TRUE(narrow->synchronise());
+  const test::TsdfComparison cmp = test::compareTsdf(reference, map, 1e-4, 1e-4);
+  EXPECT_GT(cmp.updated, 5000u);
+  EXPECT_GE(double(cmp.within), 0.999 * double(cmp.updated));
+  EXPECT_EQ(narrow->stats().updates_dropped, 0u);
 }
 
 TEST(OpenClBackend, KernelBuildFailureIsAClearError) {

@@ -1,0 +1,106 @@
+/* SPDX-License-Identifier: BSD-3-Clause */
+/* TSDF maps on a device: what a span does to the TSDF layer, by the rules of
+ * kernels/common/tsdf.h, the same updates the CPU's TsdfUpdate (src/map/cpu_voxel_ops.hpp) makes.
+ * Called by the occupancy span kernel when rm_integrate_params.has_tsdf is set (a uniform branch:
+ * a TSDF map has no occupancy layer and its rays no hits, so that is all its batches do).
+ *
+ * Each voxel update reads the (distance, weight) pair, fuses the ray in and writes both back as
+ * one: with a 64-bit compare-and-swap where the device has 64-bit atomics (CUDA always,
+ * OpenCL with cl_khr_int64_base_atomics), retried at most RM_CAS_RETRY_LIMIT times. Without them,
+ * the sign bit of the weight word (weights are never negative) is a per-voxel lock taken with a
+ * 32-bit compare-and-swap under the same bound: the holder reads the distance, writes the fused
+ * distance and releases by writing the fused weight, in straight-line code, so a work-item never
+ * waits on a lock held by one that cannot run. An update given up under contention is counted in
+ * RM_COUNTER_DROPPED by the caller, never lost silently. Updates of one voxel by several rays in
+ * one batch land in any order: the averages differ from the CPU's by float rounding only. */
+#ifndef RAYMAP_KERNELS_DEVICE_TSDF_H
+#define RAYMAP_KERNELS_DEVICE_TSDF_H
+
+#include "../common/batch.h"
+#include "../common/line_walk.h"
+#include "../common/span_walk.h"
+#include "../common/tsdf.h"
+#include "counters.h"
+#include "device.h"
+
+#define RM_TSDF_LOCK_BIT 0x80000000u
+
+/* Fuses a ray at signed distance sdf into pair i of the layer (word 2i: distance, 2i + 1:
+ * weight). Returns 0 when the update was given up. */
+RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, float sdf,
+                                       rm_tsdf_params p) {
+  float w;
+  int attempt;
+  if (!rm_tsdf_in_reach(sdf, p)) {
+    return 1;
+  }
+  w = rm_tsdf_weight(sdf, p);
+#if defined(RM_HAVE_INT64_ATOMICS)
+  {
+    RM_ATOMIC_GLOBAL rm_u64* pair = (RM_ATOMIC_GLOBAL rm_u64*)(tsdf + 2u * i);
+    rm_u64 old = rm_load_u64(pair);
+    for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
+      rm_tsdf_voxel v;
+      rm_tsdf_voxel fused;
+      rm_u64 desired;
+      rm_u64 seen;
+      /* Little-endian: the distance (first member) is the low word. */
+      v.distance = rm_as_float((rm_u32)(old & 0xFFFFFFFFu));
+      v.weight = rm_as_float((rm_u32)(old >> 32));
+      fused = rm_tsdf_fuse(v, sdf, w, p);
+      desired = (rm_u64)rm_as_u32(fused.distance) | ((rm_u64)rm_as_u32(fused.weight) << 32);
+      if (desired == old) {
+        return 1;
+      }
+      seen = rm_atomic_cas_u64(pair, old, desired);
+      if (seen == old) {
+        return 1;
+      }
+      old = seen;
+    }
+    return 0;
+  }
+#else
+  {
+    RM_ATOMIC_GLOBAL rm_u32* distance = tsdf + 2u * i;
+    RM_ATOMIC_GLOBAL rm_u32* weight = distance + 1;
+    for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
+      rm_u32 bits = rm_load_u32(weight);
+      rm_tsdf_voxel v;
+      rm_tsdf_voxel fused;
+      if ((bits & RM_TSDF_LOCK_BIT) != 0u ||
+          rm_atomic_cas_u32(weight, bits, bits | RM_TSDF_LOCK_BIT) != bits) {
+        continue; /* another work-item holds the voxel */
+      }
+      rm_global_fence();
+      v.weight = rm_as_float(bits);
+      v.distance = rm_as_float(rm_atomic_xchg_u32(distance, 0u));
+      fused = rm_tsdf_fuse(v, sdf, w, p);
+      (void)rm_atomic_xchg_u32(distance, rm_as_u32(fused.distance));
+      rm_global_fence();
+      (void)rm_atomic_xchg_u32(weight, rm_as_u32(fused.weight)); /* releases the voxel */
+      return 1;
+    }
+    return 0;
+  }
+#endif
+}
+
+/* Walks `count` voxels of span walk `s` (as rm_span_walk_init left it) and fuses the ray into each.
+ * `base`: the span's region in the layer (slot * voxels_per_region). Returns the updates given
+ * up. */
+RM_DEVICE_FN rm_u32 rm_tsdf_span(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 base, rm_span_walk s,
+                                 rm_i32 count, const rm_line_walk_ray* walk_ray,
+                                 int sample_is_start, float end_sdf, rm_tsdf_params p) {
+  rm_tsdf_ray ray = rm_tsdf_ray_make(walk_ray, sample_is_start, end_sdf);
+  rm_u32 dropped = 0u;
+  rm_i32 k;
+  for (k = 0; k < count; ++k) {
+    rm_u32 i = base + (k == 0 ? RM_U32(s.index) : rm_span_walk_advance(&s));
+    float sdf = rm_tsdf_sdf(&ray, rm_span_walk_voxel(&s), p.resolution);
+    dropped += rm_tsdf_update_atomic(tsdf, i, sdf, p) ? 0u : 1u;
+  }
+  return dropped;
+}
+
+#endif /* RAYMAP_KERNELS_DEVICE_TSDF_H */
