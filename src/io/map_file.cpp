@@ -66,6 +66,10 @@ constexpr std::uint32_t kFirstVersionWithMode = 2;
 constexpr std::uint16_t kNdtBlockBytes = 5 * 8 + 3 * 4;  // 5 f64, 3 u32 (docs/map-format.md)
 constexpr std::uint32_t kNdtFlagAdaptationRate = 1u;     // adaptation rate given, not derived
 constexpr std::uint32_t kNdtKnownFlags = kNdtFlagAdaptationRate;
+// Version 3 appends the TSDF parameters (after the NDT block): u16 block size, u16 reserved,
+// then truncation (m), max weight and drop-off (m) as f64, resolved (never "unset").
+constexpr std::uint32_t kFirstVersionWithTsdf = 3;
+constexpr std::uint16_t kTsdfBlockBytes = 3 * 8;
 constexpr std::uint64_t kMaxRegions = std::numeric_limits<std::uint32_t>::max() / 4u;
 
 // ---- little-endian encoding, byte by byte (correct whatever the host's byte order) ----
@@ -322,7 +326,7 @@ Expected<void, Error> readModeAndNdt(ByteReader& body, MapConfig& config,
   if (!body.u8(mode) || !body.u8(reserved) || !body.u16(block_bytes)) {
     return malformed("map mode runs past the header");
   }
-  if (mode > static_cast<std::uint8_t>(MapMode::kNdtTm) || reserved != 0) {
+  if (mode > static_cast<std::uint8_t>(MapMode::kTsdf) || reserved != 0) {
     return malformed("unknown map mode " + std::to_string(mode));
   }
   if (block_bytes != kNdtBlockBytes) {
@@ -348,6 +352,32 @@ Expected<void, Error> readModeAndNdt(ByteReader& body, MapConfig& config,
   config.mode = static_cast<MapMode>(mode);
   if (auto ok = ndt.validate(); !ok) {
     return malformed("bad NDT parameters: " + ok.error().message);
+  }
+  return {};
+}
+
+/// Version 3: the TSDF block. `malformed` builds the error.
+template <class Malformed>
+Expected<void, Error> readTsdf(ByteReader& body, MapConfig& config, const Malformed& malformed) {
+  std::uint16_t block_bytes = 0;
+  std::uint16_t reserved = 0;
+  if (!body.u16(block_bytes) || !body.u16(reserved)) {
+    return malformed("TSDF parameters run past the header");
+  }
+  if (block_bytes != kTsdfBlockBytes || reserved != 0) {
+    return malformed("TSDF parameter block of " + std::to_string(block_bytes) +
+                     " bytes (expected " + std::to_string(kTsdfBlockBytes) + ")");
+  }
+  double truncation = 0.0;
+  double dropoff = 0.0;
+  TsdfParams& tsdf = config.tsdf;
+  if (!body.f64(truncation) || !body.f64(tsdf.max_weight) || !body.f64(dropoff)) {
+    return malformed("TSDF parameters run past the header");
+  }
+  tsdf.truncation_m = truncation;
+  tsdf.dropoff_m = dropoff;
+  if (auto ok = tsdf.validate(config.geometry.resolution); !ok) {
+    return malformed("bad TSDF parameters: " + ok.error().message);
   }
   return {};
 }
@@ -523,6 +553,11 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
       return Unexpected(ok.error());
     }
   }  // else a version-1 file: an occupancy map, whose NDT parameters stay at their defaults
+  if (version >= kFirstVersionWithTsdf) {
+    if (auto ok = readTsdf(body, config, malformed); !ok) {
+      return Unexpected(ok.error());
+    }
+  }  // else no TSDF map: its parameters stay at their defaults
   if (isNdt(config.mode) && config.semantics != Semantics::kPerRay) {
     return malformed(std::string(toString(config.mode)) + " map with per-scan semantics");
   }
@@ -820,6 +855,13 @@ std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSp
   body.u32(ndt.sample_threshold);
   body.u32(ndt.reinit_count);
   body.u32(ndt.adaptation_rate ? kNdtFlagAdaptationRate : 0u);
+  // Version 3: TSDF parameters, resolved for the map's resolution.
+  const double resolution = config.geometry.resolution;
+  body.u16(kTsdfBlockBytes);
+  body.u16(0);  // reserved
+  body.f64(config.tsdf.truncationMetres(resolution));
+  body.f64(config.tsdf.max_weight);
+  body.f64(config.tsdf.dropoffMetres(resolution));
 
   ByteWriter header;
   for (const std::uint8_t b : kMagic) {

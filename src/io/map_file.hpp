@@ -15,7 +15,7 @@ namespace raymap::io {
 
 /// 1: occupancy maps. 2: adds the map mode and the NDT parameters (version-1 files still load, as
 /// occupancy maps).
-inline constexpr std::uint32_t kMapFormatVersion = 2;
+inline constexpr std::uint32_t kMapFormatVersion = 3;
 
 /// @brief The header of a map file: everything except the voxels.
 struct MapFileHeader {

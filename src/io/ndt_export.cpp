@@ -16,6 +16,7 @@
 #include "kernels/common/occupancy.h"
 #include "src/core/symmetric_eigen.hpp"
 #include "src/io/atomic_file.hpp"
+#include "src/io/le_buffer.hpp"
 
 namespace raymap::io {
 namespace {
@@ -25,7 +26,6 @@ constexpr int kStacks = 6;  // latitude bands
 static_assert(kEllipsoidVertices == 2 + kSlices * (kStacks - 1));
 static_assert(kEllipsoidFaces == 2 * kSlices * (kStacks - 1));
 constexpr double kMaxSigmas = 100.0;
-constexpr std::size_t kFlushBytes = std::size_t{1} << 20;
 
 /// One exported Gaussian, in the world frame.
 struct Gaussian {
@@ -147,33 +147,11 @@ Expected<void, Error> checkMap(const VoxelMap& map, const NdtExportOptions& opti
   return {};
 }
 
-class LeBuffer {
- public:
-  void u8(std::uint8_t v) { bytes_.push_back(static_cast<std::byte>(v)); }
-  void u32(std::uint32_t v) {
-    for (int i = 0; i < 4; ++i) {
-      bytes_.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFFu));
-    }
-  }
-  void f32(double v) { u32(std::bit_cast<std::uint32_t>(static_cast<float>(v))); }
-  void rgb(Rgb8 c) {
-    u8(c.r);
-    u8(c.g);
-    u8(c.b);
-  }
-  /// Writes what is buffered once it is large (or always, when `force`).
-  Expected<void, Error> flush(AtomicFileWriter& writer, bool force) {
-    if (bytes_.empty() || (!force && bytes_.size() < kFlushBytes)) {
-      return {};
-    }
-    auto ok = writer.write(bytes_);
-    bytes_.clear();
-    return ok;
-  }
-
- private:
-  std::vector<std::byte> bytes_;
-};
+void putRgb(LeBuffer& out, Rgb8 c) {
+  out.u8(c.r);
+  out.u8(c.g);
+  out.u8(c.b);
+}
 
 std::string commentLine(const VoxelMap& map, const NdtExportOptions& options) {
   char text[256];
@@ -308,7 +286,7 @@ Result<std::uint64_t> exportNdtEllipsoids(const VoxelMap& map, const NdtExportOp
       out.f32(p.x);
       out.f32(p.y);
       out.f32(p.z);
-      out.rgb(rgb[i]);
+      putRgb(out, rgb[i]);
     }
     if (auto ok = out.flush(*writer, false); !ok) {
       return Unexpected(ok.error());
@@ -368,7 +346,7 @@ Result<std::uint64_t> exportNdtPoints(const VoxelMap& map, const NdtExportOption
     out.f32(normal.x);
     out.f32(normal.y);
     out.f32(normal.z);
-    out.rgb(rgb[i]);
+    putRgb(out, rgb[i]);
     out.u32(g.count);
     if (auto ok = out.flush(*writer, false); !ok) {
       return Unexpected(ok.error());

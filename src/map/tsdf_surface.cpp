@@ -69,4 +69,23 @@ std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_w
   return points;
 }
 
+TsdfSummary summariseTsdf(const VoxelMap& map) noexcept {
+  TsdfSummary summary;
+  if (map.tsdfLayer() < 0) {
+    return summary;
+  }
+  const auto max_weight = static_cast<float>(map.config().tsdf.max_weight);
+  map.store().forEachRegion([&](std::uint32_t slot, Vec3i) {
+    const auto* tsdf = map.store().layerData<rm_tsdf_voxel>(slot, map.tsdfLayer());
+    for (std::uint32_t i = 0; i < map.store().voxelsPerRegion(); ++i) {
+      if (tsdf[i].weight > 0.0f) {
+        ++summary.updated;
+        summary.behind += tsdf[i].distance < 0.0f ? 1u : 0u;
+        summary.saturated += tsdf[i].weight >= max_weight ? 1u : 0u;
+      }
+    }
+  });
+  return summary;
+}
+
 }  // namespace raymap

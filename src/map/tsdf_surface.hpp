@@ -28,4 +28,13 @@ struct TsdfSurfacePoint {
 /// alongside other const queries. @rt allocates: yes (offline tool).
 std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_weight);
 
+/// @brief Counts of a TSDF map's voxels.
+struct TsdfSummary {
+  std::uint64_t updated = 0;    ///< weight > 0
+  std::uint64_t behind = 0;     ///< of those: distance < 0 (behind / inside the surface)
+  std::uint64_t saturated = 0;  ///< of those: weight at the maximum
+};
+/// @brief Counts over all stored regions (all zero without a TSDF layer). Const; @rt no.
+TsdfSummary summariseTsdf(const VoxelMap& map) noexcept;
+
 }  // namespace raymap

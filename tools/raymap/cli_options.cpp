@@ -49,6 +49,59 @@ void addNdtOptions(CLI::App& c, MappingFlags& f) {
                     NdtParams::kDefaultInitialIntensityVariance));
 }
 
+void addTsdfOptions(CLI::App& c, MappingFlags& f) {
+  c.add_option("--tsdf-truncation", f.tsdf_truncation,
+               "TSDF: truncation distance, metres: distances are kept within +-this, and rays go "
+               "on this far behind their sample (default 3 voxel edges)");
+  c.add_option("--tsdf-max-weight", f.tsdf_max_weight,
+               "TSDF: largest voxel weight, rays (default 10000)");
+  c.add_option("--tsdf-dropoff", f.tsdf_dropoff,
+               "TSDF: behind the surface the ray weight falls from 1 at -this to 0 at minus the "
+               "truncation, metres; 0 = constant weight (default 1 voxel edge)");
+}
+
+/// --mode tsdf and the --tsdf-* options into config.
+Expected<void, Error> applyTsdf(const MappingFlags& f, MapConfig& config) {
+  const bool tsdf = f.mode == "tsdf";
+  if (!tsdf) {
+    for (const auto& [set, name] : {std::pair{f.tsdf_truncation.has_value(), "--tsdf-truncation"},
+                                    std::pair{f.tsdf_max_weight.has_value(), "--tsdf-max-weight"},
+                                    std::pair{f.tsdf_dropoff.has_value(), "--tsdf-dropoff"}}) {
+      if (set) {
+        return fail(ErrorCode::kInvalidArgument,
+                    std::string(name) + " applies only to --mode tsdf");
+      }
+    }
+    return {};
+  }
+  if (f.decay_rate) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--decay-rate does not combine with --mode tsdf (a TSDF map has no occupancy or "
+                "voxel mean for the rate)");
+  }
+  if (config.semantics != Semantics::kPerRay) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--mode tsdf needs --semantics ray: every ray's distance is averaged in");
+  }
+  config = config.forTsdf();
+  if (f.tsdf_truncation) {
+    config.tsdf.truncation_m = *f.tsdf_truncation;
+  }
+  if (f.tsdf_max_weight) {
+    config.tsdf.max_weight = *f.tsdf_max_weight;
+  }
+  if (f.tsdf_dropoff) {
+    config.tsdf.dropoff_m = *f.tsdf_dropoff;
+  }
+  if (auto ok = config.tsdf.validate(config.geometry.resolution); !ok) {
+    // TsdfParams names the parameter as "tsdf truncation"; the user typed --tsdf-truncation.
+    std::string message = ok.error().message;
+    message[4] = '-';
+    return fail(ErrorCode::kInvalidArgument, std::string("--") + message);
+  }
+  return {};
+}
+
 /// --mode and the --ndt-* options into config (after the semantics are set).
 Expected<void, Error> applyMode(const MappingFlags& f, MapConfig& config) {
   // "decay" is occupancy plus the traversal layer; --decay-rate adds that layer to any mode.
@@ -56,8 +109,24 @@ Expected<void, Error> applyMode(const MappingFlags& f, MapConfig& config) {
   const std::optional<MapMode> mode =
       decay_mode ? std::optional<MapMode>(MapMode::kOccupancy) : mapModeFromName(f.mode);
   if (!mode) {
-    return fail(ErrorCode::kInvalidArgument, "--mode: unknown mode '" + f.mode +
-                                                 "' (expected occupancy, ndt-om, ndt-tm or decay)");
+    return fail(ErrorCode::kInvalidArgument,
+                "--mode: unknown mode '" + f.mode +
+                    "' (expected occupancy, ndt-om, ndt-tm, decay or tsdf)");
+  }
+  if (auto ok = applyTsdf(f, config); !ok || *mode == MapMode::kTsdf) {
+    if (!ok) {
+      return ok;
+    }
+    for (const bool set : {f.ndt_sensor_noise.has_value(), f.ndt_regulariser.has_value(),
+                           f.ndt_sample_threshold.has_value(), f.ndt_reinit_probability.has_value(),
+                           f.ndt_reinit_count.has_value(), f.ndt_adaptation_rate.has_value(),
+                           f.ndt_initial_intensity_variance.has_value()}) {
+      if (set) {
+        return fail(ErrorCode::kInvalidArgument,
+                    "the --ndt-* options apply only to --mode ndt-om or ndt-tm");
+      }
+    }
+    return {};
   }
   config.mode = *mode;
   config.decay_rate = decay_mode || f.decay_rate;
@@ -144,12 +213,14 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "occupancy: log-odds occupancy; ndt-om: occupancy whose misses follow each voxel's "
                "Gaussian (NDT-OM); ndt-tm: NDT-OM plus hit/miss counts and intensity (NDT-TM); "
                "decay: occupancy plus the metres of ray path in each voxel, for decay rates "
-               "(samples per metre). NDT needs --semantics ray")
-      ->check(CLI::IsMember({"occupancy", "ndt-om", "ndt-tm", "decay"}))
+               "(samples per metre); tsdf: a truncated signed distance field only (no "
+               "occupancy). NDT and TSDF need --semantics ray")
+      ->check(CLI::IsMember({"occupancy", "ndt-om", "ndt-tm", "decay", "tsdf"}))
       ->capture_default_str();
   c.add_flag("--decay-rate", f.decay_rate,
              "Keep the metres of ray path in each voxel (decay rates) with any --mode");
   addNdtOptions(c, f);
+  addTsdfOptions(c, f);
   c.add_option("--backend", f.backend, "Integration backend: cpu, opencl or cuda")
       ->check(CLI::IsMember({"cpu", "opencl", "cuda"}))
       ->capture_default_str();

@@ -27,7 +27,7 @@ struct MappingFlags {
   std::optional<double> clamp_max;
   std::optional<double> threshold;
   std::string semantics = "ray";
-  std::string mode = "occupancy";  ///< occupancy, ndt-om, ndt-tm or decay (occupancy + decay)
+  std::string mode = "occupancy";  ///< occupancy, ndt-om, ndt-tm, decay (occupancy + decay), tsdf
   bool decay_rate = false;         ///< --decay-rate: the traversal layer on any mode
   // NDT parameters (unset: NdtParams defaults); only with --mode ndt-om / ndt-tm.
   std::optional<double> ndt_sensor_noise;
@@ -37,6 +37,10 @@ struct MappingFlags {
   std::optional<std::uint32_t> ndt_reinit_count;
   std::optional<double> ndt_adaptation_rate;
   std::optional<double> ndt_initial_intensity_variance;
+  // TSDF parameters (unset: TsdfParams defaults); only with --mode tsdf.
+  std::optional<double> tsdf_truncation;
+  std::optional<double> tsdf_max_weight;
+  std::optional<double> tsdf_dropoff;
   std::string backend = "cpu";
   unsigned threads = 0;
   std::string opencl_platform;

@@ -9,11 +9,15 @@
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/ndt_export.hpp"
+#include "src/io/tsdf_export.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 
 namespace raymap::cli {
 namespace {
+
+// tsdf: crossings between voxels with at least this many rays' weight by default.
+constexpr double kDefaultTsdfMinWeight = 1.0;
 
 struct ExportFlags {
   std::string map;
@@ -22,7 +26,8 @@ struct ExportFlags {
   double sigmas = io::NdtExportOptions::kDefaultSigmas;
   std::optional<double> min_axis;
   std::optional<std::string> colour;
-  std::optional<double> threshold;  ///< decay: lowest rate exported, per metre
+  std::optional<double> threshold;   ///< decay: lowest rate exported, per metre
+  std::optional<double> min_weight;  ///< tsdf: lightest voxel pair whose crossing is exported
   bool quiet = false;
 };
 
@@ -72,9 +77,50 @@ int runNdtExport(const ExportFlags& f) {
   return kExitOk;
 }
 
+int runTsdfExport(const ExportFlags& f) {
+  const char* command = "export";
+  const double min_weight = f.min_weight.value_or(kDefaultTsdfMinWeight);
+  if (!std::isfinite(min_weight) || min_weight < 0.0) {
+    printError(command, "--min-weight: must be a finite weight >= 0 (rays)");
+    return kExitUsage;
+  }
+  if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
+  }
+  auto map = io::loadMap(f.map);
+  if (!map) {
+    printError(command, map.error().message);
+    return kExitFailure;
+  }
+  auto count = io::exportTsdfSurface(*map, f.ply, min_weight);
+  if (!count) {
+    printError(command, f.map + ": " + count.error().message);
+    return kExitFailure;
+  }
+  if (!f.quiet) {
+    std::printf("wrote %s TSDF surface points (zero crossings, weight >= %g) to %s\n",
+                withCommas(*count).c_str(), min_weight, f.ply.c_str());
+  }
+  return kExitOk;
+}
+
 int runExport(const ExportFlags& f) {
   if (f.mode == "ndt" || f.mode == "ndt-points") {
     return runNdtExport(f);
+  }
+  if (f.min_weight && f.mode != "tsdf") {
+    printError("export", "--min-weight applies only to --mode tsdf");
+    return kExitUsage;
+  }
+  if (f.mode == "tsdf") {
+    if (f.threshold || f.colour || f.min_axis || f.sigmas != io::NdtExportOptions::kDefaultSigmas) {
+      printError("export",
+                 "--threshold, --colour, --sigmas and --min-axis do not apply to "
+                 "--mode tsdf (its option is --min-weight)");
+      return kExitUsage;
+    }
+    return runTsdfExport(f);
   }
   if (f.colour || f.min_axis || f.sigmas != io::NdtExportOptions::kDefaultSigmas) {
     printError("export",
@@ -124,7 +170,9 @@ int runExport(const ExportFlags& f) {
 void addExportCommand(CLI::App& app, int* exit_code) {
   auto flags = std::make_shared<ExportFlags>();
   CLI::App* c = app.add_subcommand(
-      "export", "Write a map's voxels as a point-cloud PLY, or its NDT Gaussians as ellipsoids");
+      "export",
+      "Write a map's voxels as a point-cloud PLY, its NDT Gaussians as ellipsoids, or its TSDF "
+      "surface as points");
   c->add_option("map", flags->map, "Map file (.rmap)")->required();
   c->add_option("--ply", flags->ply, "PLY file to write")->required();
   c->add_option(
@@ -133,7 +181,8 @@ void addExportCommand(CLI::App& app, int* exit_code) {
        "mean: every voxel with samples, at its mean; decay: every voxel of a decay-rate map "
        "whose rate (samples per metre of ray path) is at least --threshold; ndt: a "
        "triangle-mesh ellipsoid per occupied NDT Gaussian; ndt-points: the Gaussians' "
-       "means with normals")
+       "means with normals; tsdf: the zero crossings of a TSDF map (its surface) as points "
+       "with normals")
       ->capture_default_str();
   c->add_option("--sigmas", flags->sigmas, "NDT: ellipsoid half-axes in standard deviations")
       ->capture_default_str();
@@ -146,6 +195,8 @@ void addExportCommand(CLI::App& app, int* exit_code) {
   c->add_option("--threshold", flags->threshold,
                 "decay: the lowest decay rate exported, reflections per metre (default 0: every "
                 "voxel a ray entered)");
+  c->add_option("--min-weight", flags->min_weight,
+                "tsdf: leave out crossings between voxels lighter than this, rays (default 1)");
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   c->callback([flags, exit_code] { *exit_code = runExport(*flags); });
 }

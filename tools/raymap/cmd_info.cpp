@@ -5,6 +5,7 @@
 #include <string>
 
 #include "src/io/map_file.hpp"
+#include "src/map/tsdf_surface.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
 
@@ -130,6 +131,17 @@ int runInfo(const InfoFlags& f) {
     if (isNdt(c.mode)) {
       j.raw("ndt", ndtJson(c).str());
     }
+    if (c.mode == MapMode::kTsdf) {
+      const TsdfSummary t = summariseTsdf(*map);
+      JsonObject tsdf;
+      tsdf.add("truncation_m", c.tsdf.truncationMetres(c.geometry.resolution))
+          .add("max_weight", c.tsdf.max_weight)
+          .add("dropoff_m", c.tsdf.dropoffMetres(c.geometry.resolution))
+          .add("voxels_updated", t.updated)
+          .add("voxels_behind_surface", t.behind)
+          .add("voxels_at_max_weight", t.saturated);
+      j.raw("tsdf", tsdf.str());
+    }
     j.add("regions", s.regions)
         .add("memory_bytes", s.regions * bytes_per_region)
         .add("voxels_free", s.voxels_free)
@@ -147,22 +159,35 @@ int runInfo(const InfoFlags& f) {
               c.geometry.region_voxels, c.geometry.regionExtent());
   std::printf("semantics      %s\n", toString(c.semantics));
   std::printf("mode           %s\n", mapModeName(c).c_str());
-  std::printf(
-      "occupancy      hit %.4g, miss %.4g, clamps %.4g / %.4g, threshold %.4g"
-      " (log-odds %+.4f %+.4f %+.4f %+.4f %+.4f)\n",
-      probability(o.hit), probability(o.miss), probability(o.clamp_min), probability(o.clamp_max),
-      probability(o.threshold), static_cast<double>(o.hit), static_cast<double>(o.miss),
-      static_cast<double>(o.clamp_min), static_cast<double>(o.clamp_max),
-      static_cast<double>(o.threshold));
+  if (c.occupancy_layer) {
+    std::printf(
+        "occupancy      hit %.4g, miss %.4g, clamps %.4g / %.4g, threshold %.4g"
+        " (log-odds %+.4f %+.4f %+.4f %+.4f %+.4f)\n",
+        probability(o.hit), probability(o.miss), probability(o.clamp_min), probability(o.clamp_max),
+        probability(o.threshold), static_cast<double>(o.hit), static_cast<double>(o.miss),
+        static_cast<double>(o.clamp_min), static_cast<double>(o.clamp_max),
+        static_cast<double>(o.threshold));
+  }
   if (isNdt(c.mode)) {
     printNdt(c);
+  }
+  if (c.mode == MapMode::kTsdf) {
+    const TsdfSummary t = summariseTsdf(*map);
+    std::printf("tsdf           truncation %g m, max weight %g, drop-off %g m\n",
+                c.tsdf.truncationMetres(c.geometry.resolution), c.tsdf.max_weight,
+                c.tsdf.dropoffMetres(c.geometry.resolution));
+    std::printf("tsdf voxels    %s updated, %s behind the surface, %s at the max weight\n",
+                withCommas(t.updated).c_str(), withCommas(t.behind).c_str(),
+                withCommas(t.saturated).c_str());
   }
   std::printf("layers         %s per voxel\n", layers.c_str());
   std::printf("regions        %s (%.1f MiB in memory)\n", withCommas(s.regions).c_str(),
               static_cast<double>(s.regions * bytes_per_region) / (1024.0 * 1024.0));
-  std::printf("voxels         %s free, %s occupied, %s unobserved in stored regions\n",
-              withCommas(s.voxels_free).c_str(), withCommas(s.voxels_occupied).c_str(),
-              withCommas(s.voxels_unobserved).c_str());
+  if (c.occupancy_layer) {
+    std::printf("voxels         %s free, %s occupied, %s unobserved in stored regions\n",
+                withCommas(s.voxels_free).c_str(), withCommas(s.voxels_occupied).c_str(),
+                withCommas(s.voxels_unobserved).c_str());
+  }
   if (s.voxels_free + s.voxels_occupied > 0) {
     std::printf("extent         [%.2f, %.2f, %.2f] to [%.2f, %.2f, %.2f] m\n", s.observed_min.x,
                 s.observed_min.y, s.observed_min.z, s.observed_max.x, s.observed_max.y,

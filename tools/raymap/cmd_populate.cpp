@@ -45,11 +45,20 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
   std::printf("\n               %s clipped to max range, %s without return, %s scans\n",
               withCommas(r.rays.rays_clipped).c_str(), withCommas(r.rays.rays_no_return).c_str(),
               withCommas(r.scans).c_str());
-  std::printf(
-      "map            %s free, %s occupied voxels in %s regions (%.3g m, %s semantics, %s)\n",
-      withCommas(r.summary.voxels_free).c_str(), withCommas(r.summary.voxels_occupied).c_str(),
-      withCommas(r.summary.regions).c_str(), o.map.geometry.resolution, toString(o.map.semantics),
-      mapModeName(o.map).c_str());
+  if (o.map.mode == MapMode::kTsdf) {
+    std::printf(
+        "map            %s TSDF voxels updated (%s behind the surface) in %s regions (%.3g m, "
+        "truncation %g m)\n",
+        withCommas(r.tsdf.updated).c_str(), withCommas(r.tsdf.behind).c_str(),
+        withCommas(r.summary.regions).c_str(), o.map.geometry.resolution,
+        o.map.tsdf.truncationMetres(o.map.geometry.resolution));
+  } else {
+    std::printf(
+        "map            %s free, %s occupied voxels in %s regions (%.3g m, %s semantics, %s)\n",
+        withCommas(r.summary.voxels_free).c_str(), withCommas(r.summary.voxels_occupied).c_str(),
+        withCommas(r.summary.regions).c_str(), o.map.geometry.resolution, toString(o.map.semantics),
+        mapModeName(o.map).c_str());
+  }
   if (r.device.empty()) {
     std::printf("integration    %.3f s, %.3g M rays/s (%s, %u threads); reading %.3f s\n",
                 r.integrate_seconds, rate / 1e6, r.backend_name.c_str(), r.threads, r.read_seconds);

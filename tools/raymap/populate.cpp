@@ -177,6 +177,7 @@ Result<PopulateReport> integrateStream(
   report.rays = preparer.counters();
   report.backend = statsSince(backend.stats(), stats_before);
   report.summary = map.summarise();
+  report.tsdf = summariseTsdf(map);
   report.total_seconds = secondsSince(start);
   report.peak_rss_bytes = platform::peakResidentBytes();
   return report;
@@ -249,6 +250,8 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
       .add("total_seconds", r.total_seconds)
       .add("voxels_free", r.summary.voxels_free)
       .add("voxels_occupied", r.summary.voxels_occupied)
+      .add("tsdf_voxels_updated", r.tsdf.updated)
+      .add("tsdf_voxels_behind_surface", r.tsdf.behind)
       .add("regions", r.summary.regions)
       .add("voxels_visited", r.backend.voxels_visited)
       .add("backend", r.backend_name)

@@ -11,6 +11,7 @@
 #include "src/io/ray_source.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/ray_preparer.hpp"
+#include "src/map/tsdf_surface.hpp"
 #include "src/map/voxel_map.hpp"
 #include "src/service/backend_choice.hpp"
 
@@ -53,6 +54,7 @@ struct PopulateReport {
   double read_seconds = 0;        ///< reading and decoding the input
   double total_seconds = 0;
   MapSummary summary;
+  TsdfSummary tsdf;  ///< TSDF maps (zero otherwise)
   std::uint64_t peak_rss_bytes = 0;
 };
 

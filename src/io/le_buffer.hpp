@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Little-endian binary records (PLY bodies) buffered on their way into an AtomicFileWriter.
+#pragma once
+
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "src/core/error.hpp"
+#include "src/io/atomic_file.hpp"
+
+namespace raymap::io {
+
+/// @brief Appends values in little-endian order, byte by byte (correct on any host), and writes
+/// them out once a megabyte has built up. Not thread-safe; offline tools only (allocates).
+class LeBuffer {
+ public:
+  static constexpr std::size_t kFlushBytes = std::size_t{1} << 20;
+
+  void u8(std::uint8_t v) { bytes_.push_back(static_cast<std::byte>(v)); }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) {
+      bytes_.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFFu));
+    }
+  }
+  /// A float32 (the value is rounded from double).
+  void f32(double v) { u32(std::bit_cast<std::uint32_t>(static_cast<float>(v))); }
+  /// @brief Writes what is buffered once it is large (or always, when `force`).
+  Expected<void, Error> flush(AtomicFileWriter& writer, bool force) {
+    if (bytes_.empty() || (!force && bytes_.size() < kFlushBytes)) {
+      return {};
+    }
+    auto ok = writer.write(bytes_);
+    bytes_.clear();
+    return ok;
+  }
+
+ private:
+  std::vector<std::byte> bytes_;
+};
+
+}  // namespace raymap::io
