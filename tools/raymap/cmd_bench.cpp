@@ -77,10 +77,10 @@ int runBench(const BenchFlags& f) {
       !warning.empty()) {
     std::fprintf(stderr, "bench: warning: %s\n", warning.c_str());
   }
-  // NDT maps integrate per ray only: the default list shrinks to "ray"; an explicit "scan" is an
-  // error rather than a silently skipped run.
+  // NDT and TSDF maps integrate per ray only: the default list shrinks to "ray"; an explicit
+  // "scan" is an error rather than a silently skipped run.
   std::string semantics_list = f.semantics_list;
-  if (isNdt(base->map.mode)) {
+  if (isNdt(base->map.mode) || base->map.mode == MapMode::kTsdf) {
     if (semantics_list == kDefaultSemanticsList) {
       semantics_list = "ray";
     }
@@ -195,7 +195,7 @@ void addBenchCommand(CLI::App& app, int* exit_code) {
   c->add_option("--threads-list", flags->threads_list, "Thread counts to run, e.g. 1,2,0 (0 = all)")
       ->capture_default_str();
   c->add_option("--semantics-list", flags->semantics_list,
-                "Semantics to run: ray, scan or both (NDT --mode: ray only)")
+                "Semantics to run: ray, scan or both (NDT and TSDF --mode: ray only)")
       ->capture_default_str();
   c->add_option("--repeat", flags->repeat, "Runs per configuration (the median is reported)")
       ->check(CLI::Range(1, 100))
