@@ -38,7 +38,8 @@ constexpr std::size_t kIndexEntryBytes = 20;
 constexpr std::size_t kBodyLayerCount = 34;
 constexpr std::size_t kBodyFirstLayerKind = 36;
 // Version 2 ends the body with the map mode (4 bytes) and the 52-byte NDT block.
-constexpr std::size_t kBodyModeAndNdtBytes = 4 + 52;
+// Version 2's mode and NDT block, then version 3's TSDF block, end the header body.
+constexpr std::size_t kBodyModeAndNdtBytes = 4 + 52 + 4 + 24;
 
 std::size_t headerBodyBytes(const std::vector<std::uint8_t>& bytes) {
   return static_cast<std::size_t>(getLe(bytes, 12, 4));
@@ -758,7 +759,7 @@ TEST_F(DamagedMapFile, ANewerVersionIsUnsupported) {
 
   // Assert
   EXPECT_EQ(error.code, ErrorCode::kUnsupported);
-  EXPECT_EQ(error.message, bad_path_ + ": map format version 7 is newer than this raymap (2)");
+  EXPECT_EQ(error.message, bad_path_ + ": map format version 7 is newer than this raymap (3)");
   ASSERT_FALSE(header.has_value());
   EXPECT_EQ(header.error().message, error.message);
 }

@@ -26,13 +26,16 @@ using test::writeFileBytes;
 // ---- file bytes (docs/map-format.md) ----
 
 constexpr std::size_t kPrefixBytes = 16;
-// The version-2 tail of the header body: mode, reserved, block size, then the NDT block.
+// The version-2 tail of the header body: mode, reserved, block size, then the NDT block; version 3
+// appends the TSDF block (size, reserved, 3 f64) after it.
 constexpr std::size_t kModeAndNdtBytes = 4 + 52;
+constexpr std::size_t kTsdfBytes = 4 + 24;
 // Offsets inside that tail.
 constexpr std::size_t kTailMode = 0;
 constexpr std::size_t kTailBlockBytes = 2;
 constexpr std::size_t kTailSensorNoise = 4;
 constexpr std::size_t kTailFlags = 4 + 52 - 4;
+constexpr std::size_t kTailTsdfTruncation = kModeAndNdtBytes + 4;
 
 std::size_t bodyBytes(const std::vector<std::uint8_t>& bytes) {
   return static_cast<std::size_t>(getLe(bytes, 12, 4));
@@ -40,7 +43,7 @@ std::size_t bodyBytes(const std::vector<std::uint8_t>& bytes) {
 
 /// File offset of the version-2 tail of the header body.
 std::size_t tailOffset(const std::vector<std::uint8_t>& bytes) {
-  return kPrefixBytes + bodyBytes(bytes) - kModeAndNdtBytes;
+  return kPrefixBytes + bodyBytes(bytes) - kModeAndNdtBytes - kTsdfBytes;
 }
 
 void resealHeader(std::vector<std::uint8_t>& bytes) {
@@ -48,29 +51,31 @@ void resealHeader(std::vector<std::uint8_t>& bytes) {
   putLe(bytes, covered, crc32(bytes.data(), covered), 4);
 }
 
-/// Rewrites a version-2 file as version 1 wrote it: no mode, no NDT block. The block offsets in
-/// the index and footer move with the header.
-std::vector<std::uint8_t> asVersion1(const std::vector<std::uint8_t>& v2) {
-  std::vector<std::uint8_t> v1 = v2;
-  const std::size_t tail = tailOffset(v1);
-  v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(tail),
-           v1.begin() + static_cast<std::ptrdiff_t>(tail + kModeAndNdtBytes));
-  putLe(v1, 8, 1, 4);
-  putLe(v1, 12, bodyBytes(v2) - kModeAndNdtBytes, 4);
-  resealHeader(v1);
+/// Rewrites a version-3 file as an older version wrote it: version 2 without the TSDF block,
+/// version 1 without the mode and NDT block too. The block offsets in the index and footer move
+/// with the header.
+std::vector<std::uint8_t> asVersion(const std::vector<std::uint8_t>& v3, std::uint32_t version) {
+  std::vector<std::uint8_t> old = v3;
+  const std::size_t removed = version == 1 ? kModeAndNdtBytes + kTsdfBytes : kTsdfBytes;
+  const std::size_t cut = kPrefixBytes + bodyBytes(v3) - removed;
+  old.erase(old.begin() + static_cast<std::ptrdiff_t>(cut),
+            old.begin() + static_cast<std::ptrdiff_t>(cut + removed));
+  putLe(old, 8, version, 4);
+  putLe(old, 12, bodyBytes(v3) - removed, 4);
+  resealHeader(old);
   // Footer: region count at +4, index offset at +12; index entries: coord (12) + offset (8).
-  const std::size_t footer = v1.size() - 24;
-  const std::size_t count = static_cast<std::size_t>(getLe(v1, footer + 4, 8));
-  const std::size_t index = static_cast<std::size_t>(getLe(v1, footer + 12, 8)) - kModeAndNdtBytes;
-  putLe(v1, footer + 12, index, 8);
-  putLe(v1, footer + 20, crc32(v1.data() + footer, 20), 4);
+  const std::size_t footer = old.size() - 24;
+  const std::size_t count = static_cast<std::size_t>(getLe(old, footer + 4, 8));
+  const std::size_t index = static_cast<std::size_t>(getLe(old, footer + 12, 8)) - removed;
+  putLe(old, footer + 12, index, 8);
+  putLe(old, footer + 20, crc32(old.data() + footer, 20), 4);
   for (std::size_t i = 0; i < count; ++i) {
     const std::size_t at = index + 4 + i * 20 + 12;
-    putLe(v1, at, getLe(v1, at, 8) - kModeAndNdtBytes, 8);
+    putLe(old, at, getLe(old, at, 8) - removed, 8);
   }
   const std::size_t index_bytes = 4 + count * 20;
-  putLe(v1, index + index_bytes, crc32(v1.data() + index, index_bytes), 4);
-  return v1;
+  putLe(old, index + index_bytes, crc32(old.data() + index, index_bytes), 4);
+  return old;
 }
 
 // ---- maps ----
@@ -179,7 +184,7 @@ TEST(NdtMapFileParams, AVersion1FileLoadsAsAnOccupancyMap) {
   TempDir dir;
   const std::string path = dir.file("v1.rmap");
   ASSERT_TRUE(saveMap(map, path).has_value());
-  writeFileBytes(path, asVersion1(readFileBytes(path)));
+  writeFileBytes(path, asVersion(readFileBytes(path), 1));
 
   // Act
   auto loaded = loadMap(path);
@@ -189,6 +194,60 @@ TEST(NdtMapFileParams, AVersion1FileLoadsAsAnOccupancyMap) {
   EXPECT_EQ(loaded->mode(), MapMode::kOccupancy);
   EXPECT_EQ(loaded->config().ndt, NdtParams{});
   expectSameSavedLayers(map, *loaded);
+}
+
+TEST(NdtMapFileParams, AVersion2FileLoadsWithTheDefaultTsdfParameters) {
+  // Arrange
+  const MapConfig config = ndtConfig(MapMode::kNdtOm);
+  const VoxelMap map = integratedMap(config);
+  TempDir dir;
+  const std::string path = dir.file("v2.rmap");
+  ASSERT_TRUE(saveMap(map, path).has_value());
+  writeFileBytes(path, asVersion(readFileBytes(path), 2));
+
+  // Act
+  auto loaded = loadMap(path);
+
+  // Assert
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_EQ(loaded->mode(), MapMode::kNdtOm);
+  EXPECT_EQ(loaded->config().ndt, config.ndt);
+  EXPECT_EQ(loaded->config().tsdf, TsdfParams{});
+  expectSameSavedLayers(map, *loaded);
+}
+
+TEST(TsdfMapFile, ATsdfMapRoundTripsWithItsParametersAndField) {
+  // Arrange
+  MapConfig config = ndtConfig(MapMode::kOccupancy).forTsdf();
+  config.tsdf.truncation_m = 0.7;
+  config.tsdf.max_weight = 77.0;
+  config.tsdf.dropoff_m = 0.0;
+  const VoxelMap map = integratedMap(config);
+  TempDir dir;
+  const std::string path = dir.file("tsdf.rmap");
+
+  // Act
+  ASSERT_TRUE(saveMap(map, path).has_value());
+  auto loaded = loadMap(path);
+
+  // Assert
+  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+  EXPECT_EQ(loaded->mode(), MapMode::kTsdf);
+  EXPECT_EQ(loaded->config().tsdf.truncationMetres(0.2), 0.7);
+  EXPECT_EQ(loaded->config().tsdf.max_weight, 77.0);
+  EXPECT_EQ(loaded->config().tsdf.dropoffMetres(0.2), 0.0);
+  EXPECT_EQ(loaded->occupancyLayer(), -1);
+  std::uint64_t updated = 0;
+  map.store().forEachRegion([&](std::uint32_t slot, Vec3i region) {
+    const auto* a = map.store().layerData<rm_tsdf_voxel>(slot, map.tsdfLayer());
+    for (std::uint32_t i = 0; i < map.store().voxelsPerRegion(); ++i) {
+      const rm_tsdf_voxel b = loaded->tsdf(map.voxelAt(region, i));
+      ASSERT_EQ(a[i].distance, b.distance);
+      ASSERT_EQ(a[i].weight, b.weight);
+      updated += a[i].weight > 0.0f ? 1u : 0u;
+    }
+  });
+  EXPECT_GT(updated, 100u);
 }
 
 // ---- damaged NDT sections ----
@@ -263,6 +322,14 @@ TEST_F(DamagedNdtFile, UnknownFlagsAreRejected) {
   const Error error = loadFails(bad);
   EXPECT_EQ(error.code, ErrorCode::kCorrupt);
   EXPECT_NE(error.message.find("unknown NDT flags"), std::string::npos) << error.message;
+}
+
+TEST_F(DamagedNdtFile, ABadTsdfParameterIsNamed) {
+  std::vector<std::uint8_t> bad = good_;
+  putLe(bad, tail_ + kTailTsdfTruncation, std::bit_cast<std::uint64_t>(-0.3), 8);
+  const Error error = loadFails(bad);
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_NE(error.message.find("bad TSDF parameters"), std::string::npos) << error.message;
 }
 
 TEST_F(DamagedNdtFile, ABodyCutInsideTheNdtBlockIsNamed) {

@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// TSDF maps through the raymap program: populate --mode tsdf with its parameters, info, the map
+// file round trip, export --mode tsdf (the surface of a simulated plane, where it should be), and
+// the errors.
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/io/map_file.hpp"
+#include "src/io/ray_cloud_writer.hpp"
+#include "tests/support/cli_runner.hpp"
+#include "tests/support/temp_dir.hpp"
+#include "tests/support/tsdf_scenes.hpp"
+
+namespace raymap::test {
+namespace {
+
+void writeRays(const std::string& path, const std::vector<Ray>& rays) {
+  auto writer = io::RayCloudWriter::open(path);
+  ASSERT_TRUE(writer.has_value()) << writer.error().message;
+  ASSERT_TRUE((*writer)->write(rays).has_value());
+  ASSERT_TRUE((*writer)->finish().has_value());
+}
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// The body of a binary PLY written by export --mode tsdf: 7 floats a point (x y z nx ny nz
+// weight).
+std::vector<float> plyFloats(const std::string& text) {
+  const std::size_t body = text.find("end_header\n");
+  if (body == std::string::npos) {
+    return {};
+  }
+  std::vector<float> values((text.size() - body - 11) / 4);
+  std::memcpy(values.data(), text.data() + body + 11, values.size() * 4);
+  return values;
+}
+
+TEST(CliTsdf, PopulateInfoAndExportThePlanesSurface) {
+  TempDir dir;
+  const std::string rays = dir.file("plane.ply");
+  const std::string map = dir.file("plane.rmap");
+  const std::string ply = dir.file("surface.ply");
+  const TsdfScene scene = planeScene(3000);
+  writeRays(rays, scene.rays);
+
+  const RunResult populated =
+      runRaymap({"populate", rays, "--output", map, "--mode", "tsdf", "--tsdf-truncation", "0.25",
+                 "--tsdf-max-weight", "500", "--tsdf-dropoff", "0.05"});
+  ASSERT_EQ(populated.exit_code, 0) << describe(populated);
+  EXPECT_TRUE(has(populated.out, "TSDF voxels updated")) << populated.out;
+  const RunResult info = runRaymap({"info", map});
+  ASSERT_EQ(info.exit_code, 0) << describe(info);
+  EXPECT_TRUE(has(info.out, "mode           tsdf")) << info.out;
+  EXPECT_TRUE(has(info.out, "tsdf           truncation 0.25 m, max weight 500, drop-off 0.05 m"))
+      << info.out;
+  EXPECT_TRUE(has(info.out, "tsdf (8 B)")) << info.out;
+  EXPECT_FALSE(has(info.out, "occupancy      hit")) << info.out;
+
+  // The file keeps the parameters and the field.
+  auto loaded = io::loadMap(map);
+  ASSERT_TRUE(loaded) << loaded.error().message;
+  EXPECT_EQ(loaded->mode(), MapMode::kTsdf);
+  EXPECT_EQ(loaded->config().tsdf.truncationMetres(0.1), 0.25);
+  EXPECT_EQ(loaded->config().tsdf.max_weight, 500.0);
+  EXPECT_EQ(loaded->config().tsdf.dropoffMetres(0.1), 0.05);
+  EXPECT_LT(loaded->tsdf(loaded->voxelOf({0.05, 0.05, 0.45})).distance, 0.0f);
+  EXPECT_GT(loaded->tsdf(loaded->voxelOf({0.05, 0.05, 0.65})).distance, 0.0f);
+
+  const RunResult exported =
+      runRaymap({"export", map, "--mode", "tsdf", "--min-weight", "20", "--ply", ply});
+  ASSERT_EQ(exported.exit_code, 0) << describe(exported);
+  EXPECT_TRUE(has(exported.out, "TSDF surface points")) << exported.out;
+  const std::string text = readFile(ply);
+  EXPECT_TRUE(has(text, "property float weight\n"));
+  const std::vector<float> values = plyFloats(text);
+  ASSERT_GT(values.size(), 7u * 100u);
+  ASSERT_EQ(values.size() % 7, 0u);
+  std::size_t up = 0;
+  for (std::size_t i = 0; i < values.size(); i += 7) {
+    // Within a quarter voxel of the plane z = 0.537 m, weights at least 20.
+    EXPECT_NEAR(values[i + 2], 0.537f, 0.025f);
+    EXPECT_GE(values[i + 6], 20.0f);
+    up += values[i + 5] == 1.0f ? 1u : 0u;
+  }
+  // Nearly all crossings are between a voxel and the one above it (a few lie between
+  // neighbours in the layer just above the plane, whose distance of 0.013 m averages to
+  // either sign).
+  std::printf("%zu of %zu crossings vertical\n", up, values.size() / 7);
+  EXPECT_GE(up, values.size() / 7 * 9 / 10);
+}
+
+TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
+  TempDir dir;
+  const std::string rays = dir.file("plane.ply");
+  writeRays(rays, planeScene(50).rays);
+  const std::string tsdf = dir.file("tsdf.rmap");
+  const std::string plain = dir.file("plain.rmap");
+  ASSERT_EQ(runRaymap({"populate", rays, "--output", tsdf, "--mode", "tsdf", "-q"}).exit_code, 0);
+  ASSERT_EQ(runRaymap({"populate", rays, "--output", plain, "-q"}).exit_code, 0);
+
+  const RunResult dropoff = runRaymap(
+      {"populate", rays, "--output", dir.file("x.rmap"), "--mode", "tsdf", "--tsdf-dropoff", "1"});
+  EXPECT_NE(dropoff.exit_code, 0);
+  EXPECT_TRUE(has(dropoff.err, "--tsdf-dropoff")) << dropoff.err;
+  const RunResult scan = runRaymap(
+      {"populate", rays, "--output", dir.file("x.rmap"), "--mode", "tsdf", "--semantics", "scan"});
+  EXPECT_NE(scan.exit_code, 0);
+  EXPECT_TRUE(has(scan.err, "--semantics ray")) << scan.err;
+  const RunResult stray =
+      runRaymap({"populate", rays, "--output", dir.file("x.rmap"), "--tsdf-truncation", "0.3"});
+  EXPECT_NE(stray.exit_code, 0);
+  EXPECT_TRUE(has(stray.err, "--tsdf-truncation applies only to --mode tsdf")) << stray.err;
+
+  const RunResult no_layer =
+      runRaymap({"export", plain, "--mode", "tsdf", "--ply", dir.file("x.ply")});
+  EXPECT_NE(no_layer.exit_code, 0);
+  EXPECT_TRUE(has(no_layer.err, "no TSDF layer")) << no_layer.err;
+  const RunResult occupied = runRaymap({"export", tsdf, "--ply", dir.file("x.ply")});
+  EXPECT_NE(occupied.exit_code, 0);
+  EXPECT_TRUE(has(occupied.err, "no occupancy layer")) << occupied.err;
+  const RunResult weight = runRaymap(
+      {"export", plain, "--mode", "occupied", "--min-weight", "3", "--ply", dir.file("x.ply")});
+  EXPECT_NE(weight.exit_code, 0);
+  EXPECT_TRUE(has(weight.err, "--min-weight applies only to --mode tsdf")) << weight.err;
+  const RunResult heightmap = runRaymap({"heightmap", tsdf, "--csv", dir.file("h.csv")});
+  EXPECT_NE(heightmap.exit_code, 0);
+  EXPECT_TRUE(has(heightmap.err, "occupancy")) << heightmap.err;
+}
+
+}  // namespace
+}  // namespace raymap::test
