@@ -108,9 +108,15 @@ RAYMAP_FN rm_tsdf_voxel rm_tsdf_fuse(rm_tsdf_voxel v, float sdf, float w, rm_tsd
   if (total < RM_TSDF_MIN_WEIGHT) {
     return v;
   }
+  out.weight = RM_FMINF(total, p.max_weight);
+  /* A ray that agrees with the voxel leaves its average where it is, exactly: the common case of
+   * free space crossed again (+tau on both sides), which then costs no division. */
+  if (d == v.distance) {
+    out.distance = d;
+    return out;
+  }
   out.distance =
       RM_FMINF(RM_FMAXF((v.distance * v.weight + d * w) / total, -p.truncation), p.truncation);
-  out.weight = RM_FMINF(total, p.max_weight);
   return out;
 }
 

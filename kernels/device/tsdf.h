@@ -6,13 +6,14 @@
  *
  * Each voxel update reads the (distance, weight) pair, fuses the ray in and writes both back as
  * one: with a 64-bit compare-and-swap where the device has 64-bit atomics (CUDA always,
- * OpenCL with cl_khr_int64_base_atomics), retried at most RM_CAS_RETRY_LIMIT times. Without them,
- * the sign bit of the weight word (weights are never negative) is a per-voxel lock taken with a
- * 32-bit compare-and-swap under the same bound: the holder reads the distance, writes the fused
- * distance and releases by writing the fused weight, in straight-line code, so a work-item never
- * waits on a lock held by one that cannot run. An update given up under contention is counted in
- * RM_COUNTER_DROPPED by the caller, never lost silently. Updates of one voxel by several rays in
- * one batch land in any order: the averages differ from the CPU's by float rounding only. */
+ * OpenCL with cl_khr_int64_base_atomics), retried at most RM_CAS_RETRY_LIMIT times (a failed
+ * compare-and-swap means another work-item's update went in). Without them, the sign bit of the
+ * weight word (weights are never negative) is a per-voxel lock taken with a 32-bit
+ * compare-and-swap, tried at most RM_TSDF_LOCK_SPIN_LIMIT times: the holder reads the distance,
+ * writes the fused distance and releases by writing the fused weight, in straight-line code. An
+ * update given up under contention is counted in RM_COUNTER_DROPPED by the caller, never lost
+ * silently. Updates of one voxel by several rays in one batch land in any order: the averages
+ * differ from the CPU's by float rounding only. */
 #ifndef RAYMAP_KERNELS_DEVICE_TSDF_H
 #define RAYMAP_KERNELS_DEVICE_TSDF_H
 
@@ -24,13 +25,18 @@
 #include "device.h"
 
 #define RM_TSDF_LOCK_BIT 0x80000000u
+/* Tries for a voxel's lock before the update is given up. A holder keeps it for a few
+ * instructions, so waits are short on a GPU, where a work-item that holds it keeps running. On a
+ * CPU device (PoCL) the holder's thread can be preempted inside those instructions for a
+ * scheduler slice or more (measured: 4M tries, a few milliseconds, were not enough on a loaded
+ * 2-core machine), so the bound is about a second of spinning: a last resort, never a wait. */
+#define RM_TSDF_LOCK_SPIN_LIMIT 0x10000000u
 
 /* Fuses a ray at signed distance sdf into pair i of the layer (word 2i: distance, 2i + 1:
  * weight). Returns 0 when the update was given up. */
 RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, float sdf,
                                        rm_tsdf_params p) {
   float w;
-  int attempt;
   if (!rm_tsdf_in_reach(sdf, p)) {
     return 1;
   }
@@ -39,6 +45,7 @@ RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, 
   {
     RM_ATOMIC_GLOBAL rm_u64* pair = (RM_ATOMIC_GLOBAL rm_u64*)(tsdf + 2u * i);
     rm_u64 old = rm_load_u64(pair);
+    int attempt;
     for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
       rm_tsdf_voxel v;
       rm_tsdf_voxel fused;
@@ -64,24 +71,28 @@ RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, 
   {
     RM_ATOMIC_GLOBAL rm_u32* distance = tsdf + 2u * i;
     RM_ATOMIC_GLOBAL rm_u32* weight = distance + 1;
-    for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
+    int done = 0;
+    rm_u32 spins;
+    /* The critical section sits inside the loop body and every path meets again at its end, so
+     * on SIMT hardware the lock holder finishes in the same pass as the lanes that wait on it
+     * (a holder that left the loop would wait for them at the function's end: a deadlock). */
+    for (spins = 0u; done == 0 && spins < RM_TSDF_LOCK_SPIN_LIMIT; ++spins) {
       rm_u32 bits = rm_load_u32(weight);
-      rm_tsdf_voxel v;
-      rm_tsdf_voxel fused;
-      if ((bits & RM_TSDF_LOCK_BIT) != 0u ||
-          rm_atomic_cas_u32(weight, bits, bits | RM_TSDF_LOCK_BIT) != bits) {
-        continue; /* another work-item holds the voxel */
+      if ((bits & RM_TSDF_LOCK_BIT) == 0u &&
+          rm_atomic_cas_u32(weight, bits, bits | RM_TSDF_LOCK_BIT) == bits) {
+        rm_tsdf_voxel v;
+        rm_tsdf_voxel fused;
+        rm_global_fence();
+        v.weight = rm_as_float(bits);
+        v.distance = rm_as_float(rm_atomic_xchg_u32(distance, 0u));
+        fused = rm_tsdf_fuse(v, sdf, w, p);
+        (void)rm_atomic_xchg_u32(distance, rm_as_u32(fused.distance));
+        rm_global_fence();
+        (void)rm_atomic_xchg_u32(weight, rm_as_u32(fused.weight)); /* releases the voxel */
+        done = 1;
       }
-      rm_global_fence();
-      v.weight = rm_as_float(bits);
-      v.distance = rm_as_float(rm_atomic_xchg_u32(distance, 0u));
-      fused = rm_tsdf_fuse(v, sdf, w, p);
-      (void)rm_atomic_xchg_u32(distance, rm_as_u32(fused.distance));
-      rm_global_fence();
-      (void)rm_atomic_xchg_u32(weight, rm_as_u32(fused.weight)); /* releases the voxel */
-      return 1;
     }
-    return 0;
+    return done;
   }
 #endif
 }

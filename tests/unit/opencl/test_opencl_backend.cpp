@@ -58,18 +58,21 @@ TEST(OpenClBackend, ThirtyTwoBitCountersGiveTheSameMap) {
 }
 
 // Without 64-bit atomics the (distance, weight) pair of a TSDF voxel is updated under a lock bit
-// in its weight word (kernels/device/tsdf.h): the same field as the CPU's, nothing dropped.
+// in its weight word (kernels/device/tsdf.h): the same field as the CPU's, nothing dropped. The
+// rays are walked from the sample back (the device default), as a robot's would be.
 TEST(OpenClBackend, TsdfWithoutSixtyFourBitAtomicsAgreesWithTheCpu) {
   const test::TsdfScene scene = test::sphereScene(3000);
+  RayFilter reverse;
+  reverse.reverse = true;
   VoxelMap reference = test::makeMap(test::tsdfConfig());
   auto cpu = test::cpuBackend(reference, 1);
-  test::integrate(reference, *cpu, scene.rays);
+  test::integrate(reference, *cpu, scene.rays, reverse);
   VoxelMap map = test::makeMap(test::tsdfConfig());
   OpenClBackendOptions narrow_options;
   narrow_options.force_32bit_atomics = true;
   auto narrow = openClBackend(map, narrow_options);
   REQUIRE_OPENCL(narrow);
-  test::integrate(map, *narrow, scene.rays);
+  test::integrate(map, *narrow, scene.rays, reverse);
   ASSERT_TRUE(narrow->synchronise());
   const test::TsdfComparison cmp = test::compareTsdf(reference, map, 1e-4, 1e-4);
   EXPECT_GT(cmp.updated, 5000u);
