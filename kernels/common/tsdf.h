@@ -86,6 +86,30 @@ RAYMAP_FN float rm_tsdf_sdf(const rm_tsdf_ray* r, rm_vec3i voxel, float resoluti
   return r->end_sdf + to_end * resolution;
 }
 
+/* Voxels whose centre may lie up to this far (voxel units) along the ray from any point of the
+ * ray inside them: half the voxel's diagonal (0.87), rounded up for float rounding of the walk. */
+#define RM_TSDF_FREE_MARGIN 1.0f
+
+/* The walk parameter beyond which (forward walks: up to which) every voxel is free space: its
+ * signed distance is at least tau whatever its centre's offset from the ray, so its update is
+ * exactly the update at sdf = tau and its distance need not be computed. Compare the walk's entry
+ * parameter of a voxel with rm_tsdf_is_free. */
+RAYMAP_FN float rm_tsdf_free_bound(const rm_tsdf_ray* r, rm_tsdf_params p) {
+  /* Distance along the ray (voxel units) a voxel centre must be from the sample end. */
+  float need = (p.truncation - r->end_sdf) / p.resolution + RM_TSDF_FREE_MARGIN;
+  if (!(r->length > 0.0f)) {
+    return r->sample_is_start ? RM_INF : -RM_INF; /* nothing is known to be free */
+  }
+  return r->sample_is_start ? need / r->length : 1.0f - need / r->length;
+}
+
+/* True when the voxel the walk entered at parameter t_enter is free space (rm_tsdf_free_bound):
+ * a forward walk ends at the sample end, so its free voxels come first; a reverse one starts
+ * there, so they come last. */
+RAYMAP_FN int rm_tsdf_is_free(float t_enter, float bound, int sample_is_start) {
+  return sample_is_start ? t_enter >= bound : t_enter <= bound;
+}
+
 /* Weight of one ray's update at signed distance sdf (metres): 1, or Voxblox's linear drop-off
  * behind the surface when p.dropoff > 0. */
 RAYMAP_FN float rm_tsdf_weight(float sdf, rm_tsdf_params p) {

@@ -117,16 +117,29 @@ struct PerScanMiss {
   }
 };
 
-/// TSDF update (kernels/common/tsdf.h): each crossed voxel fuses the ray's signed distance at
-/// its centre.
-struct TsdfUpdate {
-  rm_tsdf_voxel* tsdf;
-  rm_tsdf_ray ray;
-  rm_tsdf_params params;
-  void operator()(std::uint32_t i, rm_vec3i voxel) const noexcept {
-    rm_tsdf_update(&tsdf[i], rm_tsdf_sdf(&ray, voxel, params.resolution), params);
+/// @brief Walks one span of a TSDF map's ray and fuses the ray into each voxel
+/// (kernels/common/tsdf.h): free-space voxels (rm_tsdf_is_free) at +tau without computing their
+/// distance, the others at their signed distance. Returns the voxels visited. @rt allocates: no.
+inline std::uint32_t tsdfSpan(const rm_line_walk_ray& ray, bool sample_is_start,
+                              const RaySpan& span, std::int32_t region_voxels, rm_tsdf_voxel* tsdf,
+                              float tsdf_end_m, const rm_tsdf_params& params) noexcept {
+  rm_span_walk walk;
+  const std::uint32_t flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
+  const int reverse = sample_is_start ? 1 : 0;
+  const std::int32_t count =
+      rm_span_walk_init(&walk, &ray, span.t0, span.t1, span.box_lo, region_voxels, flags, reverse);
+  const rm_tsdf_ray r = rm_tsdf_ray_make(&ray, reverse, tsdf_end_m);
+  const float bound = rm_tsdf_free_bound(&r, params);
+  for (std::int32_t k = 0; k < count; ++k) {
+    const auto index =
+        k == 0 ? static_cast<std::uint32_t>(walk.index) : rm_span_walk_advance(&walk);
+    const float sdf = rm_tsdf_is_free(rm_line_walk_t_enter(&walk.walk), bound, reverse) != 0
+                          ? params.truncation
+                          : rm_tsdf_sdf(&r, rm_span_walk_voxel(&walk), params.resolution);
+    rm_tsdf_update(&tsdf[index], sdf, params);
   }
-};
+  return static_cast<std::uint32_t>(count);
+}
 
 /// @brief Pointers to one region's layers (null for absent layers).
 struct RegionLayers {
@@ -285,10 +298,8 @@ inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_
                               bool sample_is_start, std::uint32_t ray_flags, float tsdf_end_m,
                               const RaySpan& span, const RegionLayers& layers) noexcept {
   if (layers.tsdf != nullptr) {
-    return walkSpan(
-        ray, sample_is_start, span, ctx.region_voxels,
-        TsdfUpdate{layers.tsdf, rm_tsdf_ray_make(&ray, sample_is_start ? 1 : 0, tsdf_end_m),
-                   ctx.tsdf_params});
+    return tsdfSpan(ray, sample_is_start, span, ctx.region_voxels, layers.tsdf, tsdf_end_m,
+                    ctx.tsdf_params);
   }
   const auto walk = [&](auto&& miss) {
     if (layers.traversal != nullptr) {
