@@ -26,6 +26,13 @@ class LeBuffer {
   }
   /// A float32 (the value is rounded from double).
   void f32(double v) { u32(std::bit_cast<std::uint32_t>(static_cast<float>(v))); }
+  /// @brief Writes what is still buffered and commits the file (renames it into place).
+  Expected<void, Error> finish(AtomicFileWriter& writer) {
+    if (auto ok = flush(writer, true); !ok) {
+      return ok;
+    }
+    return writer.commit();
+  }
   /// @brief Writes what is buffered once it is large (or always, when `force`).
   Expected<void, Error> flush(AtomicFileWriter& writer, bool force) {
     if (bytes_.empty() || (!force && bytes_.size() < kFlushBytes)) {

@@ -38,12 +38,7 @@ struct Point {
 template <class Fn>
 void forEachPoint(const VoxelMap& map, ExportMode mode, const ExportOptions& options, Fn&& fn) {
   const RegionStore& store = map.store();
-  std::vector<std::pair<Vec3i, std::uint32_t>> regions;
-  regions.reserve(store.size());
-  store.forEachRegion([&](std::uint32_t slot, Vec3i coord) { regions.emplace_back(coord, slot); });
-  std::sort(regions.begin(), regions.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
-  });
+  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
 
   const std::int32_t n = map.geometry().region_voxels;
   const double resolution = map.geometry().resolution;

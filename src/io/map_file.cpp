@@ -891,12 +891,7 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
 
   // Regions in coordinate order (z, y, x), so that equal maps give equal files whatever order
   // their regions were created in.
-  std::vector<std::pair<Vec3i, std::uint32_t>> regions;
-  regions.reserve(store.size());
-  store.forEachRegion([&](std::uint32_t slot, Vec3i coord) { regions.emplace_back(coord, slot); });
-  std::sort(regions.begin(), regions.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
-  });
+  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
 
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {

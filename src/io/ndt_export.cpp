@@ -40,11 +40,7 @@ struct Gaussian {
 /// order, so the output is deterministic.
 std::vector<Gaussian> collect(const VoxelMap& map, const NdtExportOptions& options) {
   const RegionStore& store = map.store();
-  std::vector<std::pair<Vec3i, std::uint32_t>> regions;
-  store.forEachRegion([&](std::uint32_t slot, Vec3i coord) { regions.emplace_back(coord, slot); });
-  std::sort(regions.begin(), regions.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
-  });
+  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
   const std::int32_t n = map.geometry().region_voxels;
   const double resolution = map.geometry().resolution;
   const double min_axis =
@@ -305,10 +301,7 @@ Result<std::uint64_t> exportNdtEllipsoids(const VoxelMap& map, const NdtExportOp
       return Unexpected(ok.error());
     }
   }
-  if (auto ok = out.flush(*writer, true); !ok) {
-    return Unexpected(ok.error());
-  }
-  if (auto ok = writer->commit(); !ok) {
+  if (auto ok = out.finish(*writer); !ok) {
     return Unexpected(ok.error());
   }
   return gaussians.size();
@@ -352,10 +345,7 @@ Result<std::uint64_t> exportNdtPoints(const VoxelMap& map, const NdtExportOption
       return Unexpected(ok.error());
     }
   }
-  if (auto ok = out.flush(*writer, true); !ok) {
-    return Unexpected(ok.error());
-  }
-  if (auto ok = writer->commit(); !ok) {
+  if (auto ok = out.finish(*writer); !ok) {
     return Unexpected(ok.error());
   }
   return gaussians.size();

@@ -53,10 +53,7 @@ Result<std::uint64_t> exportTsdfSurface(const VoxelMap& map, const std::string& 
       return Unexpected(ok.error());
     }
   }
-  if (auto ok = out.flush(*writer, true); !ok) {
-    return Unexpected(ok.error());
-  }
-  if (auto ok = writer->commit(); !ok) {
+  if (auto ok = out.finish(*writer); !ok) {
     return Unexpected(ok.error());
   }
   return points.size();

@@ -14,12 +14,7 @@ namespace raymap {
 std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_weight) {
   RAYMAP_EXPECTS(map.tsdfLayer() >= 0);
   const RegionStore& store = map.store();
-  std::vector<std::pair<Vec3i, std::uint32_t>> regions;
-  regions.reserve(store.size());
-  store.forEachRegion([&](std::uint32_t slot, Vec3i coord) { regions.emplace_back(coord, slot); });
-  std::sort(regions.begin(), regions.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
-  });
+  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
   const std::int32_t n = map.geometry().region_voxels;
   const auto tau =
       static_cast<float>(map.config().tsdf.truncationMetres(map.geometry().resolution));

@@ -22,11 +22,11 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include "src/io/ray_cloud_writer.hpp"
 #include "src/sim/yard_scan.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/ply_test_writer.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
 
 namespace raymap::test {
 namespace {
@@ -177,13 +177,6 @@ constexpr int kYardScans = 2;
 constexpr std::uint64_t kYardRays = 2 * 8 * 256;
 /// Keeps the maps of the success tests small and fast.
 const std::vector<std::string> kSmallMap = {"--max-range", "8", "--quiet"};
-
-void writeRayCloud(const std::string& path, const std::vector<Ray>& rays) {
-  auto writer = io::RayCloudWriter::open(path);
-  ASSERT_TRUE(writer.has_value()) << writer.error().message;
-  ASSERT_TRUE((*writer)->write(rays).has_value());
-  ASSERT_TRUE((*writer)->finish().has_value());
-}
 
 /// A valid ray cloud of `count` rays as a PlyTestFile (float x y z nx ny nz), for damaging.
 PlyTestFile smallRayCloud(int count) {

@@ -6,9 +6,9 @@
 
 #include <gtest/gtest.h>
 
-#include "src/io/ray_cloud_writer.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
 
 namespace raymap::test {
 namespace {
@@ -24,10 +24,7 @@ void writeRays(const std::string& path) {
     ray.sample = Vec3d{end_x, 0.05, 0.05};
     rays.push_back(ray);
   }
-  auto writer = io::RayCloudWriter::open(path);
-  ASSERT_TRUE(writer.has_value()) << writer.error().message;
-  ASSERT_TRUE((*writer)->write(rays).has_value());
-  ASSERT_TRUE((*writer)->finish().has_value());
+  writeRayCloud(path, rays);
 }
 
 bool has(const std::string& text, const std::string& part) {

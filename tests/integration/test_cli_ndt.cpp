@@ -11,11 +11,11 @@
 
 #include <gtest/gtest.h>
 
-#include "src/io/ray_cloud_writer.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/mini_json.hpp"
 #include "tests/support/ply_test_writer.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
 
 namespace raymap::test {
 namespace {
@@ -39,13 +39,6 @@ std::vector<Ray> wallRays() {
     }
   }
   return rays;
-}
-
-void writeRayCloud(const std::string& path, const std::vector<Ray>& rays) {
-  auto writer = io::RayCloudWriter::open(path);
-  ASSERT_TRUE(writer.has_value()) << writer.error().message;
-  ASSERT_TRUE((*writer)->write(rays).has_value());
-  ASSERT_TRUE((*writer)->finish().has_value());
 }
 
 /// The same wall without an intensity property (float x y z nx ny nz: a ray cloud).

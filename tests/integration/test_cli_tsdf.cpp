@@ -11,20 +11,13 @@
 #include <gtest/gtest.h>
 
 #include "src/io/map_file.hpp"
-#include "src/io/ray_cloud_writer.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
 #include "tests/support/tsdf_scenes.hpp"
 
 namespace raymap::test {
 namespace {
-
-void writeRays(const std::string& path, const std::vector<Ray>& rays) {
-  auto writer = io::RayCloudWriter::open(path);
-  ASSERT_TRUE(writer.has_value()) << writer.error().message;
-  ASSERT_TRUE((*writer)->write(rays).has_value());
-  ASSERT_TRUE((*writer)->finish().has_value());
-}
 
 bool has(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
@@ -48,7 +41,7 @@ TEST(CliTsdf, PopulateInfoAndExportThePlanesSurface) {
   const std::string map = dir.file("plane.rmap");
   const std::string ply = dir.file("surface.ply");
   const TsdfScene scene = planeScene(3000);
-  writeRays(rays, scene.rays);
+  writeRayCloud(rays, scene.rays);
 
   const RunResult populated =
       runRaymap({"populate", rays, "--output", map, "--mode", "tsdf", "--tsdf-truncation", "0.25",
@@ -99,7 +92,7 @@ TEST(CliTsdf, PopulateInfoAndExportThePlanesSurface) {
 TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
   TempDir dir;
   const std::string rays = dir.file("plane.ply");
-  writeRays(rays, planeScene(50).rays);
+  writeRayCloud(rays, planeScene(50).rays);
   const std::string tsdf = dir.file("tsdf.rmap");
   const std::string plain = dir.file("plain.rmap");
   ASSERT_EQ(runRaymap({"populate", rays, "--output", tsdf, "--mode", "tsdf", "-q"}).exit_code, 0);

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "kernels/common/decay.h"
+#include "src/io/ray_cloud_writer.hpp"
 #include "src/map/cpu_backend.hpp"
 
 namespace raymap::test {
@@ -90,6 +91,13 @@ std::vector<Ray> cubeRoomRays(double resolution, int half) {
     }
   }
   return rays;
+}
+
+void writeRayCloud(const std::string& path, const std::vector<Ray>& rays) {
+  auto writer = io::RayCloudWriter::open(path);
+  ASSERT_TRUE(writer.has_value()) << writer.error().message;
+  ASSERT_TRUE((*writer)->write(rays).has_value());
+  ASSERT_TRUE((*writer)->finish().has_value());
 }
 
 MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels) {

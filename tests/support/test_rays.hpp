@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "src/map/backend.hpp"
@@ -36,6 +37,9 @@ RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays
 /// @brief `scans` scans of `rays_per_scan` random rays (0.2-12 m, flattened in z) from random
 /// origins within +-2 m; every 17th ray is a no-return ray. Deterministic for a seed.
 std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan);
+
+/// @brief Writes `rays` as a ray-cloud PLY (io::RayCloudWriter) or fails the test.
+void writeRayCloud(const std::string& path, const std::vector<Ray>& rays);
 
 /// @brief Creates a CPU backend with `threads` workers or fails the test.
 std::unique_ptr<Backend> cpuBackend(VoxelMap& map, unsigned threads);
