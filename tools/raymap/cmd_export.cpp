@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
@@ -31,6 +32,20 @@ struct ExportFlags {
   bool quiet = false;
 };
 
+/// Checks that --ply can be written, then loads the map; prints why not and returns nullopt.
+std::optional<VoxelMap> openMapForExport(const ExportFlags& f) {
+  if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
+    printError("export", ok.error().message);
+    return std::nullopt;
+  }
+  auto map = io::loadMap(f.map);
+  if (!map) {
+    printError("export", map.error().message);
+    return std::nullopt;
+  }
+  return std::move(*map);
+}
+
 int runNdtExport(const ExportFlags& f) {
   const char* command = "export";
   io::NdtExportOptions options;
@@ -48,13 +63,8 @@ int runNdtExport(const ExportFlags& f) {
     printError(command, ok.error().message);
     return kExitUsage;
   }
-  if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
-    printError(command, ok.error().message);
-    return kExitFailure;
-  }
-  auto map = io::loadMap(f.map);
+  auto map = openMapForExport(f);
   if (!map) {
-    printError(command, map.error().message);
     return kExitFailure;
   }
   const bool points = f.mode == "ndt-points";
@@ -84,13 +94,8 @@ int runTsdfExport(const ExportFlags& f) {
     printError(command, "--min-weight: must be a finite weight >= 0 (rays)");
     return kExitUsage;
   }
-  if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
-    printError(command, ok.error().message);
-    return kExitFailure;
-  }
-  auto map = io::loadMap(f.map);
+  auto map = openMapForExport(f);
   if (!map) {
-    printError(command, map.error().message);
     return kExitFailure;
   }
   auto count = io::exportTsdfSurface(*map, f.ply, min_weight);
@@ -144,13 +149,8 @@ int runExport(const ExportFlags& f) {
     }
     options.decay_threshold = *f.threshold;
   }
-  if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
-    printError("export", ok.error().message);
-    return kExitFailure;
-  }
-  auto map = io::loadMap(f.map);
+  auto map = openMapForExport(f);
   if (!map) {
-    printError("export", map.error().message);
     return kExitFailure;
   }
   auto count = io::exportPly(*map, *mode, f.ply, options);
