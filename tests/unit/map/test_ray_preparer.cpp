@@ -160,6 +160,36 @@ TEST(PreparerRolling, RaysAreClippedToTheWindow) {
   EXPECT_EQ(out[2].flags & RM_RAY_END_HIT, RM_RAY_END_HIT);
 }
 
+// TSDF maps (truncation 0.3 m): a ray with a return is walked on 0.3 m past its sample and takes
+// no hit; each prepared ray carries its signed distance at its end: -tau, the distance still to
+// go for a piece or a window-clipped ray, or RM_TSDF_FREE for rays that only clear.
+TEST(PreparerTsdf, RaysGoOnPastTheirSampleAndCarryTheDistanceAtTheirEnd) {
+  MapConfig c = test::smallConfig(Semantics::kPerRay).forTsdf();
+  c.tsdf.truncation_m = 0.3;
+  VoxelMap map = test::makeMap(c);
+  RayFilter filter;
+  filter.max_range_m = 5.0;
+  filter.segment_length_m = 1.0;
+  RayPreparer preparer(map, filter);
+  const std::vector<Ray> rays = {makeRay({0.05, 0.05, 0.05}, {1.55, 0.05, 0.05}),
+                                 makeRay({0.05, 0.05, 0.05}, {0.05, 0.75, 0.05}, kRayNoReturn),
+                                 makeRay({0.05, 0.05, 0.05}, {0.05, 0.05, 9.05})};
+  std::vector<PreparedRay> out(16);
+  const auto p = preparer.prepare(rays, out);
+  // 1.8 m in 2 pieces, 0.7 m in 1, 5 m (clipped) in 5.
+  ASSERT_EQ(p.written, 8u);
+  EXPECT_EQ(out[1].sample_voxel.x, 18);  // 1.55 + 0.3 = 1.85 m
+  EXPECT_NEAR(out[1].tsdf_end_m, -0.3f, 1e-6f);
+  EXPECT_NEAR(out[0].tsdf_end_m, 0.9f - 0.3f, 1e-6f);  // the first piece ends 0.9 m before
+  for (const PreparedRay& ray : out) {
+    EXPECT_EQ(ray.flags & RM_RAY_END_HIT, 0u);
+  }
+  EXPECT_EQ(out[2].sample_voxel.y, 7);  // no return: not extended
+  EXPECT_GE(out[2].tsdf_end_m, 1e29f);
+  EXPECT_EQ(out[7].sample_voxel.z, 50);  // clipped at 5 m: not extended, clears only
+  EXPECT_GE(out[7].tsdf_end_m, 1e29f);
+}
+
 TEST(RayFilterValidation, NamesTheOption) {
   RayFilter f;
   f.min_range_m = -1.0;
