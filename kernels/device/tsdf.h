@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: BSD-3-Clause */
 /* TSDF maps on a device: what a span does to the TSDF layer, by the rules of
- * kernels/common/tsdf.h, the same updates the CPU's TsdfUpdate (src/map/cpu_voxel_ops.hpp) makes.
+ * kernels/common/tsdf.h, the same updates the CPU's tsdfSpan (src/map/cpu_voxel_ops.hpp) makes.
  * Called by the occupancy span kernel when rm_integrate_params.has_tsdf is set (a uniform branch:
  * a TSDF map has no occupancy layer and its rays no hits, so that is all its batches do).
  *
