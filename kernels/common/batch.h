@@ -46,6 +46,7 @@ typedef struct rm_integrate_params {
   float resolution;         /* voxel edge, metres (path lengths in the traversal layer) */
   rm_u32 has_tsdf;          /* 1 for TSDF maps: spans update the TSDF layer only (tsdf.h) */
   rm_tsdf_params tsdf;      /* TSDF maps */
+  rm_u32 has_occupancy;     /* 0 for maps without the occupancy layer (TSDF, decay rates only) */
 } rm_integrate_params;
 
 /* Per-ray semantics: most hit groups in one batch. The device tags a voxel with samples with its

@@ -32,7 +32,11 @@
  * CPU's up to rounding (the order of the adds differs).
  *
  * TSDF maps (p.has_tsdf): no occupancy layer and no hits; rm_integrate_span fuses each ray into
- * the TSDF layer of the voxels of its spans (tsdf.h), and that is the whole batch. */
+ * the TSDF layer of the voxels of its spans (tsdf.h), and that is the whole batch.
+ *
+ * Decay-rate-only maps (p.has_occupancy 0, p.has_traversal 1; per-ray semantics): no occupancy
+ * and so no tags; rm_integrate_span adds the path lengths, then rm_apply_hit_group folds the
+ * voxel means (their counts are the samples). */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
 
@@ -117,6 +121,9 @@ RM_DEVICE_FN void rm_integrate_span(
   } else if (p.has_traversal != 0u) {
     dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
                                      frame.sample_is_start, p.region_voxels, p.resolution);
+    if (p.has_occupancy == 0u) {
+      misses = 0; /* decay rates only: the path is the whole update */
+    }
   }
   for (k = 0; k < misses; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
@@ -169,7 +176,9 @@ RM_DEVICE_FN void rm_apply_hit_group(rm_u32 id, const RM_GLOBAL rm_prepared_ray*
     }
     means[i] = mean;
   }
-  if (p.per_scan != 0u) {
+  if (p.has_occupancy == 0u) {
+    /* Decay rates only: the mean is the whole hit. */
+  } else if (p.per_scan != 0u) {
     if (rm_scan_needs_hit(marks[i], p.sequence)) {
       occupancy[i] = rm_as_u32(rm_occupancy_hit(rm_as_float(occupancy[i]), p.occupancy));
       marks[i] = rm_scan_mark_hit(p.sequence);

@@ -328,9 +328,9 @@ gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device) {
 
 Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
                                                    const CudaBackendOptions& options) {
-  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0) {
+  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0 && map.traversalLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument,
-                "the CUDA backend needs an occupancy or a TSDF layer to integrate into");
+                "the CUDA backend needs an occupancy, traversal or TSDF layer to integrate into");
   }
   if (auto ok = gpu::checkBatchOptions(options, "CUDA"); !ok) {
     return Unexpected(ok.error());

@@ -9,7 +9,7 @@ namespace {
 
 static_assert(sizeof(rm_span_record) == 32, "device ABI");
 static_assert(sizeof(rm_hit_group) == 16, "device ABI");
-static_assert(sizeof(rm_integrate_params) == 76, "device ABI");
+static_assert(sizeof(rm_integrate_params) == 80, "device ABI");
 static_assert(sizeof(rm_tsdf_voxel) == 8, "device ABI");
 static_assert(sizeof(rm_ndt_params) == 32, "device ABI");
 static_assert(sizeof(rm_ndt_voxel) == 40, "device ABI");
@@ -42,6 +42,7 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
   // As the CPU backend rounds it (IntegrationContext::resolution): equal per-voxel lengths.
   params_.resolution = static_cast<float>(map.geometry().resolution);
   params_.has_tsdf = map.tsdfLayer() >= 0 ? 1u : 0u;
+  params_.has_occupancy = map.occupancyLayer() >= 0 ? 1u : 0u;
   params_.tsdf = map.config().tsdf.toKernel(map.geometry().resolution);
   if (ndt_) {
     ndt_params_ = map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
@@ -63,7 +64,8 @@ std::size_t StagedBackend::counterBytes() const noexcept {
 std::size_t StagedBackend::scratchWords() const noexcept {
   // NDT maps need no tags or runs of misses (submit()); one word keeps the buffer valid (OpenCL
   // refuses empty buffers) instead of about 3 MiB a staging set.
-  return ndt_ || params_.has_tsdf != 0u ? 1u : RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays);
+  return ndt_ || params_.has_occupancy == 0u ? 1u
+                                             : RM_SCRATCH_WORDS(limits_.max_rays, limits_.max_rays);
 }
 
 Expected<void, IntegrateError> StagedBackend::integrate(
@@ -226,6 +228,11 @@ Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
     // in ray order (kernels/common/ndt.h); no scratch, no tags.
     ok = ok && launchNdtOver(NdtKernel::kIntegrateSpans, set, a.spans.size()) &&
          launchNdtOver(NdtKernel::kApplyHitGroups, set, a.groups.size());
+  } else if (params_.has_occupancy == 0u) {
+    // No occupancy to order hits and misses in (TSDF maps, decay rates only): the spans, then the
+    // voxel means of the samples (TSDF batches have none).
+    ok = ok && launchOver(OccupancyKernel::kIntegrateSpans, set, a.spans.size()) &&
+         launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size());
   } else if (params_.per_scan != 0u) {
     // Hits first: the scan mark they leave makes the misses skip those voxels (occupied wins).
     ok = ok && launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size()) &&

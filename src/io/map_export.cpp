@@ -46,7 +46,9 @@ void forEachPoint(const VoxelMap& map, ExportMode mode, const ExportOptions& opt
   const int mean_layer = map.meanLayer();
   const auto decay_threshold = static_cast<float>(options.decay_threshold);
   for (const auto& [region, slot] : regions) {
-    const float* occupancy = store.layerData<float>(slot, map.occupancyLayer());
+    // Maps of decay rates only have no occupancy: every voxel reads as unobserved.
+    const float* occupancy =
+        map.occupancyLayer() >= 0 ? store.layerData<float>(slot, map.occupancyLayer()) : nullptr;
     const float* traversal =
         map.traversalLayer() >= 0 ? store.layerData<float>(slot, map.traversalLayer()) : nullptr;
     const rm_voxel_mean* means =
@@ -55,7 +57,7 @@ void forEachPoint(const VoxelMap& map, ExportMode mode, const ExportOptions& opt
     for (std::int32_t z = 0; z < n; ++z) {
       for (std::int32_t y = 0; y < n; ++y) {
         for (std::int32_t x = 0; x < n; ++x, ++index) {
-          const float value = occupancy[index];
+          const float value = occupancy != nullptr ? occupancy[index] : RM_OCC_UNOBSERVED;
           const rm_voxel_mean mean = means != nullptr ? means[index] : rm_voxel_mean{0u, 0u};
           const bool observed = rm_occupancy_observed(value) != 0;
           bool selected = false;
@@ -161,10 +163,11 @@ const char* toString(ExportMode mode) noexcept {
 
 Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std::string& path,
                                 const ExportOptions& options) {
-  if (map.occupancyLayer() < 0) {
-    return fail(
-        ErrorCode::kUnsupported,
-        "the map has no occupancy layer: nothing to export as occupied, free or mean voxels");
+  const bool needs_occupancy = mode == ExportMode::kOccupied || mode == ExportMode::kFree;
+  if (map.occupancyLayer() < 0 && (needs_occupancy || map.meanLayer() < 0)) {
+    return fail(ErrorCode::kUnsupported,
+                std::string("the map has no occupancy layer: nothing to export as ") +
+                    (needs_occupancy ? "occupied or free voxels" : "voxels"));
   }
   if (mode == ExportMode::kDecay) {
     if (map.traversalLayer() < 0 || map.meanLayer() < 0) {

@@ -87,9 +87,9 @@ Result<std::unique_ptr<Backend>> createCpuBackend(VoxelMap& map, const CpuBacken
                                                  std::to_string(CpuBackendOptions::kMaxThreads) +
                                                  " (got " + std::to_string(threads) + ")");
   }
-  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0) {
+  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0 && map.traversalLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument,
-                "the CPU backend needs an occupancy or a TSDF layer to integrate into");
+                "the CPU backend needs an occupancy, traversal or TSDF layer to integrate into");
   }
   return std::unique_ptr<Backend>(new CpuBackend(map, threads, options.expected_batch_rays));
 }

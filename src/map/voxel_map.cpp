@@ -25,8 +25,10 @@ std::string mapModeName(const MapConfig& config) {
   if (!config.decay_rate) {
     return toString(config.mode);
   }
-  return config.mode == MapMode::kOccupancy ? std::string("decay")
-                                            : std::string(toString(config.mode)) + "+decay";
+  if (!config.occupancy_layer) {
+    return "decay";
+  }
+  return std::string(toString(config.mode)) + "+decay";
 }
 
 LayerSchema MapConfig::schema() const {
@@ -107,9 +109,15 @@ Expected<void, Error> MapConfig::validate() const {
                 "decay-rate maps need the voxel-mean layer (its sample count over the traversal "
                 "is the rate)");
   }
-  if (decay_rate && !occupancy_layer) {
+  if (decay_rate && !occupancy_layer && semantics != Semantics::kPerRay) {
     return fail(ErrorCode::kInvalidArgument,
-                "decay-rate maps need the occupancy layer (they are integrated with it)");
+                "decay-rate maps without occupancy need per-ray semantics (per-scan marks choose "
+                "one occupancy update per voxel and scan; every ray's path counts)");
+  }
+  if (!occupancy_layer && !decay_rate && mode != MapMode::kTsdf) {
+    return fail(ErrorCode::kInvalidArgument,
+                "a map without the occupancy layer needs the traversal layer (decay rate) or the "
+                "TSDF mode: it would have nothing to integrate into");
   }
   if (policy == StorePolicy::kRolling) {
     if (window_regions.x < 1 || window_regions.y < 1 || window_regions.z < 1 ||

@@ -41,11 +41,13 @@ struct MapConfig {
   TsdfParams tsdf;
   bool voxel_mean = true;  ///< keep the voxel-mean layer
   /// Keep the traversal layer (metres of ray path per voxel) for decay rates: samples per metre
-  /// (kernels/common/decay.h). Needs the voxel mean (its count is the samples).
+  /// (kernels/common/decay.h). Needs the voxel mean (its count is the samples). With the
+  /// occupancy layer it is an occupancy map that also keeps decay rates; without it (forDecay())
+  /// a decay-rate map only.
   bool decay_rate = false;
-  /// Keep the occupancy layer. Every map built today has it; a map without it (layers that need
-  /// no occupancy, e.g. a distance field) answers occupancy queries with "unobserved", and what
-  /// needs occupancy (integration, height maps, occupied/free export) refuses it with an error.
+  /// Keep the occupancy layer. A map without it holds a distance field (mode kTsdf) or decay
+  /// rates only (decay_rate, forDecay()); it answers occupancy queries with "unobserved", and
+  /// what needs occupancy (height maps, occupied/free export) refuses it with an error.
   bool occupancy_layer = true;
   StorePolicy policy = StorePolicy::kGlobal;
   /// Global policy: the pool holds floor(memory_budget / bytes-per-region) regions.
@@ -64,14 +66,26 @@ struct MapConfig {
     c.decay_rate = false;
     return c;
   }
+  /// @brief This configuration as a decay-rate-only map: the voxel mean (its sample counts) and
+  /// the traversal layer, no occupancy; per-ray semantics, occupancy mode (not NDT or TSDF).
+  MapConfig forDecay() const {
+    MapConfig c = *this;
+    c.mode = MapMode::kOccupancy;
+    c.semantics = Semantics::kPerRay;
+    c.occupancy_layer = false;
+    c.voxel_mean = true;
+    c.decay_rate = true;
+    return c;
+  }
   /// @brief The layer schema this configuration implies.
   LayerSchema schema() const;
   /// @brief Number of regions the pool will hold.
   std::uint64_t capacityRegions() const;
 };
 
-/// @brief The map's kind as the tools name it: "occupancy", "ndt-om", "ndt-tm", "decay"
-/// (occupancy with the traversal layer) or "<ndt mode>+decay".
+/// @brief The map's kind as the tools name it: "occupancy", "ndt-om", "ndt-tm", "tsdf", "decay"
+/// (decay rates only: voxel mean and traversal) or "<mode>+decay" (that mode with the traversal
+/// layer, e.g. "occupancy+decay").
 std::string mapModeName(const MapConfig& config);
 
 /// Occupancy state of a voxel.

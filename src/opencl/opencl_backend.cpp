@@ -338,9 +338,9 @@ gpu::DeviceMemoryLimits memoryLimits(const opencl::DeviceInfo& device) {
 
 Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
                                                      const OpenClBackendOptions& options) {
-  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0) {
+  if (map.occupancyLayer() < 0 && map.tsdfLayer() < 0 && map.traversalLayer() < 0) {
     return fail(ErrorCode::kInvalidArgument,
-                "the OpenCL backend needs an occupancy or a TSDF layer to integrate into");
+                "the OpenCL backend needs an occupancy, traversal or TSDF layer to integrate into");
   }
   if (auto ok = gpu::checkBatchOptions(options, "OpenCL"); !ok) {
     return Unexpected(ok.error());

@@ -82,15 +82,18 @@ std::string reportLine(const std::string& label, const DecayComparison& c,
 // Rays along +x through the centres of the voxel row y = z = 0 (0.1 m voxels), as in
 // tests/unit/map/test_decay_map.cpp: voxel 10 is crossed whole by three rays and entered by two
 // that end in it, 3 * 0.1 + 0.03 + 0.07 = 0.4 m for 2 samples: 5 per metre. Walked forward
-// (the left-out sample voxel is in the span flagged last) and reversed (flagged first).
+// (the left-out sample voxel is in the span flagged last) and reversed (flagged first); in
+// occupancy maps of both semantics and in a map of decay rates only.
 TEST(DeviceDecay, AVoxelCrossedByKnownPathsWithKnownHitsHasTheExactRate) {
   REQUIRE_DEVICE();
-  for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+  const MapConfig configs[] = {decayConfig(Semantics::kPerRay), decayConfig(Semantics::kPerScan),
+                               decayConfig(Semantics::kPerRay).forDecay()};
+  for (const MapConfig& config : configs) {
     for (const bool reverse : {false, true}) {
       // Arrange
-      const std::string label =
-          std::string(toString(semantics)) + (reverse ? ", reverse" : ", forward");
-      VoxelMap map = makeMap(decayConfig(semantics));
+      const std::string label = std::string(toString(config.semantics)) + ", " +
+                                mapModeName(config) + (reverse ? ", reverse" : ", forward");
+      VoxelMap map = makeMap(config);
       auto device = createDeviceBackend(map);
       ASSERT_TRUE(device) << label;
       const Vec3d origin{0.05, 0.05, 0.05};
@@ -126,6 +129,12 @@ TEST(DeviceDecay, AVoxelCrossedByKnownPathsWithKnownHitsHasTheExactRate) {
 struct DecayCase {
   Semantics semantics;
   MapMode mode;
+  bool occupancy = true;  ///< false: decay rates only (MapConfig::forDecay)
+
+  MapConfig config() const {
+    const MapConfig c = decayConfig(semantics, mode);
+    return occupancy ? c : c.forDecay();
+  }
 };
 
 class DeviceDecay : public testing::TestWithParam<DecayCase> {};
@@ -139,14 +148,14 @@ TEST_P(DeviceDecay, AgreesWithTheCpuReferenceOnRandomScans) {
     RayFilter filter;
     filter.reverse = reverse;
     filter.max_range_m = 9.0;
-    VoxelMap reference = makeMap(decayConfig(c.semantics, c.mode));
+    VoxelMap reference = makeMap(c.config());
     auto cpu = cpuBackend(reference, 1);
     integrate(reference, *cpu, rays, filter);
     for (DeviceMemory memory : {DeviceMemory::kCache, DeviceMemory::kShared}) {
       if (memory == DeviceMemory::kShared && !deviceUnderTest().shares_memory()) {
         continue;
       }
-      VoxelMap map = makeMap(decayConfig(c.semantics, c.mode));
+      VoxelMap map = makeMap(c.config());
       DeviceBackendOptions options;
       options.memory = memory;
       auto device = createDeviceBackend(map, options);
@@ -159,8 +168,8 @@ TEST_P(DeviceDecay, AgreesWithTheCpuReferenceOnRandomScans) {
       const BackendStats stats = device->stats();
 
       // Assert
-      const std::string label = std::string(toString(c.semantics)) + ", " + toString(c.mode) +
-                                (reverse ? ", reverse" : ", forward") +
+      const std::string label = std::string(toString(c.semantics)) + ", " +
+                                mapModeName(c.config()) + (reverse ? ", reverse" : ", forward") +
                                 (memory == DeviceMemory::kCache ? ", region cache" : ", shared");
       std::cout << "[device-decay] " << reportLine(label, cmp, stats) << std::endl;
       EXPECT_GT(cmp.with_path, 100000u) << label;
@@ -175,9 +184,14 @@ TEST_P(DeviceDecay, AgreesWithTheCpuReferenceOnRandomScans) {
 INSTANTIATE_TEST_SUITE_P(Maps, DeviceDecay,
                          testing::Values(DecayCase{Semantics::kPerRay, MapMode::kOccupancy},
                                          DecayCase{Semantics::kPerScan, MapMode::kOccupancy},
-                                         DecayCase{Semantics::kPerRay, MapMode::kNdtOm}),
+                                         DecayCase{Semantics::kPerRay, MapMode::kNdtOm},
+                                         DecayCase{Semantics::kPerRay, MapMode::kOccupancy,
+                                                   /*occupancy=*/false}),
                          [](const testing::TestParamInfo<DecayCase>& param_info) {
                            const DecayCase& c = param_info.param;
+                           if (!c.occupancy) {
+                             return std::string("DecayOnly");
+                           }
                            return std::string(c.semantics == Semantics::kPerRay ? "PerRay"
                                                                                 : "PerScan") +
                                   (c.mode == MapMode::kNdtOm ? "NdtOm" : "Occupancy");

@@ -262,8 +262,7 @@ TEST(HeightmapPlanErrors, NegativeClearanceFloorOrCeiling) {
 }
 
 TEST(HeightmapPlanErrors, MapWithoutAnOccupancyLayer) {
-  MapConfig config = smallGlobalConfig();
-  config.occupancy_layer = false;
+  const MapConfig config = smallGlobalConfig().forDecay();  // decay rates only
   auto map = globalMap(config);
   ASSERT_NE(map, nullptr);
   ASSERT_LT(map->occupancyLayer(), 0);
@@ -272,8 +271,7 @@ TEST(HeightmapPlanErrors, MapWithoutAnOccupancyLayer) {
 }
 
 TEST(HeightmapPlanErrors, MapWithoutAnOccupancyLayerAfterSaveAndLoad) {
-  MapConfig config = smallGlobalConfig();
-  config.occupancy_layer = false;
+  const MapConfig config = smallGlobalConfig().forDecay();  // decay rates only
   auto map = globalMap(config);
   ASSERT_NE(map, nullptr);
   test::TempDir dir;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Decay-rate maps through the raymap program: populate --mode decay (and --decay-rate with an NDT
-// mode), info, export --mode decay --threshold, and the errors for maps without the layer.
+// Decay-rate maps through the raymap program: populate --mode decay (decay rates only) and
+// --decay-rate with occupancy or an NDT mode, info, export --mode decay --threshold, and the
+// errors for maps without the layer.
 #include <string>
 #include <vector>
 
@@ -43,8 +44,15 @@ TEST(CliDecay, PopulateInfoAndExportADecayRateMap) {
   ASSERT_EQ(populated.exit_code, 0) << describe(populated);
   const RunResult info = runRaymap({"info", map});
   ASSERT_EQ(info.exit_code, 0) << describe(info);
-  EXPECT_TRUE(has(info.out, "mode           decay")) << info.out;
+  EXPECT_TRUE(has(info.out, "mode           decay\n")) << info.out;
   EXPECT_TRUE(has(info.out, "traversal (4 B)")) << info.out;
+  // Decay rates only: no occupancy layer, parameters or voxel counts.
+  EXPECT_FALSE(has(info.out, "occupancy (4 B)")) << info.out;
+  EXPECT_FALSE(has(info.out, "occupancy      hit")) << info.out;
+  EXPECT_TRUE(has(info.out, "decay voxels   24 crossed, 4 with samples")) << info.out;
+  const RunResult occupied = runRaymap({"export", map, "--mode", "occupied", "--ply", ply});
+  EXPECT_NE(occupied.exit_code, 0);
+  EXPECT_TRUE(has(occupied.err, "no occupancy layer")) << occupied.err;
   const RunResult exported =
       runRaymap({"export", map, "--mode", "decay", "--threshold", "4.5", "--ply", ply});
   ASSERT_EQ(exported.exit_code, 0) << describe(exported);
@@ -54,16 +62,26 @@ TEST(CliDecay, PopulateInfoAndExportADecayRateMap) {
   EXPECT_TRUE(has(text, "property float decay_rate\n"));
 }
 
-TEST(CliDecay, DecayRateCombinesWithNdt) {
+TEST(CliDecay, DecayRateCombinesWithOccupancyAndNdt) {
   TempDir dir;
   const std::string rays = dir.file("rays.ply");
-  const std::string map = dir.file("ndt.rmap");
   writeRays(rays);
-  const RunResult populated =
-      runRaymap({"populate", rays, "--output", map, "--mode", "ndt-om", "--decay-rate", "--quiet"});
-  ASSERT_EQ(populated.exit_code, 0) << describe(populated);
-  const RunResult info = runRaymap({"info", map});
-  EXPECT_TRUE(has(info.out, "mode           ndt-om+decay")) << info.out;
+  for (const std::string mode : {"occupancy", "ndt-om"}) {
+    const std::string map = dir.file(mode + ".rmap");
+    const RunResult populated =
+        runRaymap({"populate", rays, "--output", map, "--mode", mode, "--decay-rate", "--quiet"});
+    ASSERT_EQ(populated.exit_code, 0) << describe(populated);
+    const RunResult info = runRaymap({"info", map});
+    EXPECT_TRUE(has(info.out, "mode           " + mode + "+decay\n")) << info.out;
+    EXPECT_TRUE(has(info.out, "occupancy (4 B)")) << info.out;
+    EXPECT_TRUE(has(info.out, "decay voxels   24 crossed, 4 with samples")) << info.out;
+  }
+  // The name info prints is also a --mode.
+  const std::string map = dir.file("named.rmap");
+  const RunResult named =
+      runRaymap({"populate", rays, "--output", map, "--mode", "occupancy+decay", "--quiet"});
+  ASSERT_EQ(named.exit_code, 0) << describe(named);
+  EXPECT_TRUE(has(runRaymap({"info", map}).out, "mode           occupancy+decay\n"));
 }
 
 TEST(CliDecay, ErrorsNameTheMapAndTheReason) {
@@ -85,6 +103,10 @@ TEST(CliDecay, ErrorsNameTheMapAndTheReason) {
       runRaymap({"populate", rays, "--output", dir.file("z.rmap"), "--mode", "decay", "--no-mean"});
   EXPECT_NE(no_mean.exit_code, 0);
   EXPECT_TRUE(has(no_mean.err, "voxel mean")) << no_mean.err;
+  const RunResult per_scan = runRaymap(
+      {"populate", rays, "--output", dir.file("s.rmap"), "--mode", "decay", "--semantics", "scan"});
+  EXPECT_NE(per_scan.exit_code, 0);
+  EXPECT_TRUE(has(per_scan.err, "--mode decay needs --semantics ray")) << per_scan.err;
   EXPECT_FALSE(has(readFile(map), "traversal")) << "the plain map was not touched";
 }
 

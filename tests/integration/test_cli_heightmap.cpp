@@ -433,8 +433,8 @@ TEST(CliHeightmap, UnwritablePngFailsBeforeAnyWork) {
 TEST(CliHeightmap, MapWithoutAnOccupancyLayerIsRefused) {
   TempDir dir;
   const std::string path = dir.file("no_occupancy.rmap");
-  MapConfig config;
-  config.occupancy_layer = false;
+  // A map of decay rates only (populate --mode decay): voxel means and path lengths, no occupancy.
+  MapConfig config = MapConfig{}.forDecay();
   config.memory_budget_bytes = std::uint64_t{64} << 20;
   auto map = VoxelMap::create(config);
   ASSERT_TRUE(map) << map.error().message;

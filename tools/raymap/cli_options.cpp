@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
+#include <string_view>
 #include <utility>
 
 #include <fcntl.h>
@@ -102,9 +103,23 @@ Expected<void, Error> applyTsdf(const MappingFlags& f, MapConfig& config) {
   return {};
 }
 
+/// The flags with a "<mode>+decay" --mode (as `info` names such maps) spelled as --mode <mode>
+/// --decay-rate.
+MappingFlags withDecaySuffixSplit(const MappingFlags& given) {
+  constexpr std::string_view kSuffix = "+decay";
+  MappingFlags f = given;
+  if (f.mode.size() > kSuffix.size() && f.mode.ends_with(kSuffix)) {
+    f.mode.resize(f.mode.size() - kSuffix.size());
+    f.decay_rate = true;
+  }
+  return f;
+}
+
 /// --mode and the --ndt-* options into config (after the semantics are set).
-Expected<void, Error> applyMode(const MappingFlags& f, MapConfig& config) {
-  // "decay" is occupancy plus the traversal layer; --decay-rate adds that layer to any mode.
+Expected<void, Error> applyMode(const MappingFlags& flags, MapConfig& config) {
+  const MappingFlags f = withDecaySuffixSplit(flags);
+  // "decay" is decay rates only (voxel mean and traversal, no occupancy); --decay-rate adds the
+  // traversal layer to occupancy or NDT maps.
   const bool decay_mode = f.mode == "decay";
   const std::optional<MapMode> mode =
       decay_mode ? std::optional<MapMode>(MapMode::kOccupancy) : mapModeFromName(f.mode);
@@ -134,6 +149,14 @@ Expected<void, Error> applyMode(const MappingFlags& f, MapConfig& config) {
     return fail(ErrorCode::kInvalidArgument,
                 "--mode decay / --decay-rate need the voxel mean (its sample count over the "
                 "metres of ray path is the rate): drop --no-mean");
+  }
+  if (decay_mode) {
+    if (config.semantics != Semantics::kPerRay) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "--mode decay needs --semantics ray: every ray's path counts (for decay rates "
+                  "beside per-scan occupancy use --mode occupancy --decay-rate)");
+    }
+    config = config.forDecay();
   }
   const std::pair<bool, const char*> given[] = {
       {f.ndt_sensor_noise.has_value(), "--ndt-sensor-noise"},
@@ -212,13 +235,16 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--mode", f.mode,
                "occupancy: log-odds occupancy; ndt-om: occupancy whose misses follow each voxel's "
                "Gaussian (NDT-OM); ndt-tm: NDT-OM plus hit/miss counts and intensity (NDT-TM); "
-               "decay: occupancy plus the metres of ray path in each voxel, for decay rates "
-               "(samples per metre); tsdf: a truncated signed distance field only (no "
-               "occupancy). NDT and TSDF need --semantics ray")
-      ->check(CLI::IsMember({"occupancy", "ndt-om", "ndt-tm", "decay", "tsdf"}))
+               "decay: decay rates only (samples per metre of ray path in each voxel; no "
+               "occupancy); tsdf: a truncated signed distance field only (no occupancy). "
+               "occupancy+decay, ndt-om+decay, ndt-tm+decay: that mode with --decay-rate. NDT, "
+               "decay and TSDF need --semantics ray")
+      ->check(CLI::IsMember({"occupancy", "ndt-om", "ndt-tm", "decay", "tsdf", "occupancy+decay",
+                             "ndt-om+decay", "ndt-tm+decay"}))
       ->capture_default_str();
   c.add_flag("--decay-rate", f.decay_rate,
-             "Keep the metres of ray path in each voxel (decay rates) with any --mode");
+             "Keep the metres of ray path in each voxel (decay rates) beside occupancy or NDT "
+             "(--mode occupancy --decay-rate is occupancy with decay rates)");
   addNdtOptions(c, f);
   addTsdfOptions(c, f);
   c.add_option("--backend", f.backend, "Integration backend: cpu, opencl or cuda")

@@ -77,16 +77,16 @@ int runBench(const BenchFlags& f) {
       !warning.empty()) {
     std::fprintf(stderr, "bench: warning: %s\n", warning.c_str());
   }
-  // NDT and TSDF maps integrate per ray only: the default list shrinks to "ray"; an explicit
-  // "scan" is an error rather than a silently skipped run.
+  // NDT, TSDF and decay-rate-only maps integrate per ray only: the default list shrinks to
+  // "ray"; an explicit "scan" is an error rather than a silently skipped run.
   std::string semantics_list = f.semantics_list;
-  if (isNdt(base->map.mode) || base->map.mode == MapMode::kTsdf) {
+  if (isNdt(base->map.mode) || !base->map.occupancy_layer) {
     if (semantics_list == kDefaultSemanticsList) {
       semantics_list = "ray";
     }
     for (const std::string& semantics : splitComma(semantics_list)) {
       if (semantics == "scan") {
-        printError(command, std::string("--semantics-list: --mode ") + toString(base->map.mode) +
+        printError(command, "--semantics-list: --mode " + mapModeName(base->map) +
                                 " maps need per-ray semantics; use --semantics-list ray");
         return kExitUsage;
       }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "src/io/map_file.hpp"
+#include "src/map/decay_summary.hpp"
 #include "src/map/tsdf_surface.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
@@ -142,6 +143,15 @@ int runInfo(const InfoFlags& f) {
           .add("voxels_at_max_weight", t.saturated);
       j.raw("tsdf", tsdf.str());
     }
+    if (c.decay_rate) {
+      const DecaySummary d = summariseDecay(*map);
+      JsonObject decay;
+      decay.add("voxels_crossed", d.crossed)
+          .add("voxels_with_samples", d.with_samples)
+          .add("metres", d.metres)
+          .add("samples", d.samples);
+      j.raw("decay", decay.str());
+    }
     j.add("regions", s.regions)
         .add("memory_bytes", s.regions * bytes_per_region)
         .add("voxels_free", s.voxels_free)
@@ -179,6 +189,12 @@ int runInfo(const InfoFlags& f) {
     std::printf("tsdf voxels    %s updated, %s behind the surface, %s at the max weight\n",
                 withCommas(t.updated).c_str(), withCommas(t.behind).c_str(),
                 withCommas(t.saturated).c_str());
+  }
+  if (c.decay_rate) {
+    const DecaySummary d = summariseDecay(*map);
+    std::printf("decay voxels   %s crossed, %s with samples; %.6g m of ray path, %s samples\n",
+                withCommas(d.crossed).c_str(), withCommas(d.with_samples).c_str(), d.metres,
+                withCommas(d.samples).c_str());
   }
   std::printf("layers         %s per voxel\n", layers.c_str());
   std::printf("regions        %s (%.1f MiB in memory)\n", withCommas(s.regions).c_str(),

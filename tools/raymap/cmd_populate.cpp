@@ -52,6 +52,12 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
         withCommas(r.tsdf.updated).c_str(), withCommas(r.tsdf.behind).c_str(),
         withCommas(r.summary.regions).c_str(), o.map.geometry.resolution,
         o.map.tsdf.truncationMetres(o.map.geometry.resolution));
+  } else if (!o.map.occupancy_layer) {
+    std::printf(
+        "map            %s voxels crossed (%s with samples) in %s regions (%.3g m, decay rates "
+        "only)\n",
+        withCommas(r.decay.crossed).c_str(), withCommas(r.decay.with_samples).c_str(),
+        withCommas(r.summary.regions).c_str(), o.map.geometry.resolution);
   } else {
     std::printf(
         "map            %s free, %s occupied voxels in %s regions (%.3g m, %s semantics, %s)\n",

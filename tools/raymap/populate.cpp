@@ -178,6 +178,7 @@ Result<PopulateReport> integrateStream(
   report.backend = statsSince(backend.stats(), stats_before);
   report.summary = map.summarise();
   report.tsdf = summariseTsdf(map);
+  report.decay = summariseDecay(map);
   report.total_seconds = secondsSince(start);
   report.peak_rss_bytes = platform::peakResidentBytes();
   return report;
@@ -252,6 +253,8 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
       .add("voxels_occupied", r.summary.voxels_occupied)
       .add("tsdf_voxels_updated", r.tsdf.updated)
       .add("tsdf_voxels_behind_surface", r.tsdf.behind)
+      .add("decay_voxels_crossed", r.decay.crossed)
+      .add("decay_voxels_with_samples", r.decay.with_samples)
       .add("regions", r.summary.regions)
       .add("voxels_visited", r.backend.voxels_visited)
       .add("backend", r.backend_name)

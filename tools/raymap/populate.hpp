@@ -10,6 +10,7 @@
 #include "src/core/error.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/map/backend.hpp"
+#include "src/map/decay_summary.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/tsdf_surface.hpp"
 #include "src/map/voxel_map.hpp"
@@ -54,7 +55,8 @@ struct PopulateReport {
   double read_seconds = 0;        ///< reading and decoding the input
   double total_seconds = 0;
   MapSummary summary;
-  TsdfSummary tsdf;  ///< TSDF maps (zero otherwise)
+  TsdfSummary tsdf;    ///< TSDF maps (zero otherwise)
+  DecaySummary decay;  ///< maps with decay rates (zero otherwise)
   std::uint64_t peak_rss_bytes = 0;
 };
 

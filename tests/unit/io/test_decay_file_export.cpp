@@ -25,8 +25,9 @@ using test::TempDir;
 /// Rays along +x from the centre of voxel (0,0,0): five to x = 1.55, 1.65, 2.35, 1.03 and 1.07 m
 /// (tests/unit/map/test_decay_map.cpp works the lengths out: voxel (10,0,0) has 0.4 m and 2
 /// samples, rate 5).
-VoxelMap decayMap() {
-  VoxelMap map = test::makeMap(test::decayConfig());
+VoxelMap decayMap(bool with_occupancy = true) {
+  const MapConfig config = test::decayConfig();
+  VoxelMap map = test::makeMap(with_occupancy ? config : config.forDecay());
   auto backend = test::cpuBackend(map, 1);
   std::vector<Ray> rays;
   for (const double end_x : {1.55, 1.65, 2.35, 1.03, 1.07}) {
@@ -41,25 +42,51 @@ float f32At(const test::Bytes& bytes, std::size_t at) {
 }
 
 TEST(DecayFile, TheTraversalLayerRoundTripsAndMakesADecayRateMap) {
-  TempDir dir;
-  const VoxelMap map = decayMap();
-  const std::string path = dir.file("decay.rmap");
-  ASSERT_TRUE(saveMap(map, path).has_value());
-  auto loaded = loadMap(path);
-  ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
-  EXPECT_TRUE(loaded->config().decay_rate);
-  EXPECT_EQ(mapModeName(loaded->config()), "decay");
-  ASSERT_GE(loaded->traversalLayer(), 0);
-  for (int x = -1; x < 30; ++x) {
-    EXPECT_EQ(loaded->traversal({x, 0, 0}), map.traversal({x, 0, 0})) << "x = " << x;
+  for (const bool with_occupancy : {true, false}) {
+    TempDir dir;
+    const VoxelMap map = decayMap(with_occupancy);
+    const std::string path = dir.file("decay.rmap");
+    ASSERT_TRUE(saveMap(map, path).has_value());
+    auto loaded = loadMap(path);
+    ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
+    EXPECT_TRUE(loaded->config().decay_rate);
+    EXPECT_EQ(loaded->config().occupancy_layer, with_occupancy);
+    EXPECT_EQ(mapModeName(loaded->config()), with_occupancy ? "occupancy+decay" : "decay");
+    ASSERT_GE(loaded->traversalLayer(), 0);
+    for (int x = -1; x < 30; ++x) {
+      EXPECT_EQ(loaded->traversal({x, 0, 0}), map.traversal({x, 0, 0})) << "x = " << x;
+    }
+    EXPECT_NEAR(rm_decay_rate(loaded->mean({10, 0, 0}).count, loaded->traversal({10, 0, 0})), 5.0f,
+                1e-5f);
   }
-  EXPECT_NEAR(rm_decay_rate(loaded->mean({10, 0, 0}).count, loaded->traversal({10, 0, 0})), 5.0f,
-              1e-5f);
 }
 
+/// Exports map (decayMap()) at thresholds 0 and 4.5 and checks the points and their records.
+void exportAndCheck(const VoxelMap& map);
+
 TEST(DecayFile, ExportWritesTheVoxelsAtOrAboveTheThresholdWithRateAndMetres) {
+  for (const bool with_occupancy : {true, false}) {
+    SCOPED_TRACE(with_occupancy ? "occupancy+decay" : "decay");
+    exportAndCheck(decayMap(with_occupancy));
+  }
+}
+
+TEST(DecayFile, AMapOfDecayRatesOnlyExportsMeansButNoOccupiedOrFreeVoxels) {
   TempDir dir;
-  const VoxelMap map = decayMap();
+  const VoxelMap map = decayMap(false);
+  auto means = exportPly(map, ExportMode::kMean, dir.file("mean.ply"));
+  ASSERT_TRUE(means.has_value()) << means.error().message;
+  EXPECT_EQ(*means, 4u);  // the samples' voxels: 10 (two of them), 15, 16 and 23
+  for (const ExportMode mode : {ExportMode::kOccupied, ExportMode::kFree}) {
+    auto refused = exportPly(map, mode, dir.file("x.ply"));
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_NE(refused.error().message.find("no occupancy layer"), std::string::npos)
+        << refused.error().message;
+  }
+}
+
+void exportAndCheck(const VoxelMap& map) {
+  TempDir dir;
   const std::string all = dir.file("all.ply");
   const std::string high = dir.file("high.ply");
   auto n_all = exportPly(map, ExportMode::kDecay, all);

@@ -29,12 +29,67 @@ TEST(DecayMap, TheTraversalLayerIsOnlyInDecayRateMapsAndNeedsTheMean) {
   EXPECT_NE(ok.error().message.find("voxel-mean"), std::string::npos) << ok.error().message;
 }
 
+TEST(DecayMap, AMapOfDecayRatesOnlyKeepsTheMeanAndTraversalAndNeedsPerRaySemantics) {
+  const MapConfig config = decayConfig().forDecay();
+  ASSERT_TRUE(config.validate());
+  const LayerSchema schema = config.schema();
+  EXPECT_FALSE(schema.has(LayerKind::kOccupancy));
+  EXPECT_TRUE(schema.has(LayerKind::kVoxelMean));
+  EXPECT_TRUE(schema.has(LayerKind::kTraversal));
+  EXPECT_EQ(schema.size(), 2);
+  EXPECT_EQ(mapModeName(config), "decay");
+  EXPECT_EQ(mapModeName(decayConfig()), "occupancy+decay");
+  EXPECT_EQ(mapModeName(decayConfig(Semantics::kPerRay, MapMode::kNdtOm)), "ndt-om+decay");
+
+  MapConfig per_scan = config;
+  per_scan.semantics = Semantics::kPerScan;
+  auto ok = per_scan.validate();
+  ASSERT_FALSE(ok);
+  EXPECT_NE(ok.error().message.find("per-ray"), std::string::npos) << ok.error().message;
+
+  MapConfig nothing = test::smallConfig(Semantics::kPerRay);
+  nothing.occupancy_layer = false;
+  ok = nothing.validate();
+  ASSERT_FALSE(ok);
+  EXPECT_NE(ok.error().message.find("nothing to integrate"), std::string::npos)
+      << ok.error().message;
+}
+
+// A map of decay rates only walks the same path and folds the same samples as an occupancy map
+// with decay rates: equal traversal floats and sample counts, serially and on several workers.
+TEST(DecayMap, AMapOfDecayRatesOnlyMatchesTheOccupancyMapsDecayRates) {
+  const std::vector<Ray> rays = test::randomScans(41, 3, 3000);
+  for (const unsigned threads : {1u, 3u}) {
+    VoxelMap combined = test::makeMap(decayConfig());
+    VoxelMap only = test::makeMap(decayConfig().forDecay());
+    auto a = test::cpuBackend(combined, threads);
+    auto b = test::cpuBackend(only, threads);
+    test::integrate(combined, *a, rays);
+    test::integrate(only, *b, rays);
+    EXPECT_EQ(only.occupancyLayer(), -1);
+    int crossed = 0;
+    combined.store().forEachRegion([&](std::uint32_t, Vec3i region) {
+      for (std::uint32_t i = 0; i < combined.geometry().voxelsPerRegion(); ++i) {
+        const Vec3i v = combined.voxelAt(region, i);
+        ASSERT_EQ(combined.traversal(v), only.traversal(v)) << v.x << "," << v.y << "," << v.z;
+        ASSERT_EQ(combined.mean(v).count, only.mean(v).count) << v.x << "," << v.y << "," << v.z;
+        ASSERT_EQ(combined.mean(v).packed, only.mean(v).packed);
+        crossed += combined.traversal(v) > 0.0f ? 1 : 0;
+      }
+    });
+    EXPECT_GT(crossed, 10000) << threads << " threads";
+    EXPECT_EQ(only.state({0, 0, 0}), VoxelState::kUnobserved);
+  }
+}
+
 // Rays along +x through the centres of the voxel row y = z = 0 (0.1 m voxels): voxel 10
 // (x in [1.0, 1.1) m) is crossed whole by three rays and entered by two that end in it at
 // x = 1.03 and 1.07 m. Its path is 3 * 0.1 + 0.03 + 0.07 = 0.4 m for 2 samples: 5 per metre.
 TEST(DecayMap, AVoxelCrossedByKnownPathsWithKnownHitsHasTheExactRate) {
-  for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
-    VoxelMap map = test::makeMap(decayConfig(semantics));
+  const MapConfig configs[] = {decayConfig(Semantics::kPerRay), decayConfig(Semantics::kPerScan),
+                               decayConfig(Semantics::kPerRay).forDecay()};
+  for (const MapConfig& config : configs) {
+    VoxelMap map = test::makeMap(config);
     auto backend = test::cpuBackend(map, 1);
     const Vec3d origin{0.05, 0.05, 0.05};
     std::vector<Ray> rays;
