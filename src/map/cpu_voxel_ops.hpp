@@ -3,6 +3,7 @@
 // the shared update rules (kernels/common) to them, and finding regions quickly.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <type_traits>
@@ -139,13 +140,27 @@ inline std::uint32_t tsdfSpan(const rm_line_walk_ray& ray, bool sample_is_start,
       rm_span_walk_init(&walk, &ray, span.t0, span.t1, span.box_lo, region_voxels, flags, reverse);
   const rm_tsdf_ray r = rm_tsdf_ray_make(&ray, reverse, tsdf_end_m);
   const float bound = rm_tsdf_free_bound(&r, params);
-  for (std::int32_t k = 0; k < count; ++k) {
-    const auto index =
-        k == 0 ? static_cast<std::uint32_t>(walk.index) : rm_span_walk_advance(&walk);
-    const float sdf = rm_tsdf_is_free(rm_line_walk_t_enter(&walk.walk), bound, reverse) != 0
-                          ? params.truncation
-                          : rm_tsdf_sdf(&r, rm_span_walk_voxel(&walk), params.resolution);
-    rm_tsdf_update(&tsdf[index], sdf, params);
+  // Two loops over chunks of the span: the walk (indices and distances, a prefetch of each
+  // voxel's line), then the updates. A TSDF update is long enough that one loop doing both kept
+  // few of the span's cache misses in flight; this ran 1.2 times as fast (one thread, Ouster
+  // scans: 0.60 -> 0.72 of occupancy). The same split made occupancy slower (0.93 times: its
+  // miss is short and the processor already overlaps it), so its walk stays one loop.
+  constexpr std::int32_t kChunk = 64;
+  std::uint32_t indices[kChunk];
+  float sdfs[kChunk];
+  for (std::int32_t done = 0; done < count; done += kChunk) {
+    const std::int32_t n = std::min(kChunk, count - done);
+    for (std::int32_t k = 0; k < n; ++k) {
+      indices[k] =
+          done + k == 0 ? static_cast<std::uint32_t>(walk.index) : rm_span_walk_advance(&walk);
+      __builtin_prefetch(&tsdf[indices[k]], 1);
+      sdfs[k] = rm_tsdf_is_free(rm_line_walk_t_enter(&walk.walk), bound, reverse) != 0
+                    ? params.truncation
+                    : rm_tsdf_sdf(&r, rm_span_walk_voxel(&walk), params.resolution);
+    }
+    for (std::int32_t k = 0; k < n; ++k) {
+      rm_tsdf_update(&tsdf[indices[k]], sdfs[k], params);
+    }
   }
   return static_cast<std::uint32_t>(count);
 }

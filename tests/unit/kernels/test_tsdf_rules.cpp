@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The TSDF rules of kernels/common/tsdf.h on their own: the free-space shortcut never takes a voxel
 // whose distance is below the truncation, fusion averages and truncates, the drop-off behind the
-// surface, and an agreeing ray leaves a voxel's distance exactly.
+// surface, an agreeing ray leaves a voxel's distance exactly, and the free-space path of the update
+// equals the full rule.
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -89,6 +91,25 @@ TEST(TsdfRules, AnAgreeingRayLeavesTheDistanceExactly) {
   rm_tsdf_update(&v, 4.0f, kParams);
   EXPECT_EQ(v.distance, 0.3f);
   EXPECT_EQ(v.weight, 8.0f);
+}
+
+// rm_tsdf_update's free-space path (+tau on a voxel at +tau: the weight alone) gives the pair the
+// full rule gives, rm_tsdf_fuse with the ray's weight, for every weight up to and at the cap.
+TEST(TsdfRules, TheFreeSpacePathOfTheUpdateEqualsTheFullRule) {
+  rm_tsdf_params capped = kParams;
+  capped.max_weight = 50.0f;
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<float> weight(0.0f, 60.0f);
+  for (int i = 0; i < 100000; ++i) {
+    const float w = i % 10 == 0 ? capped.max_weight : std::min(weight(rng), capped.max_weight);
+    const rm_tsdf_voxel start{capped.truncation, w};
+    rm_tsdf_voxel updated = start;
+    rm_tsdf_update(&updated, capped.truncation, capped);
+    const rm_tsdf_voxel full =
+        rm_tsdf_fuse(start, capped.truncation, rm_tsdf_weight(capped.truncation, capped), capped);
+    ASSERT_EQ(updated.distance, full.distance) << "weight " << w;
+    ASSERT_EQ(updated.weight, full.weight) << "weight " << w;
+  }
 }
 
 }  // namespace
