@@ -26,6 +26,47 @@
 
 namespace raymap::detail {
 
+/// @brief A span's walk as rm_span_walk_init left it (no step taken), with its voxel count and
+/// the span's RM_SPAN_* flags; a value, so a copy walks the span again.
+struct SpanWalk {
+  rm_span_walk walk;
+  std::int32_t count = 0;  ///< voxels to visit (the ray's sample voxel left out)
+  std::uint32_t flags = 0;
+  int reverse = 0;  ///< the walk starts on the sample voxel
+};
+
+/// @brief Starts the walk of `span` of a ray with walk constants `ray`. @rt allocates: no.
+inline SpanWalk startSpanWalk(const rm_line_walk_ray& ray, bool sample_is_start,
+                              const RaySpan& span, std::int32_t region_voxels) noexcept {
+  SpanWalk s;
+  s.flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
+  s.reverse = sample_is_start ? 1 : 0;
+  s.count = rm_span_walk_init(&s.walk, &ray, span.t0, span.t1, span.box_lo, region_voxels, s.flags,
+                              s.reverse);
+  return s;
+}
+
+/// @brief Calls visit(index) for each voxel of a started span walk (index inside the span's
+/// region), or visit(index, voxel) with the voxel relative to the walk's start voxel.
+template <class Visit>
+inline void visitSpanWalk(SpanWalk s, Visit&& visit) noexcept {
+  if (s.count == 0) {
+    return;
+  }
+  if constexpr (std::is_invocable_v<Visit, std::uint32_t, rm_vec3i>) {
+    visit(static_cast<std::uint32_t>(s.walk.index), rm_span_walk_voxel(&s.walk));
+    for (std::int32_t k = 1; k < s.count; ++k) {
+      const std::uint32_t index = rm_span_walk_advance(&s.walk);
+      visit(index, rm_span_walk_voxel(&s.walk));
+    }
+  } else {
+    visit(static_cast<std::uint32_t>(s.walk.index));
+    for (std::int32_t k = 1; k < s.count; ++k) {
+      visit(rm_span_walk_advance(&s.walk));
+    }
+  }
+}
+
 /// @brief Calls visit(index) for each voxel of `span` (index inside the span's region), or
 /// visit(index, voxel) with the voxel relative to the walk's start voxel, leaving out
 /// the ray's sample voxel, which the caller updates by its own rule. `ray` holds the ray's walk
@@ -35,57 +76,44 @@ template <class Visit>
 inline std::uint32_t walkSpan(const rm_line_walk_ray& ray, bool sample_is_start,
                               const RaySpan& span, std::int32_t region_voxels,
                               Visit&& visit) noexcept {
-  rm_span_walk walk;
-  const std::uint32_t flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
-  const std::int32_t count = rm_span_walk_init(&walk, &ray, span.t0, span.t1, span.box_lo,
-                                               region_voxels, flags, sample_is_start ? 1 : 0);
-  if (count == 0) {
-    return 0;
-  }
-  if constexpr (std::is_invocable_v<Visit, std::uint32_t, rm_vec3i>) {
-    visit(static_cast<std::uint32_t>(walk.index), rm_span_walk_voxel(&walk));
-    for (std::int32_t k = 1; k < count; ++k) {
-      const std::uint32_t index = rm_span_walk_advance(&walk);
-      visit(index, rm_span_walk_voxel(&walk));
-    }
-  } else {
-    visit(static_cast<std::uint32_t>(walk.index));
-    for (std::int32_t k = 1; k < count; ++k) {
-      visit(rm_span_walk_advance(&walk));
-    }
-  }
-  return static_cast<std::uint32_t>(count);
+  const SpanWalk s = startSpanWalk(ray, sample_is_start, span, region_voxels);
+  visitSpanWalk(s, std::forward<Visit>(visit));
+  return static_cast<std::uint32_t>(s.count);
 }
 
-/// @brief Adds the metres of ray path inside each voxel of `span`, and inside the voxel the walk
-/// leaves out when this span holds it, to `traversal` (kernels/common/decay.h): the whole update
-/// of a decay-rate-only map's span. Returns the voxels visited. @rt allocates: no.
-inline std::uint32_t addSpanPath(const rm_line_walk_ray& ray, bool sample_is_start,
-                                 const RaySpan& span, std::int32_t region_voxels, float* traversal,
-                                 float ray_metres) noexcept {
-  rm_span_walk walk;
-  const std::uint32_t flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
-  const int reverse = sample_is_start ? 1 : 0;
-  const std::int32_t count =
-      rm_span_walk_init(&walk, &ray, span.t0, span.t1, span.box_lo, region_voxels, flags, reverse);
-  if ((flags & (reverse != 0 ? RM_SPAN_FIRST : RM_SPAN_LAST)) != 0u) {
-    traversal[rm_decay_left_out_index(&ray, reverse, span.box_lo, region_voxels)] +=
-        rm_decay_left_out_metres(&walk, flags, reverse, ray_metres);
+/// @brief Adds the metres of ray path inside each voxel of a started span walk of `span`, and
+/// inside the voxel the walk leaves out when this span holds it, to `traversal`
+/// (kernels/common/decay.h). @rt allocates: no.
+inline void addSpanWalkPath(SpanWalk s, const rm_line_walk_ray& ray, const RaySpan& span,
+                            std::int32_t region_voxels, float* traversal,
+                            float ray_metres) noexcept {
+  if ((s.flags & (s.reverse != 0 ? RM_SPAN_FIRST : RM_SPAN_LAST)) != 0u) {
+    traversal[rm_decay_left_out_index(&ray, s.reverse, span.box_lo, region_voxels)] +=
+        rm_decay_left_out_metres(&s.walk, s.flags, s.reverse, ray_metres);
   }
-  if (count == 0) {
-    return 0;
+  if (s.count == 0) {
+    return;
   }
   // Each voxel's metres are added once the walk has stepped past it (decay.h,
   // rm_decay_stepped_voxel_metres); the span's last voxel from its own exit.
-  auto index = static_cast<std::uint32_t>(walk.index);
-  for (std::int32_t k = 1; k < count; ++k) {
-    const float t_left_enter = rm_line_walk_t_enter(&walk.walk);
-    const std::uint32_t next = rm_span_walk_advance(&walk);
-    traversal[index] += rm_decay_stepped_voxel_metres(t_left_enter, &walk.walk, ray_metres);
+  auto index = static_cast<std::uint32_t>(s.walk.index);
+  for (std::int32_t k = 1; k < s.count; ++k) {
+    const float t_left_enter = rm_line_walk_t_enter(&s.walk.walk);
+    const std::uint32_t next = rm_span_walk_advance(&s.walk);
+    traversal[index] += rm_decay_stepped_voxel_metres(t_left_enter, &s.walk.walk, ray_metres);
     index = next;
   }
-  traversal[index] += rm_decay_voxel_metres(&walk.walk, ray_metres);
-  return static_cast<std::uint32_t>(count);
+  traversal[index] += rm_decay_voxel_metres(&s.walk.walk, ray_metres);
+}
+
+/// @brief The whole update of a decay-rate-only map's span: its path (addSpanWalkPath). Returns
+/// the voxels visited. @rt allocates: no.
+inline std::uint32_t addSpanPath(const rm_line_walk_ray& ray, bool sample_is_start,
+                                 const RaySpan& span, std::int32_t region_voxels, float* traversal,
+                                 float ray_metres) noexcept {
+  const SpanWalk s = startSpanWalk(ray, sample_is_start, span, region_voxels);
+  addSpanWalkPath(s, ray, span, region_voxels, traversal, ray_metres);
+  return static_cast<std::uint32_t>(s.count);
 }
 
 /// @brief walkSpan() for decay-rate maps: also adds the metres of ray path inside each visited
@@ -96,11 +124,13 @@ inline std::uint32_t walkSpanAddingPath(const rm_line_walk_ray& ray, bool sample
                                         const RaySpan& span, std::int32_t region_voxels,
                                         float* traversal, float ray_metres,
                                         Visit&& visit) noexcept {
-  // The traversal walks the span first (addSpanPath), the misses walk it again: two tight loops,
+  // The traversal walks a copy of the span first, the misses walk it again: two tight loops,
   // each with one array to miss in, ran 1.35 times as fast as one loop updating both (one
   // thread, Ouster scans).
-  (void)addSpanPath(ray, sample_is_start, span, region_voxels, traversal, ray_metres);
-  return walkSpan(ray, sample_is_start, span, region_voxels, std::forward<Visit>(visit));
+  const SpanWalk s = startSpanWalk(ray, sample_is_start, span, region_voxels);
+  addSpanWalkPath(s, ray, span, region_voxels, traversal, ray_metres);
+  visitSpanWalk(s, std::forward<Visit>(visit));
+  return static_cast<std::uint32_t>(s.count);
 }
 
 /// Per-ray miss: every crossing lowers the occupancy.
@@ -133,11 +163,10 @@ struct PerScanMiss {
 inline std::uint32_t tsdfSpan(const rm_line_walk_ray& ray, bool sample_is_start,
                               const RaySpan& span, std::int32_t region_voxels, rm_tsdf_voxel* tsdf,
                               float tsdf_end_m, const rm_tsdf_params& params) noexcept {
-  rm_span_walk walk;
-  const std::uint32_t flags = (span.first ? RM_SPAN_FIRST : 0u) | (span.last ? RM_SPAN_LAST : 0u);
-  const int reverse = sample_is_start ? 1 : 0;
-  const std::int32_t count =
-      rm_span_walk_init(&walk, &ray, span.t0, span.t1, span.box_lo, region_voxels, flags, reverse);
+  SpanWalk s = startSpanWalk(ray, sample_is_start, span, region_voxels);
+  rm_span_walk& walk = s.walk;
+  const std::int32_t count = s.count;
+  const int reverse = s.reverse;
   const rm_tsdf_ray r = rm_tsdf_ray_make(&ray, reverse, tsdf_end_m);
   const float bound = rm_tsdf_free_bound(&r, params);
   // Two loops over chunks of the span: the walk (indices and distances, a prefetch of each
