@@ -19,7 +19,7 @@ std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_w
   const auto tau =
       static_cast<float>(map.config().tsdf.truncationMetres(map.geometry().resolution));
   const auto usable = [&](const rm_tsdf_voxel& v) {
-    return v.weight > 0.0f && v.weight >= min_weight && std::fabs(v.distance) < tau;
+    return v.weight > 0.0f && v.weight >= min_weight;
   };
   std::vector<TsdfSurfacePoint> points;
   for (const auto& [region, slot] : regions) {
@@ -29,8 +29,8 @@ std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_w
       for (std::int32_t y = 0; y < n; ++y) {
         for (std::int32_t x = 0; x < n; ++x, ++index) {
           const rm_tsdf_voxel a = tsdf[index];
-          if (!usable(a)) {
-            continue;
+          if (!usable(a) || std::fabs(a.distance) >= tau) {
+            continue;  // no crossing from a saturated voxel is measured
           }
           const Vec3i voxel{region.x * n + x, region.y * n + y, region.z * n + z};
           const std::int32_t local[3] = {x, y, z};
@@ -42,7 +42,7 @@ std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_w
             // Inside the region the neighbour is one stride on; across its face, a lookup.
             const rm_tsdf_voxel b =
                 local[axis] + 1 < n ? tsdf[index + stride[axis]] : map.tsdf(next);
-            if (!usable(b) || (a.distance >= 0.0f) == (b.distance >= 0.0f)) {
+            if (!usable(b) || !tsdfMeasuredCrossing(a.distance, b.distance, tau)) {
               continue;
             }
             const double f = static_cast<double>(a.distance) /

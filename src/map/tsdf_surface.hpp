@@ -2,6 +2,7 @@
 // The surface of a TSDF map: its zero crossings between neighbouring voxels, as points.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -18,6 +19,13 @@ struct TsdfSurfacePoint {
   /// pointing from the negative to the positive side: out of the surface, towards the sensor).
   Vec3d normal;
 };
+
+/// @brief True when two neighbouring voxels' distances (metres) have a zero crossing between them
+/// that is a measured surface: opposite signs (d >= 0 on one side, d < 0 on the other), both
+/// inside the truncation band (|d| < tau; a jump from +tau to -tau is no measured surface).
+inline bool tsdfMeasuredCrossing(float a, float b, float tau) noexcept {
+  return (a >= 0.0f) != (b >= 0.0f) && std::fabs(a) < tau && std::fabs(b) < tau;
+}
 
 /// @brief Zero crossings of a TSDF map: for every pair of face-adjacent voxels both with weight
 /// >= min_weight, both distances inside the truncation band (|d| < tau: a jump from +tau to -tau

@@ -1,16 +1,19 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // TSDF maps through the raymap program: populate --mode tsdf with its parameters, info, the map
-// file round trip, export --mode tsdf (the surface of a simulated plane, where it should be), and
-// the errors.
+// file round trip, export --mode tsdf and tsdf-mesh (the surface of a simulated plane, where it
+// should be), and the errors.
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "src/io/map_file.hpp"
+#include "src/io/ply_header.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -89,6 +92,52 @@ TEST(CliTsdf, PopulateInfoAndExportThePlanesSurface) {
   EXPECT_GE(up, values.size() / 7 * 9 / 10);
 }
 
+TEST(CliTsdf, ExportThePlanesSurfaceAsATriangleMesh) {
+  TempDir dir;
+  const std::string rays = dir.file("plane.ply");
+  const std::string map = dir.file("plane.rmap");
+  const std::string ply = dir.file("mesh.ply");
+  writeRayCloud(rays, planeScene(3000).rays);
+  ASSERT_EQ(runRaymap({"populate", rays, "--output", map, "--mode", "tsdf", "-q"}).exit_code, 0);
+
+  const RunResult exported =
+      runRaymap({"export", map, "--mode", "tsdf-mesh", "--min-weight", "20", "--ply", ply});
+  ASSERT_EQ(exported.exit_code, 0) << describe(exported);
+  EXPECT_TRUE(has(exported.out, "TSDF surface mesh of")) << exported.out;
+  const std::string text = readFile(ply);
+  auto header = io::parsePlyHeader(std::string_view(text), ply);
+  ASSERT_TRUE(header) << header.error().message;
+  ASSERT_EQ(header->elements.size(), 2u);
+  const io::PlyElement& vertex = header->elements[0];
+  const io::PlyElement& face = header->elements[1];
+  ASSERT_EQ(vertex.name, "vertex");
+  ASSERT_EQ(vertex.properties.size(), 7u);  // x y z nx ny nz weight
+  ASSERT_EQ(face.name, "face");
+  ASSERT_TRUE(face.hasLists());
+  ASSERT_GT(face.count, 200u);
+  ASSERT_EQ(text.size(), header->header_bytes + vertex.count * 28 + face.count * 13);
+  const char* body = text.data() + header->header_bytes;
+  std::size_t up = 0;
+  for (std::uint64_t i = 0; i < vertex.count; ++i) {
+    float v[7];
+    std::memcpy(v, body + i * 28, sizeof(v));
+    EXPECT_NEAR(v[2], 0.537f, 0.025f);  // within a quarter voxel of the plane z = 0.537 m
+    EXPECT_GE(v[6], 20.0f);
+    up += v[5] > 0.9f ? 1u : 0u;  // the normal points up, towards the sensors
+  }
+  EXPECT_GE(up, vertex.count * 9 / 10);
+  const char* faces = body + vertex.count * 28;
+  for (std::uint64_t i = 0; i < face.count; ++i) {
+    ASSERT_EQ(faces[i * 13], 3);
+    std::int32_t index[3];
+    std::memcpy(index, faces + i * 13 + 1, sizeof(index));
+    for (const std::int32_t k : index) {
+      ASSERT_GE(k, 0);
+      ASSERT_LT(static_cast<std::uint64_t>(k), vertex.count);
+    }
+  }
+}
+
 TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
   TempDir dir;
   const std::string rays = dir.file("plane.ply");
@@ -122,6 +171,18 @@ TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
       {"export", plain, "--mode", "occupied", "--min-weight", "3", "--ply", dir.file("x.ply")});
   EXPECT_NE(weight.exit_code, 0);
   EXPECT_TRUE(has(weight.err, "--min-weight applies only to --mode tsdf")) << weight.err;
+  const RunResult mesh_of_plain =
+      runRaymap({"export", plain, "--mode", "tsdf-mesh", "--ply", dir.file("x.ply")});
+  EXPECT_NE(mesh_of_plain.exit_code, 0);
+  EXPECT_TRUE(has(mesh_of_plain.err, "no TSDF layer")) << mesh_of_plain.err;
+  const RunResult mesh_threshold = runRaymap({"export", tsdf, "--mode", "tsdf-mesh", "--threshold",
+                                              "1", "--ply", dir.file("x.ply")});
+  EXPECT_NE(mesh_threshold.exit_code, 0);
+  EXPECT_TRUE(has(mesh_threshold.err, "do not apply to --mode tsdf-mesh")) << mesh_threshold.err;
+  const RunResult unknown = runRaymap({"export", tsdf, "--mode", "mesh", "--ply", dir.file("x.ply")});
+  EXPECT_NE(unknown.exit_code, 0);
+  EXPECT_TRUE(has(unknown.err, "unknown mode 'mesh'")) << unknown.err;
+  EXPECT_TRUE(has(unknown.err, "tsdf-mesh")) << unknown.err;
   const RunResult heightmap = runRaymap({"heightmap", tsdf, "--csv", dir.file("h.csv")});
   EXPECT_NE(heightmap.exit_code, 0);
   EXPECT_TRUE(has(heightmap.err, "occupancy")) << heightmap.err;

@@ -17,7 +17,7 @@
 namespace raymap::cli {
 namespace {
 
-// tsdf: crossings between voxels with at least this many rays' weight by default.
+// tsdf, tsdf-mesh: crossings between voxels with at least this many rays' weight by default.
 constexpr double kDefaultTsdfMinWeight = 1.0;
 
 struct ExportFlags {
@@ -28,7 +28,7 @@ struct ExportFlags {
   std::optional<double> min_axis;
   std::optional<std::string> colour;
   std::optional<double> threshold;   ///< decay: lowest rate exported, per metre
-  std::optional<double> min_weight;  ///< tsdf: lightest voxel pair whose crossing is exported
+  std::optional<double> min_weight;  ///< tsdf, tsdf-mesh: lightest voxel exported
   bool quiet = false;
 };
 
@@ -98,6 +98,20 @@ int runTsdfExport(const ExportFlags& f) {
   if (!map) {
     return kExitFailure;
   }
+  if (f.mode == "tsdf-mesh") {
+    auto counts = io::exportTsdfMesh(*map, f.ply, min_weight);
+    if (!counts) {
+      printError(command, f.map + ": " + counts.error().message);
+      return kExitFailure;
+    }
+    if (!f.quiet) {
+      std::printf("wrote a TSDF surface mesh of %s triangles, %s vertices (marching cubes, "
+                  "weight >= %g) to %s\n",
+                  withCommas(counts->triangles).c_str(), withCommas(counts->vertices).c_str(),
+                  min_weight, f.ply.c_str());
+    }
+    return kExitOk;
+  }
   auto count = io::exportTsdfSurface(*map, f.ply, min_weight);
   if (!count) {
     printError(command, f.map + ": " + count.error().message);
@@ -114,15 +128,15 @@ int runExport(const ExportFlags& f) {
   if (f.mode == "ndt" || f.mode == "ndt-points") {
     return runNdtExport(f);
   }
-  if (f.min_weight && f.mode != "tsdf") {
-    printError("export", "--min-weight applies only to --mode tsdf");
+  const bool tsdf = f.mode == "tsdf" || f.mode == "tsdf-mesh";
+  if (f.min_weight && !tsdf) {
+    printError("export", "--min-weight applies only to --mode tsdf or tsdf-mesh");
     return kExitUsage;
   }
-  if (f.mode == "tsdf") {
+  if (tsdf) {
     if (f.threshold || f.colour || f.min_axis || f.sigmas != io::NdtExportOptions::kDefaultSigmas) {
-      printError("export",
-                 "--threshold, --colour, --sigmas and --min-axis do not apply to "
-                 "--mode tsdf (its option is --min-weight)");
+      printError("export", "--threshold, --colour, --sigmas and --min-axis do not apply to "
+                           "--mode " + f.mode + " (its option is --min-weight)");
       return kExitUsage;
     }
     return runTsdfExport(f);
@@ -134,7 +148,9 @@ int runExport(const ExportFlags& f) {
   }
   auto mode = io::exportModeFromString(f.mode);
   if (!mode) {
-    printError("export", mode.error().message);
+    printError("export", "--mode: unknown mode '" + f.mode +
+                             "' (expected occupied, free, mean, decay, ndt, ndt-points, tsdf or "
+                             "tsdf-mesh)");
     return kExitUsage;
   }
   io::ExportOptions options;
@@ -172,7 +188,7 @@ void addExportCommand(CLI::App& app, int* exit_code) {
   CLI::App* c = app.add_subcommand(
       "export",
       "Write a map's voxels as a point-cloud PLY, its NDT Gaussians as ellipsoids, or its TSDF "
-      "surface as points");
+      "surface as points or a triangle mesh");
   c->add_option("map", flags->map, "Map file (.rmap)")->required();
   c->add_option("--ply", flags->ply, "PLY file to write")->required();
   c->add_option(
@@ -182,7 +198,7 @@ void addExportCommand(CLI::App& app, int* exit_code) {
        "whose rate (samples per metre of ray path) is at least --threshold; ndt: a "
        "triangle-mesh ellipsoid per occupied NDT Gaussian; ndt-points: the Gaussians' "
        "means with normals; tsdf: the zero crossings of a TSDF map (its surface) as points "
-       "with normals")
+       "with normals; tsdf-mesh: that surface as a triangle mesh (marching cubes)")
       ->capture_default_str();
   c->add_option("--sigmas", flags->sigmas, "NDT: ellipsoid half-axes in standard deviations")
       ->capture_default_str();
@@ -196,7 +212,8 @@ void addExportCommand(CLI::App& app, int* exit_code) {
                 "decay: the lowest decay rate exported, reflections per metre (default 0: every "
                 "voxel a ray entered)");
   c->add_option("--min-weight", flags->min_weight,
-                "tsdf: leave out crossings between voxels lighter than this, rays (default 1)");
+                "tsdf: leave out crossings between voxels lighter than this; tsdf-mesh: leave out "
+                "cubes with a voxel lighter than this; rays (default 1)");
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   c->callback([flags, exit_code] { *exit_code = runExport(*flags); });
 }
