@@ -32,8 +32,9 @@ Expected<void, Error> checkTsdfExport(const VoxelMap& map, double min_weight) {
 std::string vertexHeader(const VoxelMap& map, const char* what, double min_weight,
                          std::uint64_t vertices) {
   char comment[160];
-  std::snprintf(comment, sizeof(comment), "comment raymap TSDF %s, truncation %g m, min weight %g\n",
-                what, map.config().tsdf.truncationMetres(map.geometry().resolution), min_weight);
+  std::snprintf(comment, sizeof(comment),
+                "comment raymap TSDF %s, truncation %g m, min weight %g\n", what,
+                map.config().tsdf.truncationMetres(map.geometry().resolution), min_weight);
   return "ply\nformat binary_little_endian 1.0\n" + std::string(comment) + "element vertex " +
          std::to_string(vertices) +
          "\nproperty float x\nproperty float y\nproperty float z\n"
@@ -98,8 +99,8 @@ Result<TsdfMeshCounts> exportTsdfMesh(const VoxelMap& map, const std::string& pa
     return Unexpected(writer.error());
   }
   const std::string header =
-      vertexHeader(map, "marching cubes mesh", min_weight, mesh.vertices.size()) +
-      "element face " + std::to_string(mesh.triangles.size()) +
+      vertexHeader(map, "marching cubes mesh", min_weight, mesh.vertices.size()) + "element face " +
+      std::to_string(mesh.triangles.size()) +
       "\nproperty list uchar int vertex_indices\nend_header\n";
   if (auto ok = writer->write(header); !ok) {
     return Unexpected(ok.error());

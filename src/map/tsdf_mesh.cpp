@@ -82,8 +82,8 @@ class MeshBuilder {
  private:
   /// The vertex on the edge from voxel `lower` one step along `axis`, made on first use.
   std::uint32_t vertex(Vec3i lower, int axis, rm_tsdf_voxel a, rm_tsdf_voxel b) {
-    const auto [it, inserted] = index_.try_emplace(EdgeKey{lower, axis},
-                                                   static_cast<std::uint32_t>(mesh_.vertices.size()));
+    const auto [it, inserted] =
+        index_.try_emplace(EdgeKey{lower, axis}, static_cast<std::uint32_t>(mesh_.vertices.size()));
     if (inserted) {
       Vec3i upper = lower;
       upper[axis] += 1;

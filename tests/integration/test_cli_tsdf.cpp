@@ -175,11 +175,12 @@ TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
       runRaymap({"export", plain, "--mode", "tsdf-mesh", "--ply", dir.file("x.ply")});
   EXPECT_NE(mesh_of_plain.exit_code, 0);
   EXPECT_TRUE(has(mesh_of_plain.err, "no TSDF layer")) << mesh_of_plain.err;
-  const RunResult mesh_threshold = runRaymap({"export", tsdf, "--mode", "tsdf-mesh", "--threshold",
-                                              "1", "--ply", dir.file("x.ply")});
+  const RunResult mesh_threshold = runRaymap(
+      {"export", tsdf, "--mode", "tsdf-mesh", "--threshold", "1", "--ply", dir.file("x.ply")});
   EXPECT_NE(mesh_threshold.exit_code, 0);
   EXPECT_TRUE(has(mesh_threshold.err, "do not apply to --mode tsdf-mesh")) << mesh_threshold.err;
-  const RunResult unknown = runRaymap({"export", tsdf, "--mode", "mesh", "--ply", dir.file("x.ply")});
+  const RunResult unknown =
+      runRaymap({"export", tsdf, "--mode", "mesh", "--ply", dir.file("x.ply")});
   EXPECT_NE(unknown.exit_code, 0);
   EXPECT_TRUE(has(unknown.err, "unknown mode 'mesh'")) << unknown.err;
   EXPECT_TRUE(has(unknown.err, "tsdf-mesh")) << unknown.err;

@@ -105,10 +105,11 @@ int runTsdfExport(const ExportFlags& f) {
       return kExitFailure;
     }
     if (!f.quiet) {
-      std::printf("wrote a TSDF surface mesh of %s triangles, %s vertices (marching cubes, "
-                  "weight >= %g) to %s\n",
-                  withCommas(counts->triangles).c_str(), withCommas(counts->vertices).c_str(),
-                  min_weight, f.ply.c_str());
+      std::printf(
+          "wrote a TSDF surface mesh of %s triangles, %s vertices (marching cubes, "
+          "weight >= %g) to %s\n",
+          withCommas(counts->triangles).c_str(), withCommas(counts->vertices).c_str(), min_weight,
+          f.ply.c_str());
     }
     return kExitOk;
   }
@@ -135,8 +136,9 @@ int runExport(const ExportFlags& f) {
   }
   if (tsdf) {
     if (f.threshold || f.colour || f.min_axis || f.sigmas != io::NdtExportOptions::kDefaultSigmas) {
-      printError("export", "--threshold, --colour, --sigmas and --min-axis do not apply to "
-                           "--mode " + f.mode + " (its option is --min-weight)");
+      const std::string options = "--threshold, --colour, --sigmas and --min-axis";
+      printError("export",
+                 options + " do not apply to --mode " + f.mode + " (its option is --min-weight)");
       return kExitUsage;
     }
     return runTsdfExport(f);

@@ -34,7 +34,8 @@ Vec3d cross(Vec3d a, Vec3d b) {
 }
 
 Vec3d normalOf(const TsdfMesh& mesh, const std::array<std::uint32_t, 3>& t) {
-  return cross(mesh.vertices[t[1]] - mesh.vertices[t[0]], mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+  return cross(mesh.vertices[t[1]] - mesh.vertices[t[0]],
+               mesh.vertices[t[2]] - mesh.vertices[t[0]]);
 }
 
 /// Writes a voxel's distance and weight straight into the map (creating its region).
@@ -62,10 +63,10 @@ void fillBox(VoxelMap& map, Vec3i lo, Vec3i hi, Field field) {
 }
 
 struct Topology {
-  std::size_t open_edges = 0;       // used by one triangle only
-  std::size_t overused_edges = 0;   // used by more than two
-  std::size_t miswound_edges = 0;   // used twice in the same direction
-  std::size_t degenerate = 0;       // triangles with a repeated vertex
+  std::size_t open_edges = 0;      // used by one triangle only
+  std::size_t overused_edges = 0;  // used by more than two
+  std::size_t miswound_edges = 0;  // used twice in the same direction
+  std::size_t degenerate = 0;      // triangles with a repeated vertex
 };
 
 Topology topologyOf(const TsdfMesh& mesh) {
@@ -131,8 +132,7 @@ TEST(MarchingCubesTable, ATriangleRoundOneInsideCornerFacesAwayFromIt) {
         p[k] = (at(e.lower) + at(e.upper())) * 0.5;
       }
       const Vec3d normal = cross(p[1] - p[0], p[2] - p[0]);
-      const Vec3d lone{double(corner & 1u), double((corner >> 1) & 1u),
-                       double((corner >> 2) & 1u)};
+      const Vec3d lone{double(corner & 1u), double((corner >> 1) & 1u), double((corner >> 2) & 1u)};
       // Inside corner alone: the normal points away from it; outside corner alone: towards it.
       const double towards = normal.dot(lone - p[0]);
       EXPECT_TRUE(mask == (1u << corner) ? towards < 0.0 : towards > 0.0) << mask;
@@ -149,8 +149,8 @@ TEST(TsdfMesh, ARandomFieldGivesAClosedConsistentlyWoundSurfaceThroughTheZeroCro
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<float> value(-0.1f, 0.1f);
   fillBox(map, lo, hi, [&](Vec3i v) {
-    const bool shell = v.x == lo.x || v.y == lo.y || v.z == lo.z || v.x == hi.x || v.y == hi.y ||
-                       v.z == hi.z;
+    const bool shell =
+        v.x == lo.x || v.y == lo.y || v.z == lo.z || v.x == hi.x || v.y == hi.y || v.z == hi.z;
     const float d = value(rng);
     return shell ? 0.05f + std::fabs(d) : (d == 0.0f ? 0.01f : d);
   });
@@ -212,10 +212,11 @@ TEST(TsdfMesh, AnExactSpheresMeshIsClosedOnTheSphereAndFacesOutwards) {
     worst_normal = std::min(worst_normal, mesh.normals[i].dot(radial * (1.0 / radial.norm())));
   }
   const double true_area = 4.0 * std::numbers::pi * sphere.radius * sphere.radius;
-  std::printf("exact sphere: %zu triangles, %zu vertices, worst %.4f voxel off, area %.4f of "
-              "the sphere's, worst vertex normal . radial %.3f\n",
-              mesh.triangles.size(), mesh.vertices.size(), worst / kResolution, area / true_area,
-              worst_normal);
+  std::printf(
+      "exact sphere: %zu triangles, %zu vertices, worst %.4f voxel off, area %.4f of "
+      "the sphere's, worst vertex normal . radial %.3f\n",
+      mesh.triangles.size(), mesh.vertices.size(), worst / kResolution, area / true_area,
+      worst_normal);
   EXPECT_LE(worst / kResolution, 0.25);
   EXPECT_NEAR(area / true_area, 1.0, 0.02);
   EXPECT_EQ(inward, 0u);
@@ -270,8 +271,8 @@ TEST(TsdfMesh, CubesWithALightVoxelAreLeftOut) {
       // No vertex on an edge that ends at the light voxel: every such vertex is a full voxel
       // or more from the light voxel's centre, or not on one of its six edges' lines.
       const Vec3d d = mesh.vertices[v] - map.voxelCentre(light);
-      const int off_axes = (std::fabs(d.x) > 1e-9) + (std::fabs(d.y) > 1e-9) +
-                           (std::fabs(d.z) > 1e-9);
+      const int off_axes =
+          (std::fabs(d.x) > 1e-9) + (std::fabs(d.y) > 1e-9) + (std::fabs(d.z) > 1e-9);
       EXPECT_FALSE(off_axes <= 1 && d.norm() < kResolution - 1e-9);
     }
   }
