@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # Reproduces the map-representation tables of docs/benchmarks.md: the throughput of several
 # --mode values on the same rays and backend (per-ray semantics, 0.1 m, 20 m max range, OctoMap's
-# probabilities), on the CPU backend (1 thread and all cores) and on OpenCL when a platform
-# exists, fresh maps and steady state. The modes take turns, one timed run each per round, and
+# probabilities), on the CPU backend (1 thread and all cores), on OpenCL and on CUDA when
+# `raymap devices` lists a device for them, fresh maps and steady state. The modes take turns, one timed run each per round, and
 # each rate is the median over the rounds: this VM's speed drifts by 15 % over a minute, and
 # back-to-back blocks of runs would carry that drift into the ratios. Ratios are to the first mode.
 #   RAYMAP_BENCH_MODES="occupancy ndt-om ndt-tm" tools/bench/run-mode-benchmarks.sh \
@@ -75,6 +75,13 @@ row() {
   echo "$line $(IFS=/; echo "${dropped[*]}") |" >>"$summary"
 }
 
+# has_device API: true when `raymap devices` lists a device under its OpenCL or CUDA heading.
+has_device() {
+  "$bin/raymap" devices 2>/dev/null |
+    awk -v api="$1" '/^(OpenCL|CUDA)$/ { in_api = ($0 == api) } in_api && /^  device [0-9]+:/ { found = 1 }
+      END { exit !found }'
+}
+
 run() {  # run NAME INPUT [options]
   local name=$1 input=$2
   shift 2
@@ -83,8 +90,11 @@ run() {  # run NAME INPUT [options]
     if [ "$map" = steady ]; then steady=(--steady-state); fi
     row "$name" "$input" "cpu-1" "$map" "$@" "${steady[@]}" --threads-list 1
     row "$name" "$input" "cpu-$(nproc)" "$map" "$@" "${steady[@]}" --threads-list 0
-    if "$bin/raymap" devices 2>/dev/null | grep -qi opencl; then
+    if has_device OpenCL; then
       row "$name" "$input" "opencl" "$map" "$@" "${steady[@]}" --backend opencl
+    fi
+    if has_device CUDA; then
+      row "$name" "$input" "cuda" "$map" "$@" "${steady[@]}" --backend cuda
     fi
   done
 }
