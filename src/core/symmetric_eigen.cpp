@@ -68,10 +68,8 @@ SymmetricEigen3 symmetricEigen3(const std::array<double, 6>& p) noexcept {
   // Sorting may have swapped two columns: make the frame right-handed again.
   const Vec3d& e0 = out.vectors[0];
   const Vec3d& e1 = out.vectors[1];
-  const Vec3d cross{e0.y * e1.z - e0.z * e1.y, e0.z * e1.x - e0.x * e1.z,
-                    e0.x * e1.y - e0.y * e1.x};
   const Vec3d& e2 = out.vectors[2];
-  if (cross.x * e2.x + cross.y * e2.y + cross.z * e2.z < 0.0) {
+  if (e0.cross(e1).dot(e2) < 0.0) {
     out.vectors[2] = Vec3d{-e2.x, -e2.y, -e2.z};
   }
   return out;

@@ -30,6 +30,10 @@ struct Vec3d {
   friend constexpr Vec3d operator*(double s, Vec3d a) noexcept { return a * s; }
   friend constexpr bool operator==(Vec3d a, Vec3d b) noexcept = default;
   constexpr double dot(Vec3d o) const noexcept { return x * o.x + y * o.y + z * o.z; }
+  /// Right-handed cross product, this x o.
+  constexpr Vec3d cross(Vec3d o) const noexcept {
+    return {y * o.z - z * o.y, z * o.x - x * o.z, x * o.y - y * o.x};
+  }
   double norm() const noexcept { return std::sqrt(dot(*this)); }
   bool isFinite() const noexcept {
     return std::isfinite(x) && std::isfinite(y) && std::isfinite(z);

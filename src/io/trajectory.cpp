@@ -61,11 +61,8 @@ bool parseNumber(std::string_view text, double& value) noexcept {
 Vec3d Quaternion::rotate(Vec3d v) const noexcept {
   // v' = v + 2w (u x v) + 2 u x (u x v), u = (x, y, z): fewer operations than building R(q).
   const Vec3d u{x, y, z};
-  const auto cross = [](Vec3d a, Vec3d b) {
-    return Vec3d{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-  };
-  const Vec3d t = cross(u, v) * 2.0;
-  return v + t * w + cross(u, t);
+  const Vec3d t = u.cross(v) * 2.0;
+  return v + t * w + u.cross(t);
 }
 
 Trajectory::Trajectory(std::string path, std::vector<TrajectorySample> samples,

@@ -15,10 +15,6 @@ Vec3d cornerPosition(unsigned corner) {
           static_cast<double>((corner >> 2) & 1u)};
 }
 
-Vec3d cross(Vec3d a, Vec3d b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
 std::array<CubeEdge, kCubeEdges> makeEdges() {
   std::array<CubeEdge, kCubeEdges> edges{};
   std::size_t n = 0;
@@ -85,7 +81,7 @@ CubeCase makeCase(unsigned inside_mask, const std::array<CubeEdge, kCubeEdges>& 
     const Vec3d a = edgeMidpoint(edges[static_cast<std::size_t>(from)]);
     const Vec3d b = edgeMidpoint(edges[static_cast<std::size_t>(to)]);
     // Seen from outside (along -face_normal), face_normal x direction points to the left.
-    if (cross(face_normal, b - a).dot(inside_point - a) < 0.0) {
+    if (face_normal.cross(b - a).dot(inside_point - a) < 0.0) {
       std::swap(from, to);
     }
     RAYMAP_ENSURES(next[static_cast<std::size_t>(from)] == -1);

@@ -33,10 +33,6 @@ struct EdgeKeyHash {
   }
 };
 
-Vec3d cross(Vec3d a, Vec3d b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
 Vec3i cornerOffset(unsigned corner) {
   return {static_cast<std::int32_t>(corner & 1u), static_cast<std::int32_t>((corner >> 1) & 1u),
           static_cast<std::int32_t>((corner >> 2) & 1u)};
@@ -66,8 +62,8 @@ class MeshBuilder {
     mesh_.normals.assign(mesh_.vertices.size(), Vec3d{});
     for (const auto& t : mesh_.triangles) {
       // Unnormalised: its length is twice the triangle's area, which weights the mean.
-      const Vec3d n = cross(mesh_.vertices[t[1]] - mesh_.vertices[t[0]],
-                            mesh_.vertices[t[2]] - mesh_.vertices[t[0]]);
+      const Vec3d n = (mesh_.vertices[t[1]] - mesh_.vertices[t[0]])
+                          .cross(mesh_.vertices[t[2]] - mesh_.vertices[t[0]]);
       for (const std::uint32_t v : t) {
         mesh_.normals[v] = mesh_.normals[v] + n;
       }

@@ -29,13 +29,9 @@ namespace {
 constexpr double kResolution = 0.1;
 constexpr double kTau = 0.3;  // tsdfConfig()'s truncation, metres
 
-Vec3d cross(Vec3d a, Vec3d b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
 Vec3d normalOf(const TsdfMesh& mesh, const std::array<std::uint32_t, 3>& t) {
-  return cross(mesh.vertices[t[1]] - mesh.vertices[t[0]],
-               mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+  return (mesh.vertices[t[1]] - mesh.vertices[t[0]])
+      .cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
 }
 
 /// Writes a voxel's distance and weight straight into the map (creating its region).
@@ -131,7 +127,7 @@ TEST(MarchingCubesTable, ATriangleRoundOneInsideCornerFacesAwayFromIt) {
         };
         p[k] = (at(e.lower) + at(e.upper())) * 0.5;
       }
-      const Vec3d normal = cross(p[1] - p[0], p[2] - p[0]);
+      const Vec3d normal = (p[1] - p[0]).cross(p[2] - p[0]);
       const Vec3d lone{double(corner & 1u), double((corner >> 1) & 1u), double((corner >> 2) & 1u)};
       // Inside corner alone: the normal points away from it; outside corner alone: towards it.
       const double towards = normal.dot(lone - p[0]);
