@@ -107,9 +107,7 @@ TsdfMesh tsdfMesh(const VoxelMap& map, float min_weight) {
   const std::int32_t n = map.geometry().region_voxels;
   const auto tau =
       static_cast<float>(map.config().tsdf.truncationMetres(map.geometry().resolution));
-  const auto usable = [&](const rm_tsdf_voxel& v) {
-    return v.weight > 0.0f && v.weight >= min_weight;
-  };
+  const auto usable = [&](const rm_tsdf_voxel& v) { return tsdfVoxelUsable(v, min_weight); };
   const std::array<CubeEdge, kCubeEdges>& edges = cubeEdges();
   // Offsets of the corners inside a region's voxel array (x fastest, then y, then z).
   std::array<std::uint32_t, kCubeCorners> step{};

@@ -18,9 +18,7 @@ std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_w
   const std::int32_t n = map.geometry().region_voxels;
   const auto tau =
       static_cast<float>(map.config().tsdf.truncationMetres(map.geometry().resolution));
-  const auto usable = [&](const rm_tsdf_voxel& v) {
-    return v.weight > 0.0f && v.weight >= min_weight;
-  };
+  const auto usable = [&](const rm_tsdf_voxel& v) { return tsdfVoxelUsable(v, min_weight); };
   std::vector<TsdfSurfacePoint> points;
   for (const auto& [region, slot] : regions) {
     const rm_tsdf_voxel* tsdf = store.layerData<rm_tsdf_voxel>(slot, map.tsdfLayer());

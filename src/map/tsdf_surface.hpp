@@ -20,6 +20,12 @@ struct TsdfSurfacePoint {
   Vec3d normal;
 };
 
+/// @brief True when a voxel takes part in the surface: updated (weight > 0) and at least
+/// min_weight heavy.
+inline bool tsdfVoxelUsable(const rm_tsdf_voxel& v, float min_weight) noexcept {
+  return v.weight > 0.0f && v.weight >= min_weight;
+}
+
 /// @brief True when two neighbouring voxels' distances (metres) have a zero crossing between them
 /// that is a measured surface: opposite signs (d >= 0 on one side, d < 0 on the other), both
 /// inside the truncation band (|d| < tau; a jump from +tau to -tau is no measured surface).
