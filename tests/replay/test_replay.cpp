@@ -47,14 +47,6 @@ std::string configFor(std::uint32_t domain, const std::string& backend) {
   return text;
 }
 
-double meanPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::size_t first) {
-  if (maps.size() < first + 2) {
-    return 0.0;
-  }
-  return static_cast<double>(maps.back().arrival_ns - maps[first].arrival_ns) * 1e-6 /
-         static_cast<double>(maps.size() - 1 - first);
-}
-
 double diagnostic(const Watcher& w, const std::string& key) {
   return w.diagnostics->number(key).value_or(-1.0);
 }
@@ -127,7 +119,7 @@ TEST_P(ReplayOnBackend, GridMapsEqualTheOfflineHeightmapAtTheSameInstantsWithNot
             points);
   // Rate and latency at the recorded rate.
   ASSERT_GE(watcher.maps.size(), 12U);
-  EXPECT_NEAR(meanPeriodMs(watcher.maps, 2), 200.0, 4.0);
+  EXPECT_NEAR(publishPeriodMs(watcher.maps, 2), 200.0, 4.0);
   const double latency_p99 = diagnostic(watcher, "raymapd: height map/latency_p99_ms_total");
   EXPECT_GT(latency_p99, 0.0);
   EXPECT_LE(latency_p99, 400.0) << "scan arrival to the first GridMap containing it";

@@ -11,6 +11,27 @@
 
 namespace raymap::test {
 
+double publishPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::size_t first) {
+  if (maps.size() < first + 2) {
+    return 0.0;
+  }
+  const auto n = static_cast<double>(maps.size() - first);
+  const double mean_index = (n - 1.0) / 2.0;
+  const std::int64_t t0 = maps[first].arrival_ns;
+  double mean_t = 0.0;
+  for (std::size_t i = first; i < maps.size(); ++i) {
+    mean_t += static_cast<double>(maps[i].arrival_ns - t0) / n;
+  }
+  double covariance = 0.0;
+  double variance = 0.0;
+  for (std::size_t i = first; i < maps.size(); ++i) {
+    const double k = static_cast<double>(i - first) - mean_index;
+    covariance += k * (static_cast<double>(maps[i].arrival_ns - t0) - mean_t);
+    variance += k * k;
+  }
+  return covariance / variance * 1e-6;
+}
+
 std::uint32_t uniqueDomain() {
   // Every test pins Cyclone DDS to loopback (tests/CMakeLists.txt sets it); without it the
   // traffic would leave the machine and large clouds would meet the default socket buffer.

@@ -30,6 +30,13 @@ std::uint32_t uniqueDomain();
 std::string serviceConfig(std::uint32_t domain, const std::string& extra = "",
                           std::uint32_t scan_slots = 4);
 
+/// @brief The publishing period of `maps` from the subscriber's arrival times, milliseconds: the
+/// slope of a least-squares line through (index, arrival) from maps[first] on, so one message
+/// delivered late (a loaded machine, the sanitizer build) moves it by a fraction of its delay
+/// instead of the delay divided by the count, as the mean of first-to-last would. 0 with fewer
+/// than two maps from `first`.
+double publishPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::size_t first);
+
 /// @brief The yard scene with its lidar set to `beams` x `columns`, moving along its path or not.
 driver::SimulatedLidar yardLidar(int beams, int columns, bool moving);
 

@@ -77,14 +77,6 @@ HeightCheck checkHeights(const driver::ReceivedGridMap& map, const sim::Scene& s
   return check;
 }
 
-double meanPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::size_t skip) {
-  if (maps.size() < skip + 2) {
-    return 0.0;
-  }
-  return static_cast<double>(maps.back().arrival_ns - maps[skip].arrival_ns) * 1e-6 /
-         static_cast<double>(maps.size() - 1 - skip);
-}
-
 TEST(Raymapd, PublishesDecodableGridMapsAtFiveHertzWithTrueHeightsUnderSystemd) {
   const std::uint32_t domain = uniqueDomain();
   RunningDaemon daemon(serviceConfig(domain), true);
@@ -102,7 +94,7 @@ TEST(Raymapd, PublishesDecodableGridMapsAtFiveHertzWithTrueHeightsUnderSystemd) 
 
   // Rate: 5 Hz within 2 % over the run, from the subscriber's arrival times.
   ASSERT_GE(maps.size(), 20u) << daemon.log();
-  const double period = meanPeriodMs(maps, 2);
+  const double period = publishPeriodMs(maps, 2);
   EXPECT_NEAR(period, 200.0, 4.0);
 
   // The bytes decoded as grid_map_msgs/GridMap (Cyclone's own deserialiser): layout and layers.
@@ -266,7 +258,7 @@ TEST(Raymapd, OverflowAtTenTimesTheInputRateDropsOldestScansAndPublishesOnTime) 
   EXPECT_LE(ros.diagnostics->number("raymapd: pipeline/scan_queue_depth").value_or(99.0), 2.0);
   // Still on time: 5 Hz within 2 %.
   ASSERT_GE(maps.size(), 20u);
-  EXPECT_NEAR(meanPeriodMs(maps, 2), 200.0, 4.0);
+  EXPECT_NEAR(publishPeriodMs(maps, 2), 200.0, 4.0);
   const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
   ASSERT_TRUE(stopped.has_value());
   EXPECT_EQ(stopped->first, 0) << daemon.log();
