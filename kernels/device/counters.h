@@ -10,8 +10,12 @@
 #include "../common/occupancy.h"
 #include "device.h"
 
-/* Compare-and-swap attempts per miss before the update is given up (and counted). */
-#define RM_CAS_RETRY_LIMIT 64
+/* Compare-and-swap attempts per update before it is given up (and counted). Each failed attempt
+ * means another work-item's update of the same word went in, so the loop always makes progress;
+ * the bound is a last resort only, and it must exceed the number of updates that can race for one
+ * word: on a GPU thousands of lanes of one launch update a sensor's own voxel (64 tries were
+ * enough on PoCL's few threads, not there). */
+#define RM_CAS_RETRY_LIMIT (1 << 20)
 
 #if defined(RM_HAVE_INT64_ATOMICS)
 typedef rm_u64 rm_counter;

@@ -81,7 +81,7 @@ RM_DEVICE_FN int rm_ndt_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
  * like rm_ndt_count_miss, though the check and the add are not one atomic step, which matters
  * only within a few counts of 2^32. */
 RM_DEVICE_FN void rm_ndt_count_pass(RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_u32 i) {
-  RM_ATOMIC_GLOBAL rm_u32* misses = hit_miss + 2u * i + 1u;
+  RM_ATOMIC_GLOBAL rm_u32* misses = hit_miss + i + i + 1u; /* not 2u * i: wraps past 2^31 */
   if (rm_load_u32(misses) != 0xFFFFFFFFu) {
     (void)rm_atomic_add_u32(misses, 1u);
   }

@@ -43,7 +43,7 @@ RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, 
   w = rm_tsdf_weight(sdf, p);
 #if defined(RM_HAVE_INT64_ATOMICS)
   {
-    RM_ATOMIC_GLOBAL rm_u64* pair = (RM_ATOMIC_GLOBAL rm_u64*)(tsdf + 2u * i);
+    RM_ATOMIC_GLOBAL rm_u64* pair = (RM_ATOMIC_GLOBAL rm_u64*)(tsdf + i + i);
     rm_u64 old = rm_load_u64(pair);
     int attempt;
     for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
@@ -69,7 +69,7 @@ RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, 
   }
 #else
   {
-    RM_ATOMIC_GLOBAL rm_u32* distance = tsdf + 2u * i;
+    RM_ATOMIC_GLOBAL rm_u32* distance = tsdf + i + i; /* not 2u * i: wraps past 2^31 voxels */
     RM_ATOMIC_GLOBAL rm_u32* weight = distance + 1;
     int done = 0;
     rm_u32 spins;

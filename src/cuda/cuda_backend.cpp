@@ -4,6 +4,7 @@
 #include "src/cuda/cuda_backend.hpp"
 
 #include <array>
+#include <cstdio>
 #include <new>
 #include <string>
 #include <tuple>
@@ -174,6 +175,7 @@ class CudaBackend final : public gpu::StagedBackend {
     }
     void* host = nullptr;
     if (const cudaError_t s = cudaMallocHost(&host, counterBytes()); s != cudaSuccess) {
+      (void)cudaGetLastError();  // a later launch's check must not see this failure as its own
       return Unexpected(cuda::cudaFailure("CUDA counter read-back buffer", s));
     }
     b.counters_host.reset(host);
@@ -185,26 +187,48 @@ class CudaBackend final : public gpu::StagedBackend {
     return {};
   }
 
+  /// True when `status` is success. Otherwise the CUDA call named `what` failed: the staged
+  /// backend turns that into IntegrateError::kDeviceFailure without a cause, so the first few
+  /// failures of a backend are also written to stderr with CUDA's name for the error (a kernel
+  /// fault is sticky: every later call fails the same way). Failure path only: the steady state
+  /// writes nothing.
+  bool succeeded(cudaError_t status, const char* what) noexcept {
+    if (status == cudaSuccess) {
+      return true;
+    }
+    if (failures_reported_ < kFailuresReported) {
+      ++failures_reported_;
+      std::fprintf(stderr, "raymap: CUDA %s on device %d failed: %s (%s)\n", what, device_.index,
+                   cudaGetErrorName(status), cudaGetErrorString(status));
+    }
+    return false;
+  }
+
   // ---- gpu::StagedBackend ----
-  bool makeCurrent() noexcept override { return cudaSetDevice(device_.index) == cudaSuccess; }
+  bool makeCurrent() noexcept override {
+    return succeeded(cudaSetDevice(device_.index), "cudaSetDevice");
+  }
 
   bool uploadBatch(unsigned set, const gpu::BatchArrays& a) noexcept override {
     const DeviceBatch& b = batches_[set];
     bool ok = true;
     auto copy = [&](const cuda::DeviceMemoryHandle& dst, const void* src, std::size_t bytes) {
-      ok = ok && (bytes == 0 || cudaMemcpyAsync(dst.get(), src, bytes, cudaMemcpyHostToDevice,
-                                                stream_.get()) == cudaSuccess);
+      ok = ok && (bytes == 0 || succeeded(cudaMemcpyAsync(dst.get(), src, bytes,
+                                                          cudaMemcpyHostToDevice, stream_.get()),
+                                          "batch upload"));
     };
     copy(b.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
     copy(b.spans, a.spans.data(), a.spans.size() * sizeof(rm_span_record));
     copy(b.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
     copy(b.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
-    return ok && cudaMemsetAsync(b.counters.get(), 0, counterBytes(), stream_.get()) == cudaSuccess;
+    return ok && succeeded(cudaMemsetAsync(b.counters.get(), 0, counterBytes(), stream_.get()),
+                           "counter reset");
   }
 
   bool clearScratch(unsigned set, std::size_t first_word, std::size_t words) noexcept override {
-    return cudaMemsetAsync(typed<std::uint32_t>(batches_[set].scratch) + first_word, 0, words * 4u,
-                           stream_.get()) == cudaSuccess;
+    return succeeded(cudaMemsetAsync(typed<std::uint32_t>(batches_[set].scratch) + first_word, 0,
+                                     words * 4u, stream_.get()),
+                     "scratch clear");
   }
 
   bool launch(OccupancyKernel kernel, unsigned set,
@@ -226,8 +250,8 @@ class CudaBackend final : public gpu::StagedBackend {
         kernel == OccupancyKernel::kTagHitGroups     ? cuda::OccupancyKernelId::kTagHitGroups
         : kernel == OccupancyKernel::kIntegrateSpans ? cuda::OccupancyKernelId::kIntegrateSpans
                                                      : cuda::OccupancyKernelId::kApplyHitGroups;
-    return cuda::launchOccupancyKernel(id, stream_.get(), block_threads_, buffers, p) ==
-           cudaSuccess;
+    return succeeded(cuda::launchOccupancyKernel(id, stream_.get(), block_threads_, buffers, p),
+                     "occupancy kernel launch");
   }
 
   bool launchNdt(NdtKernel kernel, unsigned set, const rm_integrate_params& p,
@@ -249,19 +273,24 @@ class CudaBackend final : public gpu::StagedBackend {
     const cuda::NdtKernelId id = kernel == NdtKernel::kIntegrateSpans
                                      ? cuda::NdtKernelId::kIntegrateSpans
                                      : cuda::NdtKernelId::kApplyHitGroups;
-    return cuda::launchNdtKernel(id, stream_.get(), block_threads_, buffers, p, ndt) == cudaSuccess;
+    return succeeded(cuda::launchNdtKernel(id, stream_.get(), block_threads_, buffers, p, ndt),
+                     "NDT kernel launch");
   }
 
   bool endBatch(unsigned set) noexcept override {
     DeviceBatch& b = batches_[set];
-    return cudaMemcpyAsync(b.counters_host.get(), b.counters.get(), counterBytes(),
-                           cudaMemcpyDeviceToHost, stream_.get()) == cudaSuccess &&
-           cudaEventRecord(b.done.get(), stream_.get()) == cudaSuccess;
+    return succeeded(cudaMemcpyAsync(b.counters_host.get(), b.counters.get(), counterBytes(),
+                                     cudaMemcpyDeviceToHost, stream_.get()),
+                     "counter read-back") &&
+           succeeded(cudaEventRecord(b.done.get(), stream_.get()), "batch event record");
   }
 
   const void* waitForBatch(unsigned set) noexcept override {
     DeviceBatch& b = batches_[set];
-    return cudaEventSynchronize(b.done.get()) == cudaSuccess ? b.counters_host.get() : nullptr;
+    // A fault inside a kernel of the batch surfaces here.
+    return succeeded(cudaEventSynchronize(b.done.get()), "batch (kernels and read-back)")
+               ? b.counters_host.get()
+               : nullptr;
   }
 
   /// The host store is pageable: an upload is staged by the driver and then waited for, so the
@@ -273,12 +302,12 @@ class CudaBackend final : public gpu::StagedBackend {
     std::byte* device =
         static_cast<std::byte*>(layer_ptrs_[static_cast<std::size_t>(layer)]) + device_offset;
     if (to_device) {
-      return cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_.get()) ==
-                 cudaSuccess &&
+      return succeeded(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_.get()),
+                       "region upload") &&
              finish();
     }
-    return cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, stream_.get()) ==
-           cudaSuccess;
+    return succeeded(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, stream_.get()),
+                     "region download");
   }
 
   bool fillLayer(int layer, std::size_t device_offset, std::size_t bytes,
@@ -290,13 +319,14 @@ class CudaBackend final : public gpu::StagedBackend {
     }
     auto* device = static_cast<std::uint32_t*>(layer_ptrs_[static_cast<std::size_t>(layer)]) +
                    device_offset / 4u;
-    return cuda::launchFill(stream_.get(), device, bytes / 4u, pattern) == cudaSuccess;
+    return succeeded(cuda::launchFill(stream_.get(), device, bytes / 4u, pattern),
+                     "layer fill launch");
   }
 
   /// Waits on an event rather than the stream, so the host thread sleeps instead of spinning.
   bool finish() noexcept override {
-    return cudaEventRecord(idle_.get(), stream_.get()) == cudaSuccess &&
-           cudaEventSynchronize(idle_.get()) == cudaSuccess;
+    return succeeded(cudaEventRecord(idle_.get(), stream_.get()), "idle event record") &&
+           succeeded(cudaEventSynchronize(idle_.get()), "device work");
   }
 
   void* layerOr(int layer) const noexcept {
@@ -312,6 +342,8 @@ class CudaBackend final : public gpu::StagedBackend {
   std::vector<void*> layer_ptrs_;        // device address of each layer
   cuda::DeviceMemoryHandle dummy_;
   std::array<DeviceBatch, kStagingSets> batches_;
+  static constexpr unsigned kFailuresReported = 8;
+  unsigned failures_reported_ = 0;
 };
 
 gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device) {

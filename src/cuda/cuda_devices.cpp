@@ -11,7 +11,11 @@ namespace {
 
 int attribute(cudaDeviceAttr attr, int device) {
   int value = 0;
-  return cudaDeviceGetAttribute(&value, attr, device) == cudaSuccess ? value : 0;
+  if (cudaDeviceGetAttribute(&value, attr, device) != cudaSuccess) {
+    (void)cudaGetLastError();  // a later launch's check must not see this failure as its own
+    return 0;
+  }
+  return value;
 }
 
 /// Why there is no usable device, in the user's terms.

@@ -88,6 +88,7 @@ Result<StreamHandle> createStream() {
   cudaStream_t stream = nullptr;
   if (const cudaError_t s = cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking);
       s != cudaSuccess) {
+    (void)cudaGetLastError();  // a later launch's check must not see this failure as its own
     return Unexpected(cudaFailure("CUDA stream", s));
   }
   return StreamHandle(stream);
@@ -98,6 +99,7 @@ Result<EventHandle> createEvent() {
   if (const cudaError_t s =
           cudaEventCreateWithFlags(&event, cudaEventDisableTiming | cudaEventBlockingSync);
       s != cudaSuccess) {
+    (void)cudaGetLastError();
     return Unexpected(cudaFailure("CUDA event", s));
   }
   return EventHandle(event);
