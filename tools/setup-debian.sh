@@ -13,6 +13,7 @@ packages=(
   libsystemd-dev systemd  # sd_notify for Type=notify; systemd-analyze lints the unit in the tests
   libboost-dev            # Boost.Lockfree SPSC queues (header-only)
   clang-format
+  patchelf                # tools/device-kit.sh: the kit's executables find its own libraries
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -3,6 +3,7 @@
 // scanned by the simulated lidar, mapped on the CPU, and every generator's height map is compared
 // with the scene's true height field. Runs for every generator (CPU; OpenCL on PoCL in CI).
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <string>
@@ -34,6 +35,13 @@ struct MappedScene {
   std::vector<Vec3d> sensor_positions;
 };
 
+/// The scene files: $RAYMAP_SCENE_DIR when set (the device kit carries them beside its test
+/// executables), else this checkout's config/scenes.
+std::string sceneDir() {
+  const char* env = std::getenv("RAYMAP_SCENE_DIR");
+  return env != nullptr && *env != '\0' ? std::string(env) : std::string(RAYMAP_SCENE_DIR);
+}
+
 const MappedScene& mappedScene(const std::string& name, std::int32_t region_voxels = 32) {
   static std::map<std::pair<std::string, std::int32_t>, std::unique_ptr<MappedScene>> cache;
   const auto key = std::make_pair(name, region_voxels);
@@ -42,7 +50,7 @@ const MappedScene& mappedScene(const std::string& name, std::int32_t region_voxe
     return *found->second;
   }
   auto scene = std::make_unique<MappedScene>();
-  auto file = sim::loadSceneFile(std::string(RAYMAP_SCENE_DIR) + "/" + name + ".yaml");
+  auto file = sim::loadSceneFile(sceneDir() + "/" + name + ".yaml");
   EXPECT_TRUE(file) << file.error().message;
   scene->file = std::move(*file);
   // Dropouts are no-return rays that clear free space to max range, through the ground; the
