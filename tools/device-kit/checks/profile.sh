@@ -31,7 +31,6 @@ section_profile() {
     note "profile: skipped, out of time"
     return 0
   fi
-  wait_synthetic || return 0
   "$bin/raymap" simulate "$kit/config/scenes/yard.yaml" --rays "$work/profile.ply" --scans 20 -q \
     >"$work/logs/profile-simulate.log" 2>&1 || { fail "profile: raymap simulate failed"; return 0; }
   local mode

@@ -78,20 +78,17 @@ daemon_run() {
     return
   fi
   [ "$daemon_rc" = 0 ] || fail "raymapd ($backend, ${multiple}x) exited $daemon_rc after SIGTERM"
-  local published received integrated overflow nopose late maps period p99 l50 l99 lmax pps
-  published=$(value scans_published_total "$f")
-  received=$(value clouds_received "$f")
-  integrated=$(value scans_integrated "$f")
-  overflow=$(value clouds_dropped_overflow "$f")
-  nopose=$(value scans_dropped_no_pose "$f")
-  late=$(value cycles_late "$f")
-  maps=$(value maps_received "$f")
-  period=$(value map_period_mean_ms "$f")
-  p99=$(value p99 "$f")
-  l50=$(value latency_p50_ms "$f")
-  l99=$(value latency_p99_ms "$f")
-  lmax=$(value latency_max_ms "$f")
-  pps=$(value points_per_s "$f")
+  # raymap-load's JSON: the first number after each key.
+  local -A r
+  local key
+  for key in scans_published_total scans_integrated clouds_dropped_overflow scans_dropped_no_pose \
+    cycles_late maps_received map_period_mean_ms p99 latency_p50_ms latency_p99_ms latency_max_ms \
+    points_per_s; do
+    r[$key]=$(value "$key" "$f")
+  done
+  local published=${r[scans_published_total]} integrated=${r[scans_integrated]}
+  local overflow=${r[clouds_dropped_overflow]} nopose=${r[scans_dropped_no_pose]}
+  local late=${r[cycles_late]} maps=${r[maps_received]}
   local keeps=no
   if awk -v p="$published" -v i="$integrated" -v o="$overflow" -v n="$nopose" -v l="$late" \
     -v m="$maps" -v s="$seconds" \
@@ -101,7 +98,7 @@ daemon_run() {
   if [ "$backend" = cpu ] && awk -v m="$maps" 'BEGIN { exit !(m + 0 < 1) }'; then
     fail "raymapd (cpu) published no height map in $seconds s"
   fi
-  md raymapd "| $backend | $multiple | $((beams * columns)) | $rate | $pps | $seconds | $keeps | $published | $integrated | $(awk -v o="$overflow" -v n="$nopose" 'BEGIN { print o + n }') | $late | $period | $p99 | $l50 / $l99 / $lmax |"
+  md raymapd "| $backend | $multiple | $((beams * columns)) | $rate | ${r[points_per_s]} | $seconds | $keeps | $published | $integrated | $(awk -v o="$overflow" -v n="$nopose" 'BEGIN { print o + n }') | $late | ${r[map_period_mean_ms]} | ${r[p99]} | ${r[latency_p50_ms]} / ${r[latency_p99_ms]} / ${r[latency_max_ms]} |"
   record raymapd "{\"backend\": \"$backend\", \"multiple\": $multiple, \"beams\": $beams, \"columns\": $columns, \"scan_rate_hz\": $rate, \"seconds\": $seconds, \"keeps_up\": $([ $keeps = yes ] && echo true || echo false), \"daemon_exit\": $daemon_rc, \"load\": $(tr -d '\n' <"$f")}"
   echo "$keeps"
 }
