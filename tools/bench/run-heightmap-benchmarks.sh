@@ -5,7 +5,7 @@
 # and machine have), then `raymap heightmap --repeat` on maps of the shipped yard scene and, when
 # present, the shared Ouster data.
 #   tools/bench/run-heightmap-benchmarks.sh [DATA_DIR] [OUT_DIR] [BUILD_DIR]
-# BUILD_DIR: an existing build to use (tools/gpu-check.sh passes its CUDA build); default: the
+# BUILD_DIR: an existing build to use (a CUDA build, say); default: the
 # release preset, configured and built here.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
