@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <string>
 
 #include "src/core/error.hpp"
 
@@ -40,5 +42,17 @@ class PageBlock {
   std::byte* data_ = nullptr;
   std::size_t size_ = 0;
 };
+
+/// @brief How much memory a process starting now can count on, and what sets that bound.
+struct MemoryLimit {
+  std::uint64_t bytes = 0;  ///< the smallest of the bounds below that applies
+  std::string source;  ///< e.g. "MemAvailable in /proc/meminfo", "RLIMIT_AS", "cgroup memory.max"
+};
+
+/// @brief The smallest of: MemAvailable (/proc/meminfo), RLIMIT_AS (soft, when finite), and the
+/// cgroup v2 memory.max of this process's cgroup less its memory.current (when finite). Start-up
+/// only (reads files; allocates). Bounds it cannot read are left out; with none, bytes is
+/// UINT64_MAX and source says so.
+MemoryLimit availableMemory();
 
 }  // namespace raymap::platform

@@ -5,10 +5,13 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <limits>
 #include <string>
 #include <utility>
 
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace raymap::platform {
@@ -71,6 +74,66 @@ void PageBlock::prefault() noexcept {
     // A volatile write so the compiler keeps it; the page already holds zero.
     *static_cast<volatile std::byte*>(data_ + offset) = std::byte{0};
   }
+}
+
+namespace {
+
+/// The first word of a file as a whole number (memory.max, memory.current); false for "max"
+/// (no limit) or when it cannot be read.
+bool readNumber(const std::string& path, std::uint64_t* out) {
+  std::ifstream in(path);
+  std::string word;
+  if (!(in >> word) || word.empty() || word.find_first_not_of("0123456789") != std::string::npos) {
+    return false;
+  }
+  *out = std::stoull(word);
+  return true;
+}
+
+}  // namespace
+
+MemoryLimit availableMemory() {
+  MemoryLimit limit;
+  limit.bytes = std::numeric_limits<std::uint64_t>::max();
+  limit.source = "no limit could be read";
+  const auto consider = [&](std::uint64_t bytes, std::string source) {
+    if (bytes < limit.bytes) {
+      limit.bytes = bytes;
+      limit.source = std::move(source);
+    }
+  };
+  {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key;
+    std::uint64_t kib = 0;
+    std::string unit;
+    while (meminfo >> key >> kib >> unit) {
+      if (key == "MemAvailable:") {
+        consider(kib * 1024, "MemAvailable in /proc/meminfo");
+        break;
+      }
+    }
+  }
+  rlimit as{};
+  if (::getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) {
+    consider(static_cast<std::uint64_t>(as.rlim_cur), "RLIMIT_AS (ulimit -v)");
+  }
+  // cgroup v2: "0::/path" in /proc/self/cgroup; the limit is that folder's memory.max.
+  std::ifstream cgroup("/proc/self/cgroup");
+  std::string line;
+  while (std::getline(cgroup, line)) {
+    if (line.rfind("0::", 0) != 0) {
+      continue;
+    }
+    const std::string dir = "/sys/fs/cgroup" + line.substr(3);
+    std::uint64_t max = 0;
+    std::uint64_t current = 0;
+    if (readNumber(dir + "/memory.max", &max)) {
+      (void)readNumber(dir + "/memory.current", &current);
+      consider(max > current ? max - current : 0, "cgroup memory.max (" + dir + ")");
+    }
+  }
+  return limit;
 }
 
 }  // namespace raymap::platform

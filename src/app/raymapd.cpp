@@ -8,10 +8,12 @@
 #include <CLI/CLI.hpp>
 
 #include "platform/clock.hpp"
+#include "platform/memory.hpp"
 #include "platform/signals.hpp"
 #include "src/service/daemon_config.hpp"
 #include "src/service/log.hpp"
 #include "src/service/service.hpp"
+#include "src/service/startup_checks.hpp"
 
 namespace {
 
@@ -25,6 +27,10 @@ int checkConfig(const std::string& path) {
     return kExitConfig;
   }
   const raymap::service::DaemonConfig& c = config.value();
+  if (auto ok = raymap::service::checkStartup(c, raymap::platform::availableMemory()); !ok) {
+    std::fprintf(stderr, "%s\n", ok.error().message.c_str());
+    return kExitConfig;
+  }
   std::printf("%s: ok (backend %s, %zu sensor%s, height map %g m at %g Hz on %s, domain %u)\n",
               path.c_str(), c.backend.name.c_str(), c.sensors.size(),
               c.sensors.size() == 1 ? "" : "s", c.heightmap.size_m, c.heightmap.rate_hz,
@@ -41,6 +47,13 @@ int run(const std::string& path) {
   auto config = raymap::service::loadDaemonConfig(path);
   if (!config) {
     logLine(LogLevel::kError, "%s", config.error().message.c_str());
+    return kExitConfig;
+  }
+  // Every pool is sized before any is allocated: a configuration that cannot fit is refused
+  // here, naming its key, instead of failing halfway (or being killed) later.
+  if (auto ok = raymap::service::checkStartup(config.value(), raymap::platform::availableMemory());
+      !ok) {
+    logLine(LogLevel::kError, "%s", ok.error().message.c_str());
     return kExitConfig;
   }
   auto service = raymap::service::Service::create(config.value());

@@ -26,7 +26,7 @@ inline constexpr std::uint8_t kDiagnosticStale = 3;
 /// Thread-safety: none; one publishing thread. Move-only.
 class DiagnosticsMessage {
  public:
-  static constexpr std::size_t kTextBytes = 128;
+  static constexpr std::size_t kTextBytes = 512;  // a status message names its reasons
   static constexpr std::size_t kKeyBytes = 64;
   static constexpr std::size_t kValueBytes = 96;
 

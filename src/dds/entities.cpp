@@ -93,12 +93,15 @@ Participant::~Participant() { deleteEntity(handle_); }
 Result<RawReader> RawReader::create(const Participant& participant, const char* topic_name,
                                     const dds_topic_descriptor_t* descriptor,
                                     Reliability reliability, std::int32_t depth,
-                                    Durability durability) {
+                                    Durability durability, Origin origin) {
   dds_entity_t topic = 0;
   if (auto created = createTopic(participant, topic_name, descriptor, depth, &topic); !created) {
     return Unexpected(std::move(created).error());
   }
   dds_qos_t* qos = makeQos(reliability, depth, durability);
+  if (origin == Origin::kOtherParticipants) {
+    dds_qset_ignorelocal(qos, DDS_IGNORELOCAL_PARTICIPANT);
+  }
   const dds_entity_t reader = dds_create_reader(participant.handle(), topic, qos, nullptr);
   dds_delete_qos(qos);
   if (reader < 0) {

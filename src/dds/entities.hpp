@@ -49,6 +49,9 @@ enum class Reliability : std::uint8_t { kBestEffort, kReliable };
 /// reader also gets the writer's kept history: how ROS 2 latches /tf_static and maps). A
 /// transient-local reader matches only transient-local writers.
 enum class Durability : std::uint8_t { kVolatile, kTransientLocal };
+/// Which writers a reader matches: any, or only those of other participants (a service watching
+/// for another publisher of its own output topic).
+enum class Origin : std::uint8_t { kAny, kOtherParticipants };
 
 /// @brief Called once per sample by RawReader::take.
 /// @param context the pointer given to take()
@@ -70,8 +73,8 @@ class RawReader {
   /// @param depth KEEP_LAST history depth (>= 1)
   static Result<RawReader> create(const Participant& participant, const char* topic_name,
                                   const dds_topic_descriptor_t* descriptor, Reliability reliability,
-                                  std::int32_t depth,
-                                  Durability durability = Durability::kVolatile);
+                                  std::int32_t depth, Durability durability = Durability::kVolatile,
+                                  Origin origin = Origin::kAny);
 
   RawReader(RawReader&& other) noexcept
       : topic_(std::exchange(other.topic_, 0)), reader_(std::exchange(other.reader_, 0)) {}

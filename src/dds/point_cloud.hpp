@@ -57,6 +57,9 @@ enum class CloudError : std::uint8_t {
   kFrameIdTooLong,     ///< header.frame_id has 64 or more characters
   kMissingTimeField,   ///< CloudDecodeOptions::time_field names a field the cloud lacks
 };
+/// The number of CloudError values (per-reason counters are indexed by the error).
+inline constexpr std::size_t kCloudErrorCount =
+    static_cast<std::size_t>(CloudError::kMissingTimeField) + 1;
 
 /// @brief Short, stable name ("truncated", "bad_field_type", ...). @rt allocates: no.
 const char* toString(CloudError error) noexcept;

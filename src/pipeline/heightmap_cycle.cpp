@@ -45,6 +45,8 @@ Expected<void, CycleError> HeightmapCycle::generate() noexcept {
   }
   const std::int64_t started = platform::monotonicNowNs();
   std::lock_guard<platform::PiMutex> lock(map_mutex_);
+  stats_.map_lock_wait_us.record(
+      static_cast<std::uint64_t>((platform::monotonicNowNs() - started) / 1000));
   if (!backend_.synchronise()) {
     return Unexpected(CycleError::kSynchronise);
   }

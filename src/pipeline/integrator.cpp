@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "platform/clock.hpp"
+#include "src/pipeline/load_shedding.hpp"
 
 namespace raymap::pipeline {
 namespace {
@@ -16,6 +17,11 @@ constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
 
 std::int64_t pointTimeNs(std::int64_t stamp_ns, float time_s) noexcept {
   return stamp_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(time_s) * 1e9));
+}
+
+/// A per-point time the scan can use: finite and within `max_offset_s` of the header stamp.
+bool usableTime(float time_s, float max_offset_s) noexcept {
+  return std::fabs(time_s) <= max_offset_s;  // false for NaN
 }
 
 }  // namespace
@@ -71,10 +77,18 @@ bool Integrator::convertScan() noexcept {
   const SensorSettings& sensor = sensors_[scan_->sensor];
   const auto capacity = static_cast<std::uint32_t>(rays_.size());
   while (scan_cursor_ < points.size() && batch_size_ < capacity) {
-    const dds::ScanPoint& p = points[scan_cursor_++];
+    const std::uint32_t index = scan_cursor_++;
+    const dds::ScanPoint& p = points[index];
+    if (scan_stride_ > 1 && index % scan_stride_ != 0) {
+      stats_.points_shed.add();  // subsampled (latency bound)
+      continue;
+    }
     if ((p.flags & dds::kPointNoReturn) != 0u) {
       stats_.points_no_return.add();  // no direction: nothing to clear along
       continue;
+    }
+    if (!usableTime(p.time_s, sensor.max_time_offset_s)) {
+      continue;  // counted (points_bad_time) when the scan was taken
     }
     const std::int64_t t = pointTimeNs(scan_->header.stamp_ns, p.time_s);
     if (t != last_point_time_ns_) {
@@ -103,40 +117,70 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   }
   RayPreparer& preparer = preparers_[batch_sensor_];
   const std::uint64_t rejected_before = preparer.counters().rejected();
-  {
-    std::lock_guard<platform::PiMutex> lock(map_mutex_);
-    const std::int64_t started = platform::monotonicNowNs();
-    std::span<const Ray> in(rays_.data(), batch_size_);
-    while (!in.empty()) {
-      const RayPreparer::Progress progress = preparer.prepare(in, prepared_);
-      in = in.subspan(progress.consumed);
-      if (progress.written > 0) {
-        auto result =
-            backend_.integrate(std::span<const PreparedRay>(prepared_.data(), progress.written));
-        stats_.batches.add();
-        if (!result) {
-          stats_.integrate_errors.add();
-        } else {
-          stats_.rays_integrated.add(progress.written);
+  const std::int64_t batch_started = platform::monotonicNowNs();
+  std::span<const Ray> in(rays_.data(), batch_size_);
+  std::unique_lock<platform::PiMutex> lock(map_mutex_, std::defer_lock);
+  do {
+    lock.lock();
+    const std::int64_t hold_started = platform::monotonicNowNs();
+    std::int64_t now = hold_started;
+    // Slices until the hold budget is spent (one slice at least; the whole scan per-scan).
+    do {
+      std::size_t slice = in.size();
+      if (!per_scan_) {
+        const double fit = static_cast<double>(settings_.max_lock_hold_ns) / ns_per_ray_;
+        slice = std::min(slice, static_cast<std::size_t>(std::clamp(fit, 256.0, 1048576.0)));
+      }
+      std::span<const Ray> part = in.first(slice);
+      const std::int64_t slice_started = now;
+      while (!part.empty()) {
+        const RayPreparer::Progress progress = preparer.prepare(part, prepared_);
+        part = part.subspan(progress.consumed);
+        in = in.subspan(progress.consumed);
+        if (progress.written > 0) {
+          auto result =
+              backend_.integrate(std::span<const PreparedRay>(prepared_.data(), progress.written));
+          stats_.batches.add();
+          if (!result) {
+            stats_.integrate_errors.add();
+          } else {
+            stats_.rays_integrated.add(progress.written);
+          }
+        }
+        if (progress.consumed == 0) {
+          in = {};  // cannot happen without segmentation; never spin
+          break;
         }
       }
-      if (progress.consumed == 0) {
-        break;  // cannot happen without segmentation; never spin
+      now = platform::monotonicNowNs();
+      if (slice > 0) {
+        const double measured =
+            static_cast<double>(now - slice_started) / static_cast<double>(slice);
+        ns_per_ray_ = 0.75 * ns_per_ray_ + 0.25 * std::max(measured, 1.0);
       }
+    } while (!in.empty() && now - hold_started < settings_.max_lock_hold_ns);
+    stats_.map_lock_hold_us.record(static_cast<std::uint64_t>((now - hold_started) / 1000));
+    if (!in.empty()) {
+      lock.unlock();  // a waiting publisher gets the map here (the PI mutex hands it over)
     }
-    if (scan_stamp_pending_ != 0) {
-      stats_.newest_scan_stamp_ns.store(scan_stamp_pending_, std::memory_order_relaxed);
-    }
-    const std::int64_t finished = platform::monotonicNowNs();
-    stats_.integrate_batch_us.record(static_cast<std::uint64_t>((finished - started) / 1000));
-    // Arrivals go out while the map is locked: the publisher reads how many are queued under the
-    // same lock, so it counts exactly the scans its map contains.
-    for (std::uint32_t i = 0; i < completed_count_; ++i) {
-      integrated_.push(completed_[i]);  // full: the latency sample is lost, nothing else
-    }
+  } while (!in.empty());
+  // Still locked: the last slice's hold.
+  if (scan_stamp_pending_ != 0) {
+    stats_.newest_scan_stamp_ns.store(scan_stamp_pending_, std::memory_order_relaxed);
   }
+  stats_.integrate_batch_us.record(
+      static_cast<std::uint64_t>((platform::monotonicNowNs() - batch_started) / 1000));
+  // Arrivals go out while the map is locked: the publisher reads how many are queued under the
+  // same lock, so it counts exactly the scans its map contains.
+  for (std::uint32_t i = 0; i < completed_count_; ++i) {
+    integrated_.push(completed_[i]);  // full: the latency sample is lost, nothing else
+  }
+  lock.unlock();
   stats_.rays_rejected.add(preparer.counters().rejected() - rejected_before);
   stats_.scans_integrated.add(completed_count_);
+  if (completed_count_ > 0) {
+    stats_.last_scan_integrated_ns.store(platform::monotonicNowNs(), std::memory_order_relaxed);
+  }
   completed_count_ = 0;
   batch_size_ = 0;
   scan_stamp_pending_ = 0;
@@ -152,13 +196,26 @@ std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
         break;
       }
       scan_cursor_ = 0;
+      scan_stride_ = 1;
+      scan_planned_ = false;
       scan_first_wait_ns_ = 0;
       last_point_time_ns_ = INT64_MIN;  // the cached pose belongs to the previous scan's sensor
+      // The poses must cover the scan's usable point times; a point with a corrupt time is left
+      // out (convertScan skips it), not allowed to stretch the scan.
+      const float max_offset = sensors_[scan_->sensor].max_time_offset_s;
       float t_min = 0.0f;
       float t_max = 0.0f;
+      std::uint64_t bad_time = 0;
       for (const dds::ScanPoint& p : scan_->points()) {
+        if (!usableTime(p.time_s, max_offset)) {
+          bad_time += (p.flags & dds::kPointNoReturn) == 0u ? 1u : 0u;
+          continue;
+        }
         t_min = std::min(t_min, p.time_s);
         t_max = std::max(t_max, p.time_s);
+      }
+      if (bad_time > 0) {
+        stats_.points_bad_time.add(bad_time);
       }
       scan_start_ns_ = pointTimeNs(scan_->header.stamp_ns, t_min);
       scan_end_ns_ = pointTimeNs(scan_->header.stamp_ns, t_max);
@@ -194,6 +251,29 @@ std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
       mailbox_.release(scan_);
       scan_ = nullptr;
       continue;
+    }
+    if (!scan_planned_) {
+      // The latency bound: take the scan whole, subsampled, or not at all.
+      scan_planned_ = true;
+      PublishSchedule schedule;
+      schedule.next_publish_ns = stats_.next_publish_ns.load(std::memory_order_relaxed);
+      schedule.period_ns = settings_.publish_period_ns;
+      schedule.lead_ns = stats_.publish_lead_us.load(std::memory_order_relaxed) * 1000;
+      const double rays =
+          static_cast<double>(scan_->header.points) - static_cast<double>(scan_->header.no_return);
+      // A scan that waited for its poses counts from when they came (about now): waiting for
+      // the pose source is not a backlog of the backend's.
+      const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
+      const ShedDecision decision =
+          planScan(now_ns, ready, static_cast<double>(batch_size_), rays, ns_per_ray_, schedule,
+                   settings_.max_latency_ns, settings_.max_stride);
+      if (decision.drop) {
+        stats_.scans_shed.add();
+        mailbox_.release(scan_);
+        scan_ = nullptr;
+        continue;
+      }
+      scan_stride_ = decision.stride;
     }
     if (batch_size_ > 0 && batch_sensor_ != scan_->sensor) {
       integrateBatch(now_ns);  // a batch has one sensor's range limits

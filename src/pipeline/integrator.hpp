@@ -25,12 +25,27 @@ struct IntegratorSettings {
   std::int64_t pose_wait_ns = 200000000;     ///< a scan waits this long for poses
   std::int64_t pose_hold_ns = 20000000;      ///< newest pose used this far beyond it
   std::uint32_t pose_history = 4096;
+  /// The integrator gives the map lock up after this long (between slices of a batch) so that a
+  /// waiting publisher takes it (the PI mutex hands it to the waiter). Per-scan semantics cannot
+  /// split a scan: there a hold is one whole scan.
+  std::int64_t max_lock_hold_ns = 5000000;
+  /// Latency bound (load shedding): a scan is taken whole, subsampled or dropped so that the
+  /// first map containing it is published within this long of its arrival (0 = no bound).
+  std::int64_t max_latency_ns = 250000000;
+  std::int64_t publish_period_ns = 200000000;  ///< the publisher's period (for the bound)
+  /// Subsample by at most this factor; a scan that would need more is dropped. 1 = never
+  /// subsample: whole scans are dropped (queues.shed: drop).
+  std::uint32_t max_stride = 8;
 };
 
 /// @brief Per-sensor settings: extrinsic (until tf_static replaces it) and ray limits.
 struct SensorSettings {
   io::Pose extrinsic;  ///< sensor in the base frame
   RayFilter filter;    ///< min/max range
+  /// A point whose time is further than this from the header stamp (or not finite) is left out
+  /// and counted (points_bad_time): one corrupt time must not make the scan wait for poses that
+  /// never come, and so cost the whole scan.
+  float max_time_offset_s = 1.0f;
 };
 
 /// @brief Moves scans from the mailbox into the map.
@@ -40,10 +55,14 @@ struct SensorSettings {
 /// its last point (or dropped after pose_wait_ns), converted point by point into world-frame rays
 /// (the pose interpolated at each distinct point time: deskewing), and the rays go into a batch.
 /// A batch is integrated when full, at the end of a scan under per-scan semantics, or when no
-/// scan waits and its oldest ray is batch_deadline_ns old. Each backend call holds `map_mutex`
-/// (shared with the publisher, which moves the window and reads the map), so a batch's size
-/// bounds how long the publisher can wait. Arrival times of scans whose last ray went into the
-/// map go to `integrated` (for the latency measure).
+/// scan waits and its oldest ray is batch_deadline_ns old. A batch goes in as slices, each
+/// prepared and integrated under `map_mutex` (shared with the publisher, which moves the window
+/// and reads the map); the lock is given up once it has been held max_lock_hold_ns, so the
+/// publisher waits at most about that long (plus one slice), whatever the batch size. Slices are
+/// sized from the measured time per ray to fit the hold. Before a scan is converted, the latency
+/// bound (load_shedding.hpp) decides whether it goes in whole, subsampled or not at all, and
+/// points whose time is corrupt are left out. Arrival times of scans whose last ray went into
+/// the map go to `integrated` (for the latency measure).
 ///
 /// Thread-safety: one thread. @rt step(): allocates: no; blocks: on map_mutex only.
 class Integrator {
@@ -91,6 +110,8 @@ class Integrator {
   std::int64_t scan_start_ns_ = 0;       // time of its earliest and latest point
   std::int64_t scan_end_ns_ = 0;
   std::uint32_t scan_cursor_ = 0;
+  std::uint32_t scan_stride_ = 1;  // take every stride-th point (load shedding)
+  bool scan_planned_ = false;      // the latency bound was applied to the current scan
   std::int64_t last_point_time_ns_ = INT64_MIN;  // cache: pose of the last point time
   io::Pose last_sensor_pose_;
 
@@ -103,6 +124,7 @@ class Integrator {
   std::vector<std::int64_t> completed_;  // arrivals of scans whose last ray is in the batch
   std::uint32_t completed_count_ = 0;
   std::int64_t scan_stamp_pending_ = 0;  // newest header stamp among the completed scans
+  double ns_per_ray_ = 1000.0;           // measured (moving average): sizes the slices
 };
 
 }  // namespace raymap::pipeline

@@ -2,9 +2,11 @@
 // The counters and histograms the pipeline threads keep, read by the diagnostics reporter.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 
+#include "src/dds/point_cloud.hpp"
 #include "src/pipeline/histogram.hpp"
 
 namespace raymap::pipeline {
@@ -27,19 +29,35 @@ class Counter {
 struct PipelineStats {
   // ---- ingest thread ----
   Counter clouds_received;       ///< PointCloud2 messages taken from DDS
-  Counter clouds_malformed;      ///< rejected by the decoder (last_cloud_error says why)
+  Counter clouds_malformed;      ///< rejected by the decoder (clouds_rejected_by says why)
   Counter clouds_too_large;      ///< more points than the sensor's max_points
-  Counter clouds_unknown_frame;  ///< frame_id matches no configured sensor frame
-  Counter points_received;       ///< points in accepted clouds
-  std::atomic<std::uint32_t> last_cloud_error{0};  ///< dds::CloudError + 1; 0 = none yet
-  Counter poses_received;                          ///< odometry messages / TF transforms used
-  Counter poses_malformed;                         ///< rejected by the decoder
-  Counter poses_dropped;  ///< pose queue full (the integrator is far behind)
-  Counter tf_ignored;     ///< TF transforms between frames the service does not use
+  Counter clouds_unknown_frame;  ///< frame_id is not the configured sensors[].frame
+  /// Clouds the decoder rejected, per reason (indexed by dds::CloudError; too_many_points is
+  /// clouds_too_large, the others add up to clouds_malformed).
+  std::array<Counter, dds::kCloudErrorCount> clouds_rejected_by;
+  /// The first frame_id that matched no configured frame, and the sensor it came for (written
+  /// once by the ingest thread, then wrong_frame_seen is set with release).
+  char wrong_frame[64] = {};
+  std::uint32_t wrong_frame_sensor = 0;
+  std::atomic<bool> wrong_frame_seen{false};
+  Counter points_received;  ///< points in accepted clouds
+  Counter poses_received;   ///< odometry messages / TF transforms used
+  Counter poses_malformed;  ///< rejected by the decoder
+  Counter poses_dropped;    ///< pose queue full (the integrator is far behind)
+  Counter tf_ignored;       ///< TF transforms between frames the service does not use
   // ---- integrator thread ----
-  Counter scans_integrated;    ///< scans whose every ray went into the map
-  Counter scans_no_pose;       ///< dropped: no pose covered the scan in time
-  Counter points_no_return;    ///< non-finite points (no direction: counted, not integrated)
+  Counter scans_integrated;  ///< scans whose every ray went into the map
+  Counter scans_no_pose;     ///< dropped: no pose covered the scan in time
+  Counter points_no_return;  ///< non-finite points (no direction: counted, not integrated)
+  /// Points whose per-point time is not finite or further than sensors[].max_time_offset_s from
+  /// the header stamp (a corrupt time field): the point is left out, not the scan.
+  Counter points_bad_time;
+  /// Load shedding (queues.max_latency_s): scans dropped whole because no map within the bound
+  /// could contain them, and points left out of subsampled scans.
+  Counter scans_shed;
+  Counter points_shed;
+  /// Monotonic time the last scan went into the map (0: none yet); the staleness rule.
+  std::atomic<std::int64_t> last_scan_integrated_ns{0};
   Counter rays_integrated;     ///< rays handed to the backend
   Counter rays_rejected;       ///< invalid, too short, out of bounds or outside the window
   Counter batches;             ///< backend calls
@@ -47,6 +65,7 @@ struct PipelineStats {
   Counter poses_out_of_order;  ///< pose stamps not after the previous one (ignored)
   // ---- publisher thread ----
   Counter maps_published;
+  Counter maps_withheld;     ///< cycles with no map published: the map was stale (health)
   Counter cycles_late;       ///< generation did not finish by the publish instant
   Counter heightmap_errors;  ///< generation failed (nothing published that cycle)
   /// header.stamp of the newest scan in the map (the pose source's clock; written by the
@@ -55,7 +74,16 @@ struct PipelineStats {
   DurationHistogram latency_us;          ///< cloud arrival -> first GridMap containing it
   DurationHistogram period_error_us;     ///< |publish period - nominal period|
   DurationHistogram generate_us;         ///< window move + height-map generation
-  DurationHistogram integrate_batch_us;  ///< one backend call (written by the integrator)
+  DurationHistogram integrate_batch_us;  ///< one batch, all its slices (written by the integrator)
+  /// Each continuous hold of the map lock by the integrator (one or more slices of a batch).
+  DurationHistogram map_lock_hold_us;
+  /// How long the publisher waited for the map lock each cycle (written by the publisher).
+  DurationHistogram map_lock_wait_us;
+  /// The publisher's lead before each publish instant, microseconds (adapts; publisher writes).
+  std::atomic<std::int64_t> publish_lead_us{0};
+  /// The next publish instant (monotonic ns; 0 before the first), for the integrator's latency
+  /// bound (written by the publisher).
+  std::atomic<std::int64_t> next_publish_ns{0};
 };
 
 }  // namespace raymap::pipeline

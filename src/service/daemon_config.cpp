@@ -4,6 +4,7 @@
 #include "src/service/daemon_config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <exception>
 #include <fstream>
@@ -205,7 +206,7 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
     const std::string path = config::item("sensors", i);
     Fields f(ctx, node[i], path);
     f.knownKeys({"name", "topic", "frame", "extrinsic", "min_range", "max_range", "max_points",
-                 "time_field"});
+                 "time_field", "max_time_offset_s"});
     SensorConfig s;
     s.name = text(f, "name", "lidar" + std::to_string(i));
     s.topic = topic(f, "topic", s.topic);
@@ -222,6 +223,9 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
     s.time_field = text(f, "time_field", s.time_field);
     f.check(!s.time_field.empty() && s.time_field.size() < 32, "time_field",
             "must be auto, none or a field name shorter than 32 characters");
+    s.max_time_offset_s = f.positive("max_time_offset_s", s.max_time_offset_s);
+    f.check(s.max_time_offset_s <= 60.0, "max_time_offset_s",
+            "must be at most 60 s (a scan's points lie within one revolution of its stamp)");
     sensors.push_back(s);
   }
 }
@@ -229,7 +233,7 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
 void readHeightmap(Context& ctx, const YAML::Node& node, HeightmapConfig& hm) {
   Fields f(ctx, node, "heightmap");
   f.knownKeys({"rate_hz", "size", "mode", "min_clearance", "floor_depth", "ceiling_height",
-               "virtual_surfaces", "base_height", "publish_lead_s"});
+               "virtual_surfaces", "base_height", "publish_lead_s", "publish_lead_max_s"});
   hm.rate_hz = f.positive("rate_hz", hm.rate_hz);
   f.check(hm.rate_hz <= 100.0, "rate_hz", "must be at most 100");
   hm.size_m = f.positive("size", hm.size_m);
@@ -246,6 +250,14 @@ void readHeightmap(Context& ctx, const YAML::Node& node, HeightmapConfig& hm) {
   hm.base_height_m = f.number("base_height", hm.base_height_m);
   hm.publish_lead_s = f.positive("publish_lead_s", hm.publish_lead_s, true);
   f.check(hm.publish_lead_s < 0.9 / hm.rate_hz, "publish_lead_s",
+          "must be shorter than 90 % of the publish period (1 / rate_hz)");
+  // Default: 100 ms, at most half the period, at least the minimum lead.
+  hm.publish_lead_max_s = f.positive(
+      "publish_lead_max_s",
+      std::max(hm.publish_lead_s, std::min(hm.publish_lead_max_s, 0.5 / hm.rate_hz)), true);
+  f.check(hm.publish_lead_max_s >= hm.publish_lead_s, "publish_lead_max_s",
+          "must be at least publish_lead_s");
+  f.check(hm.publish_lead_max_s < 0.9 / hm.rate_hz, "publish_lead_max_s",
           "must be shorter than 90 % of the publish period (1 / rate_hz)");
 }
 
@@ -271,11 +283,40 @@ void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
 
 void readQueues(Context& ctx, const YAML::Node& node, QueueConfig& q) {
   Fields f(ctx, node, "queues");
-  f.knownKeys({"scan_slots", "pose_queue", "batch_rays", "batch_deadline_s"});
+  f.knownKeys({"scan_slots", "pose_queue", "batch_rays", "batch_deadline_s", "max_lock_hold_s",
+               "max_latency_s", "shed", "max_subsample"});
   q.scan_slots = f.integer<std::uint32_t>("scan_slots", q.scan_slots, 1u, 256u);
   q.pose_queue = f.integer<std::uint32_t>("pose_queue", q.pose_queue, 16u, 1u << 20);
   q.batch_rays = f.integer<std::uint32_t>("batch_rays", q.batch_rays, 256u, 1u << 22);
   q.batch_deadline_s = f.positive("batch_deadline_s", q.batch_deadline_s);
+  q.max_lock_hold_s = f.positive("max_lock_hold_s", q.max_lock_hold_s);
+  f.check(q.max_lock_hold_s <= 1.0, "max_lock_hold_s", "must be at most 1 s");
+  if (f.has("max_latency_s")) {
+    q.max_latency_s = f.positive("max_latency_s", q.max_latency_s, true);
+  } else {
+    q.max_latency_s = -1.0;  // the default, once the publish rate is known (parse())
+  }
+  q.shed_subsample = choiceOr(f, "shed", {"subsample", "drop"}, 0) == 0;
+  q.max_subsample = f.integer<std::uint32_t>("max_subsample", q.max_subsample, 1u, 64u);
+}
+
+/// A name for logs, diagnostics and hardware ids: letters, digits, '-', '_', '.', '/'.
+bool isPlainName(const std::string& name) {
+  return !name.empty() && name.size() < 64 && std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_' || c == '.' ||
+           c == '/';
+  });
+}
+
+void readHealth(Context& ctx, const YAML::Node& node, HealthConfig& health) {
+  Fields f(ctx, node, "health");
+  f.knownKeys({"stale_after_s", "hardware_id"});
+  health.stale_after_s = f.positive("stale_after_s", health.stale_after_s);
+  f.check(health.stale_after_s <= 3600.0, "stale_after_s", "must be at most 3600 s");
+  health.hardware_id = text(f, "hardware_id", "");
+  f.check(
+      health.hardware_id.empty() || isPlainName(health.hardware_id), "hardware_id",
+      "must be 1 to 63 letters, digits, '-', '_', '.' or '/' (got '" + health.hardware_id + "')");
 }
 
 void readThread(Context& ctx, const YAML::Node& node, const std::string& path, ThreadConfig& t) {
@@ -313,7 +354,11 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   DaemonConfig config;
   config.path = name;
   Fields top(ctx, root, "");
-  top.knownKeys({"map", "backend", "pose", "sensors", "heightmap", "dds", "queues", "realtime"});
+  top.knownKeys({"name", "map", "backend", "pose", "sensors", "heightmap", "dds", "queues",
+                 "realtime", "health"});
+  config.name = text(top, "name", config.name);
+  top.check(isPlainName(config.name), "name",
+            "must be 1 to 63 letters, digits, '-', '_', '.' or '/' (got '" + config.name + "')");
   const auto section = [&](const char* key) {
     const YAML::Node node = top.get(key);
     return node.IsDefined() && !node.IsNull() ? node : YAML::Node(YAML::NodeType::Map);
@@ -326,6 +371,7 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   if (!ctx.failed()) readDds(ctx, section("dds"), config.dds);
   if (!ctx.failed()) readQueues(ctx, section("queues"), config.queues);
   if (!ctx.failed()) readRealtime(ctx, section("realtime"), config.realtime);
+  if (!ctx.failed()) readHealth(ctx, section("health"), config.health);
   if (ctx.failed()) {
     return Unexpected(ctx.error());
   }
@@ -345,6 +391,20 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
             " m does not fit the rolling window (map.window x, y = " + formatNumber(window_x) +
             " x " + formatNumber(window_y) + " m; the map must be at least one region (" +
             formatNumber(extent) + " m) smaller)");
+  }
+  const double period = 1.0 / config.heightmap.rate_hz;
+  if (config.queues.max_latency_s < 0.0) {
+    // 250 ms at 5 Hz and faster; slower maps need a period, the lead and 35 ms to integrate in.
+    config.queues.max_latency_s =
+        std::max(QueueConfig{}.max_latency_s, period + config.heightmap.publish_lead_s + 0.035);
+  }
+  if (config.queues.max_latency_s > 0.0 &&
+      config.queues.max_latency_s < period + config.heightmap.publish_lead_s) {
+    return fail(ErrorCode::kInvalidArgument,
+                name + ": queues.max_latency_s: " + formatNumber(config.queues.max_latency_s) +
+                    " s is shorter than one publish period plus the lead (" +
+                    formatNumber(period + config.heightmap.publish_lead_s) +
+                    " s): most scans could never be published in time (0 turns the bound off)");
   }
   if (!config.save_map_on_exit.empty() && config.save_map_on_exit.back() == '/') {
     return fail(ErrorCode::kInvalidArgument,

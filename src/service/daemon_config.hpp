@@ -29,6 +29,9 @@ struct SensorConfig {
   std::uint32_t max_points = 262144;  ///< larger clouds are dropped whole (and counted)
   /// Per-point time field: "auto" (t, time, timestamp by their usual types), "none" or a name.
   std::string time_field = "auto";
+  /// Points whose time is further than this from header.stamp (seconds), or not finite, are
+  /// left out and counted: a corrupt time field costs the point, not the scan.
+  double max_time_offset_s = 1.0;
 };
 
 /// @brief Where the robot's pose comes from.
@@ -54,8 +57,11 @@ struct HeightmapConfig {
   bool virtual_surfaces = false;
   /// Height of the base frame above the ground (metres): the search reference is base z minus it.
   double base_height_m = 0.0;
-  /// The map is generated this long before each publish instant, which is then kept exactly.
+  /// The map is generated at least this long before each publish instant, which is then kept
+  /// exactly. The lead grows with the measured generation time (the worst of the last 8 cycles,
+  /// waiting for the map included, times 1.5, plus 2 ms) up to publish_lead_max_s.
   double publish_lead_s = 0.015;
+  double publish_lead_max_s = 0.1;
 };
 
 /// @brief DDS: domain, Cyclone configuration, output topics.
@@ -79,6 +85,16 @@ struct QueueConfig {
       16384;  ///< rays per backend call (bounds how long a batch holds the map)
   double batch_deadline_s =
       0.005;  ///< a partial batch is integrated once its oldest ray is this old
+  /// The integrator holds the map at most about this long at a time (seconds), then lets a
+  /// waiting publisher in (per-ray semantics; per-scan holds one whole scan).
+  double max_lock_hold_s = 0.005;
+  /// Latency bound, seconds from a cloud's arrival to the first height map that contains it:
+  /// scans that cannot make it are subsampled (every k-th point) or dropped, and counted. 0: off.
+  double max_latency_s = 0.25;
+  /// How the bound sheds: subsample scans by up to max_subsample, dropping only what needs more
+  /// (true), or drop whole scans only (false: queues.shed: drop).
+  bool shed_subsample = true;
+  std::uint32_t max_subsample = 8;
 };
 
 /// @brief Scheduling of one thread.
@@ -94,10 +110,25 @@ struct RealtimeConfig {
   ThreadConfig publisher{60, {}};
 };
 
+/// @brief What the service calls unhealthy, and how it names itself in diagnostics.
+struct HealthConfig {
+  /// No scan integrated for this long (seconds) while running: the pipeline status is ERROR,
+  /// no GridMap is published (a planner must not take the last one for the present) and the
+  /// systemd watchdog is no longer pinged.
+  double stale_after_s = 1.0;
+  /// diagnostic_msgs hardware_id; empty: "<host name>/<name>", so that two services on one
+  /// domain are told apart.
+  std::string hardware_id;
+};
+
 /// @brief Everything raymapd reads from its YAML file.
 struct DaemonConfig {
   std::string path;  ///< the file it came from
-  MapConfig map;     ///< always the rolling policy
+  /// The service's name: the diagnostics' status names ("<name>: pipeline", ...) and the default
+  /// hardware_id.
+  std::string name = "raymapd";
+  HealthConfig health;
+  MapConfig map;  ///< always the rolling policy
   BackendChoice backend;
   PoseConfig pose;
   std::vector<SensorConfig> sensors;

@@ -1,111 +1,286 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// DiagnosticsReporter: three statuses (pipeline, height map, real time) with stable keys.
+// DiagnosticsReporter: three statuses (pipeline, height map, real time) with stable keys, levels
+// decided over a sliding window (see the header).
 #include "src/service/diagnostics_reporter.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cinttypes>
+#include <cmath>
+#include <cstdarg>
 #include <cstdio>
+#include <cstring>
 
 #include "src/dds/point_cloud.hpp"
 #include "src/service/log.hpp"
 #include "src/service/service.hpp"
 
 namespace raymap::service {
+namespace {
+
+constexpr double kMinWindowS = 1.0;  // rates and drops over at least this long
+
+/// Appends printf output to the NUL-terminated `out` (truncating, never overflowing).
+void appendf(char* out, std::size_t size, const char* format, ...)
+    __attribute__((format(printf, 3, 4)));
+void appendf(char* out, std::size_t size, const char* format, ...) {
+  const std::size_t used = std::strlen(out);
+  if (used + 1 >= size) {
+    return;
+  }
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(out + used, size - used, format, args);
+  va_end(args);
+}
+
+const char* levelName(std::uint8_t level) {
+  return level == dds::kDiagnosticError ? "ERROR" : level == dds::kDiagnosticWarn ? "WARN" : "OK";
+}
+
+}  // namespace
 
 DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
                                          const pipeline::ScanMailbox& mailbox,
-                                         const pipeline::PoseQueue& poses, std::string backend,
-                                         std::string device, double publish_rate_hz)
+                                         const pipeline::PoseQueue& poses,
+                                         ReporterSettings settings, std::int64_t started_ns)
     : stats_(stats),
       mailbox_(mailbox),
       poses_(poses),
-      backend_(std::move(backend)),
-      device_(std::move(device)),
-      publish_rate_hz_(publish_rate_hz),
-      message_(3, 32) {}
+      settings_(std::move(settings)),
+      pipeline_name_(settings_.name + ": pipeline"),
+      heightmap_name_(settings_.name + ": height map"),
+      realtime_name_(settings_.name + ": real time"),
+      started_ns_(started_ns),
+      message_(3, 64) {
+  const double window_s = std::max(kMinWindowS, 1.0 / settings_.report_rate_hz);
+  window_ns_ = static_cast<std::int64_t>(std::llround(window_s * 1e9));
+  // Enough samples that one of them is a whole window older than the newest.
+  ring_.resize(static_cast<std::size_t>(std::ceil(window_s * settings_.report_rate_hz)) + 2);
+}
 
 DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   Totals t;
   t.clouds = stats_.clouds_received.get();
   t.malformed = stats_.clouds_malformed.get();
   t.too_large = stats_.clouds_too_large.get();
-  t.unknown_frame = stats_.clouds_unknown_frame.get();
+  t.wrong_frame = stats_.clouds_unknown_frame.get();
   t.overflow = mailbox_.droppedOldest();
   t.scans = stats_.scans_integrated.get();
   t.no_pose = stats_.scans_no_pose.get();
   t.rays = stats_.rays_integrated.get();
   t.rejected = stats_.rays_rejected.get();
   t.no_return = stats_.points_no_return.get();
+  t.bad_time = stats_.points_bad_time.get();
+  t.scans_shed = stats_.scans_shed.get();
+  t.points_shed = stats_.points_shed.get();
   t.maps = stats_.maps_published.get();
+  t.withheld = stats_.maps_withheld.get();
   t.late = stats_.cycles_late.get();
   t.hm_errors = stats_.heightmap_errors.get();
   t.integrate_errors = stats_.integrate_errors.get();
   t.poses = stats_.poses_received.get();
   t.poses_malformed = stats_.poses_malformed.get();
   t.poses_dropped = stats_.poses_dropped.get();
+  for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
+    t.rejected_by[i] = stats_.clouds_rejected_by[i].get();
+  }
   return t;
 }
 
-void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& realtime) noexcept {
+const DiagnosticsReporter::Sample& DiagnosticsReporter::windowBase() const noexcept {
+  const Sample& now = ring_[head_];
+  const std::size_t n = ring_.size();
+  for (std::size_t back = 1; back < filled_; ++back) {
+    const Sample& s = ring_[(head_ + n - back) % n];
+    if (now.ns - s.ns >= window_ns_) {
+      return s;
+    }
+  }
+  return ring_[(head_ + n - (filled_ - 1)) % n];  // the oldest (the newest itself at first)
+}
+
+void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& realtime,
+                                 std::uint32_t other_map_publishers) noexcept {
   realtime_ = &realtime;
-  previous_ = current_;
-  previous_ns_ = now_ns_;
-  now_ns_ = now_ns;
-  current_ = read();
-  latency_prev_ = latency_now_;
-  period_prev_ = period_now_;
-  generate_prev_ = generate_now_;
-  stats_.latency_us.snapshot(&latency_now_);
-  stats_.period_error_us.snapshot(&period_now_);
-  stats_.generate_us.snapshot(&generate_now_);
-  const double dt = previous_ns_ == 0 ? 0.0 : static_cast<double>(now_ns_ - previous_ns_) * 1e-9;
-  const double map_rate = dt > 0.0 ? static_cast<double>(current_.maps - previous_.maps) / dt : 0.0;
+  head_ = filled_ == 0 ? 0 : (head_ + 1) % ring_.size();
+  filled_ = std::min(filled_ + 1, ring_.size());
+  Sample& s = ring_[head_];
+  s.ns = now_ns;
+  s.totals = read();
+  stats_.latency_us.snapshot(&s.latency);
+  stats_.period_error_us.snapshot(&s.period);
+  stats_.generate_us.snapshot(&s.generate);
+  stats_.map_lock_hold_us.snapshot(&s.hold);
+  stats_.map_lock_wait_us.snapshot(&s.wait);
+  base_ = &windowBase();
+  decide(other_map_publishers);
+  const double dt = static_cast<double>(s.ns - base_->ns) * 1e-9;
+  const double map_rate =
+      dt > 0.0 ? static_cast<double>(s.totals.maps - base_->totals.maps) / dt : 0.0;
   std::snprintf(status_line_, sizeof(status_line_),
-                "%s: %.1f maps/s, %" PRIu64 " scans, %" PRIu64 " dropped, latency p99 %.0f ms; %s",
-                backend_.c_str(), map_rate, current_.scans,
-                current_.overflow + current_.no_pose + current_.malformed + current_.too_large,
-                latency_now_.quantileUs(0.99) / 1000.0, realtime.summary.c_str());
+                "%s %s: %.1f maps/s, %" PRIu64 " scans, %" PRIu64
+                " dropped, latency p99 %.0f ms; %s",
+                settings_.backend.c_str(), levelName(pipeline_level_), map_rate, s.totals.scans,
+                s.totals.overflow + s.totals.no_pose + s.totals.malformed + s.totals.too_large +
+                    s.totals.wrong_frame,
+                s.latency.quantileUs(0.99) / 1000.0, realtime.summary.c_str());
+}
+
+void DiagnosticsReporter::appendDropReasons(char* out, std::size_t size) const noexcept {
+  const Totals& c = ring_[head_].totals;
+  const Totals& b = base_->totals;
+  const char* sep = "";  // the caller wrote the lead-in
+  const auto reason = [&](std::uint64_t now, std::uint64_t before, const char* what) {
+    if (now > before) {
+      appendf(out, size, "%s%" PRIu64 " %s", sep, now - before, what);
+      sep = "; ";
+    }
+  };
+  if (c.wrong_frame > b.wrong_frame) {
+    const bool seen = stats_.wrong_frame_seen.load(std::memory_order_acquire);
+    const std::uint32_t sensor = stats_.wrong_frame_sensor;
+    if (seen && sensor < settings_.sensor_frames.size()) {
+      appendf(out, size, "%s%" PRIu64 " clouds in frame '%s', not sensors[%u].frame '%s'", sep,
+              c.wrong_frame - b.wrong_frame, stats_.wrong_frame, sensor,
+              settings_.sensor_frames[sensor].c_str());
+      sep = "; ";
+    } else {
+      reason(c.wrong_frame, b.wrong_frame, "clouds in a frame no sensor is configured for");
+    }
+  }
+  if (c.malformed > b.malformed) {
+    appendf(out, size, "%s%" PRIu64 " malformed clouds (", sep, c.malformed - b.malformed);
+    const char* inner = "";
+    for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
+      if (i != static_cast<std::size_t>(dds::CloudError::kTooManyPoints) &&
+          c.rejected_by[i] > b.rejected_by[i]) {
+        appendf(out, size, "%s%s %" PRIu64, inner, dds::toString(static_cast<dds::CloudError>(i)),
+                c.rejected_by[i] - b.rejected_by[i]);
+        inner = ", ";
+      }
+    }
+    appendf(out, size, ")");
+    sep = "; ";
+  }
+  reason(c.too_large, b.too_large, "clouds larger than max_points");
+  reason(c.no_pose, b.no_pose, "scans without a pose in time");
+  reason(c.overflow, b.overflow, "scans dropped, oldest first (input faster than the integrator)");
+  reason(c.bad_time, b.bad_time, "points with a per-point time out of range");
+  reason(c.scans_shed, b.scans_shed,
+         "scans shed (no map within queues.max_latency_s could hold them)");
+  reason(c.points_shed, b.points_shed, "points shed by subsampling (latency bound)");
+  reason(c.poses_dropped, b.poses_dropped, "poses dropped (pose queue full)");
+}
+
+void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
+  const Sample& now = ring_[head_];
+  const Totals& c = now.totals;
+  const Totals& b = base_->totals;
+  other_publishers_ = other_map_publishers;
+  const std::int64_t last = stats_.last_scan_integrated_ns.load(std::memory_order_relaxed);
+  const std::int64_t since = now.ns - (last != 0 ? last : started_ns_);
+  seconds_since_scan_ = static_cast<double>(since) * 1e-9;
+  stale_ = since > static_cast<std::int64_t>(std::llround(settings_.stale_after_s * 1e9));
+  const bool failing = c.integrate_errors > b.integrate_errors;
+  const bool dropping = c.overflow > b.overflow || c.no_pose > b.no_pose ||
+                        c.malformed > b.malformed || c.too_large > b.too_large ||
+                        c.wrong_frame > b.wrong_frame || c.bad_time > b.bad_time ||
+                        c.poses_dropped > b.poses_dropped || c.scans_shed > b.scans_shed ||
+                        c.points_shed > b.points_shed;
+
+  pipeline_message_[0] = '\0';
+  char* m = pipeline_message_;
+  const std::size_t size = sizeof(pipeline_message_);
+  if (other_publishers_ > 0) {
+    appendf(m, size, "%u other publisher%s of %s on this domain (another raymapd?)",
+            other_publishers_, other_publishers_ == 1 ? "" : "s", settings_.grid_map_topic.c_str());
+  }
+  if (stale_) {
+    appendf(m, size, "%sno scan integrated %s %.1f s", m[0] == '\0' ? "" : "; ",
+            last != 0 ? "for" : "since start,", seconds_since_scan_);
+    const double dt = static_cast<double>(now.ns - base_->ns) * 1e-9;
+    if (c.clouds == b.clouds) {
+      appendf(m, size, " (no point cloud arrives%s)", c.clouds == 0 ? " at all" : " any more");
+    } else if (dt > 0.0) {
+      appendf(m, size, " (%.1f clouds/s arrive)", static_cast<double>(c.clouds - b.clouds) / dt);
+    }
+  }
+  if (failing) {
+    appendf(m, size, "%s%" PRIu64 " backend failures", m[0] == '\0' ? "" : "; ",
+            c.integrate_errors - b.integrate_errors);
+  }
+  const bool error = other_publishers_ > 0 || stale_ || failing;
+  if (dropping) {
+    appendf(m, size, "%sdropping input: ", m[0] == '\0' ? "" : "; ");
+    appendDropReasons(m, size);
+  }
+  pipeline_level_ = error      ? dds::kDiagnosticError
+                    : dropping ? dds::kDiagnosticWarn
+                               : dds::kDiagnosticOk;
+  if (m[0] == '\0') {
+    appendf(m, size, "ok");
+  }
+
+  heightmap_message_[0] = '\0';
+  if (c.withheld > b.withheld || stale_) {
+    heightmap_level_ = dds::kDiagnosticError;
+    appendf(heightmap_message_, sizeof(heightmap_message_),
+            "withheld: the map is stale (no scan integrated for %.1f s)", seconds_since_scan_);
+  } else if (c.late > b.late || c.hm_errors > b.hm_errors) {
+    heightmap_level_ = dds::kDiagnosticWarn;
+    appendf(heightmap_message_, sizeof(heightmap_message_),
+            "%" PRIu64 " late and %" PRIu64 " failed cycles", c.late - b.late,
+            c.hm_errors - b.hm_errors);
+  } else {
+    heightmap_level_ = dds::kDiagnosticOk;
+    appendf(heightmap_message_, sizeof(heightmap_message_), "ok");
+  }
 }
 
 const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
-  const double dt = previous_ns_ == 0 ? 0.0 : static_cast<double>(now_ns_ - previous_ns_) * 1e-9;
-  const auto rate = [&](std::uint64_t now, std::uint64_t before) {
-    return dt > 0.0 ? static_cast<double>(now - before) / dt : 0.0;
+  const Sample& now = ring_[head_];
+  const Sample& base = *base_;
+  const double dt = static_cast<double>(now.ns - base.ns) * 1e-9;
+  const auto rate = [&](std::uint64_t a, std::uint64_t b) {
+    return dt > 0.0 ? static_cast<double>(a - b) / dt : 0.0;
   };
-  const Totals& c = current_;
-  const Totals& p = previous_;
+  const Totals& c = now.totals;
+  const Totals& p = base.totals;
+  const char* hw = settings_.hardware_id.c_str();
   message_.begin(stamp_ns);
 
   // Pipeline: input, queues, drops, integration.
-  const bool dropping = c.overflow > p.overflow || c.no_pose > p.no_pose ||
-                        c.malformed > p.malformed || c.too_large > p.too_large ||
-                        c.poses_dropped > p.poses_dropped;
-  const bool failing = c.integrate_errors > p.integrate_errors;
-  const int s = message_.addStatus(failing    ? dds::kDiagnosticError
-                                   : dropping ? dds::kDiagnosticWarn
-                                              : dds::kDiagnosticOk,
-                                   "raymapd: pipeline",
-                                   failing    ? "backend errors"
-                                   : dropping ? "dropping input"
-                                              : "ok",
-                                   "raymapd");
-  message_.addValue(s, "backend", "%s", backend_.c_str());
-  message_.addValue(s, "device", "%s", device_.empty() ? "host CPU" : device_.c_str());
+  const int s = message_.addStatus(pipeline_level_, pipeline_name_.c_str(), pipeline_message_, hw);
+  message_.addValue(s, "backend", "%s", settings_.backend.c_str());
+  message_.addValue(s, "device", "%s",
+                    settings_.device.empty() ? "host CPU" : settings_.device.c_str());
   message_.addValue(s, "clouds_received", "%" PRIu64, c.clouds);
   message_.addValue(s, "cloud_rate_hz", "%.2f", rate(c.clouds, p.clouds));
   message_.addValue(s, "clouds_dropped_overflow", "%" PRIu64, c.overflow);
   message_.addValue(s, "clouds_malformed", "%" PRIu64, c.malformed);
   message_.addValue(s, "clouds_too_large", "%" PRIu64, c.too_large);
-  message_.addValue(s, "clouds_wrong_frame", "%" PRIu64, c.unknown_frame);
-  const std::uint32_t last_error = stats_.last_cloud_error.load(std::memory_order_relaxed);
-  message_.addValue(
-      s, "last_cloud_error", "%s",
-      last_error == 0 ? "none" : dds::toString(static_cast<dds::CloudError>(last_error - 1)));
+  message_.addValue(s, "clouds_wrong_frame", "%" PRIu64, c.wrong_frame);
+  for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
+    if (i == static_cast<std::size_t>(dds::CloudError::kTooManyPoints)) {
+      continue;  // clouds_too_large
+    }
+    char key[64];
+    std::snprintf(key, sizeof(key), "clouds_malformed_%s",
+                  dds::toString(static_cast<dds::CloudError>(i)));
+    message_.addValue(s, key, "%" PRIu64, c.rejected_by[i]);
+  }
   message_.addValue(s, "scans_integrated", "%" PRIu64, c.scans);
+  message_.addValue(s, "scan_rate_hz", "%.2f", rate(c.scans, p.scans));
+  message_.addValue(s, "seconds_since_last_scan", "%.2f", seconds_since_scan_);
   message_.addValue(s, "scans_dropped_no_pose", "%" PRIu64, c.no_pose);
   message_.addValue(s, "rays_integrated", "%" PRIu64, c.rays);
   message_.addValue(s, "ray_rate_per_s", "%.0f", rate(c.rays, p.rays));
   message_.addValue(s, "rays_rejected", "%" PRIu64, c.rejected);
   message_.addValue(s, "points_no_return", "%" PRIu64, c.no_return);
+  message_.addValue(s, "points_bad_time", "%" PRIu64, c.bad_time);
+  message_.addValue(s, "scans_shed", "%" PRIu64, c.scans_shed);
+  message_.addValue(s, "points_shed", "%" PRIu64, c.points_shed);
   message_.addValue(s, "integrate_errors", "%" PRIu64, c.integrate_errors);
   message_.addValue(s, "scan_queue_depth", "%u", mailbox_.waiting());
   message_.addValue(s, "scan_queue_capacity", "%u", mailbox_.capacity() - 1);
@@ -113,38 +288,50 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "poses_received", "%" PRIu64, c.poses);
   message_.addValue(s, "poses_malformed", "%" PRIu64, c.poses_malformed);
   message_.addValue(s, "poses_dropped", "%" PRIu64, c.poses_dropped);
+  message_.addValue(s, "other_map_publishers", "%u", other_publishers_);
+  message_.addValue(s, "rate_window_s", "%.2f", dt);
 
-  // Height map: rate, timing, latency.
-  const pipeline::DurationHistogram::Snapshot latency = latency_now_.since(latency_prev_);
-  const pipeline::DurationHistogram::Snapshot period = period_now_.since(period_prev_);
-  const pipeline::DurationHistogram::Snapshot generate = generate_now_.since(generate_prev_);
-  const bool late = c.late > p.late || c.hm_errors > p.hm_errors;
+  // Height map: rate, timing, latency (percentiles over the same window).
+  const pipeline::DurationHistogram::Snapshot latency = now.latency.since(base.latency);
+  const pipeline::DurationHistogram::Snapshot period = now.period.since(base.period);
+  const pipeline::DurationHistogram::Snapshot generate = now.generate.since(base.generate);
   const int h =
-      message_.addStatus(late ? dds::kDiagnosticWarn : dds::kDiagnosticOk, "raymapd: height map",
-                         late ? "late or failed cycles" : "ok", "raymapd");
+      message_.addStatus(heightmap_level_, heightmap_name_.c_str(), heightmap_message_, hw);
   message_.addValue(h, "maps_published", "%" PRIu64, c.maps);
+  message_.addValue(h, "maps_withheld_stale", "%" PRIu64, c.withheld);
   message_.addValue(h, "publish_rate_hz", "%.3f", rate(c.maps, p.maps));
-  message_.addValue(h, "nominal_rate_hz", "%g", publish_rate_hz_);
+  message_.addValue(h, "nominal_rate_hz", "%g", settings_.publish_rate_hz);
   message_.addValue(h, "cycles_late", "%" PRIu64, c.late);
   message_.addValue(h, "heightmap_errors", "%" PRIu64, c.hm_errors);
-  // Interval values (since the previous report) and totals since start.
+  // Window values and totals since start.
   message_.addValue(h, "period_error_p50_ms", "%.3f", period.quantileUs(0.5) / 1000.0);
   message_.addValue(h, "period_error_p99_ms", "%.3f", period.quantileUs(0.99) / 1000.0);
   message_.addValue(h, "period_error_max_ms_total", "%.3f",
-                    static_cast<double>(period_now_.max_us) / 1000.0);
+                    static_cast<double>(now.period.max_us) / 1000.0);
   message_.addValue(h, "latency_p50_ms", "%.1f", latency.quantileUs(0.5) / 1000.0);
   message_.addValue(h, "latency_p99_ms", "%.1f", latency.quantileUs(0.99) / 1000.0);
-  message_.addValue(h, "latency_p50_ms_total", "%.1f", latency_now_.quantileUs(0.5) / 1000.0);
-  message_.addValue(h, "latency_p99_ms_total", "%.1f", latency_now_.quantileUs(0.99) / 1000.0);
+  message_.addValue(h, "latency_p50_ms_total", "%.1f", now.latency.quantileUs(0.5) / 1000.0);
+  message_.addValue(h, "latency_p99_ms_total", "%.1f", now.latency.quantileUs(0.99) / 1000.0);
   message_.addValue(h, "latency_max_ms_total", "%.1f",
-                    static_cast<double>(latency_now_.max_us) / 1000.0);
+                    static_cast<double>(now.latency.max_us) / 1000.0);
   message_.addValue(h, "generate_p99_ms", "%.2f", generate.quantileUs(0.99) / 1000.0);
+  const pipeline::DurationHistogram::Snapshot hold = now.hold.since(base.hold);
+  const pipeline::DurationHistogram::Snapshot wait = now.wait.since(base.wait);
+  message_.addValue(h, "map_lock_hold_p99_ms", "%.2f", hold.quantileUs(0.99) / 1000.0);
+  message_.addValue(h, "map_lock_hold_max_ms_total", "%.2f",
+                    static_cast<double>(now.hold.max_us) / 1000.0);
+  message_.addValue(h, "map_lock_wait_p99_ms", "%.2f", wait.quantileUs(0.99) / 1000.0);
+  message_.addValue(h, "map_lock_wait_max_ms_total", "%.2f",
+                    static_cast<double>(now.wait.max_us) / 1000.0);
+  message_.addValue(
+      h, "publish_lead_ms", "%.1f",
+      static_cast<double>(stats_.publish_lead_us.load(std::memory_order_relaxed)) / 1000.0);
 
   // Real time.
   const bool degraded = realtime_ != nullptr && realtime_->degraded;
-  const int r =
-      message_.addStatus(degraded ? dds::kDiagnosticWarn : dds::kDiagnosticOk, "raymapd: real time",
-                         degraded ? "real-time settings refused" : "ok", "raymapd");
+  const int r = message_.addStatus(degraded ? dds::kDiagnosticWarn : dds::kDiagnosticOk,
+                                   realtime_name_.c_str(),
+                                   degraded ? "real-time settings refused" : "ok", hw);
   message_.addValue(r, "scheduling", "%s",
                     realtime_ != nullptr ? realtime_->summary.c_str() : "unknown");
   message_.addValue(r, "memory_locked", "%s",
@@ -153,29 +340,13 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
 }
 
 void DiagnosticsReporter::logChanges() noexcept {
-  const Totals& c = current_;
-  const Totals& p = previous_;
-  if (c.overflow > p.overflow) {
-    logLine(LogLevel::kWarning,
-            "dropped %" PRIu64 " scans (oldest first): input faster than the integrator",
-            c.overflow - p.overflow);
+  if (pipeline_level_ != dds::kDiagnosticOk) {
+    logLine(pipeline_level_ == dds::kDiagnosticError ? LogLevel::kError : LogLevel::kWarning,
+            "%s %s: %s", pipeline_name_.c_str(), levelName(pipeline_level_), pipeline_message_);
   }
-  if (c.malformed > p.malformed || c.too_large > p.too_large) {
-    const std::uint32_t e = stats_.last_cloud_error.load(std::memory_order_relaxed);
-    logLine(LogLevel::kWarning, "rejected %" PRIu64 " point clouds (last: %s)",
-            c.malformed - p.malformed + c.too_large - p.too_large,
-            e == 0 ? "?" : dds::toString(static_cast<dds::CloudError>(e - 1)));
-  }
-  if (c.no_pose > p.no_pose) {
-    logLine(LogLevel::kWarning, "dropped %" PRIu64 " scans: no pose covered them in time",
-            c.no_pose - p.no_pose);
-  }
-  if (c.late > p.late) {
-    logLine(LogLevel::kWarning, "%" PRIu64 " height-map cycles late", c.late - p.late);
-  }
-  if (c.hm_errors > p.hm_errors || c.integrate_errors > p.integrate_errors) {
-    logLine(LogLevel::kError, "%" PRIu64 " height-map and %" PRIu64 " integration failures",
-            c.hm_errors - p.hm_errors, c.integrate_errors - p.integrate_errors);
+  if (heightmap_level_ != dds::kDiagnosticOk && !stale_) {  // stale: said once, above
+    logLine(heightmap_level_ == dds::kDiagnosticError ? LogLevel::kError : LogLevel::kWarning,
+            "%s %s: %s", heightmap_name_.c_str(), levelName(heightmap_level_), heightmap_message_);
   }
 }
 

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Turns the pipeline's counters and histograms into a diagnostic_msgs/DiagnosticArray, a systemd
-// status line and log lines about what changed, once per diagnostics period.
+// status line and a log line per report while anything is wrong, once per diagnostics period.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "src/dds/diagnostics_message.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
@@ -15,49 +17,97 @@ namespace raymap::service {
 
 struct RealtimeReport;
 
-/// @brief The diagnostics thread's state: the previous snapshot (rates and interval percentiles
-/// are differences between two snapshots) and the preallocated message.
+/// @brief What the reporter is told once, at start-up.
+struct ReporterSettings {
+  std::string name = "raymapd";  ///< status names are "<name>: pipeline", ...
+  std::string hardware_id;       ///< diagnostic_msgs hardware_id of every status
+  std::string backend;
+  std::string device;
+  double publish_rate_hz = 5.0;
+  double report_rate_hz = 1.0;
+  double stale_after_s = 1.0;              ///< no scan integrated for this long: ERROR
+  std::string grid_map_topic;              ///< named when another publisher of it is found
+  std::vector<std::string> sensor_frames;  ///< sensors[].frame ("" = any), for the reasons
+};
+
+/// @brief The diagnostics thread's state: a ring of snapshots (rates, drops and percentiles are
+/// differences over a window of at least one second, whatever the report rate) and the
+/// preallocated message.
+///
+/// Levels (docs/raymapd.md, Diagnostics):
+/// - pipeline ERROR: no scan integrated for stale_after_s while running (also before the first
+///   one, once stale_after_s has passed since start), another publisher of the height-map topic
+///   on the domain, or backend failures; WARN: any input dropped within the window (wrong frame,
+///   malformed, too large, no pose, overflow, points with bad times); the message names the
+///   reasons.
+/// - height map ERROR while maps are withheld (stale), WARN for late or failed cycles.
+/// - real time WARN when requested settings were refused.
 /// Thread-safety: one thread (diagnostics). Reads the counters other threads write.
 /// @rt not a real-time thread; still allocates nothing after construction (fixed buffers).
 class DiagnosticsReporter {
  public:
+  /// @param started_ns when the service started (monotonic): the staleness rule's origin.
   DiagnosticsReporter(const pipeline::PipelineStats& stats, const pipeline::ScanMailbox& mailbox,
-                      const pipeline::PoseQueue& poses, std::string backend, std::string device,
-                      double publish_rate_hz);
+                      const pipeline::PoseQueue& poses, ReporterSettings settings,
+                      std::int64_t started_ns);
 
-  /// @brief Takes a snapshot at `now_ns` (monotonic) and fills the message and status line.
-  void update(std::int64_t now_ns, const RealtimeReport& realtime) noexcept;
+  /// @brief Takes a snapshot at `now_ns` (monotonic) and decides the levels and messages.
+  /// @param other_map_publishers writers of the height-map topic in other participants
+  void update(std::int64_t now_ns, const RealtimeReport& realtime,
+              std::uint32_t other_map_publishers) noexcept;
   /// @brief The DiagnosticArray of the last update(), stamped `stamp_ns` (wall clock).
   const void* message(std::int64_t stamp_ns) noexcept;
   /// @brief One line for `systemctl status` (STATUS=).
   const char* statusLine() const noexcept { return status_line_; }
-  /// @brief Logs new drops, malformed input and late cycles since the previous update.
+  /// @brief Logs one line per status that is not OK, naming the reason.
   void logChanges() noexcept;
+  /// @brief The pipeline status's level after the last update (dds::kDiagnosticOk, ...).
+  std::uint8_t pipelineLevel() const noexcept { return pipeline_level_; }
 
  private:
   struct Totals {
-    std::uint64_t clouds = 0, malformed = 0, too_large = 0, unknown_frame = 0, overflow = 0;
-    std::uint64_t scans = 0, no_pose = 0, rays = 0, rejected = 0, no_return = 0;
-    std::uint64_t maps = 0, late = 0, hm_errors = 0, integrate_errors = 0;
+    std::uint64_t clouds = 0, malformed = 0, too_large = 0, wrong_frame = 0, overflow = 0;
+    std::uint64_t scans = 0, no_pose = 0, rays = 0, rejected = 0, no_return = 0, bad_time = 0;
+    std::uint64_t scans_shed = 0, points_shed = 0;
+    std::uint64_t maps = 0, withheld = 0, late = 0, hm_errors = 0, integrate_errors = 0;
     std::uint64_t poses = 0, poses_malformed = 0, poses_dropped = 0;
+    std::array<std::uint64_t, dds::kCloudErrorCount> rejected_by{};
+  };
+  /// One report's snapshot.
+  struct Sample {
+    std::int64_t ns = 0;
+    Totals totals;
+    pipeline::DurationHistogram::Snapshot latency, period, generate, hold, wait;
   };
   Totals read() const noexcept;
+  /// The newest sample at least one window older than the current one (else the oldest).
+  const Sample& windowBase() const noexcept;
+  void decide(std::uint32_t other_map_publishers) noexcept;
+  /// Appends the drop reasons within the window to `out` ("; "-separated, after the caller's
+  /// lead-in).
+  void appendDropReasons(char* out, std::size_t size) const noexcept;
 
   const pipeline::PipelineStats& stats_;
   const pipeline::ScanMailbox& mailbox_;
   const pipeline::PoseQueue& poses_;
-  std::string backend_;
-  std::string device_;
-  double publish_rate_hz_;
+  ReporterSettings settings_;
+  std::string pipeline_name_, heightmap_name_, realtime_name_;
+  std::int64_t started_ns_;
+  std::int64_t window_ns_;
   dds::DiagnosticsMessage message_;
-  pipeline::DurationHistogram::Snapshot latency_prev_, period_prev_, generate_prev_;
-  pipeline::DurationHistogram::Snapshot latency_now_, period_now_, generate_now_;
-  Totals previous_{};
-  Totals current_{};
-  std::int64_t previous_ns_ = 0;
-  std::int64_t now_ns_ = 0;
-  char status_line_[256] = {};
+  std::vector<Sample> ring_;  // fixed size; ring_[head_] is the newest
+  std::size_t head_ = 0;
+  std::size_t filled_ = 0;
+  const Sample* base_ = nullptr;  // windowBase() of the last update
   const RealtimeReport* realtime_ = nullptr;
+  std::uint32_t other_publishers_ = 0;
+  double seconds_since_scan_ = 0.0;
+  bool stale_ = false;
+  std::uint8_t pipeline_level_ = 0;
+  std::uint8_t heightmap_level_ = 0;
+  char pipeline_message_[512] = {};
+  char heightmap_message_[128] = {};
+  char status_line_[256] = {};
 };
 
 }  // namespace raymap::service

@@ -2,6 +2,8 @@
 // Service: start-up wiring and the four thread loops (see the header's design note).
 #include "src/service/service.hpp"
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cinttypes>
@@ -12,6 +14,8 @@
 #include <limits>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 #include "platform/allocation_scope.hpp"
 #include "platform/clock.hpp"
@@ -81,6 +85,9 @@ struct Service::Impl {
   std::optional<dds::Writer> grid_map_writer;
   std::optional<dds::Writer> diagnostics_writer;
   std::optional<dds::Writer> voxels_writer;
+  /// Matches writers of our height-map topic in other participants: another raymapd (or any
+  /// other publisher) there is an ERROR (health).
+  std::optional<dds::RawReader> map_publisher_watch;
   std::unique_ptr<dds::GridMapMessage> grid_map_message;
   std::unique_ptr<dds::PointCloudMessage> voxels_message;
   std::vector<float> voxels_xyz;
@@ -99,6 +106,10 @@ struct Service::Impl {
   std::atomic<int> rt_refusals{0};
   std::atomic<int> threads_set_up{0};  // threads past their scheduling set-up (start() waits)
   std::atomic<std::int64_t> last_publish_ns{0};
+  /// The pipeline status's level at the last report (diagnostics thread writes; the publisher
+  /// pings the watchdog only while it is below ERROR).
+  std::atomic<std::uint8_t> pipeline_level{0};
+  std::int64_t started_ns = 0;
 
   void applyThreadSettings(const char* name, const ThreadConfig& t);
   void ingestLoop();
@@ -178,12 +189,17 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   settings.pose_wait_ns = seconds(config.pose.max_wait_s);
   settings.pose_hold_ns = seconds(config.pose.hold_s);
   settings.pose_history = config.pose.history;
+  settings.max_lock_hold_ns = seconds(config.queues.max_lock_hold_s);
+  settings.max_latency_ns = seconds(config.queues.max_latency_s);
+  settings.publish_period_ns = seconds(1.0 / config.heightmap.rate_hz);
+  settings.max_stride = config.queues.shed_subsample ? config.queues.max_subsample : 1u;
   std::vector<pipeline::SensorSettings> sensors;
   for (const SensorConfig& s : config.sensors) {
     pipeline::SensorSettings ss;
     ss.extrinsic = s.extrinsic;
     ss.filter.min_range_m = s.min_range_m;
     ss.filter.max_range_m = s.max_range_m;
+    ss.max_time_offset_s = static_cast<float>(s.max_time_offset_s);
     sensors.push_back(ss);
     dds::CloudDecodeOptions decode;
     const std::string& field = impl->config.sensors[sensors.size() - 1].time_field;
@@ -293,9 +309,38 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     impl->voxels_message = std::make_unique<dds::PointCloudMessage>(config.dds.voxels_max_points);
     impl->voxels_xyz.resize(std::size_t{config.dds.voxels_max_points} * 3);
   }
-  impl->reporter = std::make_unique<DiagnosticsReporter>(
-      impl->stats, *impl->mailbox, *impl->poses, impl->backend.backend->name(),
-      impl->backend.backend->deviceName(), config.heightmap.rate_hz);
+  {
+    auto watch =
+        dds::RawReader::create(pp, config.dds.grid_map_topic.c_str(),
+                               dds::GridMapMessage::descriptor(), dds::Reliability::kBestEffort, 1,
+                               dds::Durability::kVolatile, dds::Origin::kOtherParticipants);
+    if (!watch) {
+      return fail(watch.error().code, file + ": dds.grid_map_topic: " + watch.error().message);
+    }
+    impl->map_publisher_watch.emplace(std::move(watch).value());
+  }
+  ReporterSettings reporting;
+  reporting.name = config.name;
+  reporting.hardware_id = config.health.hardware_id;
+  if (reporting.hardware_id.empty()) {
+    char host[256] = {};
+    if (::gethostname(host, sizeof(host) - 1) != 0 || host[0] == '\0') {
+      std::snprintf(host, sizeof(host), "unknown-host");
+    }
+    reporting.hardware_id = std::string(host) + "/" + config.name;
+  }
+  reporting.backend = impl->backend.backend->name();
+  reporting.device = impl->backend.backend->deviceName();
+  reporting.publish_rate_hz = config.heightmap.rate_hz;
+  reporting.report_rate_hz = config.dds.diagnostics_rate_hz;
+  reporting.stale_after_s = config.health.stale_after_s;
+  reporting.grid_map_topic = config.dds.grid_map_topic;
+  for (const SensorConfig& sensor : config.sensors) {
+    reporting.sensor_frames.push_back(sensor.frame);
+  }
+  impl->started_ns = platform::monotonicNowNs();
+  impl->reporter = std::make_unique<DiagnosticsReporter>(impl->stats, *impl->mailbox, *impl->poses,
+                                                         std::move(reporting), impl->started_ns);
   return std::unique_ptr<Service>(new Service(std::move(impl)));
 }
 
@@ -366,8 +411,7 @@ void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr
     } else {
       stats.clouds_malformed.add();
     }
-    stats.last_cloud_error.store(static_cast<std::uint32_t>(decoded.error()) + 1,
-                                 std::memory_order_relaxed);
+    stats.clouds_rejected_by[static_cast<std::size_t>(decoded.error())].add();
     return;
   }
   const SensorConfig& s = config.sensors[sensor];
@@ -375,6 +419,12 @@ void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr
   if (!s.frame.empty() && std::strcmp(decoded.value().frame_id, s.frame.c_str()) != 0) {
     mailbox->abandon(slot);  // its extrinsic would be wrong
     stats.clouds_unknown_frame.add();
+    if (!stats.wrong_frame_seen.load(std::memory_order_relaxed)) {
+      // The first wrong frame, for the diagnostics' reason (written once, then published).
+      std::memcpy(stats.wrong_frame, decoded.value().frame_id, sizeof(stats.wrong_frame));
+      stats.wrong_frame_sensor = sensor;
+      stats.wrong_frame_seen.store(true, std::memory_order_release);
+    }
     return;
   }
   if (learned[0] == '\0') {
@@ -544,7 +594,15 @@ void Service::Impl::publishVoxels(std::int64_t stamp_ns) {
 void Service::Impl::publisherLoop() {
   applyThreadSettings("raymap-publish", config.realtime.publisher);
   const std::int64_t period = seconds(1.0 / config.heightmap.rate_hz);
-  const std::int64_t lead = seconds(config.heightmap.publish_lead_s);
+  // The lead adapts to what generation has been taking (waiting for the map included), so the
+  // publish instant holds when the integrator is saturated or the machine busy.
+  const std::int64_t lead_min = seconds(config.heightmap.publish_lead_s);
+  const std::int64_t lead_max = seconds(config.heightmap.publish_lead_max_s);
+  std::int64_t lead = lead_min;
+  std::array<std::int64_t, 8> recent_generate{};  // ns, the last 8 cycles
+  std::size_t recent_next = 0;
+  stats.publish_lead_us.store(lead / 1000, std::memory_order_relaxed);
+  const std::int64_t stale_after = seconds(config.health.stale_after_s);
   const std::int64_t voxels_every =
       std::max<std::int64_t>(1, std::llround(config.heightmap.rate_hz / config.dds.voxels_rate_hz));
   // Publish instants are t0 + k * period on the monotonic clock: absolute deadlines do not
@@ -559,18 +617,38 @@ void Service::Impl::publisherLoop() {
     if (!first_cycle) {
       steady.emplace();
     }
+    stats.next_publish_ns.store(next, std::memory_order_relaxed);  // the latency bound's timetable
     platform::sleepUntilMonotonicNs(next - lead);
     if (stopping.load(std::memory_order_acquire)) {
       break;
     }
+    // A stale map (no scan integrated for health.stale_after_s, or none yet) is withheld: a
+    // planner must not take the last map for the present, and a GridMap's stamp never pretends
+    // to be fresh. Silence on the topic is what its timeouts detect.
+    const std::int64_t last_scan = stats.last_scan_integrated_ns.load(std::memory_order_relaxed);
+    if (last_scan == 0 || platform::monotonicNowNs() - last_scan > stale_after) {
+      stats.maps_withheld.add();
+      previous_publish = 0;  // a gap is not a period
+      next += period;
+      const std::int64_t now = platform::monotonicNowNs();
+      if (now > next) {
+        next += ((now - next) / period + 1) * period;
+      }
+      continue;
+    }
+    const std::int64_t generate_started = platform::monotonicNowNs();
     auto generated = cycle->generate();
+    recent_generate[recent_next++ % recent_generate.size()] =
+        platform::monotonicNowNs() - generate_started;
+    const std::int64_t worst = *std::max_element(recent_generate.begin(), recent_generate.end());
+    lead = std::clamp(worst + worst / 2 + 2000000, lead_min, lead_max);
+    stats.publish_lead_us.store(lead / 1000, std::memory_order_relaxed);
     bool healthy = true;
     if (generated) {
       first_cycle = false;
-      grid_map_message->fill(
-          cycle->heightMap(),
-          cycle->dataStampNs() != 0 ? cycle->dataStampNs() : platform::realtimeNowNs(),
-          config.pose.world_frame.c_str());
+      // The stamp is the newest scan's (the data's own time, never the wall clock).
+      grid_map_message->fill(cycle->heightMap(), cycle->dataStampNs(),
+                             config.pose.world_frame.c_str());
     } else if (generated.error() != pipeline::CycleError::kNoPose) {
       stats.heightmap_errors.add();
       healthy = false;
@@ -605,8 +683,9 @@ void Service::Impl::publisherLoop() {
     } else {
       previous_publish = 0;  // a gap is not a period
     }
-    // The watchdog hears from the service only after a cycle that did its job on time.
-    if (healthy) {
+    // The watchdog hears from the service only after a cycle that did its job on time, while the
+    // pipeline is not in ERROR (health rules: docs/raymapd.md).
+    if (healthy && pipeline_level.load(std::memory_order_relaxed) < dds::kDiagnosticError) {
       notifier.watchdog();
     }
     next += period;
@@ -633,7 +712,8 @@ void Service::Impl::diagnosticsLoop() {
     }
     platform::RealtimeScope steady;
     const std::int64_t now = platform::monotonicNowNs();
-    reporter->update(now, realtime);
+    reporter->update(now, realtime, map_publisher_watch->matchedWriters());
+    pipeline_level.store(reporter->pipelineLevel(), std::memory_order_relaxed);
     const void* sample = reporter->message(platform::realtimeNowNs());
     {
       platform::ForeignScope dds;

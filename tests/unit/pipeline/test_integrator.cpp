@@ -376,6 +376,67 @@ TEST(Integrator, NoReturnPointsAreCountedAndNotIntegrated) {
   EXPECT_EQ(rig->map.summarise().voxels_occupied, 3u);
 }
 
+TEST(Integrator, APointWithACorruptTimeCostsThatPointNotTheScan) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->pushPose(kStamp + 100 * kMs, makePose({0.0, 0.0, 0.0}));
+  // An Ouster-like t of 0xFFFFFFFF ns (4.29 s after the stamp): no pose will ever cover it.
+  rig->publishScan(kStamp,
+                   {scanPoint(kWall, 0.0f), scanPoint({3.05, 1.05, 0.05}, 4.294967295f),
+                    scanPoint({3.05, -1.05, 0.05}, 0.05f), scanPoint({3.05, 2.05, 0.05}, kNaN)});
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 0u);
+  EXPECT_EQ(rig->stats.points_bad_time.get(), 2u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 2u);
+  EXPECT_EQ(rig->stateAt(kWall), VoxelState::kOccupied);
+  EXPECT_NE(rig->stateAt({3.05, 1.05, 0.05}), VoxelState::kOccupied);
+}
+
+/// A scan of `n` points at the wall, all at the header stamp.
+std::vector<dds::ScanPoint> wallScan(std::size_t n) {
+  return std::vector<dds::ScanPoint>(n, scanPoint(kWall));
+}
+
+TEST(Integrator, LatencyBoundSubsamplesAScanThatWouldMissTheLastMapWithinIt) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  // The scan arrived 100 ms ago; the bound (250 ms) allows the map published 0.5 ms from now
+  // (no lead), and the integrator starts out assuming 1 us a ray: 1,000 rays need 1 ms, so every
+  // second point fits.
+  rig->stats.next_publish_ns.store(kNow + kMs / 2);
+  rig->stats.publish_lead_us.store(0);
+  rig->publishScan(kStamp, wallScan(1000), 0, kNow - 100 * kMs);
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_shed.get(), 0u);
+  EXPECT_EQ(rig->stats.points_shed.get(), 500u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 500u);
+}
+
+TEST(Integrator, LatencyBoundDropsAScanNoMapWithinItCanHold) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  // Arrived 300 ms ago: even the next map, 0.5 ms away, is beyond 250 ms.
+  rig->stats.next_publish_ns.store(kNow + kMs / 2);
+  rig->publishScan(kStamp, wallScan(10), 0, kNow - 300 * kMs);
+  // A later scan that makes it is still integrated.
+  rig->publishScan(kStamp, wallScan(10), 0, kNow);
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.scans_shed.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 10u);
+}
+
 TEST(Integrator, RaysShorterThanTheMinimumRangeAreRejected) {
   auto rig = std::make_unique<Rig>();  // min range 0.2 m
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));

@@ -1,0 +1,125 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Start-up checks of raymapd (see the header).
+#include "src/service/startup_checks.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include <unistd.h>
+
+#include "src/dds/point_cloud.hpp"
+#include "src/map/ray.hpp"
+#include "src/pipeline/pose_update.hpp"
+
+namespace raymap::service {
+namespace {
+
+/// The slack between the pools and the limit: threads' stacks, DDS, libraries, the heap.
+constexpr double kHeadroomBytes = 256.0 * 1024 * 1024;
+
+std::string thousands(double n) {
+  char digits[64];
+  std::snprintf(digits, sizeof(digits), "%.0f", n);
+  std::string out;
+  const std::string s = digits;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (i > 0 && (s.size() - i) % 3 == 0) {
+      out += ',';
+    }
+    out += s[i];
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string formatBytes(double bytes) {
+  static const char* const kUnits[] = {"bytes", "KB", "MB", "GB", "TB", "PB", "EB"};
+  int unit = 0;
+  while (bytes >= 1000.0 && unit < 6) {
+    bytes /= 1000.0;
+    ++unit;
+  }
+  char text[64];
+  std::snprintf(text, sizeof(text), unit == 0 ? "%.0f %s" : "%.1f %s", bytes, kUnits[unit]);
+  return text;
+}
+
+std::vector<PoolEstimate> estimatePools(const DaemonConfig& config) {
+  std::vector<PoolEstimate> pools;
+  const MapConfig& map = config.map;
+  // The region pool: every window region's layers, plus the store's per-slot bookkeeping.
+  const double regions =
+      static_cast<double>(map.window_regions.x) * map.window_regions.y * map.window_regions.z;
+  const double region_bytes =
+      static_cast<double>(map.schema().bytesPerRegion(map.geometry.voxelsPerRegion()));
+  pools.push_back(
+      {"map.window",
+       "region pool (" + thousands(regions) + " regions of " + thousands(region_bytes) + " bytes)",
+       regions * (region_bytes + 64.0)});
+  std::uint32_t max_points = 1;
+  for (const SensorConfig& s : config.sensors) {
+    max_points = std::max(max_points, s.max_points);
+  }
+  const double slots = config.queues.scan_slots + 1.0;
+  pools.push_back(
+      {"queues.scan_slots x sensors[].max_points",
+       "decoded scan slots (" + thousands(slots) + " of " + thousands(max_points) + " points)",
+       slots * max_points * static_cast<double>(sizeof(dds::ScanPoint))});
+  // The integrator's batch: whole scans under per-scan semantics.
+  const double batch = map.semantics == Semantics::kPerScan
+                           ? std::max<double>(config.queues.batch_rays, max_points)
+                           : config.queues.batch_rays;
+  pools.push_back({"queues.batch_rays", "integrator batch (" + thousands(batch) + " rays)",
+                   batch * static_cast<double>(sizeof(Ray) + sizeof(PreparedRay))});
+  pools.push_back({"queues.pose_queue, pose.history", "pose queue and history",
+                   (static_cast<double>(config.queues.pose_queue) + config.pose.history) *
+                       static_cast<double>(sizeof(pipeline::PoseUpdate))});
+  if (!config.dds.voxels_topic.empty()) {
+    pools.push_back({"dds.voxels_max_points", "occupied-voxel buffers",
+                     static_cast<double>(config.dds.voxels_max_points) * 28.0});
+  }
+  std::sort(pools.begin(), pools.end(),
+            [](const PoolEstimate& a, const PoolEstimate& b) { return a.bytes > b.bytes; });
+  return pools;
+}
+
+Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::MemoryLimit& limit) {
+  const std::vector<PoolEstimate> pools = estimatePools(config);
+  double total = 0.0;
+  for (const PoolEstimate& p : pools) {
+    total += p.bytes;
+  }
+  const double available = static_cast<double>(limit.bytes);
+  if (total + kHeadroomBytes > available) {
+    const PoolEstimate& largest = pools.front();
+    return fail(ErrorCode::kCapacity,
+                config.path + ": " + largest.key + ": needs " + formatBytes(largest.bytes) +
+                    " for the " + largest.what + "; with the other pools raymapd would take " +
+                    formatBytes(total) + " (+ " + formatBytes(kHeadroomBytes) +
+                    " for threads and DDS), more than the " + formatBytes(available) +
+                    " this machine leaves it (" + limit.source +
+                    "): make it smaller, or free memory");
+  }
+  const std::string& save = config.save_map_on_exit;
+  if (!save.empty()) {
+    std::filesystem::path dir = std::filesystem::path(save).parent_path();
+    if (dir.empty()) {
+      dir = ".";
+    }
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec)) {
+      return fail(ErrorCode::kIo, config.path + ": map.save_on_exit: the folder " + dir.string() +
+                                      " does not exist (the map would be lost at shutdown)");
+    }
+    if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+      return fail(ErrorCode::kIo, config.path + ": map.save_on_exit: the folder " + dir.string() +
+                                      " is not writable by this user (the map would be lost "
+                                      "at shutdown)");
+    }
+  }
+  return {};
+}
+
+}  // namespace raymap::service

@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The latency bound's arithmetic: when a scan goes in whole, subsampled or not at all.
+#include <cstdint>
+
+#include <gtest/gtest.h>
+
+#include "src/pipeline/load_shedding.hpp"
+
+namespace raymap::pipeline {
+namespace {
+
+constexpr std::int64_t kMs = 1000000;
+constexpr std::int64_t kNow = 10000 * kMs;
+constexpr std::int64_t kBound = 250 * kMs;  // queues.max_latency_s
+constexpr std::uint32_t kMaxStride = 8;
+
+/// Maps every 200 ms; the next one at kNow + `next_in_ms`, generated 15 ms before each.
+PublishSchedule schedule(std::int64_t next_in_ms) {
+  PublishSchedule s;
+  s.next_publish_ns = kNow + next_in_ms * kMs;
+  s.period_ns = 200 * kMs;
+  s.lead_ns = 15 * kMs;
+  return s;
+}
+
+TEST(LoadShedding, AScanThatMakesTheNextMapGoesInWhole) {
+  // Arrived now; 50 ms of rays; the next map is generated in 85 ms and published in 100.
+  const ShedDecision d =
+      planScan(kNow, kNow, 0.0, 50000.0, 1000.0, schedule(100), kBound, kMaxStride);
+  EXPECT_FALSE(d.drop);
+  EXPECT_EQ(d.stride, 1u);
+}
+
+TEST(LoadShedding, AScanThatMissesTheNextMapButMakesTheOneAfterWithinTheBoundGoesInWhole) {
+  // Arrived now; 50 ms of rays but the next generation is in 5 ms: the map after, 220 ms from
+  // the arrival, is still within 250 ms.
+  const ShedDecision d =
+      planScan(kNow, kNow, 0.0, 50000.0, 1000.0, schedule(20), kBound, kMaxStride);
+  EXPECT_FALSE(d.drop);
+  EXPECT_EQ(d.stride, 1u);
+}
+
+TEST(LoadShedding, AScanDelayedPastItsOwnMapIsSubsampledToMakeIt) {
+  // Arrived 50 ms ago with 100 ms of rays: started at once it would have made the map published
+  // in 100 ms (generated in 85). Starting now it would wait for the one after (300 ms from now,
+  // 350 after the arrival, beyond 250): every second point makes the first (100 / 85 -> 2).
+  const ShedDecision d =
+      planScan(kNow, kNow - 50 * kMs, 0.0, 100000.0, 1000.0, schedule(100), kBound, kMaxStride);
+  EXPECT_FALSE(d.drop);
+  EXPECT_EQ(d.stride, 2u);
+}
+
+TEST(LoadShedding, AScanWhoseOwnMapIsBeyondTheBoundKeepsIt) {
+  // Arrived 100 ms ago with 200 ms of rays, nothing queued: even started at its arrival it would
+  // have waited for the map 400 ms after it. That is its own size, not a backlog: kept whole.
+  const ShedDecision d =
+      planScan(kNow, kNow - 100 * kMs, 0.0, 200000.0, 1000.0, schedule(100), kBound, kMaxStride);
+  EXPECT_FALSE(d.drop);
+  EXPECT_EQ(d.stride, 1u);
+}
+
+TEST(LoadShedding, RaysAlreadyQueuedAheadCountAgainstTheTimeLeft) {
+  // 85 ms before the generation; 60 ms of rays queued ahead leave 25 ms for a 50 ms scan.
+  const ShedDecision d =
+      planScan(kNow, kNow - 100 * kMs, 60000.0, 50000.0, 1000.0, schedule(100), kBound, kMaxStride);
+  EXPECT_FALSE(d.drop);
+  EXPECT_EQ(d.stride, 2u);
+}
+
+TEST(LoadShedding, AScanNoMapWithinTheBoundCanHoldIsDropped) {
+  // Arrived 300 ms ago: even the next map is beyond the bound.
+  ShedDecision d =
+      planScan(kNow, kNow - 300 * kMs, 0.0, 1000.0, 1000.0, schedule(100), kBound, kMaxStride);
+  EXPECT_TRUE(d.drop);
+  // Arrived 140 ms ago: the next map (240 ms after it) is the last within the bound, and the
+  // 90 ms of rays queued ahead outlast the 85 ms before its generation.
+  d = planScan(kNow, kNow - 140 * kMs, 90000.0, 1000.0, 1000.0, schedule(100), kBound, kMaxStride);
+  EXPECT_TRUE(d.drop);
+}
+
+TEST(LoadShedding, AScanThatWouldNeedMoreThanTheLargestStrideIsDropped) {
+  // Arrived now with 50 ms of rays behind 80 ms queued: 5 ms are left before the next map's
+  // generation and the one after is beyond 250 ms; a stride of 10 would be needed.
+  ShedDecision d =
+      planScan(kNow, kNow, 80000.0, 50000.0, 1000.0, schedule(100), kBound, kMaxStride);
+  EXPECT_TRUE(d.drop);
+  // With subsampling off (largest stride 1) a scan that does not fit whole is dropped.
+  d = planScan(kNow, kNow - 100 * kMs, 60000.0, 50000.0, 1000.0, schedule(100), kBound, 1);
+  EXPECT_TRUE(d.drop);
+}
+
+TEST(LoadShedding, WithoutABoundOrAScheduleNothingIsShed) {
+  EXPECT_FALSE(
+      planScan(kNow, kNow - 900 * kMs, 0.0, 1e9, 1000.0, schedule(100), 0, kMaxStride).drop);
+  EXPECT_FALSE(
+      planScan(kNow, kNow - 900 * kMs, 0.0, 1e9, 1000.0, PublishSchedule{}, kBound, kMaxStride)
+          .drop);
+}
+
+TEST(LoadShedding, APublishInstantAlreadyPastIsAdvancedByWholePeriods) {
+  // The publisher's "next" is 30 ms in the past (it is about to store the next one): the next
+  // generation is then 155 ms away; the scan arrived now, so it goes in whole.
+  const ShedDecision d =
+      planScan(kNow, kNow, 0.0, 50000.0, 1000.0, schedule(-30), kBound, kMaxStride);
+  EXPECT_FALSE(d.drop);
+  EXPECT_EQ(d.stride, 1u);
+}
+
+}  // namespace
+}  // namespace raymap::pipeline
