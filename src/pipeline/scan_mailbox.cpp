@@ -28,7 +28,7 @@ ScanMailbox::Entry& ScanMailbox::entryOf(ScanSlot* slot) noexcept {
   return entries_[0];
 }
 
-std::uint32_t ScanMailbox::oldestReady() const noexcept {
+std::uint32_t ScanMailbox::oldestReady(std::uint64_t* sequence_out) const noexcept {
   std::uint32_t best = slot_count_;
   std::uint64_t best_sequence = 0;
   for (std::uint32_t i = 0; i < slot_count_; ++i) {
@@ -40,6 +40,9 @@ std::uint32_t ScanMailbox::oldestReady() const noexcept {
       best = i;
       best_sequence = sequence;
     }
+  }
+  if (sequence_out != nullptr) {
+    *sequence_out = best_sequence;
   }
   return best;
 }
@@ -98,10 +101,12 @@ ScanSlot* ScanMailbox::take() noexcept {
       // Two races make the claimed scan not the oldest, and both are undone by handing it back
       // as ready and looking again: between the scan and the CAS the producer dropped this scan
       // and published a newer one in the same slot (ABA); or the scan passed a slot while the
-      // producer was still writing a scan older than this one.
-      const std::uint32_t older = oldestReady();
-      const bool still_oldest = older == slot_count_ ||
-                                entries_[older].sequence.load(std::memory_order_relaxed) > sequence;
+      // producer was still writing a scan older than this one. The second look compares the
+      // sequence it saw: re-reading the oldest slot's sequence afterwards could find it dropped
+      // and refilled with a newer scan while a third slot, older than ours, still waited.
+      std::uint64_t older_sequence = 0;
+      const std::uint32_t older = oldestReady(&older_sequence);
+      const bool still_oldest = older == slot_count_ || older_sequence > sequence;
       if (entry.sequence.load(std::memory_order_relaxed) == sequence && still_oldest) {
         return &entry.slot;
       }

@@ -91,8 +91,9 @@ class ScanMailbox {
     ScanSlot slot;
   };
   Entry& entryOf(ScanSlot* slot) noexcept;
-  /// Index of the ready entry with the lowest sequence, or slot_count_ when none is ready.
-  std::uint32_t oldestReady() const noexcept;
+  /// Index of the ready entry with the lowest sequence, or slot_count_ when none is ready; its
+  /// sequence as read during the scan goes to `*sequence` when given.
+  std::uint32_t oldestReady(std::uint64_t* sequence = nullptr) const noexcept;
 
   std::uint32_t slot_count_;
   std::uint32_t max_points_;
