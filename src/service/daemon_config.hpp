@@ -112,9 +112,9 @@ struct RealtimeConfig {
 
 /// @brief What the service calls unhealthy, and how it names itself in diagnostics.
 struct HealthConfig {
-  /// No scan integrated for this long (seconds) while running: the pipeline status is ERROR,
-  /// no GridMap is published (a planner must not take the last one for the present) and the
-  /// systemd watchdog is no longer pinged.
+  /// No scan integrated for this long (seconds) while running (or since start): the pipeline
+  /// status is ERROR and no GridMap is published (a planner must not take the last one for the
+  /// present). The systemd watchdog keeps being pinged: a restart cannot make the input come.
   double stale_after_s = 1.0;
   /// diagnostic_msgs hardware_id; empty: "<host name>/<name>", so that two services on one
   /// domain are told apart.

@@ -183,6 +183,7 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   seconds_since_scan_ = static_cast<double>(since) * 1e-9;
   stale_ = since > static_cast<std::int64_t>(std::llround(settings_.stale_after_s * 1e9));
   const bool failing = c.integrate_errors > b.integrate_errors;
+  backend_failing_ = failing;
   const bool dropping = c.overflow > b.overflow || c.no_pose > b.no_pose ||
                         c.malformed > b.malformed || c.too_large > b.too_large ||
                         c.wrong_frame > b.wrong_frame || c.bad_time > b.bad_time ||

@@ -63,6 +63,12 @@ class DiagnosticsReporter {
   void logChanges() noexcept;
   /// @brief The pipeline status's level after the last update (dds::kDiagnosticOk, ...).
   std::uint8_t pipelineLevel() const noexcept { return pipeline_level_; }
+  /// @brief The pipeline status's message after the last update ("ok", or the reasons).
+  const char* pipelineMessage() const noexcept { return pipeline_message_; }
+  /// @brief Backend failures within the window (the one ERROR a restart can clear).
+  bool backendFailing() const noexcept { return backend_failing_; }
+  /// @brief The height-map status's level after the last update.
+  std::uint8_t heightmapLevel() const noexcept { return heightmap_level_; }
 
  private:
   struct Totals {
@@ -103,6 +109,7 @@ class DiagnosticsReporter {
   std::uint32_t other_publishers_ = 0;
   double seconds_since_scan_ = 0.0;
   bool stale_ = false;
+  bool backend_failing_ = false;
   std::uint8_t pipeline_level_ = 0;
   std::uint8_t heightmap_level_ = 0;
   char pipeline_message_[512] = {};

@@ -106,9 +106,9 @@ struct Service::Impl {
   std::atomic<int> rt_refusals{0};
   std::atomic<int> threads_set_up{0};  // threads past their scheduling set-up (start() waits)
   std::atomic<std::int64_t> last_publish_ns{0};
-  /// The pipeline status's level at the last report (diagnostics thread writes; the publisher
-  /// pings the watchdog only while it is below ERROR).
-  std::atomic<std::uint8_t> pipeline_level{0};
+  /// Backend failures at the last report (diagnostics thread writes): the publisher stops
+  /// pinging the watchdog, so that systemd restarts the service.
+  std::atomic<bool> backend_failing{false};
   std::int64_t started_ns = 0;
 
   void applyThreadSettings(const char* name, const ThreadConfig& t);
@@ -628,6 +628,9 @@ void Service::Impl::publisherLoop() {
     const std::int64_t last_scan = stats.last_scan_integrated_ns.load(std::memory_order_relaxed);
     if (last_scan == 0 || platform::monotonicNowNs() - last_scan > stale_after) {
       stats.maps_withheld.add();
+      // The loop is alive and doing its job: the watchdog hears from it (a restart cannot make a
+      // lidar publish, and systemd's start limit would leave the robot without a mapper).
+      notifier.watchdog();
       previous_publish = 0;  // a gap is not a period
       next += period;
       const std::int64_t now = platform::monotonicNowNs();
@@ -683,9 +686,9 @@ void Service::Impl::publisherLoop() {
     } else {
       previous_publish = 0;  // a gap is not a period
     }
-    // The watchdog hears from the service only after a cycle that did its job on time, while the
-    // pipeline is not in ERROR (health rules: docs/raymapd.md).
-    if (healthy && pipeline_level.load(std::memory_order_relaxed) < dds::kDiagnosticError) {
+    // The watchdog hears from the service only after a cycle that did its job on time, and not
+    // while the backend fails (docs/raymapd.md, Health).
+    if (healthy && !backend_failing.load(std::memory_order_relaxed)) {
       notifier.watchdog();
     }
     next += period;
@@ -713,7 +716,7 @@ void Service::Impl::diagnosticsLoop() {
     platform::RealtimeScope steady;
     const std::int64_t now = platform::monotonicNowNs();
     reporter->update(now, realtime, map_publisher_watch->matchedWriters());
-    pipeline_level.store(reporter->pipelineLevel(), std::memory_order_relaxed);
+    backend_failing.store(reporter->backendFailing(), std::memory_order_relaxed);
     const void* sample = reporter->message(platform::realtimeNowNs());
     {
       platform::ForeignScope dds;

@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <fstream>
 
 #include <unistd.h>
 
 #include "platform/clock.hpp"
+#include "tests/support/cli_runner.hpp"
 
 namespace raymap::test {
 
@@ -58,6 +60,19 @@ std::string serviceConfig(std::uint32_t domain, const std::string& extra,
       std::to_string(scan_slots) + "}\n";
   return text + extra;
 }
+
+RunningDaemon::RunningDaemon(const std::string& config_text, bool watchdog) {
+  const std::string config = dir.file("raymapd.yaml");
+  std::ofstream(config) << config_text;
+  std::vector<std::string> env = {"NOTIFY_SOCKET=" + notify.path()};
+  if (watchdog) {
+    env.push_back("WATCHDOG_USEC=1000000");  // WatchdogSec=1s: pings needed < 0.5 s apart
+  }
+  process = std::make_unique<DaemonProcess>(
+      RAYMAPD_PATH, std::vector<std::string>{"--config", config}, env, dir.file("raymapd.log"));
+}
+
+std::string RunningDaemon::log() const { return readFile(dir.file("raymapd.log")); }
 
 driver::SimulatedLidar yardLidar(int beams, int columns, bool moving) {
   auto file = sim::loadSceneFile(std::string(RAYMAP_SCENES_DIR) + "/yard.yaml");

@@ -13,6 +13,8 @@
 
 #include "src/dds/entities.hpp"
 #include "src/sim/scene_file.hpp"
+#include "tests/service/daemon_process.hpp"
+#include "tests/support/fake_notify_socket.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tools/dds_driver/lidar_playback.hpp"
 #include "tools/dds_driver/ros_endpoints.hpp"
@@ -39,6 +41,17 @@ double publishPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::si
 
 /// @brief The yard scene with its lidar set to `beams` x `columns`, moving along its path or not.
 driver::SimulatedLidar yardLidar(int beams, int columns, bool moving);
+
+/// @brief raymapd started on `config_text` (written to a temporary folder) with a fake systemd
+/// notify socket; `watchdog` sets WATCHDOG_USEC to 1 s.
+struct RunningDaemon {
+  RunningDaemon(const std::string& config_text, bool watchdog);
+  std::string log() const;
+
+  TempDir dir;
+  FakeNotifySocket notify;
+  std::unique_ptr<DaemonProcess> process;
+};
 
 /// @brief The test's side of the DDS graph, in its own participants (the publisher and the
 /// subscribers are independent of each other, like separate ROS nodes).

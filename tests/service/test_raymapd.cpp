@@ -22,24 +22,6 @@
 namespace raymap::test {
 namespace {
 
-struct RunningDaemon {
-  TempDir dir;
-  FakeNotifySocket notify;
-  std::unique_ptr<DaemonProcess> process;
-
-  RunningDaemon(const std::string& config_text, bool watchdog) {
-    const std::string config = dir.file("raymapd.yaml");
-    std::ofstream(config) << config_text;
-    std::vector<std::string> env = {"NOTIFY_SOCKET=" + notify.path()};
-    if (watchdog) {
-      env.push_back("WATCHDOG_USEC=1000000");  // WatchdogSec=1s: pings needed < 0.5 s apart
-    }
-    process = std::make_unique<DaemonProcess>(
-        RAYMAPD_PATH, std::vector<std::string>{"--config", config}, env, dir.file("raymapd.log"));
-  }
-  std::string log() const { return readFile(dir.file("raymapd.log")); }
-};
-
 struct HeightCheck {
   int surfaces = 0;  ///< surface cells with an unambiguous truth
   int within = 0;    ///< of those, within one voxel of it
@@ -245,6 +227,13 @@ TEST(Raymapd, OverflowAtTenTimesTheInputRateDropsOldestScansAndPublishesOnTime) 
   options.scan_rate_hz = 100.0;
   std::vector<driver::ReceivedGridMap> maps;
   ros.play(lidar, options, 5.0, maps);
+  // The overload is reported while it lasts, with its cause.
+  const std::string level = ros.diagnostics->values().at("raymapd: pipeline/level");
+  const std::string message = ros.diagnostics->values().at("raymapd: pipeline/message");
+  EXPECT_EQ(level, "1") << message;
+  EXPECT_TRUE(message.find("oldest first") != std::string::npos ||
+              message.find("shed") != std::string::npos)
+      << message;
   ros.settle(1.2, &maps);
   EXPECT_TRUE(daemon.process->running()) << daemon.log();
   const double dropped =

@@ -16,10 +16,18 @@ LidarPlayback::LidarPlayback(const SimulatedLidar& lidar, DriverPublisher& publi
   if (!lidar_.moving()) {
     for (std::size_t k = 0; k < n; ++k) {
       lidar_.scan(k, scans_cache_[k], rings_cache_[k]);
+      corruptTimes(scans_cache_[k]);
     }
   }
   scan_period_ = std::llround(1e9 / options_.scan_rate_hz);
   odometry_period_ = std::llround(1e9 / options_.odometry_rate_hz);
+}
+
+void LidarPlayback::corruptTimes(std::vector<dds::ScanPoint>& scan) const {
+  const std::size_t n = std::min<std::size_t>(options_.bad_time_points, scan.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    scan[i].time_s = 4.294967295f;  // t = 0xFFFFFFFF ns once written back as nanoseconds
+  }
 }
 
 void LidarPlayback::start(std::int64_t monotonic_ns, std::int64_t wall_ns) {
@@ -50,6 +58,7 @@ std::int64_t LidarPlayback::publishDue(std::int64_t now) {
     const std::size_t slot = lidar_.moving() ? 0 : k % scans_cache_.size();
     if (lidar_.moving()) {
       lidar_.scan(k, scans_cache_[0], rings_cache_[0]);
+      corruptTimes(scans_cache_[0]);
     }
     const std::int64_t start = static_cast<std::int64_t>(k) * scan_period_;
     publisher_.publishCloud(scans_cache_[slot], rings_cache_[slot], stamp0_ + start,

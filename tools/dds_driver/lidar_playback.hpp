@@ -24,6 +24,9 @@ struct PlaybackOptions {
   const char* frame = "lidar";  ///< frame_id of the clouds (= base: identity extrinsic)
   const char* world_frame = "odom";
   const char* base_frame = "base_link";
+  /// Fault injection: this many points of every cloud carry a per-point time of 4.29 s
+  /// (an Ouster driver's t of 0xFFFFFFFF ns: a corrupt time field).
+  std::uint32_t bad_time_points = 0;
 };
 
 /// @brief Call publishDue() often (every few ms); it publishes what is due.
@@ -39,6 +42,8 @@ class LidarPlayback {
   std::uint64_t pointsPublished() const noexcept { return points_; }
 
  private:
+  void corruptTimes(std::vector<dds::ScanPoint>& scan) const;  // bad_time_points
+
   const SimulatedLidar& lidar_;
   DriverPublisher& publisher_;
   PlaybackOptions options_;

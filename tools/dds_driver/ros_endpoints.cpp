@@ -257,6 +257,8 @@ int DiagnosticsListener::poll() {
         const auto& status = m->status._buffer[s];
         const std::string name = status.name != nullptr ? status.name : "";
         values_[name + "/level"] = std::to_string(status.level);
+        values_[name + "/message"] = status.message != nullptr ? status.message : "";
+        values_[name + "/hardware_id"] = status.hardware_id != nullptr ? status.hardware_id : "";
         for (std::uint32_t v = 0; v < status.values._length; ++v) {
           const auto& kv = status.values._buffer[v];
           values_[name + "/" + (kv.key != nullptr ? kv.key : "")] =

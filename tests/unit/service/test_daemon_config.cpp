@@ -383,5 +383,71 @@ TEST(DaemonConfig, ValuesAreRead) {
   EXPECT_EQ(c.realtime.integrator.priority, 30) << "default kept";
 }
 
+TEST(DaemonConfig, HealthAndLoadDefaults) {
+  auto result = parseDaemonConfig("{}\n", kName);
+
+  ASSERT_TRUE(result) << result.error().message;
+  const DaemonConfig& c = result.value();
+  EXPECT_EQ(c.name, "raymapd");
+  EXPECT_EQ(c.health.stale_after_s, 1.0);
+  EXPECT_TRUE(c.health.hardware_id.empty()) << "host name + name at start-up";
+  EXPECT_EQ(c.sensors[0].max_time_offset_s, 1.0);
+  EXPECT_EQ(c.queues.max_lock_hold_s, 0.005);
+  EXPECT_EQ(c.queues.max_latency_s, 0.25);
+  EXPECT_TRUE(c.queues.shed_subsample);
+  EXPECT_EQ(c.queues.max_subsample, 8u);
+  EXPECT_EQ(c.heightmap.publish_lead_max_s, 0.1);
+}
+
+TEST(DaemonConfig, HealthAndLoadValuesAreRead) {
+  auto result = parseDaemonConfig(
+      "name: front-mapper\n"
+      "health: {stale_after_s: 2.5, hardware_id: robot7/front}\n"
+      "sensors:\n  - max_time_offset_s: 0.2\n"
+      "queues: {max_lock_hold_s: 0.002, max_latency_s: 0.4, shed: drop, max_subsample: 4}\n"
+      "heightmap: {publish_lead_max_s: 0.05}\n",
+      kName);
+
+  ASSERT_TRUE(result) << result.error().message;
+  const DaemonConfig& c = result.value();
+  EXPECT_EQ(c.name, "front-mapper");
+  EXPECT_EQ(c.health.stale_after_s, 2.5);
+  EXPECT_EQ(c.health.hardware_id, "robot7/front");
+  EXPECT_EQ(c.sensors[0].max_time_offset_s, 0.2);
+  EXPECT_EQ(c.queues.max_lock_hold_s, 0.002);
+  EXPECT_EQ(c.queues.max_latency_s, 0.4);
+  EXPECT_FALSE(c.queues.shed_subsample);
+  EXPECT_EQ(c.queues.max_subsample, 4u);
+  EXPECT_EQ(c.heightmap.publish_lead_max_s, 0.05);
+}
+
+TEST(DaemonConfig, TheLatencyBoundFollowsThePublishRate) {
+  // Off.
+  auto off = parseDaemonConfig("queues: {max_latency_s: 0}\n", kName);
+  ASSERT_TRUE(off) << off.error().message;
+  EXPECT_EQ(off->queues.max_latency_s, 0.0);
+  // At 2 Hz the default grows to a period, the lead and 35 ms.
+  auto slow = parseDaemonConfig("heightmap: {rate_hz: 2}\n", kName);
+  ASSERT_TRUE(slow) << slow.error().message;
+  EXPECT_NEAR(slow->queues.max_latency_s, 0.55, 1e-12);
+  // A bound no map can meet is refused.
+  expectError("queues: {max_latency_s: 0.1}\n", "queues.max_latency_s", "shorter than one publish");
+}
+
+TEST(DaemonConfig, HealthAndLoadErrorsAreNamed) {
+  expectError("name: two words\n", "name", "letters, digits");
+  expectError("health: {stale_after_s: 0}\n", "health.stale_after_s", "");
+  expectError("health: {hardware_id: 'a b'}\n", "health.hardware_id", "letters, digits");
+  expectError("health: {grace: 1}\n", "health.grace", "");
+  expectError("sensors:\n  - max_time_offset_s: 120\n", "sensors[0].max_time_offset_s",
+              "at most 60");
+  expectError("queues: {shed: sometimes}\n", "queues.shed", "");
+  expectError("queues: {max_lock_hold_s: 2}\n", "queues.max_lock_hold_s", "at most 1");
+  expectError("heightmap: {publish_lead_s: 0.05, publish_lead_max_s: 0.02}\n",
+              "heightmap.publish_lead_max_s", "at least publish_lead_s");
+  expectError("heightmap: {publish_lead_max_s: 0.19}\n", "heightmap.publish_lead_max_s",
+              "publish period");
+}
+
 }  // namespace
 }  // namespace raymap::service

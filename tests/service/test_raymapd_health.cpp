@@ -1,0 +1,194 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymapd's health rules end to end (separate processes on loopback DDS): every fault a robot
+// meets turns the diagnostics to the documented level with the documented reason within two
+// report periods, and a stale map is withheld rather than republished.
+#include <chrono>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include "platform/clock.hpp"
+#include "tests/service/daemon_process.hpp"
+#include "tests/service/service_fixture.hpp"
+
+namespace raymap::test {
+namespace {
+
+constexpr const char* kPipeline = "raymapd: pipeline";
+
+/// The last report's value of `key` of the pipeline status ("" when none arrived).
+std::string pipelineValue(const RosSide& ros, const std::string& key) {
+  const auto& values = ros.diagnostics->values();
+  const auto it = values.find(std::string(kPipeline) + "/" + key);
+  return it == values.end() ? std::string() : it->second;
+}
+
+/// Stops raymapd and expects a clean exit.
+void expectCleanStop(RunningDaemon& daemon) {
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
+/// raymapd started and discovered, with the test's DDS side.
+struct Started {
+  explicit Started(const std::string& config)
+      : daemon(config, false), ros(domainOf(config), 70000) {}
+  static std::uint32_t domainOf(const std::string& config) {
+    const std::size_t at = config.find("domain: ") + 8;
+    return static_cast<std::uint32_t>(std::stoul(config.substr(at)));
+  }
+  RunningDaemon daemon;
+  RosSide ros;
+};
+
+TEST(RaymapdHealth, CloudsInAFrameNoSensorIsConfiguredForAreAnErrorNamingBothFrames) {
+  std::string config = serviceConfig(uniqueDomain());
+  config.replace(config.find("frame: lidar"), 12, "frame: lidar_typo");
+  Started s(config);
+  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << s.daemon.log();
+  ASSERT_TRUE(s.ros.waitForService(10.0));
+  std::vector<driver::ReceivedGridMap> maps;
+  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 3.0, maps);
+
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "2") << pipelineValue(s.ros, "message");
+  const std::string message = pipelineValue(s.ros, "message");
+  EXPECT_NE(message.find("no scan integrated since start"), std::string::npos) << message;
+  EXPECT_NE(message.find("in frame 'lidar', not sensors[0].frame 'lidar_typo'"), std::string::npos)
+      << message;
+  EXPECT_GT(s.ros.diagnostics->number("raymapd: pipeline/clouds_wrong_frame").value_or(0), 10.0);
+  EXPECT_TRUE(maps.empty()) << "a map of nothing is withheld, not published as all unknown";
+  EXPECT_NE(s.daemon.log().find("sensors[0].frame 'lidar_typo'"), std::string::npos)
+      << "one log line per report names the reason:\n"
+      << s.daemon.log();
+  expectCleanStop(s.daemon);
+}
+
+TEST(RaymapdHealth, APointWithACorruptTimeCostsThatPointAndIsAWarning) {
+  Started s(serviceConfig(uniqueDomain()));
+  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << s.daemon.log();
+  ASSERT_TRUE(s.ros.waitForService(10.0));
+  driver::PlaybackOptions options;
+  options.bad_time_points = 1;  // 1 of 8,192 points per cloud
+  std::vector<driver::ReceivedGridMap> maps;
+  s.ros.play(yardLidar(16, 512, false), options, 3.0, maps);
+
+  const double received =
+      s.ros.diagnostics->number("raymapd: pipeline/clouds_received").value_or(0);
+  const double integrated =
+      s.ros.diagnostics->number("raymapd: pipeline/scans_integrated").value_or(0);
+  EXPECT_GE(received, 20.0);
+  EXPECT_GE(integrated, received - 3.0) << "the scans go in (the last may still be on its way)";
+  EXPECT_EQ(s.ros.diagnostics->number("raymapd: pipeline/scans_dropped_no_pose").value_or(-1), 0.0);
+  EXPECT_GE(s.ros.diagnostics->number("raymapd: pipeline/points_bad_time").value_or(0),
+            received - 3.0);
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "1");
+  EXPECT_NE(pipelineValue(s.ros, "message").find("points with a per-point time out of range"),
+            std::string::npos)
+      << pipelineValue(s.ros, "message");
+  EXPECT_GE(maps.size(), 10u);
+  expectCleanStop(s.daemon);
+}
+
+TEST(RaymapdHealth, NoInputAtAllIsAnErrorAndNoMapIsPublishedButTheWatchdogIsFed) {
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(serviceConfig(domain), /*watchdog=*/true);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.settle(2.5, &maps);
+
+  EXPECT_EQ(pipelineValue(ros, "level"), "2");
+  EXPECT_NE(pipelineValue(ros, "message").find("no point cloud arrives at all"), std::string::npos)
+      << pipelineValue(ros, "message");
+  EXPECT_EQ(ros.diagnostics->values().at("raymapd: height map/level"), "2");
+  EXPECT_TRUE(maps.empty());
+  // The service's loops run: systemd hears from it (a restart would not bring the lidar).
+  EXPECT_TRUE(daemon.notify.waitFor("WATCHDOG=1", std::chrono::seconds(2)).has_value());
+  expectCleanStop(daemon);
+}
+
+TEST(RaymapdHealth, InputThatStopsTurnsToErrorAndTheMapsStop) {
+  Started s(serviceConfig(uniqueDomain()));
+  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << s.daemon.log();
+  ASSERT_TRUE(s.ros.waitForService(10.0));
+  std::vector<driver::ReceivedGridMap> maps;
+  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 2.0, maps);
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "0") << pipelineValue(s.ros, "message");
+  ASSERT_GE(maps.size(), 5u);
+  const std::size_t while_playing = maps.size();
+  const std::int64_t stopped_at = platform::monotonicNowNs();
+  s.ros.settle(3.0, &maps);  // stale after 1 s, reported within 2 more
+
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "2");
+  const std::string message = pipelineValue(s.ros, "message");
+  EXPECT_NE(message.find("no scan integrated for"), std::string::npos) << message;
+  EXPECT_NE(message.find("no point cloud arrives any more"), std::string::npos) << message;
+  // A map or two may follow the last scan (within health.stale_after_s), none after that.
+  for (std::size_t i = while_playing; i < maps.size(); ++i) {
+    EXPECT_LT(maps[i].arrival_ns - stopped_at, 1300000000) << "map " << i << " republished late";
+  }
+  expectCleanStop(s.daemon);
+}
+
+TEST(RaymapdHealth, TwoServicesPublishingOneHeightMapTopicBothReportError) {
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon first(serviceConfig(domain), false);
+  RunningDaemon second("name: second\n" + serviceConfig(domain), false);
+  ASSERT_TRUE(first.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value()) << first.log();
+  ASSERT_TRUE(second.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << second.log();
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(10.0));
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 3.0, maps);
+
+  for (const char* name : {"raymapd", "second"}) {
+    const auto& values = ros.diagnostics->values();
+    const auto level = values.find(std::string(name) + ": pipeline/level");
+    const auto message = values.find(std::string(name) + ": pipeline/message");
+    ASSERT_NE(level, values.end()) << name << ": no diagnostics";
+    EXPECT_EQ(level->second, "2") << name;
+    EXPECT_NE(message->second.find("1 other publisher of rt/height_map"), std::string::npos)
+        << name << ": " << message->second;
+  }
+  // Their statuses are told apart by name and by hardware id (host name / name).
+  const auto& values = ros.diagnostics->values();
+  EXPECT_NE(values.at("raymapd: pipeline/hardware_id"), values.at("second: pipeline/hardware_id"));
+  EXPECT_NE(values.at("second: pipeline/hardware_id").find("/second"), std::string::npos);
+  expectCleanStop(first);
+  expectCleanStop(second);
+}
+
+TEST(RaymapdHealth, ImpossibleConfigurationsAreRefusedAtCheckAndAtStartWithTheKey) {
+  TempDir dir;
+  struct Case {
+    std::string yaml;
+    std::string key;
+  };
+  const std::vector<Case> cases = {
+      {"map: {window: [256, 256, 256]}\n", "map.window"},
+      {"queues: {scan_slots: 256}\nsensors:\n  - max_points: 16777216\n",
+       "queues.scan_slots x sensors[].max_points"},
+      {"map: {save_on_exit: " + dir.file("missing/last.rmap") + "}\n", "map.save_on_exit"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = dir.file("bad.yaml");
+    std::ofstream(path) << c.yaml;
+    for (const char* flag : {"--check-config", "--config"}) {
+      const auto [status, text] = runToCompletion(RAYMAPD_PATH, {flag, path});
+      EXPECT_EQ(status, 2) << flag << "\n" << c.yaml << text;
+      EXPECT_NE(text.find(c.key), std::string::npos) << flag << ": " << text;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace raymap::test

@@ -1,0 +1,192 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The diagnostics' levels and reasons: stale pipelines, drops by cause, another publisher of the
+// height map, and rates over a window that does not depend on the report rate.
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+#include "diagnostic_msgs.h"
+#include <gtest/gtest.h>
+
+#include "src/dds/diagnostics_message.hpp"
+#include "src/dds/point_cloud.hpp"
+#include "src/service/diagnostics_reporter.hpp"
+#include "src/service/service.hpp"
+
+namespace raymap::service {
+namespace {
+
+constexpr std::int64_t kMs = 1000000;
+constexpr std::int64_t kStart = 1000 * kMs;
+
+/// The pipeline around a reporter, with the clock in the test's hands.
+struct Rig {
+  explicit Rig(double report_rate_hz = 1.0) : mailbox(5, 16), poses(16) {
+    ReporterSettings s;
+    s.name = "raymapd";
+    s.hardware_id = "host/raymapd";
+    s.backend = "cpu";
+    s.report_rate_hz = report_rate_hz;
+    s.stale_after_s = 1.0;
+    s.grid_map_topic = "rt/height_map";
+    s.sensor_frames = {"lidar_typo"};
+    reporter = std::make_unique<DiagnosticsReporter>(stats, mailbox, poses, s, kStart);
+  }
+  /// One report at kStart + `ms`, scans integrated up to then when `scans_flowing`.
+  void report(std::int64_t ms, std::uint32_t other_publishers = 0) {
+    reporter->update(kStart + ms * kMs, realtime, other_publishers);
+  }
+  std::string message() const { return reporter->pipelineMessage(); }
+  /// The value of `key` in the pipeline status of the last message.
+  std::string value(const char* key) {
+    const auto* array =
+        static_cast<const diagnostic_msgs_msg_dds__DiagnosticArray_*>(reporter->message(0));
+    const diagnostic_msgs_msg_dds__DiagnosticStatus_& pipeline = array->status._buffer[0];
+    for (std::uint32_t i = 0; i < pipeline.values._length; ++i) {
+      if (std::strcmp(pipeline.values._buffer[i].key, key) == 0) {
+        return pipeline.values._buffer[i].value;
+      }
+    }
+    ADD_FAILURE() << "no key " << key;
+    return "";
+  }
+
+  pipeline::PipelineStats stats;
+  pipeline::ScanMailbox mailbox;
+  pipeline::PoseQueue poses;
+  RealtimeReport realtime;
+  std::unique_ptr<DiagnosticsReporter> reporter;
+};
+
+TEST(DiagnosticsReporter, NoScanSinceStartIsAnErrorOnceTheStaleTimeHasPassed) {
+  Rig rig;
+  rig.report(500);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  rig.report(1500);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_NE(rig.message().find("no scan integrated since start"), std::string::npos)
+      << rig.message();
+  EXPECT_NE(rig.message().find("no point cloud arrives at all"), std::string::npos)
+      << rig.message();
+  EXPECT_EQ(rig.reporter->heightmapLevel(), dds::kDiagnosticError) << "maps are withheld";
+}
+
+TEST(DiagnosticsReporter, InputThatStopsTurnsThePipelineToErrorAfterTheStaleTime) {
+  Rig rig;
+  for (int ms = 0; ms <= 2000; ms += 100) {
+    rig.stats.clouds_received.add();
+    rig.stats.scans_integrated.add();
+    rig.stats.last_scan_integrated_ns.store(kStart + ms * kMs);
+  }
+  rig.report(2000);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  EXPECT_EQ(rig.message(), "ok");
+  rig.report(3000);  // 1.0 s without a scan: not yet beyond
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  rig.report(3500);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_NE(rig.message().find("no scan integrated for 1.5 s"), std::string::npos) << rig.message();
+  EXPECT_NE(rig.message().find("no point cloud arrives any more"), std::string::npos)
+      << rig.message();
+}
+
+TEST(DiagnosticsReporter, CloudsInTheWrongFrameAreAWarningNamingBothFramesThenAnError) {
+  Rig rig;
+  std::strcpy(rig.stats.wrong_frame, "lidar");
+  rig.stats.wrong_frame_sensor = 0;
+  rig.stats.wrong_frame_seen.store(true);
+  rig.report(0);
+  rig.stats.clouds_received.add(5);
+  rig.stats.clouds_unknown_frame.add(5);
+  rig.report(600);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn) << rig.message();
+  EXPECT_NE(rig.message().find("5 clouds in frame 'lidar', not sensors[0].frame 'lidar_typo'"),
+            std::string::npos)
+      << rig.message();
+  rig.stats.clouds_received.add(5);
+  rig.stats.clouds_unknown_frame.add(5);
+  rig.report(1200);  // and nothing has been integrated since start
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_NE(rig.message().find("clouds/s arrive"), std::string::npos) << rig.message();
+  EXPECT_NE(rig.message().find("frame 'lidar'"), std::string::npos) << rig.message();
+  EXPECT_EQ(rig.value("clouds_wrong_frame"), "10");
+}
+
+TEST(DiagnosticsReporter, MalformedCloudsAreCountedAndNamedPerReason) {
+  Rig rig;
+  rig.stats.last_scan_integrated_ns.store(kStart);
+  rig.report(0);
+  rig.stats.clouds_malformed.add(3);
+  rig.stats.clouds_rejected_by[static_cast<std::size_t>(dds::CloudError::kTruncated)].add(2);
+  rig.stats.clouds_rejected_by[static_cast<std::size_t>(dds::CloudError::kMissingXyz)].add(1);
+  rig.stats.last_scan_integrated_ns.store(kStart + 500 * kMs);
+  rig.report(500);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn);
+  EXPECT_NE(rig.message().find("3 malformed clouds (truncated 2, missing_xyz 1)"),
+            std::string::npos)
+      << rig.message();
+  EXPECT_EQ(rig.value("clouds_malformed_truncated"), "2");
+  EXPECT_EQ(rig.value("clouds_malformed_missing_xyz"), "1");
+  EXPECT_EQ(rig.value("clouds_malformed_bad_field_type"), "0");
+}
+
+TEST(DiagnosticsReporter, BadTimesAndSheddingAreWarningsNamedAsSuch) {
+  Rig rig;
+  rig.stats.last_scan_integrated_ns.store(kStart);
+  rig.report(0);
+  rig.stats.points_bad_time.add(200);
+  rig.stats.scans_shed.add(2);
+  rig.stats.points_shed.add(4096);
+  rig.stats.last_scan_integrated_ns.store(kStart + 500 * kMs);
+  rig.report(500);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn);
+  EXPECT_NE(rig.message().find("200 points with a per-point time out of range"), std::string::npos)
+      << rig.message();
+  EXPECT_NE(rig.message().find("2 scans shed"), std::string::npos) << rig.message();
+  EXPECT_NE(rig.message().find("4096 points shed"), std::string::npos) << rig.message();
+}
+
+TEST(DiagnosticsReporter, AnotherPublisherOfTheHeightMapIsAnError) {
+  Rig rig;
+  rig.stats.last_scan_integrated_ns.store(kStart + 400 * kMs);
+  rig.report(500, 1);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_NE(rig.message().find("1 other publisher of rt/height_map"), std::string::npos)
+      << rig.message();
+  EXPECT_EQ(rig.value("other_map_publishers"), "1");
+}
+
+TEST(DiagnosticsReporter, RatesAtTenReportsASecondAreTakenOverASecondNotOneInterval) {
+  Rig rig(10.0);
+  // Clouds arrive at 5 Hz: one every other 100 ms report. Rates per interval would alternate
+  // between 0 and 10 Hz; over the one-second window they read 5.
+  for (int k = 0; k <= 40; ++k) {
+    if (k % 2 == 0) {
+      rig.stats.clouds_received.add();
+      rig.stats.scans_integrated.add();
+      rig.stats.last_scan_integrated_ns.store(kStart + k * 100 * kMs);
+    }
+    rig.report(k * 100);
+    if (k >= 12) {
+      EXPECT_EQ(rig.value("cloud_rate_hz"), "5.00") << "report " << k;
+      EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+    }
+  }
+}
+
+TEST(DiagnosticsReporter, ADropStaysAWarningForTheWholeWindowAtHighReportRates) {
+  Rig rig(10.0);
+  for (int k = 0; k <= 30; ++k) {
+    rig.stats.last_scan_integrated_ns.store(kStart + k * 100 * kMs);
+    if (k == 10) {
+      rig.stats.scans_no_pose.add();
+    }
+    rig.report(k * 100);
+    const bool within = k >= 10 && k < 20;
+    EXPECT_EQ(rig.reporter->pipelineLevel(), within ? dds::kDiagnosticWarn : dds::kDiagnosticOk)
+        << "report " << k << ": " << rig.message();
+  }
+}
+
+}  // namespace
+}  // namespace raymap::service
