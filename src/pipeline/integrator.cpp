@@ -156,7 +156,9 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
       if (slice > 0) {
         const double measured =
             static_cast<double>(now - slice_started) / static_cast<double>(slice);
-        ns_per_ray_ = 0.75 * ns_per_ray_ + 0.25 * std::max(measured, 1.0);
+        // A slice stalled by preemption counts, but at most four times the estimate: one stall
+        // must not inflate the latency bound's predictions.
+        ns_per_ray_ = 0.75 * ns_per_ray_ + 0.25 * std::clamp(measured, 1.0, 4.0 * ns_per_ray_);
       }
     } while (!in.empty() && now - hold_started < settings_.max_lock_hold_ns);
     stats_.map_lock_hold_us.record(static_cast<std::uint64_t>((now - hold_started) / 1000));
@@ -188,6 +190,25 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
 }
 
 std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
+  const std::int64_t wake = step_(now_ns);
+  const std::int64_t end = platform::monotonicNowNs();
+  // The load: busy time over about a second. Overloaded from 90 % until it falls below 70 %.
+  load_busy_ns_ += end - now_ns;
+  if (load_window_start_ns_ == 0) {
+    load_window_start_ns_ = now_ns;
+  } else if (end - load_window_start_ns_ >= 1000000000) {
+    const double load =
+        static_cast<double>(load_busy_ns_) / static_cast<double>(end - load_window_start_ns_);
+    overloaded_ = overloaded_ ? load > 0.7 : load > 0.9;
+    stats_.integrator_load_percent.store(static_cast<std::int32_t>(std::lround(load * 100.0)),
+                                         std::memory_order_relaxed);
+    load_window_start_ns_ = end;
+    load_busy_ns_ = 0;
+  }
+  return wake;
+}
+
+std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
   drainPoses();
   for (;;) {
     if (scan_ == nullptr) {
@@ -264,16 +285,21 @@ std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
       // A scan that waited for its poses counts from when they came (about now): waiting for
       // the pose source is not a backlog of the backend's.
       const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
-      const ShedDecision decision =
-          planScan(now_ns, ready, static_cast<double>(batch_size_), rays, ns_per_ray_, schedule,
-                   settings_.max_latency_ns, settings_.max_stride);
-      if (decision.drop) {
+      const ShedDecision decision = planScan(
+          now_ns, ready, static_cast<double>(batch_size_), rays, ns_per_ray_, schedule,
+          settings_.max_latency_ns, settings_.max_stride, overloaded_ || settings_.shed_always);
+      if (decision.drop && scans_shed_in_a_row_ < 2) {
+        ++scans_shed_in_a_row_;
         stats_.scans_shed.add();
         mailbox_.release(scan_);
         scan_ = nullptr;
         continue;
       }
-      scan_stride_ = decision.stride;
+      // After two scans shed whole, the third goes in at the largest stride whatever the
+      // prediction says: the map keeps moving, and the time per ray is measured again (a
+      // prediction inflated by one stalled slice must not shed everything for ever).
+      scans_shed_in_a_row_ = 0;
+      scan_stride_ = decision.drop ? std::max(settings_.max_stride, 1u) : decision.stride;
     }
     if (batch_size_ > 0 && batch_sensor_ != scan_->sensor) {
       integrateBatch(now_ns);  // a batch has one sensor's range limits

@@ -36,6 +36,8 @@ struct IntegratorSettings {
   /// Subsample by at most this factor; a scan that would need more is dropped. 1 = never
   /// subsample: whole scans are dropped (queues.shed: drop).
   std::uint32_t max_stride = 8;
+  /// The bound applies always, not only while the integrator is saturated (queues.shed_when).
+  bool shed_always = false;
 };
 
 /// @brief Per-sensor settings: extrinsic (until tf_static replaces it) and ray limits.
@@ -84,6 +86,7 @@ class Integrator {
   const PoseHistory& poses() const noexcept { return history_; }
 
  private:
+  std::int64_t step_(std::int64_t now_ns) noexcept;  // step() without the load accounting
   void drainPoses() noexcept;
   /// Converts points of the current scan into the batch until it is done or the batch is full.
   /// @return true when the scan is finished.
@@ -125,6 +128,12 @@ class Integrator {
   std::uint32_t completed_count_ = 0;
   std::int64_t scan_stamp_pending_ = 0;  // newest header stamp among the completed scans
   double ns_per_ray_ = 1000.0;           // measured (moving average): sizes the slices
+  // How busy the integrator is (overload detection for the latency bound): time spent in step()
+  // over windows of about a second.
+  std::int64_t load_window_start_ns_ = 0;
+  std::int64_t load_busy_ns_ = 0;
+  bool overloaded_ = false;
+  std::uint32_t scans_shed_in_a_row_ = 0;  // whole scans the latency bound dropped in a row
 };
 
 }  // namespace raymap::pipeline

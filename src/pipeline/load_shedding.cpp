@@ -9,7 +9,8 @@ namespace raymap::pipeline {
 
 ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queued_rays,
                       double scan_rays, double ns_per_ray, const PublishSchedule& schedule,
-                      std::int64_t max_latency_ns, std::uint32_t max_stride) noexcept {
+                      std::int64_t max_latency_ns, std::uint32_t max_stride,
+                      bool overloaded) noexcept {
   ShedDecision keep;
   if (max_latency_ns <= 0 || schedule.next_publish_ns == 0 || schedule.period_ns <= 0) {
     return keep;
@@ -29,7 +30,8 @@ ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queue
   // of its arrival against the maps. A scan whose own map is already beyond the bound keeps it
   // (at the nominal rate nothing is shed); only delay added by a backlog is shed.
   const double own = firstAfter(static_cast<double>(arrival_ns) + work);
-  const double bound = std::max(static_cast<double>(arrival_ns + max_latency_ns), own);
+  const double configured = static_cast<double>(arrival_ns + max_latency_ns);
+  const double bound = overloaded ? configured : std::max(configured, own);
   if (first <= bound) {
     return keep;
   }

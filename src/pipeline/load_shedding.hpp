@@ -33,8 +33,12 @@ struct ShedDecision {
 /// factor it must shrink by), or dropped whole when that takes a stride above `max_stride` or no
 /// such instant is still ahead. `max_latency_ns` <= 0, or no schedule yet, never sheds.
 /// @rt allocates: no; pure.
+/// `overloaded`: the backend has been busy nearly all the time lately, so the input exceeds what
+/// it integrates. Then the bound is `max_latency_ns` alone (a scan's own map does not extend it),
+/// and the excess is shed rather than let latency grow.
 ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queued_rays,
                       double scan_rays, double ns_per_ray, const PublishSchedule& schedule,
-                      std::int64_t max_latency_ns, std::uint32_t max_stride) noexcept;
+                      std::int64_t max_latency_ns, std::uint32_t max_stride,
+                      bool overloaded = false) noexcept;
 
 }  // namespace raymap::pipeline

@@ -56,6 +56,9 @@ struct PipelineStats {
   /// could contain them, and points left out of subsampled scans.
   Counter scans_shed;
   Counter points_shed;
+  /// Share of the last second the integrator spent working, percent (above 90 the latency bound
+  /// treats the input as more than the backend integrates).
+  std::atomic<std::int32_t> integrator_load_percent{0};
   /// Monotonic time the last scan went into the map (0: none yet); the staleness rule.
   std::atomic<std::int64_t> last_scan_integrated_ns{0};
   Counter rays_integrated;     ///< rays handed to the backend

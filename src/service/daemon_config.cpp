@@ -284,7 +284,7 @@ void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
 void readQueues(Context& ctx, const YAML::Node& node, QueueConfig& q) {
   Fields f(ctx, node, "queues");
   f.knownKeys({"scan_slots", "pose_queue", "batch_rays", "batch_deadline_s", "max_lock_hold_s",
-               "max_latency_s", "shed", "max_subsample"});
+               "max_latency_s", "shed", "max_subsample", "shed_when"});
   q.scan_slots = f.integer<std::uint32_t>("scan_slots", q.scan_slots, 1u, 256u);
   q.pose_queue = f.integer<std::uint32_t>("pose_queue", q.pose_queue, 16u, 1u << 20);
   q.batch_rays = f.integer<std::uint32_t>("batch_rays", q.batch_rays, 256u, 1u << 22);
@@ -298,6 +298,7 @@ void readQueues(Context& ctx, const YAML::Node& node, QueueConfig& q) {
   }
   q.shed_subsample = choiceOr(f, "shed", {"subsample", "drop"}, 0) == 0;
   q.max_subsample = f.integer<std::uint32_t>("max_subsample", q.max_subsample, 1u, 64u);
+  q.shed_always = choiceOr(f, "shed_when", {"overload", "always"}, 0) == 1;
 }
 
 /// A name for logs, diagnostics and hardware ids: letters, digits, '-', '_', '.', '/'.

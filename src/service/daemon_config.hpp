@@ -95,6 +95,10 @@ struct QueueConfig {
   /// (true), or drop whole scans only (false: queues.shed: drop).
   bool shed_subsample = true;
   std::uint32_t max_subsample = 8;
+  /// When the bound applies: only while the integrator is saturated (false: the default; at the
+  /// nominal rate a scan keeps the latency its own size and phase give it), or always (true:
+  /// queues.shed_when: always, latency is then bounded even when the CPU is merely slow).
+  bool shed_always = false;
 };
 
 /// @brief Scheduling of one thread.

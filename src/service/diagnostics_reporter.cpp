@@ -224,10 +224,15 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   }
 
   heightmap_message_[0] = '\0';
-  if (c.withheld > b.withheld || stale_) {
+  if (stale_) {
     heightmap_level_ = dds::kDiagnosticError;
     appendf(heightmap_message_, sizeof(heightmap_message_),
             "withheld: the map is stale (no scan integrated for %.1f s)", seconds_since_scan_);
+  } else if (c.withheld > b.withheld) {
+    heightmap_level_ = dds::kDiagnosticError;
+    appendf(heightmap_message_, sizeof(heightmap_message_),
+            "%" PRIu64 " maps withheld in the last %.1f s: the map was stale",
+            c.withheld - b.withheld, static_cast<double>(now.ns - base_->ns) * 1e-9);
   } else if (c.late > b.late || c.hm_errors > b.hm_errors) {
     heightmap_level_ = dds::kDiagnosticWarn;
     appendf(heightmap_message_, sizeof(heightmap_message_),
@@ -282,6 +287,8 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "points_bad_time", "%" PRIu64, c.bad_time);
   message_.addValue(s, "scans_shed", "%" PRIu64, c.scans_shed);
   message_.addValue(s, "points_shed", "%" PRIu64, c.points_shed);
+  message_.addValue(s, "integrator_load_percent", "%d",
+                    stats_.integrator_load_percent.load(std::memory_order_relaxed));
   message_.addValue(s, "integrate_errors", "%" PRIu64, c.integrate_errors);
   message_.addValue(s, "scan_queue_depth", "%u", mailbox_.waiting());
   message_.addValue(s, "scan_queue_capacity", "%u", mailbox_.capacity() - 1);

@@ -193,6 +193,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   settings.max_latency_ns = seconds(config.queues.max_latency_s);
   settings.publish_period_ns = seconds(1.0 / config.heightmap.rate_hz);
   settings.max_stride = config.queues.shed_subsample ? config.queues.max_subsample : 1u;
+  settings.shed_always = config.queues.shed_always;
   std::vector<pipeline::SensorSettings> sensors;
   for (const SensorConfig& s : config.sensors) {
     pipeline::SensorSettings ss;

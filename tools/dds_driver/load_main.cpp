@@ -139,10 +139,12 @@ int main(int argc, char** argv) {
   }
 
   std::vector<double> errors_ms;
+  std::vector<double> periods_ms;
   double mean_period_ms = 0.0;
   for (std::size_t i = 1; i < arrivals.size(); ++i) {
     const double p = static_cast<double>(arrivals[i] - arrivals[i - 1]) * 1e-6;
     errors_ms.push_back(std::fabs(p - period_nominal_s * 1e3));
+    periods_ms.push_back(p);
   }
   if (arrivals.size() >= 2) {
     mean_period_ms = static_cast<double>(arrivals.back() - arrivals.front()) * 1e-6 /
@@ -155,14 +157,19 @@ int main(int argc, char** argv) {
       "  \"scans_published_total\": %llu,\n  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  "
       "\"map_period_mean_ms\": %.3f,\n"
       "  \"map_period_error_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
+      "  \"map_period_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
       "  \"raymapd\": {\"latency_p50_ms\": %.1f, \"latency_p99_ms\": %.1f, "
       "\"latency_max_ms\": %.1f, \"clouds_received\": %.0f, \"clouds_dropped_overflow\": %.0f, "
       "\"scans_dropped_no_pose\": %.0f, \"clouds_malformed\": %.0f, \"scans_integrated\": %.0f, "
-      "\"rays_integrated\": %.0f, \"cycles_late\": %.0f, \"period_error_max_ms\": %.3f}\n}\n",
+      "\"rays_integrated\": %.0f, \"cycles_late\": %.0f, \"period_error_max_ms\": %.3f, "
+      "\"scans_shed\": %.0f, \"points_shed\": %.0f, \"map_lock_hold_max_ms\": %.2f, "
+      "\"map_lock_wait_max_ms\": %.2f, \"publish_lead_ms\": %.1f, \"level\": %.0f, "
+      "\"integrator_load_percent\": %.0f}\n}\n",
       scan_rate, lidar.pointsPerScan(), static_cast<unsigned long long>(published),
       static_cast<unsigned long long>(playback.scansPublished()),
       static_cast<double>(points) / duration, arrivals.size(), mean_period_ms,
       quantile(errors_ms, 0.5), quantile(errors_ms, 0.99), quantile(errors_ms, 1.0),
+      quantile(periods_ms, 0.5), quantile(periods_ms, 0.99), quantile(periods_ms, 1.0),
       value("raymapd: height map/latency_p50_ms_total"),
       value("raymapd: height map/latency_p99_ms_total"),
       value("raymapd: height map/latency_max_ms_total"), value("raymapd: pipeline/clouds_received"),
@@ -170,6 +177,11 @@ int main(int argc, char** argv) {
       value("raymapd: pipeline/scans_dropped_no_pose"), value("raymapd: pipeline/clouds_malformed"),
       value("raymapd: pipeline/scans_integrated"), value("raymapd: pipeline/rays_integrated"),
       value("raymapd: height map/cycles_late"),
-      value("raymapd: height map/period_error_max_ms_total"));
+      value("raymapd: height map/period_error_max_ms_total"), value("raymapd: pipeline/scans_shed"),
+      value("raymapd: pipeline/points_shed"),
+      value("raymapd: height map/map_lock_hold_max_ms_total"),
+      value("raymapd: height map/map_lock_wait_max_ms_total"),
+      value("raymapd: height map/publish_lead_ms"), value("raymapd: pipeline/level"),
+      value("raymapd: pipeline/integrator_load_percent"));
   return 0;
 }

@@ -59,6 +59,15 @@ TEST(LoadShedding, AScanWhoseOwnMapIsBeyondTheBoundKeepsIt) {
   EXPECT_EQ(d.stride, 1u);
 }
 
+TEST(LoadShedding, UnderOverloadAScansOwnMapNoLongerExtendsTheBound) {
+  // The scan of AScanWhoseOwnMapIsBeyondTheBoundKeepsIt, with the backend saturated: the bound
+  // is 250 ms after the arrival, and every third point makes the map in 100 ms (200 / 85 -> 3).
+  const ShedDecision d = planScan(kNow, kNow - 100 * kMs, 0.0, 200000.0, 1000.0, schedule(100),
+                                  kBound, kMaxStride, /*overloaded=*/true);
+  EXPECT_FALSE(d.drop);
+  EXPECT_EQ(d.stride, 3u);
+}
+
 TEST(LoadShedding, RaysAlreadyQueuedAheadCountAgainstTheTimeLeft) {
   // 85 ms before the generation; 60 ms of rays queued ahead leave 25 ms for a 50 ms scan.
   const ShedDecision d =

@@ -396,6 +396,7 @@ TEST(DaemonConfig, HealthAndLoadDefaults) {
   EXPECT_EQ(c.queues.max_latency_s, 0.25);
   EXPECT_TRUE(c.queues.shed_subsample);
   EXPECT_EQ(c.queues.max_subsample, 8u);
+  EXPECT_FALSE(c.queues.shed_always);
   EXPECT_EQ(c.heightmap.publish_lead_max_s, 0.1);
 }
 
@@ -404,7 +405,8 @@ TEST(DaemonConfig, HealthAndLoadValuesAreRead) {
       "name: front-mapper\n"
       "health: {stale_after_s: 2.5, hardware_id: robot7/front}\n"
       "sensors:\n  - max_time_offset_s: 0.2\n"
-      "queues: {max_lock_hold_s: 0.002, max_latency_s: 0.4, shed: drop, max_subsample: 4}\n"
+      "queues: {max_lock_hold_s: 0.002, max_latency_s: 0.4, shed: drop, max_subsample: 4,\n"
+      "         shed_when: always}\n"
       "heightmap: {publish_lead_max_s: 0.05}\n",
       kName);
 
@@ -418,6 +420,7 @@ TEST(DaemonConfig, HealthAndLoadValuesAreRead) {
   EXPECT_EQ(c.queues.max_latency_s, 0.4);
   EXPECT_FALSE(c.queues.shed_subsample);
   EXPECT_EQ(c.queues.max_subsample, 4u);
+  EXPECT_TRUE(c.queues.shed_always);
   EXPECT_EQ(c.heightmap.publish_lead_max_s, 0.05);
 }
 
@@ -442,6 +445,7 @@ TEST(DaemonConfig, HealthAndLoadErrorsAreNamed) {
   expectError("sensors:\n  - max_time_offset_s: 120\n", "sensors[0].max_time_offset_s",
               "at most 60");
   expectError("queues: {shed: sometimes}\n", "queues.shed", "");
+  expectError("queues: {shed_when: never}\n", "queues.shed_when", "");
   expectError("queues: {max_lock_hold_s: 2}\n", "queues.max_lock_hold_s", "at most 1");
   expectError("heightmap: {publish_lead_s: 0.05, publish_lead_max_s: 0.02}\n",
               "heightmap.publish_lead_max_s", "at least publish_lead_s");

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# raymapd on a busy machine: a second process keeps one core busy throughout, and raymap-load (a
+# simulated Ouster OS-1-128, 128 x 1024 points per scan, PointCloud2 + odometry over loopback DDS,
+# GridMap and diagnostics subscriber) drives raymapd at 1, 2, 5 and 10 times the sensor's 10 Hz.
+# Each rate runs under three policies of the same binary: "bounded" (the shipped defaults: the
+# map lock given up every 5 ms, the adaptive publish lead, the latency bound while the integrator
+# is saturated), "always" (the same with queues.shed_when: always) and "unbounded" (the behaviour
+# before them: max_lock_hold_s 1, publish_lead_max_s = publish_lead_s, max_latency_s 0).
+# Prints one JSON object per run (raymap-load's output plus rate and policy) to stdout.
+#   tools/bench/run-overload-benchmarks.sh [BUILD_DIR] [SECONDS]
+# defaults: build/release, 20 (after a 3 s warm-up). RATES (scans/s, default "10 20 50 100") and
+# POLICIES (default "bounded always unbounded") select runs.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+build=${1:-build/release}
+duration=${2:-20}
+export CYCLONEDDS_URI="file://$PWD/config/cyclonedds-loopback.xml"
+work=$(mktemp -d)
+colo=""
+cleanup() {
+  [ -z "$colo" ] || kill "$colo" 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+# The co-load: one core kept busy for the whole run, as other software on a robot does.
+(while :; do :; done) &
+colo=$!
+domain=80
+for rate in ${RATES:-10 20 50 100}; do
+  for policy in ${POLICIES:-bounded always unbounded}; do
+    domain=$((domain + 1))
+    extra=()
+    if [ "$policy" = always ]; then
+      extra=(-e "s/^  shed_when: [a-z]*/  shed_when: always/")
+    elif [ "$policy" = unbounded ]; then
+      extra=(-e "s/^  max_lock_hold_s: [0-9.]*/  max_lock_hold_s: 1/"
+        -e "s/^  publish_lead_max_s: [0-9.]*/  publish_lead_max_s: 0.015/"
+        -e "s/^  max_latency_s: [0-9.]*/  max_latency_s: 0/")
+    fi
+    sed -e "s/^  domain: 0 /  domain: $domain /" -e "s/^  voxels_topic: .*/  voxels_topic: \"\"/" \
+      "${extra[@]}" config/cpu.yaml > "$work/raymapd.yaml"
+    "$build/src/service/raymapd" --config "$work/raymapd.yaml" 2> "$work/raymapd.log" &
+    pid=$!
+    sleep 2
+    out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
+      --scan-rate "$rate" --duration "$duration" --warmup 3)
+    kill -TERM "$pid"
+    wait "$pid" || true
+    printf '{"rate_hz": %s, "policy": "%s", "result": %s}\n' "$rate" "$policy" \
+      "$(echo "$out" | tr -d '\n')"
+  done
+done
