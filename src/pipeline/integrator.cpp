@@ -285,10 +285,10 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       // A scan that waited for its poses counts from when they came (about now): waiting for
       // the pose source is not a backlog of the backend's.
       const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
-      const ShedDecision decision = planScan(
-          now_ns, ready, static_cast<double>(batch_size_), rays,
-          std::max(ns_per_ray_, scan_ns_per_point_), schedule,
-          settings_.max_latency_ns, settings_.max_stride, overloaded_ || settings_.shed_always);
+      const ShedDecision decision =
+          planScan(now_ns, ready, static_cast<double>(batch_size_), rays,
+                   std::max(ns_per_ray_, scan_ns_per_point_), schedule, settings_.max_latency_ns,
+                   settings_.max_stride, overloaded_ || settings_.shed_always);
       if (decision.drop && scans_shed_in_a_row_ < 2) {
         ++scans_shed_in_a_row_;
         stats_.scans_shed.add();
@@ -327,12 +327,11 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
     if (taken >= 1024.0) {
       // What a point of a scan really costs, conversion (deskewing) and waits included: the
       // latency bound predicts with this (integration alone under-predicts by the conversion).
-      const double sample =
-          static_cast<double>(platform::monotonicNowNs() - scan_started) / taken;
-      scan_ns_per_point_ = scan_ns_per_point_ == 0.0
-                               ? sample
-                               : 0.75 * scan_ns_per_point_ +
-                                     0.25 * std::min(sample, 4.0 * scan_ns_per_point_);
+      const double sample = static_cast<double>(platform::monotonicNowNs() - scan_started) / taken;
+      scan_ns_per_point_ =
+          scan_ns_per_point_ == 0.0
+              ? sample
+              : 0.75 * scan_ns_per_point_ + 0.25 * std::min(sample, 4.0 * scan_ns_per_point_);
     }
   }
   if (batch_size_ > 0 || completed_count_ > 0) {

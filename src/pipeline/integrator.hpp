@@ -134,7 +134,7 @@ class Integrator {
   std::int64_t load_busy_ns_ = 0;
   bool overloaded_ = false;
   std::uint32_t scans_shed_in_a_row_ = 0;  // whole scans the latency bound dropped in a row
-  double scan_ns_per_point_ = 0.0;  // measured per scan, conversion included (0: not yet)
+  double scan_ns_per_point_ = 0.0;         // measured per scan, conversion included (0: not yet)
 };
 
 }  // namespace raymap::pipeline
