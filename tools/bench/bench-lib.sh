@@ -21,3 +21,17 @@ run_data_sets() {  # run_data_sets FUNCTION DATA_DIR: FUNCTION NAME INPUT [optio
   "$1" 3dtk-points "$2/3dtk/3dtk_points.ply.gz" --trajectory "$2/3dtk/3dtk_trajectory.txt"
   "$1" octomap "$2/octomap/octomap_scan_raycloud.ply.gz"
 }
+
+daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: raymap-load's JSON
+  # raymapd on CONFIG, driven by raymap-load (an OS-1-128, 128 x 1024 points) at RATE scans/s for
+  # SECONDS after a 3 s warm-up; prints raymap-load's JSON on one line.
+  local build=$1 config=$2 domain=$3 rate=$4 seconds=$5 pid out
+  "$build/src/service/raymapd" --config "$config" 2> "${config%.yaml}.log" &
+  pid=$!
+  sleep 2
+  out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
+    --scan-rate "$rate" --duration "$seconds" --warmup 3)
+  kill -TERM "$pid"
+  wait "$pid" || true
+  echo "$out" | tr -d '\n'
+}

@@ -15,6 +15,7 @@ backends=${2:-"cpu opencl"}
 rates=${3:-"10 12 14 16"}
 duration=${DURATION:-20}
 export CYCLONEDDS_URI="file://$PWD/config/cyclonedds-loopback.xml"
+source tools/bench/bench-lib.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 domain=60
@@ -28,14 +29,7 @@ for backend in $backends; do
     sed -e "s/^  name: cpu/  name: $backend/" -e "s/^  domain: 0 /  domain: $domain /" \
       -e "s/^  voxels_topic: .*/  voxels_topic: \"\"/" \
       -e "s/^  publish_lead_s: [0-9.]*/  publish_lead_s: $lead/" config/cpu.yaml > "$work/raymapd.yaml"
-    "$build/src/service/raymapd" --config "$work/raymapd.yaml" 2> "$work/raymapd.log" &
-    pid=$!
-    sleep 2
-    out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
-      --scan-rate "$rate" --duration "$duration" --warmup 3)
-    kill -TERM "$pid"
-    wait "$pid" || true
     printf '{"backend": "%s", "scan_rate_hz": %s, "result": %s}\n' "$backend" "$rate" \
-      "$(echo "$out" | tr -d '\n')"
+      "$(daemon_under_load "$build" "$work/raymapd.yaml" "$domain" "$rate" "$duration")"
   done
 done

@@ -16,6 +16,7 @@ cd "$(dirname "$0")/../.."
 build=${1:-build/release}
 duration=${2:-20}
 export CYCLONEDDS_URI="file://$PWD/config/cyclonedds-loopback.xml"
+source tools/bench/bench-lib.sh
 work=$(mktemp -d)
 colo=""
 cleanup() {
@@ -40,14 +41,7 @@ for rate in ${RATES:-10 20 50 100}; do
     fi
     sed -e "s/^  domain: 0 /  domain: $domain /" -e "s/^  voxels_topic: .*/  voxels_topic: \"\"/" \
       "${extra[@]}" config/cpu.yaml > "$work/raymapd.yaml"
-    "$build/src/service/raymapd" --config "$work/raymapd.yaml" 2> "$work/raymapd.log" &
-    pid=$!
-    sleep 2
-    out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
-      --scan-rate "$rate" --duration "$duration" --warmup 3)
-    kill -TERM "$pid"
-    wait "$pid" || true
     printf '{"rate_hz": %s, "policy": "%s", "result": %s}\n' "$rate" "$policy" \
-      "$(echo "$out" | tr -d '\n')"
+      "$(daemon_under_load "$build" "$work/raymapd.yaml" "$domain" "$rate" "$duration")"
   done
 done
