@@ -11,7 +11,7 @@
 #            (libstdc++ too, so an older distribution runs them)
 #   data/    a subset of ../shared/data ($RAYMAP_KIT_DATA) when present, within the size limit
 #   config/  the loopback DDS profile, raymapd's configuration and the scene files
-#   run.sh, results.sh, checks/   the runner (docs/device-kit.md)
+#   run.sh, results.sh, bench-lib.sh, checks/   the runner (docs/device-kit.md)
 #   KIT.txt  what was built: commit, date, compiler, architectures, contents
 # The kit must stay under 48 MiB; the script fails otherwise, and when any executable needs a
 # library outside the kit (checked with ldd, the kit's RPATH alone). A failed build leaves no
@@ -93,7 +93,7 @@ for lib in "$stage"/lib/*; do
 done
 
 echo "== runner, configuration"
-cp tools/device-kit/run.sh tools/device-kit/results.sh "$stage/"
+cp tools/device-kit/run.sh tools/device-kit/results.sh tools/bench/bench-lib.sh "$stage/"
 cp tools/device-kit/checks/*.sh "$stage/checks/"
 chmod +x "$stage/run.sh"
 cp config/cyclonedds-loopback.xml config/cpu.yaml "$stage/config/"

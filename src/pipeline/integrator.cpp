@@ -217,8 +217,6 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
         break;
       }
       scan_cursor_ = 0;
-      scan_stride_ = 1;
-      scan_planned_ = false;
       scan_first_wait_ns_ = 0;
       last_point_time_ns_ = INT64_MIN;  // the cached pose belongs to the previous scan's sensor
       // The poses must cover the scan's usable point times; a point with a corrupt time is left
@@ -273,20 +271,20 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       scan_ = nullptr;
       continue;
     }
-    if (!scan_planned_) {
-      // The latency bound: take the scan whole, subsampled, or not at all.
-      scan_planned_ = true;
+    // The latency bound: take the scan whole, subsampled, or not at all. (A scan gets here once:
+    // from here on it is converted whole in this pass.)
+    const double scan_rays =
+        static_cast<double>(scan_->header.points) - static_cast<double>(scan_->header.no_return);
+    {
       PublishSchedule schedule;
       schedule.next_publish_ns = stats_.next_publish_ns.load(std::memory_order_relaxed);
       schedule.period_ns = settings_.publish_period_ns;
       schedule.lead_ns = stats_.publish_lead_us.load(std::memory_order_relaxed) * 1000;
-      const double rays =
-          static_cast<double>(scan_->header.points) - static_cast<double>(scan_->header.no_return);
       // A scan that waited for its poses counts from when they came (about now): waiting for
       // the pose source is not a backlog of the backend's.
       const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
       const ShedDecision decision =
-          planScan(now_ns, ready, static_cast<double>(batch_size_), rays,
+          planScan(now_ns, ready, static_cast<double>(batch_size_), scan_rays,
                    std::max(ns_per_ray_, scan_ns_per_point_), schedule, settings_.max_latency_ns,
                    settings_.max_stride, overloaded_ || settings_.shed_always);
       if (decision.drop && scans_shed_in_a_row_ < 2) {
@@ -310,8 +308,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       batch_first_ns_ = scan_->arrival_ns;
     }
     const std::int64_t scan_started = platform::monotonicNowNs();
-    const double taken =
-        static_cast<double>(scan_->header.points - scan_->header.no_return) / scan_stride_;
+    const double taken = scan_rays / scan_stride_;
     while (!convertScan()) {
       integrateBatch(now_ns);
       batch_sensor_ = scan_->sensor;

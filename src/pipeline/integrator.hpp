@@ -113,8 +113,7 @@ class Integrator {
   std::int64_t scan_start_ns_ = 0;       // time of its earliest and latest point
   std::int64_t scan_end_ns_ = 0;
   std::uint32_t scan_cursor_ = 0;
-  std::uint32_t scan_stride_ = 1;  // take every stride-th point (load shedding)
-  bool scan_planned_ = false;      // the latency bound was applied to the current scan
+  std::uint32_t scan_stride_ = 1;  // take every stride-th point (set by the latency bound)
   std::int64_t last_point_time_ns_ = INT64_MIN;  // cache: pose of the last point time
   io::Pose last_sensor_pose_;
 

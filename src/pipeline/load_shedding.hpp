@@ -25,17 +25,15 @@ struct ShedDecision {
 /// A map generated at P - lead (P a publish instant) contains the scans integrated by then, so a
 /// scan taken now, behind `queued_rays` rays already waiting, is complete at now + (queued +
 /// scan) * ns_per_ray and first published at the first instant whose generation follows that.
-/// The bound is `max_latency_ns` after its arrival, or, when later, the instant the scan would
-/// have made had nothing been ahead of it (its own size and its arrival's phase against the
-/// maps): so at the nominal rate nothing is shed, and under overload the delay a backlog adds
-/// is. Within the bound the scan goes in whole. Otherwise it is subsampled uniformly so that it
-/// completes before the generation of the latest instant still within the bound (stride = the
-/// factor it must shrink by), or dropped whole when that takes a stride above `max_stride` or no
-/// such instant is still ahead. `max_latency_ns` <= 0, or no schedule yet, never sheds.
+/// The bound is `max_latency_ns` after its arrival. Unless `overloaded` (the backend has been
+/// busy nearly all the time lately: the input exceeds what it integrates), the bound extends to
+/// the instant the scan would have made had nothing been ahead of it (its own size and its
+/// arrival's phase against the maps), so that only the delay a backlog adds is shed. Within the
+/// bound the scan goes in whole. Otherwise it is subsampled uniformly so that it completes before
+/// the generation of the latest instant still within the bound (stride = the factor it must
+/// shrink by), or dropped whole when that takes a stride above `max_stride` or no such instant is
+/// still ahead. `max_latency_ns` <= 0, or no schedule yet, never sheds.
 /// @rt allocates: no; pure.
-/// `overloaded`: the backend has been busy nearly all the time lately, so the input exceeds what
-/// it integrates. Then the bound is `max_latency_ns` alone (a scan's own map does not extend it),
-/// and the excess is shed rather than let latency grow.
 ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queued_rays,
                       double scan_rays, double ns_per_ray, const PublishSchedule& schedule,
                       std::int64_t max_latency_ns, std::uint32_t max_stride,

@@ -127,10 +127,13 @@ void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& real
                 s.latency.quantileUs(0.99) / 1000.0, realtime.summary.c_str());
 }
 
-void DiagnosticsReporter::appendDropReasons(char* out, std::size_t size) const noexcept {
+void DiagnosticsReporter::describeDrops() noexcept {
   const Totals& c = ring_[head_].totals;
   const Totals& b = base_->totals;
-  const char* sep = "";  // the caller wrote the lead-in
+  char* out = drop_reasons_;
+  const std::size_t size = sizeof(drop_reasons_);
+  out[0] = '\0';
+  const char* sep = "";
   const auto reason = [&](std::uint64_t now, std::uint64_t before, const char* what) {
     if (now > before) {
       appendf(out, size, "%s%" PRIu64 " %s", sep, now - before, what);
@@ -184,11 +187,8 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   stale_ = since > static_cast<std::int64_t>(std::llround(settings_.stale_after_s * 1e9));
   const bool failing = c.integrate_errors > b.integrate_errors;
   backend_failing_ = failing;
-  const bool dropping = c.overflow > b.overflow || c.no_pose > b.no_pose ||
-                        c.malformed > b.malformed || c.too_large > b.too_large ||
-                        c.wrong_frame > b.wrong_frame || c.bad_time > b.bad_time ||
-                        c.poses_dropped > b.poses_dropped || c.scans_shed > b.scans_shed ||
-                        c.points_shed > b.points_shed;
+  describeDrops();
+  const bool dropping = drop_reasons_[0] != '\0';
 
   pipeline_message_[0] = '\0';
   char* m = pipeline_message_;
@@ -213,8 +213,7 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   }
   const bool error = other_publishers_ > 0 || stale_ || failing;
   if (dropping) {
-    appendf(m, size, "%sdropping input: ", m[0] == '\0' ? "" : "; ");
-    appendDropReasons(m, size);
+    appendf(m, size, "%sdropping input: %s", m[0] == '\0' ? "" : "; ", drop_reasons_);
   }
   pipeline_level_ = error      ? dds::kDiagnosticError
                     : dropping ? dds::kDiagnosticWarn

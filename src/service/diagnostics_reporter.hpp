@@ -89,9 +89,9 @@ class DiagnosticsReporter {
   /// The newest sample at least one window older than the current one (else the oldest).
   const Sample& windowBase() const noexcept;
   void decide(std::uint32_t other_map_publishers) noexcept;
-  /// Appends the drop reasons within the window to `out` ("; "-separated, after the caller's
-  /// lead-in).
-  void appendDropReasons(char* out, std::size_t size) const noexcept;
+  /// Writes every input dropped within the window, with its count, to drop_reasons_
+  /// ("; "-separated; empty when nothing was dropped: that is what "dropping" means).
+  void describeDrops() noexcept;
 
   const pipeline::PipelineStats& stats_;
   const pipeline::ScanMailbox& mailbox_;
@@ -113,6 +113,7 @@ class DiagnosticsReporter {
   std::uint8_t pipeline_level_ = 0;
   std::uint8_t heightmap_level_ = 0;
   char pipeline_message_[512] = {};
+  char drop_reasons_[448] = {};
   char heightmap_message_[128] = {};
   char status_line_[256] = {};
 };

@@ -109,7 +109,6 @@ struct Service::Impl {
   /// Backend failures at the last report (diagnostics thread writes): the publisher stops
   /// pinging the watchdog, so that systemd restarts the service.
   std::atomic<bool> backend_failing{false};
-  std::int64_t started_ns = 0;
 
   void applyThreadSettings(const char* name, const ThreadConfig& t);
   void ingestLoop();
@@ -339,9 +338,8 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   for (const SensorConfig& sensor : config.sensors) {
     reporting.sensor_frames.push_back(sensor.frame);
   }
-  impl->started_ns = platform::monotonicNowNs();
-  impl->reporter = std::make_unique<DiagnosticsReporter>(impl->stats, *impl->mailbox, *impl->poses,
-                                                         std::move(reporting), impl->started_ns);
+  impl->reporter = std::make_unique<DiagnosticsReporter>(
+      impl->stats, *impl->mailbox, *impl->poses, std::move(reporting), platform::monotonicNowNs());
   return std::unique_ptr<Service>(new Service(std::move(impl)));
 }
 
@@ -611,6 +609,19 @@ void Service::Impl::publisherLoop() {
   std::int64_t next = platform::monotonicNowNs() + period;
   std::int64_t previous_publish = 0;
   std::int64_t cycle_index = 0;
+  // Moves `next` to the next publish instant; returns how many whole periods had already passed
+  // (skipped, not published in a burst; previous_publish is then no longer a period ago).
+  const auto advance = [&]() -> std::int64_t {
+    next += period;
+    const std::int64_t now = platform::monotonicNowNs();
+    if (now <= next) {
+      return 0;
+    }
+    const std::int64_t missed = (now - next) / period + 1;
+    next += missed * period;
+    previous_publish = 0;
+    return missed;
+  };
   bool first_cycle = true;
   while (!stopping.load(std::memory_order_acquire)) {
     // The first successful cycle sizes the plan and the layers; every later one allocates nothing.
@@ -633,11 +644,7 @@ void Service::Impl::publisherLoop() {
       // lidar publish, and systemd's start limit would leave the robot without a mapper).
       notifier.watchdog();
       previous_publish = 0;  // a gap is not a period
-      next += period;
-      const std::int64_t now = platform::monotonicNowNs();
-      if (now > next) {
-        next += ((now - next) / period + 1) * period;
-      }
+      (void)advance();
       continue;
     }
     const std::int64_t generate_started = platform::monotonicNowNs();
@@ -692,14 +699,9 @@ void Service::Impl::publisherLoop() {
     if (healthy && !backend_failing.load(std::memory_order_relaxed)) {
       notifier.watchdog();
     }
-    next += period;
-    const std::int64_t now = platform::monotonicNowNs();
-    if (now > next) {
-      // Missed whole periods (the machine stalled): skip them instead of bursting.
-      const std::int64_t missed = (now - next) / period + 1;
+    // Missed whole periods (the machine stalled) are skipped instead of published in a burst.
+    if (const std::int64_t missed = advance(); missed > 0) {
       stats.cycles_late.add(static_cast<std::uint64_t>(missed));
-      next += missed * period;
-      previous_publish = 0;
     }
   }
 }

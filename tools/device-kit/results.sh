@@ -21,22 +21,11 @@ json_number() {
   if [[ $1 =~ ^-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?$ ]]; then printf '%s' "$1"; else printf 'null'; fi
 }
 
-# value KEY FILE [N]: the N-th (default first) number after "KEY": in a JSON file; empty if none.
-value() {
-  grep -o "\"$1\": *-\{0,1\}[0-9][0-9.e+-]*" "$2" 2>/dev/null | sed -n "${3:-1}p" |
-    sed 's/.*: *//'
-}
-
-# number KEY FILE [N]: like value, but 0 when there is none (for sums).
+# number KEY FILE [N]: like value (tools/bench/bench-lib.sh), but 0 when there is none (sums).
 number() {
-  local v
-  v=$(value "$@")
+  local v=""
+  [ -f "$2" ] && v=$(value "$@")
   echo "${v:-0}"
-}
-
-# text KEY FILE: the first string value of KEY in a JSON file.
-text() {
-  grep -o "\"$1\": *\"[^\"]*\"" "$2" 2>/dev/null | head -1 | sed 's/^[^:]*: *"//; s/"$//'
 }
 
 # ratio A B [FORMAT]: A / B, empty when either is missing or B is zero.

@@ -53,6 +53,7 @@ mkdir -p "$out" || { echo "run.sh: cannot create the results folder $out" >&2; e
 work=$(mktemp -d "${TMPDIR:-/tmp}/raymap-kit.XXXXXX") || exit 2
 mkdir -p "$work/json" "$work/md" "$work/logs" "$work/tmp"
 : >"$out/run.log"
+source "$kit/bench-lib.sh"  # value, text: numbers and strings out of the tools' JSON
 source "$kit/results.sh"
 for f in "$kit"/checks/*.sh; do
   source "$f"
