@@ -12,7 +12,8 @@ ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queue
                       std::int64_t max_latency_ns, std::uint32_t max_stride,
                       bool overloaded) noexcept {
   ShedDecision keep;
-  if (max_latency_ns <= 0 || schedule.next_publish_ns == 0 || schedule.period_ns <= 0) {
+  if (!overloaded || max_latency_ns <= 0 || schedule.next_publish_ns == 0 ||
+      schedule.period_ns <= 0) {
     return keep;
   }
   const auto period = static_cast<double>(schedule.period_ns);
@@ -26,12 +27,7 @@ ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queue
   const double start = static_cast<double>(now_ns) + queued_rays * ns_per_ray;
   const double work = scan_rays * ns_per_ray;
   const double first = firstAfter(start + work);
-  // The map the scan would have made had nothing been ahead of it: its own size and the phase
-  // of its arrival against the maps. A scan whose own map is already beyond the bound keeps it
-  // (at the nominal rate nothing is shed); only delay added by a backlog is shed.
-  const double own = firstAfter(static_cast<double>(arrival_ns) + work);
-  const double configured = static_cast<double>(arrival_ns + max_latency_ns);
-  const double bound = overloaded ? configured : std::max(configured, own);
+  const double bound = static_cast<double>(arrival_ns + max_latency_ns);  // latest instant
   if (first <= bound) {
     return keep;
   }

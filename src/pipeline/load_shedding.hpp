@@ -22,21 +22,21 @@ struct ShedDecision {
 
 /// @brief Decides how much of a scan fits the latency bound.
 ///
-/// A map generated at P - lead (P a publish instant) contains the scans integrated by then, so a
-/// scan taken now, behind `queued_rays` rays already waiting, is complete at now + (queued +
-/// scan) * ns_per_ray and first published at the first instant whose generation follows that.
-/// The bound is `max_latency_ns` after its arrival. Unless `overloaded` (the backend has been
-/// busy nearly all the time lately: the input exceeds what it integrates), the bound extends to
-/// the instant the scan would have made had nothing been ahead of it (its own size and its
-/// arrival's phase against the maps), so that only the delay a backlog adds is shed. Within the
-/// bound the scan goes in whole. Otherwise it is subsampled uniformly so that it completes before
-/// the generation of the latest instant still within the bound (stride = the factor it must
-/// shrink by), or dropped whole when that takes a stride above `max_stride` or no such instant is
-/// still ahead. `max_latency_ns` <= 0, or no schedule yet, never sheds.
+/// Only while `overloaded` (the backend has been busy nearly all the time lately, so the input
+/// exceeds what it integrates; or the bound is to apply always): otherwise every scan is kept,
+/// since a scan that merely waits behind its predecessor would be thinned for latency the
+/// system is not accumulating. A map generated at P - lead (P a publish instant) contains the
+/// scans integrated by then, so a scan taken now, behind `queued_rays` rays already waiting, is
+/// complete at now + (queued + scan) * ns_per_ray and first published at the first instant whose
+/// generation follows that. Within `max_latency_ns` of its arrival the scan goes in whole.
+/// Otherwise it is subsampled uniformly so that it completes before the generation of the latest
+/// instant still within the bound (stride = the factor it must shrink by), or dropped whole when
+/// that takes a stride above `max_stride` or no such instant is still ahead. `max_latency_ns`
+/// <= 0, or no schedule yet, never sheds.
 /// @rt allocates: no; pure.
 ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queued_rays,
                       double scan_rays, double ns_per_ray, const PublishSchedule& schedule,
                       std::int64_t max_latency_ns, std::uint32_t max_stride,
-                      bool overloaded = false) noexcept;
+                      bool overloaded) noexcept;
 
 }  // namespace raymap::pipeline

@@ -402,7 +402,9 @@ std::vector<dds::ScanPoint> wallScan(std::size_t n) {
 }
 
 TEST(Integrator, LatencyBoundSubsamplesAScanThatWouldMissTheLastMapWithinIt) {
-  auto rig = std::make_unique<Rig>();
+  IntegratorSettings settings = defaultSettings();
+  settings.shed_always = true;  // the bound applies without a second of saturation first
+  auto rig = std::make_unique<Rig>(settings);
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
   // The scan arrived 100 ms ago; the bound (250 ms) allows the map published 0.5 ms from now
   // (no lead), and the integrator starts out assuming 1 us a ray: 1,000 rays need 1 ms, so every
@@ -421,7 +423,9 @@ TEST(Integrator, LatencyBoundSubsamplesAScanThatWouldMissTheLastMapWithinIt) {
 }
 
 TEST(Integrator, LatencyBoundDropsAScanNoMapWithinItCanHold) {
-  auto rig = std::make_unique<Rig>();
+  IntegratorSettings settings = defaultSettings();
+  settings.shed_always = true;  // the bound applies without a second of saturation first
+  auto rig = std::make_unique<Rig>(settings);
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
   // Arrived 300 ms ago: even the next map, 0.5 ms away, is beyond 250 ms.
   rig->stats.next_publish_ns.store(kNow + kMs / 2);
