@@ -14,6 +14,9 @@ namespace raymap::pipeline {
 namespace {
 
 constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
+/// A scan with time for fewer points than this before its deadline is cut short there (or shed
+/// whole when none of it went in yet): a smaller batch would cost more in overhead than it adds.
+constexpr std::uint64_t kMinVisits = 256;
 
 std::int64_t pointTimeNs(std::int64_t stamp_ns, float time_s) noexcept {
   return stamp_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(time_s) * 1e9));
@@ -72,17 +75,14 @@ void Integrator::drainPoses() noexcept {
   }
 }
 
-bool Integrator::convertScan() noexcept {
+bool Integrator::convertScan(std::uint64_t max_visits) noexcept {
   const std::span<const dds::ScanPoint> points = scan_->points();
   const SensorSettings& sensor = sensors_[scan_->sensor];
   const auto capacity = static_cast<std::uint32_t>(rays_.size());
-  while (scan_cursor_ < points.size() && batch_size_ < capacity) {
-    const std::uint32_t index = scan_cursor_++;
+  std::uint32_t index = 0;
+  while (batch_size_ < capacity && max_visits > 0 && order_.next(&index)) {
+    --max_visits;
     const dds::ScanPoint& p = points[index];
-    if (scan_stride_ > 1 && index % scan_stride_ != 0) {
-      stats_.points_shed.add();  // subsampled (latency bound)
-      continue;
-    }
     if ((p.flags & dds::kPointNoReturn) != 0u) {
       stats_.points_no_return.add();  // no direction: nothing to clear along
       continue;
@@ -108,7 +108,26 @@ bool Integrator::convertScan() noexcept {
     ray.flags = 0;
     ray.scan = scan_->sequence;
   }
-  return scan_cursor_ == points.size();
+  return order_.done();
+}
+
+std::int64_t Integrator::batchDue(std::int64_t now_ns) const noexcept {
+  // A scan with a deadline does not wait for company.
+  return batch_due_ns_ != kNever ? now_ns : batch_first_ns_ + settings_.batch_deadline_ns;
+}
+
+std::uint64_t Integrator::visitsBefore(std::int64_t deadline) const noexcept {
+  if (deadline == kNever) {
+    return std::numeric_limits<std::uint64_t>::max();
+  }
+  // The batch's rays still to integrate, then each new point at what a point of a whole scan
+  // has cost lately (deskewing, integration and waits).
+  const double left = static_cast<double>(deadline - settings_.clock_ns()) -
+                      static_cast<double>(batch_size_) * ns_per_ray_;
+  if (left <= 0.0) {
+    return 0;
+  }
+  return static_cast<std::uint64_t>(left / std::max(ns_per_ray_, scan_ns_per_point_));
 }
 
 void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
@@ -117,12 +136,12 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   }
   RayPreparer& preparer = preparers_[batch_sensor_];
   const std::uint64_t rejected_before = preparer.counters().rejected();
-  const std::int64_t batch_started = platform::monotonicNowNs();
+  const std::int64_t batch_started = settings_.clock_ns();
   std::span<const Ray> in(rays_.data(), batch_size_);
   std::unique_lock<platform::PiMutex> lock(map_mutex_, std::defer_lock);
   do {
     lock.lock();
-    const std::int64_t hold_started = platform::monotonicNowNs();
+    const std::int64_t hold_started = settings_.clock_ns();
     std::int64_t now = hold_started;
     // Slices until the hold budget is spent (one slice at least; the whole scan per-scan).
     do {
@@ -152,7 +171,7 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
           break;
         }
       }
-      now = platform::monotonicNowNs();
+      now = settings_.clock_ns();
       if (slice > 0) {
         const double measured =
             static_cast<double>(now - slice_started) / static_cast<double>(slice);
@@ -171,7 +190,7 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
     stats_.newest_scan_stamp_ns.store(scan_stamp_pending_, std::memory_order_relaxed);
   }
   stats_.integrate_batch_us.record(
-      static_cast<std::uint64_t>((platform::monotonicNowNs() - batch_started) / 1000));
+      static_cast<std::uint64_t>((settings_.clock_ns() - batch_started) / 1000));
   // Arrivals go out while the map is locked: the publisher reads how many are queued under the
   // same lock, so it counts exactly the scans its map contains.
   for (std::uint32_t i = 0; i < completed_count_; ++i) {
@@ -181,17 +200,18 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   stats_.rays_rejected.add(preparer.counters().rejected() - rejected_before);
   stats_.scans_integrated.add(completed_count_);
   if (completed_count_ > 0) {
-    stats_.last_scan_integrated_ns.store(platform::monotonicNowNs(), std::memory_order_relaxed);
+    stats_.last_scan_integrated_ns.store(settings_.clock_ns(), std::memory_order_relaxed);
   }
   completed_count_ = 0;
   batch_size_ = 0;
   scan_stamp_pending_ = 0;
+  batch_due_ns_ = kNever;
   (void)now_ns;
 }
 
 std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
   const std::int64_t wake = step_(now_ns);
-  const std::int64_t end = platform::monotonicNowNs();
+  const std::int64_t end = settings_.clock_ns();
   // The load: busy time over about a second. Overloaded from 90 % until it falls below 70 %.
   load_busy_ns_ += end - now_ns;
   if (load_window_start_ns_ == 0) {
@@ -216,7 +236,6 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       if (scan_ == nullptr) {
         break;
       }
-      scan_cursor_ = 0;
       scan_first_wait_ns_ = 0;
       last_point_time_ns_ = INT64_MIN;  // the cached pose belongs to the previous scan's sensor
       // The poses must cover the scan's usable point times; a point with a corrupt time is left
@@ -257,7 +276,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       if (now_ns < give_up) {
         // Earlier scans already in the batch do not wait for this one's poses.
         if (batch_size_ > 0 || completed_count_ > 0) {
-          const std::int64_t due = batch_first_ns_ + settings_.batch_deadline_ns;
+          const std::int64_t due = batchDue(now_ns);
           if (now_ns >= due) {
             integrateBatch(now_ns);
           } else {
@@ -271,15 +290,19 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       scan_ = nullptr;
       continue;
     }
-    // The latency bound: take the scan whole, subsampled, or not at all. (A scan gets here once:
-    // from here on it is converted whole in this pass.)
+    // The latency bound: take the scan whole, subsampled, or not at all, and by when its rays
+    // must be in the map. (A scan gets here once: from here on it is converted in this pass.)
     const double scan_rays =
         static_cast<double>(scan_->header.points) - static_cast<double>(scan_->header.no_return);
+    std::int64_t deadline = kNever;
+    std::uint32_t stride = 1;
     {
       PublishSchedule schedule;
       schedule.next_publish_ns = stats_.next_publish_ns.load(std::memory_order_relaxed);
       schedule.period_ns = settings_.publish_period_ns;
-      schedule.lead_ns = stats_.publish_lead_us.load(std::memory_order_relaxed) * 1000;
+      // The margin of one lock hold: the last slice may overrun the plan by about that much.
+      schedule.lead_ns = stats_.publish_lead_us.load(std::memory_order_relaxed) * 1000 +
+                         settings_.max_lock_hold_ns;
       // A scan that waited for its poses counts from when they came (about now): waiting for
       // the pose source is not a backlog of the backend's.
       const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
@@ -296,10 +319,18 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       }
       // After two scans shed whole, the third goes in at the largest stride whatever the
       // prediction says: the map keeps moving, and the time per ray is measured again (a
-      // prediction inflated by one stalled slice must not shed everything for ever).
+      // prediction inflated by one stalled slice must not shed everything for ever). Its
+      // deadline still holds.
       scans_shed_in_a_row_ = 0;
-      scan_stride_ = decision.drop ? std::max(settings_.max_stride, 1u) : decision.stride;
+      stride = decision.drop ? std::max(settings_.max_stride, 1u) : decision.stride;
+      // The deadline holds whatever the load (only whole scans are shed with queues.shed: drop).
+      if (settings_.max_stride > 1) {
+        const std::int64_t generation =
+            latestGenerationWithin(ready, schedule, settings_.max_latency_ns);
+        deadline = generation != 0 ? generation : kNever;
+      }
     }
+    order_.reset(scan_->header.points, stride);
     if (batch_size_ > 0 && batch_sensor_ != scan_->sensor) {
       integrateBatch(now_ns);  // a batch has one sensor's range limits
     }
@@ -307,24 +338,61 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       batch_sensor_ = scan_->sensor;
       batch_first_ns_ = scan_->arrival_ns;
     }
-    const std::int64_t scan_started = platform::monotonicNowNs();
-    const double taken = scan_rays / scan_stride_;
-    while (!convertScan()) {
-      integrateBatch(now_ns);
+    const std::int64_t scan_started = settings_.clock_ns();
+    bool cut_short = false;
+    for (;;) {
+      const std::uint64_t own = visitsBefore(deadline);
+      if (own < kMinVisits) {
+        cut_short = true;  // out of time: what went in so far is spread over the scan
+        break;
+      }
+      // Rays of earlier scans in the batch go in before their own deadline.
+      const std::uint64_t for_batch = visitsBefore(batch_due_ns_);
+      if (for_batch < kMinVisits && batch_size_ > 0) {
+        integrateBatch(now_ns);
+        batch_sensor_ = scan_->sensor;
+        batch_first_ns_ = scan_->arrival_ns;
+        continue;
+      }
+      if (convertScan(std::min(own, for_batch))) {
+        break;
+      }
+      if (per_scan_ && batch_size_ < rays_.size()) {
+        cut_short = true;  // one backend call per scan: no time to convert the rest
+        break;
+      }
+      integrateBatch(now_ns);  // full, or as much as fits before a deadline
       batch_sensor_ = scan_->sensor;
       batch_first_ns_ = scan_->arrival_ns;
     }
-    completed_[completed_count_++] = scan_->arrival_ns;
-    scan_stamp_pending_ = std::max(scan_stamp_pending_, scan_->header.stamp_ns);
+    const std::uint64_t visited = order_.visited();
+    const std::uint64_t left_out = order_.notVisited();
+    const std::int64_t arrival = scan_->arrival_ns;
+    const std::int64_t stamp = scan_->header.stamp_ns;
     mailbox_.release(scan_);
     scan_ = nullptr;
-    if (per_scan_ || completed_count_ == completed_.size() || batch_size_ == rays_.size()) {
+    if (visited == 0) {
+      stats_.scans_shed.add();  // its deadline passed before any of it could go in
+      continue;
+    }
+    if (left_out > 0) {
+      stats_.points_shed.add(left_out);
+    }
+    if (cut_short) {
+      stats_.scans_cut_short.add();
+    }
+    completed_[completed_count_++] = arrival;
+    scan_stamp_pending_ = std::max(scan_stamp_pending_, stamp);
+    batch_due_ns_ = std::min(batch_due_ns_, deadline);
+    if (per_scan_ || cut_short || completed_count_ == completed_.size() ||
+        batch_size_ == rays_.size() || visitsBefore(batch_due_ns_) < kMinVisits) {
       integrateBatch(now_ns);
     }
-    if (taken >= 1024.0) {
+    if (visited >= 1024) {
       // What a point of a scan really costs, conversion (deskewing) and waits included: the
       // latency bound predicts with this (integration alone under-predicts by the conversion).
-      const double sample = static_cast<double>(platform::monotonicNowNs() - scan_started) / taken;
+      const double sample =
+          static_cast<double>(settings_.clock_ns() - scan_started) / static_cast<double>(visited);
       scan_ns_per_point_ =
           scan_ns_per_point_ == 0.0
               ? sample
@@ -332,7 +400,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
     }
   }
   if (batch_size_ > 0 || completed_count_ > 0) {
-    const std::int64_t due = batch_first_ns_ + settings_.batch_deadline_ns;
+    const std::int64_t due = batchDue(now_ns);
     if (now_ns >= due) {
       integrateBatch(now_ns);
     } else {

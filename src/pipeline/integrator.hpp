@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "platform/clock.hpp"
 #include "platform/pi_mutex.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/ray_preparer.hpp"
@@ -15,6 +16,7 @@
 #include "src/pipeline/pose_history.hpp"
 #include "src/pipeline/pose_update.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
+#include "src/pipeline/scan_order.hpp"
 
 namespace raymap::pipeline {
 
@@ -36,8 +38,12 @@ struct IntegratorSettings {
   /// Subsample by at most this factor; a scan that would need more is dropped. 1 = never
   /// subsample: whole scans are dropped (queues.shed: drop).
   std::uint32_t max_stride = 8;
-  /// The bound applies always, not only while the integrator is saturated (queues.shed_when).
+  /// Planning ahead (subsampling or dropping a scan that is predicted to miss the bound) applies
+  /// always, not only while the integrator is saturated (queues.shed_when). The deadline itself
+  /// holds either way.
   bool shed_always = false;
+  /// The clock (monotonic ns) the integrator reads; tests give it one whose time they control.
+  std::int64_t (*clock_ns)() noexcept = &platform::monotonicNowNs;
 };
 
 /// @brief Per-sensor settings: extrinsic (until tf_static replaces it) and ray limits.
@@ -63,8 +69,11 @@ struct SensorSettings {
 /// publisher waits at most about that long (plus one slice), whatever the batch size. Slices are
 /// sized from the measured time per ray to fit the hold. Before a scan is converted, the latency
 /// bound (load_shedding.hpp) decides whether it goes in whole, subsampled or not at all, and
-/// points whose time is corrupt are left out. Arrival times of scans whose last ray went into
-/// the map go to `integrated` (for the latency measure).
+/// points whose time is corrupt are left out. Its points are then visited coarse to fine
+/// (ScanOrder) until the scan's deadline, the generation of the last map within the bound: a
+/// scan that would miss it is cut short there, and what went in is still spread over the whole
+/// scan. Batches are sized so that rays of a scan whose deadline is near go in before it. Arrival
+/// times of scans whose last ray went into the map go to `integrated` (for the latency measure).
 ///
 /// Thread-safety: one thread. @rt step(): allocates: no; blocks: on map_mutex only.
 class Integrator {
@@ -88,10 +97,16 @@ class Integrator {
  private:
   std::int64_t step_(std::int64_t now_ns) noexcept;  // step() without the load accounting
   void drainPoses() noexcept;
-  /// Converts points of the current scan into the batch until it is done or the batch is full.
-  /// @return true when the scan is finished.
-  bool convertScan() noexcept;
+  /// Converts points of the current scan into the batch until it is done, the batch is full or
+  /// `max_visits` points have been visited. @return true when the scan is finished.
+  bool convertScan(std::uint64_t max_visits) noexcept;
   void integrateBatch(std::int64_t now_ns) noexcept;
+  /// How many more points can be converted (and, with the batch, integrated) before `deadline`
+  /// at the measured cost; UINT64_MAX for kNoDeadline.
+  std::uint64_t visitsBefore(std::int64_t deadline) const noexcept;
+  /// When the partial batch must go in: at once when a scan in it has a deadline, else
+  /// batch_deadline_ns after its first scan arrived.
+  std::int64_t batchDue(std::int64_t now_ns) const noexcept;
 
   VoxelMap& map_;
   Backend& backend_;
@@ -112,8 +127,7 @@ class Integrator {
   std::int64_t scan_first_wait_ns_ = 0;  // when it first waited for poses
   std::int64_t scan_start_ns_ = 0;       // time of its earliest and latest point
   std::int64_t scan_end_ns_ = 0;
-  std::uint32_t scan_cursor_ = 0;
-  std::uint32_t scan_stride_ = 1;  // take every stride-th point (set by the latency bound)
+  ScanOrder order_;  // which points, in which order (stride set by the latency bound)
   std::int64_t last_point_time_ns_ = INT64_MIN;  // cache: pose of the last point time
   io::Pose last_sensor_pose_;
 
@@ -125,8 +139,9 @@ class Integrator {
   std::int64_t batch_first_ns_ = 0;      // arrival of the first scan in the batch
   std::vector<std::int64_t> completed_;  // arrivals of scans whose last ray is in the batch
   std::uint32_t completed_count_ = 0;
-  std::int64_t scan_stamp_pending_ = 0;  // newest header stamp among the completed scans
-  double ns_per_ray_ = 1000.0;           // measured (moving average): sizes the slices
+  std::int64_t scan_stamp_pending_ = 0;    // newest header stamp among the completed scans
+  std::int64_t batch_due_ns_ = INT64_MAX;  // earliest deadline of the completed scans in the batch
+  double ns_per_ray_ = 1000.0;             // measured (moving average): sizes the slices
   // How busy the integrator is (overload detection for the latency bound): time spent in step()
   // over windows of about a second.
   std::int64_t load_window_start_ns_ = 0;

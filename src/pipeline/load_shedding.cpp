@@ -7,6 +7,21 @@
 
 namespace raymap::pipeline {
 
+std::int64_t latestGenerationWithin(std::int64_t arrival_ns, const PublishSchedule& schedule,
+                                    std::int64_t max_latency_ns) noexcept {
+  if (max_latency_ns <= 0 || schedule.next_publish_ns == 0 || schedule.period_ns <= 0) {
+    return 0;
+  }
+  const std::int64_t bound = arrival_ns + max_latency_ns;
+  const std::int64_t ahead = bound - schedule.next_publish_ns;
+  // floor division: the instant may lie before next_publish_ns
+  std::int64_t periods = ahead / schedule.period_ns;
+  if (ahead % schedule.period_ns != 0 && ahead < 0) {
+    --periods;
+  }
+  return schedule.next_publish_ns + periods * schedule.period_ns - schedule.lead_ns;
+}
+
 ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queued_rays,
                       double scan_rays, double ns_per_ray, const PublishSchedule& schedule,
                       std::int64_t max_latency_ns, std::uint32_t max_stride,

@@ -34,6 +34,13 @@ struct ShedDecision {
 /// that takes a stride above `max_stride` or no such instant is still ahead. `max_latency_ns`
 /// <= 0, or no schedule yet, never sheds.
 /// @rt allocates: no; pure.
+/// @brief When generation starts for the latest publish instant within `max_latency_ns` of
+/// `arrival_ns`: the scan's deadline (monotonic ns). A scan whose last ray is in the map by then
+/// is published within the bound. 0 when there is no bound (`max_latency_ns` <= 0) or no
+/// schedule yet. The instant may already be past. @rt allocates: no; pure.
+std::int64_t latestGenerationWithin(std::int64_t arrival_ns, const PublishSchedule& schedule,
+                                    std::int64_t max_latency_ns) noexcept;
+
 ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queued_rays,
                       double scan_rays, double ns_per_ray, const PublishSchedule& schedule,
                       std::int64_t max_latency_ns, std::uint32_t max_stride,

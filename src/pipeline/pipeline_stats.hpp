@@ -53,8 +53,10 @@ struct PipelineStats {
   /// the header stamp (a corrupt time field): the point is left out, not the scan.
   Counter points_bad_time;
   /// Load shedding (queues.max_latency_s): scans dropped whole because no map within the bound
-  /// could contain them, and points left out of subsampled scans.
+  /// could contain them, scans cut short at their deadline (what went in is spread over the
+  /// whole scan), and the points left out of subsampled or cut-short scans.
   Counter scans_shed;
+  Counter scans_cut_short;
   Counter points_shed;
   /// Share of the last second the integrator spent working, percent (above 90 the latency bound
   /// treats the input as more than the backend integrates).

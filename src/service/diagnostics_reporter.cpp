@@ -73,6 +73,7 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   t.no_return = stats_.points_no_return.get();
   t.bad_time = stats_.points_bad_time.get();
   t.scans_shed = stats_.scans_shed.get();
+  t.scans_cut_short = stats_.scans_cut_short.get();
   t.points_shed = stats_.points_shed.get();
   t.maps = stats_.maps_published.get();
   t.withheld = stats_.maps_withheld.get();
@@ -172,6 +173,8 @@ void DiagnosticsReporter::describeDrops() noexcept {
   reason(c.bad_time, b.bad_time, "points with a per-point time out of range");
   reason(c.scans_shed, b.scans_shed,
          "scans shed (no map within queues.max_latency_s could hold them)");
+  reason(c.scans_cut_short, b.scans_cut_short,
+         "scans cut short at their deadline (queues.max_latency_s)");
   reason(c.points_shed, b.points_shed, "points shed by subsampling (latency bound)");
   reason(c.poses_dropped, b.poses_dropped, "poses dropped (pose queue full)");
 }
@@ -285,6 +288,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "points_no_return", "%" PRIu64, c.no_return);
   message_.addValue(s, "points_bad_time", "%" PRIu64, c.bad_time);
   message_.addValue(s, "scans_shed", "%" PRIu64, c.scans_shed);
+  message_.addValue(s, "scans_cut_short", "%" PRIu64, c.scans_cut_short);
   message_.addValue(s, "points_shed", "%" PRIu64, c.points_shed);
   message_.addValue(s, "integrator_load_percent", "%d",
                     stats_.integrator_load_percent.load(std::memory_order_relaxed));

@@ -74,7 +74,7 @@ class DiagnosticsReporter {
   struct Totals {
     std::uint64_t clouds = 0, malformed = 0, too_large = 0, wrong_frame = 0, overflow = 0;
     std::uint64_t scans = 0, no_pose = 0, rays = 0, rejected = 0, no_return = 0, bad_time = 0;
-    std::uint64_t scans_shed = 0, points_shed = 0;
+    std::uint64_t scans_shed = 0, scans_cut_short = 0, points_shed = 0;
     std::uint64_t maps = 0, withheld = 0, late = 0, hm_errors = 0, integrate_errors = 0;
     std::uint64_t poses = 0, poses_malformed = 0, poses_dropped = 0;
     std::array<std::uint64_t, dds::kCloudErrorCount> rejected_by{};

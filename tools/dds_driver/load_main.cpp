@@ -162,7 +162,8 @@ int main(int argc, char** argv) {
       "\"latency_max_ms\": %.1f, \"clouds_received\": %.0f, \"clouds_dropped_overflow\": %.0f, "
       "\"scans_dropped_no_pose\": %.0f, \"clouds_malformed\": %.0f, \"scans_integrated\": %.0f, "
       "\"rays_integrated\": %.0f, \"cycles_late\": %.0f, \"period_error_max_ms\": %.3f, "
-      "\"scans_shed\": %.0f, \"points_shed\": %.0f, \"map_lock_hold_max_ms\": %.2f, "
+      "\"scans_shed\": %.0f, \"scans_cut_short\": %.0f, \"points_shed\": %.0f, "
+      "\"map_lock_hold_max_ms\": %.2f, "
       "\"map_lock_wait_max_ms\": %.2f, \"publish_lead_ms\": %.1f, \"level\": %.0f, "
       "\"integrator_load_percent\": %.0f}\n}\n",
       scan_rate, lidar.pointsPerScan(), static_cast<unsigned long long>(published),
@@ -178,7 +179,7 @@ int main(int argc, char** argv) {
       value("raymapd: pipeline/scans_integrated"), value("raymapd: pipeline/rays_integrated"),
       value("raymapd: height map/cycles_late"),
       value("raymapd: height map/period_error_max_ms_total"), value("raymapd: pipeline/scans_shed"),
-      value("raymapd: pipeline/points_shed"),
+      value("raymapd: pipeline/scans_cut_short"), value("raymapd: pipeline/points_shed"),
       value("raymapd: height map/map_lock_hold_max_ms_total"),
       value("raymapd: height map/map_lock_wait_max_ms_total"),
       value("raymapd: height map/publish_lead_ms"), value("raymapd: pipeline/level"),

@@ -2,6 +2,7 @@
 // Integrator on a real rolling VoxelMap and the CPU backend: deskewing with interpolated poses,
 // extrinsics, waiting for and dropping scans without poses, no-return points, batching and the
 // arrivals of completed scans. The test plays the ingest thread (mailbox and pose queue).
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -28,6 +29,30 @@ constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
 constexpr std::int64_t kStamp = 1000 * kMs;  // header.stamp of the scans (pose clock)
 constexpr std::int64_t kNow = 5000 * kMs;    // monotonic "now" of the integrator thread
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// The integrator's clock in these tests: it stands still except while the backend integrates,
+/// which takes exactly kNsPerRay a ray. Deadlines and the measured cost per ray are then exact,
+/// whatever the machine running the test is doing.
+constexpr std::int64_t kNsPerRay = 1000;
+std::atomic<std::int64_t> g_now_ns{kNow};
+std::int64_t testClock() noexcept { return g_now_ns.load(); }
+
+/// The CPU backend, on the test clock.
+class ClockedBackend final : public Backend {
+ public:
+  explicit ClockedBackend(std::unique_ptr<Backend> inner) : inner_(std::move(inner)) {}
+  const char* name() const noexcept override { return inner_->name(); }
+  unsigned threads() const noexcept override { return inner_->threads(); }
+  Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept override {
+    g_now_ns += static_cast<std::int64_t>(rays.size()) * kNsPerRay;
+    return inner_->integrate(rays);
+  }
+  Expected<void, IntegrateError> synchronise() noexcept override { return inner_->synchronise(); }
+  BackendStats stats() const noexcept override { return inner_->stats(); }
+
+ private:
+  std::unique_ptr<Backend> inner_;
+};
 
 /// A yaw of `radians` about +z.
 io::Quaternion yaw(double radians) {
@@ -72,6 +97,7 @@ IntegratorSettings defaultSettings() {
   s.pose_wait_ns = 50 * kMs;
   s.pose_hold_ns = 20 * kMs;
   s.pose_history = 64;
+  s.clock_ns = &testClock;
   return s;
 }
 
@@ -82,7 +108,7 @@ struct Rig {
                std::vector<SensorSettings> sensors = {sensorAt()},
                Semantics semantics = Semantics::kPerRay)
       : map(test::makeMap(mapConfig(semantics))),
-        backend(test::cpuBackend(map, 1)),
+        backend(std::make_unique<ClockedBackend>(test::cpuBackend(map, 1))),
         mailbox(4, 4096),
         poses(256),
         arrivals(64),
@@ -90,6 +116,7 @@ struct Rig {
                    std::move(sensors), stats) {}
 
   static MapConfig mapConfig(Semantics semantics) {
+    g_now_ns = kNow;  // every rig starts the test clock over
     MapConfig c;
     c.geometry.resolution = 0.1;
     c.geometry.region_voxels = 16;
@@ -406,10 +433,10 @@ TEST(Integrator, LatencyBoundSubsamplesAScanThatWouldMissTheLastMapWithinIt) {
   settings.shed_always = true;  // the bound applies without a second of saturation first
   auto rig = std::make_unique<Rig>(settings);
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
-  // The scan arrived 100 ms ago; the bound (250 ms) allows the map published 0.5 ms from now
-  // (no lead), and the integrator starts out assuming 1 us a ray: 1,000 rays need 1 ms, so every
-  // second point fits.
-  rig->stats.next_publish_ns.store(kNow + kMs / 2);
+  // The scan arrived 100 ms ago; the bound (250 ms) allows the map published 5.75 ms from now,
+  // generated 0.75 ms from now (no lead, and the margin of one 5 ms lock hold), and the
+  // integrator starts out assuming 1 us a ray: 1,000 rays need 1 ms, so every second point fits.
+  rig->stats.next_publish_ns.store(kNow + kMs * 3 / 4 + settings.max_lock_hold_ns);
   rig->stats.publish_lead_us.store(0);
   rig->publishScan(kStamp, wallScan(1000), 0, kNow - 100 * kMs);
 
@@ -418,8 +445,10 @@ TEST(Integrator, LatencyBoundSubsamplesAScanThatWouldMissTheLastMapWithinIt) {
 
   EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
   EXPECT_EQ(rig->stats.scans_shed.get(), 0u);
+  EXPECT_EQ(rig->stats.scans_cut_short.get(), 0u);
   EXPECT_EQ(rig->stats.points_shed.get(), 500u);
   EXPECT_EQ(rig->stats.rays_integrated.get(), 500u);
+  EXPECT_LE(g_now_ns.load(), kNow + kMs * 3 / 4);  // in before the map's generation
 }
 
 TEST(Integrator, LatencyBoundDropsAScanNoMapWithinItCanHold) {
@@ -439,6 +468,65 @@ TEST(Integrator, LatencyBoundDropsAScanNoMapWithinItCanHold) {
   EXPECT_EQ(rig->stats.scans_shed.get(), 1u);
   EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
   EXPECT_EQ(rig->stats.rays_integrated.get(), 10u);
+}
+
+TEST(Integrator, DeadlineCutsAScanShortEvenBelowSaturation) {
+  // Not saturated (no prediction): the scan is taken whole, and its deadline still holds. It
+  // arrived 100 ms ago, so the last map within the bound is generated 2 ms from now; 4,000
+  // rays at 1 us need 4. What went in by then is every second point, spread over the scan.
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->stats.next_publish_ns.store(kNow + 2 * kMs + defaultSettings().max_lock_hold_ns);
+  rig->stats.publish_lead_us.store(0);
+  rig->publishScan(kStamp, wallScan(4000), 0, kNow - 100 * kMs);
+
+  rig->integrator.step(kNow);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_cut_short.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_shed.get(), 0u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 2000u);
+  EXPECT_EQ(rig->stats.points_shed.get(), 2000u);
+  EXPECT_LE(g_now_ns.load(), kNow + 2 * kMs);  // in the map before its generation
+  // Its arrival is queued (the map that is generated next contains it).
+  EXPECT_EQ(rig->drainArrivals(), (std::vector<std::int64_t>{kNow - 100 * kMs}));
+}
+
+TEST(Integrator, AScanWhoseDeadlineHasPassedIsShedWhole) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  // The last map within the bound was generated 2 ms ago.
+  rig->stats.next_publish_ns.store(kNow + 3 * kMs);
+  rig->stats.publish_lead_us.store(0);
+  rig->publishScan(kStamp, wallScan(100), 0, kNow - 100 * kMs);
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.scans_shed.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 0u);
+  EXPECT_EQ(rig->stats.points_shed.get(), 0u);  // shed whole: counted as a scan
+  EXPECT_TRUE(rig->drainArrivals().empty());
+}
+
+TEST(Integrator, EarlierScansInTheBatchGoInBeforeTheirDeadline) {
+  // Scan A (100 rays) must be in the map 2 ms from now; scan B (3,000 rays) has until the map
+  // after. B's rays must not hold A's back: A goes in by its deadline, B whole after.
+  IntegratorSettings settings = defaultSettings();
+  settings.batch_rays = 16384;
+  auto rig = std::make_unique<Rig>(settings);
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->stats.next_publish_ns.store(kNow + 2 * kMs + settings.max_lock_hold_ns);
+  rig->stats.publish_lead_us.store(0);
+  rig->publishScan(kStamp, wallScan(100), 0, kNow - 100 * kMs);
+  rig->publishScan(kStamp, wallScan(3000), 0, kNow);
+
+  rig->integrator.step(kNow);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
+  EXPECT_EQ(rig->stats.scans_cut_short.get(), 0u);
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 3100u);
+  EXPECT_GE(rig->stats.batches.get(), 2u);  // A's batch went in on its own
 }
 
 TEST(Integrator, RaysShorterThanTheMinimumRangeAreRejected) {

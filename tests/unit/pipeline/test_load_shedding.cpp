@@ -124,5 +124,20 @@ TEST(LoadShedding, APublishInstantAlreadyPastIsAdvancedByWholePeriods) {
   EXPECT_EQ(d.stride, 1u);
 }
 
+TEST(LoadShedding, TheDeadlineIsTheGenerationOfTheLastMapWithinTheBound) {
+  // Next map at +100 ms, then +300, +500. Arrived now: +300 is 50 ms past the bound, so the
+  // last map within it is +100, generated 15 ms before.
+  EXPECT_EQ(latestGenerationWithin(kNow, schedule(100), kBound), kNow + 85 * kMs);
+  // Arrived 60 ms from now: +300 is within 250 ms of it.
+  EXPECT_EQ(latestGenerationWithin(kNow + 60 * kMs, schedule(100), kBound), kNow + 285 * kMs);
+  // Arrived long ago: the instant lies before the next one, whole periods back.
+  EXPECT_EQ(latestGenerationWithin(kNow - 500 * kMs, schedule(100), kBound), kNow - 315 * kMs);
+  // Exactly on the bound counts as within it.
+  EXPECT_EQ(latestGenerationWithin(kNow - 150 * kMs, schedule(100), kBound), kNow + 85 * kMs);
+  // No bound, no schedule: no deadline.
+  EXPECT_EQ(latestGenerationWithin(kNow, schedule(100), 0), 0);
+  EXPECT_EQ(latestGenerationWithin(kNow, PublishSchedule{}, kBound), 0);
+}
+
 }  // namespace
 }  // namespace raymap::pipeline
