@@ -17,6 +17,13 @@ constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
 /// A scan with time for fewer points than this before its deadline is cut short there (or shed
 /// whole when none of it went in yet): a smaller batch would cost more in overhead than it adds.
 constexpr std::uint64_t kMinVisits = 256;
+/// The ray budget keeps the integrator's work under this share of its time (the rest absorbs
+/// the variation in scan size and in the machine's other load).
+constexpr double kBudgetLoad = 0.85;
+/// The stride goes up when the pressure passes kBudgetRaise, and down when one step finer would
+/// still keep it below kBudgetLower: in between it stays (no oscillation at the edge).
+constexpr double kBudgetRaise = 0.95;
+constexpr double kBudgetLower = 0.9;
 
 std::int64_t pointTimeNs(std::int64_t stamp_ns, float time_s) noexcept {
   return stamp_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(time_s) * 1e9));
@@ -210,33 +217,84 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
 }
 
 std::int64_t Integrator::step(std::int64_t now_ns) noexcept {
+  busy_since_ns_ = now_ns;
   const std::int64_t wake = step_(now_ns);
-  const std::int64_t end = settings_.clock_ns();
-  // The load: busy time over about a second. Overloaded from 90 % until it falls below 70 %.
-  load_busy_ns_ += end - now_ns;
-  if (load_window_start_ns_ == 0) {
-    load_window_start_ns_ = now_ns;
-  } else if (end - load_window_start_ns_ >= 1000000000) {
-    const double load =
-        static_cast<double>(load_busy_ns_) / static_cast<double>(end - load_window_start_ns_);
-    overloaded_ = overloaded_ ? load > 0.7 : load > 0.9;
-    stats_.integrator_load_percent.store(static_cast<std::int32_t>(std::lround(load * 100.0)),
-                                         std::memory_order_relaxed);
-    load_window_start_ns_ = end;
-    load_busy_ns_ = 0;
-  }
+  accountLoad(settings_.clock_ns());
   return wake;
 }
 
+void Integrator::accountLoad(std::int64_t now_ns) noexcept {
+  // The load: busy time over about a second. Overloaded from 90 % until it falls below 70 %.
+  // Called between scans too: under overload one step() can last as long as the input does.
+  load_busy_ns_ += now_ns - busy_since_ns_;
+  busy_since_ns_ = now_ns;
+  if (load_window_start_ns_ == 0) {
+    load_window_start_ns_ = now_ns;
+    load_busy_ns_ = 0;
+    return;
+  }
+  const std::int64_t window = now_ns - load_window_start_ns_;
+  if (window < 1000000000) {
+    return;
+  }
+  const double load = static_cast<double>(load_busy_ns_) / static_cast<double>(window);
+  overloaded_ = overloaded_ ? load > 0.7 : load > 0.9;
+  stats_.integrator_load_percent.store(static_cast<std::int32_t>(std::lround(load * 100.0)),
+                                       std::memory_order_relaxed);
+  updateRayBudget(load);
+  load_window_start_ns_ = now_ns;
+  load_busy_ns_ = 0;
+}
+
+void Integrator::updateRayBudget(double load) noexcept {
+  // The pressure: the load the integrator would have had at this stride had it taken every
+  // scan offered (those dropped on overflow and those shed whole included). The stride follows
+  // it to keep the load near kBudgetLoad, thinning every scan alike rather than letting whole
+  // scans be dropped; it comes down again once the pressure is clearly lower (hysteresis).
+  const std::uint64_t dropped = mailbox_.droppedOldest();
+  const double per_scan = window_scans_taken_ > 0
+                              ? window_points_taken_ / static_cast<double>(window_scans_taken_)
+                              : 0.0;
+  const double offered =
+      window_points_taken_ + static_cast<double>(dropped - window_dropped_before_) * per_scan;
+  window_points_taken_ = 0.0;
+  window_scans_taken_ = 0;
+  window_dropped_before_ = dropped;
+  const double accepted = window_points_accepted_;
+  window_points_accepted_ = 0.0;
+  if (settings_.max_latency_ns <= 0 || settings_.max_stride <= 1 || offered <= 0.0) {
+    budget_stride_ = 1;
+  } else {
+    const double pressure = accepted > 0.0 ? load * offered / accepted : 1.0;
+    const double wanted = static_cast<double>(budget_stride_) * pressure / kBudgetLoad;
+    if (pressure > kBudgetRaise) {
+      budget_stride_ = static_cast<std::uint32_t>(
+          std::min(std::ceil(wanted), static_cast<double>(settings_.max_stride)));
+    } else if (budget_stride_ > 1 && pressure * static_cast<double>(budget_stride_) /
+                                             static_cast<double>(budget_stride_ - 1) <
+                                         kBudgetLower) {
+      // One step finer would still stay below kBudgetLower.
+      budget_stride_ = static_cast<std::uint32_t>(std::max(std::ceil(wanted), 1.0));
+    }
+  }
+  stats_.subsample_stride.store(static_cast<std::int32_t>(budget_stride_),
+                                std::memory_order_relaxed);
+}
+
 std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
-  drainPoses();
   for (;;) {
+    accountLoad(settings_.clock_ns());
+    // Poses that came while the last scan went in: a scan taken after a long one must not wait
+    // for poses that are already queued.
+    drainPoses();
     if (scan_ == nullptr) {
       scan_ = mailbox_.take();
       if (scan_ == nullptr) {
         break;
       }
       scan_first_wait_ns_ = 0;
+      window_points_taken_ += static_cast<double>(scan_->header.points);
+      ++window_scans_taken_;
       last_point_time_ns_ = INT64_MIN;  // the cached pose belongs to the previous scan's sensor
       // The poses must cover the scan's usable point times; a point with a corrupt time is left
       // out (convertScan skips it), not allowed to stretch the scan.
@@ -306,10 +364,10 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       // A scan that waited for its poses counts from when they came (about now): waiting for
       // the pose source is not a backlog of the backend's.
       const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
-      const ShedDecision decision =
-          planScan(now_ns, ready, static_cast<double>(batch_size_), scan_rays,
-                   std::max(ns_per_ray_, scan_ns_per_point_), schedule, settings_.max_latency_ns,
-                   settings_.max_stride, overloaded_ || settings_.shed_always);
+      const ShedDecision decision = planScan(
+          now_ns, ready, static_cast<double>(batch_size_), scan_rays,
+          std::max(ns_per_ray_, scan_ns_per_point_), schedule, settings_.max_latency_ns,
+          settings_.max_stride, overloaded_ || budget_stride_ > 1 || settings_.shed_always);
       if (decision.drop && scans_shed_in_a_row_ < 2) {
         ++scans_shed_in_a_row_;
         stats_.scans_shed.add();
@@ -322,7 +380,8 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       // prediction inflated by one stalled slice must not shed everything for ever). Its
       // deadline still holds.
       scans_shed_in_a_row_ = 0;
-      stride = decision.drop ? std::max(settings_.max_stride, 1u) : decision.stride;
+      stride = decision.drop ? std::max(settings_.max_stride, 1u)
+                             : std::max(decision.stride, budget_stride_);
       // The deadline holds whatever the load (only whole scans are shed with queues.shed: drop).
       if (settings_.max_stride > 1) {
         const std::int64_t generation =
@@ -369,6 +428,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
     const std::uint64_t left_out = order_.notVisited();
     const std::int64_t arrival = scan_->arrival_ns;
     const std::int64_t stamp = scan_->header.stamp_ns;
+    const std::uint32_t points = scan_->header.points;
     mailbox_.release(scan_);
     scan_ = nullptr;
     if (visited == 0) {
@@ -381,6 +441,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
     if (cut_short) {
       stats_.scans_cut_short.add();
     }
+    window_points_accepted_ += static_cast<double>(points);
     completed_[completed_count_++] = arrival;
     scan_stamp_pending_ = std::max(scan_stamp_pending_, stamp);
     batch_due_ns_ = std::min(batch_due_ns_, deadline);

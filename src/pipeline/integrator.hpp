@@ -107,6 +107,12 @@ class Integrator {
   /// When the partial batch must go in: at once when a scan in it has a deadline, else
   /// batch_deadline_ns after its first scan arrived.
   std::int64_t batchDue(std::int64_t now_ns) const noexcept;
+  /// At the end of each load window (`load`: its busy share): the stride the points offered
+  /// over it need (the ray budget).
+  void updateRayBudget(double load) noexcept;
+  /// Adds the time since busy_since_ns_ to the load window, and closes the window once it is a
+  /// second long (load, overload flag, ray budget).
+  void accountLoad(std::int64_t now_ns) noexcept;
 
   VoxelMap& map_;
   Backend& backend_;
@@ -146,7 +152,15 @@ class Integrator {
   // over windows of about a second.
   std::int64_t load_window_start_ns_ = 0;
   std::int64_t load_busy_ns_ = 0;
+  std::int64_t busy_since_ns_ = 0;  // start of the busy time not yet accounted
   bool overloaded_ = false;
+  // The ray budget: points offered over the load window (scans taken plus those the mailbox
+  // dropped), and the stride every scan gets while they need more than the backend integrates.
+  double window_points_taken_ = 0.0;
+  double window_points_accepted_ = 0.0;  // of scans that went in (whole or in part)
+  std::uint64_t window_scans_taken_ = 0;
+  std::uint64_t window_dropped_before_ = 0;
+  std::uint32_t budget_stride_ = 1;
   std::uint32_t scans_shed_in_a_row_ = 0;  // whole scans the latency bound dropped in a row
   double scan_ns_per_point_ = 0.0;         // measured per scan, conversion included (0: not yet)
 };

@@ -61,6 +61,9 @@ struct PipelineStats {
   /// Share of the last second the integrator spent working, percent (above 90 the latency bound
   /// treats the input as more than the backend integrates).
   std::atomic<std::int32_t> integrator_load_percent{0};
+  /// The ray budget: every scan is subsampled by this factor (1 = whole) while the points
+  /// arriving over the last second need more than the backend integrates.
+  std::atomic<std::int32_t> subsample_stride{1};
   /// Monotonic time the last scan went into the map (0: none yet); the staleness rule.
   std::atomic<std::int64_t> last_scan_integrated_ns{0};
   Counter rays_integrated;     ///< rays handed to the backend

@@ -292,6 +292,8 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "points_shed", "%" PRIu64, c.points_shed);
   message_.addValue(s, "integrator_load_percent", "%d",
                     stats_.integrator_load_percent.load(std::memory_order_relaxed));
+  message_.addValue(s, "subsample_stride", "%d",
+                    stats_.subsample_stride.load(std::memory_order_relaxed));
   message_.addValue(s, "integrate_errors", "%" PRIu64, c.integrate_errors);
   message_.addValue(s, "scan_queue_depth", "%u", mailbox_.waiting());
   message_.addValue(s, "scan_queue_capacity", "%u", mailbox_.capacity() - 1);

@@ -529,6 +529,32 @@ TEST(Integrator, EarlierScansInTheBatchGoInBeforeTheirDeadline) {
   EXPECT_GE(rig->stats.batches.get(), 2u);  // A's batch went in on its own
 }
 
+TEST(Integrator, RayBudgetThinsEveryScanWhileTheInputExceedsTheBackendAndNotAfter) {
+  // Scans come faster than the backend integrates them (the test clock runs only while it
+  // integrates: it is busy all the time, and the mailbox drops the oldest): after a second every
+  // scan is subsampled alike (subsample_stride > 1). Once scans come with idle time between
+  // them, the stride comes back to 1.
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(0, makePose({0.0, 0.0, 0.0}));
+  rig->pushPose(kNow * 4, makePose({0.0, 0.0, 0.0}));
+  std::int64_t stamp = kStamp;
+  for (int i = 0; i < 600; ++i) {  // 3 scans of 4 ms each step: 1.2 s of work per 400 ms offered
+    for (int k = 0; k < 3; ++k) {
+      rig->publishScan(stamp += kMs, wallScan(4000), 0, g_now_ns.load());
+    }
+    rig->integrator.step(g_now_ns.load());
+  }
+  EXPECT_GT(rig->stats.subsample_stride.load(), 1);
+  EXPECT_GT(rig->stats.points_shed.get(), 0u);
+  EXPECT_EQ(rig->stats.scans_shed.get(), 0u);  // no schedule: nothing is shed whole
+  for (int i = 0; i < 200; ++i) {              // one scan every 20 ms, at most 4 ms of work
+    rig->publishScan(stamp += kMs, wallScan(4000), 0, g_now_ns.load());
+    rig->integrator.step(g_now_ns.load());
+    g_now_ns += 20 * kMs;
+  }
+  EXPECT_EQ(rig->stats.subsample_stride.load(), 1);
+}
+
 TEST(Integrator, RaysShorterThanTheMinimumRangeAreRejected) {
   auto rig = std::make_unique<Rig>();  // min range 0.2 m
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
