@@ -92,6 +92,17 @@ std::uint64_t LayerSchema::bytesPerRegion(std::uint32_t voxels_per_region) const
   return bytes;
 }
 
+std::uint64_t LayerSchema::bytesWrittenAtCreation(std::uint32_t voxels_per_region) const noexcept {
+  std::uint64_t bytes = 0;
+  for (int i = 0; i < count_; ++i) {
+    const LayerSpec& spec = specs_[static_cast<std::size_t>(i)];
+    if (!spec.clearsToZero()) {
+      bytes += std::uint64_t{spec.bytes_per_voxel} * voxels_per_region;
+    }
+  }
+  return bytes;
+}
+
 bool operator==(const LayerSchema& a, const LayerSchema& b) noexcept {
   if (a.count_ != b.count_) {
     return false;

@@ -75,6 +75,10 @@ class LayerSchema {
   const LayerSpec& at(int index) const noexcept;
   /// @brief Bytes of all layers of one region of `voxels_per_region` voxels.
   std::uint64_t bytesPerRegion(std::uint32_t voxels_per_region) const noexcept;
+  /// @brief Bytes a newly created region writes at once: every layer whose clear value is not
+  /// zero (the pool's untouched pages are zeros, so zero-clearing layers cost memory only where
+  /// they are written later). The least resident memory a region can take.
+  std::uint64_t bytesWrittenAtCreation(std::uint32_t voxels_per_region) const noexcept;
 
   friend bool operator==(const LayerSchema& a, const LayerSchema& b) noexcept;
 

@@ -625,6 +625,25 @@ TEST(Cli, MapTooBigForMaxMemoryFailsAndLeavesNoOutput) {
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
+TEST(Cli, MaxMemoryBeyondTheMachineIsSizedToWhatItCanHold) {
+  // 64 TiB of regions is about 179 million slots: their bookkeeping alone used to be committed
+  // up front (about 28 GB; the OOM killer ended the run). The pool is now sized to what this
+  // machine's memory can fill, said in a note, and a small map costs what it uses.
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  const std::string stats = dir.file("out.json");
+
+  const RunResult r =
+      runRaymap({"populate", input, "--max-memory", "64TiB", "--stats-json", stats});
+
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: note: --max-memory asks for")) << r.err;
+  EXPECT_TRUE(contains(r.err, "this machine can hold")) << r.err;
+  const std::string json = readFile(stats);
+  EXPECT_LT(jsonCount(json, "peak_rss_bytes"), std::uint64_t{1} << 30) << json;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Success paths
 // ---------------------------------------------------------------------------------------------

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap populate`: build a map from a recorded file.
+#include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -10,6 +12,7 @@
 
 #include <unistd.h>
 
+#include "platform/memory.hpp"
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
 #include "tools/raymap/cli_options.hpp"
@@ -83,6 +86,42 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
       withCommas(b.bytes_to_device >> 20).c_str(), withCommas(b.bytes_from_device >> 20).c_str());
 }
 
+/// Sizes a global map's region pool to what this machine can hold. The pool itself is address
+/// space, committed as regions are written, but every slot costs bookkeeping up front (the
+/// index, the free list, the CPU workers' tables: about 160 bytes) and a region commits at least
+/// its non-zero-clearing layers when it is created, so more slots than memory can fill would
+/// only cost memory (`--max-memory 64TiB` used to be killed by the OOM killer before the first
+/// ray). @return the note to print when the pool was limited, else empty.
+std::string limitPoolToMemory(MapConfig& map) {
+  if (map.policy != StorePolicy::kGlobal) {
+    return {};
+  }
+  const std::uint32_t voxels = map.geometry.voxelsPerRegion();
+  const std::uint64_t per_region = map.schema().bytesPerRegion(voxels);
+  const std::uint64_t at_creation =
+      std::max<std::uint64_t>(map.schema().bytesWrittenAtCreation(voxels), 4096);
+  const platform::MemoryLimit limit = platform::availableMemory();
+  if (per_region == 0 || limit.bytes == UINT64_MAX) {
+    return {};
+  }
+  // Address space limits (RLIMIT_AS) count the whole pool, written or not, and everything else
+  // the process maps (a quarter is left for that).
+  const bool address_space = limit.source.find("RLIMIT_AS") != std::string::npos;
+  const std::uint64_t usable = std::max<std::uint64_t>(
+      address_space ? limit.bytes / 4 * 3 / per_region : limit.bytes / at_creation, 1);
+  if (map.capacityRegions() <= usable) {
+    return {};
+  }
+  const std::uint64_t asked = map.capacityRegions();
+  map.memory_budget_bytes = usable * per_region;
+  const auto mib = [](std::uint64_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
+  return "--max-memory asks for " + std::to_string(asked) + " regions; this machine can hold " +
+         std::to_string(usable) + " (" + mib(limit.bytes) + " available by " + limit.source +
+         ", each region takes " + std::to_string((address_space ? per_region : at_creation) >> 10) +
+         (address_space ? " KiB of address space" : " KiB when created") +
+         "): the map is sized for those";
+}
+
 int runPopulate(const PopulateFlags& f) {
   const char* command = "populate";
   auto options = toPopulateOptions(f.input, f.mapping);
@@ -107,6 +146,10 @@ int runPopulate(const PopulateFlags& f) {
       }
     }
   }
+  const std::string pool_note = limitPoolToMemory(options->map);
+  if (!pool_note.empty() && !f.quiet) {
+    std::fprintf(stderr, "raymap populate: note: %s\n", pool_note.c_str());
+  }
   auto map = VoxelMap::create(options->map);
   if (!map) {
     printError(command, map.error().message);
@@ -115,6 +158,9 @@ int runPopulate(const PopulateFlags& f) {
   auto report = populateFromFile(*map, *options);
   if (!report) {
     printError(command, report.error().message);
+    if (!pool_note.empty()) {
+      std::fprintf(stderr, "raymap populate: the pool was limited: %s\n", pool_note.c_str());
+    }
     return kExitFailure;
   }
   for (const std::string* warning :
