@@ -9,7 +9,8 @@
 #
 # Environment: SOAK_OUT (output folder, default soak-results/<UTC time>), SOAK_BEAMS (lidar beams,
 # default 128: an OS-1-128 at 1024 columns and 10 Hz, 1.31 M points/s), SOAK_CONFIG (raymapd
-# configuration, default config/cpu.yaml), SOAK_DOMAIN (DDS domain, default 43).
+# configuration, default config/cpu.yaml), SOAK_DOMAIN (DDS domain, default 43), SOAK_COLOAD=1
+# (a second process keeps one core busy for the whole soak, as other software on a robot does).
 # Needs python3 with matplotlib for the plot (apt-get install python3-matplotlib); without it the
 # CSV and the summary are still written.
 set -euo pipefail
@@ -37,6 +38,10 @@ cleanup() {
   rm -rf "$work"
 }
 trap cleanup EXIT
+if [ "${SOAK_COLOAD:-0}" = 1 ]; then
+  (while :; do :; done) &
+  pids+=($!)
+fi
 
 # The recording: the yard drive with a 128 x 1024 lidar (2.5 s, 25 scans), replayed in a loop.
 sed -e "s/^  beams: .*/  beams: $beams/" config/scenes/yard.yaml > "$work/scene.yaml"

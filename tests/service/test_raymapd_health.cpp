@@ -82,8 +82,11 @@ TEST(RaymapdHealth, APointWithACorruptTimeCostsThatPointAndIsAWarning) {
       s.ros.diagnostics->number("raymapd: pipeline/clouds_received").value_or(0);
   const double integrated =
       s.ros.diagnostics->number("raymapd: pipeline/scans_integrated").value_or(0);
+  // On a busy machine the latency bound may shed a scan whose deadline passed: counted there.
+  const double shed = s.ros.diagnostics->number("raymapd: pipeline/scans_shed").value_or(0);
   EXPECT_GE(received, 20.0);
-  EXPECT_GE(integrated, received - 3.0) << "the scans go in (the last may still be on its way)";
+  EXPECT_GE(integrated + shed, received - 3.0)
+      << "the scans go in (the last may still be on its way)";
   EXPECT_EQ(s.ros.diagnostics->number("raymapd: pipeline/scans_dropped_no_pose").value_or(-1), 0.0);
   EXPECT_GE(s.ros.diagnostics->number("raymapd: pipeline/points_bad_time").value_or(0),
             received - 3.0);

@@ -509,6 +509,19 @@ TEST(Integrator, AScanWhoseDeadlineHasPassedIsShedWhole) {
   EXPECT_TRUE(rig->drainArrivals().empty());
 }
 
+TEST(Integrator, AnEmptyScanWithTimeLeftIsIntegratedNotShed) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->stats.next_publish_ns.store(kNow + 100 * kMs);
+  rig->publishScan(kStamp, {}, 0, kNow);
+
+  rig->integrator.step(kNow);
+
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_shed.get(), 0u);
+  EXPECT_EQ(rig->stats.scans_cut_short.get(), 0u);
+}
+
 TEST(Integrator, EarlierScansInTheBatchGoInBeforeTheirDeadline) {
   // Scan A (100 rays) must be in the map 2 ms from now; scan B (3,000 rays) has until the map
   // after. B's rays must not hold A's back: A goes in by its deadline, B whole after.
