@@ -184,6 +184,8 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
       slot = &z;
     } else if (nameIs(name, options.intensity_field)) {
       slot = &intensity;
+    } else if (options.ignore_time) {
+      // every point at the header stamp
     } else if (options.time_field != nullptr) {
       if (nameIs(name, options.time_field)) {
         slot = &explicit_time;
@@ -235,7 +237,9 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
   // time
   Field time_field;
   TimeRule time_rule = TimeRule::kNone;
-  if (options.time_field != nullptr) {
+  if (options.ignore_time) {
+    // time_field stays absent
+  } else if (options.time_field != nullptr) {
     if (!explicit_time.present) {
       return Unexpected(CloudError::kMissingTimeField);
     }

@@ -81,6 +81,9 @@ struct CloudDecodeOptions {
   /// "time_stamp" that the cloud has (no time field: time_s = 0). Named explicitly: the cloud
   /// must have it (else kMissingTimeField).
   const char* time_field = nullptr;
+  /// No per-point time: every point at the header stamp, whatever fields the cloud has
+  /// (sensors[].time_field: none). Overrides time_field.
+  bool ignore_time = false;
   TimeUnit time_unit = TimeUnit::kAuto;
   /// The field read into ScanPoint::intensity (any numeric type); nullptr = none.
   const char* intensity_field = "intensity";

@@ -292,6 +292,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       if (scan_ == nullptr) {
         break;
       }
+      drainPoses();  // what ingest queued before this scan (an extrinsic from its first cloud)
       scan_first_wait_ns_ = 0;
       window_points_taken_ += static_cast<double>(scan_->header.points);
       ++window_scans_taken_;
@@ -431,7 +432,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
     const std::uint32_t points = scan_->header.points;
     mailbox_.release(scan_);
     scan_ = nullptr;
-    if (visited == 0) {
+    if (cut_short && visited == 0) {
       stats_.scans_shed.add();  // its deadline passed before any of it could go in
       continue;
     }

@@ -45,6 +45,12 @@ struct PipelineStats {
   Counter poses_malformed;  ///< rejected by the decoder
   Counter poses_dropped;    ///< pose queue full (the integrator is far behind)
   Counter tf_ignored;       ///< TF transforms between frames the service does not use
+  /// /tf transforms of the base's moving edge that could not be composed up to world_frame (an
+  /// edge above it has not come yet): no pose for that stamp.
+  Counter tf_unresolved;
+  /// Static TF edges kept (/tf_static, any order), and sensor extrinsics resolved from them.
+  std::atomic<std::uint32_t> tf_static_edges{0};
+  std::atomic<std::uint32_t> extrinsics_from_tf{0};
   // ---- integrator thread ----
   Counter scans_integrated;  ///< scans whose every ray went into the map
   Counter scans_no_pose;     ///< dropped: no pose covered the scan in time

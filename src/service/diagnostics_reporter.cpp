@@ -294,6 +294,12 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
                     stats_.integrator_load_percent.load(std::memory_order_relaxed));
   message_.addValue(s, "subsample_stride", "%d",
                     stats_.subsample_stride.load(std::memory_order_relaxed));
+  message_.addValue(s, "tf_ignored", "%" PRIu64, stats_.tf_ignored.get());
+  message_.addValue(s, "tf_unresolved", "%" PRIu64, stats_.tf_unresolved.get());
+  message_.addValue(s, "tf_static_edges", "%u",
+                    stats_.tf_static_edges.load(std::memory_order_relaxed));
+  message_.addValue(s, "extrinsics_from_tf", "%u",
+                    stats_.extrinsics_from_tf.load(std::memory_order_relaxed));
   message_.addValue(s, "integrate_errors", "%" PRIu64, c.integrate_errors);
   message_.addValue(s, "scan_queue_depth", "%u", mailbox_.waiting());
   message_.addValue(s, "scan_queue_capacity", "%u", mailbox_.capacity() - 1);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <fstream>
 #include <numeric>
+#include <string>
+#include <thread>
 
 #include "sensor_msgs.h"
 #include <gtest/gtest.h>
@@ -232,7 +234,8 @@ TEST(Raymapd, OverflowAtTenTimesTheInputRateDropsOldestScansAndPublishesOnTime) 
   const std::string message = ros.diagnostics->values().at("raymapd: pipeline/message");
   EXPECT_EQ(level, "1") << message;
   EXPECT_TRUE(message.find("oldest first") != std::string::npos ||
-              message.find("shed") != std::string::npos)
+              message.find("shed") != std::string::npos ||
+              message.find("cut short") != std::string::npos)
       << message;
   ros.settle(1.2, &maps);
   EXPECT_TRUE(daemon.process->running()) << daemon.log();
@@ -334,6 +337,74 @@ TEST(Raymapd, UsesTheLatchedTfStaticExtrinsicPublishedBeforeItStarted) {
   ros.settle(0.5, &maps);
   ASSERT_GE(maps.size(), 10u) << daemon.log();
   // With the extrinsic ignored every surface would come out 0.5 m low.
+  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
+  EXPECT_GE(heights.surfaces, 1000);
+  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
+      << heights.within << " of " << heights.surfaces;
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
+TEST(Raymapd, ResolvesATfStaticChainThatArrivedBeforeTheFirstCloudWithTheFrameLearned) {
+  const std::uint32_t domain = uniqueDomain();
+  // As robots publish it: sensors[].frame left to the first cloud (""), and the lidar 0.5 m
+  // above base_link through a mount (base_link -> mount 0.3 m, mount -> lidar 0.2 m), both
+  // edges on /tf_static before any cloud, the child edge first. The YAML's extrinsic is the
+  // identity. Before, a transform that came before the sensor's frame was known was dropped.
+  std::string config = serviceConfig(domain);
+  config.replace(config.find("frame: lidar,"), 13, "frame: \"\",");
+  config.replace(config.find("base_height: 1.2"), 16, "base_height: 0.7");
+  RunningDaemon daemon(config, false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(10.0));
+  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.2}, {}}, "mount", "lidar");
+  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.3}, {}}, "base_link", "mount");
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
+  driver::PlaybackOptions options;
+  options.sensor_in_base = {0.0, 0.0, 0.5};  // the published base pose is 0.5 m below the lidar
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, options, 3.0, maps);
+  ros.settle(0.5, &maps);
+  ASSERT_GE(maps.size(), 10u) << daemon.log();
+  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
+  EXPECT_GE(heights.surfaces, 1000);
+  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
+      << heights.within << " of " << heights.surfaces;
+  EXPECT_EQ(ros.diagnostics->number("raymapd: pipeline/tf_static_edges").value_or(0.0), 2.0);
+  EXPECT_GE(ros.diagnostics->number("raymapd: pipeline/extrinsics_from_tf").value_or(0.0), 1.0);
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
+TEST(Raymapd, ComposesATfChainFromTheWorldFrameToTheBase) {
+  const std::uint32_t domain = uniqueDomain();
+  // As robots publish it: map -> odom (localisation, rarely) and odom -> base_link (odometry, at
+  // 100 Hz) on /tf; raymapd maps in `map`. There is no direct map -> base_link transform, so
+  // without composing the chain no scan would ever get a pose.
+  std::string config = serviceConfig(domain);
+  config.replace(config.find("source: odometry"), 16, "source: tf");
+  config.replace(config.find("world_frame: odom"), 17, "world_frame: map");
+  RunningDaemon daemon(config, false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(10.0));
+  for (int i = 0; i < 5; ++i) {  // /tf is volatile: a few times, once matched is enough
+    ros.publisher->publishTf(0, io::Pose{}, "map", "odom");
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
+  driver::PlaybackOptions options;
+  options.pose_as_tf = true;  // odom -> base_link
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, options, 3.0, maps);
+  ros.settle(0.5, &maps);
+  ASSERT_GE(maps.size(), 10u) << daemon.log();
+  EXPECT_EQ(maps.back().frame_id, "map");
   const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
   EXPECT_GE(heights.surfaces, 1000);
   EXPECT_GE(heights.within, heights.surfaces * 95 / 100)

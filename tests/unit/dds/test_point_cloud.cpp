@@ -278,6 +278,23 @@ TEST(DecodePointCloud2, ExplicitTimeFieldAndUnit) {
   EXPECT_EQ(missing.error(), CloudError::kMissingTimeField);
 }
 
+TEST(DecodePointCloud2, IgnoredTimePutsEveryPointAtTheStampWhateverFieldsTheCloudHas) {
+  // sensors[].time_field: none (a field named "none" would reject every cloud).
+  std::vector<ScanPoint> out(1);
+  CloudDecodeOptions none;
+  none.ignore_time = true;
+  none.time_field = "none";  // even with a name set: ignore_time wins
+
+  auto with_t = decode(encodeCloud(cloudWithField("t", kUInt32, 40'000)), out, none);
+  ASSERT_TRUE(with_t.has_value());
+  EXPECT_EQ(out[0].time_s, 0.0f);
+  EXPECT_FALSE(with_t.value().has_time);
+
+  auto without = decode(encodeCloud(cloudWithField("intensity", kUInt8, 7)), out, none);
+  ASSERT_TRUE(without.has_value());
+  EXPECT_EQ(out[0].time_s, 0.0f);
+}
+
 TEST(DecodePointCloud2, IntensityOfAnyNumericType) {
   std::vector<ScanPoint> out(1);
 
