@@ -316,6 +316,33 @@ TEST(Raymapd, TakesThePoseFromTfAndPublishesOccupiedVoxelsWhileSubscribed) {
   EXPECT_EQ(stopped->first, 0) << daemon.log();
 }
 
+/// Plays a still 32 x 1024 lidar in the yard for 3 s (then 0.5 s to settle) and checks that the
+/// last GridMap, at least the tenth, has the scene's heights on 95 % of at least 1,000 surface
+/// cells. @return that GridMap's frame.
+std::string expectSceneHeightsAfterPlaying(RosSide& ros, RunningDaemon& daemon,
+                                           const driver::PlaybackOptions& options) {
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, options, 3.0, maps);
+  ros.settle(0.5, &maps);
+  if (maps.size() < 10u) {
+    ADD_FAILURE() << maps.size() << " GridMaps\n" << daemon.log();
+    return {};
+  }
+  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
+  EXPECT_GE(heights.surfaces, 1000);
+  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
+      << heights.within << " of " << heights.surfaces;
+  return maps.back().frame_id;
+}
+
+/// Stops the service with SIGTERM and expects a clean exit.
+void expectCleanStop(RunningDaemon& daemon) {
+  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
 TEST(Raymapd, UsesTheLatchedTfStaticExtrinsicPublishedBeforeItStarted) {
   const std::uint32_t domain = uniqueDomain();
   // The lidar sits 0.5 m above base_link; only /tf_static says so (the YAML's extrinsic is the
@@ -329,21 +356,11 @@ TEST(Raymapd, UsesTheLatchedTfStaticExtrinsicPublishedBeforeItStarted) {
   ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
       << daemon.log();
   ASSERT_TRUE(ros.waitForService(10.0));
-  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
   driver::PlaybackOptions options;
   options.sensor_in_base = {0.0, 0.0, 0.5};  // the published base pose is 0.5 m below the lidar
-  std::vector<driver::ReceivedGridMap> maps;
-  ros.play(lidar, options, 3.0, maps);
-  ros.settle(0.5, &maps);
-  ASSERT_GE(maps.size(), 10u) << daemon.log();
   // With the extrinsic ignored every surface would come out 0.5 m low.
-  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
-  EXPECT_GE(heights.surfaces, 1000);
-  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
-      << heights.within << " of " << heights.surfaces;
-  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
-  ASSERT_TRUE(stopped.has_value());
-  EXPECT_EQ(stopped->first, 0) << daemon.log();
+  expectSceneHeightsAfterPlaying(ros, daemon, options);
+  expectCleanStop(daemon);
 }
 
 TEST(Raymapd, ResolvesATfStaticChainThatArrivedBeforeTheFirstCloudWithTheFrameLearned) {
@@ -362,22 +379,12 @@ TEST(Raymapd, ResolvesATfStaticChainThatArrivedBeforeTheFirstCloudWithTheFrameLe
   ASSERT_TRUE(ros.waitForService(10.0));
   ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.2}, {}}, "mount", "lidar");
   ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.3}, {}}, "base_link", "mount");
-  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
   driver::PlaybackOptions options;
   options.sensor_in_base = {0.0, 0.0, 0.5};  // the published base pose is 0.5 m below the lidar
-  std::vector<driver::ReceivedGridMap> maps;
-  ros.play(lidar, options, 3.0, maps);
-  ros.settle(0.5, &maps);
-  ASSERT_GE(maps.size(), 10u) << daemon.log();
-  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
-  EXPECT_GE(heights.surfaces, 1000);
-  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
-      << heights.within << " of " << heights.surfaces;
+  expectSceneHeightsAfterPlaying(ros, daemon, options);
   EXPECT_EQ(ros.diagnostics->number("raymapd: pipeline/tf_static_edges").value_or(0.0), 2.0);
   EXPECT_GE(ros.diagnostics->number("raymapd: pipeline/extrinsics_from_tf").value_or(0.0), 1.0);
-  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
-  ASSERT_TRUE(stopped.has_value());
-  EXPECT_EQ(stopped->first, 0) << daemon.log();
+  expectCleanStop(daemon);
 }
 
 TEST(Raymapd, ComposesATfChainFromTheWorldFrameToTheBase) {
@@ -397,21 +404,10 @@ TEST(Raymapd, ComposesATfChainFromTheWorldFrameToTheBase) {
     ros.publisher->publishTf(0, io::Pose{}, "map", "odom");
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
   driver::PlaybackOptions options;
   options.pose_as_tf = true;  // odom -> base_link
-  std::vector<driver::ReceivedGridMap> maps;
-  ros.play(lidar, options, 3.0, maps);
-  ros.settle(0.5, &maps);
-  ASSERT_GE(maps.size(), 10u) << daemon.log();
-  EXPECT_EQ(maps.back().frame_id, "map");
-  const HeightCheck heights = checkHeights(maps.back(), lidar.scene());
-  EXPECT_GE(heights.surfaces, 1000);
-  EXPECT_GE(heights.within, heights.surfaces * 95 / 100)
-      << heights.within << " of " << heights.surfaces;
-  const auto stopped = daemon.process->stop(SIGTERM, std::chrono::milliseconds(3000));
-  ASSERT_TRUE(stopped.has_value());
-  EXPECT_EQ(stopped->first, 0) << daemon.log();
+  EXPECT_EQ(expectSceneHeightsAfterPlaying(ros, daemon, options), "map");
+  expectCleanStop(daemon);
 }
 
 TEST(Raymapd, CheckConfigAcceptsTheProfilesAndNamesTheKeyOfAnError) {
