@@ -20,6 +20,10 @@ const dds_topic_descriptor_t* odometryType() noexcept { return &nav_msgs_msg_dds
 const dds_topic_descriptor_t* tfMessageType() noexcept {
   return &tf2_msgs_msg_dds__TFMessage__desc;
 }
+const dds_topic_descriptor_t* occupancyGridType() noexcept {
+  return &nav_msgs_msg_dds__OccupancyGrid__desc;
+}
+
 const dds_topic_descriptor_t* gridMapType() noexcept {
   return &grid_map_msgs_msg_dds__GridMap__desc;
 }
@@ -31,7 +35,7 @@ namespace {
 
 // The DDS names are spelled out (not read from m_typename) so that the table is a constant; a
 // unit test checks each against its descriptor's m_typename.
-constexpr std::array<KnownTopicType, 5> kKnownTypes = {{
+constexpr std::array<KnownTopicType, 6> kKnownTypes = {{
     {"sensor_msgs::msg::dds_::PointCloud2_", "sensor_msgs/msg/PointCloud2",
      &sensor_msgs_msg_dds__PointCloud2__desc},
     {"nav_msgs::msg::dds_::Odometry_", "nav_msgs/msg/Odometry", &nav_msgs_msg_dds__Odometry__desc},
@@ -41,6 +45,8 @@ constexpr std::array<KnownTopicType, 5> kKnownTypes = {{
      &grid_map_msgs_msg_dds__GridMap__desc},
     {"diagnostic_msgs::msg::dds_::DiagnosticArray_", "diagnostic_msgs/msg/DiagnosticArray",
      &diagnostic_msgs_msg_dds__DiagnosticArray__desc},
+    {"nav_msgs::msg::dds_::OccupancyGrid_", "nav_msgs/msg/OccupancyGrid",
+     &nav_msgs_msg_dds__OccupancyGrid__desc},
 }};
 
 /// rmw_cyclonedds prefixes every ROS topic with this (ROS_TOPIC_PREFIX in namespace_prefix.hpp).

@@ -21,6 +21,8 @@ const dds_topic_descriptor_t* tfMessageType() noexcept;
 const dds_topic_descriptor_t* gridMapType() noexcept;
 /// diagnostic_msgs::msg::dds_::DiagnosticArray_
 const dds_topic_descriptor_t* diagnosticArrayType() noexcept;
+/// nav_msgs::msg::dds_::OccupancyGrid_ (the Nav2 costmap)
+const dds_topic_descriptor_t* occupancyGridType() noexcept;
 
 /// @brief A message type raymap can read: its name on the wire, its ROS 2 name and the idlc
 /// descriptor a reader of it needs. Static data; the pointers live as long as the program.
@@ -30,8 +32,8 @@ struct KnownTopicType {
   const dds_topic_descriptor_t* descriptor;  ///< idlc's descriptor; its m_typename == dds_name
 };
 
-/// @brief The types raymap knows: PointCloud2, Odometry, TFMessage, GridMap, DiagnosticArray (in
-/// that order). @rt allocates: no; thread: any.
+/// @brief The types raymap knows: PointCloud2, Odometry, TFMessage, GridMap, DiagnosticArray,
+/// OccupancyGrid (in that order). @rt allocates: no; thread: any.
 std::span<const KnownTopicType> knownTopicTypes() noexcept;
 
 /// @brief Looks a type up by its DDS name ("grid_map_msgs::msg::dds_::GridMap_") or its ROS name

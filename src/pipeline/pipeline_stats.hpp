@@ -79,9 +79,10 @@ struct PipelineStats {
   Counter poses_out_of_order;  ///< pose stamps not after the previous one (ignored)
   // ---- publisher thread ----
   Counter maps_published;
-  Counter maps_withheld;     ///< cycles with no map published: the map was stale (health)
-  Counter cycles_late;       ///< generation did not finish by the publish instant
-  Counter heightmap_errors;  ///< generation failed (nothing published that cycle)
+  Counter costmaps_published;  ///< nav_msgs/OccupancyGrid written (dds.costmap_topic)
+  Counter maps_withheld;       ///< cycles with no map published: the map was stale (health)
+  Counter cycles_late;         ///< generation did not finish by the publish instant
+  Counter heightmap_errors;    ///< generation failed (nothing published that cycle)
   /// header.stamp of the newest scan in the map (the pose source's clock; written by the
   /// integrator under the map lock, read by the publisher under it).
   std::atomic<std::int64_t> newest_scan_stamp_ns{0};

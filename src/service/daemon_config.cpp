@@ -264,7 +264,8 @@ void readHeightmap(Context& ctx, const YAML::Node& node, HeightmapConfig& hm) {
 void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
   Fields f(ctx, node, "dds");
   f.knownKeys({"domain", "cyclonedds_uri", "grid_map_topic", "diagnostics_topic",
-               "diagnostics_rate_hz", "voxels_topic", "voxels_rate_hz", "voxels_max_points"});
+               "diagnostics_rate_hz", "voxels_topic", "voxels_rate_hz", "voxels_max_points",
+               "costmap_topic"});
   dds.domain = f.integer<std::uint32_t>("domain", 0u, 0u, 232u);
   dds.cyclonedds_uri = text(f, "cyclonedds_uri", "");
   dds.grid_map_topic = topic(f, "grid_map_topic", dds.grid_map_topic);
@@ -275,10 +276,25 @@ void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
   if (!dds.voxels_topic.empty()) {
     dds.voxels_topic = topic(f, "voxels_topic", "");
   }
+  dds.costmap_topic = text(f, "costmap_topic", "");  // empty: off
+  if (!dds.costmap_topic.empty()) {
+    dds.costmap_topic = topic(f, "costmap_topic", "");
+  }
   dds.voxels_rate_hz = f.positive("voxels_rate_hz", dds.voxels_rate_hz);
   f.check(dds.voxels_rate_hz <= 5.0, "voxels_rate_hz", "must be at most 5");
   dds.voxels_max_points =
       f.integer<std::uint32_t>("voxels_max_points", dds.voxels_max_points, 1u, 1u << 24);
+}
+
+void readCostmap(Context& ctx, const YAML::Node& node, heightmap::CostmapParams& c) {
+  Fields f(ctx, node, "costmap");
+  f.knownKeys({"max_step", "max_slope", "min_clearance", "virtual_surfaces", "max_free_cost"});
+  c.max_step_m = f.positive("max_step", c.max_step_m);
+  c.max_slope_deg = f.positive("max_slope", c.max_slope_deg);
+  f.check(c.max_slope_deg < 90.0, "max_slope", "must be below 90 degrees");
+  c.min_clearance_m = f.positive("min_clearance", c.min_clearance_m, true);
+  c.virtual_lethal = choiceOr(f, "virtual_surfaces", {"lethal", "unknown"}, 0) == 0;
+  c.max_free_cost = f.integer<int>("max_free_cost", c.max_free_cost, 0, 99);
 }
 
 void readQueues(Context& ctx, const YAML::Node& node, QueueConfig& q) {
@@ -355,8 +371,8 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   DaemonConfig config;
   config.path = name;
   Fields top(ctx, root, "");
-  top.knownKeys({"name", "map", "backend", "pose", "sensors", "heightmap", "dds", "queues",
-                 "realtime", "health"});
+  top.knownKeys({"name", "map", "backend", "pose", "sensors", "heightmap", "costmap", "dds",
+                 "queues", "realtime", "health"});
   config.name = text(top, "name", config.name);
   top.check(isPlainName(config.name), "name",
             "must be 1 to 63 letters, digits, '-', '_', '.' or '/' (got '" + config.name + "')");
@@ -369,6 +385,7 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   if (!ctx.failed()) readPose(ctx, section("pose"), config.pose);
   if (!ctx.failed()) readSensors(ctx, top.get("sensors"), config.sensors);
   if (!ctx.failed()) readHeightmap(ctx, section("heightmap"), config.heightmap);
+  if (!ctx.failed()) readCostmap(ctx, section("costmap"), config.costmap);
   if (!ctx.failed()) readDds(ctx, section("dds"), config.dds);
   if (!ctx.failed()) readQueues(ctx, section("queues"), config.queues);
   if (!ctx.failed()) readRealtime(ctx, section("realtime"), config.realtime);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "src/core/error.hpp"
+#include "src/heightmap/costmap.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/voxel_map.hpp"
@@ -73,6 +74,8 @@ struct DdsConfig {
   std::string diagnostics_topic = "rt/diagnostics";
   double diagnostics_rate_hz = 1.0;
   std::string voxels_topic;  ///< occupied voxels as PointCloud2; empty: off
+  /// A Nav2 costmap (nav_msgs/OccupancyGrid) with each height map; empty: off.
+  std::string costmap_topic;
   double voxels_rate_hz = 1.0;
   std::uint32_t voxels_max_points = 200000;
 };
@@ -137,6 +140,7 @@ struct DaemonConfig {
   PoseConfig pose;
   std::vector<SensorConfig> sensors;
   HeightmapConfig heightmap;
+  heightmap::CostmapParams costmap;  ///< the `costmap` section (used when dds.costmap_topic)
   DdsConfig dds;
   QueueConfig queues;
   RealtimeConfig realtime;

@@ -318,6 +318,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
       message_.addStatus(heightmap_level_, heightmap_name_.c_str(), heightmap_message_, hw);
   message_.addValue(h, "maps_published", "%" PRIu64, c.maps);
   message_.addValue(h, "maps_withheld_stale", "%" PRIu64, c.withheld);
+  message_.addValue(h, "costmaps_published", "%" PRIu64, stats_.costmaps_published.get());
   message_.addValue(h, "publish_rate_hz", "%.3f", rate(c.maps, p.maps));
   message_.addValue(h, "nominal_rate_hz", "%g", settings_.publish_rate_hz);
   message_.addValue(h, "cycles_late", "%" PRIu64, c.late);

@@ -26,10 +26,12 @@
 #include "src/dds/diagnostics_message.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/grid_map_message.hpp"
+#include "src/dds/occupancy_grid_message.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/dds/point_cloud_message.hpp"
 #include "src/dds/pose.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/heightmap/costmap.hpp"
 #include "src/io/map_file.hpp"
 #include "src/pipeline/heightmap_cycle.hpp"
 #include "src/pipeline/integrator.hpp"
@@ -86,6 +88,8 @@ struct Service::Impl {
   std::optional<dds::Writer> grid_map_writer;
   std::optional<dds::Writer> diagnostics_writer;
   std::optional<dds::Writer> voxels_writer;
+  std::optional<dds::Writer> costmap_writer;                   // dds.costmap_topic set
+  std::unique_ptr<dds::OccupancyGridMessage> costmap_message;  // with its writer
   /// Matches writers of our height-map topic in other participants: another raymapd (or any
   /// other publisher) there is an ERROR (health).
   std::optional<dds::RawReader> map_publisher_watch;
@@ -329,6 +333,19 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     impl->voxels_writer.emplace(std::move(voxels).value());
     impl->voxels_message = std::make_unique<dds::PointCloudMessage>(config.dds.voxels_max_points);
     impl->voxels_xyz.resize(std::size_t{config.dds.voxels_max_points} * 3);
+  }
+  if (!config.dds.costmap_topic.empty()) {
+    // As Nav2's StaticLayer subscribes by default: reliable, transient-local, keep last 1 (a
+    // costmap that starts later gets the latest at once).
+    auto costmap = dds::Writer::create(
+        pp, config.dds.costmap_topic.c_str(), dds::OccupancyGridMessage::descriptor(),
+        dds::Reliability::kReliable, 1, dds::Durability::kTransientLocal);
+    if (!costmap) {
+      return fail(costmap.error().code, file + ": dds.costmap_topic: " + costmap.error().message);
+    }
+    impl->costmap_writer.emplace(std::move(costmap).value());
+    impl->costmap_message =
+        std::make_unique<dds::OccupancyGridMessage>(plan.grid.cells_x, plan.grid.cells_y);
   }
   {
     auto watch =
@@ -773,6 +790,12 @@ void Service::Impl::publisherLoop() {
       // The stamp is the newest scan's (the data's own time, never the wall clock).
       grid_map_message->fill(cycle->heightMap(), cycle->dataStampNs(),
                              config.pose.world_frame.c_str());
+      if (costmap_message) {
+        const heightmap::HeightMap& hm = cycle->heightMap();
+        heightmap::computeCostmap(hm, config.costmap, costmap_message->cells());
+        costmap_message->fill(hm.resolution, heightmap::costmapOrigin(hm), cycle->dataStampNs(),
+                              config.pose.world_frame.c_str());
+      }
     } else if (generated.error() != pipeline::CycleError::kNoPose) {
       stats.heightmap_errors.add();
       healthy = false;
@@ -785,9 +808,17 @@ void Service::Impl::publisherLoop() {
     if (generated) {
       const std::int64_t now = platform::monotonicNowNs();
       bool written = false;
+      bool costmap_written = true;
       {
         platform::ForeignScope dds;  // Cyclone serialises into its own buffer
         written = grid_map_writer->write(grid_map_message->sample()).has_value();
+        if (costmap_writer) {
+          costmap_written = costmap_writer->write(costmap_message->sample()).has_value();
+        }
+      }
+      if (costmap_writer) {
+        (costmap_written ? stats.costmaps_published : stats.heightmap_errors).add();
+        healthy = healthy && costmap_written;
       }
       if (written) {
         stats.maps_published.add();

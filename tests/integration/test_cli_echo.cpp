@@ -29,8 +29,10 @@
 #include "src/dds/diagnostics_message.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/grid_map_message.hpp"
+#include "src/dds/occupancy_grid_message.hpp"
 #include "src/dds/point_cloud_message.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/heightmap/costmap.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/mini_json.hpp"
 
@@ -89,7 +91,8 @@ std::string textAt(const JsonValue& object, const std::string& key) {
 /// rt/bad_map, and a std_msgs/Header (a type raymap does not know) on rt/unknown_type.
 class TrafficPublisher {
  public:
-  explicit TrafficPublisher(std::uint32_t domain) : map_message_(kCellsX, kCellsY), cloud_(64) {
+  explicit TrafficPublisher(std::uint32_t domain)
+      : map_message_(kCellsX, kCellsY), costmap_message_(kCellsX, kCellsY), cloud_(64) {
     auto participant = dds::Participant::create(domain);
     if (!participant) {
       ADD_FAILURE() << participant.error().message;
@@ -106,6 +109,7 @@ class TrafficPublisher {
       return std::move(created).value();
     };
     map_writer_ = writer("rt/height_map", dds::gridMapType(), dds::Reliability::kReliable);
+    costmap_writer_ = writer("rt/costmap", dds::occupancyGridType(), dds::Reliability::kReliable);
     diagnostics_writer_ =
         writer("rt/diagnostics", dds::diagnosticArrayType(), dds::Reliability::kReliable);
     cloud_writer_ = writer("rt/points", dds::pointCloud2Type(), dds::Reliability::kBestEffort);
@@ -163,6 +167,11 @@ class TrafficPublisher {
       if (map_writer_) {
         static_cast<void>(map_writer_->write(map_message_.sample()));
       }
+      heightmap::computeCostmap(map_, heightmap::CostmapParams{}, costmap_message_.cells());
+      costmap_message_.fill(kResolution, heightmap::costmapOrigin(map_), stamp_ns, "odom");
+      if (costmap_writer_) {
+        static_cast<void>(costmap_writer_->write(costmap_message_.sample()));
+      }
       if (bad_map_writer_) {
         static_cast<void>(bad_map_writer_->write(
             cycle % 2 == 0 ? map_message_.sample() : static_cast<const void*>(&bad_map_)));
@@ -190,10 +199,11 @@ class TrafficPublisher {
   }
 
   std::optional<dds::Participant> participant_;
-  std::optional<dds::Writer> map_writer_, diagnostics_writer_, cloud_writer_, bad_map_writer_,
-      unknown_writer_;
+  std::optional<dds::Writer> map_writer_, costmap_writer_, diagnostics_writer_, cloud_writer_,
+      bad_map_writer_, unknown_writer_;
   heightmap::HeightMap map_;
   dds::GridMapMessage map_message_;
+  dds::OccupancyGridMessage costmap_message_;
   dds::PointCloudMessage cloud_;
   grid_map_msgs_msg_dds__GridMap_ bad_map_{};
   char* bad_names_[2] = {};
@@ -348,6 +358,32 @@ TEST_F(CliEcho, EchoGridMapJsonPrintsOneParseableLinePerMessage) {
     EXPECT_NEAR(numberAt(elevation, "max"), 0.99, 1e-6);
     EXPECT_EQ(textAt(layers->items[3], "name"), "observed_count");
     EXPECT_EQ(numberAt(layers->items[3], "min"), 3.0);
+  }
+}
+
+TEST_F(CliEcho, EchoCostmapJsonCountsItsCells) {
+  const RunResult r =
+      runRaymap({"echo", "/costmap", "--domain", domain(), "--count", "2", "--json"});
+
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const std::vector<std::string> messages = lines(r.out);
+  ASSERT_EQ(messages.size(), 2U) << r.out;
+  for (const std::string& message : messages) {
+    std::string error;
+    const auto line = parseJson(message, &error);
+    ASSERT_TRUE(line.has_value()) << error << "\n" << message;
+    EXPECT_EQ(textAt(*line, "type"), "nav_msgs/msg/OccupancyGrid");
+    EXPECT_EQ(textAt(*line, "frame"), "odom");
+    EXPECT_EQ(numberAt(*line, "width"), kCellsX);
+    EXPECT_EQ(numberAt(*line, "height"), kCellsY);
+    EXPECT_NEAR(numberAt(*line, "origin_x"), kCentreX - 0.5 * kCellsX * kResolution, 1e-6);
+    EXPECT_NEAR(numberAt(*line, "resolution"), kResolution, 1e-6);
+    // The cells without an elevation are unknown; every cell is counted once.
+    EXPECT_EQ(numberAt(*line, "unknown"), static_cast<double>(kNanCells));
+    EXPECT_EQ(numberAt(*line, "invalid"), 0.0);
+    EXPECT_EQ(numberAt(*line, "unknown") + numberAt(*line, "free") + numberAt(*line, "costed") +
+                  numberAt(*line, "lethal"),
+              kCellsX * kCellsY);
   }
 }
 

@@ -2,6 +2,7 @@
 // raymapd end to end, as separate processes on loopback DDS: a ROS-like lidar driver publishes,
 // raymapd maps, an independent subscriber decodes the GridMaps; systemd's notify protocol is
 // checked with a fake notify socket.
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numeric>
@@ -13,6 +14,7 @@
 #include <signal.h>
 
 #include "platform/clock.hpp"
+#include "src/dds/occupancy_grid_decode.hpp"
 #include "src/dds/topic_types.hpp"
 #include "src/sim/scene.hpp"
 #include "tests/service/daemon_process.hpp"
@@ -407,6 +409,68 @@ TEST(Raymapd, ComposesATfChainFromTheWorldFrameToTheBase) {
   driver::PlaybackOptions options;
   options.pose_as_tf = true;  // odom -> base_link
   EXPECT_EQ(expectSceneHeightsAfterPlaying(ros, daemon, options), "map");
+  expectCleanStop(daemon);
+}
+
+TEST(Raymapd, PublishesANav2CostmapWithEachHeightMapOnTheSameGrid) {
+  const std::uint32_t domain = uniqueDomain();
+  std::string config = serviceConfig(domain);
+  config.replace(config.find("dds: {"), 6, "dds: {costmap_topic: rt/costmap, ");
+  RunningDaemon daemon(config, false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  // As Nav2's StaticLayer subscribes: reliable, transient-local.
+  auto costmaps =
+      dds::RawReader::create(*ros.subscriber_participant, "rt/costmap", dds::occupancyGridType(),
+                             dds::Reliability::kReliable, 64, dds::Durability::kTransientLocal);
+  ASSERT_TRUE(costmaps.has_value());
+  ASSERT_TRUE(ros.waitForService(10.0));
+  const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
+  std::vector<driver::ReceivedGridMap> maps;
+  ros.play(lidar, driver::PlaybackOptions{}, 3.0, maps);
+  ros.settle(0.5, &maps);
+  ASSERT_GE(maps.size(), 10u) << daemon.log();
+  std::vector<dds::DecodedOccupancyGrid> grids;
+  costmaps->takeEach(
+      [&](std::span<const std::byte> cdr, std::int64_t) {
+        auto grid = dds::decodeOccupancyGrid(cdr);
+        ASSERT_TRUE(grid.has_value()) << dds::toString(grid.error());
+        grids.push_back(std::move(grid).value());
+      },
+      64);
+  // The costmap of the last height map: same stamp, frame and grid, its origin the grid's
+  // (-x, -y) corner; unknown exactly where the height map knows nothing.
+  const driver::ReceivedGridMap& hm = maps.back();
+  const auto same = std::find_if(grids.begin(), grids.end(),
+                                 [&](const auto& g) { return g.stamp_ns == hm.stamp_ns; });
+  ASSERT_NE(same, grids.end()) << grids.size() << " costmaps";
+  const auto cells_x = static_cast<std::uint32_t>(std::lround(hm.length_x / hm.resolution));
+  const auto cells_y = static_cast<std::uint32_t>(std::lround(hm.length_y / hm.resolution));
+  ASSERT_EQ(same->width, cells_x);
+  ASSERT_EQ(same->height, cells_y);
+  EXPECT_EQ(same->frame_id, hm.frame_id);
+  EXPECT_NEAR(same->resolution, hm.resolution, 1e-6);
+  EXPECT_NEAR(same->origin_x, hm.centre_x - 0.5 * hm.length_x, 1e-6);
+  EXPECT_NEAR(same->origin_y, hm.centre_y - 0.5 * hm.length_y, 1e-6);
+  const std::vector<float>* kind = hm.layer("kind");
+  ASSERT_NE(kind, nullptr);
+  std::uint32_t free = 0;
+  std::uint32_t lethal = 0;
+  std::uint32_t mismatched = 0;
+  for (std::uint32_t j = 0; j < cells_y; ++j) {
+    for (std::uint32_t i = 0; i < cells_x; ++i) {
+      const float k = (*kind)[i + j * cells_x];  // column-major, (0, 0) at +x/+y
+      const std::int8_t cost = same->data[(cells_y - 1 - j) * cells_x + (cells_x - 1 - i)];
+      mismatched += (k == 0.0F) != (cost == -1) ? 1u : 0u;  // kind 0: unknown
+      free += cost >= 0 && cost < 100 ? 1u : 0u;            // traversable, at some cost for slope
+      lethal += cost == 100 ? 1u : 0u;
+    }
+  }
+  EXPECT_EQ(mismatched, 0u);
+  EXPECT_GT(free, 1000u) << lethal << " lethal";  // the yard's ground
+  EXPECT_GT(lethal, 10u);                         // its walls and boxes
+  EXPECT_GE(ros.diagnostics->number("raymapd: height map/costmaps_published").value_or(0.0), 10.0);
   expectCleanStop(daemon);
 }
 

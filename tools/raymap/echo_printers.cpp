@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Per-type rendering for `raymap echo`: GridMap, PointCloud2, DiagnosticArray, Odometry and
-// TFMessage, each decoded from its CDR bytes with the decoders of src/dds.
+// Per-type rendering for `raymap echo`: GridMap, OccupancyGrid, PointCloud2, DiagnosticArray,
+// Odometry and TFMessage, each decoded from its CDR bytes with the decoders of src/dds.
 #include "tools/raymap/echo_printers.hpp"
 
 #include <algorithm>
@@ -12,6 +12,7 @@
 #include "src/dds/cdr_reader.hpp"
 #include "src/dds/diagnostics_decode.hpp"
 #include "src/dds/grid_map_decode.hpp"
+#include "src/dds/occupancy_grid_decode.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/dds/pose.hpp"
 #include "src/dds/ros_time.hpp"
@@ -193,6 +194,83 @@ Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
     }
     out += "\n";
   }
+  return out;
+}
+
+// ---------------------------------------------------------------- OccupancyGrid
+
+const char* describe(dds::OccupancyGridError error) {
+  switch (error) {
+    case dds::OccupancyGridError::kTruncated:
+      return "the bytes end before the message does";
+    case dds::OccupancyGridError::kBadEncapsulation:
+      return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
+    case dds::OccupancyGridError::kMalformed:
+      return "a string without its terminating NUL";
+    case dds::OccupancyGridError::kSizeMismatch:
+      return "data does not hold width x height cells";
+  }
+  return "unknown error";
+}
+
+/// Cells of an OccupancyGrid by what they say: unknown (-1), free (0), costed (1..99), lethal
+/// (100), and values no costmap uses.
+struct OccupancyCounts {
+  std::uint64_t unknown = 0, free = 0, costed = 0, lethal = 0, invalid = 0;
+};
+
+OccupancyCounts countCells(const std::vector<std::int8_t>& data) {
+  OccupancyCounts c;
+  for (const std::int8_t v : data) {
+    if (v == -1) {
+      ++c.unknown;
+    } else if (v == 0) {
+      ++c.free;
+    } else if (v > 0 && v < 100) {
+      ++c.costed;
+    } else if (v == 100) {
+      ++c.lethal;
+    } else {
+      ++c.invalid;
+    }
+  }
+  return c;
+}
+
+Result<std::string> formatOccupancyGrid(const EchoSample& sample, EchoFormat format) {
+  auto decoded = dds::decodeOccupancyGrid(sample.cdr);
+  if (!decoded) {
+    return fail(ErrorCode::kFormat,
+                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+  }
+  const dds::DecodedOccupancyGrid& grid = *decoded;
+  const OccupancyCounts c = countCells(grid.data);
+  if (format == EchoFormat::kJsonLines) {
+    JsonObject j = jsonCommon(sample, grid.stamp_ns);
+    j.raw("frame", jsonText(grid.frame_id))
+        .add("resolution", static_cast<double>(grid.resolution))
+        .add("width", static_cast<std::uint64_t>(grid.width))
+        .add("height", static_cast<std::uint64_t>(grid.height))
+        .add("origin_x", grid.origin_x)
+        .add("origin_y", grid.origin_y)
+        .add("origin_z", grid.origin_z)
+        .add("unknown", c.unknown)
+        .add("free", c.free)
+        .add("costed", c.costed)
+        .add("lethal", c.lethal)
+        .add("invalid", c.invalid);
+    return j.str() + "\n";
+  }
+  std::string out = humanFirstLine(sample, grid.stamp_ns);
+  appendFormat(out, " frame %s\n", humanText(grid.frame_id).c_str());
+  appendFormat(out, "  resolution %g m, %u x %u cells, origin (%g, %g, %g) m\n",
+               static_cast<double>(grid.resolution), grid.width, grid.height, grid.origin_x,
+               grid.origin_y, grid.origin_z);
+  appendFormat(out,
+               "  cells: %llu unknown, %llu free, %llu costed (1-99), %llu lethal, %llu invalid\n",
+               static_cast<unsigned long long>(c.unknown), static_cast<unsigned long long>(c.free),
+               static_cast<unsigned long long>(c.costed), static_cast<unsigned long long>(c.lethal),
+               static_cast<unsigned long long>(c.invalid));
   return out;
 }
 
@@ -536,6 +614,9 @@ Result<std::string> formatSample(const EchoSample& sample, EchoFormat format) {
   }
   if (type == dds::tfMessageType()) {
     return formatTfMessage(sample, format);
+  }
+  if (type == dds::occupancyGridType()) {
+    return formatOccupancyGrid(sample, format);
   }
   return fail(ErrorCode::kUnsupported,
               std::string("no printer for ") + sample.type->ros_name + " (a raymap bug)");

@@ -10,9 +10,9 @@
 namespace raymap::dds {
 namespace {
 
-TEST(KnownTopicTypes, ListsTheFiveTypesWithTheirDescriptorsNames) {
+TEST(KnownTopicTypes, ListsTheSixTypesWithTheirDescriptorsNames) {
   const auto types = knownTopicTypes();
-  ASSERT_EQ(types.size(), 5U);
+  ASSERT_EQ(types.size(), 6U);
   for (const KnownTopicType& type : types) {
     ASSERT_NE(type.descriptor, nullptr) << type.ros_name;
     // The spelled-out DDS name is what the descriptor registers, i.e. what discovery shows.
@@ -24,6 +24,7 @@ TEST(KnownTopicTypes, ListsTheFiveTypesWithTheirDescriptorsNames) {
   EXPECT_EQ(types[2].descriptor, tfMessageType());
   EXPECT_EQ(types[3].descriptor, gridMapType());
   EXPECT_EQ(types[4].descriptor, diagnosticArrayType());
+  EXPECT_EQ(types[5].descriptor, occupancyGridType());
 }
 
 TEST(FindTopicType, FindsByDdsAndByRosName) {

@@ -453,5 +453,32 @@ TEST(DaemonConfig, HealthAndLoadErrorsAreNamed) {
               "publish period");
 }
 
+TEST(DaemonConfig, TheCostmapIsOffByDefaultAndItsSectionIsRead) {
+  auto defaults = parseDaemonConfig("{}\n", kName);
+  ASSERT_TRUE(defaults) << defaults.error().message;
+  EXPECT_TRUE(defaults->dds.costmap_topic.empty());
+  EXPECT_EQ(defaults->costmap.max_step_m, 0.15);
+  EXPECT_TRUE(defaults->costmap.virtual_lethal);
+
+  auto set = parseDaemonConfig(
+      "dds: {costmap_topic: rt/costmap}\n"
+      "costmap: {max_step: 0.1, max_slope: 20, min_clearance: 0.8, virtual_surfaces: unknown,\n"
+      "          max_free_cost: 70}\n",
+      kName);
+  ASSERT_TRUE(set) << set.error().message;
+  EXPECT_EQ(set->dds.costmap_topic, "rt/costmap");
+  EXPECT_EQ(set->costmap.max_step_m, 0.1);
+  EXPECT_EQ(set->costmap.max_slope_deg, 20.0);
+  EXPECT_EQ(set->costmap.min_clearance_m, 0.8);
+  EXPECT_FALSE(set->costmap.virtual_lethal);
+  EXPECT_EQ(set->costmap.max_free_cost, 70);
+
+  expectError("costmap: {max_slope: 95}\n", "costmap.max_slope", "below 90");
+  expectError("costmap: {max_free_cost: 100}\n", "costmap.max_free_cost", "");
+  expectError("costmap: {virtual_surfaces: maybe}\n", "costmap.virtual_surfaces", "");
+  expectError("costmap: {inflation: 0.4}\n", "costmap.inflation", "");
+  expectError("dds: {costmap_topic: 'rt/a b'}\n", "dds.costmap_topic", "without spaces");
+}
+
 }  // namespace
 }  // namespace raymap::service
