@@ -9,6 +9,7 @@
 #include "grid_map_msgs.h"
 
 #include "src/core/assert.hpp"
+#include "src/dds/frame_id.hpp"
 #include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
@@ -106,14 +107,7 @@ void GridMapMessage::fill(const heightmap::HeightMap& map, std::int64_t stamp_ns
                  map.kind.size() == cells && map.observed_count.size() == cells);
 
   setRosTime(m.msg.header.stamp, stamp_ns);
-  std::size_t length = 0;
-  if (frame_id != nullptr) {
-    while (length + 1 < sizeof(m.frame_id) && frame_id[length] != '\0') {
-      m.frame_id[length] = frame_id[length];
-      ++length;
-    }
-  }
-  m.frame_id[length] = '\0';
+  copyFrameId(m.frame_id, frame_id);
 
   // geometry: pose = the grid centre
   m.msg.info.resolution = map.resolution;

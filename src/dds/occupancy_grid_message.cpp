@@ -8,6 +8,7 @@
 #include "nav_msgs.h"
 
 #include "src/core/assert.hpp"
+#include "src/dds/frame_id.hpp"
 #include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
@@ -48,14 +49,7 @@ void OccupancyGridMessage::fill(double resolution, Vec3d origin, std::int64_t st
   Impl& m = *impl_;
   setRosTime(m.msg.header.stamp, stamp_ns);
   setRosTime(m.msg.info.map_load_time, stamp_ns);
-  std::size_t length = 0;
-  if (frame_id != nullptr) {
-    while (length + 1 < sizeof(m.frame_id) && frame_id[length] != '\0') {
-      m.frame_id[length] = frame_id[length];
-      ++length;
-    }
-  }
-  m.frame_id[length] = '\0';
+  copyFrameId(m.frame_id, frame_id);
   m.msg.info.resolution = static_cast<float>(resolution);
   m.msg.info.origin.position.x = origin.x;
   m.msg.info.origin.position.y = origin.y;

@@ -12,6 +12,7 @@
 #include "sensor_msgs.h"
 
 #include "src/core/assert.hpp"
+#include "src/dds/frame_id.hpp"
 #include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
@@ -53,14 +54,7 @@ struct PointCloudMessage::Impl {
   std::uint8_t* begin(std::size_t count, std::int64_t stamp_ns, const char* frame) noexcept {
     RAYMAP_EXPECTS(count <= capacity && count % layout.rows == 0);
     setRosTime(msg.header.stamp, stamp_ns);
-    std::size_t length = 0;
-    if (frame != nullptr) {
-      while (length + 1 < sizeof(frame_id) && frame[length] != '\0') {
-        frame_id[length] = frame[length];
-        ++length;
-      }
-    }
-    frame_id[length] = '\0';
+    copyFrameId(frame_id, frame);
     const auto n = static_cast<std::uint32_t>(count);
     msg.height = layout.rows;
     msg.width = n / layout.rows;
