@@ -14,6 +14,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "src/config/yaml_reader.hpp"
+#include "src/dds/topic_types.hpp"
 
 namespace raymap::service {
 namespace {
@@ -44,11 +45,14 @@ bool flag(Fields& f, const std::string& key, bool fallback) {
 }
 
 /// A DDS topic name: non-empty, no spaces; ROS 2 topics carry the "rt/" prefix.
+/// A topic key: a DDS name (rt/points) as it is, or a ROS name (/points) as rmw_cyclonedds
+/// names it on the wire (rt/points).
 std::string topic(Fields& f, const std::string& key, const std::string& fallback) {
   std::string name = text(f, key, fallback);
-  f.check(!name.empty() && name.find_first_of(" \t") == std::string::npos, key,
-          "must be a DDS topic name without spaces, e.g. rt/points (got '" + name + "')");
-  return name;
+  f.check(!name.empty() && name.find_first_of(" \t") == std::string::npos && name != "/", key,
+          "must be a DDS topic name (rt/points) or a ROS one (/points), without spaces (got '" +
+              name + "')");
+  return dds::ddsTopicName(name);
 }
 
 std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::string>& choices,

@@ -480,5 +480,19 @@ TEST(DaemonConfig, TheCostmapIsOffByDefaultAndItsSectionIsRead) {
   expectError("dds: {costmap_topic: 'rt/a b'}\n", "dds.costmap_topic", "without spaces");
 }
 
+TEST(DaemonConfig, TopicsTakeRosNamesAsRmwCycloneddsNamesThem) {
+  auto result = parseDaemonConfig(
+      "pose: {topic: /odom}\n"
+      "sensors:\n  - topic: /ouster/points\n"
+      "dds: {grid_map_topic: /height_map, costmap_topic: rt/costmap}\n",
+      kName);
+  ASSERT_TRUE(result) << result.error().message;
+  EXPECT_EQ(result->pose.odometry_topic, "rt/odom");
+  EXPECT_EQ(result->sensors[0].topic, "rt/ouster/points");
+  EXPECT_EQ(result->dds.grid_map_topic, "rt/height_map");
+  EXPECT_EQ(result->dds.costmap_topic, "rt/costmap");  // a DDS name stays as it is
+  expectError("dds: {costmap_topic: /}\n", "dds.costmap_topic", "ROS one");
+}
+
 }  // namespace
 }  // namespace raymap::service
