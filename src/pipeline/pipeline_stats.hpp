@@ -48,7 +48,8 @@ struct PipelineStats {
   /// /tf transforms of the base's moving edge that could not be composed up to world_frame (an
   /// edge above it has not come yet): no pose for that stamp.
   Counter tf_unresolved;
-  /// Static TF edges kept (/tf_static, any order), and sensor extrinsics resolved from them.
+  /// Static TF edges kept (/tf_static, any order), and sensor extrinsic updates resolved from
+  /// TF (static chains, and moving mounts on /tf).
   std::atomic<std::uint32_t> tf_static_edges{0};
   std::atomic<std::uint32_t> extrinsics_from_tf{0};
   // ---- integrator thread ----

@@ -140,6 +140,9 @@ struct Service::Impl {
   const char* baseChainDriver() const noexcept;
   /// True when `frame` lies on the chain from base_frame up to world_frame (as far as known).
   bool isBaseAncestor(const char* frame) const noexcept;
+  /// True when the edge whose child is `edge_child` lies on the chain from `sensor_frame` up to
+  /// base_frame (as far as known): the sensor moves with it.
+  bool isOnSensorChain(const char* edge_child, const char* sensor_frame) const noexcept;
   void publishVoxels(std::int64_t stamp_ns);
 };
 
@@ -509,7 +512,7 @@ void Service::Impl::resolveExtrinsics() noexcept {
     io::Pose pose;
     // A cloud in the base frame itself keeps the configured extrinsic.
     if (frame[0] == '\0' || std::strcmp(frame, base) == 0 ||
-        !static_tf.resolve(base, frame, &pose)) {
+        !static_tf.resolve(base, frame, &pose, &tf_latest)) {
       continue;
     }
     const io::Pose& last = extrinsic_from_tf[s];
@@ -543,6 +546,28 @@ const char* Service::Impl::baseChainDriver() const noexcept {
     at = parent;
   }
   return at;
+}
+
+bool Service::Impl::isOnSensorChain(const char* edge_child,
+                                    const char* sensor_frame) const noexcept {
+  const char* at = sensor_frame;
+  for (std::uint32_t depth = 0; depth < pipeline::TransformTable::kMaxChain; ++depth) {
+    if (std::strcmp(at, config.pose.base_frame.c_str()) == 0) {
+      return false;
+    }
+    if (std::strcmp(at, edge_child) == 0) {
+      return true;
+    }
+    const char* parent = static_tf.parentOf(at);
+    if (parent == nullptr) {
+      parent = tf_latest.parentOf(at);
+    }
+    if (parent == nullptr) {
+      return false;
+    }
+    at = parent;
+  }
+  return false;
 }
 
 bool Service::Impl::isBaseAncestor(const char* frame) const noexcept {
@@ -600,17 +625,36 @@ void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static) {
     } else if (kept && isBaseAncestor(t.child)) {
       stats.poses_received.add();  // an edge higher up the base's chain: used from now on
       continue;
-    } else if (std::strcmp(t.parent, config.pose.base_frame.c_str()) == 0) {
-      // A sensor on a moving mount publishes its extrinsic on /tf.
+    } else if (kept) {
+      // A sensor on a moving mount (a pan unit, an arm): an edge of the chain from base_frame to
+      // a sensor's frame came on /tf. The sensors below it take the composed extrinsic.
       for (std::uint32_t s = 0; s < config.sensors.size(); ++s) {
         const char* frame = sensorFrame(s);
-        if (frame[0] != '\0' && std::strcmp(t.child, frame) == 0) {
-          update.kind = pipeline::PoseUpdate::kSensorExtrinsic;
-          update.sensor = s;
-          used = true;
-          break;
+        if (frame[0] == '\0' || !isOnSensorChain(t.child, frame)) {
+          continue;
         }
+        used = true;
+        pipeline::PoseUpdate extrinsic;
+        if (!static_tf.resolve(config.pose.base_frame.c_str(), frame, &extrinsic.pose,
+                               &tf_latest)) {
+          stats.tf_unresolved.add();  // an edge between it and base_frame has not come yet
+          continue;
+        }
+        extrinsic.kind = pipeline::PoseUpdate::kSensorExtrinsic;
+        extrinsic.sensor = s;
+        if (!poses->push(extrinsic)) {
+          stats.poses_dropped.add();
+          continue;
+        }
+        extrinsic_from_tf[s] = extrinsic.pose;
+        extrinsic_resolved[s] = 1;
+        stats.extrinsics_from_tf.fetch_add(1, std::memory_order_relaxed);
+        stats.poses_received.add();
       }
+      if (!used) {
+        stats.tf_ignored.add();
+      }
+      continue;
     }
     if (!used) {
       stats.tf_ignored.add();

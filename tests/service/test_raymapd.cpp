@@ -412,6 +412,31 @@ TEST(Raymapd, ComposesATfChainFromTheWorldFrameToTheBase) {
   expectCleanStop(daemon);
 }
 
+TEST(Raymapd, TakesTheExtrinsicOfASensorOnAMovingMountThroughItsChain) {
+  const std::uint32_t domain = uniqueDomain();
+  // A lidar on a pan unit: base_link -> pan on /tf (0.3 m up; it would turn), pan -> lidar on
+  // /tf_static (0.2 m up). The sensor's extrinsic is the chain composed: 0.5 m.
+  std::string config = serviceConfig(domain);
+  config.replace(config.find("source: odometry"), 16, "source: tf");
+  config.replace(config.find("base_height: 1.2"), 16, "base_height: 0.7");
+  RunningDaemon daemon(config, false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", std::chrono::seconds(10)).has_value())
+      << daemon.log();
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(10.0));
+  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.2}, {}}, "pan", "lidar");
+  for (int i = 0; i < 5; ++i) {  // /tf is volatile: a few times, once matched is enough
+    ros.publisher->publishTf(0, io::Pose{{0.0, 0.0, 0.3}, {}}, "base_link", "pan");
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  driver::PlaybackOptions options;
+  options.pose_as_tf = true;                 // odom -> base_link
+  options.sensor_in_base = {0.0, 0.0, 0.5};  // the published base pose is 0.5 m below the lidar
+  expectSceneHeightsAfterPlaying(ros, daemon, options);
+  EXPECT_GE(ros.diagnostics->number("raymapd: pipeline/extrinsics_from_tf").value_or(0.0), 1.0);
+  expectCleanStop(daemon);
+}
+
 TEST(Raymapd, PublishesANav2CostmapWithEachHeightMapOnTheSameGrid) {
   const std::uint32_t domain = uniqueDomain();
   std::string config = serviceConfig(domain);
