@@ -379,8 +379,12 @@ TEST(Raymapd, ResolvesATfStaticChainThatArrivedBeforeTheFirstCloudWithTheFrameLe
       << daemon.log();
   RosSide ros(domain, 70000);
   ASSERT_TRUE(ros.waitForService(10.0));
-  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.2}, {}}, "mount", "lidar");
-  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.3}, {}}, "base_link", "mount");
+  // In one latched TFMessage, as robot_state_publisher sends them (two messages on a keep-last-1
+  // writer could lose the first before it is delivered).
+  const driver::DriverPublisher::StaticEdge chain[] = {
+      {io::Pose{{0.0, 0.0, 0.2}, {}}, "mount", "lidar"},
+      {io::Pose{{0.0, 0.0, 0.3}, {}}, "base_link", "mount"}};
+  ros.publisher->publishTfStatic(chain);
   driver::PlaybackOptions options;
   options.sensor_in_base = {0.0, 0.0, 0.5};  // the published base pose is 0.5 m below the lidar
   expectSceneHeightsAfterPlaying(ros, daemon, options);

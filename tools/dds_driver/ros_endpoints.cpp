@@ -133,6 +133,24 @@ void DriverPublisher::publishTfStatic(const io::Pose& pose, const char* parent, 
   writeTransform(*tf_static_writer_, 0, pose, parent, child);
 }
 
+void DriverPublisher::publishTfStatic(std::span<const StaticEdge> edges) {
+  std::vector<geometry_msgs_msg_dds__TransformStamped_> transforms(edges.size());
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    geometry_msgs_msg_dds__TransformStamped_& t = transforms[i];
+    dds::setRosTime(t.header.stamp, 0);
+    t.header.frame_id = const_cast<char*>(edges[i].parent);  // NOLINT: read-only for dds_write
+    t.child_frame_id = const_cast<char*>(edges[i].child);    // NOLINT: read-only for dds_write
+    const io::Pose& pose = edges[i].pose;
+    t.transform.translation = {pose.position.x, pose.position.y, pose.position.z};
+    t.transform.rotation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
+                            pose.orientation.w};
+  }
+  tf2_msgs_msg_dds__TFMessage_ m{};
+  m.transforms._buffer = transforms.data();
+  m.transforms._length = m.transforms._maximum = static_cast<std::uint32_t>(transforms.size());
+  (void)tf_static_writer_->write(&m);
+}
+
 // ---------------------------------------------------------------- GridMap
 
 const std::vector<float>* ReceivedGridMap::layer(const std::string& name) const {

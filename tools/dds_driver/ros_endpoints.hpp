@@ -42,6 +42,15 @@ class DriverPublisher {
   /// @brief One static transform parent -> child on `rt/tf_static`, latched (reliable,
   /// transient-local, as ROS's static_transform_publisher): late readers get it too.
   void publishTfStatic(const io::Pose& pose, const char* parent, const char* child);
+  /// @brief One static edge of a TF tree (frames: NUL-terminated, alive during the call).
+  struct StaticEdge {
+    io::Pose pose;  ///< the child in the parent
+    const char* parent;
+    const char* child;
+  };
+  /// @brief Several static transforms in one TFMessage on `rt/tf_static`, as
+  /// robot_state_publisher sends them: the latched (keep last 1) sample holds them all.
+  void publishTfStatic(std::span<const StaticEdge> edges);
   /// @brief The cloud writer, to send hand-built (e.g. deliberately malformed) PointCloud2
   /// samples (sensor_msgs_msg_dds__PointCloud2_) in tests.
   dds::Writer& cloudWriter() noexcept { return *cloud_writer_; }
