@@ -135,6 +135,11 @@ struct Service::Impl {
   /// Pushes the extrinsic of every sensor whose frame is known and whose chain from base_frame
   /// /tf_static now resolves to a pose it has not pushed yet.
   void resolveExtrinsics() noexcept;
+  /// Queues sensor `s`'s extrinsic resolved from TF for the integrator, and remembers it.
+  /// @return false when the pose queue was full (counted).
+  bool pushExtrinsic(std::uint32_t s, const io::Pose& pose) noexcept;
+  /// The parent of `frame` in /tf_static, else in /tf as last heard; nullptr when neither has it.
+  const char* parentFrame(const char* frame) const noexcept;
   /// The frame whose /tf edge to its parent moves the base: base_frame, or the first frame above
   /// it with no static edge.
   const char* baseChainDriver() const noexcept;
@@ -522,18 +527,28 @@ void Service::Impl::resolveExtrinsics() noexcept {
         last.orientation.y == pose.orientation.y && last.orientation.z == pose.orientation.z) {
       continue;  // unchanged (tf_static is republished as a whole)
     }
-    pipeline::PoseUpdate update;
-    update.pose = pose;
-    update.kind = pipeline::PoseUpdate::kSensorExtrinsic;
-    update.sensor = s;
-    if (!poses->push(update)) {
-      stats.poses_dropped.add();
-      continue;
-    }
-    extrinsic_from_tf[s] = pose;
-    extrinsic_resolved[s] = 1;
-    stats.extrinsics_from_tf.fetch_add(1, std::memory_order_relaxed);
+    (void)pushExtrinsic(s, pose);
   }
+}
+
+bool Service::Impl::pushExtrinsic(std::uint32_t s, const io::Pose& pose) noexcept {
+  pipeline::PoseUpdate update;
+  update.pose = pose;
+  update.kind = pipeline::PoseUpdate::kSensorExtrinsic;
+  update.sensor = s;
+  if (!poses->push(update)) {
+    stats.poses_dropped.add();
+    return false;
+  }
+  extrinsic_from_tf[s] = pose;
+  extrinsic_resolved[s] = 1;
+  stats.extrinsics_from_tf.fetch_add(1, std::memory_order_relaxed);
+  return true;
+}
+
+const char* Service::Impl::parentFrame(const char* frame) const noexcept {
+  const char* parent = static_tf.parentOf(frame);
+  return parent != nullptr ? parent : tf_latest.parentOf(frame);
 }
 
 const char* Service::Impl::baseChainDriver() const noexcept {
@@ -558,10 +573,7 @@ bool Service::Impl::isOnSensorChain(const char* edge_child,
     if (std::strcmp(at, edge_child) == 0) {
       return true;
     }
-    const char* parent = static_tf.parentOf(at);
-    if (parent == nullptr) {
-      parent = tf_latest.parentOf(at);
-    }
+    const char* parent = parentFrame(at);
     if (parent == nullptr) {
       return false;
     }
@@ -573,10 +585,7 @@ bool Service::Impl::isOnSensorChain(const char* edge_child,
 bool Service::Impl::isBaseAncestor(const char* frame) const noexcept {
   const char* at = config.pose.base_frame.c_str();
   for (std::uint32_t depth = 0; depth < pipeline::TransformTable::kMaxChain; ++depth) {
-    const char* parent = static_tf.parentOf(at);
-    if (parent == nullptr) {
-      parent = tf_latest.parentOf(at);
-    }
+    const char* parent = parentFrame(at);
     if (parent == nullptr || std::strcmp(at, config.pose.world_frame.c_str()) == 0) {
       return false;
     }
@@ -634,22 +643,14 @@ void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static) {
           continue;
         }
         used = true;
-        pipeline::PoseUpdate extrinsic;
-        if (!static_tf.resolve(config.pose.base_frame.c_str(), frame, &extrinsic.pose,
-                               &tf_latest)) {
+        io::Pose extrinsic;
+        if (!static_tf.resolve(config.pose.base_frame.c_str(), frame, &extrinsic, &tf_latest)) {
           stats.tf_unresolved.add();  // an edge between it and base_frame has not come yet
           continue;
         }
-        extrinsic.kind = pipeline::PoseUpdate::kSensorExtrinsic;
-        extrinsic.sensor = s;
-        if (!poses->push(extrinsic)) {
-          stats.poses_dropped.add();
-          continue;
+        if (pushExtrinsic(s, extrinsic)) {
+          stats.poses_received.add();
         }
-        extrinsic_from_tf[s] = extrinsic.pose;
-        extrinsic_resolved[s] = 1;
-        stats.extrinsics_from_tf.fetch_add(1, std::memory_order_relaxed);
-        stats.poses_received.add();
       }
       if (!used) {
         stats.tf_ignored.add();

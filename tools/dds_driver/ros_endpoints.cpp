@@ -107,8 +107,10 @@ void DriverPublisher::publishOdometry(std::int64_t stamp_ns, const io::Pose& pos
 
 namespace {
 
-void writeTransform(dds::Writer& writer, std::int64_t stamp_ns, const io::Pose& pose,
-                    const char* parent, const char* child) {
+/// A TransformStamped pointing at `parent` and `child` (which must outlive its write).
+geometry_msgs_msg_dds__TransformStamped_ transformStamped(std::int64_t stamp_ns,
+                                                          const io::Pose& pose, const char* parent,
+                                                          const char* child) {
   geometry_msgs_msg_dds__TransformStamped_ t{};
   dds::setRosTime(t.header.stamp, stamp_ns);
   t.header.frame_id = const_cast<char*>(parent);  // NOLINT: read-only for dds_write
@@ -116,6 +118,12 @@ void writeTransform(dds::Writer& writer, std::int64_t stamp_ns, const io::Pose& 
   t.transform.translation = {pose.position.x, pose.position.y, pose.position.z};
   t.transform.rotation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
                           pose.orientation.w};
+  return t;
+}
+
+void writeTransform(dds::Writer& writer, std::int64_t stamp_ns, const io::Pose& pose,
+                    const char* parent, const char* child) {
+  geometry_msgs_msg_dds__TransformStamped_ t = transformStamped(stamp_ns, pose, parent, child);
   tf2_msgs_msg_dds__TFMessage_ m{};
   m.transforms._buffer = &t;
   m.transforms._length = m.transforms._maximum = 1;
@@ -134,16 +142,10 @@ void DriverPublisher::publishTfStatic(const io::Pose& pose, const char* parent, 
 }
 
 void DriverPublisher::publishTfStatic(std::span<const StaticEdge> edges) {
-  std::vector<geometry_msgs_msg_dds__TransformStamped_> transforms(edges.size());
-  for (std::size_t i = 0; i < edges.size(); ++i) {
-    geometry_msgs_msg_dds__TransformStamped_& t = transforms[i];
-    dds::setRosTime(t.header.stamp, 0);
-    t.header.frame_id = const_cast<char*>(edges[i].parent);  // NOLINT: read-only for dds_write
-    t.child_frame_id = const_cast<char*>(edges[i].child);    // NOLINT: read-only for dds_write
-    const io::Pose& pose = edges[i].pose;
-    t.transform.translation = {pose.position.x, pose.position.y, pose.position.z};
-    t.transform.rotation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
-                            pose.orientation.w};
+  std::vector<geometry_msgs_msg_dds__TransformStamped_> transforms;
+  transforms.reserve(edges.size());
+  for (const StaticEdge& edge : edges) {
+    transforms.push_back(transformStamped(0, edge.pose, edge.parent, edge.child));
   }
   tf2_msgs_msg_dds__TFMessage_ m{};
   m.transforms._buffer = transforms.data();
