@@ -53,8 +53,8 @@ ShedDecision planScan(std::int64_t now_ns, std::int64_t arrival_ns, double queue
     shed.drop = true;  // even the next map comes too late
     return shed;
   }
-  const double latest = upcoming + std::floor((bound - upcoming) / period) * period;
-  const double left = (latest - lead) - start;
+  const double left =
+      static_cast<double>(latestGenerationWithin(arrival_ns, schedule, max_latency_ns)) - start;
   if (left <= 0.0) {
     shed.drop = true;
     return shed;
