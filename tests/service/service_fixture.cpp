@@ -106,7 +106,12 @@ RosSide::RosSide(std::uint32_t domain, std::uint32_t max_points) {
 bool RosSide::waitForService(double timeout_s) {
   const std::int64_t end = platform::monotonicNowNs() + static_cast<std::int64_t>(timeout_s * 1e9);
   while (platform::monotonicNowNs() < end) {
-    if (publisher->matchedCloudReaders() > 0 && grid_maps->matchedWriters() > 0) {
+    // The pose reader too (odometry or /tf, whichever the configuration takes): poses published
+    // before it matched are lost, and the first scans would then have none (scans_dropped_no_pose).
+    const std::uint32_t pose_readers =
+        publisher->matchedOdometryReaders() + publisher->matchedTfReaders();
+    if (publisher->matchedCloudReaders() > 0 && pose_readers > 0 &&
+        grid_maps->matchedWriters() > 0) {
       return true;
     }
     platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 20000000);

@@ -62,7 +62,8 @@ struct RosSide {
   std::unique_ptr<driver::DriverPublisher> publisher;
   std::unique_ptr<driver::GridMapListener> grid_maps;
   std::unique_ptr<driver::DiagnosticsListener> diagnostics;
-  /// @brief Waits until raymapd's reader and writer are matched (discovery), up to `timeout_s`.
+  /// @brief Waits until raymapd's cloud and pose readers and its height-map writer are matched
+  /// (discovery), up to `timeout_s`.
   bool waitForService(double timeout_s);
   /// @brief Plays `lidar` for `seconds`, collecting GridMaps and diagnostics meanwhile.
   void play(const driver::SimulatedLidar& lidar, driver::PlaybackOptions options, double seconds,

@@ -87,7 +87,13 @@ TEST(RaymapdHealth, APointWithACorruptTimeCostsThatPointAndIsAWarning) {
   EXPECT_GE(received, 20.0);
   EXPECT_GE(integrated + shed, received - 3.0)
       << "the scans go in (the last may still be on its way)";
-  EXPECT_EQ(s.ros.diagnostics->number("raymapd: pipeline/scans_dropped_no_pose").value_or(-1), 0.0);
+  // A corrupt time once (0xFFFFFFFF ns) stretched every scan to need poses 4.3 s ahead: all were
+  // dropped for want of a pose. On a busy machine one may still wait out pose_wait_ns when the
+  // odometry publisher is held up, which is not what this test is about.
+  const double no_pose =
+      s.ros.diagnostics->number("raymapd: pipeline/scans_dropped_no_pose").value_or(-1);
+  EXPECT_GE(no_pose, 0.0);
+  EXPECT_LE(no_pose, 2.0);
   EXPECT_GE(s.ros.diagnostics->number("raymapd: pipeline/points_bad_time").value_or(0),
             received - 3.0);
   EXPECT_EQ(pipelineValue(s.ros, "level"), "1");
