@@ -130,7 +130,14 @@ TEST(RaymapdHealth, InputThatStopsTurnsToErrorAndTheMapsStop) {
   ASSERT_TRUE(s.ros.waitForService(10.0));
   std::vector<driver::ReceivedGridMap> maps;
   s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 2.0, maps);
-  EXPECT_EQ(pipelineValue(s.ros, "level"), "0") << pipelineValue(s.ros, "message");
+  {
+    // OK while the input flows; on a busy machine the latency bound may shed a scan or two, a
+    // true WARN that is not what this test is about.
+    const std::string level = pipelineValue(s.ros, "level");
+    const std::string message = pipelineValue(s.ros, "message");
+    EXPECT_TRUE(level == "0" || (level == "1" && message.find("shed") != std::string::npos))
+        << level << ": " << message;
+  }
   ASSERT_GE(maps.size(), 5u);
   const std::size_t while_playing = maps.size();
   const std::int64_t stopped_at = platform::monotonicNowNs();
