@@ -36,7 +36,7 @@
 #include "src/pipeline/heightmap_cycle.hpp"
 #include "src/pipeline/integrator.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
-#include "src/pipeline/transform_table.hpp"
+#include "src/pipeline/tf_router.hpp"
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/log.hpp"
 
@@ -100,13 +100,12 @@ struct Service::Impl {
 
   // Ingest-thread state: decode options per sensor (their time-field names live in config).
   std::vector<dds::CloudDecodeOptions> decode_options;
-  std::vector<char> sensor_frames_learned;  // per sensor: frame seen first (64 chars each)
-  // /tf_static as it arrived, in any order (ingest thread), and per sensor the extrinsic last
-  // resolved from it (base_frame -> ... -> the sensor's frame).
-  pipeline::TransformTable static_tf;
-  pipeline::TransformTable tf_latest;  // /tf's latest edge per child (pose.source: tf)
-  std::vector<io::Pose> extrinsic_from_tf;
-  std::vector<std::uint8_t> extrinsic_resolved;
+  // TF and the sensors' frames to base poses and extrinsics (ingest thread), into `poses`.
+  std::unique_ptr<pipeline::TfRouter> tf_router;
+  struct QueueSink final : pipeline::PoseSink {
+    pipeline::PoseQueue* queue = nullptr;
+    bool push(const pipeline::PoseUpdate& update) noexcept override { return queue->push(update); }
+  } pose_sink;
 
   platform::SystemdNotifier notifier;
   platform::Wakeup integrator_wakeup;
@@ -129,25 +128,6 @@ struct Service::Impl {
   void onCloud(std::uint32_t sensor, std::span<const std::byte> cdr);
   void onOdometry(std::span<const std::byte> cdr);
   void onTf(std::span<const std::byte> cdr, bool is_static);
-  /// The frame sensor `s`'s clouds are in: configured, or learned from its first cloud ("" until
-  /// then).
-  const char* sensorFrame(std::uint32_t s) const noexcept;
-  /// Pushes the extrinsic of every sensor whose frame is known and whose chain from base_frame
-  /// /tf_static now resolves to a pose it has not pushed yet.
-  void resolveExtrinsics() noexcept;
-  /// Queues sensor `s`'s extrinsic resolved from TF for the integrator, and remembers it.
-  /// @return false when the pose queue was full (counted).
-  bool pushExtrinsic(std::uint32_t s, const io::Pose& pose) noexcept;
-  /// The parent of `frame` in /tf_static, else in /tf as last heard; nullptr when neither has it.
-  const char* parentFrame(const char* frame) const noexcept;
-  /// The frame whose /tf edge to its parent moves the base: base_frame, or the first frame above
-  /// it with no static edge.
-  const char* baseChainDriver() const noexcept;
-  /// True when `frame` lies on the chain from base_frame up to world_frame (as far as known).
-  bool isBaseAncestor(const char* frame) const noexcept;
-  /// True when the edge whose child is `edge_child` lies on the chain from `sensor_frame` up to
-  /// base_frame (as far as known): the sensor moves with it.
-  bool isOnSensorChain(const char* edge_child, const char* sensor_frame) const noexcept;
   void publishVoxels(std::int64_t stamp_ns);
 };
 
@@ -237,9 +217,15 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     decode.time_field = field == "auto" || field == "none" ? nullptr : field.c_str();
     impl->decode_options.push_back(decode);
   }
-  impl->sensor_frames_learned.assign(config.sensors.size() * 64, '\0');
-  impl->extrinsic_from_tf.assign(config.sensors.size(), io::Pose{});
-  impl->extrinsic_resolved.assign(config.sensors.size(), 0);
+  {
+    std::vector<std::string> frames;
+    for (const SensorConfig& s : config.sensors) {
+      frames.push_back(s.frame);
+    }
+    impl->tf_router = std::make_unique<pipeline::TfRouter>(
+        config.pose.world_frame, config.pose.base_frame, frames, impl->stats);
+    impl->pose_sink.queue = impl->poses.get();
+  }
   impl->integrator = std::make_unique<pipeline::Integrator>(
       m, *impl->backend.backend, impl->map_mutex, *impl->mailbox, *impl->poses, *impl->arrivals,
       impl->latest, settings, std::move(sensors), impl->stats);
@@ -460,7 +446,6 @@ void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr
     return;
   }
   const SensorConfig& s = config.sensors[sensor];
-  char* learned = &sensor_frames_learned[std::size_t{sensor} * 64];
   if (!s.frame.empty() && std::strcmp(decoded.value().frame_id, s.frame.c_str()) != 0) {
     mailbox->abandon(slot);  // its extrinsic would be wrong
     stats.clouds_unknown_frame.add();
@@ -472,12 +457,9 @@ void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr
     }
     return;
   }
-  if (learned[0] == '\0') {
-    std::memcpy(learned, decoded.value().frame_id, 64);
-    // /tf_static latched before this first cloud now applies (before the scan is queued: the
-    // integrator takes poses queued ahead of a scan first).
-    resolveExtrinsics();
-  }
+  // /tf_static latched before a sensor's first cloud applies from it on (queued before the scan:
+  // the integrator takes poses queued ahead of a scan first).
+  tf_router->learnSensorFrame(sensor, decoded.value().frame_id, pose_sink);
   slot->header = decoded.value();
   slot->sensor = sensor;
   slot->arrival_ns = platform::monotonicNowNs();
@@ -505,98 +487,6 @@ void Service::Impl::onOdometry(std::span<const std::byte> cdr) {
   integrator_wakeup.notify();
 }
 
-const char* Service::Impl::sensorFrame(std::uint32_t s) const noexcept {
-  return config.sensors[s].frame.empty() ? &sensor_frames_learned[std::size_t{s} * 64]
-                                         : config.sensors[s].frame.c_str();
-}
-
-void Service::Impl::resolveExtrinsics() noexcept {
-  const char* base = config.pose.base_frame.c_str();
-  for (std::uint32_t s = 0; s < config.sensors.size(); ++s) {
-    const char* frame = sensorFrame(s);
-    io::Pose pose;
-    // A cloud in the base frame itself keeps the configured extrinsic.
-    if (frame[0] == '\0' || std::strcmp(frame, base) == 0 ||
-        !static_tf.resolve(base, frame, &pose, &tf_latest)) {
-      continue;
-    }
-    const io::Pose& last = extrinsic_from_tf[s];
-    if (extrinsic_resolved[s] != 0 && last.position.x == pose.position.x &&
-        last.position.y == pose.position.y && last.position.z == pose.position.z &&
-        last.orientation.w == pose.orientation.w && last.orientation.x == pose.orientation.x &&
-        last.orientation.y == pose.orientation.y && last.orientation.z == pose.orientation.z) {
-      continue;  // unchanged (tf_static is republished as a whole)
-    }
-    (void)pushExtrinsic(s, pose);
-  }
-}
-
-bool Service::Impl::pushExtrinsic(std::uint32_t s, const io::Pose& pose) noexcept {
-  pipeline::PoseUpdate update;
-  update.pose = pose;
-  update.kind = pipeline::PoseUpdate::kSensorExtrinsic;
-  update.sensor = s;
-  if (!poses->push(update)) {
-    stats.poses_dropped.add();
-    return false;
-  }
-  extrinsic_from_tf[s] = pose;
-  extrinsic_resolved[s] = 1;
-  stats.extrinsics_from_tf.fetch_add(1, std::memory_order_relaxed);
-  return true;
-}
-
-const char* Service::Impl::parentFrame(const char* frame) const noexcept {
-  const char* parent = static_tf.parentOf(frame);
-  return parent != nullptr ? parent : tf_latest.parentOf(frame);
-}
-
-const char* Service::Impl::baseChainDriver() const noexcept {
-  const char* at = config.pose.base_frame.c_str();
-  for (std::uint32_t depth = 0; depth < pipeline::TransformTable::kMaxChain; ++depth) {
-    const char* parent = static_tf.parentOf(at);
-    if (parent == nullptr) {
-      break;
-    }
-    at = parent;
-  }
-  return at;
-}
-
-bool Service::Impl::isOnSensorChain(const char* edge_child,
-                                    const char* sensor_frame) const noexcept {
-  const char* at = sensor_frame;
-  for (std::uint32_t depth = 0; depth < pipeline::TransformTable::kMaxChain; ++depth) {
-    if (std::strcmp(at, config.pose.base_frame.c_str()) == 0) {
-      return false;
-    }
-    if (std::strcmp(at, edge_child) == 0) {
-      return true;
-    }
-    const char* parent = parentFrame(at);
-    if (parent == nullptr) {
-      return false;
-    }
-    at = parent;
-  }
-  return false;
-}
-
-bool Service::Impl::isBaseAncestor(const char* frame) const noexcept {
-  const char* at = config.pose.base_frame.c_str();
-  for (std::uint32_t depth = 0; depth < pipeline::TransformTable::kMaxChain; ++depth) {
-    const char* parent = parentFrame(at);
-    if (parent == nullptr || std::strcmp(at, config.pose.world_frame.c_str()) == 0) {
-      return false;
-    }
-    if (std::strcmp(parent, frame) == 0) {
-      return std::strcmp(frame, config.pose.world_frame.c_str()) != 0;
-    }
-    at = parent;
-  }
-  return false;
-}
-
 void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static) {
   std::array<dds::StampedTransform, kTfPerMessage> transforms;
   auto count = dds::decodeTfMessage(cdr, transforms);
@@ -604,73 +494,7 @@ void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static) {
     stats.poses_malformed.add();
     return;
   }
-  for (std::uint32_t i = 0; i < count.value(); ++i) {
-    const dds::StampedTransform& t = transforms[i];
-    const io::Pose pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
-    if (is_static) {
-      // Every static edge is kept, whatever order they come in and whether or not a sensor's
-      // frame is known yet: chains are resolved below and again at each sensor's first cloud.
-      if (!static_tf.set(t.parent, t.child, pose)) {
-        stats.tf_ignored.add();  // table full
-      }
-      stats.poses_received.add();
-      continue;
-    }
-    pipeline::PoseUpdate update;
-    update.stamp_ns = t.stamp_ns;
-    update.pose = pose;
-    bool used = false;
-    const bool kept = tf_latest.set(t.parent, t.child, pose);
-    if (kept && std::strcmp(t.child, baseChainDriver()) == 0) {
-      // The lowest moving edge of the chain world_frame -> ... -> base_frame (odom -> base_link
-      // under map -> odom, say): the base's pose at this stamp, the other edges as last heard.
-      used = true;
-      if (!static_tf.resolve(config.pose.world_frame.c_str(), config.pose.base_frame.c_str(),
-                             &update.pose, &tf_latest)) {
-        stats.tf_unresolved.add();  // an edge above it has not come yet
-        continue;
-      }
-      update.kind = pipeline::PoseUpdate::kBaseInWorld;
-    } else if (kept && isBaseAncestor(t.child)) {
-      stats.poses_received.add();  // an edge higher up the base's chain: used from now on
-      continue;
-    } else if (kept) {
-      // A sensor on a moving mount (a pan unit, an arm): an edge of the chain from base_frame to
-      // a sensor's frame came on /tf. The sensors below it take the composed extrinsic.
-      for (std::uint32_t s = 0; s < config.sensors.size(); ++s) {
-        const char* frame = sensorFrame(s);
-        if (frame[0] == '\0' || !isOnSensorChain(t.child, frame)) {
-          continue;
-        }
-        used = true;
-        io::Pose extrinsic;
-        if (!static_tf.resolve(config.pose.base_frame.c_str(), frame, &extrinsic, &tf_latest)) {
-          stats.tf_unresolved.add();  // an edge between it and base_frame has not come yet
-          continue;
-        }
-        if (pushExtrinsic(s, extrinsic)) {
-          stats.poses_received.add();
-        }
-      }
-      if (!used) {
-        stats.tf_ignored.add();
-      }
-      continue;
-    }
-    if (!used) {
-      stats.tf_ignored.add();
-      continue;
-    }
-    if (!poses->push(update)) {
-      stats.poses_dropped.add();
-      continue;
-    }
-    stats.poses_received.add();
-  }
-  if (is_static) {
-    stats.tf_static_edges.store(static_tf.size(), std::memory_order_relaxed);
-    resolveExtrinsics();
-  }
+  tf_router->onTransforms(std::span(transforms).first(count.value()), is_static, pose_sink);
   integrator_wakeup.notify();
 }
 
