@@ -16,6 +16,7 @@ while [ $# -gt 0 ]; do
 done
 if [ "$install" -eq 1 ]; then
   tools/setup-debian.sh
+  tools/setup-node.sh  # the rosbag tests' independent MCAP/ROS 2 implementation (npm)
 fi
 cmake --preset "$preset" >/dev/null
 cmake --build --preset "$preset"

@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "platform/clock.hpp"
+#include "src/pipeline/deskew.hpp"
 #include "src/pipeline/load_shedding.hpp"
 
 namespace raymap::pipeline {
@@ -24,15 +25,6 @@ constexpr double kBudgetLoad = 0.85;
 /// still keep it below kBudgetLower: in between it stays (no oscillation at the edge).
 constexpr double kBudgetRaise = 0.95;
 constexpr double kBudgetLower = 0.9;
-
-std::int64_t pointTimeNs(std::int64_t stamp_ns, float time_s) noexcept {
-  return stamp_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(time_s) * 1e9));
-}
-
-/// A per-point time the scan can use: finite and within `max_offset_s` of the header stamp.
-bool usableTime(float time_s, float max_offset_s) noexcept {
-  return std::fabs(time_s) <= max_offset_s;  // false for NaN
-}
 
 }  // namespace
 
@@ -70,7 +62,7 @@ void Integrator::drainPoses() noexcept {
     if (update.kind == PoseUpdate::kSensorExtrinsic) {
       if (update.sensor < sensors_.size()) {
         sensors_[update.sensor].extrinsic = update.pose;
-        last_point_time_ns_ = INT64_MIN;  // the cached sensor pose used the old extrinsic
+        deskewer_.reset();  // the cached sensor pose used the old extrinsic
       }
       continue;
     }
@@ -97,23 +89,11 @@ bool Integrator::convertScan(std::uint64_t max_visits) noexcept {
     if (!usableTime(p.time_s, sensor.max_time_offset_s)) {
       continue;  // counted (points_bad_time) when the scan was taken
     }
-    const std::int64_t t = pointTimeNs(scan_->header.stamp_ns, p.time_s);
-    if (t != last_point_time_ns_) {
-      io::Pose base;
-      if (history_.lookup(t, settings_.pose_hold_ns, &base) != PoseLookup::kOk) {
-        continue;  // unreachable: the scan's first and last times were checked
-      }
-      last_sensor_pose_ = io::compose(base, sensor.extrinsic);
-      last_point_time_ns_ = t;
+    if (!deskewer_.toRay(p, scan_->header.stamp_ns, history_, settings_.pose_hold_ns,
+                         sensor.extrinsic, scan_->sequence, rays_[batch_size_])) {
+      continue;  // unreachable: the scan's first and last times were checked
     }
-    Ray& ray = rays_[batch_size_++];
-    ray.origin = last_sensor_pose_.position;
-    ray.sample = last_sensor_pose_.transform(
-        {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
-    ray.time_s = static_cast<double>(t) * 1e-9;
-    ray.intensity = p.intensity;
-    ray.flags = 0;
-    ray.scan = scan_->sequence;
+    ++batch_size_;
   }
   return order_.done();
 }
@@ -296,26 +276,16 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       scan_first_wait_ns_ = 0;
       window_points_taken_ += static_cast<double>(scan_->header.points);
       ++window_scans_taken_;
-      last_point_time_ns_ = INT64_MIN;  // the cached pose belongs to the previous scan's sensor
+      deskewer_.reset();  // the cached pose belongs to the previous scan's sensor
       // The poses must cover the scan's usable point times; a point with a corrupt time is left
       // out (convertScan skips it), not allowed to stretch the scan.
-      const float max_offset = sensors_[scan_->sensor].max_time_offset_s;
-      float t_min = 0.0f;
-      float t_max = 0.0f;
-      std::uint64_t bad_time = 0;
-      for (const dds::ScanPoint& p : scan_->points()) {
-        if (!usableTime(p.time_s, max_offset)) {
-          bad_time += (p.flags & dds::kPointNoReturn) == 0u ? 1u : 0u;
-          continue;
-        }
-        t_min = std::min(t_min, p.time_s);
-        t_max = std::max(t_max, p.time_s);
+      const ScanTimes times = scanTimes(scan_->points(), scan_->header.stamp_ns,
+                                        sensors_[scan_->sensor].max_time_offset_s);
+      if (times.bad_time > 0) {
+        stats_.points_bad_time.add(times.bad_time);
       }
-      if (bad_time > 0) {
-        stats_.points_bad_time.add(bad_time);
-      }
-      scan_start_ns_ = pointTimeNs(scan_->header.stamp_ns, t_min);
-      scan_end_ns_ = pointTimeNs(scan_->header.stamp_ns, t_max);
+      scan_start_ns_ = times.start_ns;
+      scan_end_ns_ = times.end_ns;
     }
     // Poses must cover the scan before any of it is converted.
     io::Pose unused;

@@ -12,6 +12,7 @@
 #include "src/map/backend.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
+#include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_history.hpp"
 #include "src/pipeline/pose_update.hpp"
@@ -133,9 +134,8 @@ class Integrator {
   std::int64_t scan_first_wait_ns_ = 0;  // when it first waited for poses
   std::int64_t scan_start_ns_ = 0;       // time of its earliest and latest point
   std::int64_t scan_end_ns_ = 0;
-  ScanOrder order_;  // which points, in which order (stride set by the latency bound)
-  std::int64_t last_point_time_ns_ = INT64_MIN;  // cache: pose of the last point time
-  io::Pose last_sensor_pose_;
+  ScanOrder order_;         // which points, in which order (stride set by the latency bound)
+  PointDeskewer deskewer_;  // caches the sensor's pose at the last point time
 
   // The batch: rays of possibly several scans, all from one sensor (range limits differ).
   std::vector<Ray> rays_;

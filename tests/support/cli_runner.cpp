@@ -36,10 +36,14 @@ bool drain(int fd, std::string& text) {
 }  // namespace
 
 RunResult runRaymap(const std::vector<std::string>& args) {
-  RunResult result;
   std::vector<std::string> words;
   words.emplace_back(RAYMAP_CLI_PATH);
   words.insert(words.end(), args.begin(), args.end());
+  return runProgram(std::move(words));
+}
+
+RunResult runProgram(std::vector<std::string> words) {
+  RunResult result;
   std::vector<char*> argv;
   for (std::string& word : words) {
     argv.push_back(word.data());
@@ -63,7 +67,7 @@ RunResult runRaymap(const std::vector<std::string>& args) {
   posix_spawn_file_actions_adddup2(&actions, out_pipe[1], STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
   pid_t pid = -1;
-  const int spawned = ::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  const int spawned = ::posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   ::close(out_pipe[1]);
   ::close(err_pipe[1]);

@@ -17,6 +17,8 @@ struct RunResult {
 /// and stderr (read as they fill, so a chatty child never blocks). A failure to start is a test
 /// failure.
 RunResult runRaymap(const std::vector<std::string>& args);
+/// @brief Runs any program (`words[0]`, looked up in PATH like a shell does) the same way.
+RunResult runProgram(std::vector<std::string> words);
 
 /// @brief A run for failure messages: exit code, stdout and stderr.
 std::string describe(const RunResult& r);

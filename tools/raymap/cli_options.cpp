@@ -212,6 +212,23 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--scan-period", f.scan_period,
                "Without a 'scan' property: seconds per scan (<= 0: one scan)")
       ->capture_default_str();
+  c.add_option("--topic", f.topics,
+               "Bags: a PointCloud2 topic to map (repeat for several sensors; default: the only "
+               "one)");
+  c.add_option("--pose-topic", f.pose_topic,
+               "Bags: the nav_msgs/msg/Odometry topic of the poses (default: the only one)");
+  c.add_option("--pose-source", f.pose_source,
+               "Bags: odometry, tf (the chain --world-frame -> --base-frame), or auto")
+      ->check(CLI::IsMember({"auto", "odometry", "tf"}))
+      ->capture_default_str();
+  c.add_option("--world-frame", f.world_frame, "Bags, TF poses: the fixed frame")
+      ->capture_default_str();
+  c.add_option("--base-frame", f.base_frame,
+               "Bags: the robot's body frame (poses, and /tf_static to each cloud's frame)")
+      ->capture_default_str();
+  c.add_option("--time-field", f.time_field,
+               "Bags: the per-point time field (auto, a field name, or none)")
+      ->capture_default_str();
   c.add_option("--resolution", f.resolution, "Voxel edge, metres")->capture_default_str();
   c.add_option("--region-voxels", f.region_voxels, "Voxels per region edge (4 to 128)")
       ->capture_default_str();
@@ -401,6 +418,27 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
     return Unexpected(offset.error());
   }
   o.source.sensor_offset = *offset;
+  o.bag.cloud_topics = f.topics;
+  o.bag.pose_topic = f.pose_topic;
+  o.bag.pose_source = f.pose_source == "odometry" ? bag::BagRaysOptions::PoseSource::kOdometry
+                      : f.pose_source == "tf"     ? bag::BagRaysOptions::PoseSource::kTf
+                                                  : bag::BagRaysOptions::PoseSource::kAuto;
+  o.bag.world_frame = f.world_frame;
+  o.bag.base_frame = f.base_frame;
+  o.bag.time_field = f.time_field;
+  o.bag.extrinsic.position = *offset;
+  const bool is_bag = bag::isBag(input);
+  if (is_bag && !f.trajectory.empty()) {
+    return fail(ErrorCode::kInvalidArgument,
+                "--trajectory: " + input + " is a bag: its poses come from --pose-topic or TF");
+  }
+  if (!is_bag && (!f.topics.empty() || !f.pose_topic.empty() || f.pose_source != "auto" ||
+                  f.time_field != "auto")) {
+    return fail(ErrorCode::kInvalidArgument,
+                input +
+                    " is not a bag: --topic, --pose-topic, --pose-source and --time-field "
+                    "apply to bags only");
+  }
   o.map.geometry.resolution = f.resolution;
   o.map.geometry.region_voxels = f.region_voxels;
   o.map.semantics = f.semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;

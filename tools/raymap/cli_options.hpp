@@ -4,6 +4,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -55,6 +56,13 @@ struct MappingFlags {
   bool no_mean = false;
   std::string max_memory = "4GiB";
   std::size_t batch_rays = PopulateOptions::kDefaultBatchRays;
+  // rosbag2 input (a bag directory, .mcap or .db3)
+  std::vector<std::string> topics;  ///< --topic: PointCloud2 topics
+  std::string pose_topic;           ///< --pose-topic: nav_msgs/msg/Odometry topic
+  std::string pose_source = "auto";
+  std::string world_frame = "odom";
+  std::string base_frame = "base_link";
+  std::string time_field = "auto";
 };
 
 /// @brief Registers the input and mapping options on a subcommand.

@@ -48,6 +48,25 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
   std::printf("\n               %s clipped to max range, %s without return, %s scans\n",
               withCommas(r.rays.rays_clipped).c_str(), withCommas(r.rays.rays_no_return).c_str(),
               withCommas(r.scans).c_str());
+  if (r.bag) {
+    const bag::BagRaysReport& b = *r.bag;
+    std::string topics;
+    for (const std::string& t : b.cloud_topics) {
+      topics += (topics.empty() ? "" : ", ") + t;
+    }
+    std::printf(
+        "bag            %s messages; clouds on %s: %s, %s mapped, %s without a pose, %s "
+        "skipped; poses from %s: %s\n",
+        withCommas(b.messages).c_str(), topics.c_str(), withCommas(b.clouds).c_str(),
+        withCommas(b.scans_integrated).c_str(), withCommas(b.scans_no_pose).c_str(),
+        withCommas(b.clouds_skipped).c_str(), b.pose_source.c_str(), withCommas(b.poses).c_str());
+    std::printf(
+        "               %s points without return, %s with a bad time; TF: %u extrinsics, %s "
+        "ignored, %s unresolved\n",
+        withCommas(b.points_no_return).c_str(), withCommas(b.points_bad_time).c_str(),
+        b.extrinsics_from_tf, withCommas(b.tf_ignored).c_str(),
+        withCommas(b.tf_unresolved).c_str());
+  }
   if (o.map.mode == MapMode::kTsdf) {
     std::printf(
         "map            %s TSDF voxels updated (%s behind the surface) in %s regions (%.3g m, "
@@ -167,6 +186,22 @@ int runPopulate(const PopulateFlags& f) {
        {&report->fallback_warning, &report->startup_warning, &report->input_warning}) {
     if (!warning->empty()) {
       std::fprintf(stderr, "raymap populate: warning: %s\n", warning->c_str());
+    }
+  }
+  if (report->bag) {
+    const bag::BagRaysReport& b = *report->bag;
+    if (!b.truncated_warning.empty()) {
+      std::fprintf(stderr, "raymap populate: warning: %s\n", b.truncated_warning.c_str());
+    }
+    for (const std::string& skip : b.skips) {
+      std::fprintf(stderr, "raymap populate: warning: %s\n", skip.c_str());
+    }
+    if (b.scans_integrated == 0) {
+      printError(command, "no cloud of " + options->input +
+                              " could be mapped: " + std::to_string(b.clouds) + " clouds, " +
+                              std::to_string(b.scans_no_pose) + " without a pose (poses from " +
+                              b.pose_source + ": " + std::to_string(b.poses) + ")");
+      return kExitFailure;
     }
   }
   // Every output is written under a temporary name and all are renamed at the end, so a run that

@@ -185,11 +185,23 @@ Result<PopulateReport> integrateStream(
 }
 
 Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& options) {
-  auto source_or = io::openRaySource(options.input, options.source);
-  if (!source_or) {
-    return Unexpected(source_or.error());
+  std::unique_ptr<io::RaySource> opened;
+  bag::BagRaySource* bag_source = nullptr;
+  if (bag::isBag(options.input)) {
+    auto bag_or = bag::openBagRaySource(options.input, options.bag);
+    if (!bag_or) {
+      return Unexpected(bag_or.error());
+    }
+    bag_source = bag_or.value().get();
+    opened = std::move(bag_or).value();
+  } else {
+    auto source_or = io::openRaySource(options.input, options.source);
+    if (!source_or) {
+      return Unexpected(source_or.error());
+    }
+    opened = std::move(source_or).value();
   }
-  io::RaySource& source = **source_or;
+  io::RaySource& source = *opened;
   const std::string warning = inputWarning(map.mode(), source.info());
   auto report = integrateStream(
       map, options, [&](std::span<Ray> out) { return source.read(out); },
@@ -198,6 +210,9 @@ Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& op
     return report;
   }
   report->input_warning = warning;
+  if (bag_source != nullptr) {
+    report->bag = bag_source->report();
+  }
   map.setInfo("source", options.input);
   map.setInfo("rays_in", std::to_string(report->rays.rays_in));
   map.setInfo("rays_integrated", std::to_string(report->rays.rays_accepted));
@@ -278,6 +293,31 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
         .add("sync_seconds", b.sync_seconds)
         .add("cache_hit_rate",
              lookups > 0 ? static_cast<double>(b.cache_hits) / static_cast<double>(lookups) : 0.0);
+  }
+  if (r.bag) {
+    const bag::BagRaysReport& b = *r.bag;
+    std::string topics = "[";
+    for (const std::string& t : b.cloud_topics) {
+      topics += (topics.size() > 1 ? ", " : "") + jsonQuote(t);
+    }
+    topics += "]";
+    JsonObject bj;
+    bj.raw("cloud_topics", topics)
+        .add("pose_source", b.pose_source)
+        .add("messages", b.messages)
+        .add("clouds", b.clouds)
+        .add("scans_integrated", b.scans_integrated)
+        .add("scans_no_pose", b.scans_no_pose)
+        .add("clouds_skipped", b.clouds_skipped)
+        .add("poses", b.poses)
+        .add("poses_skipped", b.poses_skipped)
+        .add("points_no_return", b.points_no_return)
+        .add("points_bad_time", b.points_bad_time)
+        .add("tf_ignored", b.tf_ignored)
+        .add("tf_unresolved", b.tf_unresolved)
+        .add("extrinsics_from_tf", b.extrinsics_from_tf)
+        .add("truncated", !b.truncated_warning.empty());
+    j.raw("bag", bj.str());
   }
   if (!r.fallback_warning.empty()) {
     j.add("fallback", r.fallback_warning);

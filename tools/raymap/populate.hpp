@@ -4,9 +4,11 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 
+#include "src/bag/bag_ray_source.hpp"
 #include "src/core/error.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/map/backend.hpp"
@@ -31,7 +33,8 @@ struct PopulateOptions {
   static constexpr std::size_t kDefaultBatchRays = std::size_t{1} << 18;
 
   std::string input;
-  io::RaySourceOptions source;
+  io::RaySourceOptions source;  ///< PLY input
+  bag::BagRaysOptions bag;      ///< rosbag2 input (a directory, .mcap or .db3)
   MapConfig map;
   RayFilter filter;
   BackendChoice backend;                       ///< backend, CPU threads, device options
@@ -53,6 +56,7 @@ struct PopulateReport {
   std::uint64_t scans_split = 0;  ///< per-scan: scans larger than a batch, integrated in parts
   double integrate_seconds = 0;   ///< preparation + integration + final device sync; no reading
   double read_seconds = 0;        ///< reading and decoding the input
+  std::optional<bag::BagRaysReport> bag;  ///< rosbag2 input: what its messages gave
   double total_seconds = 0;
   MapSummary summary;
   TsdfSummary tsdf;    ///< TSDF maps (zero otherwise)

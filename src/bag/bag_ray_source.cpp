@@ -1,0 +1,419 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// BagRaySource: the bag read in recording order; clouds wait (in bag time) for the poses that
+// cover them, as raymapd's integrator does, and are then deskewed point by point.
+#include "src/bag/bag_ray_source.hpp"
+
+#include <deque>
+#include <utility>
+
+#include "src/dds/point_cloud.hpp"
+#include "src/dds/pose.hpp"
+#include "src/pipeline/deskew.hpp"
+#include "src/pipeline/pipeline_stats.hpp"
+#include "src/pipeline/pose_history.hpp"
+#include "src/pipeline/tf_router.hpp"
+
+namespace raymap::bag {
+namespace {
+
+constexpr const char* kPointCloud2 = "sensor_msgs/msg/PointCloud2";
+constexpr const char* kOdometry = "nav_msgs/msg/Odometry";
+constexpr const char* kTfMessage = "tf2_msgs/msg/TFMessage";
+constexpr std::size_t kSkipsKept = 8;
+constexpr std::size_t kFirstPointCapacity = std::size_t{1} << 18;
+
+std::string topicsOfType(const std::vector<BagTopic>& topics, const std::string& type) {
+  std::string list;
+  for (const BagTopic& t : topics) {
+    if (t.type == type) {
+      list += (list.empty() ? "" : ", ") + t.name;
+    }
+  }
+  return list.empty() ? "none" : list;
+}
+
+/// The index of the topic named `name`, checked to be of `type`.
+Result<std::uint32_t> topicOfType(const BagReader& bag, const std::string& name,
+                                  const std::string& type, const char* option) {
+  const int at = findTopic(bag.topics(), name);
+  if (at < 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                std::string(option) + ": " + bag.path() + " has no topic '" + name + "' (its " +
+                    type + " topics: " + topicsOfType(bag.topics(), type) + ")");
+  }
+  const BagTopic& t = bag.topics()[static_cast<std::size_t>(at)];
+  if (t.type != type) {
+    return fail(ErrorCode::kInvalidArgument, std::string(option) + ": topic '" + name + "' in " +
+                                                 bag.path() + " is " + t.type + ", not " + type);
+  }
+  if (!t.serialization_format.empty() && t.serialization_format != "cdr") {
+    return fail(ErrorCode::kUnsupported, bag.path() + ": topic '" + name + "' is serialized as '" +
+                                             t.serialization_format + "'; raymap reads cdr");
+  }
+  return static_cast<std::uint32_t>(at);
+}
+
+/// The only topic of `type`, or an error listing them.
+Result<std::uint32_t> onlyTopicOfType(const BagReader& bag, const std::string& type,
+                                      const char* option) {
+  int found = -1;
+  for (std::size_t i = 0; i < bag.topics().size(); ++i) {
+    if (bag.topics()[i].type == type) {
+      if (found >= 0) {
+        return fail(ErrorCode::kInvalidArgument, bag.path() + " has several " + type + " topics (" +
+                                                     topicsOfType(bag.topics(), type) +
+                                                     "): choose with " + option);
+      }
+      found = static_cast<int>(i);
+    }
+  }
+  if (found < 0) {
+    return fail(ErrorCode::kInvalidArgument, bag.path() + " has no " + type + " topic");
+  }
+  return topicOfType(bag, bag.topics()[static_cast<std::size_t>(found)].name, type, option);
+}
+
+class BagRays final : public BagRaySource, private pipeline::PoseSink {
+ public:
+  BagRays(std::unique_ptr<BagReader> bag, const BagRaysOptions& options)
+      : bag_(std::move(bag)), options_(options), history_(options.pose_history) {}
+
+  Expected<void, Error> open() {
+    const BagReader& bag = *bag_;
+    if (options_.cloud_topics.empty()) {
+      auto t = onlyTopicOfType(bag, kPointCloud2, "--topic");
+      if (!t) {
+        return Unexpected(t.error());
+      }
+      cloud_topics_.push_back(t.value());
+    }
+    for (const std::string& name : options_.cloud_topics) {
+      auto t = topicOfType(bag, name, kPointCloud2, "--topic");
+      if (!t) {
+        return Unexpected(t.error());
+      }
+      cloud_topics_.push_back(t.value());
+    }
+    for (std::uint32_t t : cloud_topics_) {
+      report_.cloud_topics.push_back(bag.topics()[t].name);
+    }
+    using Source = BagRaysOptions::PoseSource;
+    Source source = options_.pose_source;
+    if (source == Source::kAuto) {
+      int odometry_topics = 0;
+      for (const BagTopic& t : bag.topics()) {
+        odometry_topics += t.type == kOdometry ? 1 : 0;
+      }
+      const bool has_tf = findTopic(bag.topics(), "/tf") >= 0;
+      if (!options_.pose_topic.empty() || odometry_topics == 1) {
+        source = Source::kOdometry;
+      } else if (has_tf) {
+        source = Source::kTf;
+      } else {
+        return fail(ErrorCode::kInvalidArgument,
+                    bag.path() + ": no pose source: " +
+                        (odometry_topics == 0
+                             ? std::string("no nav_msgs/msg/Odometry topic and no /tf")
+                             : "several Odometry topics (" + topicsOfType(bag.topics(), kOdometry) +
+                                   "): choose with --pose-topic"));
+      }
+    }
+    if (source == Source::kOdometry) {
+      auto t = options_.pose_topic.empty()
+                   ? onlyTopicOfType(bag, kOdometry, "--pose-topic")
+                   : topicOfType(bag, options_.pose_topic, kOdometry, "--pose-topic");
+      if (!t) {
+        return Unexpected(t.error());
+      }
+      odometry_topic_ = static_cast<int>(t.value());
+      report_.pose_source = "odometry " + bag.topics()[t.value()].name;
+    } else {
+      auto t = topicOfType(bag, "/tf", kTfMessage, "--pose-source tf");
+      if (!t) {
+        return Unexpected(t.error());
+      }
+      tf_topic_ = static_cast<int>(t.value());
+      report_.pose_source = "tf " + options_.world_frame + " -> " + options_.base_frame;
+    }
+    const int tf_static = findTopic(bag.topics(), "/tf_static");
+    if (tf_static >= 0 && bag.topics()[static_cast<std::size_t>(tf_static)].type == kTfMessage) {
+      tf_static_topic_ = tf_static;
+    }
+    const std::string& field = options_.time_field;
+    decode_.ignore_time = field == "none";
+    decode_.time_field = field == "auto" || field == "none" ? nullptr : field.c_str();
+    router_ = std::make_unique<pipeline::TfRouter>(options_.world_frame, options_.base_frame,
+                                                   std::vector<std::string>(cloud_topics_.size()),
+                                                   stats_);
+    extrinsics_.assign(cloud_topics_.size(), options_.extrinsic);
+    decoded_.resize(kFirstPointCapacity);
+    info_.path = bag.path();
+    info_.format = bag.storage();
+    info_.has_scan = true;
+    info_.time_property = field == "none" ? "" : "per-point time (" + field + ")";
+    return bag_->rewind();
+  }
+
+  Result<std::size_t> read(std::span<Ray> out) override {
+    std::size_t n = 0;
+    while (n < out.size()) {
+      if (current_) {
+        n += convert(out.subspan(n));
+        continue;
+      }
+      auto ready = nextReadyScan();
+      if (!ready) {
+        return Unexpected(ready.error());
+      }
+      if (!ready.value()) {
+        break;  // the bag is done and no scan waits
+      }
+    }
+    if (n == 0 && !finished_) {
+      finish();
+    }
+    return n;
+  }
+
+  const io::RaySourceInfo& info() const noexcept override { return info_; }
+  double progress() const noexcept override { return bag_->progress(); }
+  const BagRaysReport& report() const noexcept override { return report_; }
+
+ private:
+  struct Scan {
+    dds::CloudHeader header{};
+    std::vector<dds::ScanPoint> points;
+    std::uint32_t sensor = 0;
+    std::int64_t log_time_ns = 0;  // when the recorder got it (bag time, for the pose wait)
+    pipeline::ScanTimes times;
+  };
+
+  /// Fills `out` from the scan being converted. @return rays written.
+  std::size_t convert(std::span<Ray> out) {
+    Scan& scan = *current_;
+    std::size_t n = 0;
+    const io::Pose& extrinsic = extrinsics_[scan.sensor];
+    while (n < out.size() && point_ < scan.points.size()) {
+      const dds::ScanPoint& p = scan.points[point_++];
+      if ((p.flags & dds::kPointNoReturn) != 0u) {
+        ++report_.points_no_return;
+        continue;
+      }
+      if (!pipeline::usableTime(p.time_s, options_.max_time_offset_s)) {
+        continue;  // counted when the scan was taken
+      }
+      if (deskewer_.toRay(p, scan.header.stamp_ns, history_, options_.pose_hold_ns, extrinsic,
+                          scan_sequence_, out[n])) {
+        ++n;
+      }
+    }
+    if (point_ == scan.points.size()) {
+      ++report_.scans_integrated;
+      ++scan_sequence_;
+      recycle(std::move(*current_));
+      current_.reset();
+    }
+    return n;
+  }
+
+  /// Reads until the oldest waiting scan has its poses (or is given up). @return false at the
+  /// end of the bag with no scan left.
+  Result<bool> nextReadyScan() {
+    for (;;) {
+      while (!waiting_.empty()) {
+        const Scan& head = waiting_.front();
+        io::Pose unused;
+        const pipeline::PoseLookup start =
+            history_.lookup(head.times.start_ns, options_.pose_hold_ns, &unused);
+        const pipeline::PoseLookup end =
+            history_.lookup(head.times.end_ns, options_.pose_hold_ns, &unused);
+        if (start == pipeline::PoseLookup::kOk && end == pipeline::PoseLookup::kOk) {
+          current_.emplace(std::move(waiting_.front()));
+          waiting_.pop_front();
+          point_ = 0;
+          deskewer_.reset();
+          return true;
+        }
+        const bool too_old =
+            start == pipeline::PoseLookup::kTooOld || end == pipeline::PoseLookup::kTooOld;
+        if (too_old || bag_done_ || bag_time_ns_ > head.log_time_ns + options_.pose_wait_ns) {
+          ++report_.scans_no_pose;
+          recycle(std::move(waiting_.front()));
+          waiting_.pop_front();
+          continue;
+        }
+        break;  // wait for more poses
+      }
+      if (bag_done_) {
+        return false;
+      }
+      if (auto ok = readMessage(); !ok) {
+        return Unexpected(ok.error());
+      }
+    }
+  }
+
+  Expected<void, Error> readMessage() {
+    auto got = bag_->next(message_);
+    if (!got) {
+      return Unexpected(got.error());
+    }
+    if (!got.value()) {
+      bag_done_ = true;
+      report_.truncated_warning = bag_->pass().warning;
+      return {};
+    }
+    ++report_.messages;
+    bag_time_ns_ = std::max(bag_time_ns_, message_.log_time_ns);
+    const auto topic = static_cast<int>(message_.topic);
+    if (topic == odometry_topic_) {
+      onOdometry();
+    } else if (topic == tf_topic_ || topic == tf_static_topic_) {
+      onTf(topic == tf_static_topic_);
+    } else {
+      for (std::uint32_t s = 0; s < cloud_topics_.size(); ++s) {
+        if (message_.topic == cloud_topics_[s]) {
+          onCloud(s);
+        }
+      }
+    }
+    return {};
+  }
+
+  void skip(const char* what, const char* reason) {
+    if (report_.skips.size() < kSkipsKept) {
+      report_.skips.push_back(std::string(what) + " " + std::to_string(message_.index) +
+                              " on topic '" + bag_->topics()[message_.topic].name +
+                              "' skipped: " + reason);
+    }
+  }
+
+  void onCloud(std::uint32_t sensor) {
+    ++report_.clouds;
+    auto decoded = dds::decodePointCloud2(message_.data, decoded_, decode_);
+    while (!decoded && decoded.error() == dds::CloudError::kTooManyPoints &&
+           decoded_.size() < options_.max_points) {
+      decoded_.resize(std::min<std::size_t>(decoded_.size() * 2, options_.max_points));
+      decoded = dds::decodePointCloud2(message_.data, decoded_, decode_);
+    }
+    if (!decoded) {
+      ++report_.clouds_skipped;
+      skip("message", dds::toString(decoded.error()));
+      return;
+    }
+    router_->learnSensorFrame(sensor, decoded.value().frame_id, *this);
+    Scan scan = freshScan();
+    scan.header = decoded.value();
+    scan.sensor = sensor;
+    scan.log_time_ns = message_.log_time_ns;
+    scan.points.assign(decoded_.begin(), decoded_.begin() + decoded.value().points);
+    scan.times = pipeline::scanTimes(scan.points, scan.header.stamp_ns, options_.max_time_offset_s);
+    report_.points_bad_time += scan.times.bad_time;
+    waiting_.push_back(std::move(scan));
+  }
+
+  void onOdometry() {
+    auto odometry = dds::decodeOdometry(message_.data);
+    if (!odometry) {
+      ++report_.poses_skipped;
+      skip("message", "not a valid nav_msgs/msg/Odometry");
+      return;
+    }
+    const dds::StampedTransform& t = odometry.value();
+    pipeline::PoseUpdate update;
+    update.stamp_ns = t.stamp_ns;
+    update.pose = io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
+    update.kind = pipeline::PoseUpdate::kBaseInWorld;
+    (void)push(update);
+    stats_.poses_received.add();
+  }
+
+  void onTf(bool is_static) {
+    std::array<dds::StampedTransform, 64> transforms;
+    auto count = dds::decodeTfMessage(message_.data, transforms);
+    if (!count) {
+      ++report_.poses_skipped;
+      skip("message", "not a valid tf2_msgs/msg/TFMessage (or more than 64 transforms)");
+      return;
+    }
+    router_->onTransforms(std::span(transforms).first(count.value()), is_static, *this);
+  }
+
+  /// PoseSink: TF's base poses into the history, extrinsics to the sensors.
+  bool push(const pipeline::PoseUpdate& update) noexcept override {
+    if (update.kind == pipeline::PoseUpdate::kSensorExtrinsic) {
+      if (update.sensor < extrinsics_.size()) {
+        extrinsics_[update.sensor] = update.pose;
+        deskewer_.reset();
+      }
+      return true;
+    }
+    if (odometry_topic_ >= 0 || tf_topic_ >= 0) {
+      (void)history_.push(update.stamp_ns, update.pose);  // out of order: ignored, as raymapd
+    }
+    return true;
+  }
+
+  Scan freshScan() {
+    if (spare_.empty()) {
+      return Scan{};
+    }
+    Scan scan = std::move(spare_.back());
+    spare_.pop_back();
+    return scan;
+  }
+  void recycle(Scan&& scan) {
+    scan.points.clear();
+    spare_.push_back(std::move(scan));
+  }
+
+  void finish() {
+    finished_ = true;
+    report_.poses = stats_.poses_received.get();
+    report_.tf_ignored = stats_.tf_ignored.get();
+    report_.tf_unresolved = stats_.tf_unresolved.get();
+    report_.extrinsics_from_tf = stats_.extrinsics_from_tf.load();
+  }
+
+  std::unique_ptr<BagReader> bag_;
+  BagRaysOptions options_;
+  io::RaySourceInfo info_;
+  BagRaysReport report_;
+  std::vector<std::uint32_t> cloud_topics_;  // per sensor: its topic index
+  int odometry_topic_ = -1;
+  int tf_topic_ = -1;
+  int tf_static_topic_ = -1;
+  dds::CloudDecodeOptions decode_;
+  pipeline::PipelineStats stats_;  // the TF router's counters
+  std::unique_ptr<pipeline::TfRouter> router_;
+  pipeline::PoseHistory history_;
+  std::vector<io::Pose> extrinsics_;  // per sensor: in base_frame
+  pipeline::PointDeskewer deskewer_;
+  std::vector<dds::ScanPoint> decoded_;  // the decoder's output (grows to the largest cloud)
+  std::deque<Scan> waiting_;             // decoded clouds waiting for their poses, oldest first
+  std::vector<Scan> spare_;              // emptied scans whose buffers are reused
+  std::optional<Scan> current_;          // the scan being converted
+  std::size_t point_ = 0;                // its next point
+  std::uint64_t scan_sequence_ = 0;
+  BagMessage message_;
+  std::int64_t bag_time_ns_ = INT64_MIN;
+  bool bag_done_ = false;
+  bool finished_ = false;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<BagRaySource>> openBagRaySource(const std::string& path,
+                                                       const BagRaysOptions& options) {
+  auto bag = openBag(path);
+  if (!bag) {
+    return Unexpected(bag.error());
+  }
+  auto source = std::make_unique<BagRays>(std::move(bag).value(), options);
+  if (auto ok = source->open(); !ok) {
+    return Unexpected(ok.error());
+  }
+  return std::unique_ptr<BagRaySource>(std::move(source));
+}
+
+}  // namespace raymap::bag

@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Rays from a rosbag2 recording: PointCloud2 scans deskewed with poses from nav_msgs/Odometry or
+// TF, the sensors' extrinsics from /tf_static, exactly as raymapd would have mapped them live.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "src/bag/bag_reader.hpp"
+#include "src/core/error.hpp"
+#include "src/io/ray_source.hpp"
+#include "src/io/trajectory.hpp"
+
+namespace raymap::bag {
+
+/// @brief Which messages of a bag make the rays, and how (raymapd's configuration keys in
+/// brackets: the defaults are the same).
+struct BagRaysOptions {
+  enum class PoseSource : std::uint8_t { kAuto, kOdometry, kTf };
+
+  /// PointCloud2 topics, one sensor each; empty: the bag's only PointCloud2 topic.
+  std::vector<std::string> cloud_topics;
+  /// kAuto: the Odometry topic when the bag has exactly one (or `pose_topic` is given), else
+  /// TF when the bag has /tf.
+  PoseSource pose_source = PoseSource::kAuto;
+  std::string pose_topic;                ///< nav_msgs/msg/Odometry topic (pose.topic)
+  std::string world_frame = "odom";      ///< TF poses: the chain's top (pose.world_frame)
+  std::string base_frame = "base_link";  ///< the robot's body (pose.base_frame)
+  /// Sensor in base_frame when /tf_static has no chain from base_frame to the cloud's frame.
+  io::Pose extrinsic;
+  std::string time_field = "auto";        ///< per-point time: auto, a field name, or none
+  float max_time_offset_s = 1.0f;         ///< points further from the stamp are left out, counted
+  std::int64_t pose_hold_ns = 20000000;   ///< newest pose used this far beyond it
+  std::int64_t pose_wait_ns = 200000000;  ///< bag time a scan waits for its poses
+  std::uint32_t pose_history = 4096;      ///< poses kept for interpolation
+  std::uint32_t max_points = 1u << 24;    ///< larger clouds are skipped (counted)
+};
+
+/// @brief What the reading did with the bag's messages.
+struct BagRaysReport {
+  std::string pose_source;  ///< "odometry TOPIC" or "tf WORLD -> BASE"
+  std::vector<std::string> cloud_topics;
+  std::uint64_t messages = 0;          ///< messages read (all topics)
+  std::uint64_t clouds = 0;            ///< PointCloud2 messages on the chosen topics
+  std::uint64_t scans_integrated = 0;  ///< clouds turned into rays
+  std::uint64_t scans_no_pose = 0;     ///< clouds no pose covered (as raymapd drops them)
+  std::uint64_t clouds_skipped = 0;    ///< clouds that did not decode (see `skips`)
+  std::uint64_t poses = 0;             ///< odometry messages / TF transforms used
+  std::uint64_t poses_skipped = 0;     ///< Odometry/TFMessage that did not decode
+  std::uint64_t points_no_return = 0;
+  std::uint64_t points_bad_time = 0;
+  std::uint64_t tf_ignored = 0;
+  std::uint64_t tf_unresolved = 0;
+  std::uint32_t extrinsics_from_tf = 0;
+  /// The first skipped messages, each naming its topic, index and reason.
+  std::vector<std::string> skips;
+  std::string truncated_warning;  ///< the bag's file was cut off (read up to its last message)
+};
+
+/// @brief A RaySource over a bag (rays in recording order, one scan per cloud).
+class BagRaySource : public io::RaySource {
+ public:
+  /// @brief What the rays were made of, once read() has returned 0.
+  virtual const BagRaysReport& report() const noexcept = 0;
+};
+
+/// @brief Opens `path` (see openBag) and checks the chosen topics and their types.
+/// Errors: a topic that is missing or of another type (naming the bag's topics of the right
+/// type), no pose source, an unknown time field value.
+Result<std::unique_ptr<BagRaySource>> openBagRaySource(const std::string& path,
+                                                       const BagRaysOptions& options);
+
+}  // namespace raymap::bag

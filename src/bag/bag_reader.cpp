@@ -1,0 +1,207 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Opening a bag by path: a rosbag2 directory (metadata.yaml names its files, read in turn as one
+// bag), or one .mcap / .db3 file.
+#include "src/bag/bag_reader.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "src/bag/mcap_records.hpp"
+
+namespace raymap::bag {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool endsWith(const std::string& s, const char* suffix) {
+  const std::string_view tail(suffix);
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+bool startsWithMcapMagic(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::array<char, 8> head{};
+  if (!in.read(head.data(), head.size())) {
+    return false;
+  }
+  return std::equal(head.begin(), head.end(), mcap::kMagic.begin(),
+                    [](char a, std::byte b) { return static_cast<std::byte>(a) == b; });
+}
+
+Result<std::unique_ptr<BagReader>> openFile(const std::string& path) {
+  if (endsWith(path, ".db3")) {
+    return openSqliteBag(path);
+  }
+  return openMcap(path);
+}
+
+/// The files of a split bag, read one after the other as one bag; topics merged by name.
+class MultiFileBag final : public BagReader {
+ public:
+  MultiFileBag(std::string path, std::vector<std::unique_ptr<BagReader>> files)
+      : path_(std::move(path)), files_(std::move(files)) {
+    for (const auto& file : files_) {
+      std::vector<std::uint32_t> map;
+      for (const BagTopic& t : file->topics()) {
+        int at = findTopic(topics_, t.name);
+        if (at < 0) {
+          at = static_cast<int>(topics_.size());
+          topics_.push_back(t);
+        }
+        map.push_back(static_cast<std::uint32_t>(at));
+      }
+      topic_maps_.push_back(std::move(map));
+    }
+  }
+
+  const std::string& path() const noexcept override { return path_; }
+  const char* storage() const noexcept override { return files_.front()->storage(); }
+  const std::vector<BagTopic>& topics() const noexcept override { return topics_; }
+  double progress() const noexcept override {
+    if (current_ >= files_.size()) {
+      return 1.0;
+    }
+    return (static_cast<double>(current_) + files_[current_]->progress()) /
+           static_cast<double>(files_.size());
+  }
+
+  const BagPass& pass() const noexcept override { return pass_; }
+
+  Expected<void, Error> rewind() override {
+    current_ = 0;
+    index_ = 0;
+    pass_ = BagPass{};
+    return files_.front()->rewind();
+  }
+
+  Result<bool> next(BagMessage& out) override {
+    while (current_ < files_.size()) {
+      auto got = files_[current_]->next(out);
+      if (!got) {
+        return got;
+      }
+      if (got.value()) {
+        const std::vector<std::uint32_t>& map = topic_maps_[current_];
+        out.topic = out.topic < map.size() ? map[out.topic] : out.topic;
+        out.index = index_++;
+        pass_.messages = index_;
+        return true;
+      }
+      if (files_[current_]->pass().truncated) {
+        pass_.truncated = true;
+        pass_.warning = files_[current_]->pass().warning;
+      }
+      if (++current_ < files_.size()) {
+        if (auto ok = files_[current_]->rewind(); !ok) {
+          return Unexpected(ok.error());
+        }
+      }
+    }
+    return false;
+  }
+
+ private:
+  std::string path_;
+  std::vector<std::unique_ptr<BagReader>> files_;
+  std::vector<BagTopic> topics_;
+  std::vector<std::vector<std::uint32_t>> topic_maps_;  // per file: its topic -> ours
+  std::size_t current_ = 0;
+  std::uint64_t index_ = 0;
+  BagPass pass_;
+};
+
+Result<std::unique_ptr<BagReader>> openDirectory(const std::string& dir) {
+  const std::string metadata = (fs::path(dir) / "metadata.yaml").string();
+  std::vector<std::string> files;
+  try {
+    const YAML::Node root = YAML::LoadFile(metadata);
+    const YAML::Node info = root["rosbag2_bagfile_information"];
+    if (!info || !info["relative_file_paths"] || !info["relative_file_paths"].IsSequence()) {
+      return fail(ErrorCode::kFormat,
+                  metadata + ": rosbag2_bagfile_information.relative_file_paths: missing");
+    }
+    for (const YAML::Node& f : info["relative_file_paths"]) {
+      files.push_back((fs::path(dir) / f.as<std::string>()).string());
+    }
+  } catch (const YAML::Exception& e) {
+    return fail(ErrorCode::kFormat, metadata + ": " + e.what());
+  }
+  if (files.empty()) {
+    return fail(ErrorCode::kFormat,
+                metadata + ": rosbag2_bagfile_information.relative_file_paths: empty");
+  }
+  std::vector<std::unique_ptr<BagReader>> readers;
+  for (const std::string& f : files) {
+    if (!fs::exists(f)) {
+      return fail(ErrorCode::kIo, metadata + ": relative_file_paths: '" + f + "' does not exist");
+    }
+    auto r = openFile(f);
+    if (!r) {
+      return Unexpected(r.error());
+    }
+    readers.push_back(std::move(r).value());
+  }
+  if (readers.size() == 1) {
+    return std::move(readers.front());
+  }
+  return std::unique_ptr<BagReader>(std::make_unique<MultiFileBag>(dir, std::move(readers)));
+}
+
+}  // namespace
+
+bool isBag(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    return fs::exists(fs::path(path) / "metadata.yaml", ec);
+  }
+  return endsWith(path, ".mcap") || endsWith(path, ".db3") || startsWithMcapMagic(path);
+}
+
+Result<std::unique_ptr<BagReader>> openBag(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    if (!fs::exists(fs::path(path) / "metadata.yaml", ec)) {
+      return fail(ErrorCode::kFormat, path + ": a directory without metadata.yaml is not a bag");
+    }
+    return openDirectory(path);
+  }
+  if (!fs::exists(path, ec)) {
+    return fail(ErrorCode::kIo, path + ": no such file or directory");
+  }
+  return openFile(path);
+}
+
+Result<BagPass> BagReader::forEach(const Visitor& visit) {
+  if (auto ok = rewind(); !ok) {
+    return Unexpected(ok.error());
+  }
+  BagMessage m;
+  for (;;) {
+    auto got = next(m);
+    if (!got) {
+      return Unexpected(got.error());
+    }
+    if (!got.value()) {
+      return pass();
+    }
+    if (!visit(m)) {
+      BagPass stopped = pass();
+      stopped.stopped = true;
+      return stopped;
+    }
+  }
+}
+
+int findTopic(const std::vector<BagTopic>& topics, const std::string& name) noexcept {
+  for (std::size_t i = 0; i < topics.size(); ++i) {
+    if (topics[i].name == name) {
+      return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
+}  // namespace raymap::bag

@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The JSON-lines description of a bag that tests/rosbag/node/write_bag.mjs turns into a rosbag2
+// recording with Foxglove's MCAP writer and ROS 2 serializer (an implementation independent of
+// raymap's). See tests/rosbag/node/README.md for the format.
+#pragma once
+
+#include <cstdint>
+#include <fstream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "src/dds/point_cloud.hpp"
+#include "src/io/trajectory.hpp"
+
+namespace raymap::test {
+
+/// @brief One transform of a TFMessage.
+struct SpecTransform {
+  std::int64_t stamp_ns = 0;
+  std::string parent;
+  std::string child;
+  io::Pose pose;  ///< child in parent
+};
+
+/// @brief Writes a bag description line by line. Not thread-safe.
+class BagSpecWriter {
+ public:
+  explicit BagSpecWriter(const std::string& path);
+  bool ok() const { return static_cast<bool>(out_); }
+
+  void channel(const std::string& topic, const std::string& type, const std::string& qos = "");
+  /// A PointCloud2 in the Ouster driver's layout (point_step 48: x y z float32, intensity
+  /// float32 at 16, t uint32 ns at 20, ring uint16 at 26), one row; no-return points (NaN in
+  /// `points`) as (0, 0, 0), as Ouster publishes them.
+  void ousterCloud(const std::string& topic, std::int64_t log_time_ns, std::int64_t stamp_ns,
+                   const std::string& frame, std::span<const dds::ScanPoint> points,
+                   std::span<const std::uint16_t> rings);
+  void odometry(const std::string& topic, std::int64_t log_time_ns, std::int64_t stamp_ns,
+                const std::string& frame, const std::string& child, const io::Pose& pose);
+  void tf(const std::string& topic, std::int64_t log_time_ns,
+          const std::vector<SpecTransform>& transforms);
+
+ private:
+  void message(const std::string& topic, std::int64_t log_time_ns, const std::string& body);
+  std::ofstream out_;
+};
+
+/// @brief Base64 (RFC 4648, with padding).
+std::string base64(std::span<const std::byte> bytes);
+
+}  // namespace raymap::test
