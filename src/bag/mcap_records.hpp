@@ -10,6 +10,7 @@
 #include <cstring>
 #include <span>
 #include <string_view>
+#include <vector>
 
 namespace raymap::bag::mcap {
 
@@ -93,6 +94,53 @@ class Cursor {
   std::span<const std::byte> bytes_;
   std::size_t at_ = 0;
   bool ok_ = true;
+};
+
+/// @brief Appends record fields in little-endian order (the writer's counterpart of Cursor).
+/// Not thread-safe; allocates (offline and recording paths only).
+class Builder {
+ public:
+  std::vector<std::byte>& bytes() noexcept { return bytes_; }
+  std::size_t size() const noexcept { return bytes_.size(); }
+  void clear() noexcept { bytes_.clear(); }
+
+  void u8(std::uint8_t v) { bytes_.push_back(static_cast<std::byte>(v)); }
+  void u16(std::uint16_t v) { little(v, 2); }
+  void u32(std::uint32_t v) { little(v, 4); }
+  void u64(std::uint64_t v) { little(v, 8); }
+  void string(std::string_view s) {
+    u32(static_cast<std::uint32_t>(s.size()));
+    raw({reinterpret_cast<const std::byte*>(s.data()), s.size()});
+  }
+  void raw(std::span<const std::byte> b) { bytes_.insert(bytes_.end(), b.begin(), b.end()); }
+  /// Starts a record: opcode and a length to be filled in by endRecord(). @return its start.
+  std::size_t beginRecord(Op op) {
+    const std::size_t at = bytes_.size();
+    u8(static_cast<std::uint8_t>(op));
+    u64(0);
+    return at;
+  }
+  void endRecord(std::size_t at) { patch64(at + 1, bytes_.size() - at - kRecordPrefixBytes); }
+  /// Overwrites the uint64 at `at` (a length prefix written before its content).
+  void patch64(std::size_t at, std::uint64_t v) {
+    for (std::size_t i = 0; i < 8; ++i) {
+      bytes_[at + i] = static_cast<std::byte>((v >> (8 * i)) & 0xFFu);
+    }
+  }
+  void patch32(std::size_t at, std::uint32_t v) {
+    for (std::size_t i = 0; i < 4; ++i) {
+      bytes_[at + i] = static_cast<std::byte>((v >> (8 * i)) & 0xFFu);
+    }
+  }
+
+ private:
+  void little(std::uint64_t v, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      bytes_.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFFu));
+    }
+  }
+
+  std::vector<std::byte> bytes_;
 };
 
 }  // namespace raymap::bag::mcap

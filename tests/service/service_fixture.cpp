@@ -3,6 +3,7 @@
 #include "tests/service/service_fixture.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 
@@ -10,6 +11,7 @@
 
 #include "platform/clock.hpp"
 #include "tests/support/cli_runner.hpp"
+#include "tests/support/scene_truth.hpp"
 
 namespace raymap::test {
 
@@ -140,6 +142,36 @@ void RosSide::settle(double seconds, std::vector<driver::ReceivedGridMap>* maps)
     grid_maps->poll(20000000, maps != nullptr ? *maps : ignored);
     diagnostics->poll();
   }
+}
+
+HeightCheck checkHeights(const driver::ReceivedGridMap& map, const sim::Scene& scene) {
+  HeightCheck check;
+  const std::vector<float>* elevation = map.layer("elevation");
+  const std::vector<float>* kind = map.layer("kind");
+  if (elevation == nullptr || kind == nullptr) {
+    return check;
+  }
+  const auto cells_x = static_cast<int>(std::lround(map.length_x / map.resolution));
+  const auto cells_y = static_cast<int>(std::lround(map.length_y / map.resolution));
+  for (int j = 0; j < cells_y; ++j) {
+    for (int i = 0; i < cells_x; ++i) {
+      const std::size_t c = static_cast<std::size_t>(i + j * cells_x);
+      if ((*kind)[c] != 1.0f) {  // RM_HM_SURFACE
+        continue;
+      }
+      const double x = map.centre_x + (0.5 * cells_x - i - 0.5) * map.resolution;
+      const double y = map.centre_y + (0.5 * cells_y - j - 0.5) * map.resolution;
+      const auto truth = unambiguousTruth(scene, {x, y, 0.0}, map.resolution, 0.0, 0.5);
+      if (!truth) {
+        continue;  // an object's edge: lidar noise puts its side into the next column
+      }
+      ++check.surfaces;
+      if (std::fabs(static_cast<double>((*elevation)[c]) - truth->height) <= map.resolution) {
+        ++check.within;
+      }
+    }
+  }
+  return check;
 }
 
 }  // namespace raymap::test

@@ -72,4 +72,14 @@ struct RosSide {
   void settle(double seconds, std::vector<driver::ReceivedGridMap>* maps = nullptr);
 };
 
+/// @brief How a received GridMap's heights compare with the scene's truth.
+struct HeightCheck {
+  int surfaces = 0;  ///< surface cells with an unambiguous truth
+  int within = 0;    ///< of those, within one voxel of it
+};
+
+/// @brief Every surface cell of a received GridMap (grid_map order: column-major, (0, 0) at the
+/// +x/+y corner) against the scene's exact surface (reference: the ground, clearance 0.5 m).
+HeightCheck checkHeights(const driver::ReceivedGridMap& map, const sim::Scene& scene);
+
 }  // namespace raymap::test

@@ -40,9 +40,10 @@ class BagSpecWriter {
                 const std::string& frame, const std::string& child, const io::Pose& pose);
   void tf(const std::string& topic, std::int64_t log_time_ns,
           const std::vector<SpecTransform>& transforms);
+  /// Any message, its fields given as JSON (`body`).
+  void message(const std::string& topic, std::int64_t log_time_ns, const std::string& body);
 
  private:
-  void message(const std::string& topic, std::int64_t log_time_ns, const std::string& body);
   std::ofstream out_;
 };
 

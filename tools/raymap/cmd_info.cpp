@@ -4,9 +4,11 @@
 #include <memory>
 #include <string>
 
+#include "src/bag/bag_reader.hpp"
 #include "src/io/map_file.hpp"
 #include "src/map/decay_summary.hpp"
 #include "src/map/tsdf_surface.hpp"
+#include "tools/raymap/bag_info.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
 
@@ -55,6 +57,9 @@ void printNdt(const MapConfig& c) {
 }
 
 int runInfo(const InfoFlags& f) {
+  if (bag::isBag(f.map)) {
+    return runBagInfo(f.map, f.json);
+  }
   auto header = io::readMapHeader(f.map);
   if (!header) {
     printError("info", header.error().message);
@@ -219,8 +224,10 @@ int runInfo(const InfoFlags& f) {
 
 void addInfoCommand(CLI::App& app, int* exit_code) {
   auto flags = std::make_shared<InfoFlags>();
-  CLI::App* c = app.add_subcommand("info", "Show a map's parameters, layers and voxel counts");
-  c->add_option("map", flags->map, "Map file (.rmap)")->required();
+  CLI::App* c = app.add_subcommand(
+      "info", "Show a map's parameters, layers and voxel counts, or a bag's topics and counts");
+  c->add_option("map", flags->map, "Map file (.rmap), or a rosbag2 bag (directory, .mcap, .db3)")
+      ->required();
   c->add_flag("--json", flags->json, "Print JSON");
   c->callback([flags, exit_code] { *exit_code = runInfo(*flags); });
 }

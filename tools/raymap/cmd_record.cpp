@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap record`: the raw CDR of DDS topics written to a raymap record log (docs/cli.md,
-// docs/record-format.md), for replay bit for bit.
+// docs/record-format.md), for replay bit for bit, or to a rosbag2 bag (MCAP) for ROS tools.
 #include <cinttypes>
 #include <cstdio>
 #include <map>
@@ -12,6 +12,7 @@
 
 #include "platform/clock.hpp"
 #include "platform/signals.hpp"
+#include "src/bag/rosbag_writer.hpp"
 #include "src/dds/discovery.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
@@ -28,6 +29,8 @@ constexpr double kDiscoveryPeriod_s = 0.1;
 
 struct RecordFlags {
   std::string output;
+  std::string format = "rmlog";      ///< rmlog (bit-exact raw capture) or mcap (a rosbag2 bag)
+  std::string compression = "none";  ///< mcap: per-chunk compression
   std::vector<std::string> topics = {"/points", "/odom", "/tf", "/tf_static"};
   int domain = -1;  // -1: $ROS_DOMAIN_ID, else 0
   double duration = 0.0;
@@ -42,6 +45,95 @@ struct RecordedTopic {
   std::uint64_t messages = 0;
   std::uint64_t bytes = 0;
 };
+
+/// Where the recording goes: raymap's own log, or a rosbag2 bag (MCAP).
+class RecordSink {
+ public:
+  virtual ~RecordSink() = default;
+  virtual Result<std::uint32_t> addTopic(const std::string& dds_topic, const std::string& type,
+                                         bool reliable, bool latched) = 0;
+  virtual Result<void> write(std::uint32_t id, std::int64_t receive_unix_ns,
+                             std::int64_t receive_monotonic_ns, std::int64_t source_unix_ns,
+                             std::span<const std::byte> cdr) = 0;
+  virtual Result<void> close() = 0;
+  virtual const std::string& partialPath() const noexcept = 0;
+  virtual std::uint64_t messages() const noexcept = 0;
+  virtual std::uint64_t bytes() const noexcept = 0;
+};
+
+class RecordLogSink final : public RecordSink {
+ public:
+  explicit RecordLogSink(std::unique_ptr<record::RecordLogWriter> log) : log_(std::move(log)) {}
+  Result<std::uint32_t> addTopic(const std::string& dds_topic, const std::string& type,
+                                 bool reliable, bool latched) override {
+    return log_->addTopic(
+        dds_topic, type,
+        reliable ? record::LogReliability::kReliable : record::LogReliability::kBestEffort,
+        latched ? record::LogDurability::kTransientLocal : record::LogDurability::kVolatile);
+  }
+  Result<void> write(std::uint32_t id, std::int64_t receive_unix_ns,
+                     std::int64_t receive_monotonic_ns, std::int64_t source_unix_ns,
+                     std::span<const std::byte> cdr) override {
+    return log_->write(id, receive_unix_ns, receive_monotonic_ns, source_unix_ns, cdr);
+  }
+  Result<void> close() override { return log_->close(); }
+  const std::string& partialPath() const noexcept override { return log_->partialPath(); }
+  std::uint64_t messages() const noexcept override { return log_->messages(); }
+  std::uint64_t bytes() const noexcept override { return log_->bytes(); }
+
+ private:
+  std::unique_ptr<record::RecordLogWriter> log_;
+};
+
+/// A rosbag2 bag: ROS topic names, log time = when it was received (as ros2 bag record does),
+/// publish time = the writer's source timestamp.
+class RosbagSink final : public RecordSink {
+ public:
+  explicit RosbagSink(std::unique_ptr<bag::RosbagWriter> bag) : bag_(std::move(bag)) {}
+  Result<std::uint32_t> addTopic(const std::string& dds_topic, const std::string& type,
+                                 bool reliable, bool latched) override {
+    // Bags name types the ROS way (sensor_msgs/msg/PointCloud2), DDS the IDL way.
+    const dds::KnownTopicType* known = dds::findTopicType(type);
+    return bag_->addTopic(dds::rosTopicName(dds_topic), known != nullptr ? known->ros_name : type,
+                          bag::offeredQosYaml(reliable, latched, latched ? 1 : kReaderDepth));
+  }
+  Result<void> write(std::uint32_t id, std::int64_t receive_unix_ns, std::int64_t,
+                     std::int64_t source_unix_ns, std::span<const std::byte> cdr) override {
+    return bag_->write(id, receive_unix_ns, source_unix_ns, cdr);
+  }
+  Result<void> close() override { return bag_->close(); }
+  const std::string& partialPath() const noexcept override { return bag_->partialPath(); }
+  std::uint64_t messages() const noexcept override { return bag_->messages(); }
+  std::uint64_t bytes() const noexcept override { return bag_->bytes(); }
+
+ private:
+  std::unique_ptr<bag::RosbagWriter> bag_;
+};
+
+Result<std::unique_ptr<RecordSink>> openSink(const RecordFlags& flags) {
+  if (flags.format == "mcap") {
+    auto compression = bag::parseChunkCompression(flags.compression);
+    if (!compression) {
+      return fail(ErrorCode::kInvalidArgument, "--compression: " + compression.error().message);
+    }
+    bag::RosbagWriterOptions options;
+    options.compression = compression.value();
+    auto bag = bag::RosbagWriter::create(flags.output, options);
+    if (!bag) {
+      return Unexpected(bag.error());
+    }
+    return std::unique_ptr<RecordSink>(std::make_unique<RosbagSink>(std::move(bag).value()));
+  }
+  if (flags.compression != "none") {
+    return fail(ErrorCode::kInvalidArgument,
+                "--compression applies to --format mcap (a .rmlog is raw capture)");
+  }
+  auto log = record::RecordLogWriter::create(flags.output);
+  if (!log) {
+    return Unexpected(log.error());
+  }
+  return std::unique_ptr<RecordSink>(std::make_unique<RecordLogSink>(std::move(log).value()));
+}
 
 class Recorder {
  public:
@@ -76,7 +168,7 @@ class Recorder {
       return kExitFailure;
     }
     waitset_.emplace(std::move(waitset).value());
-    auto log = record::RecordLogWriter::create(flags_.output);
+    auto log = openSink(flags_);
     if (!log) {
       printError("record", log.error().message);
       return kExitFailure;
@@ -188,10 +280,7 @@ class Recorder {
       if (!reader) {
         return Unexpected(std::move(reader).error());
       }
-      auto id = log_->addTopic(
-          e.topic, e.type,
-          all_reliable ? record::LogReliability::kReliable : record::LogReliability::kBestEffort,
-          all_latched ? record::LogDurability::kTransientLocal : record::LogDurability::kVolatile);
+      auto id = log_->addTopic(e.topic, e.type, all_reliable, all_latched);
       if (!id) {
         return Unexpected(std::move(id).error());
       }
@@ -263,7 +352,7 @@ class Recorder {
   std::optional<dds::Participant> participant_;
   std::optional<dds::Discovery> discovery_;
   std::optional<dds::Waitset> waitset_;
-  std::unique_ptr<record::RecordLogWriter> log_;
+  std::unique_ptr<RecordSink> log_;
   std::map<std::string, RecordedTopic> topics_;  // node-based: pointers stay valid
   std::vector<RecordedTopic*> topics_by_token_;
   std::set<std::string> warned_;
@@ -275,7 +364,15 @@ void addRecordCommand(CLI::App& app, int* exit_code) {
   auto f = std::make_shared<RecordFlags>();
   CLI::App* c = app.add_subcommand(
       "record", "Record DDS topics (raw CDR) into a log that raymap replay plays back");
-  c->add_option("-o,--output", f->output, "Log file to write (.rmlog)")->required();
+  c->add_option("-o,--output", f->output,
+                "Log file to write (.rmlog), or with --format mcap the rosbag2 directory")
+      ->required();
+  c->add_option("--format", f->format,
+                "rmlog (raymap's log, bit-exact replay) or mcap (a rosbag2 bag for ROS tools)")
+      ->check(CLI::IsMember({"rmlog", "mcap"}))
+      ->capture_default_str();
+  c->add_option("--compression", f->compression, "--format mcap: chunk compression none|zstd|lz4")
+      ->capture_default_str();
   c->add_option("-t,--topic", f->topics,
                 "Topic to record (ROS or DDS name; repeat the option). Default: /points /odom "
                 "/tf /tf_static")

@@ -164,10 +164,10 @@ void addReplayCommand(CLI::App& app, int* exit_code) {
   CLI::App* c = app.add_subcommand(
       "replay", "Publish recorded data over DDS as a lidar driver and localisation would");
   c->add_option("inputs", f->inputs,
-                "Ray-cloud PLY, point-cloud PLY (with --trajectory) or raymap record logs, "
-                "played one after another")
+                "Ray-cloud PLY, point-cloud PLY (with --trajectory), raymap record logs or "
+                "rosbag2 bags (directory, .mcap, .db3), played one after another")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);
   c->add_option("--rate", f->rate,
                 "Data seconds per second (2 = twice as fast), or 'max': as fast as raymapd "
                 "keeps up (paced by its diagnostics)")

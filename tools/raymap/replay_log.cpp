@@ -37,6 +37,27 @@ Result<dds::CdrWriter*> ReplaySession::logWriter(const std::string& topic, const
   return &log_writers_.emplace(topic, std::move(writer).value()).first->second;
 }
 
+ReplaySession::Sent ReplaySession::sendRecorded(dds::CdrWriter& writer, bool cloud, double t,
+                                                std::span<const std::byte> cdr,
+                                                double& played_until_s) {
+  if (cloud && !waitForRoom()) {
+    return Sent::kStopped;
+  }
+  const double replay_s = pass_offset_s_ + t - options_.start_s;
+  if (!clock_.waitUntil(replay_s)) {
+    return Sent::kStopped;
+  }
+  if (!writer.write(cdr).has_value()) {
+    ++stats_.undecodable;
+    return Sent::kRefused;
+  }
+  ++stats_.messages;
+  stats_.scans += cloud ? 1 : 0;
+  stats_.data_seconds += std::max(0.0, replay_s - played_until_s);
+  played_until_s = std::max(played_until_s, replay_s);
+  return Sent::kSent;
+}
+
 Result<void> ReplaySession::playLog(const std::string& path) {
   // One pass over the file first: every topic's writer exists before the first message, so
   // discovery is done when the data starts, and the summary gives the progress total.
@@ -103,29 +124,18 @@ Result<void> ReplaySession::playLog(const std::string& path) {
       continue;
     }
     const record::LogTopic* topic = reader.topic(message.topic_id);
-    const bool cloud = clouds[message.topic_id];
-    if (cloud && !waitForRoom()) {
+    const Sent sent =
+        sendRecorded(*writer, clouds[message.topic_id], t, message.cdr, played_until_s);
+    if (sent == Sent::kStopped) {
       return {};
     }
-    const double replay_s = pass_offset_s_ + t - options_.start_s;
-    if (!clock_.waitUntil(replay_s)) {
-      return {};
+    if (sent == Sent::kRefused && !warned_undecodable[message.topic_id]) {
+      warned_undecodable[message.topic_id] = true;
+      stats_.warnings.push_back(path + ": message " + std::to_string(reader.messagesRead()) +
+                                " on " + (topic != nullptr ? topic->name : "?") +
+                                " is not a valid " + (topic != nullptr ? topic->type : "?") +
+                                " or could not be sent: skipped (and any more like it)");
     }
-    if (!writer->write(message.cdr).has_value()) {
-      ++stats_.undecodable;
-      if (!warned_undecodable[message.topic_id]) {
-        warned_undecodable[message.topic_id] = true;
-        stats_.warnings.push_back(path + ": message " + std::to_string(reader.messagesRead()) +
-                                  " on " + (topic != nullptr ? topic->name : "?") +
-                                  " is not a valid " + (topic != nullptr ? topic->type : "?") +
-                                  " or could not be sent: skipped (and any more like it)");
-      }
-      continue;
-    }
-    ++stats_.messages;
-    stats_.scans += cloud ? 1 : 0;
-    stats_.data_seconds += std::max(0.0, replay_s - played_until_s);
-    played_until_s = std::max(played_until_s, replay_s);
     reportProgress(reader.progress(), path);
   }
   if (reader.truncation()) {

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "platform/clock.hpp"
+#include "src/bag/bag_reader.hpp"
 #include "src/record/record_log_reader.hpp"
 #include "tools/raymap/commands.hpp"
 
@@ -292,7 +293,9 @@ Result<ReplayStats> ReplaySession::run() {
   stats_.stamp_zero_ns = clock_.stampAt(0.0);
   do {
     for (const std::string& input : options_.inputs) {
-      auto played = record::looksLikeRecordLog(input) ? playLog(input) : playRayFile(input);
+      auto played = record::looksLikeRecordLog(input) ? playLog(input)
+                    : bag::isBag(input)               ? playBag(input)
+                                                      : playRayFile(input);
       if (!played) {
         return Unexpected(std::move(played).error());
       }

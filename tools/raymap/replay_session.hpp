@@ -85,6 +85,14 @@ class ReplaySession {
   explicit ReplaySession(const ReplayOptions& options, platform::ShutdownSignals signals);
   Result<void> playRayFile(const std::string& path);
   Result<void> playLog(const std::string& path);
+  /// A rosbag2 bag (replay_bag.cpp): every message of a type raymap knows, on its topic
+  /// (/x -> rt/x) with the QoS the bag recorded, at its recorded spacing (log time).
+  Result<void> playBag(const std::string& path);
+  enum class Sent : std::uint8_t { kSent, kRefused, kStopped };
+  /// Sends one recorded message at `t` seconds after its input's first message (paced by the
+  /// clock; --rate max waits for room first for clouds) and counts it.
+  Sent sendRecorded(dds::CdrWriter& writer, bool cloud, double t, std::span<const std::byte> cdr,
+                    double& played_until_s);
   Result<dds::CdrWriter*> logWriter(const std::string& topic, const std::string& type,
                                     bool reliable, bool transient_local);
   /// Waits (once per session, up to --wait) for a subscriber: data sent before discovery

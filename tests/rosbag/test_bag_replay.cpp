@@ -1,0 +1,180 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap replay BAG` into raymapd, as `ros2 bag play` would feed a robot's bag to it: the
+// /tf_static latched before the first cloud, the pose from a TF chain, the cloud's frame learned
+// from the data. And `raymap record --format mcap` read back by Foxglove's MCAP reader, every
+// message of every type raymapd and raymap replay send decoded and re-serialized to the same
+// bytes by Foxglove's ROS 2 serializer.
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include "tests/replay/replay_harness.hpp"
+#include "tests/rosbag/bag_fixture.hpp"
+#include "tests/service/service_fixture.hpp"
+#include "tests/support/mini_json.hpp"
+
+namespace raymap::test {
+namespace {
+
+#define REQUIRE_NODE_HARNESS()     \
+  do {                             \
+    std::string why;               \
+    if (!nodeHarnessReady(&why)) { \
+      GTEST_SKIP() << why;         \
+    }                              \
+  } while (false)
+
+/// The member `key`, or a null value when there is none (the expectation then fails).
+const JsonValue& member(const JsonValue& v, const std::string& key) {
+  static const JsonValue kNull;
+  const JsonValue* found = v.find(key);
+  return found != nullptr ? *found : kNull;
+}
+
+double diagnostic(const Watcher& w, const std::string& key) {
+  return w.diagnostics->number(key).value_or(-1.0);
+}
+
+/// raymapd for the bag drive: clouds on /ouster/points in a frame it learns (os_sensor), the
+/// base's pose from TF map -> odom -> base_link, the extrinsic from /tf_static; every point
+/// taken (no latency bound), a Nav2 costmap beside the GridMap.
+std::string bagDriveConfig(std::uint32_t domain) {
+  std::string text = serviceConfig(domain);
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    const std::size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  };
+  replace("pose: {source: odometry, topic: rt/odom, world_frame: odom, base_frame: base_link}",
+          "pose: {source: tf, world_frame: map, base_frame: base_link}");
+  replace("topic: rt/points, frame: lidar,", "topic: /ouster/points,");
+  replace("queues: {", "queues: {max_latency_s: 0, ");
+  replace("dds: {", "dds: {costmap_topic: /costmap, ");
+  return text;
+}
+
+TEST(BagReplay, ABagPlayedIntoRaymapdGivesTrueHeightsFromItsTfChainAndStaticExtrinsic) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const int scans = 25;
+  const Drive drive = makeDrive(dir, DrivePoses::kTfChain, scans);
+  const std::string bag = dir.file("drive_bag");
+  writeBag(drive.spec, bag, {"--compression", "lz4"});
+  const std::uint32_t domain = uniqueDomain();
+  Daemon daemon(dir, bagDriveConfig(domain));
+  Watcher watcher(domain);
+  watcher.collect(10.0, [&] { return watcher.grid_maps->matchedWriters() > 0; });
+  ASSERT_GT(watcher.grid_maps->matchedWriters(), 0u) << daemon.log();
+  auto replay = startRaymap({"replay", bag, "--domain", std::to_string(domain), "--stats-json",
+                             dir.file("replay.json"), "-q"},
+                            dir.file("replay.log"));
+  watcher.collect(60.0, [&] { return !replay->running(); });
+  const auto status = replay->stop(SIGTERM, std::chrono::milliseconds(100));
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(status->first, 0) << readFile(dir.file("replay.log"));
+  watcher.collect(
+      4.0, [&] { return diagnostic(watcher, "raymapd: pipeline/scans_integrated") >= scans; });
+  watcher.collect(0.5);
+
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/clouds_received"), scans) << daemon.log();
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/scans_integrated"), scans);
+  EXPECT_EQ(diagnostic(watcher, "raymapd: pipeline/scans_dropped_no_pose"), 0);
+  EXPECT_GE(diagnostic(watcher, "raymapd: pipeline/extrinsics_from_tf"), 1)
+      << "the extrinsic comes from the bag's /tf_static";
+  ASSERT_FALSE(watcher.maps.empty());
+  const HeightCheck heights = checkHeights(watcher.maps.back(), drive.scene);
+  ASSERT_GT(heights.surfaces, 300);
+  EXPECT_GT(static_cast<double>(heights.within) / heights.surfaces, 0.9)
+      << heights.within << " of " << heights.surfaces
+      << " surface cells within a voxel of the truth";
+}
+
+TEST(BagRecord, ALiveRunRecordedAsMcapIsReadAndReserializedByFoxglovesLibraries) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const int scans = 20;
+  const Drive drive = makeDrive(dir, DrivePoses::kTfChain, scans);
+  const std::string bag = dir.file("drive_bag");
+  writeBag(drive.spec, bag, {});
+  const std::uint32_t domain = uniqueDomain();
+  Daemon daemon(dir, bagDriveConfig(domain));
+  Watcher watcher(domain);
+  watcher.collect(10.0, [&] { return watcher.grid_maps->matchedWriters() > 0; });
+  ASSERT_GT(watcher.grid_maps->matchedWriters(), 0u) << daemon.log();
+  const std::string recorded = dir.file("recorded");
+  auto recorder = startRaymap({"record",
+                               "--format",
+                               "mcap",
+                               "--compression",
+                               "zstd",
+                               "-o",
+                               recorded,
+                               "--domain",
+                               std::to_string(domain),
+                               "-t",
+                               "/ouster/points",
+                               "-t",
+                               "/tf",
+                               "-t",
+                               "/tf_static",
+                               "-t",
+                               "/height_map",
+                               "-t",
+                               "/diagnostics",
+                               "-t",
+                               "/costmap"},
+                              dir.file("record.log"));
+  watcher.collect(2.0);  // the recorder discovers the topics
+  auto replay = startRaymap({"replay", bag, "--domain", std::to_string(domain), "-q"},
+                            dir.file("replay.log"));
+  watcher.collect(60.0, [&] { return !replay->running(); });
+  watcher.collect(1.5);  // the last maps and a diagnostics report
+  const auto stopped = recorder->stop(SIGINT, std::chrono::milliseconds(5000));
+  ASSERT_TRUE(stopped.has_value());
+  ASSERT_EQ(stopped->first, 0) << readFile(dir.file("record.log"));
+  ASSERT_TRUE(std::filesystem::exists(recorded + "/metadata.yaml"))
+      << readFile(dir.file("record.log"));
+  EXPECT_FALSE(std::filesystem::exists(recorded + ".partial"));
+
+  const RunResult read = runHarness("read_mcap.mjs", {recorded + "/recorded_0.mcap"});
+  ASSERT_EQ(read.exit_code, 0) << describe(read);
+  const auto json = parseJson(read.out);
+  ASSERT_TRUE(json.has_value()) << read.out;
+  EXPECT_EQ(member(*json, "profile").text, "ros2");
+  EXPECT_TRUE(member(*json, "errors").items.empty()) << read.out;
+  std::map<std::string, const JsonValue*> topics;
+  for (const JsonValue& t : member(*json, "topics").items) {
+    const std::string& name = member(t, "topic").text;
+    topics[name] = &t;
+    const double count = member(t, "count").number;
+    EXPECT_GT(count, 0.0) << name;
+    EXPECT_EQ(member(t, "reencoded_identical").number +
+                  member(t, "reencoded_identical_but_end_padding").number,
+              count)
+        << name << ": Foxglove's serializer gives other bytes";
+  }
+  for (const char* topic :
+       {"/ouster/points", "/tf", "/tf_static", "/height_map", "/diagnostics", "/costmap"}) {
+    EXPECT_EQ(topics.count(topic), 1u) << topic << " missing from " << read.out;
+  }
+  if (topics.count("/ouster/points") == 1) {
+    EXPECT_EQ(member(*topics["/ouster/points"], "count").number, scans);
+    EXPECT_EQ(member(*topics["/ouster/points"], "type").text, "sensor_msgs/msg/PointCloud2");
+  }
+  if (topics.count("/costmap") == 1) {
+    const JsonValue& info = member(member(*topics["/costmap"], "last"), "info");
+    EXPECT_NEAR(member(info, "resolution").number, 0.1, 1e-6);
+    EXPECT_EQ(member(*topics["/costmap"], "type").text, "nav_msgs/msg/OccupancyGrid");
+  }
+  if (topics.count("/height_map") == 1) {
+    EXPECT_EQ(member(*topics["/height_map"], "type").text, "grid_map_msgs/msg/GridMap");
+  }
+  // raymap's own reader agrees.
+  const RunResult info = runRaymap({"info", recorded, "--json"});
+  EXPECT_EQ(info.exit_code, 0) << describe(info);
+  EXPECT_NE(info.out.find("\"/height_map\""), std::string::npos) << info.out;
+}
+
+}  // namespace
+}  // namespace raymap::test

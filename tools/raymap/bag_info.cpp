@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap info BAG`: a rosbag2 recording's topics, types, message counts and time span, as
+// `ros2 bag info` shows them (read from the messages themselves, so a bag without a summary or
+// with a wrong metadata.yaml is described as it is).
+#include "tools/raymap/bag_info.hpp"
+
+#include <algorithm>
+#include <cinttypes>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+#include "src/bag/bag_reader.hpp"
+#include "tools/raymap/commands.hpp"
+#include "tools/raymap/json_writer.hpp"
+
+namespace raymap::cli {
+namespace {
+
+struct TopicCount {
+  std::uint64_t messages = 0;
+  std::uint64_t bytes = 0;
+};
+
+}  // namespace
+
+int runBagInfo(const std::string& path, bool json) {
+  auto bag = bag::openBag(path);
+  if (!bag) {
+    printError("info", bag.error().message);
+    return kExitFailure;
+  }
+  bag::BagReader& reader = *bag.value();
+  std::vector<TopicCount> counts(reader.topics().size());
+  std::int64_t first = std::numeric_limits<std::int64_t>::max();
+  std::int64_t last = std::numeric_limits<std::int64_t>::min();
+  auto pass = reader.forEach([&](const bag::BagMessage& m) {
+    if (m.topic >= counts.size()) {
+      counts.resize(m.topic + 1);
+    }
+    ++counts[m.topic].messages;
+    counts[m.topic].bytes += m.data.size();
+    first = std::min(first, m.log_time_ns);
+    last = std::max(last, m.log_time_ns);
+    return true;
+  });
+  if (!pass) {
+    printError("info", pass.error().message);
+    return kExitFailure;
+  }
+  const std::uint64_t total = pass.value().messages;
+  const double duration = total > 0 ? static_cast<double>(last - first) * 1e-9 : 0.0;
+  const std::vector<bag::BagTopic>& topics = reader.topics();
+  if (json) {
+    std::string list = "[";
+    for (std::size_t i = 0; i < topics.size(); ++i) {
+      JsonObject t(JsonStyle::kCompact);
+      t.add("name", topics[i].name)
+          .add("type", topics[i].type)
+          .add("serialization_format", topics[i].serialization_format)
+          .add("messages", counts[i].messages)
+          .add("bytes", counts[i].bytes);
+      list += (i > 0 ? ", " : "") + t.str();
+    }
+    list += "]";
+    JsonObject j;
+    j.add("path", path)
+        .add("storage", reader.storage())
+        .add("messages", total)
+        .add("start_ns", total > 0 ? first : std::int64_t{0})
+        .add("end_ns", total > 0 ? last : std::int64_t{0})
+        .add("duration_s", duration)
+        .add("truncated", pass.value().truncated)
+        .raw("topics", list);
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("bag            %s (%s)\n", path.c_str(), reader.storage());
+    std::printf("messages       %" PRIu64 " over %.3f s", total, duration);
+    if (total > 0) {
+      std::printf(" (log time %" PRId64 ".%09" PRId64 " to %" PRId64 ".%09" PRId64 " s)",
+                  first / 1000000000, first % 1000000000, last / 1000000000, last % 1000000000);
+    }
+    std::printf("\ntopics         %zu\n", topics.size());
+    for (std::size_t i = 0; i < topics.size(); ++i) {
+      std::printf("  %-28s %-32s %8" PRIu64 " messages  %.3f MB  %s\n", topics[i].name.c_str(),
+                  topics[i].type.c_str(), counts[i].messages,
+                  static_cast<double>(counts[i].bytes) / 1e6,
+                  topics[i].serialization_format.c_str());
+    }
+  }
+  if (pass.value().truncated) {
+    std::fprintf(stderr, "raymap info: warning: %s\n", pass.value().warning.c_str());
+  }
+  return 0;
+}
+
+}  // namespace raymap::cli

@@ -1,0 +1,13 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap info` on a rosbag2 recording (a directory, .mcap or .db3).
+#pragma once
+
+#include <string>
+
+namespace raymap::cli {
+
+/// @brief Prints the bag's storage, time span and per-topic type and message count (JSON with
+/// `json`). Reads every message. @return the process exit code.
+int runBagInfo(const std::string& path, bool json);
+
+}  // namespace raymap::cli

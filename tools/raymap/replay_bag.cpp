@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// ReplaySession::playBag: a rosbag2 recording published as `ros2 bag play` would, without ROS:
+// each topic on its DDS name with the QoS it was recorded with, at the recorded spacing.
+#include <string_view>
+
+#include "src/bag/bag_reader.hpp"
+#include "src/dds/topic_types.hpp"
+#include "tools/raymap/replay_session.hpp"
+
+namespace raymap::cli {
+namespace {
+
+/// The value of `key:` in the first profile of rosbag2's offered_qos_profiles YAML, or -1.
+int qosValue(std::string_view yaml, std::string_view key) {
+  const std::size_t at = yaml.find(std::string(key) + ":");
+  if (at == std::string_view::npos) {
+    return -1;
+  }
+  std::size_t i = at + key.size() + 1;
+  while (i < yaml.size() && yaml[i] == ' ') {
+    ++i;
+  }
+  int value = 0;
+  bool digits = false;
+  while (i < yaml.size() && yaml[i] >= '0' && yaml[i] <= '9') {
+    value = value * 10 + (yaml[i++] - '0');
+    digits = true;
+  }
+  return digits ? value : -1;
+}
+
+}  // namespace
+
+Result<void> ReplaySession::playBag(const std::string& path) {
+  auto opened = bag::openBag(path);
+  if (!opened) {
+    return Unexpected(std::move(opened).error());
+  }
+  bag::BagReader& reader = *opened.value();
+  // Every topic's writer exists before the first message, so discovery is done when data
+  // starts. rmw's QoS enums: reliability 1 = reliable, 2 = best effort; durability 1 =
+  // transient local. A bag without profiles plays reliable and volatile (ros2 bag play's
+  // default), /tf_static transient local as its publishers latch it.
+  std::vector<dds::CdrWriter*> writers;
+  std::vector<bool> clouds;
+  dds::CdrWriter* first_cloud_writer = nullptr;
+  std::string first_cloud_topic;
+  for (const bag::BagTopic& topic : reader.topics()) {
+    const dds::KnownTopicType* known = dds::findTopicType(topic.type);
+    const bool cdr = topic.serialization_format.empty() || topic.serialization_format == "cdr";
+    dds::CdrWriter* writer = nullptr;
+    if (known != nullptr && cdr) {
+      const int reliability = qosValue(topic.offered_qos_profiles, "reliability");
+      const int durability = qosValue(topic.offered_qos_profiles, "durability");
+      const bool latched = durability == 1 || (durability < 0 && topic.name == "/tf_static");
+      auto created =
+          logWriter(dds::ddsTopicName(topic.name), known->dds_name, reliability != 2, latched);
+      if (!created) {
+        return Unexpected(std::move(created).error());
+      }
+      writer = created.value();
+    }
+    if (writer == nullptr) {
+      stats_.warnings.push_back(path + ": topic " + topic.name + " has type " + topic.type +
+                                (cdr ? "" : " in " + topic.serialization_format) +
+                                ", which this raymap cannot publish: its messages are skipped");
+    }
+    const bool cloud = topic.type == "sensor_msgs/msg/PointCloud2";
+    if (writer != nullptr && cloud && first_cloud_writer == nullptr) {
+      first_cloud_writer = writer;
+      first_cloud_topic = topic.name;
+    }
+    writers.push_back(writer);
+    clouds.push_back(cloud);
+  }
+  if (first_cloud_writer != nullptr &&
+      !waitForSubscriber([first_cloud_writer] { return first_cloud_writer->matchedReaders(); },
+                         first_cloud_topic)) {
+    return {};
+  }
+  if (auto rewound = reader.rewind(); !rewound) {
+    return Unexpected(std::move(rewound).error());
+  }
+  std::optional<std::int64_t> first_ns;
+  double played_until_s = pass_offset_s_;
+  std::vector<bool> warned(writers.size(), false);
+  bag::BagMessage message;
+  for (;;) {
+    auto next = reader.next(message);
+    if (!next) {
+      return Unexpected(std::move(next).error());
+    }
+    if (!next.value()) {
+      break;
+    }
+    if (!first_ns) {
+      first_ns = message.log_time_ns;
+    }
+    // Log times may step back a little (several recorder threads): never wait backwards.
+    const double t = std::max(0.0, static_cast<double>(message.log_time_ns - *first_ns) * 1e-9);
+    if (t < options_.start_s) {
+      continue;
+    }
+    if (options_.duration_s > 0.0 && t >= options_.start_s + options_.duration_s) {
+      break;
+    }
+    dds::CdrWriter* writer = message.topic < writers.size() ? writers[message.topic] : nullptr;
+    if (writer == nullptr) {
+      continue;
+    }
+    const Sent sent = sendRecorded(*writer, clouds[message.topic], t, message.data, played_until_s);
+    if (sent == Sent::kStopped) {
+      return {};
+    }
+    if (sent == Sent::kRefused && !warned[message.topic]) {
+      warned[message.topic] = true;
+      const bag::BagTopic& topic = reader.topics()[message.topic];
+      stats_.warnings.push_back(path + ": message " + std::to_string(message.index) + " on " +
+                                topic.name + " is not a valid " + topic.type +
+                                " or could not be sent: skipped (and any more like it)");
+    }
+    reportProgress(reader.progress(), path);
+  }
+  if (reader.pass().truncated) {
+    ++stats_.truncated_logs;
+    stats_.warnings.push_back(reader.pass().warning);
+  }
+  pass_offset_s_ = played_until_s + kGapBetweenInputs_s;
+  return {};
+}
+
+}  // namespace raymap::cli
