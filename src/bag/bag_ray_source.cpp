@@ -348,8 +348,8 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       }
       return true;
     }
-    if (odometry_topic_ >= 0 || tf_topic_ >= 0) {
-      (void)history_.push(update.stamp_ns, update.pose);  // out of order: ignored, as raymapd
+    if ((odometry_topic_ >= 0 || tf_topic_ >= 0) && !history_.push(update.stamp_ns, update.pose)) {
+      ++report_.poses_out_of_order;  // not after the previous stamp: ignored, as raymapd does
     }
     return true;
   }

@@ -42,13 +42,14 @@ struct BagRaysOptions {
 struct BagRaysReport {
   std::string pose_source;  ///< "odometry TOPIC" or "tf WORLD -> BASE"
   std::vector<std::string> cloud_topics;
-  std::uint64_t messages = 0;          ///< messages read (all topics)
-  std::uint64_t clouds = 0;            ///< PointCloud2 messages on the chosen topics
-  std::uint64_t scans_integrated = 0;  ///< clouds turned into rays
-  std::uint64_t scans_no_pose = 0;     ///< clouds no pose covered (as raymapd drops them)
-  std::uint64_t clouds_skipped = 0;    ///< clouds that did not decode (see `skips`)
-  std::uint64_t poses = 0;             ///< odometry messages / TF transforms used
-  std::uint64_t poses_skipped = 0;     ///< Odometry/TFMessage that did not decode
+  std::uint64_t messages = 0;            ///< messages read (all topics)
+  std::uint64_t clouds = 0;              ///< PointCloud2 messages on the chosen topics
+  std::uint64_t scans_integrated = 0;    ///< clouds turned into rays
+  std::uint64_t scans_no_pose = 0;       ///< clouds no pose covered (as raymapd drops them)
+  std::uint64_t clouds_skipped = 0;      ///< clouds that did not decode (see `skips`)
+  std::uint64_t poses = 0;               ///< odometry messages / TF transforms used
+  std::uint64_t poses_skipped = 0;       ///< Odometry/TFMessage that did not decode
+  std::uint64_t poses_out_of_order = 0;  ///< stamps not after the previous pose's (ignored)
   std::uint64_t points_no_return = 0;
   std::uint64_t points_bad_time = 0;
   std::uint64_t tf_ignored = 0;

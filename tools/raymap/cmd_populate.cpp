@@ -56,10 +56,11 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
     }
     std::printf(
         "bag            %s messages; clouds on %s: %s, %s mapped, %s without a pose, %s "
-        "skipped; poses from %s: %s\n",
+        "skipped; poses from %s: %s (%s out of order)\n",
         withCommas(b.messages).c_str(), topics.c_str(), withCommas(b.clouds).c_str(),
         withCommas(b.scans_integrated).c_str(), withCommas(b.scans_no_pose).c_str(),
-        withCommas(b.clouds_skipped).c_str(), b.pose_source.c_str(), withCommas(b.poses).c_str());
+        withCommas(b.clouds_skipped).c_str(), b.pose_source.c_str(), withCommas(b.poses).c_str(),
+        withCommas(b.poses_out_of_order).c_str());
     std::printf(
         "               %s points without return, %s with a bad time; TF: %u extrinsics, %s "
         "ignored, %s unresolved\n",

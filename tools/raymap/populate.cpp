@@ -311,6 +311,7 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
         .add("clouds_skipped", b.clouds_skipped)
         .add("poses", b.poses)
         .add("poses_skipped", b.poses_skipped)
+        .add("poses_out_of_order", b.poses_out_of_order)
         .add("points_no_return", b.points_no_return)
         .add("points_bad_time", b.points_bad_time)
         .add("tf_ignored", b.tf_ignored)
