@@ -319,12 +319,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       skip("message", "not a valid nav_msgs/msg/Odometry");
       return;
     }
-    const dds::StampedTransform& t = odometry.value();
-    pipeline::PoseUpdate update;
-    update.stamp_ns = t.stamp_ns;
-    update.pose = io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
-    update.kind = pipeline::PoseUpdate::kBaseInWorld;
-    (void)push(update);
+    (void)push(pipeline::baseInWorld(odometry.value()));
     stats_.poses_received.add();
   }
 

@@ -121,7 +121,7 @@ bool TfRouter::isBaseAncestor(const char* frame) const noexcept {
 void TfRouter::onTransforms(std::span<const dds::StampedTransform> transforms, bool is_static,
                             PoseSink& sink) noexcept {
   for (const dds::StampedTransform& t : transforms) {
-    const io::Pose pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
+    const io::Pose pose = poseOf(t);
     if (is_static) {
       // Every static edge is kept, whatever order they come in and whether or not a sensor's
       // frame is known yet: chains are resolved below and again at each sensor's first cloud.

@@ -17,6 +17,20 @@
 
 namespace raymap::pipeline {
 
+/// @brief The transform's pose (child in parent).
+inline io::Pose poseOf(const dds::StampedTransform& t) noexcept {
+  return io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
+}
+
+/// @brief An Odometry message's pose as the base's pose in the world at its stamp.
+inline PoseUpdate baseInWorld(const dds::StampedTransform& odometry) noexcept {
+  PoseUpdate update;
+  update.stamp_ns = odometry.stamp_ns;
+  update.pose = poseOf(odometry);
+  update.kind = PoseUpdate::kBaseInWorld;
+  return update;
+}
+
 /// @brief Where a TfRouter's pose updates go (raymapd: the SPSC queue to the integrator).
 class PoseSink {
  public:

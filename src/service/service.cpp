@@ -474,12 +474,7 @@ void Service::Impl::onOdometry(std::span<const std::byte> cdr) {
     stats.poses_malformed.add();
     return;
   }
-  const dds::StampedTransform& t = odometry.value();
-  pipeline::PoseUpdate update;
-  update.stamp_ns = t.stamp_ns;
-  update.pose = io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
-  update.kind = pipeline::PoseUpdate::kBaseInWorld;
-  if (!poses->push(update)) {
+  if (!poses->push(pipeline::baseInWorld(odometry.value()))) {
     stats.poses_dropped.add();
     return;
   }

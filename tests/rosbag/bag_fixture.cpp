@@ -12,7 +12,6 @@
 #include "src/pipeline/pose_history.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tests/support/bag_spec.hpp"
-#include "tests/support/ply_test_writer.hpp"
 #include "tools/dds_driver/simulated_lidar.hpp"
 
 namespace raymap::test {
@@ -75,6 +74,21 @@ void writeBag(const std::string& spec, const std::string& out,
   ASSERT_EQ(r.exit_code, 0) << describe(r);
 }
 
+PlyTestFile float64RayCloud() {
+  PlyTestFile ply;
+  std::vector<PlyTestProperty> properties;
+  for (const char* name : {"x", "y", "z", "nx", "ny", "nz", "time"}) {
+    properties.push_back({"double", name, ""});
+  }
+  ply.elements.emplace_back("vertex", std::move(properties));
+  return ply;
+}
+
+void addRay(PlyTestFile& ply, Vec3d origin, Vec3d sample, double time_s) {
+  const Vec3d normal = origin - sample;
+  ply.elements.front().add({sample.x, sample.y, sample.z, normal.x, normal.y, normal.z, time_s});
+}
+
 Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans) {
   Drive drive;
   auto file = sim::loadSceneFile(std::string(RAYMAP_SCENES_DIR) + "/yard.yaml");
@@ -114,15 +128,7 @@ Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans) {
 
   pipeline::PoseHistory history(4096);
   pipeline::PointDeskewer deskewer;
-  PlyTestFile ply;
-  ply.elements.emplace_back("vertex", std::vector<PlyTestProperty>{{"double", "x", ""},
-                                                                   {"double", "y", ""},
-                                                                   {"double", "z", ""},
-                                                                   {"double", "nx", ""},
-                                                                   {"double", "ny", ""},
-                                                                   {"double", "nz", ""},
-                                                                   {"double", "time", ""}});
-  PlyTestElement& vertices = ply.elements.front();
+  PlyTestFile ply = float64RayCloud();
 
   std::int64_t next_pose = kT0 - 5 * kOdometryPeriod;
   std::vector<dds::ScanPoint> points;
@@ -170,9 +176,7 @@ Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans) {
         ADD_FAILURE() << "no pose for a point of scan " << k;
         continue;
       }
-      const Vec3d normal = ray.origin - ray.sample;
-      vertices.add(
-          {ray.sample.x, ray.sample.y, ray.sample.z, normal.x, normal.y, normal.z, ray.time_s});
+      addRay(ply, ray.origin, ray.sample, ray.time_s);
       ++drive.rays;
     }
     deskewer.reset();

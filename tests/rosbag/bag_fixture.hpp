@@ -9,6 +9,7 @@
 #include "src/io/trajectory.hpp"
 #include "src/sim/scene.hpp"
 #include "tests/support/cli_runner.hpp"
+#include "tests/support/ply_test_writer.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
@@ -17,6 +18,20 @@ namespace raymap::test {
 /// Without them the bag tests skip, unless RAYMAP_REQUIRE_NODE_HARNESS=1 (CI) makes that a
 /// failure.
 bool nodeHarnessReady(std::string* why);
+
+/// @brief Skips the test (GTEST_SKIP) when the harness is missing, naming why.
+#define REQUIRE_NODE_HARNESS()     \
+  do {                             \
+    std::string why;               \
+    if (!nodeHarnessReady(&why)) { \
+      GTEST_SKIP() << why;         \
+    }                              \
+  } while (false)
+
+/// @brief A ray-cloud PLY with float64 ends, normals (origin - end) and time: the rays exactly.
+PlyTestFile float64RayCloud();
+/// @brief Appends one ray to a float64RayCloud().
+void addRay(PlyTestFile& ply, Vec3d origin, Vec3d sample, double time_s);
 
 /// @brief node tests/rosbag/node/SCRIPT ARGS...
 RunResult runHarness(const std::string& script, const std::vector<std::string>& args);

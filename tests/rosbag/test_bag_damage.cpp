@@ -17,14 +17,6 @@
 namespace raymap::test {
 namespace {
 
-#define REQUIRE_NODE_HARNESS()     \
-  do {                             \
-    std::string why;               \
-    if (!nodeHarnessReady(&why)) { \
-      GTEST_SKIP() << why;         \
-    }                              \
-  } while (false)
-
 std::string bytesOf(const std::string& path) { return readFile(path); }
 
 void writeAll(const std::string& path, const std::string& bytes) {

@@ -11,7 +11,6 @@
 #include "tests/replay/replay_harness.hpp"
 #include "tests/rosbag/bag_fixture.hpp"
 #include "tests/support/bag_spec.hpp"
-#include "tests/support/ply_test_writer.hpp"
 #include "tests/support/shared_data.hpp"
 
 namespace raymap::test {
@@ -42,14 +41,7 @@ TEST(BagOuster, TheOusterDataSetAsABagGivesTheVoxelsOfItsRays) {
 
   TempDir dir;
   const std::string spec_path = dir.file("ouster.jsonl");
-  PlyTestFile ply;
-  ply.elements.emplace_back("vertex", std::vector<PlyTestProperty>{{"double", "x", ""},
-                                                                   {"double", "y", ""},
-                                                                   {"double", "z", ""},
-                                                                   {"double", "nx", ""},
-                                                                   {"double", "ny", ""},
-                                                                   {"double", "nz", ""}});
-  PlyTestElement& vertices = ply.elements.front();
+  PlyTestFile ply = float64RayCloud();
   std::size_t scans = 0;
   {
     BagSpecWriter spec(spec_path);
@@ -89,9 +81,8 @@ TEST(BagOuster, TheOusterDataSetAsABagGivesTheVoxelsOfItsRays) {
           continue;  // a no-return in the Ouster layout
         }
         points.push_back({x, y, z, static_cast<float>(r.time_s - first), r.intensity, 0u});
-        const Vec3d sample{origin.x + double(x), origin.y + double(y), origin.z + double(z)};
-        const Vec3d normal = origin - sample;
-        vertices.add({sample.x, sample.y, sample.z, normal.x, normal.y, normal.z});
+        addRay(ply, origin, {origin.x + double(x), origin.y + double(y), origin.z + double(z)},
+               r.time_s);
       }
       spec.ousterCloud("/ouster/points", kT0 + nanoseconds(last) + 100000, stamp, "os_sensor",
                        points, {});

@@ -12,14 +12,6 @@
 namespace raymap::test {
 namespace {
 
-#define REQUIRE_NODE_HARNESS()     \
-  do {                             \
-    std::string why;               \
-    if (!nodeHarnessReady(&why)) { \
-      GTEST_SKIP() << why;         \
-    }                              \
-  } while (false)
-
 struct Counts {
   double free = -1;
   double occupied = -1;

@@ -17,14 +17,6 @@
 namespace raymap::test {
 namespace {
 
-#define REQUIRE_NODE_HARNESS()     \
-  do {                             \
-    std::string why;               \
-    if (!nodeHarnessReady(&why)) { \
-      GTEST_SKIP() << why;         \
-    }                              \
-  } while (false)
-
 /// The member `key`, or a null value when there is none (the expectation then fails).
 const JsonValue& member(const JsonValue& v, const std::string& key) {
   static const JsonValue kNull;
