@@ -35,6 +35,7 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
   }
 
   const char* name() const noexcept override { return "cuda"; }
+  std::uint64_t bytesCopied() const noexcept override { return bytes_copied_; }
   std::string deviceName() const override { return device_.name; }
 
   Expected<void, Error> generate(const VoxelMap& map, const heightmap::HeightmapPlan& plan,
@@ -104,6 +105,7 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: reading the layers back", status));
     }
+    bytes_copied_ += upload_.copiedBytes(plan, out);
     return {};
   }
 
@@ -131,6 +133,7 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
   unsigned block_threads_;
   GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
   heightmap::DeviceUpload upload_;
+  std::uint64_t bytes_copied_ = 0;  // host <-> device by every generation
 };
 
 }  // namespace

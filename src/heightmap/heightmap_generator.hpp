@@ -3,6 +3,7 @@
 // src/opencl and src/cuda. All run the column search of kernels/common/heightmap.h, so they
 // produce the same height map.
 #pragma once
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -29,6 +30,9 @@ class HeightmapGenerator {
   /// plan's grid and every layer is written.
   virtual Expected<void, Error> generate(const VoxelMap& map, const HeightmapPlan& plan,
                                          HeightMap& out) = 0;
+  /// @brief Bytes copied between host and device by every generate() so far (uploads of the map's
+  /// layers and the plan, read-backs of the output): 0 on the host.
+  virtual std::uint64_t bytesCopied() const noexcept { return 0; }
 };
 
 /// @brief The CPU generator: one thread (a 200 x 200 planar map takes a few milliseconds).

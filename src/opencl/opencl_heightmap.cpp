@@ -45,6 +45,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   }
 
   const char* name() const noexcept override { return "opencl"; }
+  std::uint64_t bytesCopied() const noexcept override { return bytes_copied_; }
   std::string deviceName() const override {
     return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")";
   }
@@ -122,6 +123,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != CL_SUCCESS) {
       return deviceError("reading the height map back", status);
     }
+    bytes_copied_ += upload_.copiedBytes(plan, out);
     return {};
   }
 
@@ -192,6 +194,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   std::size_t local_size_ = kWorkGroup;
   GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
   heightmap::DeviceUpload upload_;
+  std::uint64_t bytes_copied_ = 0;  // host <-> device by every generation
 };
 
 }  // namespace

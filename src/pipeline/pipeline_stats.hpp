@@ -95,6 +95,14 @@ struct PipelineStats {
   DurationHistogram map_lock_hold_us;
   /// How long the publisher waited for the map lock each cycle (written by the publisher).
   DurationHistogram map_lock_wait_us;
+  /// How long the publisher held the map lock each cycle: the device synchronise, the window
+  /// move and the height-map generation (written by the publisher).
+  DurationHistogram heightmap_lock_hold_us;
+  /// Bytes each cycle's synchronise() downloaded from the device (map regions; 0 on the CPU).
+  /// The histogram counts bytes where its name says microseconds.
+  DurationHistogram sync_copy_bytes;
+  /// Bytes each cycle's height-map generation copied between host and device (0 on the CPU).
+  DurationHistogram heightmap_copy_bytes;
   /// The publisher's lead before each publish instant, microseconds (adapts; publisher writes).
   std::atomic<std::int64_t> publish_lead_us{0};
   /// The next publish instant (monotonic ns; 0 before the first), for the integrator's latency

@@ -114,6 +114,9 @@ void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& real
   stats_.generate_us.snapshot(&s.generate);
   stats_.map_lock_hold_us.snapshot(&s.hold);
   stats_.map_lock_wait_us.snapshot(&s.wait);
+  stats_.heightmap_lock_hold_us.snapshot(&s.cycle_hold);
+  stats_.sync_copy_bytes.snapshot(&s.sync_bytes);
+  stats_.heightmap_copy_bytes.snapshot(&s.heightmap_bytes);
   base_ = &windowBase();
   decide(other_map_publishers);
   const double dt = static_cast<double>(s.ns - base_->ns) * 1e-9;
@@ -343,6 +346,17 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(h, "map_lock_wait_p99_ms", "%.2f", wait.quantileUs(0.99) / 1000.0);
   message_.addValue(h, "map_lock_wait_max_ms_total", "%.2f",
                     static_cast<double>(now.wait.max_us) / 1000.0);
+  // What each cycle costs the map lock and the bus (device backends; 0 on the CPU).
+  const pipeline::DurationHistogram::Snapshot cycle_hold = now.cycle_hold.since(base.cycle_hold);
+  const pipeline::DurationHistogram::Snapshot sync_bytes = now.sync_bytes.since(base.sync_bytes);
+  const pipeline::DurationHistogram::Snapshot copy_bytes =
+      now.heightmap_bytes.since(base.heightmap_bytes);
+  message_.addValue(h, "heightmap_lock_hold_p50_ms", "%.2f", cycle_hold.quantileUs(0.5) / 1000.0);
+  message_.addValue(h, "heightmap_lock_hold_p99_ms", "%.2f", cycle_hold.quantileUs(0.99) / 1000.0);
+  message_.addValue(h, "sync_copy_bytes_p50", "%.0f", sync_bytes.quantileUs(0.5));
+  message_.addValue(h, "sync_copy_bytes_p99", "%.0f", sync_bytes.quantileUs(0.99));
+  message_.addValue(h, "heightmap_copy_bytes_p50", "%.0f", copy_bytes.quantileUs(0.5));
+  message_.addValue(h, "heightmap_copy_bytes_p99", "%.0f", copy_bytes.quantileUs(0.99));
   message_.addValue(
       h, "publish_lead_ms", "%.1f",
       static_cast<double>(stats_.publish_lead_us.load(std::memory_order_relaxed)) / 1000.0);

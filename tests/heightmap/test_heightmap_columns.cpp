@@ -275,6 +275,21 @@ TEST_P(HeightmapColumns, FloodFillFollowsARampPlanarDoesNot) {
   }
 }
 
+TEST_P(HeightmapColumns, DeviceGeneratorsCountWhatTheyCopyTheCpuNothing) {
+  SKIP_UNAVAILABLE();
+  ColumnMap m;
+  m.occupied(0, 0, -1, 0.9f);
+  const std::uint64_t before = gen->bytesCopied();
+  const HeightMap h = generate(m, options());
+  const std::uint64_t copied = gen->bytesCopied() - before;
+  if (GetParam() == "cpu") {
+    EXPECT_EQ(copied, 0u);
+  } else {
+    // The five output layers read back, and the regions under the map uploaded.
+    EXPECT_GT(copied, std::uint64_t{h.cellCount()} * 4 * 5) << GetParam();
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Generators, HeightmapColumns,
                          ::testing::ValuesIn(test::heightmapGeneratorNames()),
                          [](const ::testing::TestParamInfo<std::string>& param_info) {

@@ -117,6 +117,15 @@ TEST(HeightmapCycle, FlatFloorGivesItsElevationAroundTheRobot) {
   DurationHistogram::Snapshot s;
   rig->stats.generate_us.snapshot(&s);
   EXPECT_EQ(s.total, 1u);
+  // One lock hold per cycle; on the CPU nothing crosses a bus.
+  rig->stats.heightmap_lock_hold_us.snapshot(&s);
+  EXPECT_EQ(s.total, 1u);
+  for (const DurationHistogram* bytes :
+       {&rig->stats.sync_copy_bytes, &rig->stats.heightmap_copy_bytes}) {
+    bytes->snapshot(&s);
+    EXPECT_EQ(s.total, 1u);
+    EXPECT_EQ(s.max_us, 0u);
+  }
 }
 
 TEST(HeightmapCycle, WindowFollowsTheRobotWhenItMovesFar) {
