@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -42,6 +43,15 @@ struct BagPass {
   std::string warning;
 };
 
+/// @brief Counts a bag states about itself (an MCAP summary's Statistics record), so that a
+/// description does not need to read every message.
+struct BagStatistics {
+  std::uint64_t messages = 0;
+  std::int64_t start_ns = 0;                  ///< earliest log time
+  std::int64_t end_ns = 0;                    ///< latest log time
+  std::vector<std::uint64_t> topic_messages;  ///< per topic, as topics() orders them
+};
+
 /// @brief Reads a bag front to back, any number of times (rewind() starts again). Messages come
 /// in the order they were recorded: MCAP file order, SQLite by timestamp (as `ros2 bag play`
 /// plays them). Errors name the file and, for a bad message or record, its index and offset.
@@ -66,6 +76,9 @@ class BagReader {
   virtual const BagPass& pass() const noexcept = 0;
   /// @brief Fraction of the current pass done, 0 to 1.
   virtual double progress() const noexcept = 0;
+  /// @brief The bag's own statistics when it has them (an indexed MCAP file whose summary CRC
+  /// checks), else nothing: then only reading every message counts them.
+  virtual std::optional<BagStatistics> statistics() const { return std::nullopt; }
 
   /// @brief rewind(), then every message to `visit`, in order, until it returns false.
   Result<BagPass> forEach(const Visitor& visit);

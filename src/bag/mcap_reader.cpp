@@ -50,6 +50,27 @@ class McapBagReader final : public BagReader {
 
   const BagPass& pass() const noexcept override { return pass_; }
 
+  std::optional<BagStatistics> statistics() const override {
+    if (!statistics_) {
+      return std::nullopt;
+    }
+    BagStatistics stats = *statistics_;
+    stats.topic_messages.assign(topics_.size(), 0);
+    std::uint64_t sum = 0;
+    for (const auto& [channel, count] : statistics_pending_) {
+      const auto topic = channel_topic_.find(channel);
+      if (topic == channel_topic_.end()) {
+        return std::nullopt;  // counts for a channel the summary does not define
+      }
+      stats.topic_messages[topic->second] += count;
+      sum += count;
+    }
+    if (sum != stats.messages) {
+      return std::nullopt;  // per-channel counts missing or inconsistent: count by reading
+    }
+    return stats;
+  }
+
   /// Checks the magic and the header, then learns the topics from the summary section (or, in a
   /// file without one, from a pass over the data).
   Expected<void, Error> open() {
@@ -470,9 +491,36 @@ class McapBagReader final : public BagReader {
         if (auto ok = handle(op, record, summary_start, unused); !ok) {
           return false;
         }
+      } else if (op == Op::kStatistics) {
+        readStatistics(record);
       }
     }
     return !topics_.empty();
+  }
+
+  /// The summary's Statistics record: message count, time span, messages per channel.
+  void readStatistics(std::span<const std::byte> record) {
+    Cursor c(record);
+    BagStatistics stats;
+    stats.messages = c.u64();
+    (void)c.u16();  // schemas
+    (void)c.u32();  // channels
+    (void)c.u32();  // attachments
+    (void)c.u32();  // metadata
+    (void)c.u32();  // chunks
+    stats.start_ns = static_cast<std::int64_t>(c.u64());
+    stats.end_ns = static_cast<std::int64_t>(c.u64());
+    Cursor counts(c.bytes32());
+    std::map<std::uint16_t, std::uint64_t> per_channel;
+    while (c.ok() && counts.ok() && counts.left() > 0) {
+      const std::uint16_t channel = counts.u16();
+      per_channel[channel] = counts.u64();
+    }
+    if (!c.ok() || !counts.ok()) {
+      return;  // a malformed record: counted by reading instead
+    }
+    statistics_pending_ = std::move(per_channel);
+    statistics_ = stats;
   }
 
   struct Schema {
@@ -503,6 +551,8 @@ class McapBagReader final : public BagReader {
   std::optional<Cursor> in_chunk_;      // the open chunk's records
   std::uint64_t chunk_offset_ = 0;
   bool done_ = false;
+  std::optional<BagStatistics> statistics_;                    // from the summary, if any
+  std::map<std::uint16_t, std::uint64_t> statistics_pending_;  // its messages per channel
 };
 
 }  // namespace

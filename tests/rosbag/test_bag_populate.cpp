@@ -110,3 +110,40 @@ TEST(BagPopulate, TheMapFromABagMatchesTheScenesTruth) {
 
 }  // namespace
 }  // namespace raymap::test
+
+namespace raymap::test {
+namespace {
+
+TEST(BagInfo, CountsFromAnMcapSummaryAgreeWithReadingEveryMessage) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const Drive drive = makeDrive(dir, DrivePoses::kOdometry, 4);
+  const std::string indexed = dir.file("indexed.mcap");
+  const std::string unindexed = dir.file("unindexed.mcap");
+  writeBag(drive.spec, indexed, {"--file-only", "--compression", "zstd"});
+  writeBag(drive.spec, unindexed, {"--file-only", "--unindexed"});
+  const RunResult summary = runRaymap({"info", indexed, "--json"});
+  const RunResult all = runRaymap({"info", indexed, "--json", "--read-all"});
+  const RunResult plain = runRaymap({"info", unindexed, "--json"});
+  for (const RunResult* r : {&summary, &all, &plain}) {
+    ASSERT_EQ(r->exit_code, 0) << describe(*r);
+  }
+  EXPECT_NE(summary.out.find("\"counted_from\": \"summary\""), std::string::npos) << summary.out;
+  EXPECT_NE(all.out.find("\"counted_from\": \"messages\""), std::string::npos) << all.out;
+  EXPECT_NE(plain.out.find("\"counted_from\": \"messages\""), std::string::npos) << plain.out;
+  for (const char* key : {"messages", "start_ns", "end_ns"}) {
+    EXPECT_EQ(jsonNumber(summary.out, key), jsonNumber(all.out, key)) << key;
+    EXPECT_EQ(jsonNumber(plain.out, key), jsonNumber(all.out, key)) << key;
+  }
+  // 4 clouds, the odometry around them and one /tf_static.
+  EXPECT_EQ(jsonNumber(all.out, "messages").value_or(0), 4 + 1 + 51);
+  const auto clouds = [](const std::string& json) {
+    const std::size_t at = json.find("\"/ouster/points\"");
+    return at == std::string::npos ? std::string() : json.substr(at, json.find('}', at) - at);
+  };
+  EXPECT_NE(clouds(summary.out).find("\"messages\":4"), std::string::npos) << summary.out;
+  EXPECT_NE(clouds(all.out).find("\"messages\":4"), std::string::npos) << all.out;
+}
+
+}  // namespace
+}  // namespace raymap::test

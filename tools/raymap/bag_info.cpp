@@ -8,6 +8,7 @@
 #include <cinttypes>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "src/bag/bag_reader.hpp"
@@ -24,7 +25,7 @@ struct TopicCount {
 
 }  // namespace
 
-int runBagInfo(const std::string& path, bool json) {
+int runBagInfo(const std::string& path, bool json, bool full) {
   auto bag = bag::openBag(path);
   if (!bag) {
     printError("info", bag.error().message);
@@ -34,21 +35,35 @@ int runBagInfo(const std::string& path, bool json) {
   std::vector<TopicCount> counts(reader.topics().size());
   std::int64_t first = std::numeric_limits<std::int64_t>::max();
   std::int64_t last = std::numeric_limits<std::int64_t>::min();
-  auto pass = reader.forEach([&](const bag::BagMessage& m) {
-    if (m.topic >= counts.size()) {
-      counts.resize(m.topic + 1);
+  bag::BagPass read;
+  std::uint64_t total = 0;
+  // An indexed MCAP file states its counts: no need to read gigabytes (bytes then unknown).
+  const std::optional<bag::BagStatistics> stated = full ? std::nullopt : reader.statistics();
+  if (stated) {
+    total = stated->messages;
+    first = stated->start_ns;
+    last = stated->end_ns;
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      counts[i].messages = stated->topic_messages[i];
     }
-    ++counts[m.topic].messages;
-    counts[m.topic].bytes += m.data.size();
-    first = std::min(first, m.log_time_ns);
-    last = std::max(last, m.log_time_ns);
-    return true;
-  });
-  if (!pass) {
-    printError("info", pass.error().message);
-    return kExitFailure;
+  } else {
+    auto pass = reader.forEach([&](const bag::BagMessage& m) {
+      if (m.topic >= counts.size()) {
+        counts.resize(m.topic + 1);
+      }
+      ++counts[m.topic].messages;
+      counts[m.topic].bytes += m.data.size();
+      first = std::min(first, m.log_time_ns);
+      last = std::max(last, m.log_time_ns);
+      return true;
+    });
+    if (!pass) {
+      printError("info", pass.error().message);
+      return kExitFailure;
+    }
+    read = pass.value();
+    total = read.messages;
   }
-  const std::uint64_t total = pass.value().messages;
   const double duration = total > 0 ? static_cast<double>(last - first) * 1e-9 : 0.0;
   const std::vector<bag::BagTopic>& topics = reader.topics();
   if (json) {
@@ -58,8 +73,10 @@ int runBagInfo(const std::string& path, bool json) {
       t.add("name", topics[i].name)
           .add("type", topics[i].type)
           .add("serialization_format", topics[i].serialization_format)
-          .add("messages", counts[i].messages)
-          .add("bytes", counts[i].bytes);
+          .add("messages", counts[i].messages);
+      if (!stated) {
+        t.add("bytes", counts[i].bytes);
+      }
       list += (i > 0 ? ", " : "") + t.str();
     }
     list += "]";
@@ -70,7 +87,8 @@ int runBagInfo(const std::string& path, bool json) {
         .add("start_ns", total > 0 ? first : std::int64_t{0})
         .add("end_ns", total > 0 ? last : std::int64_t{0})
         .add("duration_s", duration)
-        .add("truncated", pass.value().truncated)
+        .add("counted_from", stated ? "summary" : "messages")
+        .add("truncated", read.truncated)
         .raw("topics", list);
     std::printf("%s\n", j.str().c_str());
   } else {
@@ -80,16 +98,21 @@ int runBagInfo(const std::string& path, bool json) {
       std::printf(" (log time %" PRId64 ".%09" PRId64 " to %" PRId64 ".%09" PRId64 " s)",
                   first / 1000000000, first % 1000000000, last / 1000000000, last % 1000000000);
     }
-    std::printf("\ntopics         %zu\n", topics.size());
+    std::printf("%s\ntopics         %zu\n", stated ? " (from the file's summary)" : "",
+                topics.size());
     for (std::size_t i = 0; i < topics.size(); ++i) {
-      std::printf("  %-28s %-32s %8" PRIu64 " messages  %.3f MB  %s\n", topics[i].name.c_str(),
-                  topics[i].type.c_str(), counts[i].messages,
-                  static_cast<double>(counts[i].bytes) / 1e6,
+      char bytes[32] = "";
+      if (!stated) {
+        std::snprintf(bytes, sizeof(bytes), "  %.3f MB",
+                      static_cast<double>(counts[i].bytes) / 1e6);
+      }
+      std::printf("  %-28s %-32s %8" PRIu64 " messages%s  %s\n", topics[i].name.c_str(),
+                  topics[i].type.c_str(), counts[i].messages, bytes,
                   topics[i].serialization_format.c_str());
     }
   }
-  if (pass.value().truncated) {
-    std::fprintf(stderr, "raymap info: warning: %s\n", pass.value().warning.c_str());
+  if (read.truncated) {
+    std::fprintf(stderr, "raymap info: warning: %s\n", read.warning.c_str());
   }
   return 0;
 }

@@ -18,6 +18,7 @@ namespace {
 struct InfoFlags {
   std::string map;
   bool json = false;
+  bool read_all = false;  ///< bags: count by reading every message, even with a summary
 };
 
 std::string vectorJson(Vec3d v) {
@@ -58,7 +59,7 @@ void printNdt(const MapConfig& c) {
 
 int runInfo(const InfoFlags& f) {
   if (bag::isBag(f.map)) {
-    return runBagInfo(f.map, f.json);
+    return runBagInfo(f.map, f.json, f.read_all);
   }
   auto header = io::readMapHeader(f.map);
   if (!header) {
@@ -229,6 +230,9 @@ void addInfoCommand(CLI::App& app, int* exit_code) {
   c->add_option("map", flags->map, "Map file (.rmap), or a rosbag2 bag (directory, .mcap, .db3)")
       ->required();
   c->add_flag("--json", flags->json, "Print JSON");
+  c->add_flag("--read-all", flags->read_all,
+              "Bags: count by reading every message (also gives bytes per topic), not from the "
+              "MCAP summary");
   c->callback([flags, exit_code] { *exit_code = runInfo(*flags); });
 }
 
