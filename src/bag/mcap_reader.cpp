@@ -245,14 +245,13 @@ class McapBagReader final : public BagReader {
     Cursor c(content);
     const std::uint16_t id = c.u16();
     const std::string_view name = c.string();
-    const std::string_view encoding = c.string();
+    (void)c.string();  // encoding: rosbag2 writes ros2msg; the type name is what raymap uses
     const std::span<const std::byte> data = c.bytes32();
     if (!c.ok() || id == 0) {
       return malformed("schema", offset);
     }
     Schema& s = schemas_[id];
     s.name = name;
-    s.encoding = encoding;
     s.data.assign(reinterpret_cast<const char*>(data.data()), data.size());
     return {};
   }
@@ -525,7 +524,6 @@ class McapBagReader final : public BagReader {
 
   struct Schema {
     std::string name;
-    std::string encoding;
     std::string data;
   };
   struct ZstdFree {
@@ -537,7 +535,6 @@ class McapBagReader final : public BagReader {
 
   std::string path_;
   std::optional<io::ByteReader> reader_;
-  std::string profile_;
   std::map<std::uint16_t, Schema> schemas_;
   std::map<std::uint16_t, std::uint32_t> channel_topic_;  // channel id -> index in topics_
   std::vector<BagTopic> topics_;

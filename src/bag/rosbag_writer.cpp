@@ -37,6 +37,7 @@ struct Topic {
   std::string name;
   std::string type;
   std::string qos;
+  std::string definition;  // the ros2msg schema text
   std::uint64_t messages = 0;
 };
 
@@ -84,13 +85,13 @@ class McapRosbagWriter final : public RosbagWriter {
 
   Result<std::uint32_t> addTopic(const std::string& topic, const std::string& type,
                                  const std::string& qos) override {
-    const std::string definition = ros2MessageDefinition(type);
+    std::string definition = ros2MessageDefinition(type);
     if (definition.empty()) {
       return fail(ErrorCode::kUnsupported, topic + ": raymap has no message definition for " +
                                                type + ", so it cannot write it to a bag");
     }
     const auto id = static_cast<std::uint16_t>(topics_.size() + 1);  // 0 means "no schema"
-    topics_.push_back(Topic{topic, type, qos, 0});
+    topics_.push_back(Topic{topic, type, qos, std::move(definition), 0});
     Builder b;
     schemaRecord(b, id);
     channelRecord(b, id);
@@ -209,12 +210,12 @@ class McapRosbagWriter final : public RosbagWriter {
   }
 
   void schemaRecord(Builder& b, std::uint16_t id) const {
-    const std::string definition = ros2MessageDefinition(topics_[id - 1u].type);
+    const Topic& t = topics_[id - 1u];
     const std::size_t r = b.beginRecord(Op::kSchema);
     b.u16(id);
-    b.string(topics_[id - 1u].type);
+    b.string(t.type);
     b.string("ros2msg");
-    b.string(definition);  // bytes with a uint32 length, like a string
+    b.string(t.definition);  // bytes with a uint32 length, like a string
     b.endRecord(r);
   }
 
@@ -337,16 +338,13 @@ class McapRosbagWriter final : public RosbagWriter {
   }
 
   Expected<void, Error> writeMetadata() const {
-    const double duration = messages_ > 0 ? static_cast<double>(end_time_ - start_time_) : 0.0;
+    // The bag's span, and its one file's (the same).
+    const std::string start = std::to_string(messages_ > 0 ? start_time_ : 0);
+    const std::string duration = std::to_string(messages_ > 0 ? end_time_ - start_time_ : 0);
     std::string yaml = "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n";
-    char line[160];
-    std::snprintf(line, sizeof(line), "  duration:\n    nanoseconds: %.0f\n", duration);
-    yaml += line;
-    std::snprintf(line, sizeof(line),
-                  "  starting_time:\n    nanoseconds_since_epoch: %" PRIu64
-                  "\n  message_count: %" PRIu64 "\n",
-                  messages_ > 0 ? start_time_ : 0, messages_);
-    yaml += line;
+    yaml += "  duration:\n    nanoseconds: " + duration + "\n  starting_time:\n" +
+            "    nanoseconds_since_epoch: " + start +
+            "\n  message_count: " + std::to_string(messages_) + "\n";
     yaml += "  topics_with_message_count:\n";
     for (const Topic& t : topics_) {
       std::string qos = "\"";
@@ -360,10 +358,8 @@ class McapRosbagWriter final : public RosbagWriter {
     }
     yaml += "  compression_format: \"\"\n  compression_mode: \"\"\n  relative_file_paths:\n    - " +
             file_name_ + "\n  files:\n    - path: " + file_name_ +
-            "\n      starting_time:\n        nanoseconds_since_epoch: " +
-            std::to_string(messages_ > 0 ? start_time_ : 0) +
-            "\n      duration:\n        nanoseconds: " +
-            std::to_string(messages_ > 0 ? end_time_ - start_time_ : 0) +
+            "\n      starting_time:\n        nanoseconds_since_epoch: " + start +
+            "\n      duration:\n        nanoseconds: " + duration +
             "\n      message_count: " + std::to_string(messages_) + "\n";
     const std::string path = (fs::path(partial_) / "metadata.yaml").string();
     std::FILE* f = std::fopen(path.c_str(), "wb");

@@ -9,24 +9,11 @@
 #include "diagnostic_msgs.h"
 
 #include "src/core/assert.hpp"
+#include "src/dds/frame_id.hpp"
 #include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
 
 namespace raymap::dds {
-namespace {
-
-void copyText(char* slot, std::size_t slot_bytes, const char* text) noexcept {
-  std::size_t length = 0;
-  if (text != nullptr) {
-    while (length + 1 < slot_bytes && text[length] != '\0') {
-      slot[length] = text[length];
-      ++length;
-    }
-  }
-  slot[length] = '\0';
-}
-
-}  // namespace
 
 /// Design: one heap block per message (moves keep the addresses in `msg` valid). Text slots:
 /// status s has name/message/hardware_id at text[(3 s + k) * kTextBytes]; value v of status s
