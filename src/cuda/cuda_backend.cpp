@@ -40,7 +40,7 @@ T* typed(const cuda::DeviceMemoryHandle& memory) noexcept {
   return static_cast<T*>(memory.get());
 }
 
-class CudaBackend final : public gpu::StagedBackend {
+class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice {
  public:
   /// slots == 0: shared memory (the device works on the host store in place).
   CudaBackend(VoxelMap& map, cuda::DeviceInfo device, std::uint32_t slots,
@@ -97,6 +97,12 @@ class CudaBackend final : public gpu::StagedBackend {
            cuda::versionText(device_.runtime_version) + ")" +
            (sharedMemory() ? ", shared memory" : "");
   }
+
+  // ---- cuda::BackendDevice ----
+  int deviceIndex() const noexcept override { return device_.index; }
+  CUstream_st* stream() const noexcept override { return stream_.get(); }
+  const void* layerPointer(int layer) const noexcept override { return layerOr(layer); }
+  gpu::StagedBackend& staged() noexcept override { return *this; }
 
  private:
   /// One allocation per map layer: cache slots in device memory, or (shared memory) the host
@@ -357,6 +363,10 @@ gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device) {
 }
 
 }  // namespace
+
+cuda::BackendDevice* cuda::backendDevice(Backend& backend) noexcept {
+  return dynamic_cast<CudaBackend*>(&backend);
+}
 
 Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
                                                    const CudaBackendOptions& options) {

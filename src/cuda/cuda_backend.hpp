@@ -7,8 +7,11 @@
 
 #include "src/core/error.hpp"
 #include "src/gpu/device_options.hpp"
+#include "src/gpu/staged_backend.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
+
+struct CUstream_st;  // cudaStream_t, without the CUDA headers
 
 namespace raymap {
 
@@ -43,4 +46,27 @@ struct CudaBackendOptions : DeviceBackendOptions {
 Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
                                                    const CudaBackendOptions& options);
 
+namespace cuda {
+
+/// @brief What a CUDA backend lends to other kernels on its device: the height-map generator
+/// reads the map's layers where integration left them (device region cache, or the host pool
+/// mapped into the device) instead of through the host store.
+/// Thread-safety: as the backend's (one thread at a time, under the map's lock in raymapd).
+class BackendDevice {
+ public:
+  virtual ~BackendDevice() = default;
+  /// The device ordinal and the backend's one stream (work on it runs after the batches).
+  virtual int deviceIndex() const noexcept = 0;
+  virtual CUstream_st* stream() const noexcept = 0;
+  /// Device address of map layer `layer` (a placeholder for -1): the layout of the host store,
+  /// one region per slot.
+  virtual const void* layerPointer(int layer) const noexcept = 0;
+  /// The batch loop: placeForRead(), synchronise().
+  virtual gpu::StagedBackend& staged() noexcept = 0;
+};
+
+/// @brief `backend` as a CUDA backend, or nullptr when it is another kind.
+BackendDevice* backendDevice(Backend& backend) noexcept;
+
+}  // namespace cuda
 }  // namespace raymap

@@ -7,8 +7,10 @@
 #include <vector>
 
 #include "kernels/cuda/heightmap_launch.h"
+#include "src/cuda/cuda_backend.hpp"
 #include "src/cuda/cuda_devices.hpp"
 #include "src/cuda/cuda_handles.hpp"
+#include "src/gpu/resident_read.hpp"
 #include "src/heightmap/device_upload.hpp"
 
 namespace raymap {
@@ -26,16 +28,27 @@ struct GrowingBuffer {
 
 class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
  public:
+  /// Standalone: its own stream, reading the host store.
   CudaHeightmapGenerator(cuda::DeviceInfo device, cuda::StreamHandle stream, unsigned block)
-      : device_(std::move(device)), stream_(std::move(stream)), block_threads_(block) {}
+      : device_(std::move(device)),
+        owned_stream_(std::move(stream)),
+        stream_(owned_stream_.get()),
+        block_threads_(block) {}
+  /// On `backend`'s stream, reading the layers where it left them.
+  CudaHeightmapGenerator(cuda::DeviceInfo device, cuda::BackendDevice& backend, unsigned block)
+      : device_(std::move(device)),
+        stream_(backend.stream()),
+        backend_(&backend),
+        block_threads_(block) {}
   ~CudaHeightmapGenerator() override {
-    if (stream_) {
-      (void)cudaStreamSynchronize(stream_.get());
+    if (stream_ != nullptr && cudaSetDevice(device_.index) == cudaSuccess) {
+      (void)cudaStreamSynchronize(stream_);
     }
   }
 
   const char* name() const noexcept override { return "cuda"; }
   std::uint64_t bytesCopied() const noexcept override { return bytes_copied_; }
+  bool readsHostStore() const noexcept override { return backend_ == nullptr; }
   std::string deviceName() const override { return device_.name; }
 
   Expected<void, Error> generate(const VoxelMap& map, const heightmap::HeightmapPlan& plan,
@@ -45,13 +58,19 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (const cudaError_t s = cudaSetDevice(device_.index); s != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: selecting the device", s));
     }
-    upload_.prepare(map, plan);
+    auto slots = resident_.prepare(backend_ == nullptr ? nullptr : &backend_->staged(), map,
+                                   plan.region_slots, "CUDA");
+    if (!slots) {
+      return Unexpected(slots.error());
+    }
+    upload_.prepare(map, plan, *slots);
+    bytes_copied_ += resident_.bytesUploaded();
     for (std::size_t b = 0; b < kDeviceBufferCount; ++b) {
       if (auto ok = reserve(buffers_[b], upload_.bytes[b], static_cast<DeviceBuffer>(b)); !ok) {
         return ok;
       }
     }
-    cudaStream_t s = stream_.get();
+    cudaStream_t s = stream_;
     cudaError_t status = cudaSuccess;
     upload_.forEachCopy(
         map, plan,
@@ -67,10 +86,10 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     cuda::HeightmapKernelBuffers k;
     k.table = buffers_[kTableBuffer].as<const std::uint32_t>();
     k.region_slots = buffers_[kRegionSlotsBuffer].as<const std::uint32_t>();
-    k.occupancy = buffers_[kOccupancyBuffer].as<const float>();
+    k.occupancy = static_cast<const float*>(mapLayer(kOccupancyBuffer));
     k.masks = buffers_[kMasksBuffer].as<rm_hm_mask>();
-    k.mean = buffers_[kMeanBuffer].as<const rm_voxel_mean>();
-    k.ndt = buffers_[kNdtBuffer].as<const rm_ndt_voxel>();
+    k.mean = static_cast<const rm_voxel_mean*>(mapLayer(kMeanBuffer));
+    k.ndt = static_cast<const rm_ndt_voxel*>(mapLayer(kNdtBuffer));
     k.elevation = buffers_[kElevationBuffer].as<float>();
     k.clearance = buffers_[kClearanceBuffer].as<float>();
     k.kind = buffers_[kKindBuffer].as<std::uint32_t>();
@@ -115,7 +134,7 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (buffer.memory && buffer.bytes >= bytes) {
       return {};
     }
-    (void)cudaStreamSynchronize(stream_.get());
+    (void)cudaStreamSynchronize(stream_);
     buffer.memory.reset();
     buffer.bytes = 0;
     auto memory =
@@ -128,11 +147,30 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     return {};
   }
 
+  /// A map layer's device address: the backend's layer where resident, else the uploaded copy.
+  const void* mapLayer(heightmap::DeviceBuffer buffer) const noexcept {
+    if (!upload_.resident) {
+      return buffers_[buffer].memory.get();
+    }
+    const VoxelMap& map = backend_->staged().integratedMap();
+    switch (buffer) {
+      case heightmap::kOccupancyBuffer:
+        return backend_->layerPointer(map.occupancyLayer());
+      case heightmap::kMeanBuffer:
+        return backend_->layerPointer(upload_.with_mean ? map.meanLayer() : -1);
+      default:
+        return backend_->layerPointer(upload_.with_ndt ? map.ndtLayer() : -1);
+    }
+  }
+
   cuda::DeviceInfo device_;
-  cuda::StreamHandle stream_;
+  cuda::StreamHandle owned_stream_;  // standalone only
+  cudaStream_t stream_;
+  cuda::BackendDevice* backend_ = nullptr;  // on the backend's stream: it outlives this
   unsigned block_threads_;
   GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
   heightmap::DeviceUpload upload_;
+  gpu::ResidentRead resident_;
   std::uint64_t bytes_copied_ = 0;  // host <-> device by every generation
 };
 
@@ -156,6 +194,25 @@ Result<std::unique_ptr<heightmap::HeightmapGenerator>> createCudaHeightmapGenera
   }
   return std::unique_ptr<heightmap::HeightmapGenerator>(std::make_unique<CudaHeightmapGenerator>(
       std::move(*device), std::move(*stream), options.block_threads));
+}
+
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createCudaHeightmapGenerator(
+    Backend& backend, unsigned block_threads) {
+  if (auto ok = cuda::checkBlockThreads(block_threads); !ok) {
+    return Unexpected(ok.error());
+  }
+  cuda::BackendDevice* shared = cuda::backendDevice(backend);
+  if (shared == nullptr) {
+    return fail(ErrorCode::kInvalidArgument,
+                std::string("a CUDA height-map generator cannot share the device state of the ") +
+                    backend.name() + " backend");
+  }
+  auto device = cuda::findDevice(shared->deviceIndex());
+  if (!device) {
+    return Unexpected(device.error());
+  }
+  return std::unique_ptr<heightmap::HeightmapGenerator>(
+      std::make_unique<CudaHeightmapGenerator>(std::move(*device), *shared, block_threads));
 }
 
 }  // namespace raymap

@@ -5,6 +5,7 @@
 
 #include "src/core/error.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
+#include "src/map/backend.hpp"
 
 namespace raymap {
 
@@ -22,5 +23,19 @@ struct CudaHeightmapOptions {
 /// Thread-safety: one thread at a time.
 Result<std::unique_ptr<heightmap::HeightmapGenerator>> createCudaHeightmapGenerator(
     const CudaHeightmapOptions& options);
+
+/// @brief Creates a CUDA height-map generator on the device and stream of `backend`, a CUDA
+/// integration backend (which must outlive it), for the map that backend integrates into: its
+/// kernels run on the backend's stream after the batches integrated so far and read the
+/// occupancy, voxel-mean and NDT layers where integration left them (device region cache, or
+/// the host pool mapped into the device), through a table of each region's slot. Only that
+/// table, the plan's region table and the output layers are copied; no Backend::synchronise() is
+/// needed before generate() (readsHostStore() is false). When the regions under the box do not
+/// fit the device cache at once, generate() synchronises the backend and uploads them as the
+/// standalone generator does. Errors: `backend` is not a CUDA backend; `block_threads` is not a
+/// multiple of 32. Thread-safety: as the backend's; generate() must not run concurrently with
+/// its integrate().
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createCudaHeightmapGenerator(
+    Backend& backend, unsigned block_threads = 128);
 
 }  // namespace raymap

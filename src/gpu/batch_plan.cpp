@@ -65,13 +65,19 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::sharedRegion(
 
 Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
                                                                   std::uint32_t host_slot,
-                                                                  bool* full) noexcept {
+                                                                  bool* full, bool write) noexcept {
   *full = false;
-  auto placement = cache_->place(region, host_slot);
+  // A region the host never wrote is cleared on the device: its device copy is the only one.
+  write = write || host_uninitialised_[host_slot] != 0;
+  auto placement = cache_->place(region, host_slot, write);
   if (!placement) {
     // A region created for this ray must not stay uninitialised on the host: it is not on the
-    // device yet, and a later batch will upload it from here.
+    // device yet, and a later batch will upload it from here. Its host slot may be one a window
+    // move recycled while the download of its former region was still running: wait for it.
     if (host_uninitialised_[host_slot] != 0) {
+      if (auto idle = transfer_->waitForDevice(); !idle) {
+        return Unexpected(idle.error());
+      }
       map_->store().clearRegion(host_slot);
       host_uninitialised_[host_slot] = 0;
     }
@@ -241,6 +247,29 @@ Expected<void, IntegrateError> BatchPlanner::downloadAll() noexcept {
     }
   }
   return {};
+}
+
+Expected<bool, IntegrateError> BatchPlanner::placeForRead(
+    std::span<const std::uint32_t> host_slots, std::span<std::uint32_t> device_slots) noexcept {
+  RAYMAP_EXPECTS(host_slots.size() == device_slots.size());
+  if (cache_ == nullptr) {
+    std::copy(host_slots.begin(), host_slots.end(), device_slots.begin());
+    return true;
+  }
+  cache_->beginBatch();
+  const RegionStore& store = map_->store();
+  for (std::size_t r = 0; r < host_slots.size(); ++r) {
+    bool full = false;
+    auto slot = placeRegion(store.coordOf(host_slots[r]), host_slots[r], &full, /*write=*/false);
+    if (!slot) {
+      return Unexpected(slot.error());
+    }
+    if (full) {
+      return false;
+    }
+    device_slots[r] = *slot;
+  }
+  return true;
 }
 
 }  // namespace raymap::gpu

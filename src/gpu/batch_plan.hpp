@@ -41,6 +41,9 @@ class RegionTransfer {
   /// are left alone and their pages are not touched.
   virtual Expected<void, IntegrateError> fillClear(std::uint32_t device_slot,
                                                    bool zero_layers_clear) noexcept = 0;
+  /// @brief Waits until every move enqueued so far has finished (before the host writes a host
+  /// store slot that a download may still be filling).
+  virtual Expected<void, IntegrateError> waitForDevice() noexcept = 0;
 };
 
 /// @brief One batch in host memory, ready to copy to the device. The arrays come from a memory
@@ -116,14 +119,25 @@ class BatchPlanner {
   /// the backend has waited for the device.
   Expected<void, IntegrateError> downloadAll() noexcept;
 
+  /// @brief Makes the regions in host store slots `host_slots` readable on the device by work
+  /// enqueued next, and writes each one's device slot into `device_slots` (same size): for a
+  /// reader such as the height map. Shared mode: the host slots themselves, nothing moves.
+  /// Cache: regions not resident are uploaded (evicting the least recently used ones, downloaded
+  /// if dirty) and pinned until the next plan; resident ones keep their dirty flags. Returns
+  /// false when the cache cannot hold them all at once (the caller reads the host store instead,
+  /// after synchronise()). Call revalidate() first.
+  Expected<bool, IntegrateError> placeForRead(std::span<const std::uint32_t> host_slots,
+                                              std::span<std::uint32_t> device_slots) noexcept;
+
   const PlanStats& stats() const noexcept { return stats_; }
 
  private:
   /// Shared mode: the region's host slot, cleared on the device if it is new.
   Expected<std::uint32_t, IntegrateError> sharedRegion(std::uint32_t host_slot) noexcept;
   /// Device slot for a region of the current batch; kNoSlot + *full when the cache is pinned full.
+  /// `write`: the batch changes the region (it becomes dirty).
   Expected<std::uint32_t, IntegrateError> placeRegion(Vec3i region, std::uint32_t host_slot,
-                                                      bool* full) noexcept;
+                                                      bool* full, bool write = true) noexcept;
   void buildHitGroups(BatchArrays& out) const;
 
   VoxelMap* map_;

@@ -32,8 +32,9 @@ void DeviceRegionCache::pushBack(std::uint32_t slot) noexcept {
   tail_ = slot;
 }
 
-std::optional<DeviceRegionCache::Placement> DeviceRegionCache::place(
-    Vec3i region, std::uint32_t host_slot) noexcept {
+std::optional<DeviceRegionCache::Placement> DeviceRegionCache::place(Vec3i region,
+                                                                     std::uint32_t host_slot,
+                                                                     bool write) noexcept {
   const std::uint64_t key = RegionStore::packCoord(region);
   Placement placement;
   std::uint32_t slot = index_.find(key);
@@ -45,7 +46,7 @@ std::optional<DeviceRegionCache::Placement> DeviceRegionCache::place(
       unlink(slot);
       pushBack(slot);
     }
-    e.dirty = true;
+    e.dirty = e.dirty || write;
     ++hits_;
     placement.slot = slot;
     placement.resident = true;
@@ -69,7 +70,7 @@ std::optional<DeviceRegionCache::Placement> DeviceRegionCache::place(
     ++evictions_;
   }
   ++misses_;
-  entries_[slot] = Entry{region, host_slot, batch_, true, true};
+  entries_[slot] = Entry{region, host_slot, batch_, true, write};
   index_.insert(key, slot);
   pushBack(slot);
   placement.slot = slot;

@@ -51,9 +51,11 @@ class DeviceRegionCache {
 
   /// @brief Starts a new batch: regions placed from now on are pinned until the next call.
   void beginBatch() noexcept { ++batch_; }
-  /// @brief Places `region` (held in host store slot `host_slot`) for the current batch and marks
-  /// it dirty; nullopt when every slot is pinned by the current batch.
-  std::optional<Placement> place(Vec3i region, std::uint32_t host_slot) noexcept;
+  /// @brief Places `region` (held in host store slot `host_slot`) for the current batch; nullopt
+  /// when every slot is pinned by the current batch. `write`: the batch will change it, so it is
+  /// marked dirty (a reader, such as the height map, leaves a resident region's flag as it was
+  /// and places a region it brings in clean).
+  std::optional<Placement> place(Vec3i region, std::uint32_t host_slot, bool write = true) noexcept;
   /// @brief Device slot of a resident region, or kNoSlot.
   std::uint32_t find(Vec3i region) const noexcept;
   const Entry& entry(std::uint32_t slot) const noexcept { return entries_[slot]; }

@@ -158,6 +158,27 @@ Expected<void, IntegrateError> StagedBackend::fillClear(std::uint32_t device_slo
   return {};
 }
 
+Expected<void, IntegrateError> StagedBackend::waitForDevice() noexcept {
+  if (!finish()) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  return {};
+}
+
+Expected<StagedBackend::ReadPlacement, IntegrateError> StagedBackend::placeForRead(
+    std::span<const std::uint32_t> host_slots, std::span<std::uint32_t> device_slots) noexcept {
+  if (!makeCurrent()) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  planner_.revalidate();
+  const std::uint64_t uploaded = stats_.region_bytes_to_device;
+  auto placed = planner_.placeForRead(host_slots, device_slots);
+  if (!placed) {
+    return Unexpected(placed.error());
+  }
+  return ReadPlacement{*placed, stats_.region_bytes_to_device - uploaded};
+}
+
 Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_slot,
                                                          std::uint32_t host_slot,
                                                          bool to_device) noexcept {

@@ -59,6 +59,25 @@ class StagedBackend : public Backend, private RegionTransfer {
   BackendStats stats() const noexcept final;
   unsigned threads() const noexcept final { return 1; }
 
+  /// @brief What placeForRead() did.
+  struct ReadPlacement {
+    bool resident = false;             ///< every region is readable in the layer buffers
+    std::uint64_t bytes_uploaded = 0;  ///< region bytes it copied to the device for that
+  };
+  /// @brief Lends the map's layers, where integration left them, to a reader that enqueues its
+  /// kernels on this backend's queue next (the height-map generator): binds the device to the
+  /// calling thread, takes window moves into account, and writes the layer-buffer slot of each
+  /// region in host store slots `host_slots` into `device_slots` (same size). The reader's work
+  /// runs after every batch integrated so far (one in-order queue); nothing waits here.
+  /// Shared memory: the host slots themselves, nothing copied. Cache: regions not resident are
+  /// uploaded (evicting others, downloaded if dirty) and stay pinned until the next integrate();
+  /// `resident` is false when the cache cannot hold them all at once, and the reader must then
+  /// synchronise() and read the host store. Same thread-safety as integrate(). @rt no allocation.
+  Expected<ReadPlacement, IntegrateError> placeForRead(
+      std::span<const std::uint32_t> host_slots, std::span<std::uint32_t> device_slots) noexcept;
+  /// The map this backend integrates into.
+  const VoxelMap& integratedMap() const noexcept { return *map_; }
+
  protected:
   /// `slots` == 0: shared memory (the device works on the host store in place). `wide_counters`:
   /// the kernels count in 64-bit words (else 32-bit). `staging_memory` provides the host batch
@@ -122,6 +141,7 @@ class StagedBackend : public Backend, private RegionTransfer {
                                         std::uint32_t host_slot) noexcept final;
   Expected<void, IntegrateError> fillClear(std::uint32_t device_slot,
                                            bool zero_layers_clear) noexcept final;
+  Expected<void, IntegrateError> waitForDevice() noexcept final;
 
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
                                             bool to_device) noexcept;

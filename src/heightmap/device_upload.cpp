@@ -41,7 +41,8 @@ const char* toString(DeviceBuffer buffer) noexcept {
   return "buffer";
 }
 
-void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan) {
+void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan,
+                           std::span<const std::uint32_t> device_slots) {
   const RegionStore& store = map.store();
   const rm_heightmap_params& p = plan.params;
   with_mean = (p.flags & RM_HM_FLAG_SAMPLES) != 0 && map.meanLayer() >= 0;
@@ -49,9 +50,10 @@ void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan) {
   mean_region_bytes = with_mean ? store.layerRegionBytes(map.meanLayer()) : 0;
   with_ndt = (p.flags & RM_HM_FLAG_NORMALS) != 0 && map.ndtLayer() >= 0;
   ndt_region_bytes = with_ndt ? store.layerRegionBytes(map.ndtLayer()) : 0;
+  resident = !device_slots.empty();
   region_slots.resize(std::max<std::size_t>(plan.region_slots.size(), 1));
   for (std::size_t r = 0; r < region_slots.size(); ++r) {
-    region_slots[r] = static_cast<std::uint32_t>(r);
+    region_slots[r] = resident ? device_slots[r] : static_cast<std::uint32_t>(r);
   }
   const std::size_t regions = region_slots.size();
   const auto n = static_cast<std::size_t>(p.region_voxels);
@@ -62,9 +64,10 @@ void DeviceUpload::prepare(const VoxelMap& map, const HeightmapPlan& plan) {
   bytes[kMasksBuffer] = regions * n * n *
                         static_cast<std::size_t>(rm_hm_mask_words(p.region_voxels)) *
                         sizeof(rm_hm_mask);
-  bytes[kOccupancyBuffer] = regions * occupancy_region_bytes;
-  bytes[kMeanBuffer] = regions * mean_region_bytes;
-  bytes[kNdtBuffer] = regions * ndt_region_bytes;
+  // Resident layers are the backend's buffers: the generator's own stay at the minimum.
+  bytes[kOccupancyBuffer] = resident ? 0 : regions * occupancy_region_bytes;
+  bytes[kMeanBuffer] = resident ? 0 : regions * mean_region_bytes;
+  bytes[kNdtBuffer] = resident ? 0 : regions * ndt_region_bytes;
   for (const DeviceBuffer layer :
        {kElevationBuffer, kClearanceBuffer, kKindBuffer, kObservedCountBuffer, kReferenceBuffer}) {
     bytes[layer] = cells * 4;

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "src/heightmap/heightmap_plan.hpp"
@@ -15,9 +16,11 @@ namespace raymap::heightmap {
 /// The device buffers of a generation, in kernel-argument order after the parameter block.
 enum DeviceBuffer : std::uint8_t {
   kTableBuffer,        ///< the plan's region table
-  kRegionSlotsBuffer,  ///< region r's slot in the uploaded layers: r (regions are packed)
+  kRegionSlotsBuffer,  ///< region r's slot in the layer buffers: r when uploaded (packed), else
+                       ///< its slot in the integration backend's layers
   kMasksBuffer,        ///< column masks, written by the mask kernel
   kOccupancyBuffer,    ///< occupancy layer of the regions under the box, packed in plan order
+                       ///< (resident: the backend's buffer, nothing uploaded)
   kMeanBuffer,         ///< voxel-mean layer, likewise (a placeholder without means)
   kNdtBuffer,          ///< NDT layer, likewise (a placeholder without normals)
   kElevationBuffer,    ///< the output layers of HeightMap, in this order
@@ -35,17 +38,24 @@ enum DeviceBuffer : std::uint8_t {
 const char* toString(DeviceBuffer buffer) noexcept;
 
 /// @brief Sizes and sources of one generation's upload. Value type; reusable (keeps capacity).
+/// Two ways to reach the map's layers: uploaded (the regions under the box copied from the host
+/// store, packed in plan order), or resident (the device backend that integrates the map holds
+/// them in its layer buffers, and only the slot of each region is uploaded).
 struct DeviceUpload {
   std::array<std::size_t, kDeviceBufferCount> bytes{};  ///< at least 8 each (no empty buffers)
-  std::vector<std::uint32_t> region_slots;  ///< 0, 1, ... (what kRegionSlotsBuffer holds)
-  std::size_t occupancy_region_bytes = 0;   ///< one region of the occupancy layer
-  std::size_t mean_region_bytes = 0;        ///< one region of the mean layer; 0: not uploaded
-  std::size_t ndt_region_bytes = 0;         ///< one region of the NDT layer; 0: not uploaded
+  std::vector<std::uint32_t> region_slots;              ///< what kRegionSlotsBuffer holds
+  bool resident = false;                   ///< the map's layers are the backend's buffers
+  std::size_t occupancy_region_bytes = 0;  ///< one region of the occupancy layer
+  std::size_t mean_region_bytes = 0;       ///< one region of the mean layer; 0: not uploaded
+  std::size_t ndt_region_bytes = 0;        ///< one region of the NDT layer; 0: not uploaded
   bool with_mean = false;
   bool with_ndt = false;  ///< the plan writes normals: the NDT layer is uploaded
 
-  /// @brief Fills the sizes for `plan` on `map`. @rt allocates only when the plan grows.
-  void prepare(const VoxelMap& map, const HeightmapPlan& plan);
+  /// @brief Fills the sizes for `plan` on `map`. `device_slots`: the regions are resident at
+  /// these slots of the backend's layer buffers (one per plan region); empty: they are uploaded.
+  /// @rt allocates only when the plan grows.
+  void prepare(const VoxelMap& map, const HeightmapPlan& plan,
+               std::span<const std::uint32_t> device_slots = {});
 
   /// @brief Calls read(buffer, host_target) for each output layer of `out` (cells * 4 bytes); the
   /// normal layers only when `out` has them.
@@ -67,19 +77,25 @@ struct DeviceUpload {
   /// forEachOutput reads back.
   std::uint64_t copiedBytes(const HeightmapPlan& plan, HeightMap& out) const {
     std::uint64_t total = (plan.region_table.size() + region_slots.size()) * 4;
-    total +=
-        plan.region_slots.size() * (occupancy_region_bytes + (with_mean ? mean_region_bytes : 0) +
-                                    (with_ndt ? ndt_region_bytes : 0));
+    if (!resident) {
+      total +=
+          plan.region_slots.size() * (occupancy_region_bytes + (with_mean ? mean_region_bytes : 0) +
+                                      (with_ndt ? ndt_region_bytes : 0));
+    }
     forEachOutput(out, [&](DeviceBuffer, void*) { total += out.cellCount() * 4; });
     return total;
   }
 
   /// @brief Calls copy(buffer, device_offset, host_source, bytes) for every host-to-device copy:
-  /// the table, the slot list, then each region's occupancy (and mean, and NDT) layer.
+  /// the table, the slot list, then (unless resident) each region's occupancy (and mean, and NDT)
+  /// layer.
   template <class Copy>
   void forEachCopy(const VoxelMap& map, const HeightmapPlan& plan, Copy&& copy) const {
     copy(kTableBuffer, 0, plan.region_table.data(), plan.region_table.size() * 4);
     copy(kRegionSlotsBuffer, 0, region_slots.data(), region_slots.size() * 4);
+    if (resident) {
+      return;
+    }
     const RegionStore& store = map.store();
     for (std::size_t r = 0; r < plan.region_slots.size(); ++r) {
       copy(kOccupancyBuffer, r * occupancy_region_bytes,

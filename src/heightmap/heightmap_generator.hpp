@@ -14,8 +14,12 @@
 
 namespace raymap::heightmap {
 
-/// @brief Generates height maps from a map's host store.
-/// A map integrated by a device backend must be synchronised (Backend::synchronise()) first.
+/// @brief Generates height maps from a map.
+/// Where the map is read depends on the generator (readsHostStore()): the CPU generator and a
+/// device generator with its own context read the host store, so a map integrated by a device
+/// backend must be synchronised (Backend::synchronise()) first; a device generator created over
+/// the integration backend reads the layers where the backend left them and needs no
+/// synchronisation (it does what it needs itself).
 /// Thread-safety: one generator per thread; generate() reads the map, which must not be updated
 /// meanwhile. Real-time: generate() allocates only when `out` or the device buffers must grow
 /// (the first call for a grid size), and performs no I/O.
@@ -33,6 +37,8 @@ class HeightmapGenerator {
   /// @brief Bytes copied between host and device by every generate() so far (uploads of the map's
   /// layers and the plan, read-backs of the output): 0 on the host.
   virtual std::uint64_t bytesCopied() const noexcept { return 0; }
+  /// @brief True when generate() reads the map's host store (which must then be current).
+  virtual bool readsHostStore() const noexcept { return true; }
 };
 
 /// @brief The CPU generator: one thread (a 200 x 200 planar map takes a few milliseconds).

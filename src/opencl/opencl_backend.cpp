@@ -37,7 +37,7 @@ struct DeviceBatch {
   opencl::EventHandle done;  // completes when the counters have been read back
 };
 
-class OpenClBackend final : public gpu::StagedBackend {
+class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDevice {
  public:
   /// slots == 0: shared memory (the device works on the host store in place).
   OpenClBackend(VoxelMap& map, opencl::DeviceContext ctx, std::uint32_t slots, bool int64_counters,
@@ -116,6 +116,11 @@ class OpenClBackend final : public gpu::StagedBackend {
            (sharedMemory() ? ", shared memory" : "");
   }
   std::string startupWarning() const override { return program_warning_; }
+
+  // ---- opencl::BackendDevice ----
+  const opencl::DeviceContext& context() const noexcept override { return ctx_; }
+  cl_mem layerBuffer(int layer) const noexcept override { return layerOr(layer); }
+  gpu::StagedBackend& staged() noexcept override { return *this; }
 
  private:
   /// One buffer per map layer: the cache slots, or (shared memory) the host store's array.
@@ -335,6 +340,10 @@ gpu::DeviceMemoryLimits memoryLimits(const opencl::DeviceInfo& device) {
 }
 
 }  // namespace
+
+opencl::BackendDevice* opencl::backendDevice(Backend& backend) noexcept {
+  return dynamic_cast<OpenClBackend*>(&backend);
+}
 
 Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
                                                      const OpenClBackendOptions& options) {

@@ -10,6 +10,7 @@
 
 #include "src/core/error.hpp"
 #include "src/gpu/device_options.hpp"
+#include "src/gpu/staged_backend.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 #include "src/opencl/cl_runtime.hpp"
@@ -52,4 +53,26 @@ struct OpenClBackendOptions : DeviceBackendOptions {
 Result<std::unique_ptr<Backend>> createOpenClBackend(VoxelMap& map,
                                                      const OpenClBackendOptions& options);
 
+namespace opencl {
+
+/// @brief What an OpenCL backend lends to kernels of another program in its context: the
+/// height-map generator reads the map's layers where integration left them (device region cache
+/// or the shared host pool) instead of through the host store.
+/// Thread-safety: as the backend's (one thread at a time, under the map's lock in raymapd).
+class BackendDevice {
+ public:
+  virtual ~BackendDevice() = default;
+  /// The backend's context and its one in-order queue.
+  virtual const DeviceContext& context() const noexcept = 0;
+  /// The buffer of map layer `layer` (a placeholder for -1): the layout of the host store, one
+  /// region per slot.
+  virtual cl_mem layerBuffer(int layer) const noexcept = 0;
+  /// The batch loop: placeForRead(), synchronise().
+  virtual gpu::StagedBackend& staged() noexcept = 0;
+};
+
+/// @brief `backend` as an OpenCL backend, or nullptr when it is another kind.
+BackendDevice* backendDevice(Backend& backend) noexcept;
+
+}  // namespace opencl
 }  // namespace raymap

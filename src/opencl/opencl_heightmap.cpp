@@ -8,7 +8,9 @@
 #include <vector>
 
 #include "kernels/common/heightmap.h"
+#include "src/gpu/resident_read.hpp"
 #include "src/heightmap/device_upload.hpp"
+#include "src/opencl/opencl_backend.hpp"
 
 namespace raymap {
 namespace kernels {
@@ -23,18 +25,25 @@ constexpr cl_uint kFillRingArgument = 14;
 
 class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
  public:
-  explicit OpenClHeightmapGenerator(opencl::DeviceContext ctx) : ctx_(std::move(ctx)) {
-    local_size_ = std::min(kWorkGroup, std::max<std::size_t>(ctx_.info.max_work_group_size, 1));
+  /// Standalone: its own context, reading the host store.
+  explicit OpenClHeightmapGenerator(opencl::DeviceContext ctx)
+      : owned_ctx_(std::move(ctx)), ctx_(&owned_ctx_) {
+    setLocalSize();
+  }
+  /// In `backend`'s context, reading the layers where it left them.
+  explicit OpenClHeightmapGenerator(opencl::BackendDevice& backend)
+      : ctx_(&backend.context()), backend_(&backend) {
+    setLocalSize();
   }
   ~OpenClHeightmapGenerator() override {
-    if (ctx_.queue) {
-      (void)clFinish(ctx_.queue.get());
+    if (ctx_->queue) {
+      (void)clFinish(ctx_->queue.get());
     }
   }
 
-  Expected<void, Error> initialise(const OpenClHeightmapOptions& options) {
-    auto program = opencl::buildProgram(ctx_, kernels::kHeightmapSource, "-cl-std=CL1.2",
-                                        options.program_cache);
+  Expected<void, Error> initialise(const opencl::ProgramCacheOptions& program_cache) {
+    auto program =
+        opencl::buildProgram(*ctx_, kernels::kHeightmapSource, "-cl-std=CL1.2", program_cache);
     if (!program) {
       return Unexpected(program.error());
     }
@@ -46,21 +55,28 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   const char* name() const noexcept override { return "opencl"; }
   std::uint64_t bytesCopied() const noexcept override { return bytes_copied_; }
+  bool readsHostStore() const noexcept override { return backend_ == nullptr; }
   std::string deviceName() const override {
-    return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")";
+    return ctx_->info.device_name + " (" + ctx_->info.platform_name + ")";
   }
 
   Expected<void, Error> generate(const VoxelMap& map, const heightmap::HeightmapPlan& plan,
                                  heightmap::HeightMap& out) override {
     using namespace heightmap;
     prepareOutput(plan, out);
-    upload_.prepare(map, plan);
+    auto slots = resident_.prepare(backend_ == nullptr ? nullptr : &backend_->staged(), map,
+                                   plan.region_slots, "OpenCL");
+    if (!slots) {
+      return Unexpected(slots.error());
+    }
+    upload_.prepare(map, plan, *slots);
+    bytes_copied_ += resident_.bytesUploaded();
     for (std::size_t b = 0; b < kDeviceBufferCount; ++b) {
       if (auto ok = reserve(buffers_[b], upload_.bytes[b], static_cast<DeviceBuffer>(b)); !ok) {
         return ok;
       }
     }
-    cl_command_queue q = ctx_.queue.get();
+    cl_command_queue q = ctx_->queue.get();
     cl_int status = CL_SUCCESS;
     upload_.forEachCopy(
         map, plan,
@@ -139,11 +155,11 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (buffer.handle && buffer.bytes >= bytes) {
       return {};
     }
-    (void)clFinish(ctx_.queue.get());
+    (void)clFinish(ctx_->queue.get());
     buffer.handle.reset();
     buffer.bytes = 0;
     auto created =
-        opencl::createBuffer(ctx_, bytes, std::string("height map: ") + heightmap::toString(what));
+        opencl::createBuffer(*ctx_, bytes, std::string("height map: ") + heightmap::toString(what));
     if (!created) {
       return Unexpected(created.error());
     }
@@ -160,7 +176,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     cl_uint index = 1;
     for (const heightmap::DeviceBuffer buffer : buffers) {
       if (status == CL_SUCCESS) {
-        const cl_mem mem = buffers_[buffer].handle.get();
+        const cl_mem mem = bufferFor(buffer);
         status = clSetKernelArg(kernel, index, sizeof(cl_mem), &mem);
       }
       ++index;
@@ -174,19 +190,43 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     return {};
   }
 
+  /// The buffer a kernel argument binds: the map's layers are the backend's where resident.
+  cl_mem bufferFor(heightmap::DeviceBuffer buffer) const noexcept {
+    if (upload_.resident) {
+      const VoxelMap& map = backend_->staged().integratedMap();
+      switch (buffer) {
+        case heightmap::kOccupancyBuffer:
+          return backend_->layerBuffer(map.occupancyLayer());
+        case heightmap::kMeanBuffer:
+          return backend_->layerBuffer(upload_.with_mean ? map.meanLayer() : -1);
+        case heightmap::kNdtBuffer:
+          return backend_->layerBuffer(upload_.with_ndt ? map.ndtLayer() : -1);
+        default:
+          break;
+      }
+    }
+    return buffers_[buffer].handle.get();
+  }
+
+  void setLocalSize() {
+    local_size_ = std::min(kWorkGroup, std::max<std::size_t>(ctx_->info.max_work_group_size, 1));
+  }
+
   cl_int launch(cl_kernel kernel, std::size_t items) {
     const std::size_t global = (items + local_size_ - 1) / local_size_ * local_size_;
-    return clEnqueueNDRangeKernel(ctx_.queue.get(), kernel, 1, nullptr, &global, &local_size_, 0,
+    return clEnqueueNDRangeKernel(ctx_->queue.get(), kernel, 1, nullptr, &global, &local_size_, 0,
                                   nullptr, nullptr);
   }
 
   Unexpected<Error> deviceError(const char* what, cl_int status) const {
     return fail(ErrorCode::kUnsupported, std::string("OpenCL height map: ") + what + ": " +
                                              opencl::errorName(status) + " on " +
-                                             ctx_.info.device_name);
+                                             ctx_->info.device_name);
   }
 
-  opencl::DeviceContext ctx_;
+  opencl::DeviceContext owned_ctx_;  // standalone only; first member with handles: released last
+  const opencl::DeviceContext* ctx_;
+  opencl::BackendDevice* backend_ = nullptr;  // in the backend's context: it outlives this
   opencl::ProgramHandle program_;
   opencl::KernelHandle masks_kernel_;
   opencl::KernelHandle planar_;
@@ -194,6 +234,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   std::size_t local_size_ = kWorkGroup;
   GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
   heightmap::DeviceUpload upload_;
+  gpu::ResidentRead resident_;
   std::uint64_t bytes_copied_ = 0;  // host <-> device by every generation
 };
 
@@ -210,7 +251,22 @@ Result<std::unique_ptr<heightmap::HeightmapGenerator>> createOpenClHeightmapGene
     return Unexpected(ctx.error());
   }
   auto generator = std::make_unique<OpenClHeightmapGenerator>(std::move(*ctx));
-  if (auto ok = generator->initialise(options); !ok) {
+  if (auto ok = generator->initialise(options.program_cache); !ok) {
+    return Unexpected(ok.error());
+  }
+  return std::unique_ptr<heightmap::HeightmapGenerator>(std::move(generator));
+}
+
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createOpenClHeightmapGenerator(
+    Backend& backend, const opencl::ProgramCacheOptions& program_cache) {
+  opencl::BackendDevice* device = opencl::backendDevice(backend);
+  if (device == nullptr) {
+    return fail(ErrorCode::kInvalidArgument, std::string("an OpenCL height-map generator cannot "
+                                                         "share the context of the ") +
+                                                 backend.name() + " backend");
+  }
+  auto generator = std::make_unique<OpenClHeightmapGenerator>(*device);
+  if (auto ok = generator->initialise(program_cache); !ok) {
     return Unexpected(ok.error());
   }
   return std::unique_ptr<heightmap::HeightmapGenerator>(std::move(generator));

@@ -5,6 +5,7 @@
 
 #include "src/core/error.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
+#include "src/map/backend.hpp"
 #include "src/opencl/cl_runtime.hpp"
 #include "src/opencl/program_cache.hpp"
 
@@ -25,5 +26,18 @@ struct OpenClHeightmapOptions {
 /// buffers the device refuses. Thread-safety: one thread at a time.
 Result<std::unique_ptr<heightmap::HeightmapGenerator>> createOpenClHeightmapGenerator(
     const OpenClHeightmapOptions& options);
+
+/// @brief Creates an OpenCL height-map generator in the context of `backend`, an OpenCL
+/// integration backend (which must outlive it), for the map that backend integrates into: its
+/// kernels run on the backend's queue after the batches integrated so far and read the
+/// occupancy, voxel-mean and NDT layers where integration left them (device region cache slots,
+/// or the shared host pool), through a table of each region's slot. Only that table, the plan's
+/// region table and the output layers are copied; no Backend::synchronise() is needed before
+/// generate() (readsHostStore() is false). When the regions under the box do not fit the device
+/// cache at once, generate() synchronises the backend and uploads them as the standalone
+/// generator does. Errors: `backend` is not an OpenCL backend; the program does not build.
+/// Thread-safety: as the backend's; generate() must not run concurrently with its integrate().
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createOpenClHeightmapGenerator(
+    Backend& backend, const opencl::ProgramCacheOptions& program_cache);
 
 }  // namespace raymap

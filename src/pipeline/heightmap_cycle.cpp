@@ -47,11 +47,12 @@ Expected<void, CycleError> HeightmapCycle::generate() noexcept {
   std::lock_guard<platform::PiMutex> lock(map_mutex_);
   const std::int64_t locked = platform::monotonicNowNs();
   stats_.map_lock_wait_us.record(static_cast<std::uint64_t>((locked - started) / 1000));
+  // Regions downloaded during the cycle: by synchronise() for a generator that reads the host
+  // store, else only evictions (cache mode) when the generator brings regions onto the device.
   const std::uint64_t downloaded = backend_.stats().region_bytes_from_device;
-  if (!backend_.synchronise()) {
+  if (generator_.readsHostStore() && !backend_.synchronise()) {
     return Unexpected(CycleError::kSynchronise);
   }
-  stats_.sync_copy_bytes.record(backend_.stats().region_bytes_from_device - downloaded);
   const std::uint64_t copied = generator_.bytesCopied();
   map_.setWindowCentre(robot);
   options_.centre = {robot.x, robot.y, robot.z - base_height_m_};
@@ -64,6 +65,7 @@ Expected<void, CycleError> HeightmapCycle::generate() noexcept {
   contained_ = integrated_.read_available();
   data_stamp_ns_ = stats_.newest_scan_stamp_ns.load(std::memory_order_relaxed);
   stats_.heightmap_copy_bytes.record(generator_.bytesCopied() - copied);
+  stats_.sync_copy_bytes.record(backend_.stats().region_bytes_from_device - downloaded);
   const std::int64_t done = platform::monotonicNowNs();
   stats_.generate_us.record(static_cast<std::uint64_t>((done - started) / 1000));
   stats_.heightmap_lock_hold_us.record(static_cast<std::uint64_t>((done - locked) / 1000));

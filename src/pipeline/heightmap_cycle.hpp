@@ -27,8 +27,11 @@ const char* toString(CycleError error) noexcept;
 /// @brief Generates the robot-centric height map once per call.
 ///
 /// Design: runs on the publisher thread. generate() holds `map_mutex` (shared with the
-/// integrator) while it synchronises the backend, moves the window, plans and generates; then it
-/// notes how many integrated-scan arrivals were queued (all of them are in this map).
+/// integrator) while it moves the window, plans and generates; a generator that reads the host
+/// store (the CPU's, on a device backend only in a CPU fallback) synchronises the backend first,
+/// a device generator in the backend's context reads the map where integration left it and only
+/// launches its kernels and reads the height map back. Then it notes how many integrated-scan
+/// arrivals were queued (all of them are in this map).
 /// recordPublished() turns those into latency samples once the map is out.
 /// Thread-safety: one thread. @rt generate(): allocates only on the first call (plan and layers
 /// reach their fixed size); blocks on map_mutex.

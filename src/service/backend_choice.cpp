@@ -184,4 +184,29 @@ Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& 
   return created;
 }
 
+Result<CreatedHeightmapGenerator> createHeightmapGenerator(Backend& backend) {
+  CreatedHeightmapGenerator created;
+  const std::string name = backend.name();
+  if (name == "cpu") {
+    created.generator = heightmap::makeCpuHeightmapGenerator();
+    return created;
+  }
+  Result<std::unique_ptr<heightmap::HeightmapGenerator>> device = notBuilt(name);
+#if defined(RAYMAP_HAVE_OPENCL)
+  if (name == "opencl") {
+    device = createOpenClHeightmapGenerator(backend, {});
+  }
+#endif
+#if defined(RAYMAP_HAVE_CUDA)
+  if (name == "cuda") {
+    device = createCudaHeightmapGenerator(backend);
+  }
+#endif
+  if (!device) {
+    return fail(device.error().code, "--backend " + name + ": " + device.error().message);
+  }
+  created.generator = std::move(*device);
+  return created;
+}
+
 }  // namespace raymap::service

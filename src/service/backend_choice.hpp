@@ -46,6 +46,11 @@ struct CreatedHeightmapGenerator {
 /// @brief The height-map generator of the chosen backend (cpu, opencl, cuda; device selection and
 /// --fallback as for mapping).
 Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& choice);
+/// @brief The height-map generator for the map `backend` integrates, running where it runs: on
+/// a device backend, that device's generator in the backend's own context (one context per
+/// process: it reads the map's layers where integration left them, and nothing needs
+/// Backend::synchronise() first); on the CPU backend, the CPU generator.
+Result<CreatedHeightmapGenerator> createHeightmapGenerator(Backend& backend);
 /// @brief The backends this build has, e.g. {"cpu", "opencl", "cuda"}.
 std::vector<std::string> availableBackends();
 

@@ -161,10 +161,9 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   if (!impl->backend.startup_warning.empty()) {
     logLine(LogLevel::kWarning, "%s", impl->backend.startup_warning.c_str());
   }
-  // The height map runs where the integration runs (a CPU fallback takes both to the CPU).
-  BackendChoice generator_choice = config.backend;
-  generator_choice.name = impl->backend.backend->name();
-  auto generator = createHeightmapGenerator(generator_choice);
+  // The height map runs where the integration runs (a CPU fallback takes both to the CPU), on a
+  // device in the backend's own context: it reads the map where integration left it.
+  auto generator = createHeightmapGenerator(*impl->backend.backend);
   if (!generator) {
     return fail(generator.error().code, file + ": backend: " + generator.error().message);
   }
@@ -555,6 +554,11 @@ void Service::Impl::publishVoxels(std::int64_t stamp_ns) {
   const std::size_t capacity = voxels_xyz.size() / 3;
   {
     std::lock_guard<platform::PiMutex> lock(map_mutex);
+    // The walk reads the host store: a device backend makes it current first (the height-map
+    // cycle reads the map on the device and no longer does).
+    if (!backend.backend->synchronise()) {
+      return;
+    }
     const VoxelMap& m = *map;
     const RegionStore& store = m.store();
     const std::uint32_t per_region = m.geometry().voxelsPerRegion();

@@ -2,6 +2,7 @@
 // The shared device tests against the CUDA backend (skipped, exit code 77, without a CUDA device).
 #include "src/cuda/cuda_backend.hpp"
 #include "src/cuda/cuda_devices.hpp"
+#include "src/cuda/cuda_heightmap.hpp"
 #include "tests/device/device_under_test.hpp"
 
 namespace raymap::test {
@@ -24,10 +25,15 @@ bool sharesMemory() {
          devices->front().can_map_host_memory;
 }
 
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createHeightmap(Backend& backend) {
+  return createCudaHeightmapGenerator(backend);
+}
+
 }  // namespace
 
 const DeviceUnderTest& deviceUnderTest() {
-  static const DeviceUnderTest device{"CUDA", &unavailable, &create, &sharesMemory};
+  static const DeviceUnderTest device{"CUDA", &unavailable, &create, &sharesMemory,
+                                      &createHeightmap};
   return device;
 }
 

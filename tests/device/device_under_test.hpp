@@ -11,6 +11,7 @@
 
 #include "src/core/error.hpp"
 #include "src/gpu/device_options.hpp"
+#include "src/heightmap/heightmap_generator.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 
@@ -26,6 +27,9 @@ struct DeviceUnderTest {
                                              const DeviceBackendOptions& options) = nullptr;
   /// Whether the device can work on the host map in place (DeviceMemory::kShared).
   bool (*shares_memory)() = nullptr;
+  /// Creates the API's height-map generator in the context of `backend` (one of this API's).
+  Result<std::unique_ptr<heightmap::HeightmapGenerator>> (*create_heightmap)(Backend& backend) =
+      nullptr;
 };
 
 /// @brief Defined once per executable by the API's file (opencl_device.cpp, cuda_device.cpp).

@@ -2,6 +2,7 @@
 // The shared device tests against the OpenCL backend (PoCL in CI).
 #include "src/opencl/cl_runtime.hpp"
 #include "src/opencl/opencl_backend.hpp"
+#include "src/opencl/opencl_heightmap.hpp"
 #include "tests/device/device_under_test.hpp"
 
 namespace raymap::test {
@@ -31,10 +32,15 @@ bool sharesMemory() {
   return device && device->unified_memory;
 }
 
+Result<std::unique_ptr<heightmap::HeightmapGenerator>> createHeightmap(Backend& backend) {
+  return createOpenClHeightmapGenerator(backend, {});
+}
+
 }  // namespace
 
 const DeviceUnderTest& deviceUnderTest() {
-  static const DeviceUnderTest device{"OpenCL", &unavailable, &create, &sharesMemory};
+  static const DeviceUnderTest device{"OpenCL", &unavailable, &create, &sharesMemory,
+                                      &createHeightmap};
   return device;
 }
 

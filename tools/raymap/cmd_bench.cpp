@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "platform/process.hpp"
+#include "tools/raymap/bench_heightmaps.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
@@ -26,6 +27,7 @@ struct BenchFlags {
   int repeat = 3;
   bool steady_state = false;
   std::string json;
+  BenchHeightmapOptions heightmaps;
 };
 
 std::vector<std::string> splitComma(const std::string& text) {
@@ -111,6 +113,7 @@ int runBench(const BenchFlags& f) {
         return kExitUsage;
       }
       std::vector<PopulateReport> reports;
+      std::vector<std::string> heightmap_json;  // per report, with --heightmap-every
       for (int r = 0; r < std::max(f.repeat, 1); ++r) {
         auto map = VoxelMap::create(options.map);
         if (!map) {
@@ -118,41 +121,68 @@ int runBench(const BenchFlags& f) {
           return kExitFailure;
         }
         // Each pass streams the preloaded rays through the same path as populate. In steady
-        // state both passes share one backend, so a device's region cache stays warm too.
+        // state both passes share one backend, so a device's region cache stays warm too. With
+        // height maps the backend is kept here too: the cycles run on it between batches.
         CreatedBackend shared;
-        auto pass = [&]() {
+        const bool keep_backend = f.steady_state || f.heightmaps.enabled();
+        BenchHeightmaps cycles(f.heightmaps);
+        auto pass = [&](bool timed) {
           std::size_t next = 0;
           return integrateStream(
               *map, options,
               [&](std::span<Ray> out) -> Result<std::size_t> {
+                if (timed && next > 0 && shared.backend) {
+                  auto cycle = cycles.maybeGenerate(next, rays[next - 1].origin, *map,
+                                                    *shared.backend, options.backend);
+                  if (!cycle) {
+                    return Unexpected(cycle.error());
+                  }
+                }
                 const std::size_t n = std::min(out.size(), rays.size() - next);
                 std::copy_n(rays.begin() + static_cast<std::ptrdiff_t>(next), n, out.begin());
                 next += n;
                 return n;
               },
               [&] { return static_cast<double>(next) / static_cast<double>(rays.size()); },
-              f.steady_state ? &shared : nullptr);
+              keep_backend ? &shared : nullptr);
         };
         if (f.steady_state) {
           // Untimed first pass: the regions exist and their memory is paged in afterwards, as
           // for a robot working inside its (prefaulted) rolling window.
-          if (auto warm = pass(); !warm) {
+          if (auto warm = pass(false); !warm) {
             printError(command, warm.error().message);
             return kExitFailure;
           }
         }
-        auto report = pass();
+        auto report = pass(true);
         if (!report) {
           printError(command, report.error().message);
           return kExitFailure;
         }
         reports.push_back(*report);
+        heightmap_json.push_back(
+            cycles.json(report->rays.rays_accepted, report->integrate_seconds));
+        reports.back().read_seconds -= cycles.seconds();  // the cycles ran inside the reads
       }
-      std::sort(reports.begin(), reports.end(), [](const auto& a, const auto& b) {
-        return a.integrate_seconds < b.integrate_seconds;
+      std::vector<std::size_t> order(reports.size());
+      for (std::size_t k = 0; k < order.size(); ++k) {
+        order[k] = k;
+      }
+      std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return reports[a].integrate_seconds < reports[b].integrate_seconds;
       });
-      const PopulateReport& median = reports[reports.size() / 2];
-      runs += (runs.size() > 1 ? ",\n" : "\n") + statsJson(median, options);
+      const std::size_t median_index = order[order.size() / 2];
+      const PopulateReport& median = reports[median_index];
+      std::string run = statsJson(median, options);
+      if (f.heightmaps.enabled()) {
+        // One more key in the run's object: the cycles of the median run.
+        run = run.substr(0, run.rfind('}'));
+        while (!run.empty() && (run.back() == '\n' || run.back() == ' ')) {
+          run.pop_back();
+        }
+        run += ",\n  \"heightmap_cycles\": " + heightmap_json[median_index] + "\n}";
+      }
+      runs += (runs.size() > 1 ? ",\n" : "\n") + run;
       for (const std::string* warning : {&median.fallback_warning, &median.startup_warning}) {
         if (!warning->empty()) {
           std::fprintf(stderr, "bench: warning: %s\n", warning->c_str());
@@ -204,6 +234,16 @@ void addBenchCommand(CLI::App& app, int* exit_code) {
   c->add_flag("--steady-state", flags->steady_state,
               "Integrate the input once untimed first, so no region is created or paged in "
               "during the timed pass");
+  c->add_option("--heightmap-every", flags->heightmaps.every_rays,
+                "Generate a planar height map around the sensor each time this many more rays "
+                "were read, between batches as raymapd's cycle does (0: none)")
+      ->capture_default_str();
+  c->add_option("--heightmap-size", flags->heightmaps.size_m, "Side of those height maps, metres")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  c->add_flag("--heightmap-from-host", flags->heightmaps.from_host,
+              "Device backends: synchronise and generate from the host store with a generator of "
+              "its own (the path before one device context), for comparison");
   c->callback([flags, exit_code] { *exit_code = runBench(*flags); });
 }
 
