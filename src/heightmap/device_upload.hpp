@@ -76,14 +76,17 @@ struct DeviceUpload {
   /// @brief Bytes one generation of `plan` into `out` copies: everything forEachCopy uploads and
   /// forEachOutput reads back.
   std::uint64_t copiedBytes(const HeightmapPlan& plan, HeightMap& out) const {
-    std::uint64_t total = (plan.region_table.size() + region_slots.size()) * 4;
-    if (!resident) {
-      total +=
-          plan.region_slots.size() * (occupancy_region_bytes + (with_mean ? mean_region_bytes : 0) +
-                                      (with_ndt ? ndt_region_bytes : 0));
-    }
+    std::uint64_t total = (plan.region_table.size() + region_slots.size()) * 4 + mapBytes(plan);
     forEachOutput(out, [&](DeviceBuffer, void*) { total += out.cellCount() * 4; });
     return total;
+  }
+
+  /// @brief Of copiedBytes(): the map's layers uploaded (0 when resident).
+  std::uint64_t mapBytes(const HeightmapPlan& plan) const {
+    return resident ? 0
+                    : plan.region_slots.size() *
+                          (occupancy_region_bytes + (with_mean ? mean_region_bytes : 0) +
+                           (with_ndt ? ndt_region_bytes : 0));
   }
 
   /// @brief Calls copy(buffer, device_offset, host_source, bytes) for every host-to-device copy:

@@ -37,6 +37,9 @@ class HeightmapGenerator {
   /// @brief Bytes copied between host and device by every generate() so far (uploads of the map's
   /// layers and the plan, read-backs of the output): 0 on the host.
   virtual std::uint64_t bytesCopied() const noexcept { return 0; }
+  /// @brief Of bytesCopied(): the map's layers copied to the device (regions under the box
+  /// uploaded); 0 on the host, and where the device already held them.
+  virtual std::uint64_t mapBytesCopied() const noexcept { return 0; }
   /// @brief True when generate() reads the map's host store (which must then be current).
   virtual bool readsHostStore() const noexcept { return true; }
 };

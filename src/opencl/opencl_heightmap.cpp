@@ -55,6 +55,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   const char* name() const noexcept override { return "opencl"; }
   std::uint64_t bytesCopied() const noexcept override { return bytes_copied_; }
+  std::uint64_t mapBytesCopied() const noexcept override { return map_bytes_copied_; }
   bool readsHostStore() const noexcept override { return backend_ == nullptr; }
   std::string deviceName() const override {
     return ctx_->info.device_name + " (" + ctx_->info.platform_name + ")";
@@ -71,6 +72,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     }
     upload_.prepare(map, plan, *slots);
     bytes_copied_ += resident_.bytesUploaded();
+    map_bytes_copied_ += resident_.bytesUploaded() + upload_.mapBytes(plan);
     for (std::size_t b = 0; b < kDeviceBufferCount; ++b) {
       if (auto ok = reserve(buffers_[b], upload_.bytes[b], static_cast<DeviceBuffer>(b)); !ok) {
         return ok;
@@ -235,7 +237,8 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
   heightmap::DeviceUpload upload_;
   gpu::ResidentRead resident_;
-  std::uint64_t bytes_copied_ = 0;  // host <-> device by every generation
+  std::uint64_t bytes_copied_ = 0;      // host <-> device by every generation
+  std::uint64_t map_bytes_copied_ = 0;  // of those, the map's layers
 };
 
 }  // namespace

@@ -54,6 +54,7 @@ Expected<void, CycleError> HeightmapCycle::generate() noexcept {
     return Unexpected(CycleError::kSynchronise);
   }
   const std::uint64_t copied = generator_.bytesCopied();
+  const std::uint64_t map_copied = generator_.mapBytesCopied();
   map_.setWindowCentre(robot);
   options_.centre = {robot.x, robot.y, robot.z - base_height_m_};
   if (!heightmap::planHeightmap(map_, options_, plan_)) {
@@ -64,7 +65,8 @@ Expected<void, CycleError> HeightmapCycle::generate() noexcept {
   }
   contained_ = integrated_.read_available();
   data_stamp_ns_ = stats_.newest_scan_stamp_ns.load(std::memory_order_relaxed);
-  stats_.heightmap_copy_bytes.record(generator_.bytesCopied() - copied);
+  stats_.heightmap_copy_bytes.record(generator_.mapBytesCopied() - map_copied);
+  stats_.heightmap_transfer_bytes.record(generator_.bytesCopied() - copied);
   stats_.sync_copy_bytes.record(backend_.stats().region_bytes_from_device - downloaded);
   const std::int64_t done = platform::monotonicNowNs();
   stats_.generate_us.record(static_cast<std::uint64_t>((done - started) / 1000));

@@ -101,8 +101,12 @@ struct PipelineStats {
   /// Bytes each cycle's synchronise() downloaded from the device (map regions; 0 on the CPU).
   /// The histogram counts bytes where its name says microseconds.
   DurationHistogram sync_copy_bytes;
-  /// Bytes each cycle's height-map generation copied between host and device (0 on the CPU).
+  /// Bytes of the map's layers each cycle's height-map generation copied to the device (regions
+  /// uploaded; 0 on the CPU, and on a device whose backend holds the window).
   DurationHistogram heightmap_copy_bytes;
+  /// All bytes each cycle's generation moved between host and device: the map's layers plus the
+  /// region tables and the height map read back (0 on the CPU).
+  DurationHistogram heightmap_transfer_bytes;
   /// The publisher's lead before each publish instant, microseconds (adapts; publisher writes).
   std::atomic<std::int64_t> publish_lead_us{0};
   /// The next publish instant (monotonic ns; 0 before the first), for the integrator's latency

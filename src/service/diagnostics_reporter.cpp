@@ -117,6 +117,7 @@ void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& real
   stats_.heightmap_lock_hold_us.snapshot(&s.cycle_hold);
   stats_.sync_copy_bytes.snapshot(&s.sync_bytes);
   stats_.heightmap_copy_bytes.snapshot(&s.heightmap_bytes);
+  stats_.heightmap_transfer_bytes.snapshot(&s.transfer_bytes);
   base_ = &windowBase();
   decide(other_map_publishers);
   const double dt = static_cast<double>(s.ns - base_->ns) * 1e-9;
@@ -357,6 +358,8 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(h, "sync_copy_bytes_p99", "%.0f", sync_bytes.quantileUs(0.99));
   message_.addValue(h, "heightmap_copy_bytes_p50", "%.0f", copy_bytes.quantileUs(0.5));
   message_.addValue(h, "heightmap_copy_bytes_p99", "%.0f", copy_bytes.quantileUs(0.99));
+  message_.addValue(h, "heightmap_transfer_bytes_p99", "%.0f",
+                    now.transfer_bytes.since(base.transfer_bytes).quantileUs(0.99));
   message_.addValue(
       h, "publish_lead_ms", "%.1f",
       static_cast<double>(stats_.publish_lead_us.load(std::memory_order_relaxed)) / 1000.0);

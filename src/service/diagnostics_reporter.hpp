@@ -84,7 +84,7 @@ class DiagnosticsReporter {
     std::int64_t ns = 0;
     Totals totals;
     pipeline::DurationHistogram::Snapshot latency, period, generate, hold, wait;
-    pipeline::DurationHistogram::Snapshot cycle_hold, sync_bytes, heightmap_bytes;
+    pipeline::DurationHistogram::Snapshot cycle_hold, sync_bytes, heightmap_bytes, transfer_bytes;
   };
   Totals read() const noexcept;
   /// The newest sample at least one window older than the current one (else the oldest).

@@ -54,6 +54,7 @@ Expected<void, Error> BenchHeightmaps::maybeGenerate(std::uint64_t rays_read, Ve
     return {};
   }
   const std::uint64_t copied = generator_->bytesCopied();
+  const std::uint64_t map_copied = generator_->mapBytesCopied();
   if (auto ok = generator_->generate(map, plan_, out_); !ok) {
     return fail(ok.error().code, "--heightmap-every: " + ok.error().message);
   }
@@ -61,7 +62,8 @@ Expected<void, Error> BenchHeightmaps::maybeGenerate(std::uint64_t rays_read, Ve
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   seconds_ += seconds;
   generate_ms_.push_back(seconds * 1e3);
-  copy_bytes_.push_back(static_cast<double>(generator_->bytesCopied() - copied));
+  copy_bytes_.push_back(static_cast<double>(generator_->mapBytesCopied() - map_copied));
+  transfer_bytes_.push_back(static_cast<double>(generator_->bytesCopied() - copied));
   sync_bytes_.push_back(static_cast<double>(backend.stats().region_bytes_from_device - downloaded));
   return {};
 }
@@ -84,6 +86,7 @@ std::string BenchHeightmaps::json(std::uint64_t rays, double integrate_seconds) 
       .add("sync_copy_bytes_p99", quantile(sync_bytes_, 0.99))
       .add("heightmap_copy_bytes_p50", quantile(copy_bytes_, 0.5))
       .add("heightmap_copy_bytes_p99", quantile(copy_bytes_, 0.99))
+      .add("heightmap_transfer_bytes_p99", quantile(transfer_bytes_, 0.99))
       .add("rays_per_second_with_heightmaps", total > 0 ? static_cast<double>(rays) / total : 0.0);
   return j.str();
 }

@@ -53,7 +53,8 @@ class BenchHeightmaps {
   double seconds_ = 0;
   std::vector<double> generate_ms_;
   std::vector<double> sync_bytes_;
-  std::vector<double> copy_bytes_;
+  std::vector<double> copy_bytes_;      // the map's layers
+  std::vector<double> transfer_bytes_;  // everything, tables and read-back included
 };
 
 }  // namespace raymap::cli

@@ -124,7 +124,7 @@ int runBench(const BenchFlags& f) {
         // state both passes share one backend, so a device's region cache stays warm too. With
         // height maps the backend is kept here too: the cycles run on it between batches.
         CreatedBackend shared;
-        const bool keep_backend = f.steady_state || f.heightmaps.enabled();
+        const bool keep_backend = f.steady_state || (f.heightmaps.every_rays > 0);
         BenchHeightmaps cycles(f.heightmaps);
         auto pass = [&](bool timed) {
           std::size_t next = 0;
@@ -174,7 +174,7 @@ int runBench(const BenchFlags& f) {
       const std::size_t median_index = order[order.size() / 2];
       const PopulateReport& median = reports[median_index];
       std::string run = statsJson(median, options);
-      if (f.heightmaps.enabled()) {
+      if ((f.heightmaps.every_rays > 0)) {
         // One more key in the run's object: the cycles of the median run.
         run = run.substr(0, run.rfind('}'));
         while (!run.empty() && (run.back() == '\n' || run.back() == ' ')) {
