@@ -41,8 +41,9 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
         backend_(&backend),
         block_threads_(block) {}
   ~CudaHeightmapGenerator() override {
-    if (stream_ != nullptr && cudaSetDevice(device_.index) == cudaSuccess) {
-      (void)cudaStreamSynchronize(stream_);
+    // The backend's stream is the backend's to drain (generate() returns with it idle anyway).
+    if (owned_stream_ && cudaSetDevice(device_.index) == cudaSuccess) {
+      (void)cudaStreamSynchronize(owned_stream_.get());
     }
   }
 

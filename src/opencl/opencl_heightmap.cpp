@@ -36,8 +36,9 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     setLocalSize();
   }
   ~OpenClHeightmapGenerator() override {
-    if (ctx_->queue) {
-      (void)clFinish(ctx_->queue.get());
+    // The backend's queue is the backend's to drain (generate() returns with it idle anyway).
+    if (owned_ctx_.queue) {
+      (void)clFinish(owned_ctx_.queue.get());
     }
   }
 
