@@ -1052,6 +1052,52 @@ TEST(CliOpenCl, PopulateMatchesTheCpuAndReportsTheDevice) {
   expectDeviceMatchesTheCpu("opencl");
 }
 
+TEST(CliOpenCl, BenchHeightmapCyclesReadTheDeviceLayersAndCopyNoneOfTheMap) {
+  if (const std::string why = openClUnavailable(); !why.empty()) {
+    GTEST_SKIP() << why;
+  }
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(kYardScans));
+  for (const bool from_host : {false, true}) {
+    SCOPED_TRACE(from_host ? "from host" : "device layers");
+    std::vector<std::string> args = {"bench",
+                                     input,
+                                     "--max-range",
+                                     "8",
+                                     "--repeat",
+                                     "1",
+                                     "--semantics-list",
+                                     "scan",
+                                     "--backend",
+                                     "opencl",
+                                     "--gpu-memory",
+                                     "shared",
+                                     "--heightmap-every",
+                                     "500",
+                                     "--heightmap-size",
+                                     "6"};
+    if (from_host) {
+      args.emplace_back("--heightmap-from-host");
+    }
+    const RunResult r = runRaymap(args);
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+    const std::size_t cycles = r.out.find("\"heightmap_cycles\":");
+    ASSERT_NE(cycles, std::string::npos) << r.out;
+    const std::string json = r.out.substr(cycles);
+    EXPECT_EQ(jsonValue(json, "reads"),
+              std::optional<std::string>(from_host ? "host store" : "device layers"));
+    EXPECT_GE(jsonCount(json, "heightmaps"), 3u) << json;
+    EXPECT_GT(jsonCount(json, "heightmap_transfer_bytes_p99"), 0u) << json;
+    if (from_host) {
+      EXPECT_GT(jsonCount(json, "heightmap_copy_bytes_p99"), 0u) << json;
+    } else {
+      EXPECT_EQ(jsonCount(json, "heightmap_copy_bytes_p99"), 0u) << json;
+      EXPECT_EQ(jsonCount(json, "sync_copy_bytes_p99"), 0u) << json;
+    }
+  }
+}
+
 /// Why `--backend cuda` cannot run here, or "" when it can.
 std::string cudaUnavailable() {
   const RunResult r = runRaymap({"devices"});

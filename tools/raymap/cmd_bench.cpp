@@ -138,7 +138,12 @@ int runBench(const BenchFlags& f) {
                     return Unexpected(cycle.error());
                   }
                 }
-                const std::size_t n = std::min(out.size(), rays.size() - next);
+                std::size_t n = std::min(out.size(), rays.size() - next);
+                if (f.heightmaps.every_rays > 0) {
+                  // Chunks end at the cycle instants, so that each comes after that many rays.
+                  const std::uint64_t every = f.heightmaps.every_rays;
+                  n = static_cast<std::size_t>(std::min<std::uint64_t>(n, every - next % every));
+                }
                 std::copy_n(rays.begin() + static_cast<std::ptrdiff_t>(next), n, out.begin());
                 next += n;
                 return n;
