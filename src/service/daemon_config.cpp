@@ -145,7 +145,7 @@ void readBackend(Context& ctx, const YAML::Node& node, BackendChoice& backend) {
                "gpu_cache_mb", "gpu_memory"});
   static const std::vector<std::string> kNames = {"cpu", "opencl", "cuda"};
   backend.name = kNames[choiceOr(f, "name", kNames, 0)];
-  const std::vector<std::string> available = availableBackends();
+  const std::vector<std::string> available = backends::availableBackends();
   if (std::find(available.begin(), available.end(), backend.name) == available.end()) {
     f.check(false, "name",
             "this build has no " + backend.name + " backend (rebuild with it, or use cpu)");

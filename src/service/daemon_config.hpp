@@ -13,9 +13,11 @@
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/service/backend_choice.hpp"
+#include "src/device/backend_choice.hpp"
 
 namespace raymap::service {
+
+using backends::BackendChoice;
 
 /// @brief One lidar (or depth camera) publishing sensor_msgs/PointCloud2.
 struct SensorConfig {

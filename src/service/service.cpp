@@ -41,6 +41,10 @@
 #include "src/service/log.hpp"
 
 namespace raymap::service {
+
+using backends::CreatedBackend;
+using backends::createBackend;
+using backends::createHeightmapGenerator;
 namespace {
 
 constexpr std::int64_t kNsPerS = 1000000000;

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The shared device tests against the CUDA backend (skipped, exit code 77, without a CUDA device).
-#include "src/cuda/cuda_backend.hpp"
-#include "src/cuda/cuda_devices.hpp"
-#include "src/cuda/cuda_heightmap.hpp"
+#include "src/device/cuda/cuda_backend.hpp"
+#include "src/device/cuda/cuda_devices.hpp"
+#include "src/device/cuda/cuda_heightmap.hpp"
 #include "tests/device/device_under_test.hpp"
 
 namespace raymap::test {

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/error.hpp"
-#include "src/gpu/device_options.hpp"
+#include "src/device/staging/device_options.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The shared device tests against the OpenCL backend (PoCL in CI).
-#include "src/opencl/cl_runtime.hpp"
-#include "src/opencl/opencl_backend.hpp"
-#include "src/opencl/opencl_heightmap.hpp"
+#include "src/device/opencl/cl_runtime.hpp"
+#include "src/device/opencl/opencl_backend.hpp"
+#include "src/device/opencl/opencl_heightmap.hpp"
 #include "tests/device/device_under_test.hpp"
 
 namespace raymap::test {

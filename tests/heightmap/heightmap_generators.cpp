@@ -4,10 +4,10 @@
 #include <map>
 #include <memory>
 #if defined(RAYMAP_HAVE_OPENCL)
-#include "src/opencl/opencl_heightmap.hpp"
+#include "src/device/opencl/opencl_heightmap.hpp"
 #endif
 #if defined(RAYMAP_HAVE_CUDA)
-#include "src/cuda/cuda_heightmap.hpp"
+#include "src/device/cuda/cuda_heightmap.hpp"
 #endif
 
 namespace raymap::test {

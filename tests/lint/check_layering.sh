@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
-# src/heightmap, src/sim <- src/io, src/gpu <- src/opencl, src/cuda <- src/dds <- src/pipeline <-
-# src/service <- tools; src/config (YAML reading) and src/record (the record log format) depend
-# on core only. Includes are written relative to the repository root, so grep can tell.
+# src/heightmap, src/sim <- src/io, src/device/staging <- src/device/opencl, src/device/cuda <-
+# src/device (the backend factory) <- src/dds <- src/pipeline <- src/service <- tools;
+# src/config (YAML reading) and src/record (the record log format) depend on core only.
+# Includes are written relative to the repository root, so grep can tell.
 set -euo pipefail
 root=${1:-.}
 cd "$root"
@@ -21,18 +22,19 @@ check kernels/common 'src/|platform/|tools/|tests/' 'device code depends on noth
 check src/core 'src/map|src/io|src/sim|platform/|tools/|tests/' 'core is the base'
 check platform 'src/map|src/io|src/sim|tools/|tests/' 'platform depends only on core'
 check src/map 'src/io|src/sim|tools/|tests/' 'the map does not know files or tools'
-check src/heightmap 'src/io|src/sim|src/gpu|src/opencl|src/cuda|tools/|tests/' 'height maps read the map only; writers live in src/io'
+check src/heightmap 'src/io|src/sim|src/device/|tools/|tests/' 'height maps read the map only; writers live in src/io'
 check src/io 'src/sim|tools/|tests/' 'file formats do not know scenes or tools'
 check src/sim 'src/io|tools/|tests/' 'scenes produce rays, not files'
 check src/config 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|platform/|tools/|tests/' 'configuration reading depends only on core'
 check src/record 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|platform/|tools/|tests/' 'the log format knows bytes, not DDS'
-check src/dds 'src/sim|src/gpu|src/opencl|src/cuda|src/pipeline|src/service|tools/|tests/' 'DDS I/O knows messages, not the pipeline'
-check src/pipeline 'src/sim|src/opencl|src/cuda|src/service|tools/|tests/' 'the pipeline runs any backend through src/map/backend.hpp'
+check src/dds 'src/sim|src/device/|src/pipeline|src/service|tools/|tests/' 'DDS I/O knows messages, not the pipeline'
+check src/pipeline 'src/sim|src/device/|src/service|tools/|tests/' 'the pipeline runs any backend through src/map/backend.hpp'
 check src/service 'src/sim|tools/|tests/' 'the service does not know scenes or tools'
 check kernels/device 'src/|platform/|tools/|tests/' 'device code depends only on kernels/'
-check src/gpu 'src/io|src/sim|src/opencl|src/cuda|tools/|tests/' 'shared device-backend logic is API-agnostic'
-check src/opencl 'src/sim|src/cuda|tools/|tests/' 'a backend does not know scenes, tools or the other API'
-check src/cuda 'src/sim|src/opencl|tools/|tests/' 'a backend does not know scenes, tools or the other API'
+check src/device 'src/sim|src/dds|src/pipeline|src/service|tools/|tests/' 'backends run maps; they know no messages, pipeline or tools'
+check src/device/staging 'src/io|src/sim|src/device/opencl|src/device/cuda|src/device/backend|tools/|tests/' 'shared device-backend logic is API-agnostic'
+check src/device/opencl 'src/sim|src/device/cuda|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
+check src/device/cuda 'src/sim|src/device/opencl|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
 check kernels/cuda 'src/|platform/|tools/|tests/' 'CUDA entry points depend only on kernels/'
 # Only kernels/common headers may use C-style guards; everything else is #pragma once.
 for f in $(find src platform tools tests -name '*.hpp'); do

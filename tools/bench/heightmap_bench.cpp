@@ -15,10 +15,10 @@
 #include "src/map/ray_preparer.hpp"
 #include "src/sim/yard_scan.hpp"
 #if defined(RAYMAP_HAVE_OPENCL)
-#include "src/opencl/opencl_heightmap.hpp"
+#include "src/device/opencl/opencl_heightmap.hpp"
 #endif
 #if defined(RAYMAP_HAVE_CUDA)
-#include "src/cuda/cuda_heightmap.hpp"
+#include "src/device/cuda/cuda_heightmap.hpp"
 #endif
 
 namespace raymap {

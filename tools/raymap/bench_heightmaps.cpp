@@ -23,16 +23,16 @@ double quantile(std::vector<double> values, double q) {
 
 Expected<void, Error> BenchHeightmaps::maybeGenerate(std::uint64_t rays_read, Vec3d sensor,
                                                      VoxelMap& map, Backend& backend,
-                                                     const service::BackendChoice& choice) {
+                                                     const backends::BackendChoice& choice) {
   if (!enabled() || rays_read < next_at_) {
     return {};
   }
   next_at_ = (rays_read / options_.every_rays + 1) * options_.every_rays;
   if (!generator_) {
-    service::BackendChoice own = choice;
+    backends::BackendChoice own = choice;
     own.name = backend.name();
-    auto created = options_.from_host ? service::createHeightmapGenerator(own)
-                                      : service::createHeightmapGenerator(backend);
+    auto created = options_.from_host ? backends::createHeightmapGenerator(own)
+                                      : backends::createHeightmapGenerator(backend);
     if (!created) {
       return Unexpected(created.error());
     }

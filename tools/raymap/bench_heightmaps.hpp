@@ -13,7 +13,7 @@
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/service/backend_choice.hpp"
+#include "src/device/backend_choice.hpp"
 
 namespace raymap::cli {
 
@@ -37,7 +37,7 @@ class BenchHeightmaps {
   /// height) if `rays_read` has passed the next multiple of every_rays. The generator is created
   /// on first use, over `backend` (or, from_host, standalone for `choice`).
   Expected<void, Error> maybeGenerate(std::uint64_t rays_read, Vec3d sensor, VoxelMap& map,
-                                      Backend& backend, const service::BackendChoice& choice);
+                                      Backend& backend, const backends::BackendChoice& choice);
   /// @brief The costs as a JSON object (keys documented in docs/cli.md), with the run's
   /// `rays` and integration seconds for the combined rate.
   std::string json(std::uint64_t rays, double integrate_seconds) const;

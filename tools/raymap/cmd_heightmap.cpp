@@ -13,7 +13,7 @@
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/heightmap_export.hpp"
 #include "src/io/map_file.hpp"
-#include "src/service/backend_choice.hpp"
+#include "src/device/backend_choice.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"

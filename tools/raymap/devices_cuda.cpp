@@ -8,7 +8,7 @@
 #include "tools/raymap/json_writer.hpp"
 
 #if RAYMAP_HAVE_CUDA
-#include "src/cuda/cuda_devices.hpp"
+#include "src/device/cuda/cuda_devices.hpp"
 #endif
 
 namespace raymap::cli {

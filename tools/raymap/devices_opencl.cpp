@@ -9,7 +9,7 @@
 #include "tools/raymap/json_writer.hpp"
 
 #if RAYMAP_HAVE_OPENCL
-#include "src/opencl/cl_runtime.hpp"
+#include "src/device/opencl/cl_runtime.hpp"
 #endif
 
 namespace raymap::cli {

@@ -16,17 +16,17 @@
 #include "src/map/ray_preparer.hpp"
 #include "src/map/tsdf_surface.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/service/backend_choice.hpp"
+#include "src/device/backend_choice.hpp"
 
 namespace raymap::cli {
 
-// Backend creation is shared with raymapd (src/service/backend_choice.hpp).
-using service::availableBackends;
-using service::BackendChoice;
-using service::createBackend;
-using service::CreatedBackend;
-using service::CreatedHeightmapGenerator;
-using service::createHeightmapGenerator;
+// Backend creation is shared with raymapd (src/device/backend_choice.hpp).
+using backends::availableBackends;
+using backends::BackendChoice;
+using backends::createBackend;
+using backends::CreatedBackend;
+using backends::CreatedHeightmapGenerator;
+using backends::createHeightmapGenerator;
 
 /// @brief Everything `raymap populate` needs besides output paths.
 struct PopulateOptions {

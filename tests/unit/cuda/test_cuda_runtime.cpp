@@ -4,8 +4,8 @@
 // without a GPU; the agreement tests (tests/device, test_cuda_device) need one.
 #include <gtest/gtest.h>
 
-#include "src/cuda/cuda_backend.hpp"
-#include "src/cuda/cuda_devices.hpp"
+#include "src/device/cuda/cuda_backend.hpp"
+#include "src/device/cuda/cuda_devices.hpp"
 #include "tests/support/test_rays.hpp"
 
 namespace raymap {

@@ -13,8 +13,8 @@
 
 #include <gtest/gtest.h>
 
-#include "src/opencl/cl_runtime.hpp"
-#include "src/opencl/program_cache.hpp"
+#include "src/device/opencl/cl_runtime.hpp"
+#include "src/device/opencl/program_cache.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::opencl {

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "src/io/map_file.hpp"
-#include "src/opencl/opencl_backend.hpp"
+#include "src/device/opencl/opencl_backend.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 #include "tests/support/tsdf_scenes.hpp"

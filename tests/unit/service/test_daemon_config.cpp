@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "src/service/backend_choice.hpp"
+#include "src/device/backend_choice.hpp"
 #include "src/service/daemon_config.hpp"
 
 namespace raymap::service {
@@ -24,7 +24,7 @@ std::filesystem::path configDir() {
 }
 
 bool haveBackend(const std::string& name) {
-  const std::vector<std::string> available = availableBackends();
+  const std::vector<std::string> available = backends::availableBackends();
   return std::find(available.begin(), available.end(), name) != available.end();
 }
 

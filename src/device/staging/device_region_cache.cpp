@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Device region cache bookkeeping.
-#include "src/gpu/device_region_cache.hpp"
+#include "src/device/staging/device_region_cache.hpp"
 
 #include "src/core/assert.hpp"
 #include "src/map/region_store.hpp"

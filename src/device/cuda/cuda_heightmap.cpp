@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "src/cuda/cuda_heightmap.hpp"
+#include "src/device/cuda/cuda_heightmap.hpp"
 
 #include <algorithm>
 #include <string>
@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "kernels/cuda/heightmap_launch.h"
-#include "src/cuda/cuda_backend.hpp"
-#include "src/cuda/cuda_devices.hpp"
-#include "src/cuda/cuda_handles.hpp"
-#include "src/gpu/resident_read.hpp"
+#include "src/device/cuda/cuda_backend.hpp"
+#include "src/device/cuda/cuda_devices.hpp"
+#include "src/device/cuda/cuda_handles.hpp"
+#include "src/device/staging/resident_read.hpp"
 #include "src/heightmap/device_upload.hpp"
 
 namespace raymap {

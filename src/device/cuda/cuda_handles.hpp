@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Owning handles for CUDA runtime objects (device memory, page-locked host memory, streams,
-// events) and error text. Internal to src/cuda: this header brings the CUDA runtime API in.
+// events) and error text. Internal to src/device/cuda: this header brings the CUDA runtime API in.
 #pragma once
 
 #include <cstddef>

@@ -1,20 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Backend creation for the command line and the service.
-#include "src/service/backend_choice.hpp"
+#include "src/device/backend_choice.hpp"
 
 #include <vector>
 
 #include "src/map/cpu_backend.hpp"
 #if defined(RAYMAP_HAVE_OPENCL)
-#include "src/opencl/opencl_backend.hpp"
-#include "src/opencl/opencl_heightmap.hpp"
+#include "src/device/opencl/opencl_backend.hpp"
+#include "src/device/opencl/opencl_heightmap.hpp"
 #endif
 #if defined(RAYMAP_HAVE_CUDA)
-#include "src/cuda/cuda_backend.hpp"
-#include "src/cuda/cuda_heightmap.hpp"
+#include "src/device/cuda/cuda_backend.hpp"
+#include "src/device/cuda/cuda_heightmap.hpp"
 #endif
 
-namespace raymap::service {
+namespace raymap::backends {
 namespace {
 
 Result<std::unique_ptr<Backend>> createCpu(VoxelMap& map, const BackendChoice& choice) {
@@ -160,9 +160,9 @@ Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice)
   return created;
 }
 
-}  // namespace raymap::service
+}  // namespace raymap::backends
 
-namespace raymap::service {
+namespace raymap::backends {
 
 Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& choice) {
   CreatedHeightmapGenerator created;
@@ -209,4 +209,4 @@ Result<CreatedHeightmapGenerator> createHeightmapGenerator(Backend& backend) {
   return created;
 }
 
-}  // namespace raymap::service
+}  // namespace raymap::backends

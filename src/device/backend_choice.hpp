@@ -11,7 +11,7 @@
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 
-namespace raymap::service {
+namespace raymap::backends {
 
 /// @brief The backend options of the mapping commands (--backend and friends).
 struct BackendChoice {
@@ -54,4 +54,4 @@ Result<CreatedHeightmapGenerator> createHeightmapGenerator(Backend& backend);
 /// @brief The backends this build has, e.g. {"cpu", "opencl", "cuda"}.
 std::vector<std::string> availableBackends();
 
-}  // namespace raymap::service
+}  // namespace raymap::backends

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "src/gpu/resident_read.hpp"
+#include "src/device/staging/resident_read.hpp"
 
 #include <string>
 

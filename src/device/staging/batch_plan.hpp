@@ -11,7 +11,7 @@
 
 #include "kernels/common/batch.h"
 #include "src/core/expected.hpp"
-#include "src/gpu/device_region_cache.hpp"
+#include "src/device/staging/device_region_cache.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/region_slot_cache.hpp"
 #include "src/map/voxel_map.hpp"

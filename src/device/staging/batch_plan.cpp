@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Batch planning for device backends.
-#include "src/gpu/batch_plan.hpp"
+#include "src/device/staging/batch_plan.hpp"
 
 #include <algorithm>
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // OpenCL backend: device buffers, the in-order command queue, kernel arguments. The batch loop,
 // the kernel order and region moves are gpu::StagedBackend's.
-#include "src/opencl/opencl_backend.hpp"
+#include "src/device/opencl/opencl_backend.hpp"
 
 #include <algorithm>
 #include <array>
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "kernels/common/batch.h"
-#include "src/gpu/staged_backend.hpp"
+#include "src/device/staging/staged_backend.hpp"
 
 namespace raymap {
 namespace kernels {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // buildProgram: a cached device binary when one loads, else the source, whose binary is then saved.
-#include "src/opencl/program_cache.hpp"
+#include "src/device/opencl/program_cache.hpp"
 
 #include <cstdint>
 #include <cstdio>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The API-independent half of the device backends: batch loop, kernel order, region moves.
-#include "src/gpu/staged_backend.hpp"
+#include "src/device/staging/staged_backend.hpp"
 
 #include <chrono>
 

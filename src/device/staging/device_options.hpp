@@ -8,7 +8,7 @@
 #include <string>
 
 #include "src/core/error.hpp"
-#include "src/gpu/batch_plan.hpp"
+#include "src/device/staging/batch_plan.hpp"
 #include "src/map/voxel_map.hpp"
 
 namespace raymap {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // OpenCL device discovery and selection, and creation of contexts, buffers and kernels.
-#include "src/opencl/cl_runtime.hpp"
+#include "src/device/opencl/cl_runtime.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // CUDA backend: device memory, one stream, events per batch, kernel launches. The batch loop, the
 // kernel order and region moves are gpu::StagedBackend's.
-#include "src/cuda/cuda_backend.hpp"
+#include "src/device/cuda/cuda_backend.hpp"
 
 #include <array>
 #include <cstdio>
@@ -13,9 +13,9 @@
 #include "kernels/common/batch.h"
 #include "kernels/cuda/launch.h"
 #include "kernels/cuda/ndt_launch.h"
-#include "src/cuda/cuda_devices.hpp"
-#include "src/cuda/cuda_handles.hpp"
-#include "src/gpu/staged_backend.hpp"
+#include "src/device/cuda/cuda_devices.hpp"
+#include "src/device/cuda/cuda_handles.hpp"
+#include "src/device/staging/staged_backend.hpp"
 
 namespace raymap {
 namespace {

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // CUDA device discovery through the runtime API.
-#include "src/cuda/cuda_devices.hpp"
+#include "src/device/cuda/cuda_devices.hpp"
 
 #include <cuda_runtime_api.h>
 
-#include "src/cuda/cuda_handles.hpp"
+#include "src/device/cuda/cuda_handles.hpp"
 
 namespace raymap::cuda {
 namespace {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // CUDA runtime handles and error text.
-#include "src/cuda/cuda_handles.hpp"
+#include "src/device/cuda/cuda_handles.hpp"
 
 #include <new>
 

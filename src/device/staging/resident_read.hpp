@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "src/core/error.hpp"
-#include "src/gpu/staged_backend.hpp"
+#include "src/device/staging/staged_backend.hpp"
 #include "src/map/voxel_map.hpp"
 
 namespace raymap::gpu {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Sizing rules shared by the device backends.
-#include "src/gpu/device_options.hpp"
+#include "src/device/staging/device_options.hpp"
 
 #include <algorithm>
 

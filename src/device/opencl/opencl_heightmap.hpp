@@ -6,8 +6,8 @@
 #include "src/core/error.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/map/backend.hpp"
-#include "src/opencl/cl_runtime.hpp"
-#include "src/opencl/program_cache.hpp"
+#include "src/device/opencl/cl_runtime.hpp"
+#include "src/device/opencl/program_cache.hpp"
 
 namespace raymap {
 

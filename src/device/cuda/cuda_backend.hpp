@@ -6,8 +6,8 @@
 #include <memory>
 
 #include "src/core/error.hpp"
-#include "src/gpu/device_options.hpp"
-#include "src/gpu/staged_backend.hpp"
+#include "src/device/staging/device_options.hpp"
+#include "src/device/staging/staged_backend.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 

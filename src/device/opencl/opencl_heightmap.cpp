@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "src/opencl/opencl_heightmap.hpp"
+#include "src/device/opencl/opencl_heightmap.hpp"
 
 #include <algorithm>
 #include <initializer_list>
@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "kernels/common/heightmap.h"
-#include "src/gpu/resident_read.hpp"
+#include "src/device/staging/resident_read.hpp"
 #include "src/heightmap/device_upload.hpp"
-#include "src/opencl/opencl_backend.hpp"
+#include "src/device/opencl/opencl_backend.hpp"
 
 namespace raymap {
 namespace kernels {

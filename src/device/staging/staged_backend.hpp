@@ -14,9 +14,9 @@
 
 #include "kernels/common/batch.h"
 #include "kernels/common/ndt.h"
-#include "src/gpu/batch_plan.hpp"
-#include "src/gpu/device_options.hpp"
-#include "src/gpu/device_region_cache.hpp"
+#include "src/device/staging/batch_plan.hpp"
+#include "src/device/staging/device_options.hpp"
+#include "src/device/staging/device_region_cache.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/layer_schema.hpp"
 #include "src/map/voxel_map.hpp"

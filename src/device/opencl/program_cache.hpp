@@ -7,7 +7,7 @@
 #include <string_view>
 
 #include "src/core/error.hpp"
-#include "src/opencl/cl_runtime.hpp"
+#include "src/device/opencl/cl_runtime.hpp"
 
 namespace raymap::opencl {
 
