@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The height-map generators: one interface, a CPU implementation here, device implementations in
-// src/device/opencl and src/device/cuda. All run the column search of kernels/common/heightmap.h, so they
-// produce the same height map.
+// src/device/opencl and src/device/cuda. All run the column search of kernels/common/heightmap.h,
+// so they produce the same height map.
 #pragma once
 #include <cstdint>
 #include <memory>

@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "src/core/error.hpp"
+#include "src/device/backend_choice.hpp"
 #include "src/heightmap/costmap.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/device/backend_choice.hpp"
 
 namespace raymap::service {
 

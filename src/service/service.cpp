@@ -42,8 +42,8 @@
 
 namespace raymap::service {
 
-using backends::CreatedBackend;
 using backends::createBackend;
+using backends::CreatedBackend;
 using backends::createHeightmapGenerator;
 namespace {
 

@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "src/core/error.hpp"
+#include "src/device/backend_choice.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/device/backend_choice.hpp"
 
 namespace raymap::cli {
 

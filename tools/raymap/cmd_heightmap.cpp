@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "src/device/backend_choice.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/heightmap_export.hpp"
 #include "src/io/map_file.hpp"
-#include "src/device/backend_choice.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"

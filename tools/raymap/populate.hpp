@@ -10,13 +10,13 @@
 
 #include "src/bag/bag_ray_source.hpp"
 #include "src/core/error.hpp"
+#include "src/device/backend_choice.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/decay_summary.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/tsdf_surface.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/device/backend_choice.hpp"
 
 namespace raymap::cli {
 

@@ -9,12 +9,12 @@
 #include <string>
 
 #include "src/core/error.hpp"
+#include "src/device/opencl/cl_runtime.hpp"
+#include "src/device/opencl/program_cache.hpp"
 #include "src/device/staging/device_options.hpp"
 #include "src/device/staging/staged_backend.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
-#include "src/device/opencl/cl_runtime.hpp"
-#include "src/device/opencl/program_cache.hpp"
 
 namespace raymap {
 

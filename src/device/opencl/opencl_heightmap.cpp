@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "kernels/common/heightmap.h"
+#include "src/device/opencl/opencl_backend.hpp"
 #include "src/device/staging/resident_read.hpp"
 #include "src/heightmap/device_upload.hpp"
-#include "src/device/opencl/opencl_backend.hpp"
 
 namespace raymap {
 namespace kernels {

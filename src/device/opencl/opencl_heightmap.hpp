@@ -4,10 +4,10 @@
 #include <memory>
 
 #include "src/core/error.hpp"
-#include "src/heightmap/heightmap_generator.hpp"
-#include "src/map/backend.hpp"
 #include "src/device/opencl/cl_runtime.hpp"
 #include "src/device/opencl/program_cache.hpp"
+#include "src/heightmap/heightmap_generator.hpp"
+#include "src/map/backend.hpp"
 
 namespace raymap {
 

@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "src/io/map_file.hpp"
 #include "src/device/opencl/opencl_backend.hpp"
+#include "src/io/map_file.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 #include "tests/support/tsdf_scenes.hpp"
