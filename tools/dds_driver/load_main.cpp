@@ -165,7 +165,9 @@ int main(int argc, char** argv) {
       "\"scans_shed\": %.0f, \"scans_cut_short\": %.0f, \"points_shed\": %.0f, "
       "\"map_lock_hold_max_ms\": %.2f, "
       "\"map_lock_wait_max_ms\": %.2f, \"publish_lead_ms\": %.1f, \"level\": %.0f, "
-      "\"integrator_load_percent\": %.0f}\n}\n",
+      "\"integrator_load_percent\": %.0f, \"generate_p99_ms\": %.2f, "
+      "\"heightmap_lock_hold_p99_ms\": %.2f, \"sync_copy_bytes_p99\": %.0f, "
+      "\"heightmap_copy_bytes_p99\": %.0f, \"heightmap_transfer_bytes_p99\": %.0f}\n}\n",
       scan_rate, lidar.pointsPerScan(), static_cast<unsigned long long>(published),
       static_cast<unsigned long long>(playback.scansPublished()),
       static_cast<double>(points) / duration, arrivals.size(), mean_period_ms,
@@ -183,6 +185,11 @@ int main(int argc, char** argv) {
       value("raymapd: height map/map_lock_hold_max_ms_total"),
       value("raymapd: height map/map_lock_wait_max_ms_total"),
       value("raymapd: height map/publish_lead_ms"), value("raymapd: pipeline/level"),
-      value("raymapd: pipeline/integrator_load_percent"));
+      value("raymapd: pipeline/integrator_load_percent"),
+      value("raymapd: height map/generate_p99_ms"),
+      value("raymapd: height map/heightmap_lock_hold_p99_ms"),
+      value("raymapd: height map/sync_copy_bytes_p99"),
+      value("raymapd: height map/heightmap_copy_bytes_p99"),
+      value("raymapd: height map/heightmap_transfer_bytes_p99"));
   return 0;
 }

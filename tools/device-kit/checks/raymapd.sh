@@ -9,8 +9,8 @@
 
 section_raymapd() {
   md raymapd "## raymapd under load (loopback DDS)" "" \
-    "| backend | × OS-1-128 | points/scan | scans/s | points/s | seconds | keeps up | scans published | integrated | dropped | late cycles | map period mean ms | period error p99 ms | latency p50 / p99 / max ms |" \
-    "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
+    "| backend | × OS-1-128 | points/scan | scans/s | points/s | seconds | keeps up | scans published | integrated | dropped | late cycles | map period mean ms | period error p99 ms | latency p50 / p99 / max ms | cycle lock hold p99 ms | map bytes synced / copied per cycle p99 |" \
+    "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | --- |"
   if [ "$have_cuda" != 1 ]; then
     daemon_run cpu 1 128 1024 10 10 >/dev/null
     return 0
@@ -83,7 +83,7 @@ daemon_run() {
   local key
   for key in scans_published_total scans_integrated clouds_dropped_overflow scans_dropped_no_pose \
     cycles_late maps_received map_period_mean_ms p99 latency_p50_ms latency_p99_ms latency_max_ms \
-    points_per_s; do
+    points_per_s heightmap_lock_hold_p99_ms sync_copy_bytes_p99 heightmap_copy_bytes_p99; do
     r[$key]=$(value "$key" "$f")
   done
   local published=${r[scans_published_total]} integrated=${r[scans_integrated]}
@@ -98,7 +98,7 @@ daemon_run() {
   if [ "$backend" = cpu ] && awk -v m="$maps" 'BEGIN { exit !(m + 0 < 1) }'; then
     fail "raymapd (cpu) published no height map in $seconds s"
   fi
-  md raymapd "| $backend | $multiple | $((beams * columns)) | $rate | ${r[points_per_s]} | $seconds | $keeps | $published | $integrated | $(awk -v o="$overflow" -v n="$nopose" 'BEGIN { print o + n }') | $late | ${r[map_period_mean_ms]} | ${r[p99]} | ${r[latency_p50_ms]} / ${r[latency_p99_ms]} / ${r[latency_max_ms]} |"
+  md raymapd "| $backend | $multiple | $((beams * columns)) | $rate | ${r[points_per_s]} | $seconds | $keeps | $published | $integrated | $(awk -v o="$overflow" -v n="$nopose" 'BEGIN { print o + n }') | $late | ${r[map_period_mean_ms]} | ${r[p99]} | ${r[latency_p50_ms]} / ${r[latency_p99_ms]} / ${r[latency_max_ms]} | ${r[heightmap_lock_hold_p99_ms]} | ${r[sync_copy_bytes_p99]} / ${r[heightmap_copy_bytes_p99]} |"
   record raymapd "{\"backend\": \"$backend\", \"multiple\": $multiple, \"beams\": $beams, \"columns\": $columns, \"scan_rate_hz\": $rate, \"seconds\": $seconds, \"keeps_up\": $([ $keeps = yes ] && echo true || echo false), \"daemon_exit\": $daemon_rc, \"load\": $(tr -d '\n' <"$f")}"
   echo "$keeps"
 }
