@@ -49,13 +49,25 @@ struct DeviceUpload {
   std::size_t mean_region_bytes = 0;       ///< one region of the mean layer; 0: not uploaded
   std::size_t ndt_region_bytes = 0;        ///< one region of the NDT layer; 0: not uploaded
   bool with_mean = false;
-  bool with_ndt = false;  ///< the plan writes normals: the NDT layer is uploaded
+  bool with_ndt = false;              ///< the plan writes normals: the NDT layer is uploaded
+  std::uint64_t total_bytes = 0;      ///< host <-> device over every generation (bytesCopied())
+  std::uint64_t total_map_bytes = 0;  ///< of those, the map's layers (mapBytesCopied())
 
   /// @brief Fills the sizes for `plan` on `map`. `device_slots`: the regions are resident at
   /// these slots of the backend's layer buffers (one per plan region); empty: they are uploaded.
   /// @rt allocates only when the plan grows.
   void prepare(const VoxelMap& map, const HeightmapPlan& plan,
                std::span<const std::uint32_t> device_slots = {});
+  /// @brief Adds region bytes a device backend uploaded to make the regions resident.
+  void countResidencyUploads(std::uint64_t uploaded) noexcept {
+    total_bytes += uploaded;
+    total_map_bytes += uploaded;
+  }
+  /// @brief Adds one finished generation of `plan` into `out` to the totals.
+  void countGeneration(const HeightmapPlan& plan, HeightMap& out) {
+    total_bytes += copiedBytes(plan, out);
+    total_map_bytes += mapBytes(plan);
+  }
 
   /// @brief Calls read(buffer, host_target) for each output layer of `out` (cells * 4 bytes); the
   /// normal layers only when `out` has them.
@@ -79,6 +91,26 @@ struct DeviceUpload {
     std::uint64_t total = (plan.region_table.size() + region_slots.size()) * 4 + mapBytes(plan);
     forEachOutput(out, [&](DeviceBuffer, void*) { total += out.cellCount() * 4; });
     return total;
+  }
+
+  /// @brief True for the buffers that hold the map's layers (occupancy, mean, NDT): the
+  /// backend's own where resident.
+  static bool isMapLayer(DeviceBuffer buffer) noexcept {
+    return buffer == kOccupancyBuffer || buffer == kMeanBuffer || buffer == kNdtBuffer;
+  }
+  /// @brief The map layer that map-layer buffer `buffer` reads: the occupancy, mean or NDT layer,
+  /// or -1 (a placeholder) for one the plan does not read.
+  int layerOf(DeviceBuffer buffer, const VoxelMap& map) const noexcept {
+    switch (buffer) {
+      case kOccupancyBuffer:
+        return map.occupancyLayer();
+      case kMeanBuffer:
+        return with_mean ? map.meanLayer() : -1;
+      case kNdtBuffer:
+        return with_ndt ? map.ndtLayer() : -1;
+      default:
+        return -1;
+    }
   }
 
   /// @brief Of copiedBytes(): the map's layers uploaded (0 when resident).

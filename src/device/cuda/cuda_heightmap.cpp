@@ -48,8 +48,8 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
   }
 
   const char* name() const noexcept override { return "cuda"; }
-  std::uint64_t bytesCopied() const noexcept override { return bytes_copied_; }
-  std::uint64_t mapBytesCopied() const noexcept override { return map_bytes_copied_; }
+  std::uint64_t bytesCopied() const noexcept override { return upload_.total_bytes; }
+  std::uint64_t mapBytesCopied() const noexcept override { return upload_.total_map_bytes; }
   bool readsHostStore() const noexcept override { return backend_ == nullptr; }
   std::string deviceName() const override { return device_.name; }
 
@@ -66,8 +66,7 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
       return Unexpected(slots.error());
     }
     upload_.prepare(map, plan, *slots);
-    bytes_copied_ += resident_.bytesUploaded();
-    map_bytes_copied_ += resident_.bytesUploaded() + upload_.mapBytes(plan);
+    upload_.countResidencyUploads(resident_.bytesUploaded());
     for (std::size_t b = 0; b < kDeviceBufferCount; ++b) {
       if (auto ok = reserve(buffers_[b], upload_.bytes[b], static_cast<DeviceBuffer>(b)); !ok) {
         return ok;
@@ -127,7 +126,7 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA height map: reading the layers back", status));
     }
-    bytes_copied_ += upload_.copiedBytes(plan, out);
+    upload_.countGeneration(plan, out);
     return {};
   }
 
@@ -152,18 +151,9 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   /// A map layer's device address: the backend's layer where resident, else the uploaded copy.
   const void* mapLayer(heightmap::DeviceBuffer buffer) const noexcept {
-    if (!upload_.resident) {
-      return buffers_[buffer].memory.get();
-    }
-    const VoxelMap& map = backend_->staged().integratedMap();
-    switch (buffer) {
-      case heightmap::kOccupancyBuffer:
-        return backend_->layerPointer(map.occupancyLayer());
-      case heightmap::kMeanBuffer:
-        return backend_->layerPointer(upload_.with_mean ? map.meanLayer() : -1);
-      default:
-        return backend_->layerPointer(upload_.with_ndt ? map.ndtLayer() : -1);
-    }
+    return upload_.resident
+               ? backend_->layerPointer(upload_.layerOf(buffer, backend_->staged().integratedMap()))
+               : buffers_[buffer].memory.get();
   }
 
   cuda::DeviceInfo device_;
@@ -174,8 +164,6 @@ class CudaHeightmapGenerator final : public heightmap::HeightmapGenerator {
   GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
   heightmap::DeviceUpload upload_;
   gpu::ResidentRead resident_;
-  std::uint64_t bytes_copied_ = 0;      // host <-> device by every generation
-  std::uint64_t map_bytes_copied_ = 0;  // of those, the map's layers
 };
 
 }  // namespace

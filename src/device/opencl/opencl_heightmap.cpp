@@ -55,8 +55,8 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   }
 
   const char* name() const noexcept override { return "opencl"; }
-  std::uint64_t bytesCopied() const noexcept override { return bytes_copied_; }
-  std::uint64_t mapBytesCopied() const noexcept override { return map_bytes_copied_; }
+  std::uint64_t bytesCopied() const noexcept override { return upload_.total_bytes; }
+  std::uint64_t mapBytesCopied() const noexcept override { return upload_.total_map_bytes; }
   bool readsHostStore() const noexcept override { return backend_ == nullptr; }
   std::string deviceName() const override {
     return ctx_->info.device_name + " (" + ctx_->info.platform_name + ")";
@@ -72,8 +72,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
       return Unexpected(slots.error());
     }
     upload_.prepare(map, plan, *slots);
-    bytes_copied_ += resident_.bytesUploaded();
-    map_bytes_copied_ += resident_.bytesUploaded() + upload_.mapBytes(plan);
+    upload_.countResidencyUploads(resident_.bytesUploaded());
     for (std::size_t b = 0; b < kDeviceBufferCount; ++b) {
       if (auto ok = reserve(buffers_[b], upload_.bytes[b], static_cast<DeviceBuffer>(b)); !ok) {
         return ok;
@@ -142,7 +141,7 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != CL_SUCCESS) {
       return deviceError("reading the height map back", status);
     }
-    bytes_copied_ += upload_.copiedBytes(plan, out);
+    upload_.countGeneration(plan, out);
     return {};
   }
 
@@ -195,18 +194,8 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   /// The buffer a kernel argument binds: the map's layers are the backend's where resident.
   cl_mem bufferFor(heightmap::DeviceBuffer buffer) const noexcept {
-    if (upload_.resident) {
-      const VoxelMap& map = backend_->staged().integratedMap();
-      switch (buffer) {
-        case heightmap::kOccupancyBuffer:
-          return backend_->layerBuffer(map.occupancyLayer());
-        case heightmap::kMeanBuffer:
-          return backend_->layerBuffer(upload_.with_mean ? map.meanLayer() : -1);
-        case heightmap::kNdtBuffer:
-          return backend_->layerBuffer(upload_.with_ndt ? map.ndtLayer() : -1);
-        default:
-          break;
-      }
+    if (upload_.resident && heightmap::DeviceUpload::isMapLayer(buffer)) {
+      return backend_->layerBuffer(upload_.layerOf(buffer, backend_->staged().integratedMap()));
     }
     return buffers_[buffer].handle.get();
   }
@@ -238,8 +227,6 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
   GrowingBuffer buffers_[heightmap::kDeviceBufferCount];
   heightmap::DeviceUpload upload_;
   gpu::ResidentRead resident_;
-  std::uint64_t bytes_copied_ = 0;      // host <-> device by every generation
-  std::uint64_t map_bytes_copied_ = 0;  // of those, the map's layers
 };
 
 }  // namespace
