@@ -73,9 +73,7 @@ std::string BenchHeightmaps::json(std::uint64_t rays, double integrate_seconds) 
   const double total = integrate_seconds + seconds_;
   j.add("every_rays", options_.every_rays)
       .add("size_m", options_.size_m)
-      .add("reads", options_.from_host                            ? "host store"
-                    : generator_ && !generator_->readsHostStore() ? "device layers"
-                                                                  : "host store")
+      .add("reads", generator_ && !generator_->readsHostStore() ? "device layers" : "host store")
       .add("generator", generator_ ? generator_->name() : "")
       .add("heightmaps", static_cast<std::uint64_t>(generate_ms_.size()))
       .add("skipped_outside_map", skipped_)

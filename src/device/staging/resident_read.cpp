@@ -12,25 +12,25 @@ Expected<std::span<const std::uint32_t>, Error> ResidentRead::prepare(
   if (backend == nullptr) {
     return std::span<const std::uint32_t>{};
   }
-  const std::string who = std::string(api) + " height map: ";
+  // Error texts are built on the error paths only: this runs every height-map cycle.
+  const auto who = [api] { return std::string(api) + " height map: "; };
   if (&map != &backend->integratedMap()) {
     return fail(ErrorCode::kInvalidArgument,
-                who + "the map is not the one its backend integrates into");
+                who() + "the map is not the one its backend integrates into");
   }
   device_slots_.resize(host_slots.size());
   auto placed = backend->placeForRead(host_slots, device_slots_);
   if (!placed) {
     return fail(ErrorCode::kUnsupported,
-                who + "making the regions resident: " + toString(placed.error()));
+                who() + "making the regions resident: " + toString(placed.error()));
   }
   bytes_uploaded_ = placed->bytes_uploaded;
   if (placed->resident) {
     return std::span<const std::uint32_t>(device_slots_);
   }
   // The regions under the box do not fit the device cache together: read the host store.
-  ++fallbacks_;
   if (auto ok = backend->synchronise(); !ok) {
-    return fail(ErrorCode::kUnsupported, who + "synchronising the map: " + toString(ok.error()));
+    return fail(ErrorCode::kUnsupported, who() + "synchronising the map: " + toString(ok.error()));
   }
   return std::span<const std::uint32_t>{};
 }

@@ -33,13 +33,10 @@ class ResidentRead {
 
   /// Region bytes the last prepare() uploaded to make the regions resident.
   std::uint64_t bytesUploaded() const noexcept { return bytes_uploaded_; }
-  /// prepare() calls that fell back to synchronise() (the cache could not hold the regions).
-  std::uint64_t fallbacks() const noexcept { return fallbacks_; }
 
  private:
   std::vector<std::uint32_t> device_slots_;
   std::uint64_t bytes_uploaded_ = 0;
-  std::uint64_t fallbacks_ = 0;
 };
 
 }  // namespace raymap::gpu
