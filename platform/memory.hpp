@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
 
 namespace raymap::platform {
 

@@ -22,39 +22,10 @@ if [ "$(id -u)" -ne 0 ]; then
   echo "device-kit-chroot: needs root (chroot and mount)" >&2
   exit 1
 fi
-cache_dir=${RAYMAP_CHROOT_CACHE:-$HOME/.cache/raymap}
-cache=$cache_dir/debian12-minbase.tar.gz
-mirror=${RAYMAP_DEBIAN_MIRROR:-http://deb.debian.org/debian}
-
-if [ ! -f "$cache" ]; then
-  if ! command -v debootstrap >/dev/null; then
-    apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq debootstrap >/dev/null
-  fi
-  echo "== debootstrap --variant=minbase bookworm (cached in $cache)"
-  mkdir -p "$cache_dir"
-  fresh=$(mktemp -d /var/tmp/raymap-debootstrap.XXXXXX)
-  trap 'rm -rf "$fresh"' EXIT
-  debootstrap --variant=minbase bookworm "$fresh" "$mirror" >"$fresh.log" 2>&1 ||
-    { tail -20 "$fresh.log" >&2; rm -f "$fresh.log"; exit 1; }
-  rm -f "$fresh.log"
-  tar -C "$fresh" -czf "$cache.part" .
-  mv "$cache.part" "$cache"
-  rm -rf "$fresh"
-  trap - EXIT
-fi
-
-root=$(mktemp -d /var/tmp/raymap-chroot.XXXXXX)
-cleanup() {
-  umount "$root/dev/shm" 2>/dev/null || true
-  umount "$root/proc" 2>/dev/null || true
-  # Only once nothing is mounted inside is the tree removed.
-  if ! grep -q " $root/" /proc/mounts; then
-    rm -rf "$root"
-  fi
-}
-trap cleanup EXIT
-tar -C "$root" -xzf "$cache"
+# shellcheck source=tools/debian-chroot.sh
+. tools/debian-chroot.sh
+debian_chroot_create
+root=$chroot_root
 # What makes the machine bare: none of the libraries the kit carries is installed.
 for lib in libyaml-cpp.so.0.7 libddsc.so.0debian libOpenCL.so.1 libbenchmark.so.1debian; do
   if [ -n "$(find "$root/usr/lib" "$root/lib" -name "$lib" 2>/dev/null | head -1)" ]; then
@@ -63,9 +34,6 @@ for lib in libyaml-cpp.so.0.7 libddsc.so.0debian libOpenCL.so.1 libbenchmark.so.
   fi
 done
 cp -a "$kit" "$root/kit"
-mount -t proc proc "$root/proc"
-mkdir -p "$root/dev/shm"
-mount -t tmpfs -o size=256m tmpfs "$root/dev/shm"
 
 echo "== run.sh inside the minimal Debian 12 root file system (no GPU: CUDA parts skip)"
 start=$SECONDS

@@ -4,7 +4,8 @@
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
-  zlib1g-dev libcli11-dev libyaml-cpp-dev
+  zlib1g-dev libeigen3-dev  # the map library: gzip, map files; host geometry and the public API
+  libcli11-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   liboctomap-dev          # OctoMap: the reference in benchmarks and agreement tests only
   ocl-icd-opencl-dev opencl-headers  # the OpenCL backend (ICD loader and headers)
@@ -15,6 +16,7 @@ packages=(
   libzstd-dev liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks, SQLite (.db3) bags
   clang-format
   patchelf                # tools/device-kit.sh: the kit's executables find its own libraries
+  dpkg-dev file           # cpack -G DEB: dpkg-shlibdeps computes Depends: (tools/check-deb.sh)
 )
 missing=()
 for p in "${packages[@]}"; do

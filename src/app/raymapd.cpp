@@ -5,6 +5,7 @@
 #include <exception>
 #include <string>
 
+#include "raymap/version.hpp"
 #include <CLI/CLI.hpp>
 
 #include "platform/clock.hpp"
@@ -87,7 +88,7 @@ int main(int argc, char** argv) {
   app.add_option("--config", config_path, "configuration file (YAML), e.g. config/cpu.yaml");
   app.add_option("--check-config", check_path,
                  "validate a configuration file, print a summary and exit (0 = valid)");
-  app.set_version_flag("--version", "raymapd 0.1.0");
+  app.set_version_flag("--version", std::string("raymapd ") + RAYMAP_VERSION_STRING);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

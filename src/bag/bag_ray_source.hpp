@@ -8,8 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "raymap/error.hpp"
+
 #include "src/bag/bag_reader.hpp"
-#include "src/core/error.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/io/trajectory.hpp"
 

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "raymap/error.hpp"
 #include <yaml-cpp/yaml.h>
 
-#include "src/core/error.hpp"
 #include "src/core/vec3.hpp"
 
 namespace raymap::config {

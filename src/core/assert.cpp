@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Reporting of contract violations.
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
 
 #include <cstdio>
 #include <cstdlib>

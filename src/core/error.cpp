@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Names of error codes.
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
 
 namespace raymap {
 

@@ -8,9 +8,9 @@
 #include <optional>
 #include <span>
 
+#include "raymap/error.hpp"
 #include <dds/dds.h>
 
-#include "src/core/error.hpp"
 #include "src/dds/entities.hpp"
 
 struct ddsi_sertype;

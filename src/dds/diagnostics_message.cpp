@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "diagnostic_msgs.h"
+#include "raymap/assert.hpp"
 
-#include "src/core/assert.hpp"
 #include "src/dds/frame_id.hpp"
 #include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"

@@ -10,9 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include "raymap/error.hpp"
 #include <dds/dds.h>
 
-#include "src/core/error.hpp"
 #include "src/dds/entities.hpp"
 
 namespace raymap::dds {

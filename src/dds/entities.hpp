@@ -9,10 +9,10 @@
 #include <type_traits>
 #include <utility>
 
+#include "raymap/error.hpp"
+#include "raymap/expected.hpp"
 #include <dds/dds.h>
 
-#include "src/core/error.hpp"
-#include "src/core/expected.hpp"
 #include "src/dds/dds_error.hpp"
 
 namespace raymap::dds {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "src/core/expected.hpp"
+#include "raymap/expected.hpp"
 
 namespace raymap::dds {
 

@@ -7,7 +7,7 @@
 #include <span>
 #include <type_traits>
 
-#include "src/core/expected.hpp"
+#include "raymap/expected.hpp"
 
 namespace raymap::dds {
 

@@ -9,9 +9,9 @@
 #include <limits>
 #include <vector>
 
+#include "raymap/assert.hpp"
 #include "sensor_msgs.h"
 
-#include "src/core/assert.hpp"
 #include "src/dds/frame_id.hpp"
 #include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"

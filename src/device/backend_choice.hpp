@@ -6,7 +6,8 @@
 #include <memory>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"

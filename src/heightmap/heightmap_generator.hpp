@@ -7,7 +7,8 @@
 #include <memory>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/heightmap/height_map.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/map/voxel_map.hpp"

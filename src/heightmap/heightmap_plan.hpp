@@ -6,8 +6,9 @@
 #include <optional>
 #include <vector>
 
+#include "raymap/error.hpp"
+
 #include "kernels/common/heightmap.h"
-#include "src/core/error.hpp"
 #include "src/core/vec3.hpp"
 #include "src/heightmap/height_map.hpp"
 #include "src/map/voxel_map.hpp"

@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
 
 // zlib's opaque file type (gzFile is `gzFile_s*`); declared here to keep zlib.h out of users.
 struct gzFile_s;

@@ -9,7 +9,8 @@
 #include <limits>
 #include <string_view>
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
+
 #include "src/io/atomic_file.hpp"
 #include "src/io/png_writer.hpp"
 

@@ -7,7 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/heightmap/height_map.hpp"
 
 namespace raymap::io {

@@ -7,7 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/io/atomic_file.hpp"
 
 namespace raymap::io {

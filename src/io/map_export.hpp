@@ -5,7 +5,8 @@
 #include <cstdint>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/map/voxel_map.hpp"
 
 namespace raymap::io {

@@ -8,7 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/map/voxel_map.hpp"
 
 namespace raymap::io {

@@ -7,7 +7,8 @@
 #include <optional>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/map/voxel_map.hpp"
 
 namespace raymap::io {

@@ -9,7 +9,8 @@
 #include <string_view>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/io/byte_reader.hpp"
 
 namespace raymap::io {

@@ -8,7 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/io/byte_reader.hpp"
 #include "src/io/ply_header.hpp"
 

@@ -6,7 +6,7 @@
 #include <span>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
 
 namespace raymap::io {
 

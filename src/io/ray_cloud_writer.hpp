@@ -7,7 +7,8 @@
 #include <span>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/map/ray.hpp"
 
 namespace raymap::io {

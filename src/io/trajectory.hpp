@@ -8,7 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/core/vec3.hpp"
 
 namespace raymap::io {

@@ -6,7 +6,8 @@
 #include <span>
 #include <string>
 
-#include "src/core/expected.hpp"
+#include "raymap/expected.hpp"
+
 #include "src/map/ray.hpp"
 
 namespace raymap {

@@ -5,7 +5,8 @@
 #include <cstddef>
 #include <memory>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
 

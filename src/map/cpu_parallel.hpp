@@ -8,7 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "src/core/expected.hpp"
+#include "raymap/expected.hpp"
+
 #include "src/map/backend.hpp"
 #include "src/map/cpu_voxel_ops.hpp"
 #include "src/map/worker_pool.hpp"

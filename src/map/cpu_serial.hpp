@@ -4,7 +4,8 @@
 
 #include <span>
 
-#include "src/core/expected.hpp"
+#include "raymap/expected.hpp"
+
 #include "src/map/backend.hpp"
 #include "src/map/cpu_voxel_ops.hpp"
 

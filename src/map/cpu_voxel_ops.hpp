@@ -9,6 +9,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "raymap/assert.hpp"
+
 #include "kernels/common/decay.h"
 #include "kernels/common/key_math.h"
 #include "kernels/common/line_walk.h"
@@ -19,7 +21,6 @@
 #include "kernels/common/span_walk.h"
 #include "kernels/common/tsdf.h"
 #include "kernels/common/voxel_mean.h"
-#include "src/core/assert.hpp"
 #include "src/map/ray_region_walk.hpp"
 #include "src/map/region_slot_cache.hpp"
 #include "src/map/voxel_map.hpp"

@@ -6,9 +6,10 @@
 #include <limits>
 #include <string>
 
+#include "raymap/assert.hpp"
+
 #include "kernels/common/ndt.h"
 #include "kernels/common/tsdf.h"
-#include "src/core/assert.hpp"
 
 namespace raymap {
 namespace {

@@ -7,10 +7,12 @@
 #include <optional>
 #include <string_view>
 
+#include "raymap/error.hpp"
+#include "raymap/map_types.hpp"
+
 #include "kernels/common/ndt.h"
 #include "kernels/common/occupancy.h"
 #include "kernels/common/tsdf.h"
-#include "src/core/error.hpp"
 
 namespace raymap {
 
@@ -57,14 +59,7 @@ struct OccupancyParams {
   friend bool operator==(const OccupancyParams&, const OccupancyParams&) = default;
 };
 
-/// @brief What a map models in each voxel.
-enum class MapMode : std::uint8_t {
-  kOccupancy = 0,  ///< log-odds occupancy (and the voxel mean)
-  kNdtOm = 1,      ///< NDT-OM: occupancy whose misses are shaped by a Gaussian of the samples
-  kNdtTm = 2,      ///< NDT-TM: NDT-OM plus hit/miss counts (permeability) and intensity statistics
-  kTsdf = 3,       ///< truncated signed distance field only (no occupancy layer)
-};
-
+// MapMode, Semantics: raymap/map_types.hpp (public).
 const char* toString(MapMode mode) noexcept;
 /// @brief "occupancy", "ndt-om", "ndt-tm", "tsdf" (as the tools spell them).
 std::optional<MapMode> mapModeFromName(std::string_view name) noexcept;
@@ -139,12 +134,6 @@ struct NdtParams {
   rm_ndt_params toKernel(double resolution, const OccupancyParams& occupancy,
                          MapMode mode) const noexcept;
   friend bool operator==(const NdtParams&, const NdtParams&) = default;
-};
-
-/// @brief How rays of one scan combine.
-enum class Semantics : std::uint8_t {
-  kPerRay = 0,   ///< every ray updates every voxel it crosses (OHM, OctoMap insertRay)
-  kPerScan = 1,  ///< each voxel at most once per scan, occupied wins (OctoMap insertPointCloud)
 };
 
 const char* toString(Semantics semantics) noexcept;

@@ -4,7 +4,8 @@
 
 #include <utility>
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
+
 #include "src/core/vec3.hpp"
 
 namespace raymap {

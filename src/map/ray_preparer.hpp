@@ -7,7 +7,8 @@
 #include <cstdint>
 #include <span>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/map/ray.hpp"
 #include "src/map/voxel_map.hpp"
 

@@ -4,7 +4,7 @@
 
 #include <bit>
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
 
 namespace raymap {
 namespace {

@@ -7,8 +7,9 @@
 #include <utility>
 #include <vector>
 
+#include "raymap/error.hpp"
+
 #include "platform/memory.hpp"
-#include "src/core/error.hpp"
 #include "src/core/vec3.hpp"
 #include "src/map/layer_schema.hpp"
 #include "src/map/region_index.hpp"

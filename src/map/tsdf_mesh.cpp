@@ -8,7 +8,8 @@
 #include <unordered_map>
 #include <utility>
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
+
 #include "src/map/marching_cubes.hpp"
 #include "src/map/tsdf_surface.hpp"
 

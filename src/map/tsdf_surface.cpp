@@ -7,7 +7,7 @@
 #include <tuple>
 #include <utility>
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
 
 namespace raymap {
 

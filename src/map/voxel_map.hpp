@@ -10,8 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include "raymap/error.hpp"
+
 #include "kernels/common/voxel_mean.h"
-#include "src/core/error.hpp"
 #include "src/core/vec3.hpp"
 #include "src/map/layer_schema.hpp"
 #include "src/map/map_params.hpp"
@@ -87,9 +88,6 @@ struct MapConfig {
 /// (decay rates only: voxel mean and traversal) or "<mode>+decay" (that mode with the traversal
 /// layer, e.g. "occupancy+decay").
 std::string mapModeName(const MapConfig& config);
-
-/// Occupancy state of a voxel.
-enum class VoxelState : std::uint8_t { kUnobserved, kFree, kOccupied };
 
 /// @brief Counts over all stored regions, and the bounds of observed voxels (world frame, metres).
 struct MapSummary {

@@ -43,16 +43,16 @@ Integrator::Integrator(VoxelMap& map, Backend& backend, platform::PiMutex& map_m
       sensors_(std::move(sensors)),
       stats_(stats),
       history_(settings.pose_history),
-      per_scan_(map.semantics() == Semantics::kPerScan) {
+      per_scan_(map.semantics() == Semantics::kPerScan),
+      // Per-scan semantics integrate one scan per backend call, so a batch holds a whole scan.
+      batcher_(
+          map, backend,
+          per_scan_ ? std::max(settings.batch_rays, mailbox.maxPoints()) : settings.batch_rays) {
   preparers_.reserve(sensors_.size());
   for (const SensorSettings& sensor : sensors_) {
     preparers_.emplace_back(map_, sensor.filter);
   }
-  // Per-scan semantics integrate one scan per backend call, so a batch holds a whole scan.
-  const std::uint32_t capacity =
-      per_scan_ ? std::max(settings_.batch_rays, mailbox_.maxPoints()) : settings_.batch_rays;
-  rays_.resize(capacity);
-  prepared_.resize(capacity);
+  rays_.resize(batcher_.capacity());
   completed_.resize(std::size_t{mailbox_.capacity()} + 1);
 }
 
@@ -123,6 +123,7 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   }
   RayPreparer& preparer = preparers_[batch_sensor_];
   const std::uint64_t rejected_before = preparer.counters().rejected();
+  const BatcherCounters batcher_before = batcher_.counters();
   const std::int64_t batch_started = settings_.clock_ns();
   std::span<const Ray> in(rays_.data(), batch_size_);
   std::unique_lock<platform::PiMutex> lock(map_mutex_, std::defer_lock);
@@ -137,27 +138,14 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
         const double fit = static_cast<double>(settings_.max_lock_hold_ns) / ns_per_ray_;
         slice = std::min(slice, static_cast<std::size_t>(std::clamp(fit, 256.0, 1048576.0)));
       }
-      std::span<const Ray> part = in.first(slice);
+      const std::span<const Ray> part = in.first(slice);
+      in = in.subspan(slice);
       const std::int64_t slice_started = now;
-      while (!part.empty()) {
-        const RayPreparer::Progress progress = preparer.prepare(part, prepared_);
-        part = part.subspan(progress.consumed);
-        in = in.subspan(progress.consumed);
-        if (progress.written > 0) {
-          auto result =
-              backend_.integrate(std::span<const PreparedRay>(prepared_.data(), progress.written));
-          stats_.batches.add();
-          if (!result) {
-            stats_.integrate_errors.add();
-          } else {
-            stats_.rays_integrated.add(progress.written);
-          }
-        }
-        if (progress.consumed == 0) {
-          in = {};  // cannot happen without segmentation; never spin
-          break;
-        }
-      }
+      // The slice goes in whole before the lock is given up: what the batch keeps is flushed.
+      auto added = batcher_.add(preparer, part);
+      auto flushed = batcher_.flush();
+      (void)added;  // failures are counted by the batcher (integrate_errors below)
+      (void)flushed;
       now = settings_.clock_ns();
       if (slice > 0) {
         const double measured =
@@ -184,6 +172,10 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
     integrated_.push(completed_[i]);  // full: the latency sample is lost, nothing else
   }
   lock.unlock();
+  const BatcherCounters& batcher_now = batcher_.counters();
+  stats_.batches.add(batcher_now.batches - batcher_before.batches);
+  stats_.integrate_errors.add(batcher_now.batches_failed - batcher_before.batches_failed);
+  stats_.rays_integrated.add(batcher_now.rays_integrated - batcher_before.rays_integrated);
   stats_.rays_rejected.add(preparer.counters().rejected() - rejected_before);
   stats_.scans_integrated.add(completed_count_);
   if (completed_count_ > 0) {

@@ -10,6 +10,7 @@
 #include "platform/clock.hpp"
 #include "platform/pi_mutex.hpp"
 #include "src/map/backend.hpp"
+#include "src/map/ray_batcher.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
 #include "src/pipeline/deskew.hpp"
@@ -139,7 +140,7 @@ class Integrator {
 
   // The batch: rays of possibly several scans, all from one sensor (range limits differ).
   std::vector<Ray> rays_;
-  std::vector<PreparedRay> prepared_;
+  RayBatcher batcher_;  // prepares and integrates the batch (the one batching loop)
   std::uint32_t batch_size_ = 0;
   std::uint32_t batch_sensor_ = 0;
   std::int64_t batch_first_ns_ = 0;      // arrival of the first scan in the batch

@@ -2,7 +2,7 @@
 // PoseHistory: a ring of stamped poses with ordered-lookup hinting.
 #include "src/pipeline/pose_history.hpp"
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
 
 namespace raymap::pipeline {
 

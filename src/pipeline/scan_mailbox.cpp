@@ -2,7 +2,7 @@
 // ScanMailbox: slot states moved by compare-and-swap (see the header's design note).
 #include "src/pipeline/scan_mailbox.hpp"
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
 
 namespace raymap::pipeline {
 

@@ -11,7 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/record/record_log.hpp"
 
 namespace raymap::record {

@@ -8,7 +8,8 @@
 #include <span>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/record/record_log.hpp"
 
 namespace raymap::record {

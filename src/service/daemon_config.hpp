@@ -8,7 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/device/backend_choice.hpp"
 #include "src/heightmap/costmap.hpp"
 #include "src/heightmap/heightmap_plan.hpp"

@@ -6,7 +6,8 @@
 #include <memory>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/service/daemon_config.hpp"
 
 namespace raymap::service {

@@ -8,8 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "raymap/error.hpp"
+
 #include "platform/memory.hpp"
-#include "src/core/error.hpp"
 #include "src/service/daemon_config.hpp"
 
 namespace raymap::service {

@@ -8,7 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/core/vec3.hpp"
 #include "src/map/ray.hpp"
 #include "src/sim/scene.hpp"

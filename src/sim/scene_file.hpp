@@ -4,7 +4,8 @@
 
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/sim/lidar.hpp"
 #include "src/sim/scene.hpp"
 

@@ -7,9 +7,9 @@
 #include <memory>
 #include <string>
 
+#include "raymap/error.hpp"
 #include <gtest/gtest.h>
 
-#include "src/core/error.hpp"
 #include "src/device/staging/device_options.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/map/backend.hpp"

@@ -36,12 +36,35 @@ check src/device/staging 'src/io|src/sim|src/device/opencl|src/device/cuda|src/d
 check src/device/opencl 'src/sim|src/device/cuda|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
 check src/device/cuda 'src/sim|src/device/opencl|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
 check kernels/cuda 'src/|platform/|tools/|tests/' 'CUDA entry points depend only on kernels/'
+# The map library (raymap::raymap) builds with a compiler, zlib and Eigen alone: none of its code
+# includes the service's or the tools' dependencies (DDS, YAML, CLI11, systemd, Boost, bags'
+# compression and SQLite), nor the folders built only with them. src/sim/scene_file.* is the
+# tools' (YAML scene files).
+library_folders="include src/core src/map src/io src/heightmap src/device src/mapper src/record platform"
+for folder in $library_folders; do
+  hits=$(grep -rnE '#include [<"](yaml-cpp/|CLI/|dds/|systemd/|boost/|zstd|lz4|sqlite3|src/config/|src/dds/|src/pipeline/|src/service/|src/bag/|src/sim/scene_file|tools/)' \
+    "$folder" --include='*.hpp' --include='*.cpp' --include='*.h' | grep -v '^platform/linux/notify.cpp:' || true)
+  if [ -n "$hits" ]; then
+    echo "layering: the map library ($folder) must build without the service's and tools' dependencies:"
+    echo "$hits"
+    status=1
+  fi
+done
+# The public headers (include/raymap, installed) include only each other, Eigen and the standard
+# library.
+hits=$(grep -rnE '#include "(src|platform|kernels|tools|tests)/' include || true)
+if [ -n "$hits" ]; then
+  echo "layering: a public header includes an internal one:"
+  echo "$hits"
+  status=1
+fi
+check src/mapper 'src/sim|src/dds|src/pipeline|src/service|tools/|tests/' 'the facade runs maps and backends only'
 # Only kernels/common headers may use C-style guards; everything else is #pragma once.
-for f in $(find src platform tools tests -name '*.hpp'); do
+for f in $(find src platform tools tests include examples -name '*.hpp'); do
   grep -q '^#pragma once' "$f" || { echo "header without #pragma once: $f"; status=1; }
 done
 # Every source file starts with an SPDX line.
-for f in $(find src platform tools tests kernels -name '*.hpp' -o -name '*.cpp' -o -name '*.h' -o -name '*.cl' -o -name '*.cu'); do
+for f in $(find src platform tools tests kernels include examples -name '*.hpp' -o -name '*.cpp' -o -name '*.h' -o -name '*.cl' -o -name '*.cu'); do
   head -1 "$f" | grep -q 'SPDX-License-Identifier' || { echo "missing SPDX line: $f"; status=1; }
 done
 exit $status

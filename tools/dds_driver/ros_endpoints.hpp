@@ -12,7 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/dds/entities.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/dds/point_cloud_message.hpp"

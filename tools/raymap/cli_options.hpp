@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "raymap/error.hpp"
 #include <CLI/CLI.hpp>
 
-#include "src/core/error.hpp"
 #include "tools/raymap/populate.hpp"
 
 namespace raymap::cli {

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
 
 namespace raymap::cli {
 

@@ -9,7 +9,8 @@
 #include <string>
 #include <string_view>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/dds/topic_types.hpp"
 
 namespace raymap::cli {

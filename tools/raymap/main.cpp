@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "raymap/version.hpp"
 #include <CLI/CLI.hpp>
 
 #include "tools/raymap/commands.hpp"
@@ -11,7 +12,7 @@ int main(int argc, char** argv) {
   using namespace raymap::cli;
   CLI::App app{"raymap: occupancy maps from lidar rays (see docs/cli.md)", "raymap"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "raymap 0.1.0");
+  app.set_version_flag("--version", std::string("raymap ") + RAYMAP_VERSION_STRING);
   int exit_code = kExitOk;
   addPopulateCommand(app, &exit_code);
   addInfoCommand(app, &exit_code);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "platform/process.hpp"
+#include "src/map/ray_batcher.hpp"
 #include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/progress.hpp"
 
@@ -65,7 +66,7 @@ Result<PopulateReport> integrateStream(
   Backend& backend = *created->backend;
   const BackendStats stats_before = backend.stats();
   RayPreparer preparer(map, options.filter);
-  const bool per_scan = map.semantics() == Semantics::kPerScan;
+  RayBatcher batcher(map, backend, options.batch_rays);
 
   PopulateReport report;
   report.backend_name = backend.name();
@@ -74,34 +75,19 @@ Result<PopulateReport> integrateStream(
   report.startup_warning = created->startup_warning;
   report.threads = backend.threads();
   std::vector<Ray> chunk(std::size_t{1} << 16);
-  std::vector<PreparedRay> batch(options.batch_rays);
-  std::size_t batch_fill = 0;
-  bool have_scan = false;
-  bool scan_was_split = false;
-  std::uint64_t current_scan = 0;
   ProgressBar bar("populate", options.progress);
 
-  auto flush = [&]() -> Expected<void, Error> {
-    if (batch_fill == 0) {
-      return {};
+  const auto integrate_failed = [&](IntegrateError error) -> Error {
+    if (error == IntegrateError::kStoreFull) {
+      const double gib =
+          static_cast<double>(map.store().poolBytes()) / static_cast<double>(1u << 30);
+      return Error{ErrorCode::kCapacity, "the map needs more than the " +
+                                             std::to_string(map.store().capacity()) + " regions (" +
+                                             number(gib) +
+                                             " GiB) its memory budget allows; raise --max-memory"};
     }
-    const Clock::time_point t = Clock::now();
-    auto ok = backend.integrate(std::span<const PreparedRay>(batch.data(), batch_fill));
-    report.integrate_seconds += secondsSince(t);
-    batch_fill = 0;
-    if (!ok) {
-      if (ok.error() == IntegrateError::kStoreFull) {
-        const double gib =
-            static_cast<double>(map.store().poolBytes()) / static_cast<double>(1u << 30);
-        return fail(ErrorCode::kCapacity, "the map needs more than the " +
-                                              std::to_string(map.store().capacity()) +
-                                              " regions (" + number(gib) +
-                                              " GiB) its memory budget allows; raise --max-memory");
-      }
-      return fail(ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
-                                      " backend: " + toString(ok.error()));
-    }
-    return {};
+    return Error{ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
+                                     " backend: " + toString(error)};
   };
 
   for (;;) {
@@ -114,57 +100,27 @@ Result<PopulateReport> integrateStream(
     if (*count == 0) {
       break;
     }
-    const std::span<const Ray> rays(chunk.data(), *count);
-    std::size_t i = 0;
-    while (i < rays.size()) {
-      // A run of rays of one scan (per-ray maps take the whole chunk as one run).
-      std::size_t run_end = i;
-      while (run_end < rays.size() && rays[run_end].scan == rays[i].scan) {
-        ++run_end;
-      }
-      if (!have_scan || rays[i].scan != current_scan) {
-        ++report.scans;
-        if (per_scan && have_scan) {
-          if (auto ok = flush(); !ok) {
-            return Unexpected(ok.error());
-          }
-        }
-        scan_was_split = false;
-        have_scan = true;
-        current_scan = rays[i].scan;
-      }
-      while (i < run_end) {
-        const Clock::time_point t_prep = Clock::now();
-        const RayPreparer::Progress p = preparer.prepare(
-            rays.subspan(i, run_end - i),
-            std::span<PreparedRay>(batch.data() + batch_fill, batch.size() - batch_fill));
-        report.integrate_seconds += secondsSince(t_prep);
-        batch_fill += p.written;
-        i += p.consumed;
-        if (i < run_end) {  // the batch is full
-          if (per_scan && !scan_was_split) {
-            ++report.scans_split;
-            scan_was_split = true;
-          }
-          if (auto ok = flush(); !ok) {
-            return Unexpected(ok.error());
-          }
-        }
-      }
-    }
-    if (!per_scan && batch_fill == batch.size()) {
-      if (auto ok = flush(); !ok) {
-        return Unexpected(ok.error());
-      }
+    const Clock::time_point t_integrate = Clock::now();
+    auto ok = batcher.add(preparer, std::span<const Ray>(chunk.data(), *count));
+    report.integrate_seconds += secondsSince(t_integrate);
+    if (!ok) {
+      return Unexpected(integrate_failed(ok.error()));
     }
     const double seconds = report.integrate_seconds;
     bar.update(
         progress(), preparer.counters().rays_in,
         seconds > 0 ? static_cast<double>(preparer.counters().rays_accepted) / seconds : 0.0);
   }
-  if (auto ok = flush(); !ok) {
-    return Unexpected(ok.error());
+  {
+    const Clock::time_point t_integrate = Clock::now();
+    auto ok = batcher.flush();
+    report.integrate_seconds += secondsSince(t_integrate);
+    if (!ok) {
+      return Unexpected(integrate_failed(ok.error()));
+    }
   }
+  report.scans = batcher.counters().scans;
+  report.scans_split = batcher.counters().scans_split;
   // Device backends return before the device finishes: the wait and the download of the map
   // belong to the integration time.
   const Clock::time_point t_sync = Clock::now();

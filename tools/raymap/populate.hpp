@@ -8,8 +8,9 @@
 #include <span>
 #include <string>
 
+#include "raymap/error.hpp"
+
 #include "src/bag/bag_ray_source.hpp"
-#include "src/core/error.hpp"
 #include "src/device/backend_choice.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/map/backend.hpp"

@@ -7,7 +7,8 @@
 #include <memory>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/core/vec3.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/io/ray_source.hpp"

@@ -11,7 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/dds/cdr_writer.hpp"
 #include "src/dds/entities.hpp"
 #include "src/io/ray_source.hpp"

@@ -9,9 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "raymap/error.hpp"
 #include <unistd.h>
-
-#include "src/core/error.hpp"
 
 namespace raymap::cli {
 

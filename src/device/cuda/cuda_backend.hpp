@@ -5,7 +5,8 @@
 
 #include <memory>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/device/staging/device_options.hpp"
 #include "src/device/staging/staged_backend.hpp"
 #include "src/map/backend.hpp"

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
 
 namespace raymap::cuda {
 

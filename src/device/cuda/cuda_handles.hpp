@@ -8,9 +8,8 @@
 #include <memory_resource>
 #include <string>
 
+#include "raymap/error.hpp"
 #include <cuda_runtime_api.h>
-
-#include "src/core/error.hpp"
 
 namespace raymap::cuda {
 

@@ -3,7 +3,8 @@
 #pragma once
 #include <memory>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/map/backend.hpp"
 

@@ -12,9 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "raymap/error.hpp"
 #include <CL/cl.h>
-
-#include "src/core/error.hpp"
 
 namespace raymap::opencl {
 

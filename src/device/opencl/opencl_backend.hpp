@@ -8,7 +8,8 @@
 #include <memory>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/device/opencl/cl_runtime.hpp"
 #include "src/device/opencl/program_cache.hpp"
 #include "src/device/staging/device_options.hpp"

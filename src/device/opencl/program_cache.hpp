@@ -6,7 +6,8 @@
 #include <string>
 #include <string_view>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/device/opencl/cl_runtime.hpp"
 
 namespace raymap::opencl {

@@ -4,8 +4,9 @@
 
 #include <algorithm>
 
+#include "raymap/assert.hpp"
+
 #include "kernels/common/span_walk.h"
-#include "src/core/assert.hpp"
 #include "src/map/ray_region_walk.hpp"
 
 namespace raymap::gpu {

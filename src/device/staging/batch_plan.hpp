@@ -9,8 +9,9 @@
 #include <span>
 #include <vector>
 
+#include "raymap/expected.hpp"
+
 #include "kernels/common/batch.h"
-#include "src/core/expected.hpp"
 #include "src/device/staging/device_region_cache.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/region_slot_cache.hpp"

@@ -7,7 +7,8 @@
 #include <cstdint>
 #include <string>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/device/staging/batch_plan.hpp"
 #include "src/map/voxel_map.hpp"
 

@@ -2,7 +2,8 @@
 // Device region cache bookkeeping.
 #include "src/device/staging/device_region_cache.hpp"
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
+
 #include "src/map/region_store.hpp"
 
 namespace raymap::gpu {

@@ -7,7 +7,8 @@
 #include <span>
 #include <vector>
 
-#include "src/core/error.hpp"
+#include "raymap/error.hpp"
+
 #include "src/device/staging/staged_backend.hpp"
 #include "src/map/voxel_map.hpp"
 

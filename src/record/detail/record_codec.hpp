@@ -9,7 +9,8 @@
 #include <span>
 #include <string>
 
-#include "src/core/expected.hpp"
+#include "raymap/expected.hpp"
+
 #include "src/record/record_log.hpp"
 
 namespace raymap::record::detail {

@@ -3,10 +3,9 @@
 #include <memory>
 #include <string>
 
+#include "raymap/error.hpp"
+#include "raymap/expected.hpp"
 #include <gtest/gtest.h>
-
-#include "src/core/error.hpp"
-#include "src/core/expected.hpp"
 
 namespace raymap {
 namespace {

@@ -6,7 +6,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "src/core/assert.hpp"
+#include "raymap/assert.hpp"
 
 namespace raymap {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <utility>
 
-#include "src/core/expected.hpp"
+#include "raymap/expected.hpp"
 
 namespace raymap {
 

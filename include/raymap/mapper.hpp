@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymap::Mapper: a 3D occupancy map with its integration backend (CPU, OpenCL or CUDA), the ray
+// preparation and the batching, behind one small value-typed API that speaks Eigen.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "raymap/error.hpp"
+#include "raymap/heightmap.hpp"
+#include "raymap/map_types.hpp"
+#include "raymap/mapper_config.hpp"
+#include "raymap/scan.hpp"
+#include <Eigen/Geometry>
+
+namespace raymap {
+
+/// @brief A voxel's key: its integer coordinates on the map's grid. Voxel k covers
+/// [k * resolution, (k + 1) * resolution) metres on each axis of the world frame.
+using VoxelKey = Eigen::Vector3i;
+
+/// @brief What the map holds for one voxel. Plain value type.
+struct VoxelInfo {
+  VoxelKey key = VoxelKey::Zero();
+  VoxelState state = VoxelState::kUnobserved;
+  /// Occupancy log-odds; nullopt when unobserved (or the map has no occupancy layer).
+  std::optional<float> log_odds;
+  /// Occupancy probability (from log_odds); nullopt when unobserved.
+  std::optional<double> probability;
+  /// The mean of the samples (returns) that fell in the voxel, world frame, metres; nullopt
+  /// without samples or without the voxel-mean layer.
+  std::optional<Eigen::Vector3d> mean;
+  std::uint32_t samples = 0;  ///< returns that fell in the voxel (0 without the voxel-mean layer)
+};
+
+/// @brief What a Mapper did so far. Plain counters.
+struct MapperCounters {
+  std::uint64_t scans = 0;               ///< integrate() calls that carried at least one ray
+  std::uint64_t rays_in = 0;             ///< rays offered (points with a pose included)
+  std::uint64_t rays_integrated = 0;     ///< rays that went into the map (clipped ones included)
+  std::uint64_t rays_invalid = 0;        ///< NaN or infinite coordinates (rejected)
+  std::uint64_t rays_too_short = 0;      ///< shorter than RayOptions::min_range (rejected)
+  std::uint64_t rays_out_of_bounds = 0;  ///< beyond the map's key range (rejected)
+  std::uint64_t rays_clipped = 0;        ///< shortened to RayOptions::max_range (integrated)
+  std::uint64_t rays_no_return = 0;      ///< free-space-only rays (integrated)
+  std::uint64_t points_no_pose = 0;      ///< points left out: the pose function had no pose
+  std::uint64_t batches = 0;             ///< backend calls
+  std::uint64_t rays_pending = 0;        ///< prepared rays waiting in the batch (see flush())
+};
+
+/// @brief Voxel counts over the stored map.
+struct MapCounts {
+  std::uint64_t regions = 0;  ///< regions of region_voxels³ voxels allocated
+  std::uint64_t voxels_free = 0;
+  std::uint64_t voxels_occupied = 0;
+};
+
+/// @brief A 3D occupancy map with its integration backend: integrate scans, query voxels, make
+/// height maps, save and load.
+///
+/// Rays go through the same preparation (range limits, invalid rays counted) and the same
+/// batching as `raymap populate` and raymapd: prepared rays collect in a batch that is integrated
+/// when full, at the end of each scan under per-scan semantics, and by flush(). Queries read the
+/// map on the host, so they see what was integrated up to the last flush() (which also waits for
+/// a device backend); save() and heightmap() flush first themselves.
+///
+/// Thread-safety: none: one thread at a time uses a Mapper (queries included, since integration
+/// updates the map in place); different Mappers are independent. The CPU backend's worker
+/// threads and a device's queue are internal.
+/// Real-time: integrate() and flush() allocate only on a scan larger than any before (the
+/// conversion buffer grows once) and never do file I/O; create(), load(), save() and heightmap()
+/// allocate and are for start-up, shutdown or a non-real-time thread. No call throws (errors are
+/// values), except std::bad_alloc where memory runs out.
+class Mapper {
+ public:
+  /// @brief Builds an empty map and starts its backend. Errors name the option and the reason
+  /// (an out-of-range value, a backend this build lacks, a device that fails to start).
+  static Result<Mapper> create(const MapperConfig& config);
+  /// @brief Loads a map saved by save() or `raymap populate` (its geometry, semantics, mode and
+  /// probabilities come from the file) and starts `backend` over it; `rays` applies to what is
+  /// integrated next. Errors name the file and the reason; nothing is loaded then.
+  static Result<Mapper> load(const std::string& path, const RayOptions& rays = {},
+                             const BackendOptions& backend = {});
+
+  Mapper(Mapper&&) noexcept;
+  Mapper& operator=(Mapper&&) noexcept;
+  ~Mapper();
+
+  /// @brief Integrates one scan of world-frame rays. Rays that are invalid or outside the limits
+  /// are counted (counters()), not errors. @return an error only when the map is full (kCapacity,
+  /// raise MapOptions::max_memory_bytes) or the device failed (kIo); rays of the failed batch are
+  /// lost, the map keeps what went in before.
+  Expected<void, Error> integrate(std::span<const WorldRay> scan);
+  /// @brief Integrates one scan of sensor-frame points taken at one pose: p_world =
+  /// sensor_to_world * p_sensor, and the sensor at sensor_to_world.translation().
+  Expected<void, Error> integrate(std::span<const SensorPoint> scan,
+                                  const Eigen::Isometry3d& sensor_to_world);
+  /// @brief Integrates one scan of sensor-frame points with the sensor's pose at each point's
+  /// time (deskewing a spinning lidar's sweep): `sensor_pose_at` is asked once per distinct time.
+  Expected<void, Error> integrate(std::span<const SensorPoint> scan,
+                                  const SensorPoseFunction& sensor_pose_at);
+  /// @brief Integrates the rays waiting in the batch and waits for the backend (a device's map
+  /// is copied back to the host), so that queries see every ray given so far.
+  Expected<void, Error> flush();
+
+  /// @brief The key of the voxel holding `point` (world frame, metres); nullopt beyond the
+  /// map's key range (or for a non-finite point).
+  std::optional<VoxelKey> key(const Eigen::Vector3d& point) const noexcept;
+  /// @brief The centre of voxel `key`, world frame, metres.
+  Eigen::Vector3d centre(const VoxelKey& key) const noexcept;
+  /// @brief The state of the voxel holding `point` (world frame); unobserved beyond the key range.
+  VoxelState occupancy(const Eigen::Vector3d& point) const noexcept;
+  VoxelState occupancy(const VoxelKey& key) const noexcept;
+  /// @brief Everything stored for a voxel.
+  VoxelInfo voxel(const VoxelKey& key) const noexcept;
+  /// @brief Voxel counts over the map (walks every stored region: not for a tight loop).
+  MapCounts counts() const noexcept;
+
+  /// @brief A height map around `request.centre`, made where the map is (on the device for a
+  /// device backend). Errors name the option and the reason (a map without occupancy, a size
+  /// beyond 8192 cells, a centre outside the stored map).
+  Result<HeightMap> heightmap(const HeightmapRequest& request);
+
+  /// @brief Writes the map to `path` (the .rmap format of `raymap populate`; a temporary file
+  /// renamed into place, so a failure leaves any existing file as it was).
+  Expected<void, Error> save(const std::string& path);
+
+  MapperCounters counters() const noexcept;
+  /// The map's settings (as created, or as read from the file by load()).
+  const MapOptions& mapOptions() const noexcept;
+  /// "cpu", "opencl" or "cuda": where integration runs.
+  std::string backendName() const;
+  /// Why the CPU fallback replaced the requested backend (BackendOptions::fallback_cpu); empty
+  /// when it did not.
+  const std::string& fallbackWarning() const noexcept;
+
+ private:
+  struct State;
+  explicit Mapper(std::unique_ptr<State> state) noexcept;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace raymap

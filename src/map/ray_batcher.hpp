@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The one batching loop: prepare rays into a batch, integrate it when full and at the scan
+// boundary (per-scan semantics). raymap::Mapper, `raymap populate` and raymapd's integrator all
+// integrate through it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "raymap/expected.hpp"
+
+#include "src/map/backend.hpp"
+#include "src/map/ray.hpp"
+#include "src/map/ray_preparer.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap {
+
+/// @brief What a RayBatcher did so far. Plain counters (not synchronised).
+struct BatcherCounters {
+  std::uint64_t batches = 0;          ///< backend integrate() calls
+  std::uint64_t rays_integrated = 0;  ///< prepared rays (ray pieces) in batches that went in
+  std::uint64_t batches_failed = 0;   ///< integrate() calls that returned an error (rays lost)
+  std::uint64_t scans = 0;            ///< distinct scans (runs of one Ray::scan) seen
+  std::uint64_t scans_split = 0;      ///< per-scan: scans larger than a batch, integrated in parts
+};
+
+/// @brief Prepares rays (RayPreparer) into a fixed batch and hands full batches to a backend.
+///
+/// Batches are integrated when full, by flush(), and, under per-scan semantics (each voxel at
+/// most once per scan), whenever a ray of another scan (Ray::scan) arrives: a batch never mixes
+/// two scans there. A scan larger than the batch is integrated in parts (counted: scans_split),
+/// each part with per-scan semantics. Prepared rays of different preparers (sensors with other
+/// range limits) may share a batch.
+///
+/// A failed backend call loses that batch's rays (counted: batches_failed); later rays still go
+/// in, and the call that saw the failure returns the first error it met.
+///
+/// Thread-safety: one thread. @rt add(), flush(): allocate no memory and throw nothing (the batch
+/// is allocated by the constructor); they block only in the backend.
+class RayBatcher {
+ public:
+  /// @param batch_rays capacity of the batch in prepared rays (at least 1).
+  /// @pre `backend` integrates `map` and outlives the batcher.
+  RayBatcher(const VoxelMap& map, Backend& backend, std::size_t batch_rays);
+
+  /// @brief Prepares `rays` with `preparer` into the batch, integrating full batches (and, per
+  /// scan, each finished scan) as it goes. Every ray is consumed.
+  Expected<void, IntegrateError> add(RayPreparer& preparer, std::span<const Ray> rays) noexcept;
+  /// @brief Integrates what the batch holds. Does not wait for a device (Backend::synchronise()).
+  Expected<void, IntegrateError> flush() noexcept;
+
+  /// Prepared rays waiting in the batch.
+  std::size_t pending() const noexcept { return fill_; }
+  std::size_t capacity() const noexcept { return batch_.size(); }
+  const BatcherCounters& counters() const noexcept { return counters_; }
+  Backend& backend() noexcept { return *backend_; }
+
+ private:
+  Backend* backend_;
+  bool per_scan_;
+  std::vector<PreparedRay> batch_;
+  std::size_t fill_ = 0;
+  bool have_scan_ = false;
+  bool scan_split_ = false;  // the current scan already went in in parts
+  std::uint64_t scan_ = 0;   // Ray::scan of the rays in the batch
+  BatcherCounters counters_;
+};
+
+}  // namespace raymap

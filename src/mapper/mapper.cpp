@@ -1,0 +1,336 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymap::Mapper: the map, its backend, one RayPreparer and the RayBatcher (the batching loop
+// `raymap populate` and raymapd use too), behind the public API of include/raymap/mapper.hpp.
+#include "raymap/mapper.hpp"
+
+#include <cmath>
+#include <limits>
+#include <utility>
+#include <vector>
+
+#include "kernels/common/occupancy.h"
+#include "kernels/common/voxel_mean.h"
+#include "src/device/backend_choice.hpp"
+#include "src/heightmap/heightmap_generator.hpp"
+#include "src/io/map_file.hpp"
+#include "src/map/ray_batcher.hpp"
+#include "src/mapper/mapper_conversions.hpp"
+
+namespace raymap {
+namespace {
+
+/// Rays converted from the caller's scan per RayBatcher::add() call (the conversion buffer).
+constexpr std::size_t kChunkRays = 4096;
+/// Prepared rays per backend call when BackendOptions::batch_rays is 0 (as `raymap populate`).
+constexpr std::size_t kDefaultBatchRays = std::size_t{1} << 18;
+
+Vec3d toVec3(const Eigen::Vector3d& v) noexcept { return Vec3d{v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+struct Mapper::State {
+  State(VoxelMap map_in, const RayFilter& filter) : map(std::move(map_in)), preparer(map, filter) {}
+
+  VoxelMap map;  // never moves: the preparer, the backend and the batcher point at it
+  MapOptions options;
+  backends::CreatedBackend backend;
+  RayPreparer preparer;
+  std::unique_ptr<RayBatcher> batcher;
+  std::vector<Ray> chunk = std::vector<Ray>(kChunkRays);
+  std::size_t chunk_fill = 0;
+  std::uint64_t next_scan = 0;
+  std::uint64_t scans = 0;
+  std::uint64_t points_no_pose = 0;
+  std::unique_ptr<heightmap::HeightmapGenerator> generator;  // made on the first heightmap()
+  heightmap::HeightmapPlan plan;
+  heightmap::HeightMap grid;
+
+  /// Starts the backend over the map, and the batcher that feeds it.
+  Expected<void, Error> startBackend(const BackendOptions& choice) {
+    auto made = backends::createBackend(map, mapper::toBackendChoice(choice));
+    if (!made) {
+      return Unexpected(made.error());
+    }
+    backend = std::move(*made);
+    batcher = std::make_unique<RayBatcher>(
+        map, *backend.backend, choice.batch_rays != 0 ? choice.batch_rays : kDefaultBatchRays);
+    return {};
+  }
+  Error integrateError(IntegrateError error) const {
+    if (error == IntegrateError::kStoreFull) {
+      return Error{ErrorCode::kCapacity,
+                   "the map needs more than the " + std::to_string(map.store().capacity()) +
+                       " regions its memory budget allows; raise MapOptions::max_memory_bytes"};
+    }
+    return Error{ErrorCode::kIo, std::string("integration failed on the ") +
+                                     backend.backend->name() + " backend: " + toString(error)};
+  }
+  /// Integrates the converted rays (one scan) and empties the conversion buffer.
+  Expected<void, Error> drainChunk() noexcept {
+    const std::span<const Ray> rays(chunk.data(), chunk_fill);
+    chunk_fill = 0;
+    if (auto ok = batcher->add(preparer, rays); !ok) {
+      return Unexpected(integrateError(ok.error()));
+    }
+    return {};
+  }
+  Expected<void, Error> push(const Ray& ray) noexcept {
+    chunk[chunk_fill++] = ray;
+    return chunk_fill == chunk.size() ? drainChunk() : Expected<void, Error>{};
+  }
+  /// Ends a scan: its last rays go to the batcher, and the scan gets its number.
+  Expected<void, Error> endScan(std::uint64_t rays_before) noexcept {
+    auto ok = drainChunk();
+    if (preparer.counters().rays_in != rays_before) {
+      ++scans;
+    }
+    ++next_scan;
+    return ok;
+  }
+  Expected<void, Error> synchronise() noexcept {
+    if (auto ok = batcher->flush(); !ok) {
+      return Unexpected(integrateError(ok.error()));
+    }
+    if (auto ok = backend.backend->synchronise(); !ok) {
+      return Unexpected(integrateError(ok.error()));
+    }
+    return {};
+  }
+};
+
+Mapper::Mapper(std::unique_ptr<State> state) noexcept : state_(std::move(state)) {}
+Mapper::Mapper(Mapper&&) noexcept = default;
+Mapper& Mapper::operator=(Mapper&&) noexcept = default;
+Mapper::~Mapper() = default;
+
+Result<Mapper> Mapper::create(const MapperConfig& config) {
+  auto map_config = mapper::toMapConfig(config.map);
+  if (!map_config) {
+    return Unexpected(map_config.error());
+  }
+  auto map = VoxelMap::create(*map_config);
+  if (!map) {
+    return Unexpected(map.error());
+  }
+  auto filter = mapper::toRayFilter(config.rays, config.backend.name != "cpu");
+  if (!filter) {
+    return Unexpected(filter.error());
+  }
+  auto state = std::make_unique<State>(std::move(*map), *filter);
+  state->options = config.map;
+  if (auto ok = state->startBackend(config.backend); !ok) {
+    return Unexpected(ok.error());
+  }
+  return Mapper(std::move(state));
+}
+
+Result<Mapper> Mapper::load(const std::string& path, const RayOptions& rays,
+                            const BackendOptions& backend_options) {
+  io::MapLoadOptions load_options;
+  load_options.memory_budget_bytes = MapConfig::kDefaultMemoryBudget;
+  auto map = io::loadMap(path, load_options);
+  if (!map) {
+    return Unexpected(map.error());
+  }
+  auto filter = mapper::toRayFilter(rays, backend_options.name != "cpu");
+  if (!filter) {
+    return Unexpected(filter.error());
+  }
+  auto state = std::make_unique<State>(std::move(*map), *filter);
+  state->options = mapper::toMapOptions(state->map.config());
+  if (auto ok = state->startBackend(backend_options); !ok) {
+    return Unexpected(ok.error());
+  }
+  return Mapper(std::move(state));
+}
+
+Expected<void, Error> Mapper::integrate(std::span<const WorldRay> scan) {
+  State& s = *state_;
+  const std::uint64_t rays_before = s.preparer.counters().rays_in;
+  Ray ray;
+  ray.scan = s.next_scan;
+  for (const WorldRay& in : scan) {
+    ray.origin = toVec3(in.origin);
+    ray.sample = toVec3(in.end);
+    ray.intensity = in.intensity;
+    ray.flags = in.no_return ? kRayNoReturn : 0u;
+    if (auto ok = s.push(ray); !ok) {
+      return ok;
+    }
+  }
+  return s.endScan(rays_before);
+}
+
+Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
+                                        const Eigen::Isometry3d& sensor_to_world) {
+  State& s = *state_;
+  const std::uint64_t rays_before = s.preparer.counters().rays_in;
+  Ray ray;
+  ray.scan = s.next_scan;
+  ray.origin = toVec3(sensor_to_world.translation());
+  for (const SensorPoint& p : scan) {
+    ray.sample = toVec3(sensor_to_world * p.position);
+    ray.time_s = p.time_s;
+    ray.intensity = p.intensity;
+    ray.flags = p.no_return ? kRayNoReturn : 0u;
+    if (auto ok = s.push(ray); !ok) {
+      return ok;
+    }
+  }
+  return s.endScan(rays_before);
+}
+
+Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
+                                        const SensorPoseFunction& sensor_pose_at) {
+  State& s = *state_;
+  const std::uint64_t rays_before = s.preparer.counters().rays_in;
+  Ray ray;
+  ray.scan = s.next_scan;
+  // The pose is asked for once per distinct time (a lidar's points come in blocks of one time).
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  bool have_pose = false;
+  double pose_time = std::numeric_limits<double>::quiet_NaN();
+  for (const SensorPoint& p : scan) {
+    if (!(p.time_s == pose_time)) {  // NaN never equals: the first point always asks
+      const std::optional<Eigen::Isometry3d> asked = sensor_pose_at(p.time_s);
+      pose_time = p.time_s;
+      have_pose = asked.has_value();
+      if (have_pose) {
+        pose = *asked;
+        ray.origin = toVec3(pose.translation());
+      }
+    }
+    if (!have_pose) {
+      ++s.points_no_pose;
+      continue;
+    }
+    ray.sample = toVec3(pose * p.position);
+    ray.time_s = p.time_s;
+    ray.intensity = p.intensity;
+    ray.flags = p.no_return ? kRayNoReturn : 0u;
+    if (auto ok = s.push(ray); !ok) {
+      return ok;
+    }
+  }
+  return s.endScan(rays_before);
+}
+
+Expected<void, Error> Mapper::flush() { return state_->synchronise(); }
+
+std::optional<VoxelKey> Mapper::key(const Eigen::Vector3d& point) const noexcept {
+  const Vec3d p = toVec3(point);
+  if (!p.isFinite() || !state_->map.voxelInRange(p)) {
+    return std::nullopt;
+  }
+  const Vec3i v = state_->map.voxelOf(p);
+  return VoxelKey(v.x, v.y, v.z);
+}
+
+Eigen::Vector3d Mapper::centre(const VoxelKey& key) const noexcept {
+  const Vec3d c = state_->map.voxelCentre(Vec3i{key.x(), key.y(), key.z()});
+  return {c.x, c.y, c.z};
+}
+
+VoxelState Mapper::occupancy(const Eigen::Vector3d& point) const noexcept {
+  const std::optional<VoxelKey> k = key(point);
+  return k ? occupancy(*k) : VoxelState::kUnobserved;
+}
+
+VoxelState Mapper::occupancy(const VoxelKey& key) const noexcept {
+  return state_->map.state(Vec3i{key.x(), key.y(), key.z()});
+}
+
+VoxelInfo Mapper::voxel(const VoxelKey& key) const noexcept {
+  const VoxelMap& map = state_->map;
+  const Vec3i v{key.x(), key.y(), key.z()};
+  VoxelInfo info;
+  info.key = key;
+  info.state = map.state(v);
+  if (info.state != VoxelState::kUnobserved) {
+    const float value = map.occupancyValue(v);
+    info.log_odds = value;
+    info.probability = probability(value);
+  }
+  if (map.meanLayer() >= 0) {
+    const rm_voxel_mean mean = map.mean(v);
+    info.samples = mean.count;
+    if (mean.count > 0) {
+      const rm_vec3f local = rm_mean_decode(mean.packed, mean.count);
+      const Vec3d corner = map.voxelMinCorner(v);
+      const double r = map.geometry().resolution;
+      info.mean = Eigen::Vector3d(corner.x + static_cast<double>(local.x) * r,
+                                  corner.y + static_cast<double>(local.y) * r,
+                                  corner.z + static_cast<double>(local.z) * r);
+    }
+  }
+  return info;
+}
+
+MapCounts Mapper::counts() const noexcept {
+  const MapSummary summary = state_->map.summarise();
+  return MapCounts{summary.regions, summary.voxels_free, summary.voxels_occupied};
+}
+
+Result<HeightMap> Mapper::heightmap(const HeightmapRequest& request) {
+  State& s = *state_;
+  if (!s.generator) {
+    auto made = backends::createHeightmapGenerator(*s.backend.backend);
+    if (!made) {
+      return Unexpected(made.error());
+    }
+    s.generator = std::move(made->generator);
+  }
+  // A generator in the backend's context reads the map where integration left it; one that
+  // reads the host store needs the device's map copied back first.
+  if (s.generator->readsHostStore()) {
+    if (auto ok = s.synchronise(); !ok) {
+      return Unexpected(ok.error());
+    }
+  } else if (auto ok = s.batcher->flush(); !ok) {
+    return Unexpected(s.integrateError(ok.error()));
+  }
+  if (auto ok = heightmap::planHeightmap(s.map, mapper::toHeightmapOptions(request), s.plan); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (auto ok = s.generator->generate(s.map, s.plan, s.grid); !ok) {
+    return Unexpected(ok.error());
+  }
+  HeightMap out;
+  mapper::copyHeightMap(s.grid, out);
+  return out;
+}
+
+Expected<void, Error> Mapper::save(const std::string& path) {
+  if (auto ok = state_->synchronise(); !ok) {
+    return ok;
+  }
+  return io::saveMap(state_->map, path);
+}
+
+MapperCounters Mapper::counters() const noexcept {
+  const State& s = *state_;
+  const RayCounters& rays = s.preparer.counters();
+  MapperCounters c;
+  c.scans = s.scans;
+  c.rays_in = rays.rays_in;
+  c.rays_integrated = rays.rays_accepted;
+  c.rays_invalid = rays.rays_invalid;
+  c.rays_too_short = rays.rays_too_short;
+  c.rays_out_of_bounds = rays.rays_out_of_bounds + rays.rays_outside_window;
+  c.rays_clipped = rays.rays_clipped;
+  c.rays_no_return = rays.rays_no_return;
+  c.points_no_pose = s.points_no_pose;
+  c.batches = s.batcher->counters().batches;
+  c.rays_pending = s.batcher->pending();
+  return c;
+}
+
+const MapOptions& Mapper::mapOptions() const noexcept { return state_->options; }
+
+std::string Mapper::backendName() const { return state_->backend.backend->name(); }
+
+const std::string& Mapper::fallbackWarning() const noexcept {
+  return state_->backend.fallback_warning;
+}
+
+}  // namespace raymap

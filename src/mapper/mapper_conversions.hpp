@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Between the public API's types (include/raymap, Eigen) and the library's own: map and ray
+// options, height-map requests and results.
+#pragma once
+
+#include "raymap/error.hpp"
+#include "raymap/heightmap.hpp"
+#include "raymap/mapper_config.hpp"
+
+#include "src/device/backend_choice.hpp"
+#include "src/heightmap/height_map.hpp"
+#include "src/heightmap/heightmap_plan.hpp"
+#include "src/map/ray_preparer.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace raymap::mapper {
+
+/// @brief The map configuration MapOptions describe (global store). Errors name the option.
+Result<MapConfig> toMapConfig(const MapOptions& options);
+/// @brief The MapOptions that describe an existing map (e.g. one loaded from a file).
+MapOptions toMapOptions(const MapConfig& config);
+/// @brief The ray limits; `device` picks the walk direction RayOptions::Walk::kAuto means.
+Result<RayFilter> toRayFilter(const RayOptions& options, bool device);
+backends::BackendChoice toBackendChoice(const BackendOptions& options);
+heightmap::HeightmapOptions toHeightmapOptions(const HeightmapRequest& request);
+/// @brief Copies the layers the public HeightMap has (elevation, clearance, kind, counts).
+void copyHeightMap(const heightmap::HeightMap& from, HeightMap& to);
+
+}  // namespace raymap::mapper

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Builds the Debian package from a Release build directory (cpack -G DEB) and proves it on a bare
+# Debian 12: a fresh minimal root file system (tools/debian-chroot.sh) where apt-get installs the
+# package and the Depends: dpkg-shlibdeps computed; there `raymap --version` and
+# `raymapd --check-config /etc/raymapd/raymapd.yaml` must run, the unit, headers and CMake package
+# must be in place, and removing and purging the package must take its files away.
+#   tools/check-deb.sh BUILD_DIR      (needs root, network access to the Debian archive)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [ $# -ne 1 ] || [ ! -f "$1/CPackConfig.cmake" ]; then
+  echo "usage: tools/check-deb.sh BUILD_DIR  (a configured and built raymap build directory)" >&2
+  exit 2
+fi
+build=$(cd "$1" && pwd)
+if [ "$(id -u)" -ne 0 ]; then
+  echo "check-deb: needs root (chroot and mount)" >&2
+  exit 1
+fi
+
+echo "== cpack -G DEB in $build"
+rm -f "$build"/raymap_*.deb
+(cd "$build" && cpack -G DEB >"$build/cpack.log" 2>&1) || { tail -30 "$build/cpack.log" >&2; exit 1; }
+deb=$(ls "$build"/raymap_*.deb)
+echo "package: $deb ($(du -h "$deb" | cut -f1))"
+depends=$(dpkg-deb -f "$deb" Depends)
+echo "Depends: $depends"
+for needed in adduser libddsc libyaml-cpp libzstd1 libsqlite3 libstdc++6 libc6; do
+  if [[ $depends != *"$needed"* ]]; then
+    echo "check-deb: Depends lacks $needed (dpkg-shlibdeps did not run?)" >&2
+    exit 1
+  fi
+done
+contents=$(dpkg-deb -c "$deb")
+for path in ./usr/bin/raymap ./usr/bin/raymapd ./usr/lib/systemd/system/raymapd.service \
+  ./etc/raymapd/raymapd.yaml ./etc/raymapd/cyclonedds.xml ./usr/include/raymap/mapper.hpp \
+  ./usr/include/raymap/version.hpp ./usr/lib/cmake/raymap/raymapConfig.cmake; do
+  grep -q " $path\$" <<<"$contents" || { echo "check-deb: the package lacks $path" >&2; exit 1; }
+done
+
+# shellcheck source=tools/debian-chroot.sh
+. tools/debian-chroot.sh
+debian_chroot_create
+root=$chroot_root
+cp /etc/resolv.conf "$root/etc/resolv.conf"
+cp "$deb" "$root/tmp/raymap.deb"
+in_root() {
+  chroot "$root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root \
+    DEBIAN_FRONTEND=noninteractive "$@"
+}
+echo "== apt-get install ./raymap.deb on a minimal Debian 12"
+in_root apt-get update -qq
+in_root apt-get install -y -qq --no-install-recommends /tmp/raymap.deb >"$build/deb-install.log" 2>&1 ||
+  { tail -30 "$build/deb-install.log" >&2; exit 1; }
+in_root raymap --version
+in_root raymapd --check-config /etc/raymapd/raymapd.yaml
+grep -q '^ExecStart=/usr/bin/raymapd --config /etc/raymapd/raymapd.yaml' \
+  "$root/usr/lib/systemd/system/raymapd.service" ||
+  { echo "check-deb: the installed unit does not start /usr/bin/raymapd" >&2; exit 1; }
+in_root getent passwd raymapd >/dev/null || { echo "check-deb: no raymapd user" >&2; exit 1; }
+
+echo "== apt-get remove, then purge"
+in_root apt-get remove -y -qq raymap >/dev/null
+for gone in usr/bin/raymap usr/bin/raymapd usr/include/raymap/mapper.hpp; do
+  [ ! -e "$root/$gone" ] || { echo "check-deb: /$gone survived removal" >&2; exit 1; }
+done
+[ -f "$root/etc/raymapd/raymapd.yaml" ] ||
+  { echo "check-deb: removal (not purge) deleted the configuration" >&2; exit 1; }
+in_root apt-get purge -y -qq raymap >/dev/null
+[ ! -e "$root/etc/raymapd/raymapd.yaml" ] ||
+  { echo "check-deb: purge left /etc/raymapd/raymapd.yaml" >&2; exit 1; }
+echo "check-deb: $(basename "$deb") installs, runs, removes and purges on a bare Debian 12"

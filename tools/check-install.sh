@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
+# Proves the installed CMake package: `cmake --install BUILD_DIR --prefix` a fresh prefix, copy
+# examples/ out of the source tree, build each example there with only find_package(raymap) and
+# run it. map_ray_cloud must give the voxel counts `raymap populate` gives on the same ray cloud
+# (per ray and per scan); heightmap_from_scans must find its step 0.3 m above the floor.
+#   tools/check-install.sh BUILD_DIR   (a built raymap build directory with the tools)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [ $# -ne 1 ] || [ ! -x "$1/tools/raymap" ]; then
+  echo "usage: tools/check-install.sh BUILD_DIR  (a built raymap build directory)" >&2
+  exit 2
+fi
+build=$(cd "$1" && pwd)
+source_dir=$(pwd)
+work=$(mktemp -d /tmp/raymap-install-check.XXXXXX)
+trap 'rm -rf "$work"' EXIT
+prefix=$work/prefix
+
+echo "== cmake --install $build --prefix $prefix"
+cmake --install "$build" --prefix "$prefix" >"$work/install.log"
+[ -f "$prefix/lib/cmake/raymap/raymapConfig.cmake" ] ||
+  { echo "check-install: no raymapConfig.cmake installed" >&2; exit 1; }
+if find "$prefix/include" -name '*.hpp' -exec grep -lE '#include "(src|platform|kernels)/' {} + |
+  grep .; then
+  echo "check-install: an installed header includes an internal one (above)" >&2
+  exit 1
+fi
+
+cp -r examples "$work/examples"  # outside the source tree: only the installed package is there
+for example in map_ray_cloud heightmap_from_scans; do
+  echo "== example $example against the installed package"
+  cmake -S "$work/examples/$example" -B "$work/build-$example" -G Ninja \
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >"$work/$example-configure.log" ||
+    { cat "$work/$example-configure.log" >&2; exit 1; }
+  cmake --build "$work/build-$example" >"$work/$example-build.log" ||
+    { tail -40 "$work/$example-build.log" >&2; exit 1; }
+  if grep -q -- "-I$source_dir" "$work/build-$example/build.ninja"; then
+    echo "check-install: $example was compiled against the source tree" >&2
+    exit 1
+  fi
+done
+
+echo "== map_ray_cloud agrees with raymap populate"
+"$build/tools/raymap" simulate "$source_dir/config/scenes/room.yaml" --rays "$work/room.ply" >/dev/null
+count() {  # count <key> <file of "key value" lines or JSON>
+  grep -oE "\"?$1\"?[: ]+[0-9]+" "$2" | grep -oE '[0-9]+$'
+}
+for semantics in ray scan; do
+  "$work/build-map_ray_cloud/map_ray_cloud" "$work/room.ply" --semantics "$semantics" \
+    | tee "$work/example-$semantics.txt"
+  "$build/tools/raymap" populate "$work/room.ply" -o "$work/room-$semantics.rmap" \
+    --semantics "$semantics" --stats-json "$work/populate-$semantics.json" --quiet >/dev/null
+  for key in voxels_occupied voxels_free; do
+    ours=$(count "$key" "$work/example-$semantics.txt")
+    theirs=$(count "$key" "$work/populate-$semantics.json")
+    if [ "$ours" != "$theirs" ] || [ "$ours" -eq 0 ]; then
+      echo "check-install: per-$semantics $key: example $ours, raymap populate $theirs" >&2
+      exit 1
+    fi
+  done
+  echo "per-$semantics: the example and raymap populate agree"
+done
+
+echo "== heightmap_from_scans"
+"$work/build-heightmap_from_scans/heightmap_from_scans" "$work/heightmap.csv" | tee "$work/hm.txt"
+step=$(grep -oE 'elevation at \(3.55, 0.05\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
+floor=$(grep -oE 'elevation at \(1.05, 2.55\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
+awk -v s="$step" -v f="$floor" 'BEGIN { exit !(s > 0.2 && s < 0.35 && f > -0.1 && f < 0.05) }' ||
+  { echo "check-install: step at $step m, floor at $floor m (want about 0.3 and 0)" >&2; exit 1; }
+[ "$(wc -l <"$work/heightmap.csv")" -eq 10001 ] ||
+  { echo "check-install: the height-map CSV does not have 100 x 100 cells" >&2; exit 1; }
+echo "check-install: the installed package builds and runs both examples"
