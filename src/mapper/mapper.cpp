@@ -87,6 +87,40 @@ struct Mapper::State {
     ++next_scan;
     return ok;
   }
+  /// One scan of sensor-frame points; `pose_at(time)` gives the sensor's pose (or nullopt), asked
+  /// once per distinct point time (a lidar's points come in blocks of one time).
+  template <class PoseAt>
+  Expected<void, Error> integratePoints(std::span<const SensorPoint> scan, const PoseAt& pose_at) {
+    const std::uint64_t rays_before = preparer.counters().rays_in;
+    Ray ray;
+    ray.scan = next_scan;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    bool have_pose = false;
+    double pose_time = std::numeric_limits<double>::quiet_NaN();
+    for (const SensorPoint& p : scan) {
+      if (!(p.time_s == pose_time)) {  // NaN never equals: the first point always asks
+        const std::optional<Eigen::Isometry3d> asked = pose_at(p.time_s);
+        pose_time = p.time_s;
+        have_pose = asked.has_value();
+        if (have_pose) {
+          pose = *asked;
+          ray.origin = toVec3(pose.translation());
+        }
+      }
+      if (!have_pose) {
+        ++points_no_pose;
+        continue;
+      }
+      ray.sample = toVec3(pose * p.position);
+      ray.time_s = p.time_s;
+      ray.intensity = p.intensity;
+      ray.flags = p.no_return ? kRayNoReturn : 0u;
+      if (auto ok = push(ray); !ok) {
+        return ok;
+      }
+    }
+    return endScan(rays_before);
+  }
   Expected<void, Error> synchronise() noexcept {
     if (auto ok = batcher->flush(); !ok) {
       return Unexpected(integrateError(ok.error()));
@@ -163,56 +197,14 @@ Expected<void, Error> Mapper::integrate(std::span<const WorldRay> scan) {
 
 Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
                                         const Eigen::Isometry3d& sensor_to_world) {
-  State& s = *state_;
-  const std::uint64_t rays_before = s.preparer.counters().rays_in;
-  Ray ray;
-  ray.scan = s.next_scan;
-  ray.origin = toVec3(sensor_to_world.translation());
-  for (const SensorPoint& p : scan) {
-    ray.sample = toVec3(sensor_to_world * p.position);
-    ray.time_s = p.time_s;
-    ray.intensity = p.intensity;
-    ray.flags = p.no_return ? kRayNoReturn : 0u;
-    if (auto ok = s.push(ray); !ok) {
-      return ok;
-    }
-  }
-  return s.endScan(rays_before);
+  return state_->integratePoints(scan, [&sensor_to_world](double) {
+    return std::optional<Eigen::Isometry3d>(sensor_to_world);
+  });
 }
 
 Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
                                         const SensorPoseFunction& sensor_pose_at) {
-  State& s = *state_;
-  const std::uint64_t rays_before = s.preparer.counters().rays_in;
-  Ray ray;
-  ray.scan = s.next_scan;
-  // The pose is asked for once per distinct time (a lidar's points come in blocks of one time).
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  bool have_pose = false;
-  double pose_time = std::numeric_limits<double>::quiet_NaN();
-  for (const SensorPoint& p : scan) {
-    if (!(p.time_s == pose_time)) {  // NaN never equals: the first point always asks
-      const std::optional<Eigen::Isometry3d> asked = sensor_pose_at(p.time_s);
-      pose_time = p.time_s;
-      have_pose = asked.has_value();
-      if (have_pose) {
-        pose = *asked;
-        ray.origin = toVec3(pose.translation());
-      }
-    }
-    if (!have_pose) {
-      ++s.points_no_pose;
-      continue;
-    }
-    ray.sample = toVec3(pose * p.position);
-    ray.time_s = p.time_s;
-    ray.intensity = p.intensity;
-    ray.flags = p.no_return ? kRayNoReturn : 0u;
-    if (auto ok = s.push(ray); !ok) {
-      return ok;
-    }
-  }
-  return s.endScan(rays_before);
+  return state_->integratePoints(scan, sensor_pose_at);
 }
 
 Expected<void, Error> Mapper::flush() { return state_->synchronise(); }
