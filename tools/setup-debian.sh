@@ -12,6 +12,7 @@ packages=(
   cyclonedds-dev cyclonedds-tools  # raymapd's DDS I/O (C API; idlc is in -tools)
   libsystemd-dev systemd  # sd_notify for Type=notify; systemd-analyze lints the unit in the tests
   libboost-dev            # Boost.Lockfree SPSC queues (header-only)
+  libeigen3-dev           # Eigen (header-only): host-side poses, rotations, eigen-solver
   libzstd-dev liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks, SQLite (.db3) bags
   clang-format
   patchelf                # tools/device-kit.sh: the kit's executables find its own libraries
