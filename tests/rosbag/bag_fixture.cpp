@@ -27,8 +27,7 @@ std::string harnessDir() { return std::string(RAYMAP_SOURCE_DIR) + "/tests/rosba
 /// so that what the test computes with is bit for bit what raymap decodes.
 Eigen::Quaterniond decoderStable(Eigen::Quaterniond q) {
   for (int i = 0; i < 8; ++i) {
-    const double n = std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z());
-    const Eigen::Quaterniond next(q.w() / n, q.x() / n, q.y() / n, q.z() / n);
+    const Eigen::Quaterniond next = q.normalized();  // what dds::decodeOdometry/TfMessage do
     if (next.coeffs() == q.coeffs()) {
       break;
     }
