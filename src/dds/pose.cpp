@@ -6,6 +6,8 @@
 #include <cstring>
 #include <string_view>
 
+#include <Eigen/Geometry>
+
 #include "src/dds/cdr_reader.hpp"
 #include "src/dds/ros_time.hpp"
 
@@ -53,15 +55,18 @@ Expected<void, PoseError> checkPose(StampedTransform& out) noexcept {
   if (!std::isfinite(out.tx) || !std::isfinite(out.ty) || !std::isfinite(out.tz)) {
     return Unexpected(PoseError::kBadTranslation);
   }
-  const double norm =
-      std::sqrt(out.qw * out.qw + out.qx * out.qx + out.qy * out.qy + out.qz * out.qz);
+  // The wire struct stays plain (trivially copyable); Eigen normalises at use: the division by
+  // the norm that Quaterniond::normalized() does, which tests predicting the decoder rely on.
+  Eigen::Quaterniond q(out.qw, out.qx, out.qy, out.qz);
+  const double norm = q.norm();
   if (!std::isfinite(norm) || norm < kMinQuaternionNorm) {
     return Unexpected(PoseError::kBadQuaternion);
   }
-  out.qw /= norm;
-  out.qx /= norm;
-  out.qy /= norm;
-  out.qz /= norm;
+  q.coeffs() /= norm;
+  out.qw = q.w();
+  out.qx = q.x();
+  out.qy = q.y();
+  out.qz = q.z();
   return {};
 }
 

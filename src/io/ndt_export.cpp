@@ -12,9 +12,11 @@
 #include <tuple>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "kernels/common/ndt.h"
 #include "kernels/common/occupancy.h"
-#include "src/core/symmetric_eigen.hpp"
+#include "src/core/eigen_conversions.hpp"
 #include "src/io/atomic_file.hpp"
 #include "src/io/le_buffer.hpp"
 
@@ -74,12 +76,13 @@ std::vector<Gaussian> collect(const VoxelMap& map, const NdtExportOptions& optio
           for (std::size_t k = 0; k < 6; ++k) {
             p_m2[k] = static_cast<double>(p[k]) * resolution * resolution;
           }
-          const SymmetricEigen3 e = symmetricEigen3(p_m2);
-          for (std::size_t k = 0; k < 3; ++k) {
-            g.axes_m[k] =
-                std::max(options.sigmas * std::sqrt(std::max(e.values[k], 0.0)), min_axis);
+          const PrincipalAxes e = principalAxes(p_m2);
+          for (int k = 0; k < 3; ++k) {
+            const auto at = static_cast<std::size_t>(k);
+            g.axes_m[at] =
+                std::max(options.sigmas * std::sqrt(std::max(e.variances[k], 0.0)), min_axis);
+            g.axes_dir[at] = toVec3(e.axes.col(k));
           }
-          g.axes_dir = e.vectors;
           switch (options.colour) {
             case NdtColour::kHeight:
               g.colour_value = g.mean_m.z;
@@ -199,6 +202,19 @@ std::vector<std::array<std::uint32_t, 3>> unitSphereFaces() {
 }
 
 }  // namespace
+
+PrincipalAxes principalAxes(const std::array<double, 6>& p) noexcept {
+  Eigen::Matrix3d covariance;
+  covariance << p[0], p[1], p[3],  //
+      p[1], p[2], p[4],            //
+      p[3], p[4], p[5];
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  PrincipalAxes out{solver.eigenvalues(), solver.eigenvectors()};
+  if (out.axes.determinant() < 0.0) {
+    out.axes.col(2) = -out.axes.col(2);  // a reflection: make the frame right-handed
+  }
+  return out;
+}
 
 Result<NdtColour> ndtColourFromString(const std::string& text) {
   for (const NdtColour c : {NdtColour::kHeight, NdtColour::kIntensity, NdtColour::kPermeability}) {

@@ -3,11 +3,13 @@
 // ellipsoid mesh per Gaussian, or one point per Gaussian with its surface normal.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
 
 #include "raymap/error.hpp"
+#include <Eigen/Core>
 
 #include "src/map/voxel_map.hpp"
 
@@ -48,6 +50,19 @@ struct Rgb8 {
   std::uint8_t b = 0;
 };
 Rgb8 rampColour(double value) noexcept;
+
+/// @brief The principal axes of a symmetric 3x3 covariance.
+struct PrincipalAxes {
+  Eigen::Vector3d variances;  ///< eigenvalues in ascending order (units of the input)
+  Eigen::Matrix3d axes;       ///< unit eigenvectors as columns, in the same order; right-handed
+};
+
+/// @brief Decomposes the covariance given by its packed lower triangle (a00, a10, a11, a20, a21,
+/// a22, the packing of kernels/common/ndt.h) with Eigen's SelfAdjointEigenSolver (Householder
+/// tridiagonalisation and QL: robust for the singular and repeated-eigenvalue covariances of flat
+/// and thin structures). The third axis is negated where needed so that the axes form a rotation
+/// (the ellipsoid meshes keep their faces turned outwards).
+PrincipalAxes principalAxes(const std::array<double, 6>& packed) noexcept;
 
 /// Vertices and triangles of the low-poly sphere each ellipsoid is made of (a UV sphere of 8
 /// longitudes and 6 latitude bands).

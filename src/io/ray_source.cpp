@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/io/ply_reader.hpp"
 #include "src/io/trajectory.hpp"
 
@@ -140,7 +141,7 @@ class PlyRaySource final : public RaySource {
                         std::to_string(first_vertex + r) + ")");
       }
       // Without orientations the pose's rotation is the identity: origin = position + offset.
-      ray.origin = pose->transform(sensor_offset_);
+      ray.origin = toVec3(pose->transform(toEigen(sensor_offset_)));
     }
     return {};
   }

@@ -58,13 +58,6 @@ bool parseNumber(std::string_view text, double& value) noexcept {
 
 }  // namespace
 
-Vec3d Quaternion::rotate(Vec3d v) const noexcept {
-  // v' = v + 2w (u x v) + 2 u x (u x v), u = (x, y, z): fewer operations than building R(q).
-  const Vec3d u{x, y, z};
-  const Vec3d t = u.cross(v) * 2.0;
-  return v + t * w + u.cross(t);
-}
-
 Trajectory::Trajectory(std::string path, std::vector<TrajectorySample> samples,
                        bool has_orientation) noexcept
     : path_(std::move(path)), samples_(std::move(samples)), has_orientation_(has_orientation) {}
@@ -77,21 +70,21 @@ Result<Trajectory> Trajectory::fromSamples(std::vector<TrajectorySample> samples
   for (std::size_t i = 0; i < samples.size(); ++i) {
     TrajectorySample& sample = samples[i];
     const std::string where = name + ": sample " + std::to_string(i + 1) + ": ";
-    if (!std::isfinite(sample.time_s) || !sample.position.isFinite()) {
+    if (!std::isfinite(sample.time_s) || !sample.position.allFinite()) {
       return fail(ErrorCode::kFormat, where + "time and position must be finite numbers");
     }
     if (i > 0 && !(sample.time_s > samples[i - 1].time_s)) {
       return fail(ErrorCode::kFormat, where + "times must increase strictly");
     }
     if (!has_orientation) {
-      sample.orientation = Quaternion{};
+      sample.orientation = Eigen::Quaterniond::Identity();
       continue;
     }
-    const double norm = std::sqrt(sample.orientation.dot(sample.orientation));
+    const double norm = sample.orientation.norm();
     if (!std::isfinite(norm) || norm < kMinQuaternionNorm) {
       return fail(ErrorCode::kFormat, where + "the orientation quaternion is not a rotation");
     }
-    sample.orientation = normalised(sample.orientation);
+    sample.orientation.coeffs() /= norm;  // = normalized(), without a second norm
   }
   return Trajectory(std::move(name), std::move(samples), has_orientation);
 }
@@ -157,9 +150,10 @@ Result<Trajectory> Trajectory::load(const std::string& path) {
     sample.time_s = values[0];
     sample.position = {values[1], values[2], values[3]};
     if (n == kOrientationColumns) {
-      sample.orientation = {values[4], values[5], values[6], values[7]};
+      sample.orientation =
+          Eigen::Quaterniond(values[4], values[5], values[6], values[7]);  // w x y z
     }
-    if (!std::isfinite(sample.time_s) || !sample.position.isFinite()) {
+    if (!std::isfinite(sample.time_s) || !sample.position.allFinite()) {
       return fail(ErrorCode::kFormat, line_prefix + "time and position must be finite numbers");
     }
     if (!samples.empty() && !(sample.time_s > samples.back().time_s)) {
@@ -168,7 +162,7 @@ Result<Trajectory> Trajectory::load(const std::string& path) {
                                           "(times must increase strictly)");
     }
     if (n == kOrientationColumns) {
-      const double norm = std::sqrt(sample.orientation.dot(sample.orientation));
+      const double norm = sample.orientation.norm();
       if (!std::isfinite(norm) || norm < kMinQuaternionNorm) {
         return fail(ErrorCode::kFormat,
                     line_prefix + "the quaternion (qw qx qy qz) is not a rotation");
@@ -213,19 +207,8 @@ std::optional<Pose> Trajectory::poseAt(double time_s, std::size_t& segment_hint)
   return interpolate(Pose{a.position, a.orientation}, Pose{b.position, b.orientation}, f);
 }
 
-Quaternion normalised(const Quaternion& q) noexcept {
-  const double norm = std::sqrt(q.dot(q));
-  return {q.w / norm, q.x / norm, q.y / norm, q.z / norm};
-}
-
-Quaternion multiply(const Quaternion& a, const Quaternion& b) noexcept {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
-}
-
 Pose compose(const Pose& a_b, const Pose& b_c) noexcept {
-  return Pose{a_b.transform(b_c.position), multiply(a_b.orientation, b_c.orientation)};
+  return Pose{a_b.transform(b_c.position), a_b.orientation * b_c.orientation};
 }
 
 Pose interpolate(const Pose& a, const Pose& b, double f) noexcept {
@@ -235,13 +218,11 @@ Pose interpolate(const Pose& a, const Pose& b, double f) noexcept {
   Pose pose;
   pose.position = a.position + (b.position - a.position) * f;
   // q and -q are the same rotation; flip b onto a's hemisphere so nlerp takes the short arc.
+  // (Not Eigen's slerp: nlerp is what the pose samples have always been interpolated with.)
   const double sign = a.orientation.dot(b.orientation) < 0.0 ? -1.0 : 1.0;
-  const Quaternion& qa = a.orientation;
-  const Quaternion& qb = b.orientation;
-  const double wa = 1.0 - f;
-  const double wb = f * sign;
-  pose.orientation = normalised(
-      {wa * qa.w + wb * qb.w, wa * qa.x + wb * qb.x, wa * qa.y + wb * qb.y, wa * qa.z + wb * qb.z});
+  pose.orientation.coeffs() =
+      (1.0 - f) * a.orientation.coeffs() + (f * sign) * b.orientation.coeffs();
+  pose.orientation.normalize();
   return pose;
 }
 
@@ -255,12 +236,12 @@ Expected<void, Error> saveTrajectory(const Trajectory& trajectory, const std::st
   constexpr std::size_t kFlushBytes = std::size_t{1} << 16;
   for (const TrajectorySample& s : trajectory.samples()) {
     char line[256];
-    int n = std::snprintf(line, sizeof(line), "%.17g %.17g %.17g %.17g", s.time_s, s.position.x,
-                          s.position.y, s.position.z);
+    int n = std::snprintf(line, sizeof(line), "%.17g %.17g %.17g %.17g", s.time_s, s.position.x(),
+                          s.position.y(), s.position.z());
     if (oriented) {
       n += std::snprintf(line + n, sizeof(line) - static_cast<std::size_t>(n),
-                         " %.17g %.17g %.17g %.17g", s.orientation.w, s.orientation.x,
-                         s.orientation.y, s.orientation.z);
+                         " %.17g %.17g %.17g %.17g", s.orientation.w(), s.orientation.x(),
+                         s.orientation.y(), s.orientation.z());
     }
     text.append(line, static_cast<std::size_t>(n));
     text += '\n';

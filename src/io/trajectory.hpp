@@ -9,47 +9,49 @@
 #include <vector>
 
 #include "raymap/error.hpp"
-
-#include "src/core/vec3.hpp"
+#include <Eigen/Geometry>
 
 namespace raymap::io {
 
-/// @brief A rotation as a Hamilton quaternion (w, x, y, z). Unit length wherever a Trajectory
-/// hands one out.
-struct Quaternion {
-  double w = 1.0;
-  double x = 0.0;
-  double y = 0.0;
-  double z = 0.0;
-
-  constexpr double dot(const Quaternion& o) const noexcept {
-    return w * o.w + x * o.x + y * o.y + z * o.z;
-  }
-  /// @brief Rotates `v` by this rotation. @pre unit length
-  Vec3d rotate(Vec3d v) const noexcept;
-};
-
 /// @brief One trajectory line: time (s, the time base of the points), the body position in the
-/// world frame (metres) and its orientation (body to world; identity when the file has none).
+/// world frame (metres) and its orientation (body to world, a unit Hamilton quaternion; the
+/// identity when the file has none).
 struct TrajectorySample {
   double time_s = 0.0;
-  Vec3d position;
-  Quaternion orientation;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
 };
 
-/// @brief A pose: p_world = orientation.rotate(p_body) + position.
+/// @brief A pose of frame b in frame a: p_a = orientation * p_b + position (metres; orientation a
+/// unit quaternion). Default: the identity.
+///
+/// Plain data, cheap to copy (seven doubles, 64 bytes with the quaternion's 16-byte alignment; no
+/// allocation; trivially destructible): it travels by value through the SPSC pose queue and the
+/// PoseHistory ring. Not trivially copyable, as Eigen's fixed-size types have user-provided copy
+/// operations; the queue and the ring need only copy construction and assignment (see
+/// PoseUpdate).
 struct Pose {
-  Vec3d position;
-  Quaternion orientation;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();               ///< origin of b in a, metres
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< b to a, unit length
 
   /// @brief Maps a point from the body frame into the world frame (metres).
-  Vec3d transform(Vec3d p_body) const noexcept { return position + orientation.rotate(p_body); }
+  Eigen::Vector3d transform(const Eigen::Vector3d& p_body) const noexcept {
+    return position + orientation * p_body;
+  }
+  /// @brief The same pose as an Eigen rigid transform (p_a = T * p_b).
+  Eigen::Isometry3d toIsometry() const noexcept {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = orientation.toRotationMatrix();
+    t.translation() = position;
+    return t;
+  }
+  /// @brief The pose of a rigid transform. @pre t.linear() is a rotation; its quaternion is
+  /// normalised, so the rounding of the matrix does not leave it off unit length.
+  static Pose fromIsometry(const Eigen::Isometry3d& t) noexcept {
+    return Pose{t.translation(), Eigen::Quaterniond(t.linear()).normalized()};
+  }
 };
 
-/// @brief The Hamilton product a * b: the rotation b followed by a.
-Quaternion multiply(const Quaternion& a, const Quaternion& b) noexcept;
-/// @brief `q` scaled to unit length. @pre q is not zero
-Quaternion normalised(const Quaternion& q) noexcept;
 /// @brief The pose of frame c in frame a from a_b (b in a) and b_c (c in b): p_a = a_b(b_c(p_c)).
 Pose compose(const Pose& a_b, const Pose& b_c) noexcept;
 /// @brief The pose a fraction f in [0, 1] of the way from `a` to `b`: position linearly,

@@ -10,6 +10,7 @@
 
 #include "kernels/common/occupancy.h"
 #include "kernels/common/voxel_mean.h"
+#include "src/core/eigen_conversions.hpp"
 #include "src/device/backend_choice.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/io/map_file.hpp"
@@ -23,8 +24,6 @@ namespace {
 constexpr std::size_t kChunkRays = 4096;
 /// Prepared rays per backend call when BackendOptions::batch_rays is 0 (as `raymap populate`).
 constexpr std::size_t kDefaultBatchRays = std::size_t{1} << 18;
-
-Vec3d toVec3(const Eigen::Vector3d& v) noexcept { return Vec3d{v.x(), v.y(), v.z()}; }
 
 }  // namespace
 
@@ -219,8 +218,7 @@ std::optional<VoxelKey> Mapper::key(const Eigen::Vector3d& point) const noexcept
 }
 
 Eigen::Vector3d Mapper::centre(const VoxelKey& key) const noexcept {
-  const Vec3d c = state_->map.voxelCentre(Vec3i{key.x(), key.y(), key.z()});
-  return {c.x, c.y, c.z};
+  return toEigen(state_->map.voxelCentre(Vec3i{key.x(), key.y(), key.z()}));
 }
 
 VoxelState Mapper::occupancy(const Eigen::Vector3d& point) const noexcept {

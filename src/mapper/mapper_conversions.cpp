@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "kernels/common/heightmap.h"
+#include "src/core/eigen_conversions.hpp"
 
 namespace raymap::mapper {
 
@@ -97,7 +98,7 @@ backends::BackendChoice toBackendChoice(const BackendOptions& options) {
 
 heightmap::HeightmapOptions toHeightmapOptions(const HeightmapRequest& request) {
   heightmap::HeightmapOptions options;
-  options.centre = Vec3d{request.centre.x(), request.centre.y(), request.centre.z()};
+  options.centre = toVec3(request.centre);
   options.size = request.size;
   options.mode =
       request.follow_terrain ? heightmap::HeightmapMode::kFill : heightmap::HeightmapMode::kPlanar;

@@ -4,6 +4,7 @@
 
 #include "raymap/ray_cloud.hpp"
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/io/ray_source.hpp"
 
 namespace raymap {
@@ -24,8 +25,7 @@ Result<RayCloudReader> RayCloudReader::open(const std::string& path,
                                             const RayCloudOptions& options) {
   io::RaySourceOptions source_options;
   source_options.trajectory_path = options.trajectory_path;
-  source_options.sensor_offset =
-      Vec3d{options.sensor_offset.x(), options.sensor_offset.y(), options.sensor_offset.z()};
+  source_options.sensor_offset = toVec3(options.sensor_offset);
   source_options.scan_period_s = options.scan_period_s;
   auto source = io::openRaySource(path, source_options);
   if (!source) {
@@ -60,8 +60,8 @@ Result<bool> RayCloudReader::nextScan(std::vector<WorldRay>& scan) {
     have_scan = true;
     scan_number = ray.scan;
     WorldRay out;
-    out.origin = Eigen::Vector3d(ray.origin.x, ray.origin.y, ray.origin.z);
-    out.end = Eigen::Vector3d(ray.sample.x, ray.sample.y, ray.sample.z);
+    out.origin = toEigen(ray.origin);
+    out.end = toEigen(ray.sample);
     out.intensity = ray.intensity;
     out.no_return = (ray.flags & kRayNoReturn) != 0u;
     scan.push_back(out);

@@ -10,6 +10,7 @@
 #include <limits>
 #include <span>
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/ray.hpp"
@@ -75,9 +76,10 @@ class PointDeskewer {
       sensor_pose_ = io::compose(base, extrinsic);
       last_time_ns_ = t;
     }
-    ray.origin = sensor_pose_.position;
-    ray.sample = sensor_pose_.transform(
-        {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
+    // The sensor's pose in the world frame maps the point (sensor frame, metres) into the world.
+    ray.origin = toVec3(sensor_pose_.position);
+    ray.sample = toVec3(sensor_pose_.transform(
+        {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}));
     ray.time_s = static_cast<double>(t) * 1e-9;
     ray.intensity = p.intensity;
     ray.flags = 0;

@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "platform/clock.hpp"
+#include "src/core/eigen_conversions.hpp"
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/load_shedding.hpp"
 
@@ -67,7 +68,7 @@ void Integrator::drainPoses() noexcept {
       continue;
     }
     if (history_.push(update.stamp_ns, update.pose)) {
-      latest_.store(update.stamp_ns, update.pose.position);
+      latest_.store(update.stamp_ns, toVec3(update.pose.position));
     } else {
       stats_.poses_out_of_order.add();
     }

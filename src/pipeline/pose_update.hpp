@@ -9,6 +9,7 @@
 
 #include <boost/lockfree/spsc_queue.hpp>
 
+#include "src/core/vec3.hpp"
 #include "src/io/trajectory.hpp"
 
 namespace raymap::pipeline {
@@ -24,7 +25,16 @@ struct PoseUpdate {
   std::uint32_t sensor = 0;
   Kind kind = kBaseInWorld;
 };
-static_assert(std::is_trivially_copyable_v<PoseUpdate>);
+// What the queue and the integrator need of an update: boost::lockfree::spsc_queue copy-constructs
+// it into its ring (placement new) and copy-assigns it out, so T needs a default constructor and
+// copy operations, not trivial copyability (only boost::lockfree::queue, the MPMC one, asks for
+// that). io::Pose holds Eigen's fixed-size Vector3d and Quaterniond, whose copy operations are
+// user-provided (so the type is not trivially copyable) but copy three and four doubles in
+// place: no allocation, no exception, no lock. Trivially destructible, so popping runs no
+// destructor either. No code memcpy's an update or shares one between threads outside the queue.
+static_assert(std::is_default_constructible_v<PoseUpdate> &&
+              std::is_copy_constructible_v<PoseUpdate> && std::is_copy_assignable_v<PoseUpdate>);
+static_assert(std::is_trivially_destructible_v<PoseUpdate>);
 
 /// @brief Bounded wait-free SPSC queue of pose updates (ingest -> integrator); the capacity is set
 /// at construction (start-up). Full: the ingest thread drops the update and counts it.

@@ -43,10 +43,8 @@ void TfRouter::resolveExtrinsics(PoseSink& sink) noexcept {
       continue;
     }
     const io::Pose& last = extrinsic_from_tf_[s];
-    if (extrinsic_resolved_[s] != 0 && last.position.x == pose.position.x &&
-        last.position.y == pose.position.y && last.position.z == pose.position.z &&
-        last.orientation.w == pose.orientation.w && last.orientation.x == pose.orientation.x &&
-        last.orientation.y == pose.orientation.y && last.orientation.z == pose.orientation.z) {
+    if (extrinsic_resolved_[s] != 0 && last.position == pose.position &&
+        last.orientation.coeffs() == pose.orientation.coeffs()) {
       continue;  // unchanged (tf_static is republished as a whole)
     }
     (void)pushExtrinsic(s, pose, sink);

@@ -19,6 +19,7 @@ namespace raymap::pipeline {
 
 /// @brief The transform's pose (child in parent).
 inline io::Pose poseOf(const dds::StampedTransform& t) noexcept {
+  // The wire struct stays plain (tx..qz); Eigen's quaternion takes (w, x, y, z).
   return io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
 }
 

@@ -14,6 +14,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "src/config/yaml_reader.hpp"
+#include "src/core/eigen_conversions.hpp"
 #include "src/dds/topic_types.hpp"
 
 namespace raymap::service {
@@ -183,16 +184,18 @@ io::Pose readExtrinsic(Context& ctx, const YAML::Node& node, const std::string& 
   f.knownKeys({"translation", "rotation"});
   io::Pose pose;
   if (f.has("translation")) {
-    pose.position = f.vec3("translation");
+    pose.position = toEigen(f.vec3("translation"));
   }
   if (f.has("rotation")) {
     const std::vector<double> q =
         config::toNumbers(ctx, f.get("rotation"), f.path("rotation"), 4, "[w, x, y, z]");
-    const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!ctx.failed() && norm < 1e-6) {
-      ctx.fail(f.get("rotation"), f.path("rotation"), "is not a rotation (zero quaternion)");
-    } else if (!ctx.failed()) {
-      pose.orientation = io::normalised({q[0], q[1], q[2], q[3]});
+    if (!ctx.failed()) {
+      const Eigen::Quaterniond rotation(q[0], q[1], q[2], q[3]);  // w, x, y, z
+      if (rotation.norm() < 1e-6) {
+        ctx.fail(f.get("rotation"), f.path("rotation"), "is not a rotation (zero quaternion)");
+      } else {
+        pose.orientation = rotation.normalized();
+      }
     }
   }
   return pose;

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
-#include "src/core/symmetric_eigen.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
@@ -53,11 +53,18 @@ enum class Shape { kLinear, kPlanar, kOther };
 Shape shapeOf(const rm_ndt_voxel& g) {
   float p[6];
   rm_ndt_covariance(g.s, p);
-  const SymmetricEigen3 e = symmetricEigen3({p[0], p[1], p[2], p[3], p[4], p[5]});
-  if (e.values[1] < kShapeRatio * e.values[2]) {
+  Eigen::Matrix3d covariance;      // from the packed lower triangle (kernels/common/ndt.h)
+  covariance << p[0], p[1], p[3],  //
+      p[1], p[2], p[4],            //
+      p[3], p[4], p[5];
+  // Eigenvalues in ascending order.
+  const Eigen::Vector3d l =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
+          .eigenvalues();
+  if (l[1] < kShapeRatio * l[2]) {
     return Shape::kLinear;  // one dominant axis: a pole, a wire, an edge
   }
-  if (e.values[0] < kShapeRatio * e.values[1]) {
+  if (l[0] < kShapeRatio * l[1]) {
     return Shape::kPlanar;  // two: a wall, the ground
   }
   return Shape::kOther;

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pose_history.hpp"
 #include "src/sim/scene_file.hpp"
@@ -24,11 +25,10 @@ std::string harnessDir() { return std::string(RAYMAP_SOURCE_DIR) + "/tests/rosba
 
 /// The quaternion as the ROS decoders leave it (divided by its norm), iterated to a fixed point,
 /// so that what the test computes with is bit for bit what raymap decodes.
-io::Quaternion decoderStable(io::Quaternion q) {
+Eigen::Quaterniond decoderStable(Eigen::Quaterniond q) {
   for (int i = 0; i < 8; ++i) {
-    const double n = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-    const io::Quaternion next{q.w / n, q.x / n, q.y / n, q.z / n};
-    if (next.w == q.w && next.x == q.x && next.y == q.y && next.z == q.z) {
+    const Eigen::Quaterniond next = q.normalized();  // what dds::decodeOdometry/TfMessage do
+    if (next.coeffs() == q.coeffs()) {
       break;
     }
     q = next;
@@ -37,9 +37,8 @@ io::Quaternion decoderStable(io::Quaternion q) {
 }
 
 io::Pose inverse(const io::Pose& p) {
-  const io::Quaternion conj{p.orientation.w, -p.orientation.x, -p.orientation.y, -p.orientation.z};
-  const Vec3d back = conj.rotate(p.position);
-  return io::Pose{{-back.x, -back.y, -back.z}, conj};
+  const Eigen::Quaterniond conj = p.orientation.conjugate();
+  return io::Pose{-(conj * p.position), conj};
 }
 
 }  // namespace
@@ -110,7 +109,7 @@ Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans) {
     b.orientation = decoderStable(b.orientation);
     return b;
   };
-  drive.centre = baseAt(kT0 + period * scans / 2).position;
+  drive.centre = toVec3(baseAt(kT0 + period * scans / 2).position);
 
   drive.spec = dir.file("drive.jsonl");
   BagSpecWriter spec(drive.spec);

@@ -135,12 +135,12 @@ std::string smallSpec(const TempDir& dir) {
   w.channel("/odom", "nav_msgs/msg/Odometry");
   w.channel("/points", "sensor_msgs/msg/PointCloud2");
   const std::int64_t t0 = 1700000000000000000;
-  w.tf("/tf_static", t0, {{t0, "base_link", "lidar", io::Pose{{0.1, 0.0, 0.5}, {}}}});
+  w.tf("/tf_static", t0, {{t0, "base_link", "lidar", io::Pose{{0.1, 0.0, 0.5}}}});
   std::vector<dds::ScanPoint> points(64);
   std::vector<std::uint16_t> rings(64, 0);
   for (int k = 0; k < 5; ++k) {
     const std::int64_t t = t0 + k * 100000000LL;
-    w.odometry("/odom", t, t, "odom", "base_link", io::Pose{{0.1 * k, 0.0, 0.0}, {}});
+    w.odometry("/odom", t, t, "odom", "base_link", io::Pose{{0.1 * k, 0.0, 0.0}});
     for (std::size_t i = 0; i < points.size(); ++i) {
       const double a = 0.1 * static_cast<double>(i);
       points[i] = {static_cast<float>(5.0 * std::cos(a)),
@@ -153,7 +153,7 @@ std::string smallSpec(const TempDir& dir) {
     w.ousterCloud("/points", t + 100000001, t, "lidar", points, rings);
   }
   const std::int64_t end = t0 + 500000000;
-  w.odometry("/odom", end, end, "odom", "base_link", io::Pose{{0.5, 0.0, 0.0}, {}});
+  w.odometry("/odom", end, end, "odom", "base_link", io::Pose{{0.5, 0.0, 0.0}});
   return spec;
 }
 

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "src/core/eigen_conversions.hpp"
 #include "tests/replay/replay_harness.hpp"
 #include "tests/rosbag/bag_fixture.hpp"
 #include "tests/support/bag_spec.hpp"
@@ -63,7 +64,7 @@ TEST(BagOuster, TheOusterDataSetAsABagGivesTheVoxelsOfItsRays) {
         last = std::max(last, r.time_s);
       }
       const std::int64_t stamp = kT0 + nanoseconds(first);
-      const io::Pose pose{origin, {}};
+      const io::Pose pose{toEigen(origin)};  // identity rotation
       // 10 us either side: inside the 98 us between a scan's last column and the next's first,
       // so that no point is interpolated between two scans' origins.
       spec.odometry("/odom", stamp - 10000, stamp - 10000, "odom", "base_link", pose);

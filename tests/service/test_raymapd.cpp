@@ -314,7 +314,7 @@ TEST(Raymapd, UsesTheLatchedTfStaticExtrinsicPublishedBeforeItStarted) {
   // identity), and it is published before raymapd exists, as a robot's static_transform_publisher
   // runs before a restarted service.
   RosSide ros(domain, 70000);
-  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.5}, {}}, "base_link", "lidar");
+  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.5}}, "base_link", "lidar");
   std::string config = serviceConfig(domain);
   config.replace(config.find("base_height: 1.2"), 16, "base_height: 0.7");
   RunningDaemon daemon(config, false);
@@ -345,8 +345,8 @@ TEST(Raymapd, ResolvesATfStaticChainThatArrivedBeforeTheFirstCloudWithTheFrameLe
   // In one latched TFMessage, as robot_state_publisher sends them (two messages on a keep-last-1
   // writer could lose the first before it is delivered).
   const driver::DriverPublisher::StaticEdge chain[] = {
-      {io::Pose{{0.0, 0.0, 0.2}, {}}, "mount", "lidar"},
-      {io::Pose{{0.0, 0.0, 0.3}, {}}, "base_link", "mount"}};
+      {io::Pose{{0.0, 0.0, 0.2}}, "mount", "lidar"},
+      {io::Pose{{0.0, 0.0, 0.3}}, "base_link", "mount"}};
   ros.publisher->publishTfStatic(chain);
   driver::PlaybackOptions options;
   options.sensor_in_base = {0.0, 0.0, 0.5};  // the published base pose is 0.5 m below the lidar
@@ -391,9 +391,9 @@ TEST(Raymapd, TakesTheExtrinsicOfASensorOnAMovingMountThroughItsChain) {
       << daemon.log();
   RosSide ros(domain, 70000);
   ASSERT_TRUE(ros.waitForService(10.0));
-  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.2}, {}}, "pan", "lidar");
+  ros.publisher->publishTfStatic(io::Pose{{0.0, 0.0, 0.2}}, "pan", "lidar");
   for (int i = 0; i < 5; ++i) {  // /tf is volatile: a few times, once matched is enough
-    ros.publisher->publishTf(0, io::Pose{{0.0, 0.0, 0.3}, {}}, "base_link", "pan");
+    ros.publisher->publishTf(0, io::Pose{{0.0, 0.0, 0.3}}, "base_link", "pan");
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   driver::PlaybackOptions options;

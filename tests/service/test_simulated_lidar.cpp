@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/sim/scene.hpp"
 #include "tests/service/service_fixture.hpp"
 
@@ -26,12 +27,12 @@ TEST(SimulatedLidar, PointsPutBackWithThePosesLieOnTheSceneWhileMoving) {
       }
       const double t = static_cast<double>(k) * lidar.scanPeriod() + static_cast<double>(p.time_s);
       const io::Pose pose = lidar.poseAt(t);
-      const Vec3d w = pose.transform(
-          {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
+      const Vec3d w = toVec3(pose.transform(
+          {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}));
+      const Vec3d origin = toVec3(pose.position);
       // The point lies where a ray from the pose's position first meets the scene (noise 1 cm).
-      const double range = (w - pose.position).norm();
-      const double hit =
-          sim::castRay(lidar.scene(), pose.position, (w - pose.position) * (1 / range));
+      const double range = (w - origin).norm();
+      const double hit = sim::castRay(lidar.scene(), origin, (w - origin) * (1 / range));
       ++checked;
       if (std::fabs(hit - range) < 0.05) {
         ++on_surface;

@@ -25,8 +25,8 @@ std::string poseJson(const io::Pose& p) {
   std::snprintf(text, sizeof(text),
                 "{\"position\":{\"x\":%.17g,\"y\":%.17g,\"z\":%.17g},\"orientation\":{\"x\":%.17g,"
                 "\"y\":%.17g,\"z\":%.17g,\"w\":%.17g}}",
-                p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
-                p.orientation.z, p.orientation.w);
+                p.position.x(), p.position.y(), p.position.z(), p.orientation.x(),
+                p.orientation.y(), p.orientation.z(), p.orientation.w());
   return text;
 }
 
@@ -113,11 +113,11 @@ void BagSpecWriter::tf(const std::string& topic, std::int64_t log_time_ns,
   for (const SpecTransform& t : transforms) {
     char translation[160];
     std::snprintf(translation, sizeof(translation), "{\"x\":%.17g,\"y\":%.17g,\"z\":%.17g}",
-                  t.pose.position.x, t.pose.position.y, t.pose.position.z);
+                  t.pose.position.x(), t.pose.position.y(), t.pose.position.z());
     char rotation[200];
     std::snprintf(rotation, sizeof(rotation), "{\"x\":%.17g,\"y\":%.17g,\"z\":%.17g,\"w\":%.17g}",
-                  t.pose.orientation.x, t.pose.orientation.y, t.pose.orientation.z,
-                  t.pose.orientation.w);
+                  t.pose.orientation.x(), t.pose.orientation.y(), t.pose.orientation.z(),
+                  t.pose.orientation.w());
     if (!list.empty()) {
       list += ',';
     }

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "src/core/eigen_conversions.hpp"
+
 namespace raymap::driver {
 
 LidarPlayback::LidarPlayback(const SimulatedLidar& lidar, DriverPublisher& publisher,
@@ -42,7 +44,7 @@ std::int64_t LidarPlayback::publishDue(std::int64_t now) {
   while (next_odometry_ <= now) {
     const double t = static_cast<double>(next_odometry_ - t0_) * 1e-9;
     io::Pose base = lidar_.poseAt(t);
-    base.position = base.position - base.orientation.rotate(options_.sensor_in_base);
+    base.position -= base.orientation * toEigen(options_.sensor_in_base);
     if (options_.pose_as_tf) {
       publisher_.publishTf(stamp0_ + (next_odometry_ - t0_), base, options_.world_frame,
                            options_.base_frame);

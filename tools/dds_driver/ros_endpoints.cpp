@@ -99,9 +99,9 @@ void DriverPublisher::publishOdometry(std::int64_t stamp_ns, const io::Pose& pos
   dds::setRosTime(m.header.stamp, stamp_ns);
   m.header.frame_id = const_cast<char*>(world_frame);  // NOLINT: read-only for dds_write
   m.child_frame_id = const_cast<char*>(base_frame);    // NOLINT: read-only for dds_write
-  m.pose.pose.position = {pose.position.x, pose.position.y, pose.position.z};
-  m.pose.pose.orientation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
-                             pose.orientation.w};
+  m.pose.pose.position = {pose.position.x(), pose.position.y(), pose.position.z()};
+  m.pose.pose.orientation = {pose.orientation.x(), pose.orientation.y(), pose.orientation.z(),
+                             pose.orientation.w()};
   (void)odometry_writer_->write(&m);
 }
 
@@ -115,9 +115,9 @@ geometry_msgs_msg_dds__TransformStamped_ transformStamped(std::int64_t stamp_ns,
   dds::setRosTime(t.header.stamp, stamp_ns);
   t.header.frame_id = const_cast<char*>(parent);  // NOLINT: read-only for dds_write
   t.child_frame_id = const_cast<char*>(child);    // NOLINT: read-only for dds_write
-  t.transform.translation = {pose.position.x, pose.position.y, pose.position.z};
-  t.transform.rotation = {pose.orientation.x, pose.orientation.y, pose.orientation.z,
-                          pose.orientation.w};
+  t.transform.translation = {pose.position.x(), pose.position.y(), pose.position.z()};
+  t.transform.rotation = {pose.orientation.x(), pose.orientation.y(), pose.orientation.z(),
+                          pose.orientation.w()};
   return t;
 }
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "src/core/eigen_conversions.hpp"
+
 namespace raymap::driver {
 
 SimulatedLidar::SimulatedLidar(sim::Scene scene, sim::SimulationConfig config)
@@ -17,8 +19,9 @@ std::uint32_t SimulatedLidar::pointsPerScan() const noexcept {
 
 io::Pose SimulatedLidar::poseAt(double time_s) const {
   const sim::SensorPose p = config_.path.at(config_.path.startTime() + time_s);
-  const double half = 0.5 * p.yaw_rad;
-  return io::Pose{p.position, io::Quaternion{std::cos(half), 0.0, 0.0, std::sin(half)}};
+  // The sensor stays level: its orientation is the heading, a turn about +z.
+  return io::Pose{toEigen(p.position),
+                  Eigen::Quaterniond(Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()))};
 }
 
 void SimulatedLidar::scan(std::uint64_t k, std::vector<dds::ScanPoint>& points,

@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/io/atomic_file.hpp"
 #include "src/map/cpu_backend.hpp"
 
@@ -426,7 +427,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.bag.world_frame = f.world_frame;
   o.bag.base_frame = f.base_frame;
   o.bag.time_field = f.time_field;
-  o.bag.extrinsic.position = *offset;
+  o.bag.extrinsic.position = toEigen(*offset);
   const bool is_bag = bag::isBag(input);
   if (is_bag && !f.trajectory.empty()) {
     return fail(ErrorCode::kInvalidArgument,

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/io/ray_cloud_writer.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/sim/scene_file.hpp"
@@ -89,8 +90,8 @@ Rect sceneRect(const sim::Scene& scene, const sim::SensorPath& path) {
 }
 
 /// Rotation about +z by `yaw` as a unit quaternion.
-io::Quaternion yawQuaternion(double yaw_rad) {
-  return {std::cos(yaw_rad / 2.0), 0.0, 0.0, std::sin(yaw_rad / 2.0)};
+Eigen::Quaterniond yawQuaternion(double yaw_rad) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()));
 }
 
 /// The true height field as CSV text: one row per cell of the map's grid (faces on multiples of
@@ -153,7 +154,7 @@ Expected<void, Error> writeTrajectory(const sim::SimulationConfig& simulation,
                                       const std::string& path) {
   std::vector<io::TrajectorySample> samples;
   for (const sim::SensorPose& pose : sim::columnPoses(simulation)) {
-    samples.push_back({pose.time_s, pose.position, yawQuaternion(pose.yaw_rad)});
+    samples.push_back({pose.time_s, toEigen(pose.position), yawQuaternion(pose.yaw_rad)});
   }
   auto trajectory = io::Trajectory::fromSamples(std::move(samples), true, path);
   if (!trajectory) {

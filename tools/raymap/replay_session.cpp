@@ -11,6 +11,7 @@
 
 #include "platform/clock.hpp"
 #include "src/bag/bag_reader.hpp"
+#include "src/core/eigen_conversions.hpp"
 #include "src/record/record_log_reader.hpp"
 #include "tools/raymap/commands.hpp"
 
@@ -248,7 +249,7 @@ Result<void> ReplaySession::playRayFile(const std::string& path) {
         return {};
       }
       io::Pose pose;
-      pose.position = knot.position;
+      pose.position = toEigen(knot.position);
       if (options_.pose_odometry) {
         driver.publishOdometry(knot.stamp_ns, pose, options_.world_frame.c_str(),
                                options_.base_frame.c_str());

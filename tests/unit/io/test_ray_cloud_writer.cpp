@@ -283,8 +283,8 @@ TEST(RayCloudWriter, PointCloudLayoutHoldsTheReturnsForATrajectory) {
   const std::vector<Ray> rays = {ray({0.0, 0.0, 1.0}, {5.0, 0.0, 0.0}, 0.0, 20.0f, 0),
                                  ray({0.5, 0.0, 1.0}, {0.5, 30.0, 1.0}, 0.5, 0.0f, 0, kRayNoReturn),
                                  ray({1.0, 0.0, 1.0}, {1.0, -3.0, 0.5}, 1.0, 30.0f, 1)};
-  auto trajectory = Trajectory::fromSamples(
-      {{0.0, {0.0, 0.0, 1.0}, {}}, {1.0, {1.0, 0.0, 1.0}, {}}}, false, path_file);
+  auto trajectory =
+      Trajectory::fromSamples({{0.0, {0.0, 0.0, 1.0}}, {1.0, {1.0, 0.0, 1.0}}}, false, path_file);
   ASSERT_TRUE(trajectory.has_value()) << trajectory.error().message;
   ASSERT_TRUE(saveTrajectory(*trajectory, path_file).has_value());
   auto writer = RayCloudWriter::open(points, PlyLayout::kPointCloud);

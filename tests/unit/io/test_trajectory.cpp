@@ -22,8 +22,8 @@ Result<Trajectory> loadText(const test::TempDir& dir, const std::string& text) {
   return Trajectory::load(path);
 }
 
-Quaternion aboutZ(double angle_rad) {
-  return {std::cos(angle_rad / 2.0), 0.0, 0.0, std::sin(angle_rad / 2.0)};
+Eigen::Quaterniond aboutZ(double angle_rad) {
+  return {std::cos(angle_rad / 2.0), 0.0, 0.0, std::sin(angle_rad / 2.0)};  // w x y z
 }
 
 TEST(Trajectory, SkipsHeaderCommentsAndBlankLinesAndAcceptsCommas) {
@@ -42,7 +42,7 @@ TEST(Trajectory, SkipsHeaderCommentsAndBlankLinesAndAcceptsCommas) {
   ASSERT_EQ(trajectory->samples().size(), 3u);
   EXPECT_EQ(trajectory->startTime(), 0.0);
   EXPECT_EQ(trajectory->endTime(), 2.5);
-  EXPECT_EQ(trajectory->samples()[1].position, (Vec3d{2, 4, 6}));
+  EXPECT_EQ(trajectory->samples()[1].position, Eigen::Vector3d(2, 4, 6));
 }
 
 TEST(Trajectory, InterpolatesPositionLinearlyAndHitsSamplesExactly) {
@@ -55,11 +55,11 @@ TEST(Trajectory, InterpolatesPositionLinearlyAndHitsSamplesExactly) {
   const auto middle = trajectory->poseAt(2.0);
 
   ASSERT_TRUE(quarter && at_sample && middle);
-  EXPECT_NEAR(quarter->position.x, 0.5, kTolerance);
-  EXPECT_NEAR(quarter->position.y, -1.0, kTolerance);
-  EXPECT_NEAR(quarter->position.z, 0.025, kTolerance);
-  EXPECT_EQ(at_sample->position, (Vec3d{0.3, 0.7, 1e-3}));  // exactly, no rounding
-  EXPECT_EQ(middle->position, (Vec3d{2, -4, 0.1}));
+  EXPECT_NEAR(quarter->position.x(), 0.5, kTolerance);
+  EXPECT_NEAR(quarter->position.y(), -1.0, kTolerance);
+  EXPECT_NEAR(quarter->position.z(), 0.025, kTolerance);
+  EXPECT_EQ(at_sample->position, Eigen::Vector3d(0.3, 0.7, 1e-3));  // exactly, no rounding
+  EXPECT_EQ(middle->position, Eigen::Vector3d(2, -4, 0.1));
 }
 
 TEST(Trajectory, TimesOutsideTheSamplesAreNotCovered) {
@@ -77,7 +77,7 @@ TEST(Trajectory, TimesOutsideTheSamplesAreNotCovered) {
 TEST(Trajectory, SegmentHintGivesTheSameAnswersInAnyQueryOrder) {
   std::vector<TrajectorySample> samples;
   for (int i = 0; i <= 100; ++i) {
-    samples.push_back({i * 0.1, {i * 1.0, i * i * 1.0, 0.0}, {}});
+    samples.push_back({i * 0.1, {i * 1.0, i * i * 1.0, 0.0}});  // identity orientation
   }
   const auto trajectory = Trajectory::fromSamples(samples, false, "made");
   ASSERT_TRUE(trajectory.has_value()) << trajectory.error().message;
@@ -93,21 +93,21 @@ TEST(Trajectory, SegmentHintGivesTheSameAnswersInAnyQueryOrder) {
 
 TEST(Trajectory, InterpolatesOrientationOnTheShortArc) {
   test::TempDir dir;
-  const Quaternion start = aboutZ(0.0);
-  const Quaternion end = aboutZ(std::numbers::pi / 2.0);
+  const Eigen::Quaterniond start = aboutZ(0.0);
+  const Eigen::Quaterniond end = aboutZ(std::numbers::pi / 2.0);
   // The end written with the opposite sign: the same rotation, which nlerp must not unwind.
-  const std::string text = "0 0 0 0 1 0 0 0\n1 0 0 0 " + std::to_string(-end.w) + " 0 0 " +
-                           std::to_string(-end.z) + "\n";
+  const std::string text = "0 0 0 0 1 0 0 0\n1 0 0 0 " + std::to_string(-end.w()) + " 0 0 " +
+                           std::to_string(-end.z()) + "\n";
   const auto trajectory = loadText(dir, text);
   ASSERT_TRUE(trajectory.has_value()) << trajectory.error().message;
   ASSERT_TRUE(trajectory->hasOrientation());
-  EXPECT_EQ(trajectory->samples()[0].orientation.w, start.w);
+  EXPECT_EQ(trajectory->samples()[0].orientation.w(), start.w());
 
   const auto halfway = trajectory->poseAt(0.5);
 
   ASSERT_TRUE(halfway.has_value());
-  const Vec3d x_axis = halfway->orientation.rotate({1, 0, 0});
-  const double angle = std::atan2(x_axis.y, x_axis.x);
+  const Eigen::Vector3d x_axis = halfway->orientation * Eigen::Vector3d::UnitX();
+  const double angle = std::atan2(x_axis.y(), x_axis.x());
   EXPECT_NEAR(angle, std::numbers::pi / 4.0, 1e-6);  // midpoint of nlerp = midpoint of slerp
   EXPECT_NEAR(std::sqrt(halfway->orientation.dot(halfway->orientation)), 1.0, kTolerance);
 }
@@ -121,10 +121,57 @@ TEST(Trajectory, NormalisesQuaternionsAndTransformsPoints) {
   const auto pose = trajectory->poseAt(0.0);
 
   ASSERT_TRUE(pose.has_value());
-  const Vec3d p_world = pose->transform({1, 0, 0});
-  EXPECT_NEAR(p_world.x, 10.0, kTolerance);
-  EXPECT_NEAR(p_world.y, 21.0, kTolerance);
-  EXPECT_NEAR(p_world.z, 30.0, kTolerance);
+  const Eigen::Vector3d p_world = pose->transform({1, 0, 0});
+  EXPECT_NEAR(p_world.x(), 10.0, kTolerance);
+  EXPECT_NEAR(p_world.y(), 21.0, kTolerance);
+  EXPECT_NEAR(p_world.z(), 30.0, kTolerance);
+}
+
+TEST(PoseMaths, InterpolationIsNlerpOnTheShortArcAndExactAtItsEnds) {
+  const Pose a{{1.0, 2.0, 3.0}, aboutZ(0.2)};
+  const double turn = std::numbers::pi / 2.0;
+  // b's quaternion on the far hemisphere: the same rotation, which must not be unwound.
+  const Pose b{{3.0, 2.0, -1.0}, Eigen::Quaterniond(-aboutZ(0.2 + turn).coeffs())};
+
+  const Pose at_a = interpolate(a, b, 0.0);
+  const Pose quarter = interpolate(a, b, 0.25);
+  const Pose at_b = interpolate(a, b, 1.0);
+
+  EXPECT_EQ(at_a.position, a.position);  // exactly
+  EXPECT_EQ(at_a.orientation.coeffs(), a.orientation.coeffs());
+  EXPECT_NEAR(quarter.position.x(), 1.5, kTolerance);
+  EXPECT_NEAR(quarter.position.z(), 2.0, kTolerance);
+  // nlerp's angle at f: 2 atan2(f sin(turn / 2), 1 - f + f cos(turn / 2)) past a's; slerp's
+  // would be f * turn, about 0.0157 rad more here.
+  const double f = 0.25;
+  const double nlerp =
+      2.0 * std::atan2(f * std::sin(turn / 2.0), 1.0 - f + f * std::cos(turn / 2.0));
+  const Eigen::Vector3d x_axis = quarter.orientation * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(std::atan2(x_axis.y(), x_axis.x()), 0.2 + nlerp, 1e-12);
+  EXPECT_GT(f * turn - nlerp, 0.01) << "this is slerp, not nlerp";
+  EXPECT_NEAR(quarter.orientation.norm(), 1.0, kTolerance);
+  EXPECT_NEAR(std::abs(at_b.orientation.dot(b.orientation)), 1.0, kTolerance);
+}
+
+TEST(PoseMaths, ComposeTransformAndIsometriesAgree) {
+  const Pose a_b{{0.5, -1.0, 2.0},
+                 Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()))};
+  const Pose b_c{
+      {-0.3, 0.2, 1.1},
+      Eigen::Quaterniond(Eigen::AngleAxisd(-1.9, Eigen::Vector3d(0, 1, -1).normalized()))};
+  const Eigen::Vector3d p_c(0.4, -2.5, 7.0);
+
+  const Pose a_c = compose(a_b, b_c);
+  const Eigen::Isometry3d t_a_c = a_b.toIsometry() * b_c.toIsometry();
+  const Pose back = Pose::fromIsometry(t_a_c);
+
+  EXPECT_NEAR((a_c.transform(p_c) - a_b.transform(b_c.transform(p_c))).norm(), 0.0, kTolerance);
+  EXPECT_NEAR((a_c.transform(p_c) - t_a_c * p_c).norm(), 0.0, kTolerance);
+  EXPECT_NEAR((back.position - a_c.position).norm(), 0.0, kTolerance);
+  EXPECT_NEAR(std::abs(back.orientation.dot(a_c.orientation)), 1.0, kTolerance);  // q or -q
+  EXPECT_NEAR(back.orientation.norm(), 1.0, kTolerance);
+  EXPECT_TRUE(Pose{}.toIsometry().isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_EQ(Pose{}.transform(p_c), p_c);  // the default pose is the identity, exactly
 }
 
 struct BadTrajectory {
@@ -209,7 +256,7 @@ TEST(Trajectory, SavesPositionsOnlyWithoutOrientation) {
   test::TempDir dir;
   const std::string path = dir.file("positions.txt");
   auto original =
-      Trajectory::fromSamples({{0.0, {1.0, 2.0, 3.0}, {}}, {1.0, {4.0, 5.0, 6.0}, {}}}, false, "p");
+      Trajectory::fromSamples({{0.0, {1.0, 2.0, 3.0}}, {1.0, {4.0, 5.0, 6.0}}}, false, "p");
   ASSERT_TRUE(original.has_value());
 
   ASSERT_TRUE(saveTrajectory(*original, path).has_value());
@@ -217,7 +264,7 @@ TEST(Trajectory, SavesPositionsOnlyWithoutOrientation) {
 
   ASSERT_TRUE(loaded.has_value()) << loaded.error().message;
   EXPECT_FALSE(loaded->hasOrientation());
-  EXPECT_EQ(loaded->samples()[1].position, (Vec3d{4.0, 5.0, 6.0}));
+  EXPECT_EQ(loaded->samples()[1].position, Eigen::Vector3d(4.0, 5.0, 6.0));
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "raymap/version.hpp"
 #include <gtest/gtest.h>
 
+#include "src/core/eigen_conversions.hpp"
 #include "src/io/map_file.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -18,8 +19,6 @@
 
 namespace raymap {
 namespace {
-
-Eigen::Vector3d toEigen(Vec3d v) { return {v.x, v.y, v.z}; }
 
 std::vector<WorldRay> toWorldRays(std::span<const Ray> rays) {
   std::vector<WorldRay> out;

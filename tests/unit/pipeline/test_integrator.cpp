@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "platform/pi_mutex.hpp"
+#include "src/core/eigen_conversions.hpp"
 #include "src/map/cpu_backend.hpp"
 #include "src/map/voxel_map.hpp"
 #include "src/pipeline/integrator.hpp"
@@ -55,22 +56,25 @@ class ClockedBackend final : public Backend {
 };
 
 /// A yaw of `radians` about +z.
-io::Quaternion yaw(double radians) {
-  return {std::cos(0.5 * radians), 0.0, 0.0, std::sin(0.5 * radians)};
+Eigen::Quaterniond yaw(double radians) {
+  return {std::cos(0.5 * radians), 0.0, 0.0, std::sin(0.5 * radians)};  // w x y z
 }
 
-io::Pose makePose(Vec3d position, io::Quaternion orientation = {}) {
+io::Pose makePose(Vec3d position, Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity()) {
   io::Pose p;
-  p.position = position;
+  p.position = toEigen(position);
   p.orientation = orientation;
   return p;
 }
 
 /// The point in the frame of `pose` that `pose` maps to `p_world`.
 Vec3d toLocal(const io::Pose& pose, Vec3d p_world) {
-  const io::Quaternion& q = pose.orientation;
-  const io::Quaternion inverse{q.w, -q.x, -q.y, -q.z};
-  return inverse.rotate(p_world - pose.position);
+  return toVec3(pose.orientation.conjugate() * (toEigen(p_world) - pose.position));
+}
+
+/// The point of the world frame that `pose` maps `p_local` to.
+Vec3d toWorld(const io::Pose& pose, Vec3d p_local) {
+  return toVec3(pose.transform(toEigen(p_local)));
 }
 
 dds::ScanPoint scanPoint(Vec3d p_sensor, float time_s = 0.0f, std::uint32_t flags = 0) {
@@ -218,13 +222,14 @@ TEST(Integrator, DeskewsEveryPointWithThePoseAtItsTime) {
   EXPECT_EQ(rig->map.summarise().voxels_occupied, 3u) << "hits only at the three wall voxels";
   // Without deskewing (every point with the pose at the header stamp, or at the scan's end) the
   // hits would land here instead.
-  EXPECT_NE(rig->stateAt(start.transform(p1)), VoxelState::kOccupied);
-  EXPECT_NE(rig->stateAt(start.transform(p2)), VoxelState::kOccupied);
-  EXPECT_NE(rig->stateAt(end.transform(p0)), VoxelState::kOccupied);
+  EXPECT_NE(rig->stateAt(toWorld(start, p1)), VoxelState::kOccupied);
+  EXPECT_NE(rig->stateAt(toWorld(start, p2)), VoxelState::kOccupied);
+  EXPECT_NE(rig->stateAt(toWorld(end, p0)), VoxelState::kOccupied);
   // The ray of each point starts where the sensor was at that point's time: the voxels between
   // the interpolated origin and the wall are free.
   EXPECT_EQ(rig->stateAt({2.05, 0.05, 0.05}), VoxelState::kFree);
-  EXPECT_EQ(rig->stateAt(middle.position + (w1 - middle.position) * 0.5), VoxelState::kFree);
+  const Vec3d middle_origin = toVec3(middle.position);
+  EXPECT_EQ(rig->stateAt(middle_origin + (w1 - middle_origin) * 0.5), VoxelState::kFree);
 }
 
 TEST(Integrator, StaticExtrinsicPlacesTheSensorOnTheBase) {
@@ -270,7 +275,7 @@ TEST(Integrator, ExtrinsicUpdateTakesEffectForLaterScans) {
 
   EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
   EXPECT_EQ(rig->stateAt(target), VoxelState::kOccupied);
-  EXPECT_NE(rig->stateAt(base.transform(p)), VoxelState::kOccupied)
+  EXPECT_NE(rig->stateAt(toWorld(base, p)), VoxelState::kOccupied)
       << "scan 2 used the old extrinsic";
   EXPECT_EQ(rig->map.summarise().voxels_occupied, 2u);
 }
@@ -310,7 +315,7 @@ TEST(Integrator, TwoSensorsWithTheSameStampUseTheirOwnExtrinsics) {
   EXPECT_EQ(rig->stateAt(front_target), VoxelState::kOccupied);
   EXPECT_EQ(rig->stateAt(rear_target), VoxelState::kOccupied)
       << "the rear sensor's point was placed with another pose";
-  EXPECT_NE(rig->stateAt(io::compose(base, front).transform(p_rear)), VoxelState::kOccupied)
+  EXPECT_NE(rig->stateAt(toWorld(io::compose(base, front), p_rear)), VoxelState::kOccupied)
       << "the rear sensor's point was placed with the front sensor's extrinsic";
 }
 

@@ -28,9 +28,9 @@ io::Pose pose(double x, double yaw = 0.0) {
 }
 
 void expectPoseNear(const io::Pose& actual, const io::Pose& expected, double tolerance) {
-  EXPECT_NEAR(actual.position.x, expected.position.x, tolerance);
-  EXPECT_NEAR(actual.position.y, expected.position.y, tolerance);
-  EXPECT_NEAR(actual.position.z, expected.position.z, tolerance);
+  EXPECT_NEAR(actual.position.x(), expected.position.x(), tolerance);
+  EXPECT_NEAR(actual.position.y(), expected.position.y(), tolerance);
+  EXPECT_NEAR(actual.position.z(), expected.position.z(), tolerance);
   // q and -q are one rotation.
   EXPECT_NEAR(std::abs(actual.orientation.dot(expected.orientation)), 1.0, tolerance);
 }
@@ -70,8 +70,8 @@ TEST(PoseHistory, InterpolatesBetweenBracketingPoses) {
   // Half way: position linear; nlerp at one half is exactly the half-angle rotation.
   expectPoseNear(out, pose(0.5, std::numbers::pi / 4), 1e-12);
   ASSERT_EQ(history.lookup(25 * kMs, 0, &out), PoseLookup::kOk);
-  EXPECT_NEAR(out.position.x, 0.25, kTolerance);
-  EXPECT_NEAR(out.position.y, 0.5, kTolerance);
+  EXPECT_NEAR(out.position.x(), 0.25, kTolerance);
+  EXPECT_NEAR(out.position.y(), 0.5, kTolerance);
 }
 
 TEST(PoseHistory, LookupAtASampleStampGivesThatSample) {
@@ -113,9 +113,9 @@ TEST(PoseHistory, FullRingForgetsTheOldestPoses) {
   io::Pose out;
   EXPECT_EQ(history.lookup(6 * kMs - 1, 0, &out), PoseLookup::kTooOld);
   ASSERT_EQ(history.lookup(6 * kMs + kMs / 2, 0, &out), PoseLookup::kOk);
-  EXPECT_NEAR(out.position.x, 6.5, kTolerance);
+  EXPECT_NEAR(out.position.x(), 6.5, kTolerance);
   ASSERT_EQ(history.lookup(8 * kMs + kMs / 4, 0, &out), PoseLookup::kOk);
-  EXPECT_NEAR(out.position.x, 8.25, kTolerance);
+  EXPECT_NEAR(out.position.x(), 8.25, kTolerance);
 }
 
 // The lookup remembers its last bracket; lookups in any order, interleaved with pushes that wrap
@@ -141,7 +141,7 @@ TEST(PoseHistory, LookupsInAnyOrderMatchLinearInterpolation) {
           lo + static_cast<std::int64_t>(rng() % static_cast<std::uint64_t>(hi - lo + 1));
       io::Pose out;
       ASSERT_EQ(history.lookup(t, 0, &out), PoseLookup::kOk) << "round " << round;
-      EXPECT_NEAR(out.position.x, static_cast<double>(t) / kMs, 1e-9)
+      EXPECT_NEAR(out.position.x(), static_cast<double>(t) / kMs, 1e-9)
           << "round " << round << " t " << t;
     }
   }

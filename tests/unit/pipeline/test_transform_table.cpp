@@ -28,10 +28,10 @@ TEST(TransformTable, ComposesAChainWhateverOrderItsEdgesCameIn) {
   EXPECT_FALSE(tf.resolve("base_link", "os_sensor", &pose));  // not yet connected
   ASSERT_TRUE(tf.set("base_link", "mount", at(0.3, 0.0, 0.0, std::numbers::pi / 2)));
   ASSERT_TRUE(tf.resolve("base_link", "os_sensor", &pose));
-  const Vec3d p = pose.transform({1.0, 0.0, 0.0});
-  EXPECT_NEAR(p.x, 0.3, 1e-12);
-  EXPECT_NEAR(p.y, 1.0, 1e-12);
-  EXPECT_NEAR(p.z, 1.2, 1e-12);
+  const Eigen::Vector3d p = pose.transform({1.0, 0.0, 0.0});
+  EXPECT_NEAR(p.x(), 0.3, 1e-12);
+  EXPECT_NEAR(p.y(), 1.0, 1e-12);
+  EXPECT_NEAR(p.z(), 1.2, 1e-12);
   EXPECT_EQ(tf.size(), 2u);
 }
 
@@ -41,7 +41,7 @@ TEST(TransformTable, ALaterEdgeForTheSameChildReplacesTheEarlier) {
   ASSERT_TRUE(tf.set("base_link", "lidar", at(0.0, 0.0, 0.7)));
   io::Pose pose;
   ASSERT_TRUE(tf.resolve("base_link", "lidar", &pose));
-  EXPECT_DOUBLE_EQ(pose.position.z, 0.7);
+  EXPECT_DOUBLE_EQ(pose.position.z(), 0.7);
   EXPECT_EQ(tf.size(), 1u);
 }
 
@@ -49,7 +49,7 @@ TEST(TransformTable, TheFrameItselfIsTheIdentityAndLoopsOrStrangersDoNotResolve)
   TransformTable tf;
   io::Pose pose = at(1.0, 2.0, 3.0);
   ASSERT_TRUE(tf.resolve("base_link", "base_link", &pose));
-  EXPECT_DOUBLE_EQ(pose.position.x, 0.0);
+  EXPECT_DOUBLE_EQ(pose.position.x(), 0.0);
   ASSERT_TRUE(tf.set("a", "b", at(1.0, 0.0, 0.0)));
   ASSERT_TRUE(tf.set("b", "a", at(1.0, 0.0, 0.0)));  // a loop (a broken tree)
   EXPECT_FALSE(tf.resolve("base_link", "a", &pose));

@@ -102,7 +102,7 @@ TEST(DaemonConfig, CpuProfileParses) {
   ASSERT_EQ(c.sensors.size(), 1u);
   EXPECT_EQ(c.sensors[0].name, "lidar");
   EXPECT_EQ(c.sensors[0].max_points, 262144u);
-  EXPECT_EQ(c.sensors[0].extrinsic.orientation.w, 1.0);
+  EXPECT_EQ(c.sensors[0].extrinsic.orientation.w(), 1.0);
   EXPECT_EQ(c.dds.voxels_topic, "rt/raymap/occupied_voxels");
   EXPECT_EQ(c.heightmap.publish_lead_s, 0.015);
   EXPECT_TRUE(c.realtime.ingest.cpus.empty());
@@ -144,7 +144,7 @@ TEST(DaemonConfig, JetsonCudaProfileParsesOrNamesTheMissingBackend) {
   if (result) {
     ASSERT_EQ(result->sensors.size(), 2u);
     EXPECT_EQ(result->sensors[1].topic, "rt/rear/points");
-    EXPECT_EQ(result->sensors[1].extrinsic.orientation.z, 1.0);
+    EXPECT_EQ(result->sensors[1].extrinsic.orientation.z(), 1.0);
     EXPECT_EQ(result->backend.gpu_cache_bytes, std::uint64_t{512} << 20);
   }
 }
@@ -368,8 +368,8 @@ TEST(DaemonConfig, ValuesAreRead) {
   EXPECT_EQ(c.pose.max_wait_s, 0.1);
   ASSERT_EQ(c.sensors.size(), 1u);
   EXPECT_EQ(c.sensors[0].name, "front");
-  EXPECT_EQ(c.sensors[0].extrinsic.position, (Vec3d{0.1, 0.2, 0.3}));
-  EXPECT_EQ(c.sensors[0].extrinsic.orientation.z, 1.0) << "normalised";
+  EXPECT_EQ(c.sensors[0].extrinsic.position, Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_EQ(c.sensors[0].extrinsic.orientation.z(), 1.0) << "normalised";
   EXPECT_EQ(c.sensors[0].min_range_m, 0.0);
   EXPECT_EQ(c.sensors[0].time_field, "t");
   EXPECT_EQ(c.heightmap.mode, heightmap::HeightmapMode::kFill);
