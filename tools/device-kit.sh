@@ -42,7 +42,7 @@ if [ -z "$nvcc" ]; then
   exit 1
 fi
 
-targets=(raymap raymapd raymap-load raymap-heightmap-bench test_unit_cuda test_cuda_device
+targets=(raymap raymapd raymap-load raymap-heightmap-bench test_unit_cuda test_cuda_device test_unit_mapper
   test_cuda_data test_heightmap)
 echo "== configure and build ($build: Release, CUDA architectures $arch, warnings as errors)"
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DRAYMAP_CUDA=ON -DRAYMAP_WERROR=ON \

@@ -6,7 +6,7 @@
 # sanitizer's runs (section "sanitizer") overlap them when both sections run.
 
 # The executables, and the shards each runs in.
-kit_tests=("test_unit_cuda 1" "test_cuda_device 2" "test_cuda_data 4" "test_heightmap 4")
+kit_tests=("test_unit_cuda 1" "test_cuda_device 2" "test_cuda_data 4" "test_heightmap 4" "test_unit_mapper 1")
 
 section_tests() {
   local sanitizing=0
