@@ -70,9 +70,10 @@ struct MapCounts {
 /// Thread-safety: none: one thread at a time uses a Mapper (queries included, since integration
 /// updates the map in place); different Mappers are independent. The CPU backend's worker
 /// threads and a device's queue are internal.
-/// Real-time: integrate() and flush() allocate only on a scan larger than any before (the
-/// conversion buffer grows once) and never do file I/O; create(), load(), save() and heightmap()
-/// allocate and are for start-up, shutdown or a non-real-time thread. No call throws (errors are
+/// Real-time: integrate() and flush() never do file I/O and, once the backend has seen a batch
+/// (its scratch sized), allocate nothing: the conversion buffer and the batch are allocated by
+/// create()/load(), and regions come from the preallocated pool. create(), load(), save() and
+/// heightmap() allocate and are for start-up, shutdown or a non-real-time thread. No call throws (errors are
 /// values), except std::bad_alloc where memory runs out.
 class Mapper {
  public:
