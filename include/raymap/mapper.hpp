@@ -73,8 +73,8 @@ struct MapCounts {
 /// Real-time: integrate() and flush() never do file I/O and, once the backend has seen a batch
 /// (its scratch sized), allocate nothing: the conversion buffer and the batch are allocated by
 /// create()/load(), and regions come from the preallocated pool. create(), load(), save() and
-/// heightmap() allocate and are for start-up, shutdown or a non-real-time thread. No call throws (errors are
-/// values), except std::bad_alloc where memory runs out.
+/// heightmap() allocate and are for start-up, shutdown or a non-real-time thread. No call throws
+/// (errors are values), except std::bad_alloc where memory runs out.
 class Mapper {
  public:
   /// @brief Builds an empty map and starts its backend. Errors name the option and the reason
