@@ -2,7 +2,8 @@
 // RayBatcher: see the header.
 #include "src/map/ray_batcher.hpp"
 
-#include <algorithm>
+#include <cstdio>
+#include <string>
 
 #include "raymap/assert.hpp"
 
@@ -77,6 +78,21 @@ Expected<void, IntegrateError> RayBatcher::add(RayPreparer& preparer,
     }
   }
   return first_error;
+}
+
+Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateError error,
+                       std::string_view raise) {
+  if (error == IntegrateError::kStoreFull) {
+    char gib[32];
+    std::snprintf(gib, sizeof gib, "%g",
+                  static_cast<double>(map.store().poolBytes()) / static_cast<double>(1u << 30));
+    return Error{ErrorCode::kCapacity, "the map needs more than the " +
+                                           std::to_string(map.store().capacity()) + " regions (" +
+                                           gib + " GiB) its memory budget allows; raise " +
+                                           std::string(raise)};
+  }
+  return Error{ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
+                                   " backend: " + toString(error)};
 }
 
 }  // namespace raymap

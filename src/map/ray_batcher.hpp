@@ -7,8 +7,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string_view>
 #include <vector>
 
+#include "raymap/error.hpp"
 #include "raymap/expected.hpp"
 
 #include "src/map/backend.hpp"
@@ -68,5 +70,12 @@ class RayBatcher {
   std::uint64_t scan_ = 0;   // Ray::scan of the rays in the batch
   BatcherCounters counters_;
 };
+
+/// @brief The error a failed batch means for whoever integrates: a full store is kCapacity ("the
+/// map needs more than the N regions (G GiB) its memory budget allows; raise <raise>", where
+/// `raise` names the caller's setting), anything else kIo naming the backend. Allocates (not for
+/// the real-time path).
+Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateError error,
+                       std::string_view raise);
 
 }  // namespace raymap

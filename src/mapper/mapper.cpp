@@ -56,13 +56,7 @@ struct Mapper::State {
     return {};
   }
   Error integrateError(IntegrateError error) const {
-    if (error == IntegrateError::kStoreFull) {
-      return Error{ErrorCode::kCapacity,
-                   "the map needs more than the " + std::to_string(map.store().capacity()) +
-                       " regions its memory budget allows; raise MapOptions::max_memory_bytes"};
-    }
-    return Error{ErrorCode::kIo, std::string("integration failed on the ") +
-                                     backend.backend->name() + " backend: " + toString(error)};
+    return integrateFailure(map, *backend.backend, error, "MapOptions::max_memory_bytes");
   }
   /// Integrates the converted rays (one scan) and empties the conversion buffer.
   Expected<void, Error> drainChunk() noexcept {

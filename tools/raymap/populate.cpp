@@ -77,17 +77,8 @@ Result<PopulateReport> integrateStream(
   std::vector<Ray> chunk(std::size_t{1} << 16);
   ProgressBar bar("populate", options.progress);
 
-  const auto integrate_failed = [&](IntegrateError error) -> Error {
-    if (error == IntegrateError::kStoreFull) {
-      const double gib =
-          static_cast<double>(map.store().poolBytes()) / static_cast<double>(1u << 30);
-      return Error{ErrorCode::kCapacity, "the map needs more than the " +
-                                             std::to_string(map.store().capacity()) + " regions (" +
-                                             number(gib) +
-                                             " GiB) its memory budget allows; raise --max-memory"};
-    }
-    return Error{ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
-                                     " backend: " + toString(error)};
+  const auto integrate_failed = [&](IntegrateError error) {
+    return integrateFailure(map, backend, error, "--max-memory");
   };
 
   for (;;) {
