@@ -38,7 +38,6 @@ struct Mapper::State {
   std::vector<Ray> chunk = std::vector<Ray>(kChunkRays);
   std::size_t chunk_fill = 0;
   std::uint64_t next_scan = 0;
-  std::uint64_t scans = 0;
   std::uint64_t points_no_pose = 0;
   std::unique_ptr<heightmap::HeightmapGenerator> generator;  // made on the first heightmap()
   heightmap::HeightmapPlan plan;
@@ -72,19 +71,16 @@ struct Mapper::State {
     return chunk_fill == chunk.size() ? drainChunk() : Expected<void, Error>{};
   }
   /// Ends a scan: its last rays go to the batcher, and the scan gets its number.
-  Expected<void, Error> endScan(std::uint64_t rays_before) noexcept {
-    auto ok = drainChunk();
-    if (preparer.counters().rays_in != rays_before) {
-      ++scans;
-    }
+  /// Ends a scan: its last rays go to the batcher (which counts the scan), and the next scan
+  /// gets its own number.
+  Expected<void, Error> endScan() noexcept {
     ++next_scan;
-    return ok;
+    return drainChunk();
   }
   /// One scan of sensor-frame points; `pose_at(time)` gives the sensor's pose (or nullopt), asked
   /// once per distinct point time (a lidar's points come in blocks of one time).
   template <class PoseAt>
   Expected<void, Error> integratePoints(std::span<const SensorPoint> scan, const PoseAt& pose_at) {
-    const std::uint64_t rays_before = preparer.counters().rays_in;
     Ray ray;
     ray.scan = next_scan;
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -112,7 +108,7 @@ struct Mapper::State {
         return ok;
       }
     }
-    return endScan(rays_before);
+    return endScan();
   }
   Expected<void, Error> synchronise() noexcept {
     if (auto ok = batcher->flush(); !ok) {
@@ -173,7 +169,6 @@ Result<Mapper> Mapper::load(const std::string& path, const RayOptions& rays,
 
 Expected<void, Error> Mapper::integrate(std::span<const WorldRay> scan) {
   State& s = *state_;
-  const std::uint64_t rays_before = s.preparer.counters().rays_in;
   Ray ray;
   ray.scan = s.next_scan;
   for (const WorldRay& in : scan) {
@@ -185,7 +180,7 @@ Expected<void, Error> Mapper::integrate(std::span<const WorldRay> scan) {
       return ok;
     }
   }
-  return s.endScan(rays_before);
+  return s.endScan();
 }
 
 Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
@@ -295,7 +290,7 @@ MapperCounters Mapper::counters() const noexcept {
   const State& s = *state_;
   const RayCounters& rays = s.preparer.counters();
   MapperCounters c;
-  c.scans = s.scans;
+  c.scans = s.batcher->counters().scans;
   c.rays_in = rays.rays_in;
   c.rays_integrated = rays.rays_accepted;
   c.rays_invalid = rays.rays_invalid;
