@@ -143,10 +143,9 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
       in = in.subspan(slice);
       const std::int64_t slice_started = now;
       // The slice goes in whole before the lock is given up: what the batch keeps is flushed.
-      auto added = batcher_.add(preparer, part);
-      auto flushed = batcher_.flush();
-      (void)added;  // failures are counted by the batcher (integrate_errors below)
-      (void)flushed;
+      // Failures are counted by the batcher (integrate_errors below).
+      (void)batcher_.add(preparer, part);
+      (void)batcher_.flush();
       now = settings_.clock_ns();
       if (slice > 0) {
         const double measured =
