@@ -14,6 +14,10 @@ namespace raymap::dds {
 /// ScanPoint::flags bit: x, y or z is not finite (no return); the point is kept so that a
 /// caller can use the direction of an organised cloud, but its coordinates are meaningless.
 inline constexpr std::uint32_t kPointNoReturn = 1U;
+/// ScanPoint::flags bit: no return within the sensor's range along this point's ray (a depth
+/// camera's pixel beyond its range, or an invalid pixel with invalid_as_free): x, y, z is the end
+/// of a free-space ray; it clears the voxels up to there and never marks a hit.
+inline constexpr std::uint32_t kPointFreeOnly = 2U;
 
 /// @brief One decoded point, in the cloud's (sensor) frame.
 struct ScanPoint {

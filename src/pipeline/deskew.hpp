@@ -61,7 +61,8 @@ class PointDeskewer {
   /// @brief Forgets the cached pose (a new scan, or a new extrinsic).
   void reset() noexcept { last_time_ns_ = std::numeric_limits<std::int64_t>::min(); }
 
-  /// @brief The ray of return `p` (not a no-return, with a usable time) of a scan stamped
+  /// @brief The ray of return `p` (not a no-return, with a usable time; a kPointFreeOnly point
+  /// gives a kRayNoReturn ray) of a scan stamped
   /// `stamp_ns`, from sensor `extrinsic` on the base whose poses `history` holds.
   /// @return false when `history` has no pose for the point's time (nothing written).
   bool toRay(const dds::ScanPoint& p, std::int64_t stamp_ns, const PoseHistory& history,
@@ -82,7 +83,7 @@ class PointDeskewer {
         {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}));
     ray.time_s = static_cast<double>(t) * 1e-9;
     ray.intensity = p.intensity;
-    ray.flags = 0;
+    ray.flags = (p.flags & dds::kPointFreeOnly) != 0u ? kRayNoReturn : 0u;
     ray.scan = scan;
     return true;
   }
