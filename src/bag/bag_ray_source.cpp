@@ -11,12 +11,15 @@
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_history.hpp"
+#include "src/pipeline/sensor_decoder.hpp"
 #include "src/pipeline/tf_router.hpp"
 
 namespace raymap::bag {
 namespace {
 
 constexpr const char* kPointCloud2 = "sensor_msgs/msg/PointCloud2";
+constexpr const char* kImage = "sensor_msgs/msg/Image";
+constexpr const char* kCameraInfo = "sensor_msgs/msg/CameraInfo";
 constexpr const char* kOdometry = "nav_msgs/msg/Odometry";
 constexpr const char* kTfMessage = "tf2_msgs/msg/TFMessage";
 constexpr std::size_t kSkipsKept = 8;
@@ -81,21 +84,57 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   Expected<void, Error> open() {
     const BagReader& bag = *bag_;
     if (options_.cloud_topics.empty()) {
-      auto t = onlyTopicOfType(bag, kPointCloud2, "--topic");
+      bool has_clouds = false;
+      for (const BagTopic& t : bag.topics()) {
+        has_clouds = has_clouds || t.type == kPointCloud2;
+      }
+      auto t = onlyTopicOfType(bag, has_clouds ? kPointCloud2 : kImage, "--topic");
       if (!t) {
         return Unexpected(t.error());
       }
       cloud_topics_.push_back(t.value());
     }
     for (const std::string& name : options_.cloud_topics) {
-      auto t = topicOfType(bag, name, kPointCloud2, "--topic");
+      const int at = findTopic(bag.topics(), name);
+      const bool image = at >= 0 && bag.topics()[static_cast<std::size_t>(at)].type == kImage;
+      auto t = topicOfType(bag, name, image ? kImage : kPointCloud2, "--topic");
       if (!t) {
         return Unexpected(t.error());
       }
       cloud_topics_.push_back(t.value());
     }
+    std::size_t images = 0;
     for (std::uint32_t t : cloud_topics_) {
-      report_.cloud_topics.push_back(bag.topics()[t].name);
+      const BagTopic& topic = bag.topics()[t];
+      report_.cloud_topics.push_back(topic.name);
+      pipeline::SensorDecodeSettings settings;
+      settings.time_field = options_.time_field;
+      settings.max_rate_hz = options_.max_rate_hz;
+      int camera_info = -1;
+      if (topic.type == kImage) {
+        settings.kind = pipeline::SensorInputKind::kDepth;
+        settings.depth = options_.depth;
+        const std::string name = images < options_.camera_info_topics.size()
+                                     ? options_.camera_info_topics[images]
+                                     : pipeline::cameraInfoTopicFor(topic.name);
+        ++images;
+        auto info = topicOfType(bag, name, kCameraInfo, "--camera-info-topic");
+        if (!info) {
+          return Unexpected(info.error());
+        }
+        camera_info = static_cast<int>(info.value());
+      }
+      decoders_.emplace_back(std::move(settings));
+      camera_info_topics_.push_back(camera_info);
+    }
+    if (images < options_.camera_info_topics.size()) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "--camera-info-topic: " + std::to_string(options_.camera_info_topics.size()) +
+                      " given for " + std::to_string(images) + " depth image topic(s)");
+    }
+    if (options_.depth.invalid_as_free && images > 0 && !(options_.depth.max_range_m > 0.0f)) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "--invalid-as-free needs --max-range (the length of the free rays)");
     }
     using Source = BagRaysOptions::PoseSource;
     Source source = options_.pose_source;
@@ -140,8 +179,6 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       tf_static_topic_ = tf_static;
     }
     const std::string& field = options_.time_field;
-    decode_.ignore_time = field == "none";
-    decode_.time_field = field == "auto" || field == "none" ? nullptr : field.c_str();
     router_ = std::make_unique<pipeline::TfRouter>(options_.world_frame, options_.base_frame,
                                                    std::vector<std::string>(cloud_topics_.size()),
                                                    stats_);
@@ -274,6 +311,8 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       for (std::uint32_t s = 0; s < cloud_topics_.size(); ++s) {
         if (message_.topic == cloud_topics_[s]) {
           onCloud(s);
+        } else if (topic == camera_info_topics_[s]) {
+          onCameraInfo(s);
         }
       }
     }
@@ -288,25 +327,48 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     }
   }
 
-  void onCloud(std::uint32_t sensor) {
-    ++report_.clouds;
-    auto decoded = dds::decodePointCloud2(message_.data, decoded_, decode_);
-    while (!decoded && decoded.error() == dds::CloudError::kTooManyPoints &&
-           decoded_.size() < options_.max_points) {
-      decoded_.resize(std::min<std::size_t>(decoded_.size() * 2, options_.max_points));
-      decoded = dds::decodePointCloud2(message_.data, decoded_, decode_);
-    }
-    if (!decoded) {
-      ++report_.clouds_skipped;
-      skip("message", dds::toString(decoded.error()));
+  void onCameraInfo(std::uint32_t sensor) {
+    if (auto taken = decoders_[sensor].onCameraInfo(message_.data); !taken) {
+      ++report_.camera_infos_skipped;
+      skip("message", dds::toString(taken.error()));
       return;
     }
-    router_->learnSensorFrame(sensor, decoded.value().frame_id, *this);
+    ++report_.camera_infos;
+  }
+
+  void onCloud(std::uint32_t sensor) {
+    ++report_.clouds;
+    pipeline::SensorDecoder& decoder = decoders_[sensor];
+    pipeline::DecodedScan decoded = decoder.decode(message_.data, decoded_);
+    while (decoded.outcome == pipeline::DecodeOutcome::kTooLarge &&
+           decoded_.size() < options_.max_points) {
+      decoded_.resize(std::min<std::size_t>(decoded_.size() * 2, options_.max_points));
+      decoded = decoder.decode(message_.data, decoded_);
+    }
+    switch (decoded.outcome) {
+      case pipeline::DecodeOutcome::kAccepted:
+        break;
+      case pipeline::DecodeOutcome::kRateLimited:
+        ++report_.rate_limited;
+        return;
+      case pipeline::DecodeOutcome::kNoCameraInfo:
+        ++report_.images_no_camera_info;
+        return;
+      case pipeline::DecodeOutcome::kMalformed:
+      case pipeline::DecodeOutcome::kTooLarge:
+      case pipeline::DecodeOutcome::kWrongFrame:  // no frame is configured: unreachable
+        ++report_.clouds_skipped;
+        skip("message", decoder.settings().kind == pipeline::SensorInputKind::kDepth
+                            ? dds::toString(decoded.image_error)
+                            : dds::toString(decoded.cloud_error));
+        return;
+    }
+    router_->learnSensorFrame(sensor, decoded.header.frame_id, *this);
     Scan scan = freshScan();
-    scan.header = decoded.value();
+    scan.header = decoded.header;
     scan.sensor = sensor;
     scan.log_time_ns = message_.log_time_ns;
-    scan.points.assign(decoded_.begin(), decoded_.begin() + decoded.value().points);
+    scan.points.assign(decoded_.begin(), decoded_.begin() + decoded.header.points);
     scan.times = pipeline::scanTimes(scan.points, scan.header.stamp_ns, options_.max_time_offset_s);
     report_.points_bad_time += scan.times.bad_time;
     waiting_.push_back(std::move(scan));
@@ -378,8 +440,9 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   int odometry_topic_ = -1;
   int tf_topic_ = -1;
   int tf_static_topic_ = -1;
-  dds::CloudDecodeOptions decode_;
-  pipeline::PipelineStats stats_;  // the TF router's counters
+  std::vector<pipeline::SensorDecoder> decoders_;  // per sensor
+  std::vector<int> camera_info_topics_;            // per sensor: its CameraInfo topic, or -1
+  pipeline::PipelineStats stats_;                  // the TF router's counters
   std::unique_ptr<pipeline::TfRouter> router_;
   pipeline::PoseHistory history_;
   std::vector<io::Pose> extrinsics_;  // per sensor: in base_frame

@@ -11,6 +11,7 @@
 #include "raymap/error.hpp"
 
 #include "src/bag/bag_reader.hpp"
+#include "src/dds/depth_image.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/io/trajectory.hpp"
 
@@ -21,8 +22,18 @@ namespace raymap::bag {
 struct BagRaysOptions {
   enum class PoseSource : std::uint8_t { kAuto, kOdometry, kTf };
 
-  /// PointCloud2 topics, one sensor each; empty: the bag's only PointCloud2 topic.
+  /// PointCloud2 or depth Image topics, one sensor each; empty: the bag's only PointCloud2
+  /// topic (or, without one, its only Image topic).
   std::vector<std::string> cloud_topics;
+  /// The sensor_msgs/msg/CameraInfo topic of each Image topic, in the order of the Image topics
+  /// in cloud_topics; missing ones default to the image topic's namespace plus "camera_info"
+  /// (/camera/depth/image_rect_raw -> /camera/depth/camera_info).
+  std::vector<std::string> camera_info_topics;
+  /// Depth images: down-sampling, the minimum range of a block's depth, the length of free rays
+  /// for invalid pixels (max_range_m, needed by invalid_as_free), as raymapd's sensors[] keys.
+  dds::DepthDecodeOptions depth;
+  /// Messages of a sensor faster than this (by header stamp) are skipped and counted; 0 = all.
+  double max_rate_hz = 0.0;
   /// kAuto: the Odometry topic when the bag has exactly one (or `pose_topic` is given), else
   /// TF when the bag has /tf.
   PoseSource pose_source = PoseSource::kAuto;
@@ -43,14 +54,18 @@ struct BagRaysOptions {
 struct BagRaysReport {
   std::string pose_source;  ///< "odometry TOPIC" or "tf WORLD -> BASE"
   std::vector<std::string> cloud_topics;
-  std::uint64_t messages = 0;            ///< messages read (all topics)
-  std::uint64_t clouds = 0;              ///< PointCloud2 messages on the chosen topics
-  std::uint64_t scans_integrated = 0;    ///< clouds turned into rays
-  std::uint64_t scans_no_pose = 0;       ///< clouds no pose covered (as raymapd drops them)
-  std::uint64_t clouds_skipped = 0;      ///< clouds that did not decode (see `skips`)
-  std::uint64_t poses = 0;               ///< odometry messages / TF transforms used
-  std::uint64_t poses_skipped = 0;       ///< Odometry/TFMessage that did not decode
-  std::uint64_t poses_out_of_order = 0;  ///< stamps not after the previous pose's (ignored)
+  std::uint64_t messages = 0;               ///< messages read (all topics)
+  std::uint64_t clouds = 0;                 ///< PointCloud2 or Image messages on the chosen topics
+  std::uint64_t images_no_camera_info = 0;  ///< depth images before their first CameraInfo
+  std::uint64_t camera_infos = 0;           ///< CameraInfo messages used
+  std::uint64_t camera_infos_skipped = 0;   ///< CameraInfo messages refused (see `skips`)
+  std::uint64_t rate_limited = 0;           ///< messages above max_rate_hz (skipped)
+  std::uint64_t scans_integrated = 0;       ///< clouds turned into rays
+  std::uint64_t scans_no_pose = 0;          ///< clouds no pose covered (as raymapd drops them)
+  std::uint64_t clouds_skipped = 0;         ///< clouds that did not decode (see `skips`)
+  std::uint64_t poses = 0;                  ///< odometry messages / TF transforms used
+  std::uint64_t poses_skipped = 0;          ///< Odometry/TFMessage that did not decode
+  std::uint64_t poses_out_of_order = 0;     ///< stamps not after the previous pose's (ignored)
   std::uint64_t points_no_return = 0;
   std::uint64_t points_bad_time = 0;
   std::uint64_t tf_ignored = 0;

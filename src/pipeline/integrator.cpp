@@ -55,6 +55,7 @@ Integrator::Integrator(VoxelMap& map, Backend& backend, platform::PiMutex& map_m
   }
   rays_.resize(batcher_.capacity());
   completed_.resize(std::size_t{mailbox_.capacity()} + 1);
+  completed_sensor_.resize(completed_.size());
 }
 
 void Integrator::drainPoses() noexcept {
@@ -178,6 +179,11 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   stats_.rays_integrated.add(batcher_now.rays_integrated - batcher_before.rays_integrated);
   stats_.rays_rejected.add(preparer.counters().rejected() - rejected_before);
   stats_.scans_integrated.add(completed_count_);
+  for (std::uint32_t i = 0; i < completed_count_; ++i) {
+    if (completed_sensor_[i] < stats_.sensors.size()) {
+      stats_.sensors[completed_sensor_[i]].scans_integrated.add();
+    }
+  }
   if (completed_count_ > 0) {
     stats_.last_scan_integrated_ns.store(settings_.clock_ns(), std::memory_order_relaxed);
   }
@@ -392,6 +398,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
     const std::int64_t arrival = scan_->arrival_ns;
     const std::int64_t stamp = scan_->header.stamp_ns;
     const std::uint32_t points = scan_->header.points;
+    const std::uint32_t sensor_index = scan_->sensor;
     mailbox_.release(scan_);
     scan_ = nullptr;
     if (cut_short && visited == 0) {
@@ -405,6 +412,7 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       stats_.scans_cut_short.add();
     }
     window_points_accepted_ += static_cast<double>(points);
+    completed_sensor_[completed_count_] = sensor_index;
     completed_[completed_count_++] = arrival;
     scan_stamp_pending_ = std::max(scan_stamp_pending_, stamp);
     batch_due_ns_ = std::min(batch_due_ns_, deadline);

@@ -143,8 +143,9 @@ class Integrator {
   RayBatcher batcher_;  // prepares and integrates the batch (the one batching loop)
   std::uint32_t batch_size_ = 0;
   std::uint32_t batch_sensor_ = 0;
-  std::int64_t batch_first_ns_ = 0;      // arrival of the first scan in the batch
-  std::vector<std::int64_t> completed_;  // arrivals of scans whose last ray is in the batch
+  std::int64_t batch_first_ns_ = 0;              // arrival of the first scan in the batch
+  std::vector<std::int64_t> completed_;          // arrivals of scans whose last ray is in the batch
+  std::vector<std::uint32_t> completed_sensor_;  // and their sensors (per-sensor counters)
   std::uint32_t completed_count_ = 0;
   std::int64_t scan_stamp_pending_ = 0;    // newest header stamp among the completed scans
   std::int64_t batch_due_ns_ = INT64_MAX;  // earliest deadline of the completed scans in the batch

@@ -6,6 +6,8 @@
 #include <atomic>
 #include <cstdint>
 
+#include "src/dds/camera_info.hpp"
+#include "src/dds/depth_image.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/pipeline/histogram.hpp"
 
@@ -24,11 +26,26 @@ class Counter {
   std::atomic<std::uint64_t> value_{0};
 };
 
+/// The most sensors the per-sensor counters hold (raymapd's configuration allows no more).
+inline constexpr std::size_t kMaxSensors = 16;
+
+/// @brief What happened to one sensor's messages (ingest thread, except scans_integrated).
+struct SensorCounters {
+  Counter received;          ///< clouds or depth images taken from DDS
+  Counter accepted;          ///< decoded and handed to the integrator
+  Counter rate_limited;      ///< dropped: faster than sensors[].max_rate_hz
+  Counter rejected;          ///< malformed, too large, wrong frame, or no CameraInfo yet
+  Counter no_camera_info;    ///< depth images before any usable CameraInfo (within rejected)
+  Counter camera_info;       ///< CameraInfo messages taken
+  Counter camera_info_bad;   ///< CameraInfo refused (camera_info_rejected_by says why)
+  Counter scans_integrated;  ///< in the map (integrator thread)
+};
+
 /// @brief Everything the pipeline counts. Each group has one writer thread (named); any thread
 /// reads. @rt writes are wait-free and allocate nothing.
 struct PipelineStats {
   // ---- ingest thread ----
-  Counter clouds_received;       ///< PointCloud2 messages taken from DDS
+  Counter clouds_received;       ///< PointCloud2 and depth Image messages taken from DDS
   Counter clouds_malformed;      ///< rejected by the decoder (clouds_rejected_by says why)
   Counter clouds_too_large;      ///< more points than the sensor's max_points
   Counter clouds_unknown_frame;  ///< frame_id is not the configured sensors[].frame
@@ -37,6 +54,13 @@ struct PipelineStats {
   std::array<Counter, dds::kCloudErrorCount> clouds_rejected_by;
   /// The first frame_id that matched no configured frame, and the sensor it came for (written
   /// once by the ingest thread, then wrong_frame_seen is set with release).
+  /// Depth images and CameraInfo messages the decoders rejected, per reason (indexed by
+  /// dds::DepthImageError and dds::CameraInfoError); images also count in clouds_malformed (or
+  /// clouds_too_large for too_many_points).
+  std::array<Counter, dds::kDepthImageErrorCount> images_rejected_by;
+  std::array<Counter, dds::kCameraInfoErrorCount> camera_info_rejected_by;
+  /// Per configured sensor, by its index in sensors[].
+  std::array<SensorCounters, kMaxSensors> sensors;
   char wrong_frame[64] = {};
   std::uint32_t wrong_frame_sensor = 0;
   std::atomic<bool> wrong_frame_seen{false};

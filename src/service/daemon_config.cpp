@@ -16,6 +16,7 @@
 #include "src/config/yaml_reader.hpp"
 #include "src/core/eigen_conversions.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/pipeline/sensor_decoder.hpp"
 
 namespace raymap::service {
 namespace {
@@ -211,15 +212,37 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
     return;
   }
   std::set<std::string> topics;
+  if (node.size() > kMaxSensors) {
+    ctx.fail(node, "sensors", "at most " + std::to_string(kMaxSensors) + " sensors");
+    return;
+  }
   for (std::size_t i = 0; i < node.size() && !ctx.failed(); ++i) {
     const std::string path = config::item("sensors", i);
     Fields f(ctx, node[i], path);
-    f.knownKeys({"name", "topic", "frame", "extrinsic", "min_range", "max_range", "max_points",
-                 "time_field", "max_time_offset_s"});
+    f.knownKeys({"name", "kind", "topic", "camera_info_topic", "frame", "extrinsic", "min_range",
+                 "max_range", "max_points", "time_field", "max_time_offset_s", "downsample",
+                 "invalid_as_free", "max_rate_hz"});
     SensorConfig s;
-    s.name = text(f, "name", "lidar" + std::to_string(i));
-    s.topic = topic(f, "topic", s.topic);
+    s.kind = choiceOr(f, "kind", {"points", "depth"}, 0) == 0 ? SensorKind::kPointCloud
+                                                              : SensorKind::kDepth;
+    const bool depth = s.kind == SensorKind::kDepth;
+    s.name = text(f, "name", (depth ? "depth" : "lidar") + std::to_string(i));
+    s.topic = topic(f, "topic", depth ? "rt/camera/depth/image_rect_raw" : s.topic);
     f.check(topics.insert(s.topic).second, "topic", "two sensors on one topic");
+    if (depth) {
+      s.camera_info_topic = topic(f, "camera_info_topic", pipeline::cameraInfoTopicFor(s.topic));
+      f.check(topics.insert(s.camera_info_topic).second, "camera_info_topic",
+              "a topic another sensor already uses");
+      s.min_range_m = 0.1;
+      s.max_range_m = 3.0;
+      s.max_points = 640 * 480;
+    } else {
+      f.check(!f.has("camera_info_topic") && !f.has("downsample") && !f.has("invalid_as_free"),
+              f.has("camera_info_topic") ? "camera_info_topic"
+              : f.has("downsample")      ? "downsample"
+                                         : "invalid_as_free",
+              "applies to depth cameras only (kind: depth)");
+    }
     s.frame = text(f, "frame", "");
     f.check(s.frame.size() < 64, "frame", "must be shorter than 64 characters");
     if (f.has("extrinsic")) {
@@ -235,6 +258,10 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
     s.max_time_offset_s = f.positive("max_time_offset_s", s.max_time_offset_s);
     f.check(s.max_time_offset_s <= 60.0, "max_time_offset_s",
             "must be at most 60 s (a scan's points lie within one revolution of its stamp)");
+    s.downsample = f.integer<std::uint32_t>("downsample", s.downsample, 1u, 64u);
+    s.invalid_as_free = flag(f, "invalid_as_free", s.invalid_as_free);
+    s.max_rate_hz = f.positive("max_rate_hz", s.max_rate_hz, true);
+    f.check(s.max_rate_hz <= 1000.0, "max_rate_hz", "must be at most 1000 (0 = no limit)");
     sensors.push_back(s);
   }
 }

@@ -15,27 +15,52 @@
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/voxel_map.hpp"
+#include "src/pipeline/pipeline_stats.hpp"
 
 namespace raymap::service {
 
 using backends::BackendChoice;
 
-/// @brief One lidar (or depth camera) publishing sensor_msgs/PointCloud2.
+/// What a sensor publishes.
+enum class SensorKind : std::uint8_t {
+  kPointCloud,  ///< sensor_msgs/PointCloud2 (a lidar, or a camera driver's point cloud)
+  kDepth,       ///< sensor_msgs/Image (16UC1 mm or 32FC1 m) with sensor_msgs/CameraInfo
+};
+
+/// The most sensors one raymapd takes (per-sensor counters are fixed arrays).
+inline constexpr std::size_t kMaxSensors = pipeline::kMaxSensors;
+
+/// @brief One lidar publishing sensor_msgs/PointCloud2, or one depth camera publishing
+/// sensor_msgs/Image and sensor_msgs/CameraInfo (`kind: depth`).
 struct SensorConfig {
   std::string name = "lidar";
+  SensorKind kind = SensorKind::kPointCloud;
   std::string topic = "rt/points";  ///< DDS topic ("rt/" + the ROS topic name)
+  /// Depth cameras: the CameraInfo topic; default the image topic's namespace plus
+  /// "camera_info" (rt/camera/depth/image_rect_raw -> rt/camera/depth/camera_info).
+  std::string camera_info_topic;
   /// Frame of the points. Empty: whatever the message's header.frame_id says. tf_static
   /// transforms from the base frame to this frame override `extrinsic` when they arrive.
+  /// A depth camera's frame is its optical frame (x right, y down, z forward).
   std::string frame;
-  io::Pose extrinsic;                 ///< sensor in the base frame (metres; quaternion w, x, y, z)
-  double min_range_m = 0.5;           ///< shorter returns are the robot itself: dropped
-  double max_range_m = 20.0;          ///< longer rays clear free space up to here only
-  std::uint32_t max_points = 262144;  ///< larger clouds are dropped whole (and counted)
+  io::Pose extrinsic;         ///< sensor in the base frame (metres; quaternion w, x, y, z)
+  double min_range_m = 0.5;   ///< shorter returns are the robot itself: dropped
+  double max_range_m = 20.0;  ///< longer rays clear free space up to here only
+  /// Larger clouds are dropped whole (and counted). Depth cameras: points after down-sampling
+  /// (default 307,200: a 640 x 480 image at downsample 1).
+  std::uint32_t max_points = 262144;
   /// Per-point time field: "auto" (t, time, timestamp by their usual types), "none" or a name.
   std::string time_field = "auto";
   /// Points whose time is further than this from header.stamp (seconds), or not finite, are
   /// left out and counted: a corrupt time field costs the point, not the scan.
   double max_time_offset_s = 1.0;
+  // ---- depth cameras ----
+  /// N: each N x N block of pixels gives its nearest valid depth (dds::DepthDecodeOptions).
+  std::uint32_t downsample = 1;
+  /// Pixels without a depth (0, NaN, inf) clear free space up to max_range along their ray.
+  bool invalid_as_free = false;
+  /// Frames (or clouds) arriving faster than this are dropped and counted; 0 = every one.
+  double max_rate_hz = 0.0;
 };
 
 /// @brief Where the robot's pose comes from.

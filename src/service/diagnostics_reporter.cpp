@@ -52,7 +52,7 @@ DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
       heightmap_name_(settings_.name + ": height map"),
       realtime_name_(settings_.name + ": real time"),
       started_ns_(started_ns),
-      message_(3, 64) {
+      message_(3 + static_cast<int>(settings_.sensors.size()), 64) {
   const double window_s = std::max(kMinWindowS, 1.0 / settings_.report_rate_hz);
   window_ns_ = static_cast<std::int64_t>(std::llround(window_s * 1e9));
   // Enough samples that one of them is a whole window older than the newest.
@@ -85,6 +85,24 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   t.poses_dropped = stats_.poses_dropped.get();
   for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
     t.rejected_by[i] = stats_.clouds_rejected_by[i].get();
+  }
+  for (std::size_t i = 0; i < dds::kDepthImageErrorCount; ++i) {
+    t.image_rejected_by[i] = stats_.images_rejected_by[i].get();
+  }
+  for (std::size_t i = 0; i < dds::kCameraInfoErrorCount; ++i) {
+    t.camera_info_rejected_by[i] = stats_.camera_info_rejected_by[i].get();
+  }
+  for (std::size_t i = 0; i < settings_.sensors.size() && i < t.sensor.size(); ++i) {
+    const pipeline::SensorCounters& in = stats_.sensors[i];
+    Totals::PerSensor& out = t.sensor[i];
+    out.received = in.received.get();
+    out.accepted = in.accepted.get();
+    out.rate_limited = in.rate_limited.get();
+    out.rejected = in.rejected.get();
+    out.no_camera_info = in.no_camera_info.get();
+    out.camera_info = in.camera_info.get();
+    out.camera_info_bad = in.camera_info_bad.get();
+    out.scans = in.scans_integrated.get();
   }
   return t;
 }
@@ -158,7 +176,8 @@ void DiagnosticsReporter::describeDrops() noexcept {
     }
   }
   if (c.malformed > b.malformed) {
-    appendf(out, size, "%s%" PRIu64 " malformed clouds (", sep, c.malformed - b.malformed);
+    appendf(out, size, "%s%" PRIu64 " malformed clouds or depth images (", sep,
+            c.malformed - b.malformed);
     const char* inner = "";
     for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
       if (i != static_cast<std::size_t>(dds::CloudError::kTooManyPoints) &&
@@ -168,8 +187,41 @@ void DiagnosticsReporter::describeDrops() noexcept {
         inner = ", ";
       }
     }
+    for (std::size_t i = 0; i < dds::kDepthImageErrorCount; ++i) {
+      if (i != static_cast<std::size_t>(dds::DepthImageError::kTooManyPoints) &&
+          c.image_rejected_by[i] > b.image_rejected_by[i]) {
+        appendf(out, size, "%simage %s %" PRIu64, inner,
+                dds::toString(static_cast<dds::DepthImageError>(i)),
+                c.image_rejected_by[i] - b.image_rejected_by[i]);
+        inner = ", ";
+      }
+    }
     appendf(out, size, ")");
     sep = "; ";
+  }
+  for (std::size_t i = 0; i < settings_.sensors.size() && i < c.sensor.size(); ++i) {
+    const Totals::PerSensor& cs = c.sensor[i];
+    const Totals::PerSensor& bs = b.sensor[i];
+    if (cs.no_camera_info > bs.no_camera_info) {
+      appendf(out, size,
+              "%s%" PRIu64 " depth images of sensors[%zu] without a CameraInfo (from %s)", sep,
+              cs.no_camera_info - bs.no_camera_info, i,
+              settings_.sensors[i].camera_info_topic.c_str());
+      sep = "; ";
+    }
+    if (cs.camera_info_bad > bs.camera_info_bad) {
+      appendf(out, size, "%s%" PRIu64 " CameraInfo refused for sensors[%zu] (", sep,
+              cs.camera_info_bad - bs.camera_info_bad, i);
+      const char* inner = "";
+      for (std::size_t r = 0; r < dds::kCameraInfoErrorCount; ++r) {
+        if (c.camera_info_rejected_by[r] > b.camera_info_rejected_by[r]) {
+          appendf(out, size, "%s%s", inner, dds::toString(static_cast<dds::CameraInfoError>(r)));
+          inner = ", ";
+        }
+      }
+      appendf(out, size, ")");
+      sep = "; ";
+    }
   }
   reason(c.too_large, b.too_large, "clouds larger than max_points");
   reason(c.no_pose, b.no_pose, "scans without a pose in time");
@@ -273,6 +325,16 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "clouds_malformed", "%" PRIu64, c.malformed);
   message_.addValue(s, "clouds_too_large", "%" PRIu64, c.too_large);
   message_.addValue(s, "clouds_wrong_frame", "%" PRIu64, c.wrong_frame);
+  {
+    std::uint64_t rate_limited = 0;
+    std::uint64_t no_camera_info = 0;
+    for (std::size_t i = 0; i < settings_.sensors.size() && i < c.sensor.size(); ++i) {
+      rate_limited += c.sensor[i].rate_limited;
+      no_camera_info += c.sensor[i].no_camera_info;
+    }
+    message_.addValue(s, "clouds_rate_limited", "%" PRIu64, rate_limited);
+    message_.addValue(s, "images_without_camera_info", "%" PRIu64, no_camera_info);
+  }
   for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
     if (i == static_cast<std::size_t>(dds::CloudError::kTooManyPoints)) {
       continue;  // clouds_too_large
@@ -281,6 +343,27 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
     std::snprintf(key, sizeof(key), "clouds_malformed_%s",
                   dds::toString(static_cast<dds::CloudError>(i)));
     message_.addValue(s, key, "%" PRIu64, c.rejected_by[i]);
+  }
+  bool any_depth = false;
+  for (const ReporterSettings::Sensor& sensor : settings_.sensors) {
+    any_depth = any_depth || !sensor.camera_info_topic.empty();
+  }
+  if (any_depth) {
+    for (std::size_t i = 0; i < dds::kDepthImageErrorCount; ++i) {
+      if (i == static_cast<std::size_t>(dds::DepthImageError::kTooManyPoints)) {
+        continue;  // clouds_too_large
+      }
+      char key[64];
+      std::snprintf(key, sizeof(key), "images_malformed_%s",
+                    dds::toString(static_cast<dds::DepthImageError>(i)));
+      message_.addValue(s, key, "%" PRIu64, c.image_rejected_by[i]);
+    }
+    for (std::size_t i = 0; i < dds::kCameraInfoErrorCount; ++i) {
+      char key[64];
+      std::snprintf(key, sizeof(key), "camera_info_rejected_%s",
+                    dds::toString(static_cast<dds::CameraInfoError>(i)));
+      message_.addValue(s, key, "%" PRIu64, c.camera_info_rejected_by[i]);
+    }
   }
   message_.addValue(s, "scans_integrated", "%" PRIu64, c.scans);
   message_.addValue(s, "scan_rate_hz", "%.2f", rate(c.scans, p.scans));
@@ -364,6 +447,10 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
       h, "publish_lead_ms", "%.1f",
       static_cast<double>(stats_.publish_lead_us.load(std::memory_order_relaxed)) / 1000.0);
 
+  for (std::size_t i = 0; i < settings_.sensors.size() && i < c.sensor.size(); ++i) {
+    addSensorStatus(i, dt);
+  }
+
   // Real time.
   const bool degraded = realtime_ != nullptr && realtime_->degraded;
   const int r = message_.addStatus(degraded ? dds::kDiagnosticWarn : dds::kDiagnosticOk,
@@ -374,6 +461,53 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(r, "memory_locked", "%s",
                     realtime_ != nullptr && realtime_->memory_locked ? "true" : "false");
   return message_.sample();
+}
+
+void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {
+  const ReporterSettings::Sensor& sensor = settings_.sensors[i];
+  const Totals::PerSensor& c = ring_[head_].totals.sensor[i];
+  const Totals::PerSensor& b = base_->totals.sensor[i];
+  const auto rate = [&](std::uint64_t now, std::uint64_t before) {
+    return dt > 0.0 ? static_cast<double>(now - before) / dt : 0.0;
+  };
+  const bool depth = !sensor.camera_info_topic.empty();
+  // Silence is judged once a whole window has passed since start (a late driver is not yet
+  // a fault); rejections at once. The pipeline status says what the rejections were.
+  const bool whole_window = ring_[head_].ns - started_ns_ >= window_ns_;
+  char text[160];
+  std::uint8_t level = dds::kDiagnosticOk;
+  if (c.rejected > b.rejected) {
+    level = dds::kDiagnosticWarn;
+    std::snprintf(text, sizeof(text), "%" PRIu64 " of %" PRIu64 " %s rejected (see pipeline)",
+                  c.rejected - b.rejected, c.received - b.received,
+                  depth ? "depth images" : "clouds");
+  } else if (whole_window && c.received == b.received) {
+    level = dds::kDiagnosticWarn;
+    std::snprintf(text, sizeof(text), "no %s on %s %s", depth ? "depth image" : "point cloud",
+                  sensor.topic.c_str(), c.received == 0 ? "since start" : "any more");
+  } else {
+    std::snprintf(text, sizeof(text), "ok");
+  }
+  char name[160];
+  std::snprintf(name, sizeof(name), "%s: sensor %s", settings_.name.c_str(), sensor.name.c_str());
+  const int s = message_.addStatus(level, name, text, settings_.hardware_id.c_str());
+  message_.addValue(s, "kind", "%s", depth ? "depth" : "points");
+  message_.addValue(s, "topic", "%s", sensor.topic.c_str());
+  message_.addValue(s, "received", "%" PRIu64, c.received);
+  message_.addValue(s, "rate_hz", "%.2f", rate(c.received, b.received));
+  message_.addValue(s, "accepted", "%" PRIu64, c.accepted);
+  message_.addValue(s, "accepted_rate_hz", "%.2f", rate(c.accepted, b.accepted));
+  message_.addValue(s, "scans_integrated", "%" PRIu64, c.scans);
+  message_.addValue(s, "scan_rate_hz", "%.2f", rate(c.scans, b.scans));
+  message_.addValue(s, "rejected", "%" PRIu64, c.rejected);
+  message_.addValue(s, "rate_limited", "%" PRIu64, c.rate_limited);
+  message_.addValue(s, "max_rate_hz", "%g", sensor.max_rate_hz);
+  if (depth) {
+    message_.addValue(s, "camera_info_topic", "%s", sensor.camera_info_topic.c_str());
+    message_.addValue(s, "camera_info_received", "%" PRIu64, c.camera_info);
+    message_.addValue(s, "camera_info_rejected", "%" PRIu64, c.camera_info_bad);
+    message_.addValue(s, "images_without_camera_info", "%" PRIu64, c.no_camera_info);
+  }
 }
 
 void DiagnosticsReporter::logChanges() noexcept {

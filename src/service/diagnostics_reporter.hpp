@@ -28,6 +28,14 @@ struct ReporterSettings {
   double stale_after_s = 1.0;              ///< no scan integrated for this long: ERROR
   std::string grid_map_topic;              ///< named when another publisher of it is found
   std::vector<std::string> sensor_frames;  ///< sensors[].frame ("" = any), for the reasons
+  /// One per configured sensor (same order): a status "<name>: sensor <sensor.name>" each.
+  struct Sensor {
+    std::string name;
+    std::string topic;
+    std::string camera_info_topic;  ///< depth cameras; empty for point clouds
+    double max_rate_hz = 0.0;
+  };
+  std::vector<Sensor> sensors;
 };
 
 /// @brief The diagnostics thread's state: a ring of snapshots (rates, drops and percentiles are
@@ -78,6 +86,13 @@ class DiagnosticsReporter {
     std::uint64_t maps = 0, withheld = 0, late = 0, hm_errors = 0, integrate_errors = 0;
     std::uint64_t poses = 0, poses_malformed = 0, poses_dropped = 0;
     std::array<std::uint64_t, dds::kCloudErrorCount> rejected_by{};
+    std::array<std::uint64_t, dds::kDepthImageErrorCount> image_rejected_by{};
+    std::array<std::uint64_t, dds::kCameraInfoErrorCount> camera_info_rejected_by{};
+    struct PerSensor {
+      std::uint64_t received = 0, accepted = 0, rate_limited = 0, rejected = 0;
+      std::uint64_t no_camera_info = 0, camera_info = 0, camera_info_bad = 0, scans = 0;
+    };
+    std::array<PerSensor, pipeline::kMaxSensors> sensor{};
   };
   /// One report's snapshot.
   struct Sample {
@@ -93,6 +108,8 @@ class DiagnosticsReporter {
   /// Writes every input dropped within the window, with its count, to drop_reasons_
   /// ("; "-separated; empty when nothing was dropped: that is what "dropping" means).
   void describeDrops() noexcept;
+  /// Adds the status of sensor `i` (its counters over the window) to message_.
+  void addSensorStatus(std::size_t i, double dt) noexcept;
 
   const pipeline::PipelineStats& stats_;
   const pipeline::ScanMailbox& mailbox_;

@@ -36,6 +36,7 @@
 #include "src/pipeline/heightmap_cycle.hpp"
 #include "src/pipeline/integrator.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
+#include "src/pipeline/sensor_decoder.hpp"
 #include "src/pipeline/tf_router.hpp"
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/log.hpp"
@@ -61,10 +62,30 @@ std::uint64_t cpuMask(const std::vector<int>& cpus) {
   return mask;
 }
 
-// Waitset tokens: sensors are 0..n-1; the pose readers follow.
+// Waitset tokens: sensors are 0..n-1; the pose readers follow; then the depth cameras'
+// CameraInfo readers, kCameraInfoToken + sensor.
 constexpr std::intptr_t kOdometryToken = 1000;
 constexpr std::intptr_t kTfToken = 1001;
 constexpr std::intptr_t kTfStaticToken = 1002;
+constexpr std::intptr_t kCameraInfoToken = 2000;
+
+/// How one configured sensor's messages are decoded.
+pipeline::SensorDecodeSettings decodeSettings(const SensorConfig& s) {
+  pipeline::SensorDecodeSettings d;
+  d.kind = s.kind == SensorKind::kDepth ? pipeline::SensorInputKind::kDepth
+                                        : pipeline::SensorInputKind::kPointCloud;
+  d.time_field = s.time_field;
+  d.depth.downsample = s.downsample;
+  d.depth.min_range_m = static_cast<float>(s.min_range_m);
+  d.depth.max_range_m = static_cast<float>(s.max_range_m);
+  d.depth.invalid_as_free = s.invalid_as_free;
+  d.frame = s.frame;
+  d.max_rate_hz = s.max_rate_hz;
+  // The table covers every pixel; max_points counts the points after down-sampling.
+  d.reserve_pixels = std::min<std::size_t>(std::size_t{s.max_points} * s.downsample * s.downsample,
+                                           std::size_t{1} << 24);
+  return d;
+}
 
 }  // namespace
 
@@ -84,7 +105,8 @@ struct Service::Impl {
 
   // DDS (destroyed before the participant: members are destroyed in reverse order).
   std::optional<dds::Participant> participant;
-  std::vector<dds::RawReader> cloud_readers;
+  std::vector<dds::RawReader> cloud_readers;  // PointCloud2 or Image, one per sensor
+  std::vector<std::optional<dds::RawReader>> camera_info_readers;  // depth cameras
   std::optional<dds::RawReader> odometry_reader;
   std::optional<dds::RawReader> tf_reader;
   std::optional<dds::RawReader> tf_static_reader;
@@ -102,8 +124,8 @@ struct Service::Impl {
   std::vector<float> voxels_xyz;
   std::unique_ptr<DiagnosticsReporter> reporter;
 
-  // Ingest-thread state: decode options per sensor (their time-field names live in config).
-  std::vector<dds::CloudDecodeOptions> decode_options;
+  // Ingest-thread state: each sensor's decoder (depth cameras: with their pixel rays).
+  std::vector<pipeline::SensorDecoder> decoders;
   // TF and the sensors' frames to base poses and extrinsics (ingest thread), into `poses`.
   std::unique_ptr<pipeline::TfRouter> tf_router;
   struct QueueSink final : pipeline::PoseSink {
@@ -130,6 +152,7 @@ struct Service::Impl {
   void publisherLoop();
   void diagnosticsLoop();
   void onCloud(std::uint32_t sensor, std::span<const std::byte> cdr);
+  void onCameraInfo(std::uint32_t sensor, std::span<const std::byte> cdr);
   void onOdometry(std::span<const std::byte> cdr);
   void onTf(std::span<const std::byte> cdr, bool is_static);
   void publishVoxels(std::int64_t stamp_ns);
@@ -214,11 +237,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     ss.filter.max_range_m = s.max_range_m;
     ss.max_time_offset_s = static_cast<float>(s.max_time_offset_s);
     sensors.push_back(ss);
-    dds::CloudDecodeOptions decode;
-    const std::string& field = impl->config.sensors[sensors.size() - 1].time_field;
-    decode.ignore_time = field == "none";
-    decode.time_field = field == "auto" || field == "none" ? nullptr : field.c_str();
-    impl->decode_options.push_back(decode);
+    impl->decoders.emplace_back(decodeSettings(s));
   }
   {
     std::vector<std::string> frames;
@@ -250,10 +269,13 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     return Unexpected(waitset.error());
   }
   impl->waitset.emplace(std::move(waitset).value());
+  impl->camera_info_readers.resize(config.sensors.size());
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
-    auto reader = dds::RawReader::create(pp, config.sensors[i].topic.c_str(),
-                                         dds::pointCloud2Type(), dds::Reliability::kBestEffort,
-                                         static_cast<std::int32_t>(config.queues.scan_slots));
+    const SensorConfig& s = config.sensors[i];
+    const bool depth = s.kind == SensorKind::kDepth;
+    auto reader = dds::RawReader::create(
+        pp, s.topic.c_str(), depth ? dds::imageType() : dds::pointCloud2Type(),
+        dds::Reliability::kBestEffort, static_cast<std::int32_t>(config.queues.scan_slots));
     if (!reader) {
       return fail(reader.error().code,
                   file + ": sensors[" + std::to_string(i) + "].topic: " + reader.error().message);
@@ -263,6 +285,21 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
                                               static_cast<std::intptr_t>(i));
         !attached) {
       return Unexpected(attached.error());
+    }
+    if (depth) {
+      // Drivers publish CameraInfo best-effort beside each image (reliable writers match too).
+      auto info = dds::RawReader::create(pp, s.camera_info_topic.c_str(), dds::cameraInfoType(),
+                                         dds::Reliability::kBestEffort, 4);
+      if (!info) {
+        return fail(info.error().code, file + ": sensors[" + std::to_string(i) +
+                                           "].camera_info_topic: " + info.error().message);
+      }
+      impl->camera_info_readers[i].emplace(std::move(info).value());
+      if (auto attached = impl->waitset->attach(impl->camera_info_readers[i]->handle(),
+                                                kCameraInfoToken + static_cast<std::intptr_t>(i));
+          !attached) {
+        return Unexpected(attached.error());
+      }
     }
   }
   const auto poseReader = [&](const std::string& topic, const dds_topic_descriptor_t* type,
@@ -372,6 +409,10 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   reporting.grid_map_topic = config.dds.grid_map_topic;
   for (const SensorConfig& sensor : config.sensors) {
     reporting.sensor_frames.push_back(sensor.frame);
+    reporting.sensors.push_back(
+        {sensor.name, sensor.topic,
+         sensor.kind == SensorKind::kDepth ? sensor.camera_info_topic : std::string(),
+         sensor.max_rate_hz});
   }
   impl->reporter = std::make_unique<DiagnosticsReporter>(
       impl->stats, *impl->mailbox, *impl->poses, std::move(reporting), platform::monotonicNowNs());
@@ -388,13 +429,14 @@ std::string Service::describe() const {
   const DaemonConfig& c = impl_->config;
   std::string sensors;
   for (const SensorConfig& s : c.sensors) {
-    sensors += (sensors.empty() ? "" : ", ") + s.topic;
+    sensors += (sensors.empty() ? "" : ", ") + s.topic +
+               (s.kind == SensorKind::kDepth ? " (depth, " + s.camera_info_topic + ")" : "");
   }
   const std::string device = impl_->backend.backend->deviceName();
   char line[512];
   std::snprintf(
       line, sizeof(line),
-      "backend %s%s%s; clouds from %s; pose from %s; height map %.0f x %.0f m at %g Hz "
+      "backend %s%s%s; sensors %s; pose from %s; height map %.0f x %.0f m at %g Hz "
       "on %s (domain %u)",
       impl_->backend.backend->name(), device.empty() ? "" : " on ", device.c_str(), sensors.c_str(),
       c.pose.source == PoseConfig::Source::kOdometry ? c.pose.odometry_topic.c_str() : "rt/tf",
@@ -432,43 +474,72 @@ void Service::Impl::applyThreadSettings(const char* name, const ThreadConfig& t)
 
 void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr) {
   stats.clouds_received.add();
+  pipeline::SensorCounters& counters = stats.sensors[sensor];
+  counters.received.add();
   pipeline::ScanSlot* slot = mailbox->acquire();
   if (slot == nullptr) {
     stats.clouds_malformed.add();  // unreachable with >= 2 slots; never block
+    counters.rejected.add();
     return;
   }
-  auto decoded = dds::decodePointCloud2(cdr, slot->buffer, decode_options[sensor]);
-  if (!decoded) {
+  const pipeline::DecodedScan decoded = decoders[sensor].decode(cdr, slot->buffer);
+  if (decoded.outcome != pipeline::DecodeOutcome::kAccepted) {
     mailbox->abandon(slot);
-    if (decoded.error() == dds::CloudError::kTooManyPoints) {
-      stats.clouds_too_large.add();
-    } else {
-      stats.clouds_malformed.add();
-    }
-    stats.clouds_rejected_by[static_cast<std::size_t>(decoded.error())].add();
-    return;
   }
-  const SensorConfig& s = config.sensors[sensor];
-  if (!s.frame.empty() && std::strcmp(decoded.value().frame_id, s.frame.c_str()) != 0) {
-    mailbox->abandon(slot);  // its extrinsic would be wrong
-    stats.clouds_unknown_frame.add();
-    if (!stats.wrong_frame_seen.load(std::memory_order_relaxed)) {
-      // The first wrong frame, for the diagnostics' reason (written once, then published).
-      std::memcpy(stats.wrong_frame, decoded.value().frame_id, sizeof(stats.wrong_frame));
-      stats.wrong_frame_sensor = sensor;
-      stats.wrong_frame_seen.store(true, std::memory_order_release);
-    }
-    return;
+  switch (decoded.outcome) {
+    case pipeline::DecodeOutcome::kAccepted:
+      break;
+    case pipeline::DecodeOutcome::kRateLimited:
+      counters.rate_limited.add();  // by configuration: not an input fault
+      return;
+    case pipeline::DecodeOutcome::kMalformed:
+    case pipeline::DecodeOutcome::kTooLarge:
+      counters.rejected.add();
+      if (decoded.outcome == pipeline::DecodeOutcome::kTooLarge) {
+        stats.clouds_too_large.add();
+      } else {
+        stats.clouds_malformed.add();
+      }
+      if (config.sensors[sensor].kind == SensorKind::kDepth) {
+        stats.images_rejected_by[static_cast<std::size_t>(decoded.image_error)].add();
+      } else {
+        stats.clouds_rejected_by[static_cast<std::size_t>(decoded.cloud_error)].add();
+      }
+      return;
+    case pipeline::DecodeOutcome::kNoCameraInfo:
+      counters.rejected.add();
+      counters.no_camera_info.add();
+      return;
+    case pipeline::DecodeOutcome::kWrongFrame:
+      counters.rejected.add();  // its extrinsic would be wrong
+      stats.clouds_unknown_frame.add();
+      if (!stats.wrong_frame_seen.load(std::memory_order_relaxed)) {
+        // The first wrong frame, for the diagnostics' reason (written once, then published).
+        std::memcpy(stats.wrong_frame, decoded.header.frame_id, sizeof(stats.wrong_frame));
+        stats.wrong_frame_sensor = sensor;
+        stats.wrong_frame_seen.store(true, std::memory_order_release);
+      }
+      return;
   }
   // /tf_static latched before a sensor's first cloud applies from it on (queued before the scan:
   // the integrator takes poses queued ahead of a scan first).
-  tf_router->learnSensorFrame(sensor, decoded.value().frame_id, pose_sink);
-  slot->header = decoded.value();
+  tf_router->learnSensorFrame(sensor, decoded.header.frame_id, pose_sink);
+  slot->header = decoded.header;
   slot->sensor = sensor;
   slot->arrival_ns = platform::monotonicNowNs();
   stats.points_received.add(slot->header.points);
+  counters.accepted.add();
   mailbox->publish(slot);
   integrator_wakeup.notify();
+}
+
+void Service::Impl::onCameraInfo(std::uint32_t sensor, std::span<const std::byte> cdr) {
+  pipeline::SensorCounters& counters = stats.sensors[sensor];
+  counters.camera_info.add();
+  if (auto taken = decoders[sensor].onCameraInfo(cdr); !taken) {
+    counters.camera_info_bad.add();
+    stats.camera_info_rejected_by[static_cast<std::size_t>(taken.error())].add();
+  }
 }
 
 void Service::Impl::onOdometry(std::span<const std::byte> cdr) {
@@ -517,6 +588,17 @@ void Service::Impl::ingestLoop() {
               onCloud(sensor, cdr);
             },
             kTakePerWake);
+      } else if (token >= kCameraInfoToken &&
+                 token < kCameraInfoToken + static_cast<std::intptr_t>(cloud_readers.size())) {
+        const auto sensor = static_cast<std::uint32_t>(token - kCameraInfoToken);
+        platform::ForeignScope dds;
+        camera_info_readers[sensor]->takeEach(
+            [&](std::span<const std::byte> cdr, std::int64_t) {
+              // A new camera builds its pixel-ray table here (allocation-free up to the
+              // reserved size; a few ms once): not counted as real-time work.
+              onCameraInfo(sensor, cdr);
+            },
+            4);
       } else if (token == kOdometryToken) {
         odometry_reader->takeEach(
             [&](std::span<const std::byte> cdr, std::int64_t) { onOdometry(cdr); }, 256);

@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "tests/support/bag_spec.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <vector>
 
 namespace raymap::test {
 namespace {
@@ -105,6 +107,50 @@ void BagSpecWriter::odometry(const std::string& topic, std::int64_t log_time_ns,
   message(topic, log_time_ns,
           "{\"header\":" + headerJson(stamp_ns, frame) + ",\"child_frame_id\":\"" + child +
               "\",\"pose\":{\"pose\":" + poseJson(pose) + "}}");
+}
+
+void BagSpecWriter::cameraInfo(const std::string& topic, std::int64_t log_time_ns,
+                               std::int64_t stamp_ns, const std::string& frame,
+                               const CameraIntrinsics& c) {
+  const bool distorted = c.distortion == DistortionModel::kPlumbBob;
+  char body[1024];
+  std::snprintf(body, sizeof(body),
+                ",\"height\":%u,\"width\":%u,\"distortion_model\":\"%s\","
+                "\"d\":[%.17g,%.17g,%.17g,%.17g,%.17g],"
+                "\"k\":[%.17g,0,%.17g,0,%.17g,%.17g,0,0,1],\"r\":[1,0,0,0,1,0,0,0,1],"
+                "\"p\":[%.17g,0,%.17g,0,0,%.17g,%.17g,0,0,0,1,0]}",
+                c.height, c.width, distorted ? "plumb_bob" : "", c.k1, c.k2, c.p1, c.p2, c.k3, c.fx,
+                c.cx, c.fy, c.cy, c.fx, c.cx, c.fy, c.cy);
+  message(topic, log_time_ns, "{\"header\":" + headerJson(stamp_ns, frame) + body);
+}
+
+void BagSpecWriter::depthImage(const std::string& topic, std::int64_t log_time_ns,
+                               std::int64_t stamp_ns, const std::string& frame, std::uint32_t width,
+                               std::uint32_t height, std::span<const float> depth_m,
+                               bool millimetres) {
+  std::vector<std::byte> data;
+  data.reserve(depth_m.size() * 4);
+  for (const float d : depth_m) {
+    if (millimetres) {
+      const float mm = std::isfinite(d) && d > 0.0f ? std::round(d * 1000.0f) : 0.0f;
+      const auto v = static_cast<std::uint16_t>(std::min(mm, 65535.0f));
+      data.push_back(static_cast<std::byte>(v & 0xFFu));
+      data.push_back(static_cast<std::byte>(v >> 8));
+    } else {
+      std::uint32_t bits = 0;
+      std::memcpy(&bits, &d, sizeof(bits));
+      for (int b = 0; b < 4; ++b) {
+        data.push_back(static_cast<std::byte>((bits >> (8 * b)) & 0xFFu));
+      }
+    }
+  }
+  char fields[256];
+  std::snprintf(fields, sizeof(fields),
+                ",\"height\":%u,\"width\":%u,\"encoding\":\"%s\",\"is_bigendian\":0,"
+                "\"step\":%u,\"data\":{\"base64\":\"",
+                height, width, millimetres ? "16UC1" : "32FC1", width * (millimetres ? 2u : 4u));
+  message(topic, log_time_ns,
+          "{\"header\":" + headerJson(stamp_ns, frame) + fields + base64(data) + "\"}}");
 }
 
 void BagSpecWriter::tf(const std::string& topic, std::int64_t log_time_ns,

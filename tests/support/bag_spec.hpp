@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "src/core/pinhole_camera.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/io/trajectory.hpp"
 
@@ -40,6 +41,16 @@ class BagSpecWriter {
                 const std::string& frame, const std::string& child, const io::Pose& pose);
   void tf(const std::string& topic, std::int64_t log_time_ns,
           const std::vector<SpecTransform>& transforms);
+  /// A sensor_msgs/CameraInfo of `camera` (plumb_bob when it has distortion, else "";
+  /// R identity, P = [K | 0], no binning, the whole image as ROI).
+  void cameraInfo(const std::string& topic, std::int64_t log_time_ns, std::int64_t stamp_ns,
+                  const std::string& frame, const CameraIntrinsics& camera);
+  /// A depth sensor_msgs/Image, row-major `depth_m` (metres along the optical axis; NaN or 0 =
+  /// no depth): 32FC1 (metres), or 16UC1 (millimetres, rounded; invalid -> 0), little-endian,
+  /// step = width x pixel size.
+  void depthImage(const std::string& topic, std::int64_t log_time_ns, std::int64_t stamp_ns,
+                  const std::string& frame, std::uint32_t width, std::uint32_t height,
+                  std::span<const float> depth_m, bool millimetres);
   /// Any message, its fields given as JSON (`body`).
   void message(const std::string& topic, std::int64_t log_time_ns, const std::string& body);
 

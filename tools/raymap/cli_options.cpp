@@ -214,8 +214,21 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "Without a 'scan' property: seconds per scan (<= 0: one scan)")
       ->capture_default_str();
   c.add_option("--topic", f.topics,
-               "Bags: a PointCloud2 topic to map (repeat for several sensors; default: the only "
-               "one)");
+               "Bags: a PointCloud2 or depth Image (16UC1/32FC1) topic to map (repeat for several "
+               "sensors; default: the only PointCloud2 topic, else the only Image topic)");
+  c.add_option("--camera-info-topic", f.camera_info_topics,
+               "Bags: the CameraInfo topic of each Image topic, in their order (default: the "
+               "image topic's namespace + camera_info)");
+  c.add_option("--downsample", f.downsample,
+               "Bags, depth images: N x N pixel blocks give their nearest depth (1 = every pixel)")
+      ->check(CLI::Range(1u, 64u))
+      ->capture_default_str();
+  c.add_option("--max-rate", f.max_rate_hz,
+               "Bags: skip a sensor's messages above this rate, Hz (by header stamp; 0 = all)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  c.add_flag("--invalid-as-free", f.invalid_as_free,
+             "Bags, depth images: pixels without a depth clear free space up to --max-range");
   c.add_option("--pose-topic", f.pose_topic,
                "Bags: the nav_msgs/msg/Odometry topic of the poses (default: the only one)");
   c.add_option("--pose-source", f.pose_source,
@@ -427,6 +440,12 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.bag.world_frame = f.world_frame;
   o.bag.base_frame = f.base_frame;
   o.bag.time_field = f.time_field;
+  o.bag.camera_info_topics = f.camera_info_topics;
+  o.bag.depth.downsample = f.downsample;
+  o.bag.depth.min_range_m = static_cast<float>(f.min_range);
+  o.bag.depth.max_range_m = static_cast<float>(f.max_range);
+  o.bag.depth.invalid_as_free = f.invalid_as_free;
+  o.bag.max_rate_hz = f.max_rate_hz;
   o.bag.extrinsic.position = toEigen(*offset);
   const bool is_bag = bag::isBag(input);
   if (is_bag && !f.trajectory.empty()) {
@@ -434,11 +453,13 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
                 "--trajectory: " + input + " is a bag: its poses come from --pose-topic or TF");
   }
   if (!is_bag && (!f.topics.empty() || !f.pose_topic.empty() || f.pose_source != "auto" ||
-                  f.time_field != "auto")) {
+                  f.time_field != "auto" || !f.camera_info_topics.empty() || f.downsample != 1 ||
+                  f.invalid_as_free || f.max_rate_hz != 0.0)) {
     return fail(ErrorCode::kInvalidArgument,
                 input +
-                    " is not a bag: --topic, --pose-topic, --pose-source and --time-field "
-                    "apply to bags only");
+                    " is not a bag: --topic, --pose-topic, --pose-source, --time-field, "
+                    "--camera-info-topic, --downsample, --invalid-as-free and --max-rate apply to "
+                    "bags only");
   }
   o.map.geometry.resolution = f.resolution;
   o.map.geometry.region_voxels = f.region_voxels;

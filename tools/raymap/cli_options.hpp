@@ -57,12 +57,17 @@ struct MappingFlags {
   std::string max_memory = "4GiB";
   std::size_t batch_rays = PopulateOptions::kDefaultBatchRays;
   // rosbag2 input (a bag directory, .mcap or .db3)
-  std::vector<std::string> topics;  ///< --topic: PointCloud2 topics
+  std::vector<std::string> topics;  ///< --topic: PointCloud2 or depth Image topics
   std::string pose_topic;           ///< --pose-topic: nav_msgs/msg/Odometry topic
   std::string pose_source = "auto";
   std::string world_frame = "odom";
   std::string base_frame = "base_link";
   std::string time_field = "auto";
+  // depth images in bags (sensor_msgs/msg/Image + CameraInfo)
+  std::vector<std::string> camera_info_topics;  ///< --camera-info-topic, per Image topic
+  std::uint32_t downsample = 1;                 ///< --downsample
+  bool invalid_as_free = false;                 ///< --invalid-as-free
+  double max_rate_hz = 0.0;                     ///< --max-rate
 };
 
 /// @brief Registers the input and mapping options on a subcommand.

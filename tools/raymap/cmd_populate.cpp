@@ -67,6 +67,13 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
         withCommas(b.points_no_return).c_str(), withCommas(b.points_bad_time).c_str(),
         b.extrinsics_from_tf, withCommas(b.tf_ignored).c_str(),
         withCommas(b.tf_unresolved).c_str());
+    if (b.camera_infos + b.camera_infos_skipped + b.images_no_camera_info + b.rate_limited > 0) {
+      std::printf(
+          "               depth: %s CameraInfo used, %s refused, %s images before their "
+          "CameraInfo; %s messages above --max-rate\n",
+          withCommas(b.camera_infos).c_str(), withCommas(b.camera_infos_skipped).c_str(),
+          withCommas(b.images_no_camera_info).c_str(), withCommas(b.rate_limited).c_str());
+    }
   }
   if (o.map.mode == MapMode::kTsdf) {
     std::printf(

@@ -65,7 +65,9 @@ Result<void> ReplaySession::playBag(const std::string& path) {
                                 (cdr ? "" : " in " + topic.serialization_format) +
                                 ", which this raymap cannot publish: its messages are skipped");
     }
-    const bool cloud = topic.type == "sensor_msgs/msg/PointCloud2";
+    // Scans: point clouds and depth images (paced against raymapd's progress with --rate max).
+    const bool cloud =
+        topic.type == "sensor_msgs/msg/PointCloud2" || topic.type == "sensor_msgs/msg/Image";
     if (writer != nullptr && cloud && first_cloud_writer == nullptr) {
       first_cloud_writer = writer;
       first_cloud_topic = topic.name;

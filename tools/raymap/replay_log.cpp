@@ -12,8 +12,9 @@ namespace {
 
 constexpr std::int32_t kLogWriterDepth = 16;
 
+/// A scan: a point cloud or a depth image (paced against raymapd's progress with --rate max).
 bool isPointCloud(const std::string& type) {
-  return type == "sensor_msgs::msg::dds_::PointCloud2_";
+  return type == "sensor_msgs::msg::dds_::PointCloud2_" || type == "sensor_msgs::msg::dds_::Image_";
 }
 
 }  // namespace

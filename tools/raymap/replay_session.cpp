@@ -28,10 +28,17 @@ constexpr double kReaderSideMatch_s = 1.0;
 constexpr double kFeedbackTimeout_s = 2.0;
 
 /// The counters of raymapd's "raymapd: pipeline" status that account for every received cloud.
-constexpr const char* kProcessedKeys[] = {
-    "raymapd: pipeline/scans_integrated",        "raymapd: pipeline/scans_dropped_no_pose",
-    "raymapd: pipeline/clouds_dropped_overflow", "raymapd: pipeline/clouds_malformed",
-    "raymapd: pipeline/clouds_too_large",        "raymapd: pipeline/clouds_wrong_frame"};
+/// (Depth images count as clouds; those above a sensor's max_rate_hz or before its CameraInfo
+/// are accounted too, and so are scans the latency bound shed whole.)
+constexpr const char* kProcessedKeys[] = {"raymapd: pipeline/scans_integrated",
+                                          "raymapd: pipeline/scans_dropped_no_pose",
+                                          "raymapd: pipeline/clouds_dropped_overflow",
+                                          "raymapd: pipeline/clouds_malformed",
+                                          "raymapd: pipeline/clouds_too_large",
+                                          "raymapd: pipeline/clouds_wrong_frame",
+                                          "raymapd: pipeline/clouds_rate_limited",
+                                          "raymapd: pipeline/images_without_camera_info",
+                                          "raymapd: pipeline/scans_shed"};
 
 std::optional<double> processedClouds(const driver::DiagnosticsListener& diagnostics) {
   double sum = 0.0;

@@ -44,6 +44,40 @@ const kMsgText = new Map([
       "",
     ].join("\n"),
   ],
+  [
+    "sensor_msgs/Image",
+    [
+      "std_msgs/Header header",
+      "uint32 height",
+      "uint32 width",
+      "string encoding",
+      "uint8 is_bigendian",
+      "uint32 step",
+      "uint8[] data",
+      "",
+    ].join("\n"),
+  ],
+  [
+    "sensor_msgs/RegionOfInterest",
+    "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify\n",
+  ],
+  [
+    "sensor_msgs/CameraInfo",
+    [
+      "std_msgs/Header header",
+      "uint32 height",
+      "uint32 width",
+      "string distortion_model",
+      "float64[] d",
+      "float64[9]  k",
+      "float64[9]  r",
+      "float64[12] p",
+      "uint32 binning_x",
+      "uint32 binning_y",
+      "RegionOfInterest roi",
+      "",
+    ].join("\n"),
+  ],
   ["geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n"],
   ["geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"],
   // ROS 2 gives Quaternion defaults, so a default-constructed one is the identity rotation.
@@ -74,6 +108,8 @@ const kMsgText = new Map([
 /** The top-level types a spec may declare, by their ROS 2 name. */
 export const kSupportedTypes = Object.freeze([
   "sensor_msgs/msg/PointCloud2",
+  "sensor_msgs/msg/Image",
+  "sensor_msgs/msg/CameraInfo",
   "nav_msgs/msg/Odometry",
   "tf2_msgs/msg/TFMessage",
   "geometry_msgs/msg/PoseStamped",

@@ -2,6 +2,7 @@
 // raymapd's configuration: defaults, the shipped profiles, and errors that name the file, the key
 // and the reason.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -142,9 +143,20 @@ TEST(DaemonConfig, JetsonCudaProfileParsesOrNamesTheMissingBackend) {
   expectProfile("jetson-cuda.yaml", "cuda");
   auto result = loadDaemonConfig((configDir() / "jetson-cuda.yaml").string());
   if (result) {
-    ASSERT_EQ(result->sensors.size(), 2u);
-    EXPECT_EQ(result->sensors[1].topic, "rt/rear/points");
-    EXPECT_EQ(result->sensors[1].extrinsic.orientation.z(), 1.0);
+    // A lidar and two body depth cameras (issue 26's example).
+    ASSERT_EQ(result->sensors.size(), 3u);
+    EXPECT_EQ(result->sensors[0].kind, SensorKind::kPointCloud);
+    EXPECT_EQ(result->sensors[1].kind, SensorKind::kDepth);
+    EXPECT_EQ(result->sensors[2].kind, SensorKind::kDepth);
+    EXPECT_EQ(result->sensors[1].camera_info_topic, "rt/front_left/depth/camera_info");
+    EXPECT_EQ(result->sensors[2].downsample, 6u);
+    EXPECT_EQ(result->sensors[2].max_rate_hz, 5.0);
+    // The optical axis (z) of the left camera looks forward-left and 45 degrees down.
+    const Eigen::Vector3d axis =
+        result->sensors[1].extrinsic.orientation * Eigen::Vector3d::UnitZ();
+    EXPECT_NEAR(axis.z(), -std::sqrt(0.5), 1e-5);
+    EXPECT_GT(axis.x(), 0.6);
+    EXPECT_GT(axis.y(), 0.3);
     EXPECT_EQ(result->backend.gpu_cache_bytes, std::uint64_t{512} << 20);
   }
 }
@@ -496,3 +508,52 @@ TEST(DaemonConfig, TopicsTakeRosNamesAsRmwCycloneddsNamesThem) {
 
 }  // namespace
 }  // namespace raymap::service
+
+TEST(DaemonConfig, DepthCameraTakesItsKeysAndDefaults) {
+  auto config = parseDaemonConfig(R"(
+sensors:
+  - topic: rt/points
+  - kind: depth
+    topic: /cam/depth/image_rect_raw
+    downsample: 4
+    invalid_as_free: true
+    max_rate_hz: 5
+)",
+                                  "depth.yaml");
+  ASSERT_TRUE(config) << config.error().message;
+  ASSERT_EQ(config->sensors.size(), 2u);
+  const SensorConfig& depth = config->sensors[1];
+  EXPECT_EQ(depth.kind, SensorKind::kDepth);
+  EXPECT_EQ(depth.name, "depth1");
+  EXPECT_EQ(depth.topic, "rt/cam/depth/image_rect_raw");
+  EXPECT_EQ(depth.camera_info_topic, "rt/cam/depth/camera_info");
+  EXPECT_EQ(depth.downsample, 4u);
+  EXPECT_TRUE(depth.invalid_as_free);
+  EXPECT_EQ(depth.max_rate_hz, 5.0);
+  EXPECT_EQ(depth.max_range_m, 3.0);  // a depth camera's default, not a lidar's
+  EXPECT_EQ(depth.max_points, 640u * 480u);
+  EXPECT_EQ(config->sensors[0].kind, SensorKind::kPointCloud);
+}
+
+TEST(DaemonConfig, DepthCameraKeysAreRefusedOnPointCloudsAndCheckedOnCameras) {
+  const struct {
+    const char* yaml;
+    const char* key;
+  } cases[] = {
+      {"sensors:\n  - topic: rt/points\n    downsample: 2\n", "sensors[0].downsample"},
+      {"sensors:\n  - topic: rt/points\n    camera_info_topic: rt/ci\n",
+       "sensors[0].camera_info_topic"},
+      {"sensors:\n  - kind: depth\n    downsample: 0\n", "sensors[0].downsample"},
+      {"sensors:\n  - kind: lidar\n", "sensors[0].kind"},
+      {"sensors:\n  - kind: depth\n    max_rate_hz: -1\n", "sensors[0].max_rate_hz"},
+      {"sensors:\n  - kind: depth\n    topic: rt/a/image\n  - kind: depth\n    topic: "
+       "rt/a/depth\n",
+       "sensors[1].camera_info_topic"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.yaml);
+    auto config = parseDaemonConfig(c.yaml, "bad.yaml");
+    ASSERT_FALSE(config);
+    EXPECT_NE(config.error().message.find(c.key), std::string::npos) << config.error().message;
+  }
+}

@@ -1,0 +1,102 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// One sensor's input: a lidar's PointCloud2, or a depth camera's Image with the CameraInfo it
+// is back-projected with, decoded into scan points in the sensor's frame, rate-limited and
+// checked against the configured frame. One definition for raymapd's ingest thread and the
+// offline readers of bags (raymap populate), so both turn the same messages into the same rays.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "raymap/expected.hpp"
+
+#include "src/core/pinhole_camera.hpp"
+#include "src/dds/camera_info.hpp"
+#include "src/dds/depth_image.hpp"
+#include "src/dds/point_cloud.hpp"
+
+namespace raymap::pipeline {
+
+/// What a sensor publishes.
+enum class SensorInputKind : std::uint8_t {
+  kPointCloud,  ///< sensor_msgs/PointCloud2
+  kDepth,       ///< sensor_msgs/Image (16UC1 / 32FC1) with sensor_msgs/CameraInfo
+};
+
+/// @brief How one sensor's messages are decoded (from raymapd's sensors[] or populate's flags).
+struct SensorDecodeSettings {
+  SensorInputKind kind = SensorInputKind::kPointCloud;
+  /// Point clouds: the per-point time field ("auto", "none" or a name).
+  std::string time_field = "auto";
+  /// Depth cameras: down-sampling, ranges and invalid pixels (dds::DepthDecodeOptions).
+  dds::DepthDecodeOptions depth;
+  /// The frame messages must carry; empty: any (the message's frame is used).
+  std::string frame;
+  /// Messages whose stamps follow the last accepted one's by less than 1 / max_rate_hz (less
+  /// 1 ms of jitter) are dropped; 0 = every message.
+  double max_rate_hz = 0.0;
+  /// Depth cameras: pixels the ray table is sized for up front (no allocation for cameras up
+  /// to this size; a larger one allocates once, when its CameraInfo first arrives).
+  std::size_t reserve_pixels = 640 * 480;
+};
+
+/// Why a message gave no scan.
+enum class DecodeOutcome : std::uint8_t {
+  kAccepted,
+  kRateLimited,   ///< faster than max_rate_hz
+  kMalformed,     ///< the decoder refused it (`cloud_error` or `image_error` says why)
+  kTooLarge,      ///< more points than the buffer holds
+  kWrongFrame,    ///< header.frame_id is not the configured frame
+  kNoCameraInfo,  ///< a depth image before any usable CameraInfo of its frame
+};
+
+/// @brief What decode() did with one message.
+struct DecodedScan {
+  DecodeOutcome outcome = DecodeOutcome::kMalformed;
+  dds::CloudHeader header{};  ///< valid when accepted (and frame_id when kWrongFrame)
+  dds::CloudError cloud_error = dds::CloudError::kTruncated;            ///< point clouds
+  dds::DepthImageError image_error = dds::DepthImageError::kTruncated;  ///< depth images
+};
+
+/// @brief Decodes one sensor's messages. Thread-safety: one thread (raymapd's ingest thread).
+/// @rt decode(): allocates no, blocks no. onCameraInfo(): allocates only for a camera larger
+/// than reserve_pixels, or to describe a refused one; builds the pixel ray table when the
+/// intrinsics change (a few milliseconds for 640 x 480: once, not per frame).
+class SensorDecoder {
+ public:
+  explicit SensorDecoder(SensorDecodeSettings settings);
+  SensorDecoder(const SensorDecoder&) = delete;
+  SensorDecoder& operator=(const SensorDecoder&) = delete;
+  SensorDecoder(SensorDecoder&&) noexcept = default;
+  SensorDecoder& operator=(SensorDecoder&&) noexcept = default;
+
+  /// @brief Takes a CameraInfo (depth cameras). A valid one replaces the intrinsics images are
+  /// back-projected with (the newest of its frame is used for every later image: drivers
+  /// publish the same intrinsics with every frame). @return why it was refused.
+  Expected<void, dds::CameraInfoError> onCameraInfo(std::span<const std::byte> cdr);
+
+  /// @brief Decodes a PointCloud2 or depth Image into `out` (the sensor's frame).
+  DecodedScan decode(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
+
+  const SensorDecodeSettings& settings() const noexcept { return settings_; }
+  /// @brief Whether a depth camera has usable intrinsics (always true for point clouds).
+  bool ready() const noexcept { return settings_.kind != SensorInputKind::kDepth || rays_.built(); }
+
+ private:
+  bool rateAllows(std::int64_t stamp_ns) noexcept;
+
+  SensorDecodeSettings settings_;
+  PixelRayTable rays_;
+  char camera_frame_[64] = {};  // frame_id of the CameraInfo the table was built from
+  std::int64_t last_accepted_ns_ = 0;
+  bool accepted_any_ = false;
+};
+
+/// @brief The CameraInfo topic ROS drivers publish beside an image topic: its namespace plus
+/// "camera_info" (/camera/depth/image_rect_raw -> /camera/depth/camera_info; the same for DDS
+/// names, rt/camera/depth/image_rect_raw -> rt/camera/depth/camera_info).
+std::string cameraInfoTopicFor(const std::string& image_topic);
+
+}  // namespace raymap::pipeline
