@@ -25,8 +25,11 @@ namespace {
 constexpr double kMetresPerMillimetre = 1e-3;
 constexpr float kLargestDepth = std::numeric_limits<float>::max();
 
-/// One pixel's depth in metres (0 for a 16UC1 "no data"; NaN/inf/<= 0 pass through for 32FC1
-/// and are rejected by isValid()). The bytes may be unaligned (step is any number).
+/// One pixel's depth in the image's own unit, as float: millimetres for 16UC1 (exact: a uint16
+/// converts to float without rounding; 0 = no data) and metres for 32FC1 (NaN/inf/<= 0 pass
+/// through and are rejected by isValid()). Comparisons (validity, the block minimum) run in this
+/// unit; only the depths that become points are converted to metres. The bytes may be unaligned
+/// (step is any number).
 template <bool kMillimetres, bool kSwap>
 inline float loadDepth(const std::byte* p) noexcept {
   if constexpr (kMillimetres) {
@@ -35,7 +38,7 @@ inline float loadDepth(const std::byte* p) noexcept {
     if constexpr (kSwap) {
       raw = __builtin_bswap16(raw);
     }
-    return static_cast<float>(static_cast<double>(raw) * kMetresPerMillimetre);
+    return static_cast<float>(raw);
   } else {
     std::uint32_t bits = 0;
     std::memcpy(&bits, p, sizeof(bits));
@@ -46,15 +49,27 @@ inline float loadDepth(const std::byte* p) noexcept {
   }
 }
 
+/// A depth of loadDepth()'s unit in metres.
+template <bool kMillimetres>
+inline float toMetres(float depth) noexcept {
+  if constexpr (kMillimetres) {
+    return static_cast<float>(static_cast<double>(depth) * kMetresPerMillimetre);
+  } else {
+    return depth;
+  }
+}
+
 /// What the loops need besides the pixels.
 struct Limits {
-  float min_range2 = 0.0f;  ///< min_range_m², compared with the squared range along the ray
+  float min_range2 = 0.0f;  ///< min range², in the image's unit (mm² or m²), compared with the
+                            ///< squared range along the ray
   float max_range = 0.0f;   ///< metres along the ray: the end of a free-only point
   bool free_invalid = false;
 };
 
 /// A usable return: a positive, finite depth whose range along its ray, d·sqrt(x²+y²+1), is at
-/// least min range (compared squared: no square root per pixel). NaN fails every comparison.
+/// least min range (compared squared: no square root per pixel; in the image's unit). NaN fails
+/// every comparison.
 inline bool isValid(float depth, float xn, float yn, const Limits& limits) noexcept {
   const float q = xn * xn + yn * yn + 1.0f;
   return depth > 0.0f && depth <= kLargestDepth && depth * depth * q >= limits.min_range2;
@@ -96,7 +111,7 @@ Counts decodeEveryPixel(const Image& image, const PixelRayTable& rays, const Lim
     for (std::uint32_t u = 0; u < image.width; ++u, ray += 2) {
       const float depth = loadDepth<kMillimetres, kSwap>(row + u * kPixelBytes);
       if (isValid(depth, ray[0], ray[1], limits)) [[likely]] {
-        writeReturn(out[n++], depth, ray);
+        writeReturn(out[n++], toMetres<kMillimetres>(depth), ray);
       } else {
         ++counts.invalid;
         if (limits.free_invalid) {
@@ -138,7 +153,7 @@ Counts decodeBlocks(const Image& image, const PixelRayTable& rays, const Limits&
         }
       }
       if (best <= kLargestDepth) {
-        writeReturn(out[n++], best, rays.ray(best_u, best_v));
+        writeReturn(out[n++], toMetres<kMillimetres>(best), rays.ray(best_u, best_v));
       } else {
         ++counts.invalid;
         if (limits.free_invalid) {
@@ -266,7 +281,8 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
   header.height = height;
 
   Limits limits;
-  const float min_range = std::max(options.min_range_m, 0.0f);  // NaN -> 0: none
+  // NaN -> 0: none. In millimetres for 16UC1 (the unit its pixels are compared in).
+  const float min_range = std::max(options.min_range_m, 0.0f) * (header.millimetres ? 1e3f : 1.0f);
   limits.min_range2 = min_range * min_range;
   limits.max_range = options.max_range_m;
   // Free-only points need a length: without a max range invalid blocks are left out.
