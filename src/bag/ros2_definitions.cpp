@@ -59,6 +59,18 @@ const std::vector<Definition>& definitions() {
        "std_msgs/Header header\nuint32 height\nuint32 width\nPointField[] fields\n"
        "bool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n",
        {"std_msgs/msg/Header", "sensor_msgs/msg/PointField"}},
+      {"sensor_msgs/msg/RegionOfInterest",
+       "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify\n",
+       {}},
+      {"sensor_msgs/msg/CameraInfo",
+       "std_msgs/Header header\nuint32 height\nuint32 width\nstring distortion_model\n"
+       "float64[] d\nfloat64[9] k\nfloat64[9] r\nfloat64[12] p\nuint32 binning_x\n"
+       "uint32 binning_y\nRegionOfInterest roi\n",
+       {"std_msgs/msg/Header", "sensor_msgs/msg/RegionOfInterest"}},
+      {"sensor_msgs/msg/Image",
+       "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\n"
+       "uint8 is_bigendian\nuint32 step\nuint8[] data\n",
+       {"std_msgs/msg/Header"}},
       {"nav_msgs/msg/Odometry",
        "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n"
        "geometry_msgs/TwistWithCovariance twist\n",

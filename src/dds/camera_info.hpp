@@ -21,7 +21,8 @@ struct CameraInfoHeader {
   /// width, height, K (fx, fy, cx, cy) and D. binning_x/y > 1 divide the size and K as
   /// image_geometry does; a region of interest other than the whole image shifts cx, cy and
   /// sets the size to the ROI's. P, R are not used: the depth images raymap reads are in the
-  /// camera's own (unrectified) frame.
+  /// camera's own (unrectified) frame. A D of all zeros (as drivers of rectified depth send
+  /// "plumb_bob") decodes as DistortionModel::kNone.
   CameraIntrinsics camera;
 };
 static_assert(std::is_trivially_copyable_v<CameraInfoHeader>);
@@ -34,8 +35,10 @@ enum class CameraInfoError : std::uint8_t {
   kFrameIdTooLong,         ///< header.frame_id has 64 or more characters
   kUnsupportedDistortion,  ///< a distortion_model other than "", "plumb_bob" and
                            ///< "rational_polynomial" (with its k4..k6 zero), or too few D
+                           ///< (fewer than 5), or "" with a non-zero D (coefficients of no model)
   kInvalidIntrinsics,      ///< zero or non-finite focal length, size 0, non-finite D, or a
-                           ///< distortion that folds over the image (CameraIntrinsics::validate)
+                           ///< distortion that folds over the image (CameraIntrinsics::validate);
+                           ///< also a ROI that is not all zero and not inside the image
 };
 inline constexpr std::size_t kCameraInfoErrorCount =
     static_cast<std::size_t>(CameraInfoError::kInvalidIntrinsics) + 1;

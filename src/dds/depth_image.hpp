@@ -29,7 +29,7 @@ struct DepthDecodeOptions {
   float max_range_m = 0.0f;
   /// A block without a valid depth (0, NaN, ±inf, or all nearer than min_range_m) gives a
   /// kPointFreeOnly point max_range_m along the ray of its centre pixel (REP 117: no return within
-  /// range), instead of nothing. Needs max_range_m > 0.
+  /// range), instead of nothing. Needs max_range_m > 0 (with 0 such blocks are left out).
   bool invalid_as_free = false;
 };
 
@@ -54,9 +54,11 @@ enum class DepthImageError : std::uint8_t {
   kFrameIdTooLong,       ///< header.frame_id has 64 or more characters
   kUnsupportedEncoding,  ///< an encoding other than 16UC1 / mono16 and 32FC1
   kStepTooSmall,         ///< step < width × bytes per pixel (or it overflows)
-  kDataTooShort,         ///< data shorter than step × height
+  kDataTooShort,         ///< data shorter than step × height (longer data is accepted: the
+                         ///< bytes after the last row are not read)
   kCameraInfoMismatch,   ///< the image's width or height differs from the CameraInfo's
-  kTooManyPoints,        ///< more points than `out` holds (the image is dropped whole)
+  kTooManyPoints,        ///< more points than `out` holds (the image is dropped whole); checked
+                         ///< against depthPointCapacity(), the most the image can give
 };
 inline constexpr std::size_t kDepthImageErrorCount =
     static_cast<std::size_t>(DepthImageError::kTooManyPoints) + 1;
@@ -64,7 +66,9 @@ inline constexpr std::size_t kDepthImageErrorCount =
 /// @brief Short, stable name ("unsupported_encoding", "step_too_small", ...). @rt allocates: no.
 const char* toString(DepthImageError error) noexcept;
 
-/// @brief Points an image of `width` × `height` gives at most with `downsample`.
+/// @brief Points an image of `width` × `height` gives at most with `downsample`: one per block,
+/// partial blocks at the right and bottom edges included (saturated at 2^32 - 1; 0 counts as 1).
+/// @rt allocates: no.
 std::uint32_t depthPointCapacity(std::uint32_t width, std::uint32_t height,
                                  std::uint32_t downsample) noexcept;
 

@@ -23,6 +23,10 @@ const dds_topic_descriptor_t* tfMessageType() noexcept {
 const dds_topic_descriptor_t* occupancyGridType() noexcept {
   return &nav_msgs_msg_dds__OccupancyGrid__desc;
 }
+const dds_topic_descriptor_t* imageType() noexcept { return &sensor_msgs_msg_dds__Image__desc; }
+const dds_topic_descriptor_t* cameraInfoType() noexcept {
+  return &sensor_msgs_msg_dds__CameraInfo__desc;
+}
 
 const dds_topic_descriptor_t* gridMapType() noexcept {
   return &grid_map_msgs_msg_dds__GridMap__desc;
@@ -35,7 +39,7 @@ namespace {
 
 // The DDS names are spelled out (not read from m_typename) so that the table is a constant; a
 // unit test checks each against its descriptor's m_typename.
-constexpr std::array<KnownTopicType, 6> kKnownTypes = {{
+constexpr std::array<KnownTopicType, 8> kKnownTypes = {{
     {"sensor_msgs::msg::dds_::PointCloud2_", "sensor_msgs/msg/PointCloud2",
      &sensor_msgs_msg_dds__PointCloud2__desc},
     {"nav_msgs::msg::dds_::Odometry_", "nav_msgs/msg/Odometry", &nav_msgs_msg_dds__Odometry__desc},
@@ -47,6 +51,9 @@ constexpr std::array<KnownTopicType, 6> kKnownTypes = {{
      &diagnostic_msgs_msg_dds__DiagnosticArray__desc},
     {"nav_msgs::msg::dds_::OccupancyGrid_", "nav_msgs/msg/OccupancyGrid",
      &nav_msgs_msg_dds__OccupancyGrid__desc},
+    {"sensor_msgs::msg::dds_::Image_", "sensor_msgs/msg/Image", &sensor_msgs_msg_dds__Image__desc},
+    {"sensor_msgs::msg::dds_::CameraInfo_", "sensor_msgs/msg/CameraInfo",
+     &sensor_msgs_msg_dds__CameraInfo__desc},
 }};
 
 /// rmw_cyclonedds prefixes every ROS topic with this (ROS_TOPIC_PREFIX in namespace_prefix.hpp).

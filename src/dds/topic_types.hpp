@@ -23,6 +23,10 @@ const dds_topic_descriptor_t* gridMapType() noexcept;
 const dds_topic_descriptor_t* diagnosticArrayType() noexcept;
 /// nav_msgs::msg::dds_::OccupancyGrid_ (the Nav2 costmap)
 const dds_topic_descriptor_t* occupancyGridType() noexcept;
+/// sensor_msgs::msg::dds_::Image_ (a depth camera's 16UC1 / 32FC1 images)
+const dds_topic_descriptor_t* imageType() noexcept;
+/// sensor_msgs::msg::dds_::CameraInfo_ (the intrinsics of a camera's images)
+const dds_topic_descriptor_t* cameraInfoType() noexcept;
 
 /// @brief A message type raymap can read: its name on the wire, its ROS 2 name and the idlc
 /// descriptor a reader of it needs. Static data; the pointers live as long as the program.
@@ -33,7 +37,7 @@ struct KnownTopicType {
 };
 
 /// @brief The types raymap knows: PointCloud2, Odometry, TFMessage, GridMap, DiagnosticArray,
-/// OccupancyGrid (in that order). @rt allocates: no; thread: any.
+/// OccupancyGrid, Image, CameraInfo (in that order). @rt allocates: no; thread: any.
 std::span<const KnownTopicType> knownTopicTypes() noexcept;
 
 /// @brief Looks a type up by its DDS name ("grid_map_msgs::msg::dds_::GridMap_") or its ROS name

@@ -3,6 +3,7 @@
 #include "tests/unit/dds/cdr_test_writer.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace raymap::dds::test {
@@ -173,6 +174,77 @@ std::vector<std::byte> encodeTfMessage(const std::vector<TestPose>& poses, bool 
     w.string(pose.child);
     writePoseBody(w, pose);
   }
+  return w.data();
+}
+
+std::vector<std::byte> encodeImage(const TestImage& image, bool cdr_little_endian) {
+  CdrTestWriter w(cdr_little_endian);
+  w.i32(image.sec);
+  w.u32(image.nanosec);
+  w.string(image.frame_id);
+  w.u32(image.height);
+  w.u32(image.width);
+  w.string(image.encoding);
+  w.u8(image.is_bigendian);
+  w.u32(image.step);
+  w.bytes(image.data);
+  return w.data();
+}
+
+TestImage makeDepthImage(std::uint32_t width, std::uint32_t height,
+                         const std::vector<float>& depth_m, bool millimetres, bool big_endian,
+                         std::uint32_t row_padding) {
+  TestImage image;
+  image.width = width;
+  image.height = height;
+  image.encoding = millimetres ? "16UC1" : "32FC1";
+  image.is_bigendian = big_endian ? 1 : 0;
+  const std::uint32_t pixel_bytes = millimetres ? 2 : 4;
+  image.step = width * pixel_bytes + row_padding;
+  image.data.assign(std::size_t{image.step} * height, 0xAB);  // padding: not zero on purpose
+  for (std::uint32_t v = 0; v < height; ++v) {
+    for (std::uint32_t u = 0; u < width; ++u) {
+      const float d = depth_m[std::size_t{v} * width + u];
+      const std::size_t at = std::size_t{v} * image.step + std::size_t{u} * pixel_bytes;
+      if (millimetres) {
+        const double mm = std::isfinite(d) && d > 0.0f ? std::round(double{d} * 1000.0) : 0.0;
+        putValue(image.data, at, 4, mm, big_endian);
+      } else {
+        putValue(image.data, at, 7, double{d}, big_endian);
+      }
+    }
+  }
+  return image;
+}
+
+std::vector<std::byte> encodeCameraInfo(const TestCameraInfo& info, bool cdr_little_endian) {
+  CdrTestWriter w(cdr_little_endian);
+  w.i32(info.sec);
+  w.u32(info.nanosec);
+  w.string(info.frame_id);
+  w.u32(info.height);
+  w.u32(info.width);
+  w.string(info.distortion_model);
+  w.u32(static_cast<std::uint32_t>(info.d.size()));
+  for (const double d : info.d) {
+    w.f64(d);
+  }
+  for (const double v : info.k) {
+    w.f64(v);
+  }
+  for (const double v : info.r) {
+    w.f64(v);
+  }
+  for (const double v : info.p) {
+    w.f64(v);
+  }
+  w.u32(info.binning_x);
+  w.u32(info.binning_y);
+  w.u32(info.roi_x_offset);
+  w.u32(info.roi_y_offset);
+  w.u32(info.roi_height);
+  w.u32(info.roi_width);
+  w.boolean(info.roi_do_rectify);
   return w.data();
 }
 

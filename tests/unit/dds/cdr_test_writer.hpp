@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // A small XCDR1 encoder for the DDS tests: hand-built ROS 2 messages (PointCloud2, Odometry,
-// TFMessage), in either byte order, to feed the decoders.
+// TFMessage, Image, CameraInfo), in either byte order, to feed the decoders.
 #pragma once
 
 #include <cstddef>
@@ -85,5 +85,51 @@ std::vector<std::byte> encodeOdometry(const TestPose& pose, bool cdr_little_endi
 /// @brief Serializes tf2_msgs/TFMessage.
 std::vector<std::byte> encodeTfMessage(const std::vector<TestPose>& poses,
                                        bool cdr_little_endian = true);
+
+/// Every member of a sensor_msgs/Image, so that a test can break any of them.
+struct TestImage {
+  std::int32_t sec = 1'700'000'000;
+  std::uint32_t nanosec = 125'000'000;
+  std::string frame_id = "camera_depth_optical_frame";
+  std::uint32_t height = 0;
+  std::uint32_t width = 0;
+  std::string encoding = "32FC1";
+  std::uint8_t is_bigendian = 0;
+  std::uint32_t step = 0;
+  std::vector<std::uint8_t> data;
+};
+
+/// @brief Serializes a TestImage as sensor_msgs/Image.
+std::vector<std::byte> encodeImage(const TestImage& image, bool cdr_little_endian = true);
+
+/// @brief A 32FC1 (metres) or 16UC1 (millimetres, rounded) image of row-major depths, with
+/// `row_padding` bytes after each row and the pixels in the given byte order.
+TestImage makeDepthImage(std::uint32_t width, std::uint32_t height,
+                         const std::vector<float>& depth_m, bool millimetres,
+                         bool big_endian = false, std::uint32_t row_padding = 0);
+
+/// Every member of a sensor_msgs/CameraInfo.
+struct TestCameraInfo {
+  std::int32_t sec = 1'700'000'000;
+  std::uint32_t nanosec = 125'000'000;
+  std::string frame_id = "camera_depth_optical_frame";
+  std::uint32_t height = 480;
+  std::uint32_t width = 640;
+  std::string distortion_model = "plumb_bob";
+  std::vector<double> d = {0.0, 0.0, 0.0, 0.0, 0.0};
+  double k[9] = {385.0, 0.0, 320.5, 0.0, 385.0, 240.5, 0.0, 0.0, 1.0};
+  double r[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  double p[12] = {385.0, 0.0, 320.5, 0.0, 0.0, 385.0, 240.5, 0.0, 0.0, 0.0, 1.0, 0.0};
+  std::uint32_t binning_x = 0;
+  std::uint32_t binning_y = 0;
+  std::uint32_t roi_x_offset = 0;
+  std::uint32_t roi_y_offset = 0;
+  std::uint32_t roi_height = 0;
+  std::uint32_t roi_width = 0;
+  bool roi_do_rectify = false;
+};
+
+/// @brief Serializes a TestCameraInfo as sensor_msgs/CameraInfo.
+std::vector<std::byte> encodeCameraInfo(const TestCameraInfo& info, bool cdr_little_endian = true);
 
 }  // namespace raymap::dds::test

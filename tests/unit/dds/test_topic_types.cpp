@@ -10,9 +10,9 @@
 namespace raymap::dds {
 namespace {
 
-TEST(KnownTopicTypes, ListsTheSixTypesWithTheirDescriptorsNames) {
+TEST(KnownTopicTypes, ListsTheEightTypesWithTheirDescriptorsNames) {
   const auto types = knownTopicTypes();
-  ASSERT_EQ(types.size(), 6U);
+  ASSERT_EQ(types.size(), 8U);
   for (const KnownTopicType& type : types) {
     ASSERT_NE(type.descriptor, nullptr) << type.ros_name;
     // The spelled-out DDS name is what the descriptor registers, i.e. what discovery shows.
@@ -25,6 +25,8 @@ TEST(KnownTopicTypes, ListsTheSixTypesWithTheirDescriptorsNames) {
   EXPECT_EQ(types[3].descriptor, gridMapType());
   EXPECT_EQ(types[4].descriptor, diagnosticArrayType());
   EXPECT_EQ(types[5].descriptor, occupancyGridType());
+  EXPECT_EQ(types[6].descriptor, imageType());
+  EXPECT_EQ(types[7].descriptor, cameraInfoType());
 }
 
 TEST(FindTopicType, FindsByDdsAndByRosName) {
@@ -39,6 +41,10 @@ TEST(FindTopicType, FindsByDdsAndByRosName) {
   EXPECT_EQ(findTopicType("sensor_msgs::msg::dds_::PointCloud2_")->descriptor, pointCloud2Type());
   EXPECT_EQ(findTopicType("nav_msgs/msg/Odometry")->descriptor, odometryType());
   EXPECT_EQ(findTopicType("tf2_msgs/msg/TFMessage")->descriptor, tfMessageType());
+  EXPECT_EQ(findTopicType("sensor_msgs/msg/Image")->descriptor, imageType());
+  EXPECT_EQ(findTopicType("sensor_msgs::msg::dds_::Image_")->descriptor, imageType());
+  EXPECT_EQ(findTopicType("sensor_msgs/msg/CameraInfo")->descriptor, cameraInfoType());
+  EXPECT_EQ(findTopicType("sensor_msgs::msg::dds_::CameraInfo_")->descriptor, cameraInfoType());
 }
 
 TEST(FindTopicType, ReturnsNullForUnknownOrInexactNames) {
