@@ -197,7 +197,7 @@ void readObjects(Context& ctx, const YAML::Node& node, Scene& scene) {
   }
 }
 
-// ---- ground, lidar, trajectory ----
+// ---- ground, lidar, depth cameras, trajectory ----
 
 void readGround(Context& ctx, const YAML::Node& node, Scene& scene) {
   if (!node.IsDefined()) {
@@ -242,6 +242,91 @@ void readLidar(Context& ctx, const YAML::Node& node, LidarModel& lidar) {
           "must be a probability from 0 to 1 (got " + formatNumber(lidar.dropout) + ")");
   lidar.scan_period_s = rate_hz > 0.0 ? 1.0 / rate_hz : lidar.scan_period_s;
   f.finish();
+}
+
+/// `mount: {position: [x, y, z], rpy_deg: [roll, pitch, yaw]}` of a camera, body frame.
+void readMount(Context& ctx, const YAML::Node& node, const std::string& path, CameraMount& mount) {
+  Fields f(ctx, node, path);
+  f.knownKeys({"position", "rpy_deg"});
+  mount.position_m = f.vec3("position");
+  if (f.has("rpy_deg")) {
+    const auto rpy = toNumbers(ctx, f.get("rpy_deg"), f.path("rpy_deg"), 3, "[roll, pitch, yaw]");
+    mount.roll_deg = rpy[0];
+    mount.pitch_deg = rpy[1];
+    mount.yaw_deg = rpy[2];
+  }
+  f.finish();
+}
+
+const std::vector<std::string> kEncodings = {"16UC1", "32FC1"};
+
+void readDepthCamera(Context& ctx, Fields& f, DepthCameraModel& camera) {
+  const YAML::Node name = f.required("name");
+  if (!ctx.failed() && (!name.IsScalar() || name.Scalar().empty())) {
+    ctx.fail(name, f.path("name"), "expected a non-empty text");
+  }
+  camera.name = ctx.failed() ? std::string() : name.Scalar();
+  camera.width = f.integer<std::uint32_t>("width", 1, 65535);
+  camera.height = f.integer<std::uint32_t>("height", 1, 65535);
+  camera.hfov_deg = f.number("hfov_deg");
+  f.check(camera.hfov_deg > 0.0 && camera.hfov_deg < 180.0, "hfov_deg",
+          "must be between 0 and 180 degrees (got " + formatNumber(camera.hfov_deg) + ")");
+  if (f.has("cx")) {
+    camera.cx = f.number("cx");
+  }
+  if (f.has("cy")) {
+    camera.cy = f.number("cy");
+  }
+  if (f.has("distortion")) {
+    const auto d =
+        toNumbers(ctx, f.get("distortion"), f.path("distortion"), 5, "[k1, k2, p1, p2, k3]");
+    std::copy(d.begin(), d.end(), camera.distortion.begin());
+  }
+  if (!ctx.failed()) {
+    readMount(ctx, f.required("mount"), f.path("mount"), camera.mount);
+  }
+  camera.rate_hz = f.positive("rate_hz", camera.rate_hz);
+  camera.max_range_m = f.positive("max_range", camera.max_range_m);
+  camera.min_range_m = f.positive("min_range", camera.min_range_m, true);
+  camera.depth_noise_m = f.positive("noise", camera.depth_noise_m, true);
+  if (f.has("encoding")) {
+    camera.encoding =
+        f.choice("encoding", kEncodings) == 0 ? DepthEncoding::k16UC1 : DepthEncoding::k32FC1;
+  }
+  camera.downsample = f.integer<std::uint32_t>("downsample", 1, 1, 64);
+  f.check(camera.min_range_m < camera.max_range_m, "min_range", "must be less than max_range");
+  if (!ctx.failed()) {
+    // The lens: what the ray table will need (finite, and no fold over the image).
+    if (auto valid = intrinsics(camera).validate(); !valid) {
+      ctx.fail(f.has("distortion") ? f.get("distortion") : f.get("hfov_deg"),
+               f.path(f.has("distortion") ? "distortion" : "hfov_deg"), valid.error().message);
+    }
+  }
+}
+
+/// `depth_cameras:` a list of cameras on the robot body, each with a unique name.
+void readDepthCameras(Context& ctx, const YAML::Node& node, std::vector<DepthCameraModel>& out) {
+  if (!node.IsSequence() || node.size() == 0) {
+    ctx.fail(node, "depth_cameras",
+             "expected a non-empty list of cameras (lines starting with '- ')");
+    return;
+  }
+  for (std::size_t i = 0; i < node.size() && !ctx.failed(); ++i) {
+    Fields f(ctx, node[i], item("depth_cameras", i));
+    f.knownKeys({"name", "width", "height", "hfov_deg", "cx", "cy", "distortion", "mount",
+                 "rate_hz", "max_range", "min_range", "noise", "encoding", "downsample"});
+    if (ctx.failed()) {
+      return;
+    }
+    DepthCameraModel camera;
+    readDepthCamera(ctx, f, camera);
+    for (const DepthCameraModel& other : out) {
+      f.check(other.name != camera.name, "name",
+              "another camera is called '" + camera.name + "' (names must be unique)");
+    }
+    f.finish();
+    out.push_back(std::move(camera));
+  }
 }
 
 /// `waypoints` + `speed`, or `poses` ([t, x, y, z, yaw_deg] each).
@@ -300,7 +385,8 @@ void readTrajectory(Context& ctx, const YAML::Node& node, SensorPath& path) {
 Result<SceneFile> parse(const YAML::Node& root, const std::string& name) {
   Context ctx(name);
   Fields f(ctx, root, "");
-  f.knownKeys({"name", "ground", "objects", "lidar", "trajectory", "seed", "scans", "duration"});
+  f.knownKeys({"name", "ground", "objects", "lidar", "depth_cameras", "trajectory", "seed", "scans",
+               "duration"});
   if (ctx.failed()) {
     return Unexpected(ctx.error());
   }
@@ -319,7 +405,11 @@ Result<SceneFile> parse(const YAML::Node& root, const std::string& name) {
     readObjects(ctx, objects, file.scene);
   }
   SimulationConfig& sim = file.simulation;
-  if (!ctx.failed()) {
+  if (const YAML::Node cameras = f.get("depth_cameras"); cameras.IsDefined() && !ctx.failed()) {
+    readDepthCameras(ctx, cameras, file.depth_cameras);
+  }
+  file.has_lidar = f.has("lidar") || file.depth_cameras.empty();
+  if (!ctx.failed() && file.has_lidar) {
     readLidar(ctx, f.get("lidar"), sim.lidar);
   }
   if (!ctx.failed()) {
@@ -329,12 +419,27 @@ Result<SceneFile> parse(const YAML::Node& root, const std::string& name) {
   const bool has_scans = f.has("scans");
   const bool has_duration = f.has("duration");
   f.check(!(has_scans && has_duration), "duration", "give scans or duration, not both");
+  f.check(!has_scans || file.has_lidar, "scans",
+          "counts lidar revolutions, and the scene has no lidar: give duration");
   const double rate_hz = 1.0 / sim.lidar.scan_period_s;
-  if (has_scans) {
+  const double seconds =
+      has_duration ? f.positive("duration") : sim.path.endTime() - sim.path.startTime();
+  if (!file.has_lidar) {
+    sim.scans = 0;
+    file.duration_s = seconds;
+    for (const DepthCameraModel& camera : file.depth_cameras) {
+      if (frameCount(seconds, camera.rate_hz) < 1 && !ctx.failed()) {
+        ctx.fail(has_duration ? f.get("duration") : f.get("trajectory"),
+                 has_duration ? "duration" : "trajectory",
+                 "lasts " + formatNumber(seconds) + " s, less than one frame of camera '" +
+                     camera.name + "' (" + formatNumber(1.0 / camera.rate_hz) +
+                     " s); give a longer duration");
+      }
+    }
+  } else if (has_scans) {
     sim.scans = f.integer<int>("scans", 1, 100000);
+    file.duration_s = sim.scans / rate_hz;
   } else {
-    const double seconds =
-        has_duration ? f.positive("duration") : sim.path.endTime() - sim.path.startTime();
     // A hair of slack so that 2 s at 10 Hz is 20 scans despite rounding.
     const double scans = std::floor(seconds * rate_hz + 1e-6);
     if (scans < 1.0 && !ctx.failed()) {
@@ -344,6 +449,7 @@ Result<SceneFile> parse(const YAML::Node& root, const std::string& name) {
                    formatNumber(1.0 / rate_hz) + " s); give scans or a longer duration");
     }
     sim.scans = static_cast<int>(std::min(scans, 100000.0));
+    file.duration_s = has_duration ? seconds : sim.scans / rate_hz;
   }
   f.finish();
   if (ctx.failed()) {

@@ -1,20 +1,32 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Scene files: a scene, a lidar and its trajectory described in YAML (docs/scenes.md).
+// Scene files: a scene, its sensors (a lidar, depth cameras) and their trajectory described in
+// YAML (docs/scenes.md).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "raymap/error.hpp"
 
+#include "src/sim/depth_camera.hpp"
 #include "src/sim/lidar.hpp"
 #include "src/sim/scene.hpp"
 
 namespace raymap::sim {
 
 /// @brief Everything a scene file describes: the solids, and the recording to simulate in them.
+/// The trajectory (simulation.path) is the lidar's pose and the robot body's: depth cameras sit
+/// on the body at their mounts.
 struct SceneFile {
   Scene scene;
-  SimulationConfig simulation;  ///< per-column poses (a deskewed recording)
+  SimulationConfig simulation;  ///< per-column poses (a deskewed recording); scans 0 without lidar
+  /// Whether the lidar runs: the file has `lidar:`, or no `depth_cameras:` (a file without
+  /// either gets the default lidar, as every file did before depth cameras).
+  bool has_lidar = true;
+  std::vector<DepthCameraModel> depth_cameras;  ///< validated: DepthCamera::create() succeeds
+  /// Seconds recorded from the path's start: `duration`, else scans / rate with a lidar, else
+  /// the trajectory's length. Each camera takes frameCount(duration_s, rate_hz) frames.
+  double duration_s = 0.0;
 };
 
 /// @brief Reads and validates a scene file (docs/scenes.md).

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `raymap simulate`: a lidar recording of a scene file, as a ray cloud or a point cloud with its
-// trajectory, and the scene's true height field.
+// `raymap simulate`: a recording of a scene file's sensors (a lidar, depth cameras), as a ray
+// cloud or (lidar) a point cloud with its trajectory, and the scene's true height field.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -18,6 +18,7 @@
 #include "src/sim/scene_file.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
+#include "tools/raymap/simulate_depth.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
@@ -39,7 +40,14 @@ struct SimulateFlags {
   double min_clearance = kDefaultMinClearance;
   std::optional<std::uint64_t> seed;
   std::optional<int> scans;
+  std::vector<std::string> sensors;  ///< lidar, depth; empty = every sensor the scene has
   bool quiet = false;
+};
+
+/// The sensors that run: those named by --sensors, or all the scene has.
+struct Sensors {
+  bool lidar = false;
+  bool depth = false;
 };
 
 /// The xy rectangle of the truth grid.
@@ -163,6 +171,75 @@ Expected<void, Error> writeTrajectory(const sim::SimulationConfig& simulation,
   return io::saveTrajectory(*trajectory, path);
 }
 
+/// One sweep of the recording: a lidar revolution or a camera frame, at its start time.
+struct Sweep {
+  double time_s = 0.0;
+  int camera = -1;  ///< -1: the lidar's scan `index`; else depth_cameras[camera]'s frame `index`
+  int index = 0;
+};
+
+/// The rays of every sensor that runs, sweep by sweep in time order (the lidar first on a tie,
+/// then the cameras in file order), each sweep its own scan index from 0.
+Expected<void, Error> record(const sim::SceneFile& file, const Sensors& sensors, double duration_s,
+                             std::vector<Ray>& rays, std::uint64_t& depth_frames) {
+  const sim::SimulationConfig& simulation = file.simulation;
+  const double start = simulation.path.startTime();
+  std::vector<Sweep> sweeps;
+  std::vector<Ray> lidar;
+  if (sensors.lidar) {
+    lidar = sim::simulateScans(file.scene, simulation);
+    for (int s = 0; s < simulation.scans; ++s) {
+      sweeps.push_back({start + s * simulation.lidar.scan_period_s, -1, s});
+    }
+  }
+  std::vector<sim::DepthCamera> cameras;
+  if (sensors.depth) {
+    for (std::size_t c = 0; c < file.depth_cameras.size(); ++c) {
+      auto camera = sim::DepthCamera::create(file.depth_cameras[c]);
+      if (!camera) {
+        return Unexpected(camera.error());
+      }
+      const double rate = camera->model().rate_hz;
+      for (int i = 0; i < sim::frameCount(duration_s, rate); ++i) {
+        sweeps.push_back({start + i / rate, static_cast<int>(c), i});
+      }
+      cameras.push_back(std::move(*camera));
+    }
+  }
+  std::stable_sort(sweeps.begin(), sweeps.end(),
+                   [](const Sweep& a, const Sweep& b) { return a.time_s < b.time_s; });
+
+  rays.reserve(lidar.size());
+  std::size_t next_lidar = 0;  // lidar rays come scan by scan
+  std::vector<float> depth;
+  DepthRayScratch scratch;
+  for (std::size_t i = 0; i < sweeps.size(); ++i) {
+    const Sweep& sweep = sweeps[i];
+    if (sweep.camera < 0) {
+      for (; next_lidar < lidar.size() &&
+             lidar[next_lidar].scan == static_cast<std::uint64_t>(sweep.index);
+           ++next_lidar) {
+        rays.push_back(lidar[next_lidar]);
+        rays.back().scan = i;
+      }
+      continue;
+    }
+    const sim::DepthCamera& camera = cameras[static_cast<std::size_t>(sweep.camera)];
+    depth.resize(camera.pixels());
+    const sim::CameraPose pose =
+        sim::cameraPose(camera.model().mount, simulation.path.at(sweep.time_s));
+    camera.render(file.scene, pose,
+                  sim::frameSeed(simulation.seed, static_cast<std::uint32_t>(sweep.camera),
+                                 static_cast<std::uint32_t>(sweep.index)),
+                  depth);
+    if (auto ok = appendDepthFrameRays(camera, pose, sweep.time_s, i, depth, scratch, rays); !ok) {
+      return ok;
+    }
+    ++depth_frames;
+  }
+  return {};
+}
+
 int runSimulate(const SimulateFlags& f) {
   const char* command = "simulate";
   if (f.rays.empty() && f.points.empty() && f.truth.empty()) {
@@ -203,8 +280,33 @@ int runSimulate(const SimulateFlags& f) {
   }
   const sim::Scene& scene = loaded->scene;
   sim::SimulationConfig& simulation = loaded->simulation;
+  Sensors sensors{loaded->has_lidar, !loaded->depth_cameras.empty()};
+  if (!f.sensors.empty()) {
+    const auto named = [&f](const char* sensor) {
+      return std::find(f.sensors.begin(), f.sensors.end(), sensor) != f.sensors.end();
+    };
+    for (const auto& [name, has] : {std::pair{"lidar", sensors.lidar}, {"depth", sensors.depth}}) {
+      if (named(name) && !has) {
+        printError(command, std::string("--sensors ") + name + ": " + f.scene + " has no " +
+                                (std::string(name) == "lidar" ? "lidar" : "depth_cameras"));
+        return kExitUsage;
+      }
+    }
+    sensors = {named("lidar"), named("depth")};
+  }
+  if (f.scans && !loaded->has_lidar) {
+    printError(command, "--scans counts lidar revolutions, and " + f.scene +
+                            " has no lidar (its duration sets the camera frames)");
+    return kExitUsage;
+  }
+  if (!f.points.empty() && sensors.depth) {
+    printError(command,
+               "--points holds the lidar's returns with its column trajectory: write depth "
+               "cameras with --rays, or give --sensors lidar");
+    return kExitUsage;
+  }
   simulation.seed = f.seed.value_or(simulation.seed);
-  simulation.scans = f.scans.value_or(simulation.scans);
+  simulation.scans = sensors.lidar ? f.scans.value_or(simulation.scans) : 0;
 
   std::string truth_csv;
   std::uint64_t truth_cells = 0;
@@ -219,8 +321,15 @@ int runSimulate(const SimulateFlags& f) {
   }
 
   std::vector<Ray> rays;
+  std::uint64_t depth_frames = 0;
   if (!f.rays.empty() || !f.points.empty()) {
-    rays = sim::simulateScans(scene, simulation);
+    const double duration_s =
+        f.scans ? *f.scans * simulation.lidar.scan_period_s : loaded->duration_s;
+    auto recorded = record(*loaded, sensors, duration_s, rays, depth_frames);
+    if (!recorded) {
+      printError(command, recorded.error().message);
+      return kExitFailure;
+    }
   }
   const auto no_returns = static_cast<std::uint64_t>(std::count_if(
       rays.begin(), rays.end(), [](const Ray& r) { return (r.flags & kRayNoReturn) != 0; }));
@@ -265,8 +374,11 @@ int runSimulate(const SimulateFlags& f) {
       files += (files.empty() ? "" : ", ") + w;
     }
     const int scans = rays.empty() ? 0 : simulation.scans;
-    std::printf("simulated %s: %d scans, %s rays, %s no-return -> %s\n", scene.name.c_str(), scans,
-                withCommas(rays.size()).c_str(), withCommas(no_returns).c_str(), files.c_str());
+    const std::string frames =
+        depth_frames > 0 ? ", " + withCommas(depth_frames) + " depth frames" : std::string();
+    std::printf("simulated %s: %d scans, %s rays, %s no-return%s -> %s\n", scene.name.c_str(),
+                scans, withCommas(rays.size()).c_str(), withCommas(no_returns).c_str(),
+                frames.c_str(), files.c_str());
   }
   return kExitOk;
 }
@@ -276,7 +388,9 @@ int runSimulate(const SimulateFlags& f) {
 void addSimulateCommand(CLI::App& app, int* exit_code) {
   auto flags = std::make_shared<SimulateFlags>();
   CLI::App* c = app.add_subcommand(
-      "simulate", "Simulate a lidar in a scene file (docs/scenes.md): rays, points, true heights");
+      "simulate",
+      "Simulate a scene file's lidar and depth cameras (docs/scenes.md): rays, points, true "
+      "heights");
   c->add_option("scene", flags->scene, "Scene file (.yaml)")->required();
   c->add_option("--rays", flags->rays, "Ray-cloud PLY to write (every ray, no-returns included)");
   c->add_option("--points", flags->points,
@@ -298,6 +412,12 @@ void addSimulateCommand(CLI::App& app, int* exit_code) {
   c->add_option("--seed", flags->seed, "Random seed (default: the scene file's)");
   c->add_option("--scans", flags->scans, "Scans to simulate (default: the scene file's)")
       ->check(CLI::Range(1, 100000));
+  c->add_option("--sensors", flags->sensors,
+                std::string("Sensors to run, comma-separated: lidar, depth (default: all the "
+                            "scene has; depth frames become rays through the ") +
+                    depthRayPath() + " path)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"lidar", "depth"}));
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
   c->callback([flags, exit_code] { *exit_code = runSimulate(*flags); });
 }

@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Scene files: what each object expands to, the lidar and trajectory sections, one test per class
+// Scene files: what each object expands to, the lidar, depth-camera and trajectory sections, one
+// test per class
 // of error (each message names the file, the key path and the reason), and the shipped scenes.
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <ostream>
 #include <set>
 #include <string>
@@ -133,6 +136,82 @@ TEST(SceneFile, ScansFromTheTrajectoryADurationOrGiven) {
   EXPECT_EQ(parseOk(kTrajectory + "scans: 3\nseed: 42\n").simulation.scans, 3);
   EXPECT_EQ(parseOk(kTrajectory + "seed: 18446744073709551615\n").simulation.seed,
             18446744073709551615u);
+}
+
+/// A camera with only its required keys (1 s of trajectory: 15 frames at the default 15 Hz).
+const std::string kCamera =
+    "depth_cameras:\n"
+    "  - {name: front, width: 64, height: 48, hfov_deg: 87, mount: {position: [0.3, 0, 0]}}\n";
+
+TEST(SceneFile, DepthCamerasSectionAndDefaults) {
+  const SceneFile file = parseOk(
+      "depth_cameras:\n"
+      "  - name: body_front\n"
+      "    width: 424\n"
+      "    height: 240\n"
+      "    hfov_deg: 87\n"
+      "    cx: 210.5\n"
+      "    cy: 121\n"
+      "    distortion: [-0.05, 0.02, 0.001, -0.001, 0]\n"
+      "    mount: {position: [0.4, 0.0, 0.05], rpy_deg: [1, 45, -2]}\n"
+      "    rate_hz: 5\n"
+      "    max_range: 2\n"
+      "    min_range: 0.2\n"
+      "    noise: 0.003\n"
+      "    encoding: 16UC1\n"
+      "    downsample: 2\n" +
+      kCamera.substr(kCamera.find("  - ")) + kTrajectory);
+
+  ASSERT_EQ(file.depth_cameras.size(), 2u);
+  const DepthCameraModel& c = file.depth_cameras[0];
+  EXPECT_EQ(c.name, "body_front");
+  EXPECT_EQ(c.width, 424u);
+  EXPECT_EQ(c.height, 240u);
+  EXPECT_EQ(c.hfov_deg, 87.0);
+  EXPECT_EQ(c.cx, std::optional<double>(210.5));
+  EXPECT_EQ(c.cy, std::optional<double>(121.0));
+  EXPECT_EQ(c.distortion, (std::array<double, 5>{-0.05, 0.02, 0.001, -0.001, 0.0}));
+  EXPECT_EQ(c.mount.position_m, (Vec3d{0.4, 0.0, 0.05}));
+  EXPECT_EQ(c.mount.roll_deg, 1.0);
+  EXPECT_EQ(c.mount.pitch_deg, 45.0);
+  EXPECT_EQ(c.mount.yaw_deg, -2.0);
+  EXPECT_EQ(c.rate_hz, 5.0);
+  EXPECT_EQ(c.max_range_m, 2.0);
+  EXPECT_EQ(c.min_range_m, 0.2);
+  EXPECT_EQ(c.depth_noise_m, 0.003);
+  EXPECT_EQ(c.encoding, DepthEncoding::k16UC1);
+  EXPECT_EQ(c.downsample, 2u);
+  const DepthCameraModel& d = file.depth_cameras[1];
+  const DepthCameraModel defaults;
+  EXPECT_EQ(d.name, "front");
+  EXPECT_FALSE(d.cx.has_value());
+  EXPECT_EQ(d.distortion, defaults.distortion);
+  EXPECT_EQ(d.mount.pitch_deg, 0.0);
+  EXPECT_EQ(d.rate_hz, defaults.rate_hz);
+  EXPECT_EQ(d.max_range_m, defaults.max_range_m);
+  EXPECT_EQ(d.min_range_m, defaults.min_range_m);
+  EXPECT_EQ(d.depth_noise_m, defaults.depth_noise_m);
+  EXPECT_EQ(d.encoding, DepthEncoding::k32FC1);
+  EXPECT_EQ(d.downsample, 1u);
+  // Cameras without `lidar:` run alone, over the trajectory's second.
+  EXPECT_FALSE(file.has_lidar);
+  EXPECT_EQ(file.simulation.scans, 0);
+  EXPECT_DOUBLE_EQ(file.duration_s, 1.0);
+}
+
+TEST(SceneFile, LidarIsOptionalBesideCameras) {
+  const SceneFile lidar_only = parseOk(kTrajectory);
+  const SceneFile both = parseOk("lidar: {rate_hz: 20}\n" + kCamera + kTrajectory + "scans: 4\n");
+  const SceneFile cameras_for = parseOk(kCamera + kTrajectory + "duration: 0.5\n");
+
+  EXPECT_TRUE(lidar_only.has_lidar);  // a file without sensors keeps the default lidar
+  EXPECT_TRUE(lidar_only.depth_cameras.empty());
+  EXPECT_DOUBLE_EQ(lidar_only.duration_s, 1.0);
+  EXPECT_TRUE(both.has_lidar);
+  EXPECT_EQ(both.simulation.scans, 4);
+  EXPECT_DOUBLE_EQ(both.duration_s, 0.2);  // 4 scans at 20 Hz
+  EXPECT_FALSE(cameras_for.has_lidar);
+  EXPECT_DOUBLE_EQ(cameras_for.duration_s, 0.5);
 }
 
 TEST(SceneFile, PosesTakeTheHeadingInDegrees) {
@@ -278,7 +357,72 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{"shorter than a scan", "trajectory: {waypoints: [[0, 0, 1]], speed: 1}\n",
                   "trajectory: lasts 0 s, less than one scan"},
         ErrorCase{"scans and duration", kTrajectory + "scans: 3\nduration: 2\n",
-                  "duration: give scans or duration, not both"}));
+                  "duration: give scans or duration, not both"},
+        ErrorCase{"cameras not a list", "depth_cameras: {name: a}\n" + kTrajectory,
+                  "line 1: depth_cameras: expected a non-empty list of cameras"},
+        ErrorCase{"camera without a name",
+                  "depth_cameras:\n  - {width: 64, height: 48, hfov_deg: 87,"
+                  " mount: {position: [0, 0, 0]}}\n" +
+                      kTrajectory,
+                  "line 2: depth_cameras[0].name: required key missing"},
+        ErrorCase{"unknown camera key",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " mount: {position: [0, 0, 0]}, fps: 30}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].fps: unknown key (known here: "},
+        ErrorCase{"field of view out of range",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 180,"
+                  " mount: {position: [0, 0, 0]}}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].hfov_deg: must be between 0 and 180 degrees (got 180)"},
+        ErrorCase{"camera width zero",
+                  "depth_cameras:\n  - {name: a, width: 0, height: 48, hfov_deg: 87,"
+                  " mount: {position: [0, 0, 0]}}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].width: must be from 1 to 65535 (got 0)"},
+        ErrorCase{"distortion shape",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " distortion: [0.1, 0.0], mount: {position: [0, 0, 0]}}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].distortion: expected [k1, k2, p1, p2, k3]"},
+        ErrorCase{"folding distortion",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " distortion: [-0.5, 0, 0, 0, 0], mount: {position: [0, 0, 0]}}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].distortion: camera distortion D cannot be inverted"},
+        ErrorCase{"mount without position",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " mount: {rpy_deg: [0, 45, 0]}}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].mount.position: required key missing"},
+        ErrorCase{"mount angles shape",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " mount: {position: [0, 0, 0], rpy_deg: [45]}}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].mount.rpy_deg: expected [roll, pitch, yaw]"},
+        ErrorCase{"camera ranges in the wrong order",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " mount: {position: [0, 0, 0]}, min_range: 3, max_range: 2}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].min_range: must be less than max_range"},
+        ErrorCase{"negative noise",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " mount: {position: [0, 0, 0]}, noise: -0.01}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].noise: must be >= 0 (got -0.01)"},
+        ErrorCase{"unknown encoding",
+                  "depth_cameras:\n  - {name: a, width: 64, height: 48, hfov_deg: 87,"
+                  " mount: {position: [0, 0, 0]}, encoding: rgb8}\n" +
+                      kTrajectory,
+                  "depth_cameras[0].encoding: must be 16UC1 or 32FC1 (got 'rgb8')"},
+        ErrorCase{"duplicate camera names",
+                  kCamera + kCamera.substr(kCamera.find("  - ")) + kTrajectory,
+                  "line 3: depth_cameras[1].name: another camera is called 'front'"},
+        ErrorCase{"scans without a lidar", kCamera + kTrajectory + "scans: 3\n",
+                  "scans: counts lidar revolutions, and the scene has no lidar"},
+        ErrorCase{"shorter than a frame",
+                  kCamera + "trajectory: {waypoints: [[0, 0, 1]], speed: 1}\n",
+                  "trajectory: lasts 0 s, less than one frame of camera 'front'"}));
 
 TEST(SceneFile, MissingFileNamesThePath) {
   test::TempDir dir;
@@ -313,13 +457,27 @@ TEST(ShippedScenes, EveryOneLoadsAndSimulatesWithinTheSizeBudget) {
     const auto file = loadSceneFile(entry.path().string());
     ASSERT_TRUE(file.has_value()) << file.error().message;
     EXPECT_EQ(file->scene.name, entry.path().stem().string());
+    names.insert(file->scene.name);
+    // Cameras: at most about 3 million rays in all (what the CLI tests map in seconds).
+    std::size_t camera_rays = 0;
+    for (const DepthCameraModel& model : file->depth_cameras) {
+      const auto camera = DepthCamera::create(model);
+      ASSERT_TRUE(camera.has_value()) << camera.error().message;
+      const std::size_t n = model.downsample;
+      camera_rays += ((model.width + n - 1) / n) * ((model.height + n - 1) / n) *
+                     static_cast<std::size_t>(frameCount(file->duration_s, model.rate_hz));
+    }
+    EXPECT_LE(camera_rays, 3'000'000u) << entry.path();
+    if (!file->has_lidar) {
+      EXPECT_GT(camera_rays, 0u) << entry.path();
+      continue;
+    }
     EXPECT_GE(file->simulation.scans, 10) << entry.path();
     EXPECT_LE(file->simulation.scans, 30) << entry.path();
     const LidarModel& lidar = file->simulation.lidar;
     EXPECT_LE(lidar.beams * lidar.columns * file->simulation.scans, 32 * 1024 * 30) << entry.path();
     const std::vector<Ray> rays = simulateScans(file->scene, file->simulation);
     EXPECT_GT(rays.size(), 0u) << entry.path();
-    names.insert(file->scene.name);
   }
   for (const char* name : {"yard", "stairs", "ditch", "room"}) {
     EXPECT_EQ(names.count(name), 1u) << name;
