@@ -176,8 +176,12 @@ void DiagnosticsReporter::describeDrops() noexcept {
     }
   }
   if (c.malformed > b.malformed) {
-    appendf(out, size, "%s%" PRIu64 " malformed clouds or depth images (", sep,
-            c.malformed - b.malformed);
+    bool any_depth = false;
+    for (const ReporterSettings::Sensor& sensor : settings_.sensors) {
+      any_depth = any_depth || !sensor.camera_info_topic.empty();
+    }
+    appendf(out, size, "%s%" PRIu64 " malformed %s (", sep, c.malformed - b.malformed,
+            any_depth ? "clouds or depth images" : "clouds");
     const char* inner = "";
     for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
       if (i != static_cast<std::size_t>(dds::CloudError::kTooManyPoints) &&

@@ -3,10 +3,7 @@
 // by a body camera alone, mapped by `populate` and read by `heightmap`, against the scene's exact
 // height field on the CPU and OpenCL, with and without lens distortion; the lidar's near blind
 // zone filled by a camera; the summary, determinism and the --sensors errors.
-//
-// NOTE(depth-sim): frames become rays through tools/raymap/simulate_depth.cpp; until the depth
-// image serialisers and decoders are in the tree that is its interim back-projection, after that
-// raymapd's decoder (`raymap simulate --help` names the path). These tests hold for both.
+// Frames become rays through raymapd's own depth-image decoder (tools/raymap/simulate_depth.cpp).
 #include <cmath>
 #include <cstdint>
 #include <cstdio>

@@ -109,8 +109,8 @@ DepthBag makeDepthBag(const TempDir& dir, int frames, bool distorted, bool encod
       for (std::uint32_t u = 0; u < camera.width; ++u) {
         const float* r = rays.ray(u, v);
         const Eigen::Vector3d optical(r[0], r[1], 1.0);
-        const Eigen::Vector3d dir = (sensor.orientation * optical).normalized();
-        const double t = sim::castRay(bag.scene, toVec3(sensor.position), toVec3(dir));
+        const Eigen::Vector3d direction = (sensor.orientation * optical).normalized();
+        const double t = sim::castRay(bag.scene, toVec3(sensor.position), toVec3(direction));
         float d = std::numeric_limits<float>::quiet_NaN();
         if (t <= kMaxRange) {
           d = static_cast<float>(t / optical.norm());  // depth is z along the optical axis

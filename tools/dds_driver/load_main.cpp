@@ -12,6 +12,7 @@
 
 #include "platform/clock.hpp"
 #include "src/sim/scene_file.hpp"
+#include "tools/dds_driver/depth_playback.hpp"
 #include "tools/dds_driver/lidar_playback.hpp"
 #include "tools/dds_driver/ros_endpoints.hpp"
 #include "tools/dds_driver/simulated_lidar.hpp"
@@ -47,6 +48,8 @@ int main(int argc, char** argv) {
   std::string diag_topic = "rt/diagnostics";
   std::string frame = "lidar";
   double period_nominal_s = 0.2;
+  std::vector<std::string> sensors;
+  double depth_rate = 0.0;
   app.add_option("--scene", scene_path, "scene file (its lidar and path are the defaults)");
   app.add_option("--beams", beams, "lidar beams (128: an Ouster OS-1-128)");
   app.add_option("--columns", columns, "lidar columns per revolution");
@@ -62,11 +65,31 @@ int main(int argc, char** argv) {
   app.add_option("--diagnostics-topic", diag_topic);
   app.add_option("--frame", frame, "frame_id of the clouds");
   app.add_option("--map-period", period_nominal_s, "raymapd's publish period, seconds");
+  app.add_option("--sensors", sensors,
+                 "lidar, depth (comma-separated; default: what the scene has). Depth cameras "
+                 "publish Image + CameraInfo on rt/NAME/depth/{image_rect_raw,camera_info}, their "
+                 "optical frames on rt/tf_static")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"lidar", "depth"}));
+  app.add_option("--depth-rate", depth_rate,
+                 "frames per second of every depth camera (0: each "
+                 "camera's own rate)");
   CLI11_PARSE(app, argc, argv);
 
   auto scene_file = sim::loadSceneFile(scene_path);
   if (!scene_file) {
     std::fprintf(stderr, "raymap-load: %s\n", scene_file.error().message.c_str());
+    return 2;
+  }
+  const bool run_lidar = sensors.empty()
+                             ? scene_file.value().has_lidar
+                             : std::find(sensors.begin(), sensors.end(), "lidar") != sensors.end();
+  const bool run_depth = sensors.empty()
+                             ? !scene_file.value().depth_cameras.empty()
+                             : std::find(sensors.begin(), sensors.end(), "depth") != sensors.end();
+  if (run_depth && scene_file.value().depth_cameras.empty()) {
+    std::fprintf(stderr, "raymap-load: --sensors depth: %s has no depth_cameras\n",
+                 scene_path.c_str());
     return 2;
   }
   sim::SimulationConfig simulation = scene_file.value().simulation;
@@ -98,12 +121,33 @@ int main(int argc, char** argv) {
   options.distinct_scans = distinct;
   options.frame = frame.c_str();
   driver::LidarPlayback playback(lidar, *publisher.value(), options);
+  std::unique_ptr<driver::DepthPlayback> depth;
+  if (run_depth) {
+    driver::DepthPlaybackOptions depth_options;
+    depth_options.rate_hz = depth_rate;
+    depth_options.odometry_rate_hz = run_lidar ? 0.0 : 50.0;  // the lidar's playback sends it
+    auto created = driver::DepthPlayback::create(
+        participant.value(), *publisher.value(), scene_file.value().scene,
+        scene_file.value().depth_cameras, simulation.path, simulation.seed, depth_options);
+    if (!created) {
+      std::fprintf(stderr, "raymap-load: %s\n", created.error().message.c_str());
+      return 2;
+    }
+    depth = std::move(created).value();
+  }
   // Wait for raymapd's readers (discovery).
-  for (int i = 0; i < 100 && publisher.value()->matchedCloudReaders() == 0; ++i) {
+  for (int i = 0; i < 100 && !((!run_lidar || publisher.value()->matchedCloudReaders() > 0) &&
+                               (!depth || depth->matched()));
+       ++i) {
     platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 50000000);
   }
   const std::int64_t t0 = platform::monotonicNowNs();
-  playback.start(t0, platform::realtimeNowNs());
+  const std::int64_t wall0 = platform::realtimeNowNs();
+  playback.start(t0, wall0);
+  if (depth) {
+    depth->start(t0, wall0);
+  }
+  std::uint64_t frames_before = 0;
   const std::int64_t measure_from = t0 + static_cast<std::int64_t>(warmup * 1e9);
   const std::int64_t end = measure_from + static_cast<std::int64_t>(duration * 1e9);
   std::uint64_t scans_before = 0;
@@ -117,8 +161,12 @@ int main(int argc, char** argv) {
       measuring = true;
       scans_before = playback.scansPublished();
       points_before = playback.pointsPublished();
+      frames_before = depth ? depth->framesPublished() : 0;
     }
-    const std::int64_t due = playback.publishDue(now);
+    std::int64_t due = run_lidar ? playback.publishDue(now) : now + 100000000;
+    if (depth) {
+      due = std::min(due, depth->publishDue(now));
+    }
     received.clear();
     grids.value()->poll(0, received);
     for (const auto& r : received) {
@@ -130,6 +178,7 @@ int main(int argc, char** argv) {
     platform::sleepUntilMonotonicNs(std::min(due, now + 2000000));
   }
   const std::uint64_t published = playback.scansPublished() - scans_before;
+  const std::uint64_t frames = depth ? depth->framesPublished() - frames_before : 0;
   const std::uint64_t points = playback.pointsPublished() - points_before;
   // One more diagnostics report covers the end of the run.
   const std::int64_t settle = platform::monotonicNowNs() + 1200000000;
@@ -153,7 +202,8 @@ int main(int argc, char** argv) {
   const auto& d = *diagnostics.value();
   const auto value = [&](const char* key) { return d.number(key).value_or(-1.0); };
   std::printf(
-      "{\n  \"scan_rate_hz\": %g,\n  \"points_per_scan\": %u,\n  \"scans_published\": %llu,\n"
+      "{\n  \"depth_frames_published\": %llu,\n  \"depth_frames_published_total\": %llu,\n"
+      "  \"scan_rate_hz\": %g,\n  \"points_per_scan\": %u,\n  \"scans_published\": %llu,\n"
       "  \"scans_published_total\": %llu,\n  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  "
       "\"map_period_mean_ms\": %.3f,\n"
       "  \"map_period_error_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
@@ -168,7 +218,9 @@ int main(int argc, char** argv) {
       "\"integrator_load_percent\": %.0f, \"generate_p99_ms\": %.2f, "
       "\"heightmap_lock_hold_p99_ms\": %.2f, \"sync_copy_bytes_p99\": %.0f, "
       "\"heightmap_copy_bytes_p99\": %.0f, \"heightmap_transfer_bytes_p99\": %.0f}\n}\n",
-      scan_rate, lidar.pointsPerScan(), static_cast<unsigned long long>(published),
+      static_cast<unsigned long long>(frames),
+      static_cast<unsigned long long>(depth ? depth->framesPublished() : 0), scan_rate,
+      lidar.pointsPerScan(), static_cast<unsigned long long>(published),
       static_cast<unsigned long long>(playback.scansPublished()),
       static_cast<double>(points) / duration, arrivals.size(), mean_period_ms,
       quantile(errors_ms, 0.5), quantile(errors_ms, 0.99), quantile(errors_ms, 1.0),

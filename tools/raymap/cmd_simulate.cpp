@@ -413,9 +413,8 @@ void addSimulateCommand(CLI::App& app, int* exit_code) {
   c->add_option("--scans", flags->scans, "Scans to simulate (default: the scene file's)")
       ->check(CLI::Range(1, 100000));
   c->add_option("--sensors", flags->sensors,
-                std::string("Sensors to run, comma-separated: lidar, depth (default: all the "
-                            "scene has; depth frames become rays through the ") +
-                    depthRayPath() + " path)")
+                "Sensors to run, comma-separated: lidar, depth (default: all the scene has; depth "
+                "frames become rays through raymapd's depth-image decoder)")
       ->delimiter(',')
       ->check(CLI::IsMember({"lidar", "depth"}));
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");

@@ -16,12 +16,6 @@
 
 namespace raymap::cli {
 
-/// @brief Which code turns frames into rays in this build: "decoder" (serialised as
-/// sensor_msgs/Image + CameraInfo and read back by raymap::dds::decodeDepthImage, raymapd's own
-/// decoder) or "interim" (the same back-projection written out here until that decoder is in
-/// the tree). Printed by `raymap simulate --help`.
-const char* depthRayPath() noexcept;
-
 /// @brief Buffers reused from frame to frame. Not thread-safe: one per thread.
 struct DepthRayScratch {
   std::vector<std::byte> camera_info_cdr;

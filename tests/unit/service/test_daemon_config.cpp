@@ -509,6 +509,9 @@ TEST(DaemonConfig, TopicsTakeRosNamesAsRmwCycloneddsNamesThem) {
 }  // namespace
 }  // namespace raymap::service
 
+namespace raymap::service {
+namespace {
+
 TEST(DaemonConfig, DepthCameraTakesItsKeysAndDefaults) {
   auto config = parseDaemonConfig(R"(
 sensors:
@@ -557,3 +560,6 @@ TEST(DaemonConfig, DepthCameraKeysAreRefusedOnPointCloudsAndCheckedOnCameras) {
     EXPECT_NE(config.error().message.find(c.key), std::string::npos) << config.error().message;
   }
 }
+
+}  // namespace
+}  // namespace raymap::service
