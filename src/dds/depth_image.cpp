@@ -214,12 +214,16 @@ std::uint32_t depthPointCapacity(std::uint32_t width, std::uint32_t height,
       std::min<std::uint64_t>(points, std::numeric_limits<std::uint32_t>::max()));
 }
 
-Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std::byte> cdr,
-                                                             const PixelRayTable& rays,
-                                                             const DepthDecodeOptions& options,
-                                                             std::span<ScanPoint> out) noexcept {
-  RAYMAP_EXPECTS(rays.built());
-  RAYMAP_EXPECTS(options.downsample >= 1);
+namespace {
+
+/// The fields of a serialized Image, checked for what every reader needs (encoding, step, data).
+struct ParsedImage {
+  DepthImageInfo info;
+  std::span<const std::byte> data;
+  std::size_t pixel_bytes = 0;
+};
+
+Expected<ParsedImage, DepthImageError> parseImage(std::span<const std::byte> cdr) noexcept {
   CdrReader reader(cdr);
   if (!reader.ok()) {
     return Unexpected(DepthImageError::kBadEncapsulation);
@@ -233,38 +237,80 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
   std::uint8_t is_bigendian = 0;
   std::uint32_t step = 0;
   std::uint32_t data_size = 0;
-  std::span<const std::byte> data;
+  ParsedImage parsed;
   if (!reader.readI32(sec) || !reader.readU32(nanosec) || !reader.readString(frame_id) ||
       !reader.readU32(height) || !reader.readU32(width) || !reader.readString(encoding) ||
       !reader.readU8(is_bigendian) || !reader.readU32(step) ||
-      !reader.readSequenceLength(data_size, 1) || !reader.readBytes(data_size, data)) {
+      !reader.readSequenceLength(data_size, 1) || !reader.readBytes(data_size, parsed.data)) {
     return Unexpected(reader.malformed() ? DepthImageError::kMalformed
                                          : DepthImageError::kTruncated);
   }
-
-  DepthImageHeader header{};
-  if (frame_id.size() >= sizeof(header.frame_id)) {
+  DepthImageInfo& info = parsed.info;
+  if (frame_id.size() >= sizeof(info.frame_id)) {
     return Unexpected(DepthImageError::kFrameIdTooLong);
   }
   // sensor_msgs/image_encodings: "16UC1" and "mono16" are unsigned 16-bit (depth drivers use
   // millimetres, REP 118), "32FC1" is float metres.
-  std::size_t pixel_bytes = 0;
   if (encoding == "16UC1" || encoding == "mono16") {
-    header.millimetres = true;
-    pixel_bytes = 2;
+    info.millimetres = true;
+    parsed.pixel_bytes = 2;
   } else if (encoding == "32FC1") {
-    pixel_bytes = 4;
+    parsed.pixel_bytes = 4;
   } else {
     return Unexpected(DepthImageError::kUnsupportedEncoding);
   }
   // 64-bit products of 32-bit values cannot overflow.
-  if (std::uint64_t{step} < std::uint64_t{width} * pixel_bytes) {
+  if (std::uint64_t{step} < std::uint64_t{width} * parsed.pixel_bytes) {
     return Unexpected(DepthImageError::kStepTooSmall);
   }
   // Longer data (padding after the last row) is accepted; nothing past step × height is read.
   if (std::uint64_t{data_size} < std::uint64_t{step} * height) {
     return Unexpected(DepthImageError::kDataTooShort);
   }
+  info.stamp_ns = nanosecondsOf(sec, nanosec);
+  if (!frame_id.empty()) {  // an empty view may have a null data()
+    std::memcpy(info.frame_id, frame_id.data(), frame_id.size());
+  }
+  info.frame_id[frame_id.size()] = '\0';
+  std::memcpy(info.encoding, encoding.data(), encoding.size());  // one of the three above
+  info.encoding[encoding.size()] = '\0';
+  info.width = width;
+  info.height = height;
+  info.step = step;
+  info.big_endian = is_bigendian != 0;
+  info.data_bytes = data_size;
+  return parsed;
+}
+
+}  // namespace
+
+Expected<DepthImageInfo, DepthImageError> inspectDepthImage(
+    std::span<const std::byte> cdr) noexcept {
+  auto parsed = parseImage(cdr);
+  if (!parsed) {
+    return Unexpected(parsed.error());
+  }
+  return parsed->info;
+}
+
+Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std::byte> cdr,
+                                                             const PixelRayTable& rays,
+                                                             const DepthDecodeOptions& options,
+                                                             std::span<ScanPoint> out) noexcept {
+  RAYMAP_EXPECTS(rays.built());
+  RAYMAP_EXPECTS(options.downsample >= 1);
+  auto parsed = parseImage(cdr);
+  if (!parsed) {
+    return Unexpected(parsed.error());
+  }
+  const DepthImageInfo& info = parsed->info;
+  const std::uint32_t width = info.width;
+  const std::uint32_t height = info.height;
+  const std::uint32_t step = info.step;
+  const std::span<const std::byte> data = parsed->data;
+  const bool is_bigendian = info.big_endian;
+  DepthImageHeader header{};
+  header.millimetres = info.millimetres;
   if (width != rays.width() || height != rays.height()) {
     return Unexpected(DepthImageError::kCameraInfoMismatch);
   }
@@ -272,11 +318,8 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
     return Unexpected(DepthImageError::kTooManyPoints);
   }
 
-  header.stamp_ns = nanosecondsOf(sec, nanosec);
-  if (!frame_id.empty()) {  // an empty view may have a null data()
-    std::memcpy(header.frame_id, frame_id.data(), frame_id.size());
-  }
-  header.frame_id[frame_id.size()] = '\0';
+  header.stamp_ns = info.stamp_ns;
+  std::memcpy(header.frame_id, info.frame_id, sizeof(header.frame_id));
   header.width = width;
   header.height = height;
 
@@ -289,7 +332,7 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
   limits.free_invalid =
       options.invalid_as_free && options.max_range_m > 0.0f && options.max_range_m <= kLargestDepth;
   const Image image{data.data(), step, width, height};
-  const bool swap = (is_bigendian != 0) != (std::endian::native == std::endian::big);
+  const bool swap = is_bigendian != (std::endian::native == std::endian::big);
   ScanPoint* points = out.data();
   const std::uint32_t n = options.downsample;
   Counts counts;

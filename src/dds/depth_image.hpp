@@ -66,6 +66,24 @@ inline constexpr std::size_t kDepthImageErrorCount =
 /// @brief Short, stable name ("unsupported_encoding", "step_too_small", ...). @rt allocates: no.
 const char* toString(DepthImageError error) noexcept;
 
+/// @brief What an Image's fields say (for tools that show it without a camera model).
+struct DepthImageInfo {
+  std::int64_t stamp_ns = 0;  ///< header.stamp, nanoseconds
+  char frame_id[64] = {};     ///< header.frame_id, NUL-terminated
+  char encoding[8] = {};      ///< "16UC1", "mono16" or "32FC1"
+  std::uint32_t width = 0;    ///< pixels
+  std::uint32_t height = 0;   ///< pixels
+  std::uint32_t step = 0;     ///< bytes per row
+  std::uint32_t data_bytes = 0;
+  bool big_endian = false;
+  bool millimetres = false;  ///< 16UC1 / mono16
+};
+
+/// @brief Checks a serialized sensor_msgs/Image as decodeDepthImage() does (encoding, step, data
+/// length) without a camera, and says what it holds. @rt allocates: no.
+Expected<DepthImageInfo, DepthImageError> inspectDepthImage(
+    std::span<const std::byte> cdr) noexcept;
+
 /// @brief Points an image of `width` × `height` gives at most with `downsample`: one per block,
 /// partial blocks at the right and bottom edges included (saturated at 2^32 - 1; 0 counts as 1).
 /// @rt allocates: no.

@@ -9,7 +9,10 @@
 #include <cstdio>
 #include <vector>
 
+#include "src/core/pinhole_camera.hpp"
+#include "src/dds/camera_info.hpp"
 #include "src/dds/cdr_reader.hpp"
+#include "src/dds/depth_image.hpp"
 #include "src/dds/diagnostics_decode.hpp"
 #include "src/dds/grid_map_decode.hpp"
 #include "src/dds/occupancy_grid_decode.hpp"
@@ -271,6 +274,108 @@ Result<std::string> formatOccupancyGrid(const EchoSample& sample, EchoFormat for
                static_cast<unsigned long long>(c.unknown), static_cast<unsigned long long>(c.free),
                static_cast<unsigned long long>(c.costed), static_cast<unsigned long long>(c.lethal),
                static_cast<unsigned long long>(c.invalid));
+  return out;
+}
+
+// ---------------------------------------------------------------- depth Image, CameraInfo
+
+Result<std::string> formatDepthImage(const EchoSample& sample, EchoFormat format) {
+  const auto info = dds::inspectDepthImage(sample.cdr);
+  if (!info) {
+    return fail(ErrorCode::kFormat, std::string(dds::toString(info.error())) +
+                                        ": not a depth image raymap reads (16UC1, mono16 or "
+                                        "32FC1 with a step and data that fit its size)");
+  }
+  const dds::DepthImageInfo& image = *info;
+  // The depths themselves: decoded through a unit camera (fx = fy = 1 at the top-left pixel),
+  // whose points' z is each pixel's depth in metres.
+  std::uint64_t valid = 0;
+  std::vector<float> depths;
+  if (image.width > 0 && image.height > 0 && image.width <= 65535 && image.height <= 65535) {
+    CameraIntrinsics unit;
+    unit.width = image.width;
+    unit.height = image.height;
+    unit.fx = 1.0;
+    unit.fy = 1.0;
+    PixelRayTable rays;
+    std::vector<dds::ScanPoint> points(std::size_t{image.width} * image.height);
+    if (rays.build(unit)) {
+      const auto decoded = dds::decodeDepthImage(sample.cdr, rays, {}, points);
+      if (decoded) {
+        for (std::uint32_t i = 0; i < decoded->points; ++i) {
+          depths.push_back(points[i].z);
+        }
+        valid = decoded->points;
+      }
+    }
+  }
+  std::sort(depths.begin(), depths.end());
+  const double lo = depths.empty() ? 0.0 : static_cast<double>(depths.front());
+  const double hi = depths.empty() ? 0.0 : static_cast<double>(depths.back());
+  const double median = depths.empty() ? 0.0 : static_cast<double>(depths[depths.size() / 2]);
+  const std::uint64_t pixels = std::uint64_t{image.width} * image.height;
+  if (format == EchoFormat::kJsonLines) {
+    JsonObject j = jsonCommon(sample, image.stamp_ns);
+    j.raw("frame", jsonText(image.frame_id))
+        .raw("encoding", jsonText(image.encoding))
+        .add("width", static_cast<std::uint64_t>(image.width))
+        .add("height", static_cast<std::uint64_t>(image.height))
+        .add("step", static_cast<std::uint64_t>(image.step))
+        .add("big_endian", image.big_endian)
+        .add("pixels_with_depth", valid)
+        .add("depth_min_m", lo)
+        .add("depth_median_m", median)
+        .add("depth_max_m", hi);
+    return j.str() + "\n";
+  }
+  std::string out = humanFirstLine(sample, image.stamp_ns);
+  appendFormat(out, " frame %s\n", humanText(image.frame_id).c_str());
+  appendFormat(out, "  %s, %u x %u, step %u, %s-endian\n", image.encoding, image.width,
+               image.height, image.step, image.big_endian ? "big" : "little");
+  appendFormat(out, "  %llu of %llu pixels with a depth", static_cast<unsigned long long>(valid),
+               static_cast<unsigned long long>(pixels));
+  if (!depths.empty()) {
+    appendFormat(out, ": %.3f .. %.3f m (median %.3f m)", lo, hi, median);
+  }
+  out += "\n";
+  return out;
+}
+
+Result<std::string> formatCameraInfo(const EchoSample& sample, EchoFormat format) {
+  const auto decoded = dds::decodeCameraInfo(sample.cdr);
+  if (!decoded) {
+    return fail(ErrorCode::kFormat,
+                std::string(dds::toString(decoded.error())) + ": not a usable camera model");
+  }
+  const dds::CameraInfoHeader& info = *decoded;
+  const CameraIntrinsics& c = info.camera;
+  const bool distorted = c.distortion == DistortionModel::kPlumbBob;
+  if (format == EchoFormat::kJsonLines) {
+    JsonObject j = jsonCommon(sample, info.stamp_ns);
+    j.raw("frame", jsonText(info.frame_id))
+        .add("width", static_cast<std::uint64_t>(c.width))
+        .add("height", static_cast<std::uint64_t>(c.height))
+        .add("fx", c.fx)
+        .add("fy", c.fy)
+        .add("cx", c.cx)
+        .add("cy", c.cy)
+        .add("distortion", std::string(distorted ? "plumb_bob" : "none"))
+        .add("k1", c.k1)
+        .add("k2", c.k2)
+        .add("p1", c.p1)
+        .add("p2", c.p2)
+        .add("k3", c.k3);
+    return j.str() + "\n";
+  }
+  std::string out = humanFirstLine(sample, info.stamp_ns);
+  appendFormat(out, " frame %s\n", humanText(info.frame_id).c_str());
+  appendFormat(out, "  %u x %u, fx %g fy %g, cx %g cy %g, ", c.width, c.height, c.fx, c.fy, c.cx,
+               c.cy);
+  if (distorted) {
+    appendFormat(out, "plumb_bob k1 %g k2 %g p1 %g p2 %g k3 %g\n", c.k1, c.k2, c.p1, c.p2, c.k3);
+  } else {
+    out += "no distortion\n";
+  }
   return out;
 }
 
@@ -617,6 +722,12 @@ Result<std::string> formatSample(const EchoSample& sample, EchoFormat format) {
   }
   if (type == dds::occupancyGridType()) {
     return formatOccupancyGrid(sample, format);
+  }
+  if (type == dds::imageType()) {
+    return formatDepthImage(sample, format);
+  }
+  if (type == dds::cameraInfoType()) {
+    return formatCameraInfo(sample, format);
   }
   return fail(ErrorCode::kUnsupported,
               std::string("no printer for ") + sample.type->ros_name + " (a raymap bug)");
