@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The pinhole camera of CameraInfo: plumb_bob distortion inverted to 1e-9 pixel over a whole
 // image, validate()'s refusals, and the per-pixel ray table.
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
