@@ -75,6 +75,13 @@ inline bool isValid(float depth, float xn, float yn, const Limits& limits) noexc
   return depth > 0.0f && depth <= kLargestDepth && depth * depth * q >= limits.min_range2;
 }
 
+/// Something is there, nearer than min range (the robot's own body), or REP 117's -inf ("too
+/// close to measure"): not a usable return, and not free space either (it occludes the ray).
+inline bool isNear(float depth) noexcept {
+  return depth == -std::numeric_limits<float>::infinity() ||
+         (depth > 0.0f && depth <= kLargestDepth);
+}
+
 inline void writeReturn(ScanPoint& point, float depth, const float* ray) noexcept {
   point = ScanPoint{depth * ray[0], depth * ray[1], depth, 0.0f, 0.0f, 0u};
 }
@@ -114,7 +121,7 @@ Counts decodeEveryPixel(const Image& image, const PixelRayTable& rays, const Lim
         writeReturn(out[n++], toMetres<kMillimetres>(depth), ray);
       } else {
         ++counts.invalid;
-        if (limits.free_invalid) {
+        if (limits.free_invalid && !isNear(depth)) {
           writeFree(out[n++], ray, limits.max_range);
           ++counts.free_only;
         }
@@ -140,15 +147,20 @@ Counts decodeBlocks(const Image& image, const PixelRayTable& rays, const Limits&
       float best = std::numeric_limits<float>::infinity();
       std::uint32_t best_u = 0;
       std::uint32_t best_v = 0;
+      bool occluded = false;  // a pixel nearer than min range: something is there, not free
       for (std::uint32_t v = v0; v < v1; ++v) {
         const std::byte* row = image.data + v * image.step;
         const float* ray = rays.ray(u0, v);
         for (std::uint32_t u = u0; u < u1; ++u, ray += 2) {
           const float depth = loadDepth<kMillimetres, kSwap>(row + u * kPixelBytes);
-          if (isValid(depth, ray[0], ray[1], limits) && depth < best) {
-            best = depth;
-            best_u = u;
-            best_v = v;
+          if (isValid(depth, ray[0], ray[1], limits)) {
+            if (depth < best) {
+              best = depth;
+              best_u = u;
+              best_v = v;
+            }
+          } else {
+            occluded = occluded || isNear(depth);
           }
         }
       }
@@ -156,7 +168,7 @@ Counts decodeBlocks(const Image& image, const PixelRayTable& rays, const Limits&
         writeReturn(out[n++], toMetres<kMillimetres>(best), rays.ray(best_u, best_v));
       } else {
         ++counts.invalid;
-        if (limits.free_invalid) {
+        if (limits.free_invalid && !occluded) {
           const std::uint32_t centre_u = u0 + (u1 - u0 - 1) / 2;
           const std::uint32_t centre_v = v0 + (v1 - v0 - 1) / 2;
           writeFree(out[n++], rays.ray(centre_u, centre_v), limits.max_range);

@@ -27,9 +27,11 @@ struct DepthDecodeOptions {
   /// Points further than this (metres, along the ray) are kept as they are: the ray preparer
   /// clips them to free space up to max range. Also the length of invalid_as_free rays. 0 = none.
   float max_range_m = 0.0f;
-  /// A block without a valid depth (0, NaN, ±inf, or all nearer than min_range_m) gives a
-  /// kPointFreeOnly point max_range_m along the ray of its centre pixel (REP 117: no return within
-  /// range), instead of nothing. Needs max_range_m > 0 (with 0 such blocks are left out).
+  /// A block whose pixels all have no depth (0, NaN or +inf: REP 117's "no return") gives a
+  /// kPointFreeOnly point max_range_m along the ray of its centre pixel, instead of nothing. A
+  /// block with a pixel nearer than min_range_m (the robot's own body) or at REP 117's -inf (too
+  /// close to measure) and no valid depth gives nothing: something occludes it. Needs
+  /// max_range_m > 0 (with 0 such blocks are left out).
   bool invalid_as_free = false;
 };
 

@@ -367,7 +367,6 @@ TEST(DecodeDepthImage, InvalidPixelsAreLeftOutOrFreeToMaxRangeAlongTheirRay) {
 TEST(DecodeDepthImage, ABlockWithoutAValidDepthIsFreeAlongItsCentrePixel) {
   const PixelRayTable rays = tableOf(tinyCamera(5, 3));
   std::vector<float> depth(15, 0.0f);
-  depth[0] = 0.2f;  // nearer than min range: the robot itself
   std::vector<ScanPoint> out(6);
   DepthDecodeOptions options;
   options.downsample = 3;
@@ -387,6 +386,32 @@ TEST(DecodeDepthImage, ABlockWithoutAValidDepthIsFreeAlongItsCentrePixel) {
     EXPECT_NEAR(out[i].x / out[i].z, ray[0], 1e-7) << i;
     EXPECT_NEAR(out[i].y / out[i].z, ray[1], 1e-7) << i;
   }
+}
+
+TEST(DecodeDepthImage, ABlockOccludedByTheRobotIsNeverFree) {
+  // A pixel nearer than min range (the robot's own leg) or at -inf (REP 117: too close to
+  // measure) means something is there: its block gives no free space behind it.
+  const PixelRayTable rays = tableOf(tinyCamera(6, 3));
+  std::vector<float> depth(18, kNaN);
+  depth[0] = 0.2f;   // block u 0..2: nearer than min range
+  depth[4] = -kInf;  // block u 3..5: too close to measure
+  std::vector<ScanPoint> out(6);
+  DepthDecodeOptions options;
+  options.downsample = 3;
+  options.min_range_m = 0.5f;
+  options.max_range_m = 2.0f;
+  options.invalid_as_free = true;
+  const auto blocks = decode(encodeImage(makeDepthImage(6, 3, depth, false)), rays, out, options);
+  ASSERT_TRUE(blocks.has_value());
+  EXPECT_EQ(blocks->points, 0U);
+  EXPECT_EQ(blocks->invalid, 2U);
+  // The same, pixel by pixel: only the pixels without a depth are free.
+  options.downsample = 1;
+  std::vector<ScanPoint> all(18);
+  const auto pixels = decode(encodeImage(makeDepthImage(6, 3, depth, false)), rays, all, options);
+  ASSERT_TRUE(pixels.has_value());
+  EXPECT_EQ(pixels->free_only, 16U);
+  EXPECT_EQ(pixels->points, 16U);
 }
 
 TEST(DecodeDepthImage, BigEndianPixelsAndMessagesReadTheSame) {
