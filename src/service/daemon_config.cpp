@@ -469,6 +469,15 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
 
 }  // namespace
 
+std::size_t depthRayTablePixels(const SensorConfig& sensor) noexcept {
+  if (sensor.kind != SensorKind::kDepth) {
+    return 0;
+  }
+  constexpr std::size_t kLargestReserved = std::size_t{1280} * 800;
+  return std::min(std::size_t{sensor.max_points} * sensor.downsample * sensor.downsample,
+                  kLargestReserved);
+}
+
 Result<DaemonConfig> parseDaemonConfig(const std::string& text, const std::string& name) {
   try {
     return parse(YAML::Load(text), name);

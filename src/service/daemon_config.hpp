@@ -175,6 +175,11 @@ struct DaemonConfig {
   std::string save_map_on_exit;  ///< map file written (atomically) at shutdown; empty: none
 };
 
+/// @brief Pixels a depth camera's ray table is sized for at start-up: every pixel of an image
+/// that max_points covers at its downsample, at most 1280 x 800 (8 MB of rays; a larger camera's
+/// table grows once, when its first CameraInfo arrives). 0 for point clouds.
+std::size_t depthRayTablePixels(const SensorConfig& sensor) noexcept;
+
 /// @brief Reads and validates a configuration file.
 Result<DaemonConfig> loadDaemonConfig(const std::string& path);
 /// @brief Same, from text (`name` stands for the file in messages).

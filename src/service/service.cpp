@@ -82,8 +82,7 @@ pipeline::SensorDecodeSettings decodeSettings(const SensorConfig& s) {
   d.frame = s.frame;
   d.max_rate_hz = s.max_rate_hz;
   // The table covers every pixel; max_points counts the points after down-sampling.
-  d.reserve_pixels = std::min<std::size_t>(std::size_t{s.max_points} * s.downsample * s.downsample,
-                                           std::size_t{1} << 24);
+  d.reserve_pixels = depthRayTablePixels(s);
   return d;
 }
 

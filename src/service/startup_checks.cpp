@@ -62,6 +62,15 @@ std::vector<PoolEstimate> estimatePools(const DaemonConfig& config) {
   for (const SensorConfig& s : config.sensors) {
     max_points = std::max(max_points, s.max_points);
   }
+  double ray_table_pixels = 0.0;
+  for (const SensorConfig& s : config.sensors) {
+    ray_table_pixels += static_cast<double>(depthRayTablePixels(s));
+  }
+  if (ray_table_pixels > 0.0) {
+    pools.push_back({"sensors[].max_points x downsample^2 (depth cameras)",
+                     "depth cameras' pixel rays (" + thousands(ray_table_pixels) + " pixels)",
+                     ray_table_pixels * 2.0 * sizeof(float)});
+  }
   const double slots = config.queues.scan_slots + 1.0;
   pools.push_back(
       {"queues.scan_slots x sensors[].max_points",
