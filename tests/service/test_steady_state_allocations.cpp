@@ -9,6 +9,7 @@
 #include "src/service/service.hpp"
 #include "tests/service/service_fixture.hpp"
 #include "tests/support/alloc_counter.hpp"
+#include "tools/dds_driver/depth_playback.hpp"
 
 namespace raymap::test {
 namespace {
@@ -51,6 +52,71 @@ TEST(RaymapdSteadyState, MakesNoHeapAllocationAfterWarmUp) {
   // The counter is live: the warm-up did allocate inside the loops (the first height-map cycle
   // sizes its plan) or nothing at all; either way it never decreases.
   EXPECT_GE(after, before);
+}
+
+TEST(RaymapdSteadyState, ADepthCameraMakesNoHeapAllocationAfterWarmUp) {
+  if (!allocationCountingAvailable()) {
+    GTEST_SKIP() << "sanitizer build: the sanitizer owns malloc";
+  }
+  const std::uint32_t domain = uniqueDomain();
+  // Images and their CameraInfo every frame: decoded into the slots, the pixel rays built once.
+  auto config = service::parseDaemonConfig(
+      "map: {resolution: 0.1, window: [6, 6, 3]}\n"
+      "backend: {name: cpu, threads: 2}\n"
+      "pose: {source: odometry, topic: rt/odom}\n"
+      "sensors:\n"
+      "  - {name: body_front, kind: depth, topic: rt/body_front/depth/image_rect_raw,\n"
+      "     max_range: 2.0, downsample: 2}\n"
+      "heightmap: {rate_hz: 5, size: 8, base_height: 0.55}\n"
+      "dds: {domain: " +
+          std::to_string(domain) +
+          "}\n"
+          "realtime: {lock_memory: false, ingest: {priority: 0}, integrator: {priority: 0}, "
+          "publisher: {priority: 0}}\n",
+      "depth.yaml");
+  ASSERT_TRUE(config.has_value()) << config.error().message;
+  auto service = service::Service::create(config.value());
+  ASSERT_TRUE(service.has_value()) << service.error().message;
+  service.value()->start();
+
+  RosSide ros(domain, 1024);
+  auto file = sim::loadSceneFile(std::string(RAYMAP_SCENES_DIR) + "/stairs_depth.yaml");
+  ASSERT_TRUE(file.has_value());
+  // Standing in front of the stairs (as the lidar test stands in the yard).
+  const sim::SensorPath still = sim::SensorPath::fromPoses({file->simulation.path.at(4.0)}).value();
+  auto created =
+      driver::DepthPlayback::create(*ros.publisher_participant, *ros.publisher, file->scene,
+                                    file->depth_cameras, still, file->simulation.seed, {});
+  ASSERT_TRUE(created.has_value()) << created.error().message;
+  driver::DepthPlayback& playback = *created.value();
+  for (int i = 0; i < 500 && !(playback.matched() && ros.grid_maps->matchedWriters() > 0); ++i) {
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 20000000);
+  }
+  const std::int64_t t0 = platform::monotonicNowNs();
+  playback.start(t0, platform::realtimeNowNs());
+  std::vector<driver::ReceivedGridMap> maps;
+  const auto playUntil = [&](double seconds) {
+    const std::int64_t end = t0 + static_cast<std::int64_t>(seconds * 1e9);
+    for (std::int64_t now = platform::monotonicNowNs(); now < end;
+         now = platform::monotonicNowNs()) {
+      const std::int64_t due = playback.publishDue(now);
+      ros.grid_maps->poll(0, maps);
+      ros.diagnostics->poll();
+      platform::sleepUntilMonotonicNs(std::min(due, now + 5000000));
+    }
+  };
+  playUntil(3.0);  // warm-up: the first CameraInfo builds the pixel rays
+  const std::uint64_t before = realtimeAllocations();
+  const std::size_t maps_before = maps.size();
+  playUntil(7.0);
+  const std::uint64_t after = realtimeAllocations();
+  ros.settle(1.2);
+  service.value()->stop();
+
+  EXPECT_EQ(after - before, 0u) << "allocations in the steady-state loops";
+  EXPECT_GE(maps.size() - maps_before, 15u);
+  EXPECT_GE(ros.diagnostics->number("raymapd: sensor body_front/scans_integrated").value_or(0.0),
+            25.0);
 }
 
 }  // namespace
