@@ -248,4 +248,25 @@ std::vector<std::byte> encodeCameraInfo(const TestCameraInfo& info, bool cdr_lit
   return w.data();
 }
 
+void mutateForFuzzing(std::vector<std::byte>& bytes, std::mt19937& rng) {
+  const int edits = 1 + static_cast<int>(rng() % 8);
+  for (int e = 0; e < edits && !bytes.empty(); ++e) {
+    const std::size_t at = rng() % bytes.size();
+    switch (rng() % 4) {
+      case 0:
+        bytes[at] = static_cast<std::byte>(rng() & 0xFFU);
+        break;
+      case 1:
+        bytes[at] = std::byte{0xFF};
+        break;
+      case 2:
+        bytes[at] ^= static_cast<std::byte>(1U << (rng() % 8));
+        break;
+      default:
+        bytes.resize(at + 1);
+        break;
+    }
+  }
+}
+
 }  // namespace raymap::dds::test

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -131,5 +132,9 @@ struct TestCameraInfo {
 
 /// @brief Serializes a TestCameraInfo as sensor_msgs/CameraInfo.
 std::vector<std::byte> encodeCameraInfo(const TestCameraInfo& info, bool cdr_little_endian = true);
+
+/// @brief 1 to 8 random edits of `bytes` for the decoders' fuzz tests: a random byte, 0xFF, a
+/// flipped bit, or the message cut short after a random byte.
+void mutateForFuzzing(std::vector<std::byte>& bytes, std::mt19937& rng);
 
 }  // namespace raymap::dds::test

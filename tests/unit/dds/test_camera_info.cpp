@@ -22,6 +22,7 @@ namespace raymap::dds {
 namespace {
 
 using test::encodeCameraInfo;
+using test::mutateForFuzzing;
 using test::TestCameraInfo;
 
 /// Decodes from an exactly sized heap copy (so that ASan sees any read past the end).
@@ -340,24 +341,7 @@ TEST(DecodeCameraInfoFuzz, RandomMutationsNeverCrash) {
   int accepted = 0;
   for (int round = 0; round < 3000; ++round) {
     std::vector<std::byte> bytes = valid;
-    const int edits = 1 + static_cast<int>(rng() % 8);
-    for (int e = 0; e < edits; ++e) {
-      const std::size_t at = rng() % bytes.size();
-      switch (rng() % 4) {
-        case 0:
-          bytes[at] = static_cast<std::byte>(rng() & 0xFFU);
-          break;
-        case 1:
-          bytes[at] = std::byte{0xFF};
-          break;
-        case 2:
-          bytes[at] ^= static_cast<std::byte>(1U << (rng() % 8));
-          break;
-        default:
-          bytes.resize(at + 1);
-          break;
-      }
-    }
+    mutateForFuzzing(bytes, rng);
     const auto result = decode(bytes);
     if (result.has_value()) {
       ++accepted;

@@ -25,6 +25,7 @@ namespace {
 
 using test::encodeImage;
 using test::makeDepthImage;
+using test::mutateForFuzzing;
 using test::TestImage;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -635,24 +636,7 @@ TEST(DecodeDepthImageFuzz, RandomMutationsNeverCrash) {
         encodeImage(makeDepthImage(6, 4, depth, millimetres, (variant & 2) != 0));
     for (int round = 0; round < 1500; ++round) {
       std::vector<std::byte> bytes = valid;
-      const int edits = 1 + static_cast<int>(rng() % 8);
-      for (int e = 0; e < edits; ++e) {
-        const std::size_t at = rng() % bytes.size();
-        switch (rng() % 4) {
-          case 0:
-            bytes[at] = static_cast<std::byte>(rng() & 0xFFU);
-            break;
-          case 1:
-            bytes[at] = std::byte{0xFF};
-            break;
-          case 2:
-            bytes[at] ^= static_cast<std::byte>(1U << (rng() % 8));
-            break;
-          default:
-            bytes.resize(at + 1);
-            break;
-        }
-      }
+      mutateForFuzzing(bytes, rng);
       DepthDecodeOptions options;
       options.downsample = 1 + static_cast<std::uint32_t>(rng() % 3);
       options.max_range_m = 2.0f;

@@ -18,6 +18,7 @@ namespace {
 
 using test::encodeCloud;
 using test::makeXyzCloud;
+using test::mutateForFuzzing;
 using test::putValue;
 using test::TestCloud;
 
@@ -492,24 +493,7 @@ TEST(DecodePointCloud2Fuzz, RandomMutationsNeverCrash) {
   int accepted = 0;
   for (int round = 0; round < 5000; ++round) {
     std::vector<std::byte> bytes = valid;
-    const int edits = 1 + static_cast<int>(rng() % 8);
-    for (int e = 0; e < edits; ++e) {
-      const std::size_t at = rng() % bytes.size();
-      switch (rng() % 4) {
-        case 0:
-          bytes[at] = static_cast<std::byte>(rng() & 0xFFU);
-          break;
-        case 1:
-          bytes[at] = std::byte{0xFF};
-          break;
-        case 2:
-          bytes[at] ^= static_cast<std::byte>(1U << (rng() % 8));
-          break;
-        default:
-          bytes.resize(at + 1);
-          break;
-      }
-    }
+    mutateForFuzzing(bytes, rng);
     auto result = decode(bytes, out);
     if (result.has_value()) {
       ++accepted;
