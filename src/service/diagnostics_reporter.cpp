@@ -52,7 +52,11 @@ DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
       heightmap_name_(settings_.name + ": height map"),
       realtime_name_(settings_.name + ": real time"),
       started_ns_(started_ns),
-      message_(3 + static_cast<int>(settings_.sensors.size()), 64) {
+      message_(3 + static_cast<int>(settings_.sensors.size()), 64),
+      has_depth_(std::any_of(settings_.sensors.begin(), settings_.sensors.end(),
+                             [](const ReporterSettings::Sensor& sensor) {
+                               return !sensor.camera_info_topic.empty();
+                             })) {
   const double window_s = std::max(kMinWindowS, 1.0 / settings_.report_rate_hz);
   window_ns_ = static_cast<std::int64_t>(std::llround(window_s * 1e9));
   // Enough samples that one of them is a whole window older than the newest.
@@ -176,12 +180,8 @@ void DiagnosticsReporter::describeDrops() noexcept {
     }
   }
   if (c.malformed > b.malformed) {
-    bool any_depth = false;
-    for (const ReporterSettings::Sensor& sensor : settings_.sensors) {
-      any_depth = any_depth || !sensor.camera_info_topic.empty();
-    }
     appendf(out, size, "%s%" PRIu64 " malformed %s (", sep, c.malformed - b.malformed,
-            any_depth ? "clouds or depth images" : "clouds");
+            has_depth_ ? "clouds or depth images" : "clouds");
     const char* inner = "";
     for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
       if (i != static_cast<std::size_t>(dds::CloudError::kTooManyPoints) &&
@@ -265,7 +265,9 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
             last != 0 ? "for" : "since start,", seconds_since_scan_);
     const double dt = static_cast<double>(now.ns - base_->ns) * 1e-9;
     if (c.clouds == b.clouds) {
-      appendf(m, size, " (no point cloud arrives%s)", c.clouds == 0 ? " at all" : " any more");
+      appendf(m, size, " (no %s arrives%s)",
+              has_depth_ ? "point cloud or depth image" : "point cloud",
+              c.clouds == 0 ? " at all" : " any more");
     } else if (dt > 0.0) {
       appendf(m, size, " (%.1f clouds/s arrive)", static_cast<double>(c.clouds - b.clouds) / dt);
     }
@@ -348,11 +350,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
                   dds::toString(static_cast<dds::CloudError>(i)));
     message_.addValue(s, key, "%" PRIu64, c.rejected_by[i]);
   }
-  bool any_depth = false;
-  for (const ReporterSettings::Sensor& sensor : settings_.sensors) {
-    any_depth = any_depth || !sensor.camera_info_topic.empty();
-  }
-  if (any_depth) {
+  if (has_depth_) {
     for (std::size_t i = 0; i < dds::kDepthImageErrorCount; ++i) {
       if (i == static_cast<std::size_t>(dds::DepthImageError::kTooManyPoints)) {
         continue;  // clouds_too_large

@@ -119,6 +119,7 @@ class DiagnosticsReporter {
   std::int64_t started_ns_;
   std::int64_t window_ns_;
   dds::DiagnosticsMessage message_;
+  bool has_depth_;  ///< a depth camera is configured: its reasons and counters are reported
   std::vector<Sample> ring_;  // fixed size; ring_[head_] is the newest
   std::size_t head_ = 0;
   std::size_t filled_ = 0;
