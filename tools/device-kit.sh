@@ -4,9 +4,9 @@
 # with an NVIDIA GPU and its driver and nothing else (no compiler use, no packages, no network).
 #   tools/device-kit.sh OUT_DIR
 # OUT_DIR gets:
-#   bin/     Release executables (raymap, raymapd, raymap-load, raymap-heightmap-bench and the
-#            CUDA and height-map tests), CUDA machine code for sm_87 (Orin) and sm_90 (Hopper)
-#            plus sm_90 PTX; their RPATH is ../lib
+#   bin/     Release executables (raymap, raymapd, raymap-load, raymap-heightmap-bench,
+#            raymap-depth-bench and the CUDA and height-map tests), CUDA machine code for sm_87
+#            (Orin) and sm_90 (Hopper) plus sm_90 PTX; their RPATH is ../lib
 #   lib/     every shared library they need except the C library and the NVIDIA driver
 #            (libstdc++ too, so an older distribution runs them)
 #   data/    a subset of ../shared/data ($RAYMAP_KIT_DATA) when present, within the size limit
@@ -42,8 +42,8 @@ if [ -z "$nvcc" ]; then
   exit 1
 fi
 
-targets=(raymap raymapd raymap-load raymap-heightmap-bench test_unit_cuda test_cuda_device test_unit_mapper
-  test_cuda_data test_heightmap)
+targets=(raymap raymapd raymap-load raymap-heightmap-bench raymap-depth-bench test_unit_cuda
+  test_cuda_device test_unit_mapper test_cuda_data test_heightmap)
 echo "== configure and build ($build: Release, CUDA architectures $arch, warnings as errors)"
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DRAYMAP_CUDA=ON -DRAYMAP_WERROR=ON \
   -DRAYMAP_BUILD_TESTS=ON -DRAYMAP_BUILD_BENCHMARKS=ON "-DCMAKE_CUDA_ARCHITECTURES=$arch" >/dev/null
