@@ -114,6 +114,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       if (topic.type == kImage) {
         settings.kind = pipeline::SensorInputKind::kDepth;
         settings.depth = options_.depth;
+        settings.max_points = options_.max_points;
         const std::string name = images < options_.camera_info_topics.size()
                                      ? options_.camera_info_topics[images]
                                      : pipeline::cameraInfoTopicFor(topic.name);

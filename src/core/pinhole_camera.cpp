@@ -78,6 +78,29 @@ Expected<void, Error> CameraIntrinsics::validate() const {
   return {};
 }
 
+bool CameraIntrinsics::usable() const noexcept {
+  if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide) {
+    return false;
+  }
+  if (!finite(fx) || !finite(fy) || fx <= 0.0 || fy <= 0.0 || !finite(cx) || !finite(cy)) {
+    return false;
+  }
+  if (!finite(k1) || !finite(k2) || !finite(p1) || !finite(p2) || !finite(k3)) {
+    return false;
+  }
+  const double us[3] = {0.0, 0.5 * (width - 1.0), width - 1.0};
+  const double vs[3] = {0.0, 0.5 * (height - 1.0), height - 1.0};
+  for (const double u : us) {
+    for (const double v : vs) {
+      NormalisedPoint p;
+      if (!pixelToNormalised(*this, u, v, &p)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 NormalisedPoint projectNormalised(const CameraIntrinsics& camera, NormalisedPoint point) noexcept {
   const Distorted d = distort(camera, point.x, point.y);
   return {camera.fx * d.x + camera.cx, camera.fy * d.y + camera.cy};

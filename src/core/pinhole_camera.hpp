@@ -45,6 +45,8 @@ struct CameraIntrinsics {
   /// distortion that is invertible over the image (checked at the corners and edge midpoints).
   /// The message names the field and the reason.
   Expected<void, Error> validate() const;
+  /// @brief What validate() checks, without describing the failure. @rt allocates: no.
+  bool usable() const noexcept;
 
   bool operator==(const CameraIntrinsics&) const = default;
 };

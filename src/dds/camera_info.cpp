@@ -38,6 +38,8 @@ const char* toString(CameraInfoError error) noexcept {
       return "unsupported_distortion";
     case CameraInfoError::kInvalidIntrinsics:
       return "invalid_intrinsics";
+    case CameraInfoError::kTooLarge:
+      return "too_large";
   }
   return "unknown";
 }
@@ -178,7 +180,7 @@ Expected<CameraInfoHeader, CameraInfoError> decodeCameraInfo(
   camera.fy = fy;
   camera.cx = cx;
   camera.cy = cy;
-  if (!camera.validate()) {
+  if (!camera.usable()) {  // validate()'s checks, without building its message
     return Unexpected(CameraInfoError::kInvalidIntrinsics);
   }
   return out;

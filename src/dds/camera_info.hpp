@@ -39,16 +39,19 @@ enum class CameraInfoError : std::uint8_t {
   kInvalidIntrinsics,      ///< zero or non-finite focal length, size 0, non-finite D, or a
                            ///< distortion that folds over the image (CameraIntrinsics::validate);
                            ///< also a ROI that is not all zero and not inside the image
+  kTooLarge,               ///< a camera whose images would give more points than the sensor
+                           ///< takes (sensors[].max_points at its downsample): refused before
+                           ///< its pixel rays are built (the size of a huge table, the time)
 };
 inline constexpr std::size_t kCameraInfoErrorCount =
-    static_cast<std::size_t>(CameraInfoError::kInvalidIntrinsics) + 1;
+    static_cast<std::size_t>(CameraInfoError::kTooLarge) + 1;
 
 /// @brief Short, stable name ("truncated", "invalid_intrinsics", ...). @rt allocates: no.
 const char* toString(CameraInfoError error) noexcept;
 
 /// @brief Decodes a serialized sensor_msgs/CameraInfo (with its 4-byte encapsulation header).
-/// @rt allocates: no (the validation's corner check allocates only on failure: messages are
-/// built for the error path; the ingest thread treats a refused CameraInfo as rare); blocks: no.
+/// kTooLarge is never returned here (it is the sensor's policy: pipeline::SensorDecoder).
+/// @rt allocates: no; blocks: no.
 Expected<CameraInfoHeader, CameraInfoError> decodeCameraInfo(
     std::span<const std::byte> cdr) noexcept;
 

@@ -25,15 +25,29 @@ Expected<void, dds::CameraInfoError> SensorDecoder::onCameraInfo(std::span<const
   if (!info) {
     return Unexpected(info.error());
   }
-  if (rays_.matches(info.value().camera) &&
-      std::strcmp(camera_frame_, info.value().frame_id) == 0) {
+  const CameraIntrinsics& camera = info.value().camera;
+  if (rays_.matches(camera) && std::strcmp(camera_frame_, info.value().frame_id) == 0) {
     return {};  // the same camera again: nothing to do (every frame's CameraInfo comes here)
   }
-  if (!rays_.build(info.value().camera)) {
-    // decodeCameraInfo validated the intrinsics; a pixel that cannot be inverted is the same
-    // defect seen at a pixel the validation did not sample.
+  if (refused_any_ && camera == refused_camera_) {
+    return Unexpected(refused_error_);
+  }
+  const auto refuse = [&](dds::CameraInfoError error) {
+    refused_camera_ = camera;
+    refused_error_ = error;
+    refused_any_ = true;
+    return Unexpected(error);
+  };
+  if (settings_.max_points > 0 &&
+      dds::depthPointCapacity(camera.width, camera.height, settings_.depth.downsample) >
+          settings_.max_points) {
+    return refuse(dds::CameraInfoError::kTooLarge);
+  }
+  if (!rays_.build(camera)) {
+    // decodeCameraInfo checked the intrinsics; a pixel that cannot be inverted is the same
+    // defect seen at a pixel that check did not sample.
     std::memset(camera_frame_, 0, sizeof(camera_frame_));
-    return Unexpected(dds::CameraInfoError::kInvalidIntrinsics);
+    return refuse(dds::CameraInfoError::kInvalidIntrinsics);
   }
   std::memcpy(camera_frame_, info.value().frame_id, sizeof(camera_frame_));
   return {};
@@ -54,62 +68,82 @@ bool SensorDecoder::rateAllows(std::int64_t stamp_ns) noexcept {
 
 DecodedScan SensorDecoder::decode(std::span<const std::byte> cdr,
                                   std::span<dds::ScanPoint> out) noexcept {
+  return settings_.kind == SensorInputKind::kDepth ? decodeDepth(cdr, out) : decodeCloud(cdr, out);
+}
+
+DecodedScan SensorDecoder::decodeCloud(std::span<const std::byte> cdr,
+                                       std::span<dds::ScanPoint> out) noexcept {
   DecodedScan result;
-  if (settings_.kind == SensorInputKind::kPointCloud) {
-    dds::CloudDecodeOptions options;
-    options.ignore_time = settings_.time_field == "none";
-    options.time_field = settings_.time_field == "auto" || options.ignore_time
-                             ? nullptr
-                             : settings_.time_field.c_str();
-    auto cloud = dds::decodePointCloud2(cdr, out, options);
-    if (!cloud) {
-      result.cloud_error = cloud.error();
-      result.outcome = cloud.error() == dds::CloudError::kTooManyPoints ? DecodeOutcome::kTooLarge
-                                                                        : DecodeOutcome::kMalformed;
-      return result;
-    }
-    result.header = cloud.value();
-  } else {
-    if (!rays_.built()) {
-      result.outcome = DecodeOutcome::kNoCameraInfo;
-      return result;
-    }
-    auto image = dds::decodeDepthImage(cdr, rays_, settings_.depth, out);
-    if (!image) {
-      result.image_error = image.error();
-      result.outcome = image.error() == dds::DepthImageError::kTooManyPoints
-                           ? DecodeOutcome::kTooLarge
-                           : DecodeOutcome::kMalformed;
-      return result;
-    }
-    const dds::DepthImageHeader& h = image.value();
-    result.header.stamp_ns = h.stamp_ns;
-    std::memcpy(result.header.frame_id, h.frame_id, sizeof(result.header.frame_id));
-    result.header.width = h.points;  // an unorganised cloud of the blocks' points
-    result.header.height = 1;
-    result.header.points = h.points;
-    result.header.no_return = 0;  // free-only points have a direction and are integrated
-    result.header.has_time = false;
-    result.header.has_intensity = false;
-    if (std::strcmp(h.frame_id, camera_frame_) != 0) {
-      // The intrinsics came for another camera: none for this one yet.
-      result.outcome = DecodeOutcome::kNoCameraInfo;
-      return result;
-    }
-  }
-  if (!settings_.frame.empty() &&
-      std::strcmp(result.header.frame_id, settings_.frame.c_str()) != 0) {
-    result.outcome = DecodeOutcome::kWrongFrame;
+  dds::CloudDecodeOptions options;
+  options.ignore_time = settings_.time_field == "none";
+  options.time_field = settings_.time_field == "auto" || options.ignore_time
+                           ? nullptr
+                           : settings_.time_field.c_str();
+  auto cloud = dds::decodePointCloud2(cdr, out, options);
+  if (!cloud) {
+    result.cloud_error = cloud.error();
+    result.outcome = cloud.error() == dds::CloudError::kTooManyPoints ? DecodeOutcome::kTooLarge
+                                                                      : DecodeOutcome::kMalformed;
     return result;
   }
-  if (!rateAllows(result.header.stamp_ns)) {
-    result.outcome = DecodeOutcome::kRateLimited;
-    return result;
-  }
-  last_accepted_ns_ = result.header.stamp_ns;
-  accepted_any_ = true;
-  result.outcome = DecodeOutcome::kAccepted;
+  result.header = cloud.value();
+  result.outcome = admit(result.header.frame_id, result.header.stamp_ns);
   return result;
+}
+
+DecodedScan SensorDecoder::decodeDepth(std::span<const std::byte> cdr,
+                                       std::span<dds::ScanPoint> out) noexcept {
+  DecodedScan result;
+  // Stamp and frame first: an image of a camera without intrinsics yet, of the wrong frame or
+  // above the rate limit is dropped before it is back-projected.
+  const auto image = dds::inspectDepthImage(cdr);
+  if (!image) {
+    result.image_error = image.error();
+    result.outcome = DecodeOutcome::kMalformed;
+    return result;
+  }
+  result.header.stamp_ns = image->stamp_ns;
+  std::memcpy(result.header.frame_id, image->frame_id, sizeof(result.header.frame_id));
+  if (!rays_.built() || std::strcmp(image->frame_id, camera_frame_) != 0) {
+    result.outcome = DecodeOutcome::kNoCameraInfo;  // none for this camera yet
+    return result;
+  }
+  const DecodeOutcome admitted = admit(image->frame_id, image->stamp_ns, /*commit=*/false);
+  if (admitted != DecodeOutcome::kAccepted) {
+    result.outcome = admitted;
+    return result;
+  }
+  const auto decoded = dds::decodeDepthImage(cdr, rays_, settings_.depth, out);
+  if (!decoded) {
+    result.image_error = decoded.error();
+    result.outcome = decoded.error() == dds::DepthImageError::kTooManyPoints
+                         ? DecodeOutcome::kTooLarge
+                         : DecodeOutcome::kMalformed;
+    return result;
+  }
+  result.header.width = decoded->points;  // an unorganised cloud of the blocks' points
+  result.header.height = 1;
+  result.header.points = decoded->points;
+  result.header.no_return = 0;  // free-only points have a direction and are integrated
+  result.header.has_time = false;
+  result.header.has_intensity = false;
+  result.outcome = admit(image->frame_id, image->stamp_ns);
+  return result;
+}
+
+DecodeOutcome SensorDecoder::admit(const char* frame_id, std::int64_t stamp_ns,
+                                   bool commit) noexcept {
+  if (!settings_.frame.empty() && std::strcmp(frame_id, settings_.frame.c_str()) != 0) {
+    return DecodeOutcome::kWrongFrame;
+  }
+  if (!rateAllows(stamp_ns)) {
+    return DecodeOutcome::kRateLimited;
+  }
+  if (commit) {
+    last_accepted_ns_ = stamp_ns;
+    accepted_any_ = true;
+  }
+  return DecodeOutcome::kAccepted;
 }
 
 std::string cameraInfoTopicFor(const std::string& image_topic) {

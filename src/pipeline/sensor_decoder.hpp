@@ -40,6 +40,9 @@ struct SensorDecodeSettings {
   /// Depth cameras: pixels the ray table is sized for up front (no allocation for cameras up
   /// to this size; a larger one allocates once, when its CameraInfo first arrives).
   std::size_t reserve_pixels = 640 * 480;
+  /// Depth cameras: the most points an image may give (sensors[].max_points). A CameraInfo whose
+  /// images would give more is refused (kTooLarge) before its pixel rays are built. 0 = any.
+  std::uint32_t max_points = 0;
 };
 
 /// Why a message gave no scan.
@@ -62,7 +65,7 @@ struct DecodedScan {
 
 /// @brief Decodes one sensor's messages. Thread-safety: one thread (raymapd's ingest thread).
 /// @rt decode(): allocates no, blocks no. onCameraInfo(): allocates only for a camera larger
-/// than reserve_pixels, or to describe a refused one; builds the pixel ray table when the
+/// than reserve_pixels (never beyond max_points); builds the pixel ray table when the
 /// intrinsics change (a few milliseconds for 640 x 480: once, not per frame).
 class SensorDecoder {
  public:
@@ -86,10 +89,20 @@ class SensorDecoder {
 
  private:
   bool rateAllows(std::int64_t stamp_ns) noexcept;
+  DecodedScan decodeCloud(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
+  DecodedScan decodeDepth(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
+  /// The configured frame and the rate limit; `commit`: an accepted message starts the next
+  /// rate period.
+  DecodeOutcome admit(const char* frame_id, std::int64_t stamp_ns, bool commit = true) noexcept;
 
   SensorDecodeSettings settings_;
   PixelRayTable rays_;
   char camera_frame_[64] = {};  // frame_id of the CameraInfo the table was built from
+  // The last CameraInfo refused, so that the same one arriving with every frame is refused at
+  // once (not rebuilt up to its bad pixel each time).
+  CameraIntrinsics refused_camera_;
+  dds::CameraInfoError refused_error_ = dds::CameraInfoError::kInvalidIntrinsics;
+  bool refused_any_ = false;
   std::int64_t last_accepted_ns_ = 0;
   bool accepted_any_ = false;
 };

@@ -261,7 +261,8 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
     s.downsample = f.integer<std::uint32_t>("downsample", s.downsample, 1u, 64u);
     s.invalid_as_free = flag(f, "invalid_as_free", s.invalid_as_free);
     s.max_rate_hz = f.positive("max_rate_hz", s.max_rate_hz, true);
-    f.check(s.max_rate_hz <= 1000.0, "max_rate_hz", "must be at most 1000 (0 = no limit)");
+    f.check(s.max_rate_hz == 0.0 || (s.max_rate_hz >= 0.01 && s.max_rate_hz <= 1000.0),
+            "max_rate_hz", "must be 0 (no limit) or 0.01 to 1000");
     sensors.push_back(s);
   }
 }

@@ -52,7 +52,8 @@ DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
       heightmap_name_(settings_.name + ": height map"),
       realtime_name_(settings_.name + ": real time"),
       started_ns_(started_ns),
-      message_(3 + static_cast<int>(settings_.sensors.size()), 64),
+      // Up to 80 values a status: the pipeline's has 64 with a depth camera configured.
+      message_(3 + static_cast<int>(settings_.sensors.size()), 80),
       has_depth_(std::any_of(settings_.sensors.begin(), settings_.sensors.end(),
                              [](const ReporterSettings::Sensor& sensor) {
                                return !sensor.camera_info_topic.empty();
@@ -214,7 +215,7 @@ void DiagnosticsReporter::describeDrops() noexcept {
       sep = "; ";
     }
     if (cs.camera_info_bad > bs.camera_info_bad) {
-      appendf(out, size, "%s%" PRIu64 " CameraInfo refused for sensors[%zu] (", sep,
+      appendf(out, size, "%s%" PRIu64 " CameraInfo refused for sensors[%zu] (all cameras: ", sep,
               cs.camera_info_bad - bs.camera_info_bad, i);
       const char* inner = "";
       for (std::size_t r = 0; r < dds::kCameraInfoErrorCount; ++r) {

@@ -83,6 +83,7 @@ pipeline::SensorDecodeSettings decodeSettings(const SensorConfig& s) {
   d.max_rate_hz = s.max_rate_hz;
   // The table covers every pixel; max_points counts the points after down-sampling.
   d.reserve_pixels = depthRayTablePixels(s);
+  d.max_points = s.max_points;
   return d;
 }
 
@@ -481,7 +482,10 @@ void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr
     counters.rejected.add();
     return;
   }
-  const pipeline::DecodedScan decoded = decoders[sensor].decode(cdr, slot->buffer);
+  // This sensor's own max_points (the slots hold the largest of all sensors').
+  const pipeline::DecodedScan decoded =
+      decoders[sensor].decode(cdr, slot->buffer.first(std::min<std::size_t>(
+                                       slot->buffer.size(), config.sensors[sensor].max_points)));
   if (decoded.outcome != pipeline::DecodeOutcome::kAccepted) {
     mailbox->abandon(slot);
   }

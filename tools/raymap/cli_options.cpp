@@ -446,6 +446,9 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.bag.depth.max_range_m = static_cast<float>(f.max_range);
   o.bag.depth.invalid_as_free = f.invalid_as_free;
   o.bag.max_rate_hz = f.max_rate_hz;
+  if (f.max_rate_hz != 0.0 && f.max_rate_hz < 0.01) {
+    return fail(ErrorCode::kInvalidArgument, "--max-rate: must be 0 (all) or at least 0.01 Hz");
+  }
   o.bag.extrinsic.position = toEigen(*offset);
   const bool is_bag = bag::isBag(input);
   if (is_bag && !f.trajectory.empty()) {

@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// SensorDecoder: the per-sensor policy over the decoders (CameraInfo pairing, a camera too large
+// for the sensor, refused cameras remembered, frame and rate checks before back-projection).
+#include <cstddef>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/dds/depth_image_writer.hpp"
+#include "src/pipeline/sensor_decoder.hpp"
+
+namespace raymap::pipeline {
+namespace {
+
+constexpr std::int64_t kStamp = 1700000000000000000;
+
+CameraIntrinsics camera(std::uint32_t width, std::uint32_t height) {
+  CameraIntrinsics c;
+  c.width = width;
+  c.height = height;
+  c.fx = 100.0;
+  c.fy = 100.0;
+  c.cx = (width - 1.0) / 2.0;
+  c.cy = (height - 1.0) / 2.0;
+  return c;
+}
+
+std::vector<std::byte> info(const CameraIntrinsics& c, const char* frame = "cam") {
+  std::vector<std::byte> cdr;
+  dds::serializeCameraInfo(kStamp, frame, c, cdr);
+  return cdr;
+}
+
+std::vector<std::byte> image(std::uint32_t width, std::uint32_t height, std::int64_t stamp,
+                             const char* frame = "cam") {
+  std::vector<float> depth(std::size_t{width} * height, 1.5f);
+  std::vector<std::byte> cdr;
+  dds::serializeDepthImage(stamp, frame, width, height, dds::DepthEncoding::k32FC1, false, depth,
+                           cdr);
+  return cdr;
+}
+
+SensorDecodeSettings depthSettings() {
+  SensorDecodeSettings s;
+  s.kind = SensorInputKind::kDepth;
+  s.depth.max_range_m = 3.0f;
+  s.reserve_pixels = 64 * 48;
+  s.max_points = 64 * 48;
+  return s;
+}
+
+TEST(SensorDecoder, ImagesWaitForTheCameraInfoOfTheirOwnFrame) {
+  SensorDecoder decoder(depthSettings());
+  std::vector<dds::ScanPoint> out(64 * 48);
+  EXPECT_EQ(decoder.decode(image(64, 48, kStamp), out).outcome, DecodeOutcome::kNoCameraInfo);
+  ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48), "other")));
+  // Another camera's intrinsics (even of another size) are not this image's.
+  EXPECT_EQ(decoder.decode(image(32, 24, kStamp), out).outcome, DecodeOutcome::kNoCameraInfo);
+  ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
+  const DecodedScan scan = decoder.decode(image(64, 48, kStamp), out);
+  ASSERT_EQ(scan.outcome, DecodeOutcome::kAccepted);
+  EXPECT_EQ(scan.header.points, 64U * 48U);
+  EXPECT_STREQ(scan.header.frame_id, "cam");
+}
+
+TEST(SensorDecoder, ACameraLargerThanTheSensorTakesIsRefusedAndRemembered) {
+  SensorDecoder decoder(depthSettings());
+  // 65535 x 65535 pixels: refused before a 34 GB ray table is built.
+  const auto huge = decoder.onCameraInfo(info(camera(65535, 65535)));
+  ASSERT_FALSE(huge);
+  EXPECT_EQ(huge.error(), dds::CameraInfoError::kTooLarge);
+  EXPECT_FALSE(decoder.ready());
+  // With down-sampling the same sensor takes a larger camera.
+  SensorDecodeSettings blocks = depthSettings();
+  blocks.depth.downsample = 2;
+  SensorDecoder coarse(blocks);
+  EXPECT_TRUE(coarse.onCameraInfo(info(camera(128, 96))));
+  // Refused again each time it comes (with every frame), and a lens that folds over the image
+  // likewise; the sensor stays without intrinsics.
+  const auto again = decoder.onCameraInfo(info(camera(65535, 65535)));
+  ASSERT_FALSE(again);
+  EXPECT_EQ(again.error(), dds::CameraInfoError::kTooLarge);
+  CameraIntrinsics folding = camera(64, 48);
+  folding.distortion = DistortionModel::kPlumbBob;
+  folding.k1 = -3.0;
+  for (int i = 0; i < 2; ++i) {
+    const auto refused = decoder.onCameraInfo(info(folding));
+    ASSERT_FALSE(refused);
+    EXPECT_EQ(refused.error(), dds::CameraInfoError::kInvalidIntrinsics);
+  }
+  EXPECT_FALSE(decoder.ready());
+}
+
+TEST(SensorDecoder, TheRateLimitAndTheFrameApplyBeforeBackProjection) {
+  SensorDecodeSettings settings = depthSettings();
+  settings.max_rate_hz = 5.0;
+  settings.frame = "cam";
+  SensorDecoder decoder(settings);
+  ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
+  std::vector<dds::ScanPoint> out(64 * 48);
+  EXPECT_EQ(decoder.decode(image(64, 48, kStamp), out).outcome, DecodeOutcome::kAccepted);
+  // 33 ms later: above 5 Hz; 200 ms after the accepted one: taken (1 ms of jitter allowed).
+  EXPECT_EQ(decoder.decode(image(64, 48, kStamp + 33000000), out).outcome,
+            DecodeOutcome::kRateLimited);
+  EXPECT_EQ(decoder.decode(image(64, 48, kStamp + 199500000), out).outcome,
+            DecodeOutcome::kAccepted);
+  // A stamp that goes back (a replay restarted) starts again.
+  EXPECT_EQ(decoder.decode(image(64, 48, kStamp - 1000000000), out).outcome,
+            DecodeOutcome::kAccepted);
+  // An image in another frame than the configured one, whose CameraInfo came too.
+  SensorDecoder typo(settings);
+  ASSERT_TRUE(typo.onCameraInfo(info(camera(64, 48), "camera")));
+  EXPECT_EQ(typo.decode(image(64, 48, kStamp, "camera"), out).outcome, DecodeOutcome::kWrongFrame);
+}
+
+TEST(SensorDecoder, AnImageLargerThanItsBufferIsTooLarge) {
+  SensorDecoder decoder(depthSettings());
+  ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
+  std::vector<dds::ScanPoint> out(100);  // the sensor's own max_points (raymapd slices slots)
+  const DecodedScan scan = decoder.decode(image(64, 48, kStamp), out);
+  EXPECT_EQ(scan.outcome, DecodeOutcome::kTooLarge);
+  EXPECT_EQ(scan.image_error, dds::DepthImageError::kTooManyPoints);
+}
+
+TEST(SensorDecoder, CameraInfoTopicIsBesideTheImageTopic) {
+  EXPECT_EQ(cameraInfoTopicFor("/camera/depth/image_rect_raw"), "/camera/depth/camera_info");
+  EXPECT_EQ(cameraInfoTopicFor("rt/cam/depth"), "rt/cam/camera_info");
+  EXPECT_EQ(cameraInfoTopicFor("image"), "camera_info");
+}
+
+}  // namespace
+}  // namespace raymap::pipeline
