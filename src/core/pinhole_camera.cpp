@@ -45,60 +45,73 @@ bool finite(double v) noexcept { return std::isfinite(v); }
 
 }  // namespace
 
-Expected<void, Error> CameraIntrinsics::validate() const {
-  if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide) {
-    return fail(ErrorCode::kInvalidArgument,
-                "camera width and height must be 1 to 65535 pixels (got " + std::to_string(width) +
-                    " x " + std::to_string(height) + ")");
+namespace {
+
+enum class Defect : std::uint8_t { kNone, kSize, kFocal, kPrincipal, kCoefficients, kFolds };
+
+/// The first thing that makes `c` unusable (one list of checks for validate() and usable()); a
+/// folding lens's pixel goes to `*u`, `*v`. Allocates nothing.
+Defect firstDefect(const CameraIntrinsics& c, double* u_out, double* v_out) noexcept {
+  if (c.width == 0 || c.height == 0 || c.width > kMaxSide || c.height > kMaxSide) {
+    return Defect::kSize;
   }
-  if (!finite(fx) || !finite(fy) || fx <= 0.0 || fy <= 0.0) {
-    return fail(ErrorCode::kInvalidArgument,
-                "camera focal lengths K[0] (fx) and K[4] (fy) must be finite and > 0");
+  if (!finite(c.fx) || !finite(c.fy) || c.fx <= 0.0 || c.fy <= 0.0) {
+    return Defect::kFocal;
   }
-  if (!finite(cx) || !finite(cy)) {
-    return fail(ErrorCode::kInvalidArgument,
-                "camera principal point K[2] (cx) and K[5] (cy) must be finite");
+  if (!finite(c.cx) || !finite(c.cy)) {
+    return Defect::kPrincipal;
   }
-  if (!finite(k1) || !finite(k2) || !finite(p1) || !finite(p2) || !finite(k3)) {
-    return fail(ErrorCode::kInvalidArgument, "camera distortion coefficients D must be finite");
+  if (!finite(c.k1) || !finite(c.k2) || !finite(c.p1) || !finite(c.p2) || !finite(c.k3)) {
+    return Defect::kCoefficients;
   }
   // The corners and edge midpoints, where a folding distortion shows first.
-  const double us[3] = {0.0, 0.5 * (width - 1.0), width - 1.0};
-  const double vs[3] = {0.0, 0.5 * (height - 1.0), height - 1.0};
+  const double us[3] = {0.0, 0.5 * (c.width - 1.0), c.width - 1.0};
+  const double vs[3] = {0.0, 0.5 * (c.height - 1.0), c.height - 1.0};
   for (const double u : us) {
     for (const double v : vs) {
       NormalisedPoint p;
-      if (!pixelToNormalised(*this, u, v, &p)) {
-        return fail(ErrorCode::kInvalidArgument,
-                    "camera distortion D cannot be inverted at pixel (" + std::to_string(u) + ", " +
-                        std::to_string(v) + "): the lens model folds over the image");
+      if (!pixelToNormalised(c, u, v, &p)) {
+        *u_out = u;
+        *v_out = v;
+        return Defect::kFolds;
       }
     }
   }
-  return {};
+  return Defect::kNone;
+}
+
+}  // namespace
+
+Expected<void, Error> CameraIntrinsics::validate() const {
+  double u = 0.0;
+  double v = 0.0;
+  switch (firstDefect(*this, &u, &v)) {
+    case Defect::kNone:
+      return {};
+    case Defect::kSize:
+      return fail(ErrorCode::kInvalidArgument,
+                  "camera width and height must be 1 to 65535 pixels (got " +
+                      std::to_string(width) + " x " + std::to_string(height) + ")");
+    case Defect::kFocal:
+      return fail(ErrorCode::kInvalidArgument,
+                  "camera focal lengths K[0] (fx) and K[4] (fy) must be finite and > 0");
+    case Defect::kPrincipal:
+      return fail(ErrorCode::kInvalidArgument,
+                  "camera principal point K[2] (cx) and K[5] (cy) must be finite");
+    case Defect::kCoefficients:
+      return fail(ErrorCode::kInvalidArgument, "camera distortion coefficients D must be finite");
+    case Defect::kFolds:
+      break;
+  }
+  return fail(ErrorCode::kInvalidArgument, "camera distortion D cannot be inverted at pixel (" +
+                                               std::to_string(u) + ", " + std::to_string(v) +
+                                               "): the lens model folds over the image");
 }
 
 bool CameraIntrinsics::usable() const noexcept {
-  if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide) {
-    return false;
-  }
-  if (!finite(fx) || !finite(fy) || fx <= 0.0 || fy <= 0.0 || !finite(cx) || !finite(cy)) {
-    return false;
-  }
-  if (!finite(k1) || !finite(k2) || !finite(p1) || !finite(p2) || !finite(k3)) {
-    return false;
-  }
-  const double us[3] = {0.0, 0.5 * (width - 1.0), width - 1.0};
-  const double vs[3] = {0.0, 0.5 * (height - 1.0), height - 1.0};
-  for (const double u : us) {
-    for (const double v : vs) {
-      NormalisedPoint p;
-      if (!pixelToNormalised(*this, u, v, &p)) {
-        return false;
-      }
-    }
-  }
-  return true;
+  double u = 0.0;
+  double v = 0.0;
+  return firstDefect(*this, &u, &v) == Defect::kNone;
 }
 
 NormalisedPoint projectNormalised(const CameraIntrinsics& camera, NormalisedPoint point) noexcept {
