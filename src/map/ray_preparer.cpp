@@ -112,7 +112,7 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
     bool clipped = false;
     // TSDF maps: signed distance at the ray's end, metres (kernels/common/tsdf.h). Rays that
     // update free space only keep RM_TSDF_FREE.
-    double end_sdf = RM_TSDF_FREE;
+    double end_sdf = static_cast<double>(RM_TSDF_FREE);
     if (filter_.max_range_m > 0.0 && length > filter_.max_range_m) {
       sample = origin + (sample - origin) * (filter_.max_range_m / length);
       end_flag = 0u;

@@ -34,7 +34,6 @@ Integrator::Integrator(VoxelMap& map, Backend& backend, platform::PiMutex& map_m
                        LatestPosition& latest, const IntegratorSettings& settings,
                        std::vector<SensorSettings> sensors, PipelineStats& stats)
     : map_(map),
-      backend_(backend),
       map_mutex_(map_mutex),
       mailbox_(mailbox),
       pose_queue_(poses),

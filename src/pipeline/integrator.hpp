@@ -117,7 +117,6 @@ class Integrator {
   void accountLoad(std::int64_t now_ns) noexcept;
 
   VoxelMap& map_;
-  Backend& backend_;
   platform::PiMutex& map_mutex_;
   ScanMailbox& mailbox_;
   PoseQueue& pose_queue_;

@@ -131,10 +131,10 @@ void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& 
   f.check(miss < 0.5, "miss_probability", "must be below 0.5 (a miss lowers occupancy)");
   map.occupancy.hit = logOdds(hit);
   map.occupancy.miss = logOdds(miss);
-  map.occupancy.clamp_min =
-      static_cast<float>(f.number("clamp_min", double{OccupancyParams::kDefaultClampMin}));
-  map.occupancy.clamp_max =
-      static_cast<float>(f.number("clamp_max", double{OccupancyParams::kDefaultClampMax}));
+  map.occupancy.clamp_min = static_cast<float>(
+      f.number("clamp_min", static_cast<double>(OccupancyParams::kDefaultClampMin)));
+  map.occupancy.clamp_max = static_cast<float>(
+      f.number("clamp_max", static_cast<double>(OccupancyParams::kDefaultClampMax)));
   f.check(map.occupancy.clamp_min < 0.0f && map.occupancy.clamp_max > 0.0f, "clamp_max",
           "clamp_min must be below 0 and clamp_max above 0 (log-odds)");
   save_on_exit = text(f, "save_on_exit", "");

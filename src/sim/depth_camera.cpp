@@ -150,8 +150,8 @@ void DepthCamera::render(const Scene& scene, const CameraPose& pose, std::uint64
     for (std::uint32_t u = 0; u < model_.width; ++u, ++i) {
       const float* r = rays_.ray(u, v);
       // The pixel's ray (x/z, y/z, 1) in the optical frame; its length converts range to depth.
-      const double rx = r[0];
-      const double ry = r[1];
+      const double rx = static_cast<double>(r[0]);
+      const double ry = static_cast<double>(r[1]);
       const double length = std::sqrt(rx * rx + ry * ry + 1.0);
       const Vec3d dir = (pose.x_axis * rx + pose.y_axis * ry + pose.z_axis) * (1.0 / length);
       const double z = castRay(scene, pose.origin, dir) / length;

@@ -48,8 +48,8 @@ DecayComparison compareDecay(const VoxelMap& reference, const VoxelMap& map) {
     for (std::uint32_t i = 0; i < n; ++i) {
       const Vec3i voxel = map.voxelAt({x, y, z}, i);
       result.count_differs += reference.mean(voxel).count != map.mean(voxel).count ? 1u : 0u;
-      const double a = reference.traversal(voxel);
-      const double b = map.traversal(voxel);
+      const double a = static_cast<double>(reference.traversal(voxel));
+      const double b = static_cast<double>(map.traversal(voxel));
       if (a == 0.0 && b == 0.0) {
         continue;
       }

@@ -20,7 +20,6 @@ using heightmap::HeightmapOptions;
 
 using test::ColumnMap;
 constexpr float kOccupied = ColumnMap::kOccupied;
-constexpr float kFree = ColumnMap::kFree;
 constexpr double kRes = 0.1;
 
 class HeightmapColumns : public ::testing::TestWithParam<std::string> {

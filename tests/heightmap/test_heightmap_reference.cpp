@@ -383,11 +383,13 @@ void writeVoxel(VoxelMap& map, Rng& rng, Vec3i voxel, Fill f) {
     const int pick = uniformInt(rng, 0, 19);
     value = pick == 0   ? occ.threshold
             : pick == 1 ? occ.clamp_max
-                        : static_cast<float>(uniformReal(rng, occ.threshold, occ.clamp_max));
+                        : static_cast<float>(uniformReal(rng, static_cast<double>(occ.threshold),
+                                                         static_cast<double>(occ.clamp_max)));
   } else {
     value = uniformInt(rng, 0, 19) == 0
                 ? occ.clamp_min
-                : static_cast<float>(uniformReal(rng, occ.clamp_min, occ.threshold - 1e-3f));
+                : static_cast<float>(uniformReal(rng, static_cast<double>(occ.clamp_min),
+                                                 static_cast<double>(occ.threshold) - 1e-3));
   }
   map.store().layerData<float>(*slot, map.occupancyLayer())[index] = value;
   if (map.meanLayer() < 0) {

@@ -4,6 +4,7 @@
 // with the scene's true height field. Runs for every generator (CPU; OpenCL on PoCL in CI).
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -84,7 +85,7 @@ std::optional<sim::TrueSurface> unambiguousTruth(const sim::Scene& scene, const 
 
 /// Distance (x, y) from a cell to the nearest sensor position, metres.
 double distanceToPath(const MappedScene& s, const Vec3d& c) {
-  double best = INFINITY;
+  double best = std::numeric_limits<double>::infinity();
   for (const Vec3d& p : s.sensor_positions) {
     best = std::min(best, std::hypot(p.x - c.x, p.y - c.y));
   }

@@ -23,7 +23,6 @@ namespace {
 // The wall: the plane x = kWallX (the middle of voxel column 30 at 0.1 m), seen from a sensor at
 // (0, 0, 1), samples on a 2 cm grid over y in [-0.5, 0.5), z in [0.5, 1.5).
 constexpr double kWallX = 3.05;
-constexpr double kResolution = 0.1;
 // Floats of a PLY against a double: the ellipsoids' minimum half-axis is 0.05 voxel = 5 mm.
 constexpr double kOnWallTolerance = 0.006;
 

@@ -111,7 +111,8 @@ std::set<CellKey> cameraFootprint(const sim::SceneFile& file) {
       camera->render(file.scene, pose, 0, depth);
       for (std::uint32_t v = 0; v < model.height; ++v) {
         for (std::uint32_t u = 0; u < model.width; ++u) {
-          const double z = depth[static_cast<std::size_t>(v) * model.width + u];
+          const double z =
+              static_cast<double>(depth[static_cast<std::size_t>(v) * model.width + u]);
           if (std::isfinite(z)) {
             const float* r = camera->rays().ray(u, v);
             const Vec3d p =

@@ -108,7 +108,7 @@ DepthBag makeDepthBag(const TempDir& dir, int frames, bool distorted, bool encod
     for (std::uint32_t v = 0; v < camera.height; ++v) {
       for (std::uint32_t u = 0; u < camera.width; ++u) {
         const float* r = rays.ray(u, v);
-        const Eigen::Vector3d optical(r[0], r[1], 1.0);
+        const Eigen::Vector3d optical(static_cast<double>(r[0]), static_cast<double>(r[1]), 1.0);
         const Eigen::Vector3d direction = (sensor.orientation * optical).normalized();
         const double t = sim::castRay(bag.scene, toVec3(sensor.position), toVec3(direction));
         float d = std::numeric_limits<float>::quiet_NaN();

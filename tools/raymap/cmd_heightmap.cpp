@@ -201,7 +201,8 @@ int runHeightmap(const HeightmapFlags& f) {
         withCommas(counts[RM_HM_SURFACE]).c_str(), withCommas(counts[RM_HM_VIRTUAL]).c_str(),
         withCommas(counts[RM_HM_VACANT]).c_str(), withCommas(counts[RM_HM_UNKNOWN]).c_str());
     if (counts[RM_HM_SURFACE] > 0) {
-      std::printf("; elevation %s .. %s m", number(lowest).c_str(), number(highest).c_str());
+      std::printf("; elevation %s .. %s m", number(static_cast<double>(lowest)).c_str(),
+                  number(static_cast<double>(highest)).c_str());
     }
     if (result.has_normals) {
       std::printf("; %s with normals", withCommas(normal_cells).c_str());

@@ -63,7 +63,8 @@ Expected<void, Error> appendDepthFrameRays(const sim::DepthCamera& camera,
   for (const dds::ScanPoint& p : scratch.points) {
     Ray ray;
     ray.origin = pose.origin;
-    ray.sample = pose.toWorld({p.x, p.y, p.z});
+    ray.sample = pose.toWorld(
+        {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
     ray.time_s = time_s;
     ray.scan = scan;
     ray.flags = (p.flags & dds::kPointFreeOnly) != 0 ? kRayNoReturn : 0U;

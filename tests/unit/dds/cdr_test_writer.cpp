@@ -207,10 +207,11 @@ TestImage makeDepthImage(std::uint32_t width, std::uint32_t height,
       const float d = depth_m[std::size_t{v} * width + u];
       const std::size_t at = std::size_t{v} * image.step + std::size_t{u} * pixel_bytes;
       if (millimetres) {
-        const double mm = std::isfinite(d) && d > 0.0f ? std::round(double{d} * 1000.0) : 0.0;
+        const double mm =
+            std::isfinite(d) && d > 0.0f ? std::round(static_cast<double>(d) * 1000.0) : 0.0;
         putValue(image.data, at, 4, mm, big_endian);
       } else {
-        putValue(image.data, at, 7, double{d}, big_endian);
+        putValue(image.data, at, 7, static_cast<double>(d), big_endian);
       }
     }
   }

@@ -167,7 +167,8 @@ TEST_P(DepthPlane, Float32PixelsBackProjectOntoTheFloorWithinFloatRounding) {
     const ScanPoint& p = out[i];
     EXPECT_EQ(p.z, depth[i]);
     EXPECT_EQ(p.flags, 0U);
-    worst = std::max(worst, std::fabs(worldZ(pose, p.x, p.y, p.z)));
+    worst = std::max(worst, std::fabs(worldZ(pose, static_cast<double>(p.x),
+                                             static_cast<double>(p.y), static_cast<double>(p.z))));
   }
   EXPECT_LT(worst, kFloatRoundingM);
 }

@@ -346,7 +346,7 @@ TEST(NdtTm, IntensityIsTheRunningMeanAndVarianceWithAOneSamplePrior) {
   std::vector<double> values;
   for (int i = 0; i < 500; ++i) {
     const auto intensity = static_cast<float>(g(rng));
-    values.push_back(intensity);
+    values.push_back(static_cast<double>(intensity));
     rm_ndt_hit(&value, &v, &hm, &in, {0.5f, 0.5f, -10.0f}, {0.5f, 0.5f, 0.5f}, intensity,
                occupancy(), p);
   }
