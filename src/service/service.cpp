@@ -48,7 +48,6 @@ using backends::CreatedBackend;
 using backends::createHeightmapGenerator;
 namespace {
 
-constexpr std::int64_t kNsPerS = 1000000000;
 constexpr int kTfPerMessage = 64;  // transforms decoded per TFMessage
 constexpr int kTakePerWake = 16;   // samples taken per reader per wake-up
 
@@ -850,7 +849,6 @@ void Service::start() {
   s.threads.emplace_back([&s] { s.ingestLoop(); });
   s.threads.emplace_back([&s] { s.integratorLoop(); });
   s.threads.emplace_back([&s] { s.publisherLoop(); });
-  s.threads.emplace_back([&s] { s.diagnosticsLoop(); });
   // Wait (at most 1 s) for the three real-time threads to apply their scheduling, so that READY
   // and the log carry the outcome.
   for (int i = 0; i < 500 && s.threads_set_up.load(std::memory_order_acquire) < 3; ++i) {
@@ -868,6 +866,10 @@ void Service::start() {
                 requested && s.rt_refusals.load() == 0 ? " as configured" : "",
                 s.realtime.memory_locked ? "locked" : "NOT locked");
   s.realtime.summary = summary;
+  // The diagnostics thread starts only now: it reads s.realtime (summary, degraded) on every
+  // report without a lock, so both must be final before it exists (ThreadSanitizer found it
+  // reading the summary while this thread was still writing it).
+  s.threads.emplace_back([&s] { s.diagnosticsLoop(); });
   char status[512];
   std::snprintf(status, sizeof(status), "mapping: %s, %g Hz; %s", s.backend.backend->name(),
                 s.config.heightmap.rate_hz, summary);
