@@ -313,6 +313,12 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
   header.has_time = time_field.present;
   header.has_intensity = intensity.present;
 
+  if (points == 0) {
+    // width 0 and any height (or the reverse) is an empty cloud: no row loop, whose 2^32 empty
+    // rows took seconds (found by fuzz_cdr_point_cloud).
+    return header;
+  }
+
   // Absolute times are converted relative to the stamp in double: 1.7e9 s keeps ~0.2 us.
   const double stamp_s = static_cast<double>(sec) + static_cast<double>(nanosec) * 1e-9;
   const bool swap = is_bigendian != (std::endian::native == std::endian::big);

@@ -102,6 +102,23 @@ TEST(DecodePointCloud2, Float32XyzWithHeader) {
   EXPECT_EQ(out[2].flags, 0U);
 }
 
+// Found by fuzz_cdr_point_cloud (tests/fuzz/regressions/cdr_point_cloud): width 0 with a height
+// of 2^32 - 1 is an empty cloud, decoded at once (it spun through 4 billion empty rows).
+TEST(DecodePointCloud2, ZeroWidthWithAHugeHeightIsAnEmptyCloud) {
+  TestCloud cloud = makeXyzCloud({});
+  cloud.width = 0;
+  cloud.height = 0xFFFFFFFFU;
+  cloud.row_step = 16;
+  std::vector<ScanPoint> out(8);
+
+  auto result = decode(encodeCloud(cloud), out);
+
+  ASSERT_TRUE(result.has_value());
+  EXPECT_EQ(result->points, 0U);
+  EXPECT_EQ(result->width, 0U);
+  EXPECT_EQ(result->height, 0xFFFFFFFFU);
+}
+
 TEST(DecodePointCloud2, Float64Xyz) {
   TestCloud cloud;
   cloud.width = 2;
