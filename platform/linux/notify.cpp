@@ -113,11 +113,15 @@ void SystemdNotifier::send(const char* head, const char* text) noexcept {
   }
   // iovec's base is non-const in the C API; sendmsg only reads it.
   iovec parts[2] = {};
-  parts[0].iov_base = const_cast<char*>(head);  // NOLINT(cppcoreguidelines-pro-type-const-cast)
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): the C API takes a non-const pointer it
+  // only reads
+  parts[0].iov_base = const_cast<char*>(head);
   parts[0].iov_len = std::strlen(head);
   std::size_t count = 1;
   if (text != nullptr) {
-    parts[1].iov_base = const_cast<char*>(text);  // NOLINT(cppcoreguidelines-pro-type-const-cast)
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): the C API takes a non-const pointer it
+    // only reads
+    parts[1].iov_base = const_cast<char*>(text);
     parts[1].iov_len = firstLineLength(text);
     count = 2;
   }

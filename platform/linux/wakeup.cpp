@@ -20,13 +20,13 @@ long futexWaitUntil(std::atomic<std::uint32_t>* word, std::uint32_t expected,
                     const timespec* deadline) noexcept {
   // Without FUTEX_CLOCK_REALTIME, FUTEX_WAIT_BITSET measures the absolute timeout on
   // CLOCK_MONOTONIC, which is exactly our deadline's clock.
-  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word),  // NOLINT: futex ABI
+  return syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word),  // futex ABI
                  FUTEX_WAIT_BITSET | FUTEX_PRIVATE_FLAG, expected, deadline, nullptr,
                  FUTEX_BITSET_MATCH_ANY);
 }
 
 void futexWakeOne(std::atomic<std::uint32_t>* word) noexcept {
-  (void)syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word),  // NOLINT: futex ABI
+  (void)syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(word),  // futex ABI
                 FUTEX_WAKE | FUTEX_PRIVATE_FLAG, 1, nullptr, nullptr, 0);
 }
 

@@ -97,7 +97,8 @@ CdrWriter::CdrWriter(CdrWriter&& other) noexcept
 CdrWriter& CdrWriter::operator=(CdrWriter&& other) noexcept {
   if (this != &other) {
     if (sertype_ != nullptr) {
-      ddsi_sertype_unref(const_cast<ddsi_sertype*>(sertype_));  // NOLINT: Cyclone's API
+      // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): Cyclone's API
+      ddsi_sertype_unref(const_cast<ddsi_sertype*>(sertype_));
     }
     writer_ = std::move(other.writer_);
     other.writer_.reset();
@@ -109,14 +110,16 @@ CdrWriter& CdrWriter::operator=(CdrWriter&& other) noexcept {
 CdrWriter::~CdrWriter() {
   writer_.reset();
   if (sertype_ != nullptr) {
-    ddsi_sertype_unref(const_cast<ddsi_sertype*>(sertype_));  // NOLINT: Cyclone's API
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): Cyclone's API
+    ddsi_sertype_unref(const_cast<ddsi_sertype*>(sertype_));
   }
 }
 
 Expected<void, CdrWriteError> CdrWriter::write(std::span<const std::byte> cdr,
                                                DdsError* dds_error) noexcept {
   ddsrt_iovec_t iov;
-  iov.iov_base = const_cast<std::byte*>(cdr.data());  // NOLINT: read only by Cyclone
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read only by Cyclone
+  iov.iov_base = const_cast<std::byte*>(cdr.data());
   iov.iov_len = static_cast<ddsrt_iov_len_t>(cdr.size());
   // Validates the bytes against the type (NULL when they do not decode) and copies them.
   ddsi_serdata* data = ddsi_serdata_from_ser_iov(sertype_, SDK_DATA, 1, &iov, cdr.size());

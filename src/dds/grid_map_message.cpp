@@ -21,7 +21,8 @@ constexpr std::size_t kLayers = kBaseLayers + 3;  // at most: with the normal la
 
 /// idlc declares strings as char*; the message only reads them.
 char* mutableText(const char* text) noexcept {
-  return const_cast<char*>(text);  // NOLINT(cppcoreguidelines-pro-type-const-cast): C API
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): C API
+  return const_cast<char*>(text);
 }
 
 }  // namespace

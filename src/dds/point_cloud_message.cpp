@@ -26,7 +26,8 @@ static_assert(std::endian::native == std::endian::little,
               "PointCloudMessage writes little-endian point data");
 
 char* mutableText(const char* text) noexcept {
-  return const_cast<char*>(text);  // NOLINT(cppcoreguidelines-pro-type-const-cast): C API
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): C API
+  return const_cast<char*>(text);
 }
 
 template <class T>

@@ -153,7 +153,7 @@ void RegionStore::clearLayer(std::uint32_t slot, int layer) noexcept {
     std::memset(bytes, 0, layerRegionBytes(layer));
     return;
   }
-  auto* out = reinterpret_cast<std::uint32_t*>(bytes);  // NOLINT: pool is page-aligned
+  auto* out = reinterpret_cast<std::uint32_t*>(bytes);  // pool is page-aligned
   if (words == 1) {
     std::fill_n(out, voxels_per_region_, spec.clear_words[0]);
     return;

@@ -100,7 +100,7 @@ class RegionStore {
   template <class T>
   T* layerData(std::uint32_t slot, int layer) const noexcept {
     return reinterpret_cast<T*>(
-        layerBytes(slot, layer));  // NOLINT: pool holds trivially copyable voxels
+        layerBytes(slot, layer));  // the pool holds trivially copyable voxels
   }
   std::size_t layerRegionBytes(int layer) const noexcept {
     return layer_region_bytes_[static_cast<std::size_t>(layer)];

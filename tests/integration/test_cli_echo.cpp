@@ -130,16 +130,20 @@ class TrafficPublisher {
       map_.observed_count[i] = 3;
     }
     // Valid CDR, but two layer names and no data arrays: decodeGridMap refuses it.
-    bad_names_[0] = const_cast<char*>("elevation");        // NOLINT: idlc strings are char*
-    bad_names_[1] = const_cast<char*>("clearance");        // NOLINT: idlc strings are char*
-    bad_map_.header.frame_id = const_cast<char*>("odom");  // NOLINT: idlc strings are char*
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): idlc strings are char*
+    bad_names_[0] = const_cast<char*>("elevation");
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): idlc strings are char*
+    bad_names_[1] = const_cast<char*>("clearance");
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): idlc strings are char*
+    bad_map_.header.frame_id = const_cast<char*>("odom");
     bad_map_.info.resolution = kResolution;
     bad_map_.info.pose.orientation.w = 1.0;
     bad_map_.layers._buffer = bad_names_;
     bad_map_.layers._length = 2;
     bad_map_.layers._maximum = 2;
     bad_map_.layers._release = false;
-    header_.frame_id = const_cast<char*>("unknown");  // NOLINT: idlc strings are char*
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): idlc strings are char*
+    header_.frame_id = const_cast<char*>("unknown");
     thread_ = std::thread([this] { run(); });
   }
   ~TrafficPublisher() {
@@ -496,8 +500,10 @@ TEST(CliEchoLatched, ShowsATfStaticTransformPublishedBeforeEchoStarted) {
                           dds::Reliability::kReliable, 1, dds::Durability::kTransientLocal);
   ASSERT_TRUE(writer.has_value());
   geometry_msgs_msg_dds__TransformStamped_ t{};
-  t.header.frame_id = const_cast<char*>("base_link");  // NOLINT: read-only for dds_write
-  t.child_frame_id = const_cast<char*>("lidar");       // NOLINT: read-only for dds_write
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read-only for dds_write
+  t.header.frame_id = const_cast<char*>("base_link");
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read-only for dds_write
+  t.child_frame_id = const_cast<char*>("lidar");
   t.transform.translation = {0.1, 0.0, 1.2};
   t.transform.rotation = {0.0, 0.0, 0.0, 1.0};
   tf2_msgs_msg_dds__TFMessage_ m{};

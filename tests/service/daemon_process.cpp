@@ -23,9 +23,11 @@ int decode(int status) {
 
 std::vector<char*> argv(const std::string& binary, const std::vector<std::string>& args) {
   std::vector<char*> out;
-  out.push_back(const_cast<char*>(binary.c_str()));  // NOLINT: execv's signature
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): execv's signature
+  out.push_back(const_cast<char*>(binary.c_str()));
   for (const std::string& a : args) {
-    out.push_back(const_cast<char*>(a.c_str()));  // NOLINT: execv's signature
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): execv's signature
+    out.push_back(const_cast<char*>(a.c_str()));
   }
   out.push_back(nullptr);
   return out;
@@ -40,7 +42,8 @@ DaemonProcess::DaemonProcess(const std::string& binary, const std::vector<std::s
   pid_ = ::fork();
   if (pid_ == 0) {
     for (const std::string& e : environment) {
-      ::putenv(const_cast<char*>(e.c_str()));  // NOLINT: the child owns its copy
+      // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): the child owns its copy
+      ::putenv(const_cast<char*>(e.c_str()));
     }
     const int fd = ::open(stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (fd >= 0) {

@@ -109,7 +109,8 @@ struct BadCloud {
       fields.push_back(f);
     }
     data.assign(data_bytes, 0x3f);
-    msg.header.frame_id = const_cast<char*>("lidar");  // NOLINT: read-only for dds_write
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read-only for dds_write
+    msg.header.frame_id = const_cast<char*>("lidar");
     msg.width = width;
     msg.height = height;
     msg.point_step = point_step;

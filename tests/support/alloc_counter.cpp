@@ -43,13 +43,16 @@ std::uint64_t AllocationScope::count() const noexcept { return t_allocations - s
 #if !defined(RAYMAP_SANITIZED_BUILD)
 extern "C" {
 // glibc's allocator entry points (exported for exactly this use).
-void* __libc_malloc(std::size_t size);  // NOLINT(bugprone-reserved-identifier): glibc's name
-void __libc_free(void* p);              // NOLINT(bugprone-reserved-identifier): glibc's name
-void* __libc_calloc(std::size_t n,
-                    std::size_t size);            // NOLINT(bugprone-reserved-identifier)
-void* __libc_realloc(void* p, std::size_t size);  // NOLINT(bugprone-reserved-identifier)
-void* __libc_memalign(std::size_t alignment,
-                      std::size_t size);  // NOLINT(bugprone-reserved-identifier)
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's name
+void* __libc_malloc(std::size_t size);
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's name
+void __libc_free(void* p);
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's name
+void* __libc_calloc(std::size_t n, std::size_t size);
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's name
+void* __libc_realloc(void* p, std::size_t size);
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's name
+void* __libc_memalign(std::size_t alignment, std::size_t size);
 
 void* malloc(std::size_t size) noexcept {
   raymap::test::noteAllocation();

@@ -81,7 +81,7 @@ FakeNotifySocket::FakeNotifySocket(Kind kind) {
   if (fd_ < 0) {
     throw systemError("socket");
   }
-  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-reinterpret-cast): the sockets API
+  // the sockets API
   if (bind(fd_, reinterpret_cast<const sockaddr*>(&address), length) != 0) {
     const auto error = systemError("bind " + path_);
     ::close(fd_);

@@ -97,8 +97,10 @@ void DriverPublisher::publishOdometry(std::int64_t stamp_ns, const io::Pose& pos
                                       const char* world_frame, const char* base_frame) {
   nav_msgs_msg_dds__Odometry_ m{};
   dds::setRosTime(m.header.stamp, stamp_ns);
-  m.header.frame_id = const_cast<char*>(world_frame);  // NOLINT: read-only for dds_write
-  m.child_frame_id = const_cast<char*>(base_frame);    // NOLINT: read-only for dds_write
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read-only for dds_write
+  m.header.frame_id = const_cast<char*>(world_frame);
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read-only for dds_write
+  m.child_frame_id = const_cast<char*>(base_frame);
   m.pose.pose.position = {pose.position.x(), pose.position.y(), pose.position.z()};
   m.pose.pose.orientation = {pose.orientation.x(), pose.orientation.y(), pose.orientation.z(),
                              pose.orientation.w()};
@@ -113,8 +115,10 @@ geometry_msgs_msg_dds__TransformStamped_ transformStamped(std::int64_t stamp_ns,
                                                           const char* child) {
   geometry_msgs_msg_dds__TransformStamped_ t{};
   dds::setRosTime(t.header.stamp, stamp_ns);
-  t.header.frame_id = const_cast<char*>(parent);  // NOLINT: read-only for dds_write
-  t.child_frame_id = const_cast<char*>(child);    // NOLINT: read-only for dds_write
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read-only for dds_write
+  t.header.frame_id = const_cast<char*>(parent);
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): read-only for dds_write
+  t.child_frame_id = const_cast<char*>(child);
   t.transform.translation = {pose.position.x(), pose.position.y(), pose.position.z()};
   t.transform.rotation = {pose.orientation.x(), pose.orientation.y(), pose.orientation.z(),
                           pose.orientation.w()};

@@ -198,7 +198,7 @@ TEST(SystemdNotifier, MovedFromIsInactiveAndMovedToStillSends) {
   first.watchdog();  // NOLINT(bugprone-use-after-move): checking the moved-from state
   third.stopping();
 
-  EXPECT_FALSE(first.active());  // NOLINT(bugprone-use-after-move)
+  EXPECT_FALSE(first.active());  // NOLINT(bugprone-use-after-move): checking the moved-from state
   EXPECT_TRUE(third.active());
   EXPECT_EQ(third.watchdogIntervalNs(), 7);
   const auto message = fake.receive(kWait);
