@@ -73,10 +73,10 @@ testing::AssertionResult nothingNewIn(const fs::path& dir, const std::set<std::s
   return failure;
 }
 
-/// Fails when a temporary ("*.tmp-*") or probe ("*.probe-*") file is in `dir`.
+/// Fails when a temporary file ("*.raymap-tmp-*") is in `dir`.
 testing::AssertionResult noTemporaryFilesIn(const fs::path& dir) {
   for (const std::string& name : listFiles(dir)) {
-    if (name.find(".tmp-") != std::string::npos || name.find(".probe-") != std::string::npos) {
+    if (name.find(".raymap-tmp-") != std::string::npos) {
       return testing::AssertionFailure() << "temporary file left behind: " << name;
     }
   }
