@@ -410,6 +410,26 @@ TEST(Cli, TrajectoryNotCoveringTheCloudFailsNamingBothFiles) {
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
+TEST(Cli, TrajectoryWithARayCloudFailsNamingBothFiles) {
+  // Arrange: a ray cloud has its origins; the trajectory used to be ignored without a word.
+  TempDir dir;
+  const std::string input = dir.file("rays.ply");
+  const std::string trajectory = dir.file("path.txt");
+  writeRayCloud(input, yardRays(1));
+  writeText(trajectory, stillTrajectory({0.0, 0.0, 1.0}, -1e9, 1e9));
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(
+      concat({"populate", input, "--trajectory", trajectory, "--quiet"}, allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: " + input + " is a ray cloud"));
+  EXPECT_TRUE(contains(r.err, "--trajectory " + trajectory + " would not be used"));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
 TEST(Cli, NonexistentInputFails) {
   // Arrange
   TempDir dir;
