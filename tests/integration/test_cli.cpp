@@ -285,6 +285,14 @@ std::vector<MalformedCase> malformedCases() {
          writePly(path, file);
        },
        {"unexpected data after the last vertex"}},
+      {"GzipWithDataAfterIt",
+       [](const std::string& path) {
+         PlyTestFile file = smallRayCloud(2000);
+         file.gzip = true;
+         writePly(path, file);
+         std::ofstream(path, std::ios::binary | std::ios::app) << "not gzip";
+       },
+       {"8 bytes of unexpected data after the gzip stream, at byte "}},
       {"GzipCutShort",
        [](const std::string& path) {
          PlyTestFile file = smallRayCloud(2000);
