@@ -7,6 +7,7 @@
 #include <array>
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +21,7 @@
 #include <zlib.h>
 
 #include "src/io/atomic_file.hpp"
+#include "src/io/layer_values.hpp"
 
 namespace raymap::io {
 namespace {
@@ -610,6 +612,14 @@ struct IndexEntry {
   std::uint64_t offset = 0;
 };
 
+/// NaN, inf or -inf as messages spell them.
+std::string valueText(float value) {
+  if (std::isnan(value)) {
+    return "NaN";
+  }
+  return value > 0.0f ? "inf" : "-inf";
+}
+
 std::string coordText(Vec3i c) {
   // snprintf, not string concatenation: GCC 12 at -O3 reports a false -Wrestrict on
   // `"(" + std::to_string(...)`.
@@ -784,9 +794,20 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
     }
     std::size_t at = 0;
     for (std::size_t l = 0; l < parsed.layers.size(); ++l) {
-      const std::uint32_t words = parsed.layers[l].bytes_per_voxel / 4u;
-      decodeLayer(raw.data() + at, voxels, words, map.store().layerBytes(*slot, schema_layers[l]));
-      at += std::size_t{parsed.layers[l].bytes_per_voxel} * voxels;
+      const LayerSpec& spec = parsed.layers[l];
+      std::byte* layer = map.store().layerBytes(*slot, schema_layers[l]);
+      decodeLayer(raw.data() + at, voxels, spec.bytes_per_voxel / 4u, layer);
+      at += std::size_t{spec.bytes_per_voxel} * voxels;
+      // The checksums only say the bytes are those written; a forged or buggy writer's NaN
+      // would otherwise be taken for a value (a NaN occupancy compares as free).
+      if (const auto bad = findBadLayerValue(spec.kind, layer, voxels)) {
+        return fail(ErrorCode::kCorrupt,
+                    path + ": region " + coordText(coord) + " (block " + std::to_string(r + 1) +
+                        " of " + std::to_string(count) + "): layer '" + std::string(spec.name) +
+                        "' holds " + valueText(bad->value) + " at voxel " +
+                        coordText(map.voxelAt(coord, bad->voxel)) + ", where " + bad->rule +
+                        ": the file is damaged or was not written by raymap");
+      }
     }
     blocks.push_back(IndexEntry{coord, offset});
   }
