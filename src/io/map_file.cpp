@@ -73,6 +73,9 @@ constexpr std::uint32_t kNdtKnownFlags = kNdtFlagAdaptationRate;
 constexpr std::uint32_t kFirstVersionWithTsdf = 3;
 constexpr std::uint16_t kTsdfBlockBytes = 3 * 8;
 constexpr std::uint64_t kMaxRegions = std::numeric_limits<std::uint32_t>::max() / 4u;
+// A version beyond the current one by more than this is called what it more likely is: a
+// damaged or foreign file (whose checksum happens to match), not a future raymap's map.
+constexpr std::uint32_t kPlausibleVersionsAhead = 16;
 
 // ---- little-endian encoding, byte by byte (correct whatever the host's byte order) ----
 
@@ -387,7 +390,7 @@ Expected<void, Error> readTsdf(ByteReader& body, MapConfig& config, const Malfor
 /// Parses and checks the header; on success the reader is at the first region block.
 Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   if (file.size() == 0) {
-    return fail(ErrorCode::kFormat, path + ": empty file, not a raymap map");
+    return fail(ErrorCode::kFormat, path + " is empty (0 bytes): not a raymap map file");
   }
   std::array<std::byte, kPrefixBytes> prefix{};
   const std::size_t prefix_bytes =
@@ -410,20 +413,29 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   std::uint32_t body_bytes = 0;
   (void)prefix_reader.u32(version);
   (void)prefix_reader.u32(body_bytes);
-  if (version > kMapFormatVersion) {
-    return fail(ErrorCode::kUnsupported, path + ": map format version " + std::to_string(version) +
-                                             " is newer than this raymap (" +
-                                             std::to_string(kMapFormatVersion) + ")");
-  }
-  if (version == 0) {
-    return fail(ErrorCode::kCorrupt, path + ": invalid map format version 0");
-  }
+  // The header checksum covers the version, so it is checked first: a damaged version field is
+  // damage, not a newer format. Only a header too large or cut short to check is judged by its
+  // version alone.
+  const std::string versions_read = "versions 1 to " + std::to_string(kMapFormatVersion);
+  const bool newer = version > kMapFormatVersion;
+  const auto unchecked_newer = [&] {
+    return fail(ErrorCode::kUnsupported,
+                path + ": map format version " + std::to_string(version) +
+                    " is newer than this raymap, which reads " + versions_read +
+                    " (or the file is damaged: its header cannot be checked)");
+  };
   if (body_bytes > kMaxHeaderBodyBytes) {
+    if (newer) {
+      return unchecked_newer();
+    }
     return fail(ErrorCode::kCorrupt, path + ": header declares " + std::to_string(body_bytes) +
                                          " bytes (limit " + std::to_string(kMaxHeaderBodyBytes) +
                                          ")");
   }
   if (std::uint64_t{body_bytes} + 4u > file.remaining()) {
+    if (newer) {
+      return unchecked_newer();
+    }
     return fail(ErrorCode::kTruncated, path + ": truncated in the header (file is " +
                                            std::to_string(file.size()) + " bytes, header needs " +
                                            std::to_string(kPrefixBytes + body_bytes + 4u) + ")");
@@ -436,7 +448,29 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   std::uint32_t stored_crc = 0;
   (void)ByteReader(std::span(header).last(4)).u32(stored_crc);
   if (crc32Of(std::span(header).first(kPrefixBytes + body_bytes)) != stored_crc) {
+    if (newer || version == 0) {
+      return fail(ErrorCode::kCorrupt, path +
+                                           ": damaged header: its checksum does not match, and "
+                                           "its version field reads " +
+                                           std::to_string(version) +
+                                           " (this raymap reads map format " + versions_read + ")");
+    }
     return fail(ErrorCode::kCorrupt, path + ": header checksum mismatch");
+  }
+  if (version > kMapFormatVersion + kPlausibleVersionsAhead) {
+    return fail(ErrorCode::kUnsupported,
+                path + ": unsupported map format version " + std::to_string(version) +
+                    " (this raymap reads " + versions_read +
+                    "); a version this far ahead is more likely a damaged or foreign file than "
+                    "a newer raymap's");
+  }
+  if (newer) {
+    return fail(ErrorCode::kUnsupported, path + ": map format version " + std::to_string(version) +
+                                             " is newer than this raymap, which reads " +
+                                             versions_read);
+  }
+  if (version == 0) {
+    return fail(ErrorCode::kCorrupt, path + ": invalid map format version 0");
   }
 
   // The body is covered by the CRC, so a failed check below is a writer bug or a forged file;

@@ -126,6 +126,9 @@ class HeaderParser {
   Unexpected<Error> notPly() const {
     return fail(ErrorCode::kFormat, path_ + ": not a PLY file (missing 'ply' magic)");
   }
+  Unexpected<Error> empty() const {
+    return fail(ErrorCode::kFormat, path_ + " is empty (0 bytes): not a PLY file");
+  }
   Unexpected<Error> missingEnd() const {
     return fail(ErrorCode::kFormat, path_ + ": header ends without 'end_header'");
   }
@@ -366,7 +369,10 @@ Result<PlyHeader> parsePlyHeader(ByteReader& reader) {
       return Unexpected(std::move(got).error());
     }
     if (!*got) {
-      return reader.lineNumber() == 0 ? parser.notPly() : parser.missingEnd();
+      if (reader.lineNumber() == 0) {
+        return reader.position() == 0 ? parser.empty() : parser.notPly();
+      }
+      return parser.missingEnd();
     }
     auto done = parser.feed(line, reader.lineNumber());
     if (!done) {
@@ -401,6 +407,9 @@ Result<PlyHeader> parsePlyHeader(std::string_view text, const std::string& path)
       header.header_bytes = offset;
       return header;
     }
+  }
+  if (text.empty()) {
+    return parser.empty();
   }
   return line_number == 0 ? parser.notPly() : parser.missingEnd();
 }

@@ -955,6 +955,50 @@ TEST(Cli, CorruptMapFailsInInfoAndExportNamingTheFile) {
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
+TEST(Cli, EmptyAndForeignFilesSayWhatIsWrong) {
+  // Arrange: an empty record log was reported as "not a PLY file", and a log with a damaged
+  // magic too (replay took every file that lacked the magic for a PLY).
+  TempDir dir;
+  const std::string empty_log = dir.file("empty.rmlog");
+  const std::string foreign_log = dir.file("foreign.rmlog");
+  const std::string empty_ply = dir.file("empty.ply");
+  const std::string a_log = dir.file("drive.log");
+  writeText(empty_log, "");
+  writeText(foreign_log, "RMLOX\r\n\x1a and then some bytes");
+  writeText(empty_ply, "");
+  writeText(a_log, std::string("RMLOG\r\n\x1a", 8) + std::string(40, '\0'));
+  struct Case {
+    std::vector<std::string> args;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {{"replay", empty_log, "--wait", "0", "-q"},
+       "raymap replay: error: " + empty_log + " is empty (0 bytes): not a raymap record log"},
+      {{"replay", foreign_log, "--wait", "0", "-q"},
+       "raymap replay: error: " + foreign_log +
+           ": not a raymap record log: it does not start "
+           "with the magic"},
+      {{"populate", empty_ply, "--stats-json", "-", "-q"},
+       "raymap populate: error: " + empty_ply + " is empty (0 bytes): not a PLY file"},
+      {{"populate", a_log, "--stats-json", "-", "-q"},
+       "raymap populate: error: " + a_log +
+           " is a raymap record log: populate maps PLY files and "
+           "rosbag2 bags"},
+  };
+  const std::set<std::string> before = listFiles(dir.path());
+
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args[1]);
+    // Act
+    const RunResult r = runRaymap(c.args);
+
+    // Assert
+    EXPECT_EQ(r.exit_code, 1) << describe(r);
+    EXPECT_TRUE(contains(r.err, c.expected));
+  }
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
 TEST(Cli, DemoWritesItsFiles) {
   // Arrange
   TempDir dir;

@@ -110,7 +110,6 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadHeader{"NoMagic", "plx\nformat ascii 1.0\nend_header\n",
                   "not a PLY file (missing 'ply' magic)"},
-        BadHeader{"Empty", "", "not a PLY file (missing 'ply' magic)"},
         BadHeader{"UnknownFormat", "ply\nformat binary_middle_endian 1.0\nend_header\n",
                   "line 2: unknown format 'binary_middle_endian'"},
         BadHeader{"Version", "ply\nformat ascii 2.0\nend_header\n",
@@ -157,6 +156,23 @@ TEST(PlyHeader, ReadsFromGzipFileAndStopsAtFirstDataByte) {
   EXPECT_EQ(header->header_bytes, header_text.size());
   ASSERT_EQ(reader->buffered().size(), 1u);
   EXPECT_EQ(reader->buffered()[0], std::byte{0x2a});
+}
+
+TEST(PlyHeader, AnEmptyFileSaysSo) {
+  test::TempDir dir;
+  const std::string path = dir.file("empty.ply");
+  test::writeBytes(path, "");
+  auto reader = ByteReader::open(path);
+  ASSERT_TRUE(reader.has_value()) << reader.error().message;
+
+  const auto from_file = parsePlyHeader(*reader);
+  const auto from_text = parsePlyHeader("", kPath);
+
+  ASSERT_FALSE(from_file.has_value());
+  EXPECT_EQ(from_file.error().code, ErrorCode::kFormat);
+  EXPECT_EQ(from_file.error().message, path + " is empty (0 bytes): not a PLY file");
+  ASSERT_FALSE(from_text.has_value());
+  EXPECT_EQ(from_text.error().message, std::string(kPath) + " is empty (0 bytes): not a PLY file");
 }
 
 TEST(PlyHeader, BinaryGarbageIsNotAPlyFile) {
