@@ -6,9 +6,12 @@
 #include <cstring>
 #include <utility>
 
-#include <stdio.h>  // fseeko
+#include <fcntl.h>
+#include <stdio.h>  // fseeko, fdopen
 #include <sys/types.h>
 #include <unistd.h>
+
+#include "src/io/temp_files.hpp"
 
 namespace raymap::io {
 
@@ -16,23 +19,42 @@ Result<AtomicFileWriter> AtomicFileWriter::open(const std::string& path) {
   if (path.empty()) {
     return fail(ErrorCode::kInvalidArgument, "output path is empty");
   }
-  std::string temp = path + ".tmp-" + std::to_string(::getpid());
-  std::FILE* file = std::fopen(temp.c_str(), "wb");
-  if (file == nullptr) {
+  const bool in_place = isOwnTemporaryPath(path);
+  std::string temp = in_place ? path : temporaryPathFor(path);
+  if (!in_place) {
+    // A file of this name is a leftover of an earlier process with this pid (only this process
+    // makes the name now); it goes, so that O_EXCL below can insist on a new file.
+    ::unlink(temp.c_str());
+  }
+  // O_NOFOLLOW: the name is predictable, so a symbolic link planted under it must not redirect
+  // the write. O_EXCL for a name of our own making; a staged name was created by its owner.
+  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW | (in_place ? O_TRUNC : O_EXCL);
+  const int fd = ::open(temp.c_str(), flags, 0666);
+  if (fd < 0) {
     return fail(ErrorCode::kIo, "cannot write '" + path + "': " + std::strerror(errno));
   }
-  return AtomicFileWriter(path, std::move(temp), file);
+  std::FILE* file = ::fdopen(fd, "wb");
+  if (file == nullptr) {
+    const std::string reason = std::strerror(errno);
+    ::close(fd);
+    ::unlink(temp.c_str());
+    return fail(ErrorCode::kIo, "cannot write '" + path + "': " + reason);
+  }
+  // Messages name the output the user asked for, not its temporary name.
+  std::string destination = in_place ? path.substr(0, path.rfind(kTemporaryInfix)) : path;
+  return AtomicFileWriter(std::move(destination), std::move(temp), file, in_place);
 }
 
-AtomicFileWriter::AtomicFileWriter(std::string path, std::string temp_path,
-                                   std::FILE* file) noexcept
-    : path_(std::move(path)), temp_path_(std::move(temp_path)), file_(file) {}
+AtomicFileWriter::AtomicFileWriter(std::string path, std::string temp_path, std::FILE* file,
+                                   bool in_place) noexcept
+    : path_(std::move(path)), temp_path_(std::move(temp_path)), file_(file), in_place_(in_place) {}
 
 AtomicFileWriter::AtomicFileWriter(AtomicFileWriter&& other) noexcept
     : path_(std::move(other.path_)),
       temp_path_(std::move(other.temp_path_)),
       file_(std::exchange(other.file_, nullptr)),
-      written_(other.written_) {}
+      written_(other.written_),
+      in_place_(other.in_place_) {}
 
 AtomicFileWriter& AtomicFileWriter::operator=(AtomicFileWriter&& other) noexcept {
   if (this != &other) {
@@ -41,6 +63,7 @@ AtomicFileWriter& AtomicFileWriter::operator=(AtomicFileWriter&& other) noexcept
     temp_path_ = std::move(other.temp_path_);
     file_ = std::exchange(other.file_, nullptr);
     written_ = other.written_;
+    in_place_ = other.in_place_;
   }
   return *this;
 }
@@ -116,8 +139,16 @@ Expected<void, Error> AtomicFileWriter::commit() {
     abandon();
     return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + reason);
   }
-  std::fclose(file_);
+  const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
+  if (!closed) {
+    const std::string why = std::strerror(errno);
+    std::remove(temp_path_.c_str());
+    return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + why);
+  }
+  if (in_place_) {
+    return {};  // the owner of the temporary name renames it with the other outputs
+  }
   if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
     const std::string why = std::strerror(errno);
     std::remove(temp_path_.c_str());

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// ByteReader: one buffer over zlib's gzread (which reads gzip and plain files alike).
+// ByteReader: one buffer over a plain file, or over zlib's inflate for gzip files (every member,
+// and nothing but members, to the end of the file).
 #include "src/io/byte_reader.hpp"
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 #include <new>
+#include <optional>
 #include <system_error>
 #include <utility>
 
@@ -17,10 +19,34 @@ namespace raymap::io {
 namespace {
 
 constexpr std::size_t kMinBufferBytes = 64;
+/// Compressed bytes read per call; the decoded buffer's size bounds what one refill decodes.
+constexpr std::size_t kMaxInputBytes = std::size_t{1} << 20;
+// RFC 1952: every gzip member starts with these two bytes.
+constexpr unsigned char kGzipMagic0 = 0x1f;
+constexpr unsigned char kGzipMagic1 = 0x8b;
+/// inflateInit2's window bits: 15 (the largest window) + 16 (gzip wrapper only, no zlib or raw).
+constexpr int kGzipWindowBits = 15 + 16;
 
 std::string systemReason(int error_number) { return std::generic_category().message(error_number); }
 
 }  // namespace
+
+/// zlib's stream lives on the heap: zlib keeps a pointer back to it, so it must not move when the
+/// ByteReader does.
+struct ByteReader::Inflater {
+  z_stream stream{};
+  std::unique_ptr<Bytef[]> input;
+  std::size_t input_capacity = 0;
+  bool input_eof = false;     // the file has no more compressed bytes
+  bool member_ended = false;  // inflate finished a member; what follows decides what is next
+  bool initialised = false;
+
+  ~Inflater() {
+    if (initialised) {
+      ::inflateEnd(&stream);
+    }
+  }
+};
 
 Result<ByteReader> ByteReader::open(const std::string& path, std::size_t buffer_bytes) {
   buffer_bytes = std::max(buffer_bytes, kMinBufferBytes);
@@ -34,56 +60,77 @@ Result<ByteReader> ByteReader::open(const std::string& path, std::size_t buffer_
   }
   std::error_code size_error;
   const std::uintmax_t size = std::filesystem::file_size(path, size_error);
-  errno = 0;
-  gzFile file = ::gzopen(path.c_str(), "rb");
+  std::FILE* file = std::fopen(path.c_str(), "rb");
   if (file == nullptr) {
-    const int error_number = errno;
-    return fail(ErrorCode::kIo, path + ": cannot open: " +
-                                    (error_number != 0 ? systemReason(error_number)
-                                                       : std::string("out of memory")));
-  }
-  // zlib's own input/output buffers: large reads amortise the per-call overhead of inflate.
-  const unsigned zlib_buffer = static_cast<unsigned>(
-      std::min<std::size_t>(buffer_bytes, std::numeric_limits<unsigned>::max() / 4));
-  if (::gzbuffer(file, zlib_buffer) != 0) {
-    ::gzclose(file);
-    return fail(ErrorCode::kIo, path + ": cannot set the read buffer size");
+    return fail(ErrorCode::kIo, path + ": cannot open: " + systemReason(errno));
   }
   std::unique_ptr<std::byte[]> buffer(new (std::nothrow) std::byte[buffer_bytes]);
   if (buffer == nullptr) {
-    ::gzclose(file);
+    static_cast<void>(std::fclose(file));
     return fail(ErrorCode::kCapacity, path + ": cannot allocate a read buffer of " +
                                           std::to_string(buffer_bytes) + " bytes");
   }
   ByteReader reader(path, file, std::move(buffer), buffer_bytes,
-                    size_error ? 0 : static_cast<std::uint64_t>(size), false);
-  // gzdirect() is only meaningful once zlib has looked at the first bytes.
-  if (auto filled = reader.refill(); !filled) {
-    return Unexpected(std::move(filled).error());
+                    size_error ? 0 : static_cast<std::uint64_t>(size));
+  // The first two bytes tell gzip from plain data. They are read as plain data; a gzip file's
+  // go to the inflater instead.
+  std::byte* const start = reader.buffer_.get();
+  std::size_t got = 0;
+  while (got < 2) {
+    const std::size_t n = std::fread(start + got, 1, 2 - got, file);
+    if (n == 0) {
+      if (std::ferror(file) != 0) {
+        return fail(ErrorCode::kIo, path + ": read error: " + systemReason(errno));
+      }
+      break;
+    }
+    got += n;
   }
-  reader.compressed_ = ::gzdirect(file) == 0;
+  reader.raw_read_ = got;
+  const bool gzip = got == 2 && std::to_integer<unsigned char>(start[0]) == kGzipMagic0 &&
+                    std::to_integer<unsigned char>(start[1]) == kGzipMagic1;
+  if (!gzip) {
+    reader.end_ = got;
+    reader.eof_ = got < 2;
+    return reader;
+  }
+  auto inflater = std::make_unique<Inflater>();
+  inflater->input_capacity = std::min(buffer_bytes, kMaxInputBytes);
+  inflater->input.reset(new (std::nothrow) Bytef[inflater->input_capacity]);
+  if (inflater->input == nullptr) {
+    return fail(ErrorCode::kCapacity, path + ": cannot allocate a read buffer of " +
+                                          std::to_string(inflater->input_capacity) + " bytes");
+  }
+  if (::inflateInit2(&inflater->stream, kGzipWindowBits) != Z_OK) {
+    return fail(ErrorCode::kCapacity, path + ": cannot start the gzip decoder (out of memory)");
+  }
+  inflater->initialised = true;
+  std::memcpy(inflater->input.get(), start, got);
+  inflater->stream.next_in = inflater->input.get();
+  inflater->stream.avail_in = static_cast<uInt>(got);
+  reader.inflater_ = std::move(inflater);
   return reader;
 }
 
-ByteReader::ByteReader(std::string path, gzFile_s* file, std::unique_ptr<std::byte[]> buffer,
-                       std::size_t capacity, std::uint64_t file_bytes, bool compressed) noexcept
+ByteReader::ByteReader(std::string path, std::FILE* file, std::unique_ptr<std::byte[]> buffer,
+                       std::size_t capacity, std::uint64_t file_bytes) noexcept
     : path_(std::move(path)),
       file_(file),
       buffer_(std::move(buffer)),
       capacity_(capacity),
-      compressed_(compressed),
       file_bytes_(file_bytes) {}
 
 ByteReader::ByteReader(ByteReader&& other) noexcept
     : path_(std::move(other.path_)),
       file_(std::exchange(other.file_, nullptr)),
+      inflater_(std::move(other.inflater_)),
       buffer_(std::move(other.buffer_)),
       capacity_(std::exchange(other.capacity_, 0)),
       begin_(std::exchange(other.begin_, 0)),
       end_(std::exchange(other.end_, 0)),
       eof_(std::exchange(other.eof_, true)),
-      compressed_(other.compressed_),
       file_bytes_(other.file_bytes_),
+      raw_read_(other.raw_read_),
       position_(other.position_),
       line_number_(other.line_number_) {}
 
@@ -92,13 +139,14 @@ ByteReader& ByteReader::operator=(ByteReader&& other) noexcept {
     close();
     path_ = std::move(other.path_);
     file_ = std::exchange(other.file_, nullptr);
+    inflater_ = std::move(other.inflater_);
     buffer_ = std::move(other.buffer_);
     capacity_ = std::exchange(other.capacity_, 0);
     begin_ = std::exchange(other.begin_, 0);
     end_ = std::exchange(other.end_, 0);
     eof_ = std::exchange(other.eof_, true);
-    compressed_ = other.compressed_;
     file_bytes_ = other.file_bytes_;
+    raw_read_ = other.raw_read_;
     position_ = other.position_;
     line_number_ = other.line_number_;
   }
@@ -109,7 +157,7 @@ ByteReader::~ByteReader() { close(); }
 
 void ByteReader::close() noexcept {
   if (file_ != nullptr) {
-    ::gzclose(file_);
+    static_cast<void>(std::fclose(file_));
     file_ = nullptr;
   }
 }
@@ -121,11 +169,10 @@ double ByteReader::progress() const noexcept {
   if (file_ == nullptr || file_bytes_ == 0) {
     return 0.0;
   }
-  const z_off_t offset = ::gzoffset(file_);
-  if (offset < 0) {
-    return 0.0;
-  }
-  const double fraction = static_cast<double>(offset) / static_cast<double>(file_bytes_);
+  // The compressed bytes inflate has used (for a plain file, every byte read).
+  const std::uint64_t unused = inflater_ ? inflater_->stream.avail_in : 0;
+  const double fraction =
+      static_cast<double>(raw_read_ - unused) / static_cast<double>(file_bytes_);
   return std::clamp(fraction, 0.0, 1.0);
 }
 
@@ -149,35 +196,110 @@ Expected<void, Error> ByteReader::refill() {
     end_ -= begin_;
     begin_ = 0;
   }
-  const std::size_t room = capacity_ - end_;
-  if (room == 0) {
+  if (end_ == capacity_) {
     return {};
   }
-  // gzread takes an unsigned count and returns an int: stay well inside both.
-  const unsigned request = static_cast<unsigned>(std::min<std::size_t>(room, 1u << 30));
-  const int got = ::gzread(file_, buffer_.get() + end_, request);
-  if (got < 0) {
-    int zlib_error = Z_OK;
-    const char* message = ::gzerror(file_, &zlib_error);
-    const std::string reason = zlib_error == Z_ERRNO
-                                   ? systemReason(errno)
-                                   : std::string(message != nullptr ? message : "");
-    return fail(ErrorCode::kIo, path_ + ": read error: " + reason);
+  if (inflater_) {
+    return inflateMore();
   }
-  end_ += static_cast<std::size_t>(got);
-  if (static_cast<unsigned>(got) < request) {
+  const std::size_t room = capacity_ - end_;
+  const std::size_t got = std::fread(buffer_.get() + end_, 1, room, file_);
+  end_ += got;
+  raw_read_ += got;
+  if (got < room) {
     eof_ = true;
-    int zlib_error = Z_OK;
-    ::gzerror(file_, &zlib_error);
-    if (zlib_error == Z_BUF_ERROR) {
-      // zlib's way of saying the gzip stream stopped mid-way (the .gz file was cut short).
-      return fail(ErrorCode::kTruncated,
-                  path_ + ": truncated: the gzip stream ends before its end marker");
+    if (std::ferror(file_) != 0) {
+      return fail(ErrorCode::kIo, path_ + ": read error: " + systemReason(errno));
     }
-    if (zlib_error != Z_OK) {
-      return fail(ErrorCode::kCorrupt,
-                  path_ + ": corrupt gzip data: " + std::string(::gzerror(file_, &zlib_error)));
+  }
+  return {};
+}
+
+Expected<void, Error> ByteReader::readInput() {
+  Inflater& z = *inflater_;
+  const std::size_t kept = z.stream.avail_in;
+  if (kept > 0 && z.stream.next_in != z.input.get()) {
+    std::memmove(z.input.get(), z.stream.next_in, kept);
+  }
+  const std::size_t got = std::fread(z.input.get() + kept, 1, z.input_capacity - kept, file_);
+  raw_read_ += got;
+  z.stream.next_in = z.input.get();
+  z.stream.avail_in = static_cast<uInt>(kept + got);
+  if (got < z.input_capacity - kept) {
+    z.input_eof = true;
+    if (std::ferror(file_) != 0) {
+      return fail(ErrorCode::kIo, path_ + ": read error: " + systemReason(errno));
     }
+  }
+  return {};
+}
+
+Expected<void, Error> ByteReader::inflateMore() {
+  Inflater& z = *inflater_;
+  // inflate takes a uInt count: stay well inside it.
+  const std::size_t room = std::min<std::size_t>(capacity_ - end_, std::size_t{1} << 30);
+  z.stream.next_out = reinterpret_cast<Bytef*>(buffer_.get() + end_);
+  z.stream.avail_out = static_cast<uInt>(room);
+  std::optional<Error> error;
+  while (z.stream.avail_out > 0 && !error) {
+    if (z.member_ended) {
+      // RFC 1952 allows members back to back; anything else after a member is not gzip data.
+      while (z.stream.avail_in < 2 && !z.input_eof && !error) {
+        if (auto read = readInput(); !read) {
+          error = read.error();
+        }
+      }
+      if (error) {
+        break;
+      }
+      if (z.stream.avail_in == 0) {
+        eof_ = true;
+        break;
+      }
+      if (z.stream.avail_in >= 2 && z.stream.next_in[0] == kGzipMagic0 &&
+          z.stream.next_in[1] == kGzipMagic1) {
+        ::inflateReset(&z.stream);
+        z.member_ended = false;
+        continue;
+      }
+      const std::uint64_t offset = raw_read_ - z.stream.avail_in;
+      const std::uint64_t trailing =
+          file_bytes_ > offset ? file_bytes_ - offset : std::uint64_t{z.stream.avail_in};
+      eof_ = true;
+      // kCorrupt, not kFormat: the PLY header parser reads a kFormat error on its first line
+      // as "not a PLY file", and this file is a gzip file damaged at its end.
+      error = Error{ErrorCode::kCorrupt,
+                    path_ + ": " + std::to_string(trailing) +
+                        " bytes of unexpected data after the gzip stream, at byte " +
+                        std::to_string(offset) + " (not another gzip member)"};
+      break;
+    }
+    if (z.stream.avail_in == 0 && !z.input_eof) {
+      if (auto read = readInput(); !read) {
+        error = read.error();
+        break;
+      }
+    }
+    const int status = ::inflate(&z.stream, Z_NO_FLUSH);
+    if (status == Z_STREAM_END) {
+      z.member_ended = true;
+    } else if (status == Z_BUF_ERROR && z.stream.avail_in == 0 && z.input_eof) {
+      // No progress possible and no input left: the file stops inside a member.
+      eof_ = true;
+      error = Error{ErrorCode::kTruncated,
+                    path_ + ": truncated: the gzip stream ends before its end marker"};
+    } else if (status != Z_OK && status != Z_BUF_ERROR) {
+      eof_ = true;
+      error = Error{
+          ErrorCode::kCorrupt,
+          path_ + ": corrupt gzip data at byte " + std::to_string(raw_read_ - z.stream.avail_in) +
+              ": " +
+              (z.stream.msg != nullptr ? z.stream.msg : "zlib error " + std::to_string(status))};
+    }
+  }
+  end_ += room - z.stream.avail_out;
+  if (error) {
+    return Unexpected(std::move(*error));
   }
   return {};
 }

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Buffered, streamed reading of a plain or gzip-compressed file (zlib's gzFile reads both).
+// Buffered, streamed reading of a plain or gzip-compressed file.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <span>
 #include <string>
@@ -11,13 +12,13 @@
 
 #include "raymap/error.hpp"
 
-// zlib's opaque file type (gzFile is `gzFile_s*`); declared here to keep zlib.h out of users.
-struct gzFile_s;
-
 namespace raymap::io {
 
 /// @brief Reads a file front to back through one bounded buffer, so files larger than memory
-/// work. gzip files are decompressed on the fly; other files are read as they are. Offers three
+/// work. gzip files (they start with the gzip magic) are decompressed on the fly, every member of
+/// a multi-member file in turn (`cat a.gz b.gz`, as gzip -d reads it); data after the last member
+/// that is not another member is an error naming its offset (zlib's gzread ignored it). Other
+/// files are read as they are. Offers three
 /// ways in: lines (headers, ASCII data), exact byte counts, and direct access to the buffered
 /// bytes (zero-copy decoding of binary records). Every error message starts with the path.
 /// Move-only; not thread-safe.
@@ -41,8 +42,8 @@ class ByteReader {
 
   const std::string& path() const noexcept { return path_; }
   /// @brief True when the file is gzip-compressed (decoded on the fly).
-  bool compressed() const noexcept { return compressed_; }
-  /// @brief Size of the file on disk (compressed bytes for gzip), bytes.
+  bool compressed() const noexcept { return inflater_ != nullptr; }
+  /// @brief Size of the file on disk (compressed bytes for gzip), bytes; 0 when unknown.
   std::uint64_t fileBytes() const noexcept { return file_bytes_; }
   /// @brief Fraction of the file on disk consumed so far, 0 to 1 (compressed bytes for gzip;
   /// includes what sits decoded in the buffer, so it runs slightly ahead of the caller).
@@ -76,10 +77,16 @@ class ByteReader {
   Result<bool> readLine(std::string_view& line);
 
  private:
-  ByteReader(std::string path, gzFile_s* file, std::unique_ptr<std::byte[]> buffer,
-             std::size_t capacity, std::uint64_t file_bytes, bool compressed) noexcept;
+  struct Inflater;  // zlib's stream state and the compressed input (gzip files only)
+
+  ByteReader(std::string path, std::FILE* file, std::unique_ptr<std::byte[]> buffer,
+             std::size_t capacity, std::uint64_t file_bytes) noexcept;
   /// Moves the unconsumed bytes to the front and reads more behind them. Sets eof_ at the end.
   Expected<void, Error> refill();
+  /// refill() for a gzip file: decodes into the buffer's free space.
+  Expected<void, Error> inflateMore();
+  /// Reads more compressed input behind what inflate has not used yet.
+  Expected<void, Error> readInput();
   /// Consumes up to `bytes`, handing each buffered piece to sink(data, offset so far, size);
   /// returns how many were consumed (fewer at the end of the data). The loop of read and skip.
   template <class Sink>
@@ -87,14 +94,15 @@ class ByteReader {
   void close() noexcept;
 
   std::string path_;
-  gzFile_s* file_ = nullptr;
+  std::FILE* file_ = nullptr;
+  std::unique_ptr<Inflater> inflater_;  // null for a plain file
   std::unique_ptr<std::byte[]> buffer_;
   std::size_t capacity_ = 0;
   std::size_t begin_ = 0;  // first unconsumed byte in buffer_
   std::size_t end_ = 0;    // one past the last decoded byte in buffer_
   bool eof_ = false;       // the file has no more bytes to decode
-  bool compressed_ = false;
   std::uint64_t file_bytes_ = 0;
+  std::uint64_t raw_read_ = 0;  // bytes read from the file so far
   std::uint64_t position_ = 0;
   std::uint64_t line_number_ = 0;
 };

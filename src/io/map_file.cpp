@@ -7,6 +7,7 @@
 #include <array>
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +21,7 @@
 #include <zlib.h>
 
 #include "src/io/atomic_file.hpp"
+#include "src/io/layer_values.hpp"
 
 namespace raymap::io {
 namespace {
@@ -71,6 +73,9 @@ constexpr std::uint32_t kNdtKnownFlags = kNdtFlagAdaptationRate;
 constexpr std::uint32_t kFirstVersionWithTsdf = 3;
 constexpr std::uint16_t kTsdfBlockBytes = 3 * 8;
 constexpr std::uint64_t kMaxRegions = std::numeric_limits<std::uint32_t>::max() / 4u;
+// A version beyond the current one by more than this is called what it more likely is: a
+// damaged or foreign file (whose checksum happens to match), not a future raymap's map.
+constexpr std::uint32_t kPlausibleVersionsAhead = 16;
 
 // ---- little-endian encoding, byte by byte (correct whatever the host's byte order) ----
 
@@ -385,7 +390,7 @@ Expected<void, Error> readTsdf(ByteReader& body, MapConfig& config, const Malfor
 /// Parses and checks the header; on success the reader is at the first region block.
 Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   if (file.size() == 0) {
-    return fail(ErrorCode::kFormat, path + ": empty file, not a raymap map");
+    return fail(ErrorCode::kFormat, path + " is empty (0 bytes): not a raymap map file");
   }
   std::array<std::byte, kPrefixBytes> prefix{};
   const std::size_t prefix_bytes =
@@ -408,20 +413,29 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   std::uint32_t body_bytes = 0;
   (void)prefix_reader.u32(version);
   (void)prefix_reader.u32(body_bytes);
-  if (version > kMapFormatVersion) {
-    return fail(ErrorCode::kUnsupported, path + ": map format version " + std::to_string(version) +
-                                             " is newer than this raymap (" +
-                                             std::to_string(kMapFormatVersion) + ")");
-  }
-  if (version == 0) {
-    return fail(ErrorCode::kCorrupt, path + ": invalid map format version 0");
-  }
+  // The header checksum covers the version, so it is checked first: a damaged version field is
+  // damage, not a newer format. Only a header too large or cut short to check is judged by its
+  // version alone.
+  const std::string versions_read = "versions 1 to " + std::to_string(kMapFormatVersion);
+  const bool newer = version > kMapFormatVersion;
+  const auto unchecked_newer = [&] {
+    return fail(ErrorCode::kUnsupported,
+                path + ": map format version " + std::to_string(version) +
+                    " is newer than this raymap, which reads " + versions_read +
+                    " (or the file is damaged: its header cannot be checked)");
+  };
   if (body_bytes > kMaxHeaderBodyBytes) {
+    if (newer) {
+      return unchecked_newer();
+    }
     return fail(ErrorCode::kCorrupt, path + ": header declares " + std::to_string(body_bytes) +
                                          " bytes (limit " + std::to_string(kMaxHeaderBodyBytes) +
                                          ")");
   }
   if (std::uint64_t{body_bytes} + 4u > file.remaining()) {
+    if (newer) {
+      return unchecked_newer();
+    }
     return fail(ErrorCode::kTruncated, path + ": truncated in the header (file is " +
                                            std::to_string(file.size()) + " bytes, header needs " +
                                            std::to_string(kPrefixBytes + body_bytes + 4u) + ")");
@@ -434,7 +448,29 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   std::uint32_t stored_crc = 0;
   (void)ByteReader(std::span(header).last(4)).u32(stored_crc);
   if (crc32Of(std::span(header).first(kPrefixBytes + body_bytes)) != stored_crc) {
+    if (newer || version == 0) {
+      return fail(ErrorCode::kCorrupt, path +
+                                           ": damaged header: its checksum does not match, and "
+                                           "its version field reads " +
+                                           std::to_string(version) +
+                                           " (this raymap reads map format " + versions_read + ")");
+    }
     return fail(ErrorCode::kCorrupt, path + ": header checksum mismatch");
+  }
+  if (version > kMapFormatVersion + kPlausibleVersionsAhead) {
+    return fail(ErrorCode::kUnsupported,
+                path + ": unsupported map format version " + std::to_string(version) +
+                    " (this raymap reads " + versions_read +
+                    "); a version this far ahead is more likely a damaged or foreign file than "
+                    "a newer raymap's");
+  }
+  if (newer) {
+    return fail(ErrorCode::kUnsupported, path + ": map format version " + std::to_string(version) +
+                                             " is newer than this raymap, which reads " +
+                                             versions_read);
+  }
+  if (version == 0) {
+    return fail(ErrorCode::kCorrupt, path + ": invalid map format version 0");
   }
 
   // The body is covered by the CRC, so a failed check below is a writer bug or a forged file;
@@ -610,6 +646,14 @@ struct IndexEntry {
   std::uint64_t offset = 0;
 };
 
+/// NaN, inf or -inf as messages spell them.
+std::string valueText(float value) {
+  if (std::isnan(value)) {
+    return "NaN";
+  }
+  return value > 0.0f ? "inf" : "-inf";
+}
+
 std::string coordText(Vec3i c) {
   // snprintf, not string concatenation: GCC 12 at -O3 reports a false -Wrestrict on
   // `"(" + std::to_string(...)`.
@@ -784,9 +828,20 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
     }
     std::size_t at = 0;
     for (std::size_t l = 0; l < parsed.layers.size(); ++l) {
-      const std::uint32_t words = parsed.layers[l].bytes_per_voxel / 4u;
-      decodeLayer(raw.data() + at, voxels, words, map.store().layerBytes(*slot, schema_layers[l]));
-      at += std::size_t{parsed.layers[l].bytes_per_voxel} * voxels;
+      const LayerSpec& spec = parsed.layers[l];
+      std::byte* layer = map.store().layerBytes(*slot, schema_layers[l]);
+      decodeLayer(raw.data() + at, voxels, spec.bytes_per_voxel / 4u, layer);
+      at += std::size_t{spec.bytes_per_voxel} * voxels;
+      // The checksums only say the bytes are those written; a forged or buggy writer's NaN
+      // would otherwise be taken for a value (a NaN occupancy compares as free).
+      if (const auto bad = findBadLayerValue(spec.kind, layer, voxels)) {
+        return fail(ErrorCode::kCorrupt,
+                    path + ": region " + coordText(coord) + " (block " + std::to_string(r + 1) +
+                        " of " + std::to_string(count) + "): layer '" + std::string(spec.name) +
+                        "' holds " + valueText(bad->value) + " at voxel " +
+                        coordText(map.voxelAt(coord, bad->voxel)) + ", where " + bad->rule +
+                        ": the file is damaged or was not written by raymap");
+      }
     }
     blocks.push_back(IndexEntry{coord, offset});
   }

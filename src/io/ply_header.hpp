@@ -78,7 +78,8 @@ struct PlyHeader {
 };
 
 /// @brief Reads the header from the start of `reader`, leaving it at the first data byte.
-/// @return the header, or kFormat "PATH: line N: problem" (or "PATH: not a PLY file ...").
+/// @return the header, or kFormat "PATH: line N: problem" (or "PATH: not a PLY file ...", or
+/// "PATH is empty (0 bytes): not a PLY file").
 Result<PlyHeader> parsePlyHeader(ByteReader& reader);
 
 /// @brief Parses a header held in memory (tests, tools); `path` only names the source in errors.

@@ -179,6 +179,7 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
   }
 
   // Per-point sensor vectors: raycloudtools' nx ny nz, or PCL's normal_x normal_y normal_z.
+  std::string vector_names;  // as the file spells them, for messages
   for (const auto& names : {std::array<const char*, 3>{"nx", "ny", "nz"},
                             std::array<const char*, 3>{"normal_x", "normal_y", "normal_z"}}) {
     std::optional<std::size_t> present;  // first axis the file has
@@ -195,6 +196,7 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
                                             std::string(names[*present]) + "' but no '" +
                                             names[axis] + "' property");
       }
+      vector_names += (axis == 0 ? "" : " ") + vertex.properties[*property[kNx + axis]].name;
     }
     break;
   }
@@ -222,6 +224,14 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
   info.has_intensity = property[kIntensity].has_value();
   info.has_alpha = property[kAlpha].has_value();
 
+  // A trajectory with a ray cloud would be ignored (the file holds every origin): refused, so
+  // that a user who meant a point cloud, or a different trajectory, is told.
+  if (info.ray_cloud && !options.trajectory_path.empty()) {
+    return fail(ErrorCode::kInvalidArgument,
+                path + " is a ray cloud: its vertices hold the vector to the sensor (" +
+                    vector_names + "), so --trajectory " + options.trajectory_path +
+                    " would not be used; leave --trajectory out (it is for point clouds)");
+  }
   std::optional<Trajectory> trajectory;
   if (!info.ray_cloud) {
     if (options.trajectory_path.empty()) {

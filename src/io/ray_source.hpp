@@ -56,7 +56,8 @@ class RaySource {
 };
 
 /// @brief Opens a PLY (binary little/big endian or ASCII, optionally gzip-compressed) as a ray
-/// source. With normals (nx/ny/nz or normal_x/y/z) it is a ray cloud; otherwise
+/// source. With normals (nx/ny/nz or normal_x/y/z) it is a ray cloud, and a
+/// options.trajectory_path is refused (kInvalidArgument: it would not be used); otherwise
 /// options.trajectory_path is required.
 Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
                                                  const RaySourceOptions& options);

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdio>
 #include <cstring>
+#include <string_view>
 
 namespace raymap::record {
 
@@ -17,6 +18,13 @@ bool looksLikeRecordLog(const std::string& path) {
   const std::size_t got = std::fread(start.data(), 1, start.size(), file);
   static_cast<void>(std::fclose(file));
   return got == start.size() && std::memcmp(start.data(), kRecordLogMagic.data(), got) == 0;
+}
+
+bool isRecordLogInput(const std::string& path) {
+  constexpr std::string_view kExtension = ".rmlog";
+  return (path.size() > kExtension.size() &&
+          path.compare(path.size() - kExtension.size(), kExtension.size(), kExtension) == 0) ||
+         looksLikeRecordLog(path);
 }
 
 }  // namespace raymap::record

@@ -81,4 +81,10 @@ struct LogTruncation {
 /// Thread-safety: safe to call from any thread.
 bool looksLikeRecordLog(const std::string& path);
 
+/// @brief True when `path` is to be read as a record log: it starts with kRecordLogMagic, or its
+/// name ends in ".rmlog" (so that an empty or damaged log is reported as a log that is empty or
+/// damaged, not as a file of another format).
+/// Thread-safety: safe to call from any thread.
+bool isRecordLogInput(const std::string& path);
+
 }  // namespace raymap::record

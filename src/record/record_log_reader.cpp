@@ -24,6 +24,9 @@ constexpr std::size_t kStdioBufferBytes = std::size_t{256} << 10;
 /// the header size a newer version may declare, bytes.
 constexpr std::uint32_t kMinHeaderBytes = 20;
 constexpr std::uint32_t kMaxHeaderBytes = 4096;
+/// A version beyond the current one by more than this is called what it more likely is: a
+/// damaged or foreign file (with a matching checksum), not a future raymap's log.
+constexpr std::uint32_t kPlausibleVersionsAhead = 16;
 
 std::string systemReason(int error_number) { return std::generic_category().message(error_number); }
 
@@ -67,12 +70,13 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
     return fail(ErrorCode::kIo, path + ": read error in the file header: " + systemReason(errno));
   }
   if (got == 0) {
-    return fail(ErrorCode::kFormat, path + ": not a raymap record log (the file is empty)");
+    return fail(ErrorCode::kFormat, path + " is empty (0 bytes): not a raymap record log");
   }
   const std::size_t magic_bytes = std::min(got, kRecordLogMagic.size());
   if (std::memcmp(header.data(), kRecordLogMagic.data(), magic_bytes) != 0) {
-    return fail(ErrorCode::kFormat,
-                path + ": not a raymap record log (it does not start with \"RMLOG\\r\\n\\x1a\")");
+    return fail(ErrorCode::kFormat, path +
+                                        ": not a raymap record log: it does not start with the "
+                                        "magic \"RMLOG\\r\\n\\x1a\"");
   }
   const auto truncated_header = [&](std::size_t needed) {
     return fail(ErrorCode::kTruncated, path + ": truncated in the file header (" +
@@ -83,8 +87,8 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
     return truncated_header(kFileHeaderBytes);
   }
   // Every version starts with magic, u32 version, u32 header size and ends its header with the
-  // CRC-32 of the bytes before it (docs/record-format.md), so the checksum can be checked first
-  // and a damaged version field is reported as damage, not as a newer format.
+  // CRC-32 of the bytes before it (docs/record-format.md), so the checksum is checked first and a
+  // damaged version field is reported as damage, not as a newer format.
   const std::uint32_t version = detail::getU32(header.data() + 8);
   const std::uint32_t header_bytes = detail::getU32(header.data() + 12);
   if (header_bytes < kMinHeaderBytes || header_bytes > kMaxHeaderBytes) {
@@ -101,15 +105,30 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
   const std::uint32_t stored_crc = detail::getU32(header.data() + header_bytes - 4);
   const bool crc_ok =
       detail::crc32Update(0, std::span(header).first(header_bytes - 4)) == stored_crc;
-  if (version > kRecordLogVersion) {
-    return fail(ErrorCode::kUnsupported,
-                path + ": record log format version " + std::to_string(version) +
-                    " was written by a newer raymap; this one reads version " +
-                    std::to_string(kRecordLogVersion) + " and older" +
-                    (crc_ok ? "" : " (or the header is damaged: its checksum does not match)"));
-  }
+  const std::string versions_read =
+      "versions 1 to " + std::to_string(kRecordLogVersion);  // every version so far is read
   if (!crc_ok) {
+    // A damaged version field is damage, whatever number it now reads.
+    if (version > kRecordLogVersion || version == 0) {
+      return fail(ErrorCode::kCorrupt, path +
+                                           ": damaged file header: its checksum does not match, "
+                                           "and its version field reads " +
+                                           std::to_string(version) +
+                                           " (this raymap reads record-log " + versions_read + ")");
+    }
     return fail(ErrorCode::kCorrupt, path + ": file header checksum mismatch (damaged file)");
+  }
+  if (version > kRecordLogVersion + kPlausibleVersionsAhead) {
+    return fail(ErrorCode::kUnsupported,
+                path + ": unsupported record-log version " + std::to_string(version) +
+                    " (this raymap reads " + versions_read +
+                    "); a version this far ahead is more likely a damaged or foreign file than "
+                    "a newer raymap's");
+  }
+  if (version > kRecordLogVersion) {
+    return fail(ErrorCode::kUnsupported, path + ": record-log version " + std::to_string(version) +
+                                             " was written by a newer raymap; this one reads " +
+                                             versions_read);
   }
   if (version == 0) {
     return fail(ErrorCode::kCorrupt, path + ": invalid record log format version 0");

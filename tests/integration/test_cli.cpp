@@ -73,10 +73,10 @@ testing::AssertionResult nothingNewIn(const fs::path& dir, const std::set<std::s
   return failure;
 }
 
-/// Fails when a temporary ("*.tmp-*") or probe ("*.probe-*") file is in `dir`.
+/// Fails when a temporary file ("*.raymap-tmp-*") is in `dir`.
 testing::AssertionResult noTemporaryFilesIn(const fs::path& dir) {
   for (const std::string& name : listFiles(dir)) {
-    if (name.find(".tmp-") != std::string::npos || name.find(".probe-") != std::string::npos) {
+    if (name.find(".raymap-tmp-") != std::string::npos) {
       return testing::AssertionFailure() << "temporary file left behind: " << name;
     }
   }
@@ -285,6 +285,14 @@ std::vector<MalformedCase> malformedCases() {
          writePly(path, file);
        },
        {"unexpected data after the last vertex"}},
+      {"GzipWithDataAfterIt",
+       [](const std::string& path) {
+         PlyTestFile file = smallRayCloud(2000);
+         file.gzip = true;
+         writePly(path, file);
+         std::ofstream(path, std::ios::binary | std::ios::app) << "not gzip";
+       },
+       {"8 bytes of unexpected data after the gzip stream, at byte "}},
       {"GzipCutShort",
        [](const std::string& path) {
          PlyTestFile file = smallRayCloud(2000);
@@ -407,6 +415,26 @@ TEST(Cli, TrajectoryNotCoveringTheCloudFailsNamingBothFiles) {
   EXPECT_TRUE(contains(r.err, input));
   EXPECT_TRUE(contains(r.err, trajectory));
   EXPECT_TRUE(contains(r.err, "outside"));
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST(Cli, TrajectoryWithARayCloudFailsNamingBothFiles) {
+  // Arrange: a ray cloud has its origins; the trajectory used to be ignored without a word.
+  TempDir dir;
+  const std::string input = dir.file("rays.ply");
+  const std::string trajectory = dir.file("path.txt");
+  writeRayCloud(input, yardRays(1));
+  writeText(trajectory, stillTrajectory({0.0, 0.0, 1.0}, -1e9, 1e9));
+  const std::set<std::string> before = listFiles(dir.path());
+
+  // Act
+  const RunResult r = runRaymap(
+      concat({"populate", input, "--trajectory", trajectory, "--quiet"}, allOutputs(dir)));
+
+  // Assert
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "raymap populate: error: " + input + " is a ray cloud"));
+  EXPECT_TRUE(contains(r.err, "--trajectory " + trajectory + " would not be used"));
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
@@ -923,6 +951,50 @@ TEST(Cli, CorruptMapFailsInInfoAndExportNamingTheFile) {
     EXPECT_TRUE(contains(info_json.err, "raymap info: error: " + path));
     EXPECT_EQ(exported.exit_code, 1) << describe(exported);
     EXPECT_TRUE(contains(exported.err, "raymap export: error: " + path));
+  }
+  EXPECT_TRUE(nothingNewIn(dir.path(), before));
+}
+
+TEST(Cli, EmptyAndForeignFilesSayWhatIsWrong) {
+  // Arrange: an empty record log was reported as "not a PLY file", and a log with a damaged
+  // magic too (replay took every file that lacked the magic for a PLY).
+  TempDir dir;
+  const std::string empty_log = dir.file("empty.rmlog");
+  const std::string foreign_log = dir.file("foreign.rmlog");
+  const std::string empty_ply = dir.file("empty.ply");
+  const std::string a_log = dir.file("drive.log");
+  writeText(empty_log, "");
+  writeText(foreign_log, "RMLOX\r\n\x1a and then some bytes");
+  writeText(empty_ply, "");
+  writeText(a_log, std::string("RMLOG\r\n\x1a", 8) + std::string(40, '\0'));
+  struct Case {
+    std::vector<std::string> args;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {{"replay", empty_log, "--wait", "0", "-q"},
+       "raymap replay: error: " + empty_log + " is empty (0 bytes): not a raymap record log"},
+      {{"replay", foreign_log, "--wait", "0", "-q"},
+       "raymap replay: error: " + foreign_log +
+           ": not a raymap record log: it does not start "
+           "with the magic"},
+      {{"populate", empty_ply, "--stats-json", "-", "-q"},
+       "raymap populate: error: " + empty_ply + " is empty (0 bytes): not a PLY file"},
+      {{"populate", a_log, "--stats-json", "-", "-q"},
+       "raymap populate: error: " + a_log +
+           " is a raymap record log: populate maps PLY files and "
+           "rosbag2 bags"},
+  };
+  const std::set<std::string> before = listFiles(dir.path());
+
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args[1]);
+    // Act
+    const RunResult r = runRaymap(c.args);
+
+    // Assert
+    EXPECT_EQ(r.exit_code, 1) << describe(r);
+    EXPECT_TRUE(contains(r.err, c.expected));
   }
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }

@@ -11,10 +11,6 @@
 #include <string_view>
 #include <utility>
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include "src/core/eigen_conversions.hpp"
 #include "src/io/atomic_file.hpp"
 #include "src/map/cpu_backend.hpp"
@@ -376,21 +372,6 @@ Expected<void, Error> writeTextFile(const std::string& path, const std::string& 
     return ok;
   }
   return writer->commit();
-}
-
-Expected<void, Error> checkWritable(const std::string& path, const std::string& option) {
-  struct stat info {};
-  if (::stat(path.c_str(), &info) == 0 && S_ISDIR(info.st_mode)) {
-    return fail(ErrorCode::kIo, option + ": '" + path + "' is a directory, not a file");
-  }
-  const std::string probe = path + ".probe-" + std::to_string(::getpid());
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
-  if (fd < 0) {
-    return fail(ErrorCode::kIo, option + ": cannot write '" + path + "': " + std::strerror(errno));
-  }
-  ::close(fd);
-  ::unlink(probe.c_str());
-  return {};
 }
 
 namespace {

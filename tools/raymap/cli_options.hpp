@@ -82,11 +82,8 @@ Result<std::uint64_t> parseByteSize(const std::string& text);
 /// @brief Parses "x,y,z" (metres).
 Result<Vec3d> parseVector(const std::string& text, const std::string& option);
 
-/// @brief Writes `text` and a newline to `path` (temporary file + rename).
+/// @brief Writes `text` and a newline to `path` (temporary file + rename; a staged temporary
+/// of StagedOutputs in place).
 Expected<void, Error> writeTextFile(const std::string& path, const std::string& text);
-
-/// @brief Fails when `path` cannot be created (missing or read-only directory), before any work
-/// is done. Leaves no file behind.
-Expected<void, Error> checkWritable(const std::string& path, const std::string& option);
 
 }  // namespace raymap::cli

@@ -5,6 +5,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "platform/process.hpp"
@@ -13,6 +14,7 @@
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/populate.hpp"
+#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -50,11 +52,17 @@ int runBench(const BenchFlags& f) {
     return kExitUsage;
   }
   base->progress = false;
+  StagedOutputs staged(command);
+  staged.input(f.input, "the input");
+  staged.input(f.mapping.trajectory, "--trajectory");
+  std::string json_temp;
   if (!f.json.empty() && f.json != "-") {
-    if (auto ok = checkWritable(f.json, "--json"); !ok) {
-      printError(command, ok.error().message);
-      return kExitFailure;
+    auto temp = staged.add(f.json, "--json");
+    if (!temp) {
+      printError(command, temp.error().message);
+      return exitCodeFor(temp.error());
     }
+    json_temp = std::move(*temp);
   }
   // Preload: the benchmark measures preparation and integration, not file decoding.
   auto source = io::openRaySource(f.input, base->source);
@@ -212,8 +220,12 @@ int runBench(const BenchFlags& f) {
     std::printf("%s\n", result.str().c_str());
     return kExitOk;
   }
-  if (auto ok = writeTextFile(f.json, result.str()); !ok) {
+  if (auto ok = writeTextFile(json_temp, result.str()); !ok) {
     printError(command, "--json: " + ok.error().message);
+    return kExitFailure;
+  }
+  if (auto ok = staged.commit(); !ok) {
+    printError(command, ok.error().message);
     return kExitFailure;
   }
   return kExitOk;

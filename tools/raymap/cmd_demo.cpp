@@ -7,8 +7,10 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
@@ -20,6 +22,7 @@
 #include "src/sim/yard_scan.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/populate.hpp"
+#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -154,22 +157,35 @@ SceneCheck checkAgainstScene(const VoxelMap& map, const sim::YardScanConfig& sce
   return check;
 }
 
-int runDemo(const DemoFlags& f) {
+/// The demo's work, its files staged in `staged` (renamed into place at the end, so a failure
+/// leaves none of them). @return the exit code.
+int demoInto(const DemoFlags& f, StagedOutputs& staged) {
   const char* command = "demo";
-  if (::mkdir(f.output_dir.c_str(), 0755) != 0 && errno != EEXIST) {
-    printError(command, "cannot create '" + f.output_dir + "': " + std::strerror(errno));
-    return kExitFailure;
-  }
   const std::string cloud = f.output_dir + "/yard_raycloud.ply";
   const std::string map_path = f.output_dir + "/yard.rmap";
   const std::string ply = f.output_dir + "/yard_occupied.ply";
   const std::string png = f.output_dir + "/yard_heightmap.png";
+  std::string temp[4];
+  int n = 0;
+  for (const auto& [path, what] : {std::pair{&cloud, "the ray cloud"},
+                                   {&map_path, "the map"},
+                                   {&ply, "the occupied voxels"},
+                                   {&png, "the height map"}}) {
+    auto staged_path = staged.add(*path, what);
+    if (!staged_path) {
+      printError(command, staged_path.error().message);
+      return kExitFailure;
+    }
+    temp[n++] = std::move(*staged_path);
+  }
+  const std::string& cloud_temp = temp[0];
+  const std::string& map_temp = temp[1];
 
   // 1. Simulate a lidar driving through the built-in yard and record it as a ray cloud.
   sim::YardScanConfig scene;
   scene.scans = f.scans;
   const std::vector<Ray> rays = sim::simulateYardScans(scene);
-  auto writer = io::RayCloudWriter::open(cloud);
+  auto writer = io::RayCloudWriter::open(cloud_temp);
   if (!writer) {
     printError(command, writer.error().message);
     return kExitFailure;
@@ -183,9 +199,9 @@ int runDemo(const DemoFlags& f) {
     return kExitFailure;
   }
 
-  // 2. Map the recording exactly as `raymap populate` does.
+  // 2. Map the recording exactly as `raymap populate` does (from the cloud's staged file).
   PopulateOptions options;
-  options.input = cloud;
+  options.input = cloud_temp;
   options.backend.threads = f.threads;
   options.filter.max_range_m = 30.0;
   options.progress = !f.quiet;
@@ -199,27 +215,34 @@ int runDemo(const DemoFlags& f) {
     printError(command, report.error().message);
     return kExitFailure;
   }
-  if (auto ok = io::saveMap(*map, map_path); !ok) {
+  map->setInfo("source", cloud);  // the name the cloud will have, not its temporary one
+  if (auto ok = io::saveMap(*map, map_temp); !ok) {
     printError(command, ok.error().message);
     return kExitFailure;
   }
-  auto exported = io::exportPly(*map, io::ExportMode::kOccupied, ply);
+  auto exported = io::exportPly(*map, io::ExportMode::kOccupied, temp[2]);
   if (!exported) {
     printError(command, exported.error().message);
     return kExitFailure;
   }
 
   // 3. Check the map, read back from its file, against the scene it was made from.
-  auto loaded = io::loadMap(map_path);
+  auto loaded = io::loadMap(map_temp);
   if (!loaded) {
     printError(command, loaded.error().message);
     return kExitFailure;
   }
   const SceneCheck check = checkAgainstScene(*loaded, scene);
   // 4. The height map a planner would get, against the scene's true height field.
-  auto heights = heightmapOfYard(*loaded, scene, png);
+  auto heights = heightmapOfYard(*loaded, scene, temp[3]);
   if (!heights) {
     printError(command, heights.error().message);
+    return kExitFailure;
+  }
+  // The files are complete: they are kept even when the check below fails (they are what to
+  // look at then).
+  if (auto ok = staged.commit(); !ok) {
+    printError(command, ok.error().message);
     return kExitFailure;
   }
   const bool passed = check.recall >= kMinRecall && check.precision >= kMinPrecision &&
@@ -256,6 +279,23 @@ int runDemo(const DemoFlags& f) {
     return kExitFailure;
   }
   return kExitOk;
+}
+
+int runDemo(const DemoFlags& f) {
+  const bool created = ::mkdir(f.output_dir.c_str(), 0755) == 0;
+  if (!created && errno != EEXIST) {
+    printError("demo", "cannot create '" + f.output_dir + "': " + std::strerror(errno));
+    return kExitFailure;
+  }
+  int code = kExitFailure;
+  {
+    StagedOutputs staged("demo");
+    code = demoInto(f, staged);
+  }
+  if (code != kExitOk && created) {
+    ::rmdir(f.output_dir.c_str());  // a directory of this run's making, if it stayed empty
+  }
+  return code;
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "src/io/tsdf_export.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
+#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -32,18 +33,34 @@ struct ExportFlags {
   bool quiet = false;
 };
 
-/// Checks that --ply can be written, then loads the map; prints why not and returns nullopt.
-std::optional<VoxelMap> openMapForExport(const ExportFlags& f) {
-  if (auto ok = checkWritable(f.ply, "--ply"); !ok) {
-    printError("export", ok.error().message);
+/// Stages --ply (refused when it is the map, failing when it cannot be written), then loads the
+/// map; prints why not and returns nullopt. `*ply_temp` is the name to write the PLY to.
+std::optional<VoxelMap> openMapForExport(const ExportFlags& f, StagedOutputs& staged,
+                                         std::string* ply_temp, int* exit_code) {
+  staged.input(f.map, "the map");
+  auto temp = staged.add(f.ply, "--ply");
+  if (!temp) {
+    printError("export", temp.error().message);
+    *exit_code = exitCodeFor(temp.error());
     return std::nullopt;
   }
+  *ply_temp = std::move(*temp);
   auto map = io::loadMap(f.map);
   if (!map) {
     printError("export", map.error().message);
+    *exit_code = kExitFailure;
     return std::nullopt;
   }
   return std::move(*map);
+}
+
+/// Puts the written PLY in place; prints why not. @return the command's exit code.
+int commitExport(StagedOutputs& staged) {
+  if (auto ok = staged.commit(); !ok) {
+    printError("export", ok.error().message);
+    return kExitFailure;
+  }
+  return kExitOk;
 }
 
 int runNdtExport(const ExportFlags& f) {
@@ -63,16 +80,22 @@ int runNdtExport(const ExportFlags& f) {
     printError(command, ok.error().message);
     return kExitUsage;
   }
-  auto map = openMapForExport(f);
+  StagedOutputs staged(command);
+  std::string ply;
+  int exit_code = kExitOk;
+  auto map = openMapForExport(f, staged, &ply, &exit_code);
   if (!map) {
-    return kExitFailure;
+    return exit_code;
   }
   const bool points = f.mode == "ndt-points";
-  auto count = points ? io::exportNdtPoints(*map, options, f.ply)
-                      : io::exportNdtEllipsoids(*map, options, f.ply);
+  auto count = points ? io::exportNdtPoints(*map, options, ply)
+                      : io::exportNdtEllipsoids(*map, options, ply);
   if (!count) {
     printError(command, f.map + ": " + count.error().message);
     return kExitFailure;
+  }
+  if (const int committed = commitExport(staged); committed != kExitOk) {
+    return committed;
   }
   if (!f.quiet) {
     if (points) {
@@ -94,15 +117,21 @@ int runTsdfExport(const ExportFlags& f) {
     printError(command, "--min-weight: must be a finite weight >= 0 (rays)");
     return kExitUsage;
   }
-  auto map = openMapForExport(f);
+  StagedOutputs staged(command);
+  std::string ply;
+  int exit_code = kExitOk;
+  auto map = openMapForExport(f, staged, &ply, &exit_code);
   if (!map) {
-    return kExitFailure;
+    return exit_code;
   }
   if (f.mode == "tsdf-mesh") {
-    auto counts = io::exportTsdfMesh(*map, f.ply, min_weight);
+    auto counts = io::exportTsdfMesh(*map, ply, min_weight);
     if (!counts) {
       printError(command, f.map + ": " + counts.error().message);
       return kExitFailure;
+    }
+    if (const int committed = commitExport(staged); committed != kExitOk) {
+      return committed;
     }
     if (!f.quiet) {
       std::printf(
@@ -113,10 +142,13 @@ int runTsdfExport(const ExportFlags& f) {
     }
     return kExitOk;
   }
-  auto count = io::exportTsdfSurface(*map, f.ply, min_weight);
+  auto count = io::exportTsdfSurface(*map, ply, min_weight);
   if (!count) {
     printError(command, f.map + ": " + count.error().message);
     return kExitFailure;
+  }
+  if (const int committed = commitExport(staged); committed != kExitOk) {
+    return committed;
   }
   if (!f.quiet) {
     std::printf("wrote %s TSDF surface points (zero crossings, weight >= %g) to %s\n",
@@ -167,14 +199,20 @@ int runExport(const ExportFlags& f) {
     }
     options.decay_threshold = *f.threshold;
   }
-  auto map = openMapForExport(f);
+  StagedOutputs staged("export");
+  std::string ply;
+  int exit_code = kExitOk;
+  auto map = openMapForExport(f, staged, &ply, &exit_code);
   if (!map) {
-    return kExitFailure;
+    return exit_code;
   }
-  auto count = io::exportPly(*map, *mode, f.ply, options);
+  auto count = io::exportPly(*map, *mode, ply, options);
   if (!count) {
     printError("export", f.map + ": " + count.error().message);
     return kExitFailure;
+  }
+  if (const int committed = commitExport(staged); committed != kExitOk) {
+    return committed;
   }
   if (!f.quiet) {
     std::printf("wrote %s points (%s) to %s\n", withCommas(*count).c_str(), f.mode.c_str(),

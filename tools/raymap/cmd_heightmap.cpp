@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "src/device/backend_choice.hpp"
@@ -17,6 +19,7 @@
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -70,12 +73,21 @@ int runHeightmap(const HeightmapFlags& f) {
     printError("heightmap", "--repeat: must be at least 1");
     return kExitUsage;
   }
-  for (const auto& [path, option] : {std::pair{f.png, "--png"}, std::pair{f.csv, "--csv"}}) {
-    if (!path.empty()) {
-      if (auto ok = checkWritable(path, option); !ok) {
-        printError("heightmap", ok.error().message);
-        return kExitFailure;
+  // Both files are staged now (an unwritable one fails before the work) and renamed together
+  // at the end: a failure leaves neither.
+  StagedOutputs staged("heightmap");
+  staged.input(f.map, "the map");
+  std::string png_temp;
+  std::string csv_temp;
+  for (const auto& [path, option, temp] :
+       {std::tuple{&f.png, "--png", &png_temp}, std::tuple{&f.csv, "--csv", &csv_temp}}) {
+    if (!path->empty()) {
+      auto staged_path = staged.add(*path, option);
+      if (!staged_path) {
+        printError("heightmap", staged_path.error().message);
+        return exitCodeFor(staged_path.error());
       }
+      *temp = std::move(*staged_path);
     }
   }
   auto map = io::loadMap(f.map);
@@ -135,16 +147,20 @@ int runHeightmap(const HeightmapFlags& f) {
   std::sort(seconds.begin(), seconds.end());
 
   if (!f.png.empty()) {
-    if (auto ok = io::writeHeightmapPng(f.png, result); !ok) {
-      printError("heightmap", ok.error().message);
+    if (auto ok = io::writeHeightmapPng(png_temp, result); !ok) {
+      printError("heightmap", "--png: " + ok.error().message);
       return kExitFailure;
     }
   }
   if (!f.csv.empty()) {
-    if (auto ok = io::writeHeightmapCsv(f.csv, result); !ok) {
-      printError("heightmap", ok.error().message);
+    if (auto ok = io::writeHeightmapCsv(csv_temp, result); !ok) {
+      printError("heightmap", "--csv: " + ok.error().message);
       return kExitFailure;
     }
+  }
+  if (auto ok = staged.commit(); !ok) {
+    printError("heightmap", ok.error().message);
+    return kExitFailure;
   }
 
   std::uint64_t counts[4] = {};

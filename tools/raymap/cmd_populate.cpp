@@ -7,10 +7,9 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
-
-#include <unistd.h>
 
 #include "platform/memory.hpp"
 #include "src/io/map_export.hpp"
@@ -157,20 +156,31 @@ int runPopulate(const PopulateFlags& f) {
     return kExitUsage;
   }
   options->progress = !f.quiet;
-  std::string output = f.output;
+  const std::string& output = f.output;
   if (output.empty() && f.ply.empty() && f.stats_json.empty()) {
     printError(command,
                "nothing to write: give --output MAP, --ply CLOUD.ply or --stats-json FILE");
     return kExitUsage;
   }
-  // Fail on unwritable outputs before spending minutes on the input.
-  for (const auto& [path, name] : {std::pair{output, "--output"}, std::pair{f.ply, "--ply"},
-                                   std::pair{f.stats_json, "--stats-json"}}) {
-    if (!path.empty() && path != "-") {
-      if (auto ok = checkWritable(path, name); !ok) {
-        printError(command, ok.error().message);
-        return kExitFailure;
+  // Every output is staged under a temporary name now, so that an output that is an input or
+  // cannot be written fails before minutes are spent on the input, and all are renamed at the
+  // end: a run that fails part-way leaves none of them and existing files untouched.
+  StagedOutputs staged(command);
+  staged.input(f.input, "the input");
+  staged.input(f.mapping.trajectory, "--trajectory");
+  std::string output_temp;
+  std::string ply_temp;
+  std::string stats_temp;
+  for (const auto& [path, name, temp] :
+       {std::tuple{&output, "--output", &output_temp}, std::tuple{&f.ply, "--ply", &ply_temp},
+        std::tuple{&f.stats_json, "--stats-json", &stats_temp}}) {
+    if (!path->empty() && *path != "-") {
+      auto staged_path = staged.add(*path, name);
+      if (!staged_path) {
+        printError(command, staged_path.error().message);
+        return exitCodeFor(staged_path.error());
       }
+      *temp = std::move(*staged_path);
     }
   }
   const std::string pool_note = limitPoolToMemory(options->map);
@@ -212,17 +222,14 @@ int runPopulate(const PopulateFlags& f) {
       return kExitFailure;
     }
   }
-  // Every output is written under a temporary name and all are renamed at the end, so a run that
-  // fails part-way leaves none of them and existing files untouched.
-  StagedOutputs staged;
   if (!output.empty()) {
-    if (auto ok = io::saveMap(*map, staged.add(output)); !ok) {
+    if (auto ok = io::saveMap(*map, output_temp); !ok) {
       printError(command, "--output: " + ok.error().message);
       return kExitFailure;
     }
   }
   if (!f.ply.empty()) {
-    auto count = io::exportPly(*map, io::ExportMode::kOccupied, staged.add(f.ply));
+    auto count = io::exportPly(*map, io::ExportMode::kOccupied, ply_temp);
     if (!count) {
       printError(command, "--ply: " + count.error().message);
       return kExitFailure;
@@ -232,7 +239,7 @@ int runPopulate(const PopulateFlags& f) {
     const std::string json = statsJson(*report, *options);
     if (f.stats_json == "-") {
       std::printf("%s\n", json.c_str());
-    } else if (auto ok = writeTextFile(staged.add(f.stats_json), json); !ok) {
+    } else if (auto ok = writeTextFile(stats_temp, json); !ok) {
       printError(command, "--stats-json: " + ok.error().message);
       return kExitFailure;
     }

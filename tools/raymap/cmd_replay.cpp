@@ -3,6 +3,8 @@
 // robot would (docs/cli.md).
 #include <cstdio>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "src/dds/topic_types.hpp"
 #include "tools/raymap/cli_options.hpp"
@@ -10,6 +12,7 @@
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/replay_session.hpp"
+#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -123,11 +126,19 @@ int runReplay(const ReplayFlags& flags) {
     printError("replay", options.error().message);
     return kExitUsage;
   }
+  StagedOutputs staged("replay");
+  for (const std::string& input : flags.inputs) {
+    staged.input(input, "the input");
+  }
+  staged.input(flags.trajectory, "--trajectory");
+  std::string stats_temp;
   if (!flags.stats_json.empty() && flags.stats_json != "-") {
-    if (auto writable = checkWritable(flags.stats_json, "--stats-json"); !writable) {
-      printError("replay", writable.error().message);
-      return kExitFailure;
+    auto temp = staged.add(flags.stats_json, "--stats-json");
+    if (!temp) {
+      printError("replay", temp.error().message);
+      return exitCodeFor(temp.error());
     }
+    stats_temp = std::move(*temp);
   }
   // Before the participant starts Cyclone's threads, so they inherit the blocked mask and
   // Ctrl-C / SIGTERM reach the replay loop (which then stops cleanly) and nothing else.
@@ -149,8 +160,11 @@ int runReplay(const ReplayFlags& flags) {
     const std::string json = statsJson(stats.value());
     if (flags.stats_json == "-") {
       std::printf("%s\n", json.c_str());
-    } else if (auto written = writeTextFile(flags.stats_json, json); !written) {
-      printError("replay", written.error().message);
+    } else if (auto written = writeTextFile(stats_temp, json); !written) {
+      printError("replay", "--stats-json: " + written.error().message);
+      return kExitFailure;
+    } else if (auto committed = staged.commit(); !committed) {
+      printError("replay", committed.error().message);
       return kExitFailure;
     }
   }

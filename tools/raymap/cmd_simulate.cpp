@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -263,14 +264,25 @@ int runSimulate(const SimulateFlags& f) {
     }
     truth_box = *box;
   }
-  for (const auto& [path, name] :
-       {std::pair{f.rays, "--rays"}, std::pair{f.points, "--points"},
-        std::pair{f.trajectory, "--trajectory"}, std::pair{f.truth, "--truth"}}) {
-    if (!path.empty()) {
-      if (auto ok = checkWritable(path, name); !ok) {
-        printError(command, ok.error().message);
-        return kExitFailure;
+  // Staged before the work (an output that is the scene or cannot be written fails now) and
+  // renamed together at the end.
+  StagedOutputs staged(command);
+  staged.input(f.scene, "the scene file");
+  std::string rays_temp;
+  std::string points_temp;
+  std::string trajectory_temp;
+  std::string truth_temp;
+  for (const auto& [path, name, temp] :
+       {std::tuple{&f.rays, "--rays", &rays_temp}, std::tuple{&f.points, "--points", &points_temp},
+        std::tuple{&f.trajectory, "--trajectory", &trajectory_temp},
+        std::tuple{&f.truth, "--truth", &truth_temp}}) {
+    if (!path->empty()) {
+      auto staged_path = staged.add(*path, name);
+      if (!staged_path) {
+        printError(command, staged_path.error().message);
+        return exitCodeFor(staged_path.error());
       }
+      *temp = std::move(*staged_path);
     }
   }
   auto loaded = sim::loadSceneFile(f.scene);
@@ -334,22 +346,21 @@ int runSimulate(const SimulateFlags& f) {
   const auto no_returns = static_cast<std::uint64_t>(std::count_if(
       rays.begin(), rays.end(), [](const Ray& r) { return (r.flags & kRayNoReturn) != 0; }));
 
-  StagedOutputs staged;
   std::vector<std::string> written;
   if (!f.rays.empty()) {
-    if (auto ok = writeRays(rays, staged.add(f.rays), io::PlyLayout::kRayCloud); !ok) {
+    if (auto ok = writeRays(rays, rays_temp, io::PlyLayout::kRayCloud); !ok) {
       printError(command, "--rays: " + ok.error().message);
       return kExitFailure;
     }
     written.push_back(f.rays);
   }
   if (!f.points.empty()) {
-    auto points = writeRays(rays, staged.add(f.points), io::PlyLayout::kPointCloud);
+    auto points = writeRays(rays, points_temp, io::PlyLayout::kPointCloud);
     if (!points) {
       printError(command, "--points: " + points.error().message);
       return kExitFailure;
     }
-    if (auto ok = writeTrajectory(simulation, staged.add(f.trajectory)); !ok) {
+    if (auto ok = writeTrajectory(simulation, trajectory_temp); !ok) {
       printError(command, "--trajectory: " + ok.error().message);
       return kExitFailure;
     }
@@ -358,7 +369,7 @@ int runSimulate(const SimulateFlags& f) {
   }
   if (!f.truth.empty()) {
     truth_csv.pop_back();  // writeTextFile ends the last line
-    if (auto ok = writeTextFile(staged.add(f.truth), truth_csv); !ok) {
+    if (auto ok = writeTextFile(truth_temp, truth_csv); !ok) {
       printError(command, "--truth: " + ok.error().message);
       return kExitFailure;
     }

@@ -7,6 +7,7 @@
 
 #include "platform/process.hpp"
 #include "src/map/ray_batcher.hpp"
+#include "src/record/record_log.hpp"
 #include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/progress.hpp"
 
@@ -134,6 +135,11 @@ Result<PopulateReport> integrateStream(
 Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& options) {
   std::unique_ptr<io::RaySource> opened;
   bag::BagRaySource* bag_source = nullptr;
+  if (record::isRecordLogInput(options.input)) {
+    return fail(ErrorCode::kFormat, options.input +
+                                        " is a raymap record log: populate maps PLY files and "
+                                        "rosbag2 bags (raymap replay plays a log to raymapd)");
+  }
   if (bag::isBag(options.input)) {
     auto bag_or = bag::openBagRaySource(options.input, options.bag);
     if (!bag_or) {

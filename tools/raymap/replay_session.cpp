@@ -67,7 +67,7 @@ Result<std::unique_ptr<ReplaySession>> ReplaySession::create(const ReplayOptions
   s->participant_.emplace(std::move(participant).value());
   bool any_ray_file = false;
   for (const std::string& input : options.inputs) {
-    any_ray_file = any_ray_file || !record::looksLikeRecordLog(input);
+    any_ray_file = any_ray_file || !record::isRecordLogInput(input);
   }
   if (any_ray_file) {
     auto driver = driver::DriverPublisher::create(*s->participant_, options.cloud_topic,
@@ -301,9 +301,9 @@ Result<ReplayStats> ReplaySession::run() {
   stats_.stamp_zero_ns = clock_.stampAt(0.0);
   do {
     for (const std::string& input : options_.inputs) {
-      auto played = record::looksLikeRecordLog(input) ? playLog(input)
-                    : bag::isBag(input)               ? playBag(input)
-                                                      : playRayFile(input);
+      auto played = record::isRecordLogInput(input) ? playLog(input)
+                    : bag::isBag(input)             ? playBag(input)
+                                                    : playRayFile(input);
       if (!played) {
         return Unexpected(std::move(played).error());
       }

@@ -1,48 +1,67 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Several output files of one command that appear together or not at all.
+// A command's output files: all of them appear, or none (docs/cli.md, "Output files").
 #pragma once
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "raymap/error.hpp"
-#include <unistd.h>
 
 namespace raymap::cli {
 
-/// Output files written under temporary names ("<path>.part-<pid>") and renamed together by
-/// commit(); whatever was not committed is removed on destruction.
+/// @brief The output files of one command, staged under temporary names
+/// (io::temporaryPathFor(): "<path>.raymap-tmp-<pid>") and renamed into place together by
+/// commit(). Whatever was not committed is removed on destruction, on SIGINT, SIGTERM and SIGHUP
+/// (InterruptCleanup), and, after a SIGKILL, by the next command that writes the same output.
+///
+/// Declare the inputs first, then add() every output before the work starts: add() refuses an
+/// output that is an input or another output, and creates the temporary file, so an unwritable
+/// output fails before minutes are spent on the input. The io writers given a temporary path
+/// write it in place (io::AtomicFileWriter). Not thread-safe.
 class StagedOutputs {
  public:
-  StagedOutputs() = default;
+  /// @param[in] command the subcommand, for messages ("populate").
+  explicit StagedOutputs(std::string command);
   StagedOutputs(const StagedOutputs&) = delete;
   StagedOutputs& operator=(const StagedOutputs&) = delete;
-  ~StagedOutputs() {
-    for (const auto& [final_path, temp_path] : files_) {
-      std::remove(temp_path.c_str());
-    }
-  }
-  /// @brief The temporary path to write `final_path` to.
-  std::string add(const std::string& final_path) {
-    files_.emplace_back(final_path, final_path + ".part-" + std::to_string(::getpid()));
-    return files_.back().second;
-  }
-  Expected<void, Error> commit() {
-    for (const auto& [final_path, temp_path] : files_) {
-      if (std::rename(temp_path.c_str(), final_path.c_str()) != 0) {
-        return fail(ErrorCode::kIo, "cannot replace '" + final_path + "': " + std::strerror(errno));
-      }
-    }
-    files_.clear();
-    return {};
-  }
+  ~StagedOutputs();
+
+  /// @brief Declares an input (a file, or a directory whose files are all inputs, like a bag).
+  /// `what` names it in messages ("input", "--trajectory"). Empty paths and "-" are ignored.
+  void input(const std::string& path, const std::string& what);
+
+  /// @brief Stages output `path`, given with `option` ("--png"). Removes the temporaries of
+  /// `path` that a killed run left (each named on standard error), then creates this run's.
+  /// @return the temporary path to write the output to; kInvalidArgument when `path` is an
+  /// input or another output (a usage error), kIo naming the option, the path and the reason
+  /// when it cannot be written (a directory, a missing or unwritable directory).
+  Result<std::string> add(const std::string& path, const std::string& option);
+
+  /// @brief Renames every staged file onto its output, then flushes the directories to disk.
+  /// A signal during the renames is acted on after them. @return kIo naming the output that
+  /// could not be put in place (those not yet renamed are removed).
+  Expected<void, Error> commit();
 
  private:
-  std::vector<std::pair<std::string, std::string>> files_;
+  struct Output {
+    std::string path;
+    std::string option;
+    std::string temp;
+    int signal_slot = -1;
+  };
+  struct Input {
+    std::string path;
+    std::string what;
+  };
+  void removeAll() noexcept;
+
+  std::string command_;
+  std::vector<Input> inputs_;
+  std::vector<Output> outputs_;
 };
+
+/// @brief The exit code for an error of StagedOutputs::add(): kExitUsage for a conflict between
+/// the arguments, kExitFailure otherwise.
+int exitCodeFor(const Error& error) noexcept;
 
 }  // namespace raymap::cli

@@ -748,9 +748,10 @@ TEST_F(DamagedMapFile, AnOutOfRangeRegionCoordinateIsRejected) {
 }
 
 TEST_F(DamagedMapFile, ANewerVersionIsUnsupported) {
-  // Arrange
+  // Arrange: a header a newer writer sealed (its checksum covers the version).
   std::vector<std::uint8_t> bad = good_;
   putLe(bad, 8, 7, 4);
+  resealHeader(bad);
   writeFileBytes(bad_path_, bad);
 
   // Act
@@ -759,9 +760,46 @@ TEST_F(DamagedMapFile, ANewerVersionIsUnsupported) {
 
   // Assert
   EXPECT_EQ(error.code, ErrorCode::kUnsupported);
-  EXPECT_EQ(error.message, bad_path_ + ": map format version 7 is newer than this raymap (3)");
+  EXPECT_EQ(error.message, bad_path_ +
+                               ": map format version 7 is newer than this raymap, which reads "
+                               "versions 1 to 3");
   ASSERT_FALSE(header.has_value());
   EXPECT_EQ(header.error().message, error.message);
+}
+
+TEST_F(DamagedMapFile, AFlippedVersionByteIsDamageNotANewerVersion) {
+  // Arrange: 3 -> 252 in the version field; the header checksum no longer matches.
+  std::vector<std::uint8_t> bad = good_;
+  bad[8] ^= 0xFF;
+  writeFileBytes(bad_path_, bad);
+
+  // Act
+  const Error error = expectLoadFails(bad_path_);
+
+  // Assert
+  EXPECT_EQ(error.code, ErrorCode::kCorrupt);
+  EXPECT_EQ(error.message, bad_path_ +
+                               ": damaged header: its checksum does not match, and its version "
+                               "field reads 252 (this raymap reads map format versions 1 to 3)");
+}
+
+TEST_F(DamagedMapFile, AVersionFarAheadIsMoreLikelyDamageThanNew) {
+  // Arrange: a sealed header with version 252.
+  std::vector<std::uint8_t> bad = good_;
+  putLe(bad, 8, 252, 4);
+  resealHeader(bad);
+  writeFileBytes(bad_path_, bad);
+
+  // Act
+  const Error error = expectLoadFails(bad_path_);
+
+  // Assert
+  EXPECT_EQ(error.code, ErrorCode::kUnsupported);
+  EXPECT_EQ(error.message,
+            bad_path_ +
+                ": unsupported map format version 252 (this raymap reads versions 1 to 3); a "
+                "version this far ahead is more likely a damaged or foreign file than a newer "
+                "raymap's");
 }
 
 TEST_F(DamagedMapFile, AWrongMagicIsNotAMap) {
@@ -803,7 +841,7 @@ TEST(MapFileLoad, AnEmptyFileFails) {
 
   // Assert
   EXPECT_EQ(error.code, ErrorCode::kFormat);
-  EXPECT_NE(error.message.find("empty"), std::string::npos) << error.message;
+  EXPECT_EQ(error.message, path + " is empty (0 bytes): not a raymap map file");
 }
 
 TEST(MapFileLoad, AMissingFileFails) {

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PLY header parsing: formats, types, lists, and line-numbered errors.
+#include <optional>
 #include <ostream>
 #include <string>
 
@@ -109,7 +110,6 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadHeader{"NoMagic", "plx\nformat ascii 1.0\nend_header\n",
                   "not a PLY file (missing 'ply' magic)"},
-        BadHeader{"Empty", "", "not a PLY file (missing 'ply' magic)"},
         BadHeader{"UnknownFormat", "ply\nformat binary_middle_endian 1.0\nend_header\n",
                   "line 2: unknown format 'binary_middle_endian'"},
         BadHeader{"Version", "ply\nformat ascii 2.0\nend_header\n",
@@ -158,6 +158,23 @@ TEST(PlyHeader, ReadsFromGzipFileAndStopsAtFirstDataByte) {
   EXPECT_EQ(reader->buffered()[0], std::byte{0x2a});
 }
 
+TEST(PlyHeader, AnEmptyFileSaysSo) {
+  test::TempDir dir;
+  const std::string path = dir.file("empty.ply");
+  test::writeBytes(path, "");
+  auto reader = ByteReader::open(path);
+  ASSERT_TRUE(reader.has_value()) << reader.error().message;
+
+  const auto from_file = parsePlyHeader(*reader);
+  const auto from_text = parsePlyHeader("", kPath);
+
+  ASSERT_FALSE(from_file.has_value());
+  EXPECT_EQ(from_file.error().code, ErrorCode::kFormat);
+  EXPECT_EQ(from_file.error().message, path + " is empty (0 bytes): not a PLY file");
+  ASSERT_FALSE(from_text.has_value());
+  EXPECT_EQ(from_text.error().message, std::string(kPath) + " is empty (0 bytes): not a PLY file");
+}
+
 TEST(PlyHeader, BinaryGarbageIsNotAPlyFile) {
   test::TempDir dir;
   const std::string path = dir.file("noise.bin");
@@ -169,6 +186,55 @@ TEST(PlyHeader, BinaryGarbageIsNotAPlyFile) {
 
   ASSERT_FALSE(header.has_value());
   EXPECT_EQ(header.error().message, path + ": not a PLY file (missing 'ply' magic)");
+}
+
+// ---- many properties and elements (parsing stays linear; what is parsed is checked here) ----
+
+constexpr int kMany = 100000;
+
+/// A header with one vertex element of `count` float properties p0, p1, ..., then `extra` lines.
+std::string manyProperties(int count, const std::string& extra = "") {
+  std::string text = "ply\nformat binary_little_endian 1.0\nelement vertex 1\n";
+  for (int i = 0; i < count; ++i) {
+    text += "property float p" + std::to_string(i) + "\n";
+  }
+  return text + extra + "end_header\n";
+}
+
+TEST(PlyHeader, ParsesAHundredThousandPropertiesInOrder) {
+  const auto header = parsePlyHeader(manyProperties(kMany), kPath);
+
+  ASSERT_TRUE(header.has_value()) << header.error().message;
+  ASSERT_EQ(header->elements.size(), 1u);
+  const PlyElement& vertex = header->elements[0];
+  ASSERT_EQ(vertex.properties.size(), static_cast<std::size_t>(kMany));
+  EXPECT_EQ(vertex.properties.front().name, "p0");
+  EXPECT_EQ(vertex.properties.back().name, "p" + std::to_string(kMany - 1));
+  EXPECT_EQ(vertex.findProperty("P77777"), std::optional<std::size_t>(77777));
+  EXPECT_EQ(vertex.recordBytes(), 4u * kMany);
+}
+
+TEST(PlyHeader, FindsADuplicateAmongAHundredThousandProperties) {
+  // The duplicate differs in case only (names are compared case-insensitively).
+  const auto header = parsePlyHeader(manyProperties(kMany, "property double P4242\n"), kPath);
+
+  ASSERT_FALSE(header.has_value());
+  EXPECT_EQ(header.error().message, std::string(kPath) + ": line " + std::to_string(kMany + 4) +
+                                        ": property 'P4242' declared twice in element 'vertex'");
+}
+
+TEST(PlyHeader, FindsADuplicateAmongAHundredThousandElements) {
+  std::string text = "ply\nformat ascii 1.0\n";
+  for (int i = 0; i < kMany; ++i) {
+    text += "element e" + std::to_string(i) + " 0\n";
+  }
+  text += "element E99998 0\nend_header\n";
+
+  const auto header = parsePlyHeader(text, kPath);
+
+  ASSERT_FALSE(header.has_value());
+  EXPECT_EQ(header.error().message, std::string(kPath) + ": line " + std::to_string(kMany + 3) +
+                                        ": element 'E99998' declared twice");
 }
 
 }  // namespace

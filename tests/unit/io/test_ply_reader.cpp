@@ -164,6 +164,87 @@ TEST(ByteReader, SkipsAndEnsuresAcrossRefills) {
   EXPECT_EQ(reader->position(), 1000u);
 }
 
+/// The bytes of `text` gzip-compressed (one gzip member), through a file in `dir`.
+std::string gzipped(const test::TempDir& dir, const std::string& text) {
+  const std::string path = dir.file("member.gz");
+  test::writeBytes(path, text, /*gzip=*/true);
+  return readFileBytes(path);
+}
+
+/// Everything a reader decodes, or its error.
+Result<std::string> readEverything(const std::string& path, std::size_t buffer_bytes) {
+  auto reader = ByteReader::open(path, buffer_bytes);
+  if (!reader) {
+    return Unexpected(reader.error());
+  }
+  std::string text;
+  std::byte chunk[100];
+  for (;;) {
+    auto got = reader->read(chunk);
+    if (!got) {
+      return Unexpected(got.error());
+    }
+    if (*got == 0) {
+      return text;
+    }
+    text.append(reinterpret_cast<const char*>(chunk), *got);
+  }
+}
+
+TEST(ByteReader, ConcatenatedGzipMembersAreOneStream) {
+  // gzip allows members back to back (`cat a.gz b.gz`); all of them are the data. A small buffer
+  // puts member boundaries inside and between reads.
+  test::TempDir dir;
+  std::string first;
+  for (int i = 0; i < 3000; ++i) {
+    first += static_cast<char>('a' + i % 26);
+  }
+  const std::string path = dir.file("two.gz");
+  test::writeBytes(path, gzipped(dir, first) + gzipped(dir, "") + gzipped(dir, "second\n"));
+
+  for (const std::size_t buffer : {std::size_t{64}, ByteReader::kDefaultBufferBytes}) {
+    SCOPED_TRACE(buffer);
+    const auto text = readEverything(path, buffer);
+
+    ASSERT_TRUE(text.has_value()) << text.error().message;
+    EXPECT_EQ(*text, first + "second\n");
+  }
+}
+
+TEST(ByteReader, DataAfterTheGzipStreamIsAnErrorNamingItsOffset) {
+  test::TempDir dir;
+  const std::string member = gzipped(dir, "the data\n");
+  for (const std::string& trailer : {std::string("garbage!"), std::string(512, '\0'),
+                                     std::string("\x1f"), std::string(1, '\x8b')}) {
+    SCOPED_TRACE(trailer.size());
+    const std::string path = dir.file("trailing.gz");
+    test::writeBytes(path, member + trailer);
+
+    const auto text = readEverything(path, 64);
+
+    ASSERT_FALSE(text.has_value());
+    EXPECT_EQ(text.error().code, ErrorCode::kCorrupt);
+    EXPECT_EQ(text.error().message,
+              path + ": " + std::to_string(trailer.size()) +
+                  " bytes of unexpected data after the gzip stream, at byte " +
+                  std::to_string(member.size()) + " (not another gzip member)");
+  }
+}
+
+TEST(ByteReader, CorruptSecondGzipMemberIsCorrupt) {
+  test::TempDir dir;
+  std::string second = gzipped(dir, "second member\n");
+  second[12] = static_cast<char>(second[12] ^ 0x55);  // inside the deflate data
+  const std::string path = dir.file("bad-second.gz");
+  test::writeBytes(path, gzipped(dir, "first\n") + second);
+
+  const auto text = readEverything(path, 64);
+
+  ASSERT_FALSE(text.has_value());
+  EXPECT_TRUE(contains(text.error().message, path + ": ")) << text.error().message;
+  EXPECT_EQ(text.error().code, ErrorCode::kCorrupt);
+}
+
 TEST(ByteReader, MissingFileNamesPathAndReason) {
   test::TempDir dir;
   const std::string path = dir.file("absent.ply");

@@ -376,6 +376,25 @@ TEST(RaySource, PointCloudWithoutTrajectoryAsksForOne) {
                 "--trajectory");
 }
 
+TEST(RaySource, RayCloudWithATrajectoryIsAnErrorNamingBothFiles) {
+  // A ray cloud carries its origins: a trajectory would be ignored, so it is refused instead.
+  test::TempDir dir;
+  const std::string path = writeFile(dir, "rays.ply", {rayCloudVertices(3)});
+  RaySourceOptions options;
+  options.trajectory_path = writeText(dir, "path.txt", "0 0 0 0\n2 1 1 1\n");
+
+  const auto source = openRaySource(path, options);
+
+  ASSERT_FALSE(source.has_value());
+  EXPECT_EQ(source.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(source.error().message,
+            path +
+                " is a ray cloud: its vertices hold the vector to the sensor (nx ny nz), so "
+                "--trajectory " +
+                options.trajectory_path +
+                " would not be used; leave --trajectory out (it is for point clouds)");
+}
+
 TEST(RaySource, PointCloudWithoutTimeCannotUseATrajectory) {
   test::TempDir dir;
   const std::string path = writeFile(dir, "timeless.ply", {xyzOnly()});

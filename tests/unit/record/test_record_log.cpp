@@ -601,7 +601,7 @@ TEST(RecordLog, ForeignFilesAreNotRecordLogs) {
   writeFileBytes(text, Bytes(random_text.begin(), random_text.end()));
   writeFileBytes(empty, {});
 
-  for (const std::string& path : {ply, text, empty}) {
+  for (const std::string& path : {ply, text}) {
     SCOPED_TRACE(path);
     auto reader = RecordLogReader::open(path);
     ASSERT_FALSE(reader);
@@ -610,6 +610,11 @@ TEST(RecordLog, ForeignFilesAreNotRecordLogs) {
         << reader.error().message;
     EXPECT_FALSE(looksLikeRecordLog(path));
   }
+  auto empty_reader = RecordLogReader::open(empty);
+  ASSERT_FALSE(empty_reader);
+  EXPECT_EQ(empty_reader.error().code, ErrorCode::kFormat);
+  EXPECT_EQ(empty_reader.error().message, empty + " is empty (0 bytes): not a raymap record log");
+  EXPECT_FALSE(looksLikeRecordLog(empty));
   EXPECT_TRUE(looksLikeRecordLog(log));
   EXPECT_TRUE(looksLikeRecordLog(partial));
   EXPECT_FALSE(looksLikeRecordLog(dir.file("missing.rmlog")));
@@ -633,10 +638,49 @@ TEST(RecordLog, NewerVersionIsRefusedWithAClearMessage) {
   ASSERT_FALSE(reader);
   EXPECT_EQ(reader.error().code, ErrorCode::kUnsupported);
   EXPECT_NE(reader.error().message.find(path), std::string::npos);
-  EXPECT_NE(reader.error().message.find("version 2 was written by a newer raymap"),
-            std::string::npos)
-      << reader.error().message;
+  EXPECT_EQ(reader.error().message,
+            path +
+                ": record-log version 2 was written by a newer raymap; this one reads "
+                "versions 1 to 1");
   EXPECT_TRUE(looksLikeRecordLog(path));
+}
+
+TEST(RecordLog, AFlippedVersionByteIsDamageNotANewerVersion) {
+  // The version field reads 252 and the header checksum no longer matches: a damaged file, not
+  // one from a raymap 251 versions ahead.
+  TempDir dir;
+  Bytes bytes = readFileBytes(recordLog(dir.file("v.rmlog"), smallSamples(1), true));
+  bytes[8] ^= 0xFD;  // 1 -> 252
+  const std::string path = dir.file("flipped.rmlog");
+  writeFileBytes(path, bytes);
+
+  auto reader = RecordLogReader::open(path);
+
+  ASSERT_FALSE(reader);
+  EXPECT_EQ(reader.error().code, ErrorCode::kCorrupt);
+  EXPECT_EQ(reader.error().message,
+            path +
+                ": damaged file header: its checksum does not match, and its version field "
+                "reads 252 (this raymap reads record-log versions 1 to 1)");
+}
+
+TEST(RecordLog, AVersionFarAheadIsMoreLikelyDamageThanNew) {
+  TempDir dir;
+  Bytes bytes = readFileBytes(recordLog(dir.file("v.rmlog"), smallSamples(1), true));
+  putLe(bytes, 8, 252, 4);
+  putLe(bytes, 28, crc32(bytes.data(), 28), 4);  // the checksum agrees
+  const std::string path = dir.file("far.rmlog");
+  writeFileBytes(path, bytes);
+
+  auto reader = RecordLogReader::open(path);
+
+  ASSERT_FALSE(reader);
+  EXPECT_EQ(reader.error().code, ErrorCode::kUnsupported);
+  EXPECT_EQ(reader.error().message,
+            path +
+                ": unsupported record-log version 252 (this raymap reads versions 1 to 1); a "
+                "version this far ahead is more likely a damaged or foreign file than a "
+                "newer raymap's");
 }
 
 // ---- structure ----
