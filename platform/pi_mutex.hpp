@@ -32,7 +32,7 @@ class PiMutex {
   void unlock() noexcept { pthread_mutex_unlock(&mutex_); }
 
  private:
-  pthread_mutex_t mutex_;
+  pthread_mutex_t mutex_{};  // initialised by pthread_mutex_init in the constructor
 };
 
 }  // namespace raymap::platform

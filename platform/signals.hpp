@@ -2,9 +2,8 @@
 // ShutdownSignals: SIGTERM, SIGINT and SIGHUP taken synchronously (sigtimedwait), no handlers.
 #pragma once
 
+#include <csignal>
 #include <cstdint>
-
-#include <signal.h>
 
 namespace raymap::platform {
 

@@ -30,6 +30,7 @@ namespace raymap::platform {
 class Wakeup {
  public:
   Wakeup() noexcept = default;
+  ~Wakeup() = default;
   Wakeup(const Wakeup&) = delete;
   Wakeup& operator=(const Wakeup&) = delete;
 

@@ -25,8 +25,10 @@ Result<PageBlock> PageBlock::create(std::size_t bytes) {
   void* p = mmap(nullptr, rounded, PROT_READ | PROT_WRITE,
                  MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
   if (p == MAP_FAILED) {
-    return fail(ErrorCode::kCapacity, "cannot reserve " + std::to_string(rounded) +
-                                          " bytes of memory: " + std::strerror(errno));
+    return fail(ErrorCode::kCapacity,
+                "cannot reserve " + std::to_string(rounded) + " bytes of memory: " +
+                    // NOLINTNEXTLINE(concurrency-mt-unsafe): start-up only, before any thread
+                    std::strerror(errno));
   }
   return PageBlock(static_cast<std::byte*>(p), rounded);
 }

@@ -29,9 +29,11 @@ bool parseUnsigned(const char* text, unsigned long long* value) noexcept {
 /// sd_watchdog_enabled(): WATCHDOG_PID, when set, must be our pid; WATCHDOG_USEC must be > 0.
 std::int64_t watchdogFromEnvironment() noexcept {
   unsigned long long usec = 0;
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): read once, when raymapd starts, before its threads
   if (!parseUnsigned(std::getenv("WATCHDOG_USEC"), &usec) || usec == 0) {
     return 0;
   }
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): read once, when raymapd starts, before its threads
   const char* pid_text = std::getenv("WATCHDOG_PID");
   if (pid_text != nullptr) {
     unsigned long long pid = 0;
@@ -49,6 +51,7 @@ std::size_t firstLineLength(const char* text) noexcept { return std::strcspn(tex
 }  // namespace
 
 SystemdNotifier::SystemdNotifier() noexcept : watchdog_interval_ns_(watchdogFromEnvironment()) {
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): read once, when raymapd starts, before its threads
   open(std::getenv("NOTIFY_SOCKET"));
 }
 
@@ -113,14 +116,12 @@ void SystemdNotifier::send(const char* head, const char* text) noexcept {
   }
   // iovec's base is non-const in the C API; sendmsg only reads it.
   iovec parts[2] = {};
-  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): the C API takes a non-const pointer it
-  // only reads
+  // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): sendmsg only reads it
   parts[0].iov_base = const_cast<char*>(head);
   parts[0].iov_len = std::strlen(head);
   std::size_t count = 1;
   if (text != nullptr) {
-    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): the C API takes a non-const pointer it
-    // only reads
+    // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): sendmsg only reads it
     parts[1].iov_base = const_cast<char*>(text);
     parts[1].iov_len = firstLineLength(text);
     count = 2;
@@ -132,7 +133,7 @@ void SystemdNotifier::send(const char* head, const char* text) noexcept {
   message.msg_iovlen = count;
   // MSG_DONTWAIT: a full receive queue must not stall a real-time thread; MSG_NOSIGNAL: no
   // SIGPIPE. The result is ignored on purpose (see the class comment).
-  ssize_t sent;
+  ssize_t sent = 0;
   do {
     sent = sendmsg(fd_, &message, MSG_DONTWAIT | MSG_NOSIGNAL);
   } while (sent < 0 && errno == EINTR);

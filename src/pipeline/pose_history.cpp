@@ -38,6 +38,7 @@ bool PoseHistory::push(std::int64_t stamp_ns, const io::Pose& pose) noexcept {
     return false;
   }
   if (size_ == capacity_) {
+    // NOLINTNEXTLINE(clang-analyzer-core.DivideZero): capacity_ >= 2 (the constructor's @pre)
     first_ = (first_ + 1) % capacity_;
     --size_;
     hint_ = hint_ > 0 ? hint_ - 1 : 0;

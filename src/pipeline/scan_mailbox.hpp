@@ -50,6 +50,7 @@ class ScanMailbox {
   /// @brief Allocates `slots` buffers of `max_points` points each (start-up only).
   /// @pre slots >= 2, max_points >= 1
   ScanMailbox(std::uint32_t slots, std::uint32_t max_points);
+  ~ScanMailbox() = default;
   ScanMailbox(const ScanMailbox&) = delete;
   ScanMailbox& operator=(const ScanMailbox&) = delete;
 

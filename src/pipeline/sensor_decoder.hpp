@@ -70,6 +70,7 @@ struct DecodedScan {
 class SensorDecoder {
  public:
   explicit SensorDecoder(SensorDecodeSettings settings);
+  ~SensorDecoder() = default;
   SensorDecoder(const SensorDecoder&) = delete;
   SensorDecoder& operator=(const SensorDecoder&) = delete;
   SensorDecoder(SensorDecoder&&) noexcept = default;

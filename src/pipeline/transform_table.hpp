@@ -38,8 +38,8 @@ class TransformTable {
 
  private:
   struct Edge {
-    char parent[kFrameChars];
-    char child[kFrameChars];
+    char parent[kFrameChars] = {};
+    char child[kFrameChars] = {};
     io::Pose child_in_parent;
   };
   /// Index of the edge whose child is `child`, or size_.

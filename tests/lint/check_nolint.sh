@@ -29,12 +29,12 @@ while IFS= read -r hit; do
   rest=${hit#*:}
   line=${rest%%:*}
   text=${rest#*:}
-  if ! grep -qE 'NOLINT(NEXTLINE)?\([a-z0-9.,-]+\): *[^ ]' <<<"$text"; then
+  if ! grep -qE 'NOLINT(NEXTLINE)?\([A-Za-z0-9.,-]+\): *[^ ]' <<<"$text"; then
     echo "$file:$line: a NOLINT must name its checks and give a reason: NOLINT(check): why" >&2
     status=1
     continue
   fi
-  checks=$(sed -E 's/.*NOLINT(NEXTLINE)?\(([a-z0-9.,-]+)\).*/\2/' <<<"$text" | tr ',' ' ')
+  checks=$(sed -E 's/.*NOLINT(NEXTLINE)?\(([A-Za-z0-9.,-]+)\).*/\2/' <<<"$text" | tr ',' ' ')
   for check in $checks; do
     if ! check_enabled "$check"; then
       echo "$file:$line: NOLINT($check): .clang-tidy does not enable $check" >&2
@@ -44,4 +44,12 @@ while IFS= read -r hit; do
 done < <(grep -rnE 'NOLINT' src include platform tools tests examples kernels \
   --include='*.cpp' --include='*.hpp' --include='*.h' --include='*.cu' --include='*.cl' |
   grep -v '^tests/lint/')
+# A NOLINTNEXTLINE covers the next line only: that line must be code, not the rest of a comment
+# that a formatter wrapped.
+while IFS= read -r hit; do
+  echo "${hit%%-*}: NOLINTNEXTLINE is followed by a comment line, so it suppresses nothing" >&2
+  status=1
+done < <(grep -rn -A1 'NOLINTNEXTLINE' src include platform tools tests examples kernels \
+  --include='*.cpp' --include='*.hpp' --include='*.h' --include='*.cu' --include='*.cl' |
+  grep -v '^tests/lint/' | grep -E '^[^:]+-[0-9]+-[[:space:]]*//')
 exit $status

@@ -12,6 +12,7 @@
 
 #include "src/io/atomic_file.hpp"
 #include "src/io/temp_files.hpp"
+#include "tests/support/file_bytes.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::io {
@@ -29,8 +30,8 @@ std::set<std::string> namesIn(const fs::path& dir) {
 }
 
 std::string contentOf(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  const test::Bytes bytes = test::readFileBytes(path);
+  return std::string(bytes.begin(), bytes.end());
 }
 
 void writeText(const std::string& path, const std::string& text) {
