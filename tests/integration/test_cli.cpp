@@ -24,6 +24,7 @@
 
 #include "src/sim/yard_scan.hpp"
 #include "tests/support/cli_runner.hpp"
+#include "tests/support/dir_listing.hpp"
 #include "tests/support/ply_test_writer.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -47,31 +48,6 @@ testing::AssertionResult contains(const std::string& text, const std::string& pa
 // ---------------------------------------------------------------------------------------------
 // Files
 // ---------------------------------------------------------------------------------------------
-
-/// Every path under `dir`, relative to it.
-std::set<std::string> listFiles(const fs::path& dir) {
-  std::set<std::string> names;
-  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    names.insert(fs::relative(entry.path(), dir).string());
-  }
-  return names;
-}
-
-/// Fails unless `dir` holds exactly `before` (no map, PLY, JSON, temporary or probe file left).
-testing::AssertionResult nothingNewIn(const fs::path& dir, const std::set<std::string>& before) {
-  const std::set<std::string> after = listFiles(dir);
-  std::vector<std::string> added;
-  std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
-                      std::back_inserter(added));
-  if (added.empty()) {
-    return testing::AssertionSuccess();
-  }
-  auto failure = testing::AssertionFailure() << "left behind in " << dir.string() << ":";
-  for (const std::string& name : added) {
-    failure << " " << name;
-  }
-  return failure;
-}
 
 /// Fails when a temporary file ("*.raymap-tmp-*") is in `dir`.
 testing::AssertionResult noTemporaryFilesIn(const fs::path& dir) {

@@ -25,6 +25,7 @@
 
 #include "src/sim/yard_scan.hpp"
 #include "tests/support/cli_runner.hpp"
+#include "tests/support/dir_listing.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -45,31 +46,6 @@ testing::AssertionResult contains(const std::string& text, const std::string& pa
 std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
   a.insert(a.end(), b.begin(), b.end());
   return a;
-}
-
-/// Every name in `dir` (not recursive).
-std::set<std::string> namesIn(const fs::path& dir) {
-  std::set<std::string> names;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    names.insert(entry.path().filename().string());
-  }
-  return names;
-}
-
-/// Fails unless `dir` holds exactly `before`: no output, no temporary, no probe file.
-testing::AssertionResult nothingNewIn(const fs::path& dir, const std::set<std::string>& before) {
-  const std::set<std::string> after = namesIn(dir);
-  std::vector<std::string> added;
-  std::set_difference(after.begin(), after.end(), before.begin(), before.end(),
-                      std::back_inserter(added));
-  if (added.empty()) {
-    return testing::AssertionSuccess();
-  }
-  auto failure = testing::AssertionFailure() << "left behind in " << dir.string() << ":";
-  for (const std::string& name : added) {
-    failure << " " << name;
-  }
-  return failure;
 }
 
 /// Runs raymap with its file-size limit (RLIMIT_FSIZE) at `kib` KiB and SIGXFSZ ignored: a
@@ -130,7 +106,7 @@ TEST(CliOutputs, HeightmapOnAFullDiskLeavesNeitherFile) {
   ASSERT_GT(csv_bytes, limit_kib * 1024) << "the CSV must be the file that does not fit";
   const std::string png = dir.file("hm.png");
   const std::string csv = dir.file("hm.csv");
-  const std::set<std::string> before = namesIn(dir.path());
+  const std::set<std::string> before = listFiles(dir.path());
 
   // Act: the PNG (written first) fits, the CSV does not.
   const RunResult r =
@@ -171,7 +147,7 @@ TEST(CliOutputs, SimulateOnAFullDiskLeavesNoOutput) {
                                                    fs::file_size(reference.file("path.txt"))));
   ASSERT_GT(fs::file_size(reference.file("truth.csv")), limit_kib * 1024)
       << "the truth CSV must be the file that does not fit";
-  const std::set<std::string> before = namesIn(dir.path());
+  const std::set<std::string> before = listFiles(dir.path());
 
   // Act
   const RunResult r = runRaymapWithFileLimit(limit_kib, request(dir));
@@ -244,7 +220,7 @@ int waitFor(pid_t pid) {
 
 /// True when a file of `dir` whose name starts with `prefix` exists.
 bool anyNameStartsWith(const fs::path& dir, const std::string& prefix) {
-  for (const std::string& name : namesIn(dir)) {
+  for (const std::string& name : listFiles(dir)) {
     if (name.rfind(prefix, 0) == 0) {
       return true;
     }
@@ -255,7 +231,7 @@ bool anyNameStartsWith(const fs::path& dir, const std::string& prefix) {
 /// Names in `dir` that look like a temporary file of any raymap version.
 std::vector<std::string> temporariesIn(const fs::path& dir) {
   std::vector<std::string> found;
-  for (const std::string& name : namesIn(dir)) {
+  for (const std::string& name : listFiles(dir)) {
     if (name.find(".raymap-tmp-") != std::string::npos ||
         name.find(".part-") != std::string::npos || name.find(".tmp-") != std::string::npos ||
         name.find(".probe-") != std::string::npos) {
@@ -275,7 +251,7 @@ TEST_P(StoppedBySignal, PopulateRemovesItsTemporariesAndWritesNothing) {
   config.scans = 40;
   const std::string input = inputs.file("big.ply");
   writeRayCloud(input, sim::simulateYardScans(config));
-  const std::set<std::string> before = namesIn(dir.path());
+  const std::set<std::string> before = listFiles(dir.path());
 
   // Act: the signal goes as soon as an output file of any name appears (this raymap stages its
   // outputs before it starts; older ones made them only while saving). The test does not rely
@@ -322,7 +298,7 @@ TEST_P(StoppedBySignal, PopulateRemovesItsTemporariesAndWritesNothing) {
     expected.insert({"out.rmap", "out.ply", "out.json"});
   }
   EXPECT_TRUE(nothingNewIn(dir.path(), expected));
-  EXPECT_EQ(namesIn(dir.path()), expected);
+  EXPECT_EQ(listFiles(dir.path()), expected);
 }
 
 INSTANTIATE_TEST_SUITE_P(CliOutputs, StoppedBySignal, testing::Values(SIGINT, SIGTERM),
@@ -430,7 +406,7 @@ TEST_P(OutputIsTheInput, PopulateRefusesBeforeAnyWork) {
     const std::string input = yardCloud(dir);
     const std::string alias = aliasOf(input);
     const std::string bytes = readFile(input);
-    const std::set<std::string> before = namesIn(dir.path());
+    const std::set<std::string> before = listFiles(dir.path());
 
     // Act
     const RunResult r = runRaymap({"populate", input, "--max-range", "8", option, alias, "-q"});
@@ -487,7 +463,7 @@ TEST(CliOutputs, EveryCommandRefusesToOverwriteItsInputs) {
        "--output '" + trajectory + "' is the same file as --trajectory"},
       {{"bench", cloud, "--json", cloud}, "--json '" + cloud + "' is the same file as the input"},
   };
-  const std::set<std::string> before = namesIn(dir.path());
+  const std::set<std::string> before = listFiles(dir.path());
   std::vector<std::string> contents;
   for (const std::string& name : before) {
     contents.push_back(readFile(dir.file(name)));
@@ -513,7 +489,7 @@ TEST(CliOutputs, TwoOutputsOnOneFileAreRefused) {
   // Arrange
   TempDir dir;
   const std::string cloud = yardCloud(dir);
-  const std::set<std::string> before = namesIn(dir.path());
+  const std::set<std::string> before = listFiles(dir.path());
 
   // Act: the same file by two spellings.
   const RunResult r = runRaymap({"populate", cloud, "--output", dir.file("out"), "--ply",
