@@ -15,6 +15,7 @@ packages=(
   libboost-dev            # Boost.Lockfree SPSC queues (header-only)
   libzstd-dev liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks, SQLite (.db3) bags
   clang-format
+  clang libclang-rt-14-dev clang-tidy  # the asan/tsan/fuzz presets (libFuzzer), clang-tidy
   patchelf                # tools/device-kit.sh: the kit's executables find its own libraries
   dpkg-dev file           # cpack -G DEB: dpkg-shlibdeps computes Depends: (tools/check-deb.sh)
 )
