@@ -100,7 +100,7 @@ TEST(RaymapdHealth, APointWithACorruptTimeCostsThatPointAndIsAWarning) {
   EXPECT_LE(no_pose, 2.0);
   EXPECT_GE(s.ros.diagnostics->number("raymapd: pipeline/points_bad_time").value_or(0),
             received - 5.0);
-  EXPECT_EQ(pipelineValue(s.ros, "level"), "1");
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "1") << pipelineValue(s.ros, "message");
   EXPECT_NE(pipelineValue(s.ros, "message").find("points with a per-point time out of range"),
             std::string::npos)
       << pipelineValue(s.ros, "message");
