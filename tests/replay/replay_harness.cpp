@@ -60,6 +60,20 @@ void Watcher::collect(double seconds, const std::function<bool()>& until) {
   }
 }
 
+void Watcher::collectUntilQuiet(double quiet_s, double max_s) {
+  const std::int64_t quiet_ns = static_cast<std::int64_t>(quiet_s * 1e9);
+  std::int64_t last_change = platform::monotonicNowNs();
+  std::size_t seen = maps.size();
+  collect(max_s, [&] {
+    const std::int64_t now = platform::monotonicNowNs();
+    if (maps.size() != seen) {
+      seen = maps.size();
+      last_change = now;
+    }
+    return now - last_change >= quiet_ns;
+  });
+}
+
 std::optional<double> jsonNumber(const std::string& json, const std::string& key) {
   const std::string quoted = "\"" + key + "\":";
   const std::size_t at = json.find(quoted);

@@ -36,6 +36,11 @@ struct Watcher {
   explicit Watcher(std::uint32_t domain);
   /// @brief Collects for `seconds` (or until `until` returns true).
   void collect(double seconds, const std::function<bool()>& until = nullptr);
+  /// @brief Collects until no GridMap has arrived for `quiet_s`, at most `max_s`: after the
+  /// input ended, raymapd publishes until its map goes stale (health.stale_after_s after the
+  /// last scan went in) and then withholds it, so a quiet topic means every map with the last
+  /// scans in it has been received, however long a slow machine took to get there.
+  void collectUntilQuiet(double quiet_s, double max_s);
   std::optional<dds::Participant> participant;
   std::unique_ptr<driver::GridMapListener> grid_maps;
   std::unique_ptr<driver::DiagnosticsListener> diagnostics;

@@ -66,9 +66,17 @@ void publishDrive(driver::DriverPublisher& publisher, int scans, Capture& clouds
     clouds.poll();
     odometry.poll();
   }
-  platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 300'000'000);
-  clouds.poll();
-  odometry.poll();
+  // The last messages reach the witnesses (as long as that takes on a loaded machine), and the
+  // recorder, which reads the same loopback traffic, a moment more.
+  const auto all = static_cast<std::size_t>(scans);
+  const std::int64_t give_up =
+      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  do {
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 300'000'000);
+    clouds.poll();
+    odometry.poll();
+  } while ((clouds.samples.size() < all || odometry.samples.size() < all) &&
+           platform::monotonicNowNs() < give_up);
 }
 
 /// Records a drive of `scans` scans with `raymap record` on `domain`; the recorder is stopped
@@ -86,11 +94,22 @@ std::pair<Payloads, Payloads> recordDrive(const TempDir& dir, std::uint32_t doma
   auto recorder = startRaymap(
       {"record", "-o", log, "--domain", std::to_string(domain), "-t", "/points", "-t", "/odom"},
       recorder_log);
-  EXPECT_TRUE(waitForText(recorder_log, "recording rt/points", 10.0)) << readFile(recorder_log);
-  EXPECT_TRUE(waitForText(recorder_log, "recording rt/odom", 10.0)) << readFile(recorder_log);
-  platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 300'000'000);  // reader matched
+  EXPECT_TRUE(waitForText(recorder_log, "recording rt/points", kStartWaitS))
+      << readFile(recorder_log);
+  EXPECT_TRUE(waitForText(recorder_log, "recording rt/odom", kStartWaitS))
+      << readFile(recorder_log);
+  // Until the recorder's readers are matched on this side too (the witnesses' are the other
+  // two), as long as that takes: best-effort data sent before would not reach it.
+  const std::int64_t give_up =
+      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  while ((publisher->matchedCloudReaders() < 2 || publisher->matchedOdometryReaders() < 2) &&
+         platform::monotonicNowNs() < give_up) {
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 20'000'000);
+  }
+  EXPECT_GE(publisher->matchedCloudReaders(), 2U);
+  EXPECT_GE(publisher->matchedOdometryReaders(), 2U);
   publishDrive(*publisher, scans, clouds, odometry);
-  const auto stopped = recorder->stop(stop_signal, std::chrono::milliseconds(5000));
+  const auto stopped = recorder->stop(stop_signal, kStopWait);
   EXPECT_TRUE(stopped.has_value());
   if (stop_signal == SIGINT) {
     EXPECT_EQ(stopped->first, 0) << readFile(recorder_log);

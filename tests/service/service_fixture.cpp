@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 
@@ -34,6 +35,26 @@ double publishPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::si
     variance += k * k;
   }
   return covariance / variance * 1e-6;
+}
+
+std::size_t fewestMaps(double seconds, double startup_s) {
+  const double publishing_ms = std::max(0.0, seconds - startup_s) * 1000.0;
+  return static_cast<std::size_t>(publishing_ms / kSlowestPeriodMs);
+}
+
+void expectInOrderAtAboutFiveHertz(const std::vector<driver::ReceivedGridMap>& maps) {
+  ASSERT_GE(maps.size(), 4U) << "too few GridMaps for a period";
+  std::size_t older = 0;
+  for (std::size_t i = 1; i < maps.size(); ++i) {
+    older += maps[i].stamp_ns < maps[i - 1].stamp_ns ? 1U : 0U;
+  }
+  EXPECT_EQ(older, 0U) << "GridMaps whose stamp is older than the one before";
+  EXPECT_GT(maps.back().stamp_ns, maps.front().stamp_ns) << "the data never moved on";
+  // From the third map: the first cycles size the height map's buffers.
+  const double period = publishPeriodMs(maps, 2);
+  EXPECT_GE(period, kFastestPeriodMs) << maps.size() << " GridMaps";
+  EXPECT_LE(period, kSlowestPeriodMs) << maps.size() << " GridMaps";
+  std::printf("%zu GridMaps, mean period %.1f ms at the subscriber\n", maps.size(), period);
 }
 
 std::uint32_t uniqueDomain() {
@@ -68,7 +89,8 @@ RunningDaemon::RunningDaemon(const std::string& config_text, bool watchdog) {
   std::ofstream(config) << config_text;
   std::vector<std::string> env = {"NOTIFY_SOCKET=" + notify.path()};
   if (watchdog) {
-    env.push_back("WATCHDOG_USEC=1000000");  // WatchdogSec=1s: pings needed < 0.5 s apart
+    // WatchdogSec=1s: systemd restarts a service that has not pinged for 1 s.
+    env.push_back("WATCHDOG_USEC=1000000");
   }
   process = std::make_unique<DaemonProcess>(
       RAYMAPD_PATH, std::vector<std::string>{"--config", config}, env, dir.file("raymapd.log"));
@@ -136,12 +158,23 @@ void RosSide::play(const driver::SimulatedLidar& lidar, driver::PlaybackOptions 
 }
 
 void RosSide::settle(double seconds, std::vector<driver::ReceivedGridMap>* maps) {
-  const std::int64_t end = platform::monotonicNowNs() + static_cast<std::int64_t>(seconds * 1e9);
+  (void)settleUntil(
+      seconds, [] { return false; }, maps);
+}
+
+bool RosSide::settleUntil(double max_seconds, const std::function<bool()>& done,
+                          std::vector<driver::ReceivedGridMap>* maps) {
+  const std::int64_t end =
+      platform::monotonicNowNs() + static_cast<std::int64_t>(max_seconds * 1e9);
   std::vector<driver::ReceivedGridMap> ignored;
   while (platform::monotonicNowNs() < end) {
     grid_maps->poll(20000000, maps != nullptr ? *maps : ignored);
     diagnostics->poll();
+    if (done()) {
+      return true;
+    }
   }
+  return done();
 }
 
 HeightCheck checkHeights(const driver::ReceivedGridMap& map, const sim::Scene& scene) {

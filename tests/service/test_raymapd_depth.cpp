@@ -79,12 +79,12 @@ TEST(RaymapdDepth, ADepthCameraAloneMapsTheStairsAndReportsItsOwnStatus) {
   const std::uint32_t domain = uniqueDomain();
   RunningDaemon daemon(depthConfig(domain), false);
   DepthRig rig(domain);
-  ASSERT_TRUE(rig.waitForService(10.0)) << daemon.log();
+  ASSERT_TRUE(rig.waitForService(kStartWaitS)) << daemon.log();
   std::vector<driver::ReceivedGridMap> maps;
   // Towards the stairs and onto the first steps (the body reaches their foot at 5 s).
   rig.play(7.0, maps);
   rig.ros.settle(2.5, &maps);
-  ASSERT_GE(maps.size(), 20u) << daemon.log();
+  ASSERT_GE(maps.size(), fewestMaps(7.0)) << daemon.log();
 
   const HeightCheck heights = checkHeights(maps.back(), rig.file.scene);
   EXPECT_GE(heights.surfaces, 150) << "too little of the stairs observed";
@@ -92,13 +92,19 @@ TEST(RaymapdDepth, ADepthCameraAloneMapsTheStairsAndReportsItsOwnStatus) {
       << heights.within << " of " << heights.surfaces << " surface cells within a voxel";
 
   const std::string s = std::string("raymapd: sensor ") + kCamera + "/";
+  // 5 Hz for 7 s, or as many as this process rendered in time (a slow machine skips frames):
+  // the first may go before raymapd's reader has matched (best effort), the rest arrive.
+  const double published = static_cast<double>(rig.playback->framesPublished());
   const double received = rig.value(s + "received");
-  EXPECT_GE(received, 25.0) << daemon.log();  // 5 Hz for 7 s, less discovery's first frames
+  EXPECT_GE(published, 7.0 * 5.0 / 4.0);
+  EXPECT_GE(received, 0.7 * published) << published << " published\n" << daemon.log();
   EXPECT_EQ(rig.value(s + "accepted"), received);
   EXPECT_EQ(rig.value(s + "rejected"), 0.0);
   EXPECT_EQ(rig.value(s + "images_without_camera_info"), 0.0);
   EXPECT_GE(rig.value(s + "camera_info_received"), received - 1.0);
-  EXPECT_GE(rig.value(s + "scans_integrated"), received - 2.0);
+  // Every frame goes in, or is shed whole by the latency bound on a busy machine (counted).
+  EXPECT_GE(rig.value(s + "scans_integrated") + rig.value("raymapd: pipeline/scans_shed"),
+            received - 2.0);
   // The camera stopped 2.5 s ago: its status says so (the pipeline's says the map is stale).
   EXPECT_EQ(rig.value(s + "level"), 1.0);  // WARN
   EXPECT_NE(rig.ros.diagnostics->values()
@@ -120,7 +126,7 @@ TEST(RaymapdDepth, RefusedImagesAreCountedByReasonAndTheCameraWarns) {
       dds::CdrWriter::create(*rig.ros.publisher_participant, "rt/body_front/depth/image_rect_raw",
                              dds::imageType(), dds::Reliability::kBestEffort, 8);
   ASSERT_TRUE(image);
-  ASSERT_TRUE(rig.waitForService(10.0)) << daemon.log();
+  ASSERT_TRUE(rig.waitForService(kStartWaitS)) << daemon.log();
   // Before any CameraInfo: an image raymapd cannot back-project.
   std::vector<std::byte> cdr;
   std::vector<float> depth(16 * 12, 1.0f);

@@ -31,7 +31,7 @@ TEST(RaymapdSteadyState, MakesNoHeapAllocationAfterWarmUp) {
   service.value()->start();
 
   RosSide ros(domain, 70000);
-  ASSERT_TRUE(ros.waitForService(10.0));
+  ASSERT_TRUE(ros.waitForService(kStartWaitS));
   const driver::SimulatedLidar lidar = yardLidar(16, 1024, /*moving=*/false);
   std::vector<driver::ReceivedGridMap> maps;
   ros.play(lidar, driver::PlaybackOptions{}, 3.0, maps);  // warm-up: first cycles size buffers
@@ -45,8 +45,8 @@ TEST(RaymapdSteadyState, MakesNoHeapAllocationAfterWarmUp) {
   service.value()->stop();
 
   EXPECT_EQ(after - before, 0u) << "allocations in the steady-state loops";
-  // ... while the service did its whole job meanwhile.
-  EXPECT_GE(maps.size() - maps_before, 15u);
+  // ... while the service did its whole job meanwhile: publishing throughout the 4 s.
+  EXPECT_GE(maps.size() - maps_before, fewestMaps(4.0, 0.0));
   EXPECT_GT(ros.diagnostics->number("raymapd: pipeline/scans_integrated").value_or(0.0),
             scans_before + 20.0);
   // The counter is live: the warm-up did allocate inside the loops (the first height-map cycle
@@ -89,7 +89,10 @@ TEST(RaymapdSteadyState, ADepthCameraMakesNoHeapAllocationAfterWarmUp) {
                                     file->depth_cameras, still, file->simulation.seed, {});
   ASSERT_TRUE(created.has_value()) << created.error().message;
   driver::DepthPlayback& playback = *created.value();
-  for (int i = 0; i < 500 && !(playback.matched() && ros.grid_maps->matchedWriters() > 0); ++i) {
+  const std::int64_t give_up =
+      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  while (!(playback.matched() && ros.grid_maps->matchedWriters() > 0) &&
+         platform::monotonicNowNs() < give_up) {
     platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 20000000);
   }
   const std::int64_t t0 = platform::monotonicNowNs();
@@ -114,7 +117,7 @@ TEST(RaymapdSteadyState, ADepthCameraMakesNoHeapAllocationAfterWarmUp) {
   service.value()->stop();
 
   EXPECT_EQ(after - before, 0u) << "allocations in the steady-state loops";
-  EXPECT_GE(maps.size() - maps_before, 15u);
+  EXPECT_GE(maps.size() - maps_before, fewestMaps(4.0, 0.0));
   EXPECT_GE(ros.diagnostics->number("raymapd: sensor body_front/scans_integrated").value_or(0.0),
             25.0);
 }

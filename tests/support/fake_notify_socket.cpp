@@ -191,4 +191,19 @@ Clock::duration FakeNotifySocket::maxGap(const std::vector<NotifyMessage>& messa
   return widest;
 }
 
+Clock::duration FakeNotifySocket::longestSilence(const std::vector<NotifyMessage>& messages,
+                                                 std::string_view line, Clock::time_point from,
+                                                 Clock::time_point to) {
+  Clock::duration widest{0};
+  Clock::time_point previous = from;
+  for (const NotifyMessage& message : messages) {
+    if (!message.hasLine(line) || message.at < from || message.at > to) {
+      continue;
+    }
+    widest = std::max(widest, message.at - previous);
+    previous = message.at;
+  }
+  return std::max(widest, to - previous);
+}
+
 }  // namespace raymap::test

@@ -62,6 +62,13 @@ class FakeNotifySocket {
   static std::chrono::steady_clock::duration maxGap(const std::vector<NotifyMessage>& messages,
                                                     std::string_view line);
 
+  /// @brief The longest stretch of [from, to] without a message of `messages` that has `line`,
+  /// the two ends included: what systemd's watchdog would have seen over that interval (no such
+  /// message at all gives to - from, where maxGap() gives zero).
+  static std::chrono::steady_clock::duration longestSilence(
+      const std::vector<NotifyMessage>& messages, std::string_view line,
+      std::chrono::steady_clock::time_point from, std::chrono::steady_clock::time_point to);
+
  private:
   std::optional<TempDir> dir_;
   std::string path_;

@@ -24,14 +24,42 @@ run_data_sets() {  # run_data_sets FUNCTION DATA_DIR: FUNCTION NAME INPUT [optio
 
 daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: raymap-load's JSON
   # raymapd on CONFIG, driven by raymap-load (an OS-1-128, 128 x 1024 points) at RATE scans/s for
-  # SECONDS after a 3 s warm-up; prints raymap-load's JSON on one line.
+  # SECONDS after a 3 s warm-up; prints raymap-load's JSON on one line, with a "service" object
+  # added: what systemd sees of the service (tools/bench/notify_listener.py on its NOTIFY_SOCKET):
+  # ready_ms (start to READY=1), watchdog_pings and watchdog_gap_max_ms / _p99_ms (READY=1 to
+  # STOPPING=1), and stop_ms (SIGTERM to exit). The tests check only that these happen, with
+  # generous bounds; the figures are recorded here (docs/testing.md).
   local build=$1 config=$2 domain=$3 rate=$4 seconds=$5 pid out
-  "$build/src/service/raymapd" --config "$config" 2> "${config%.yaml}.log" &
+  local notify="${config%.yaml}.notify" listener started ready stop_from stopped
+  python3 tools/bench/notify_listener.py "$notify" > "$notify.json" &
+  listener=$!
+  for _ in $(seq 100); do
+    [ -S "$notify" ] && break
+    sleep 0.05
+  done
+  started=$(date +%s%N)
+  NOTIFY_SOCKET="$notify" "$build/src/service/raymapd" --config "$config" 2> "${config%.yaml}.log" &
   pid=$!
   sleep 2
   out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
     --scan-rate "$rate" --duration "$seconds" --warmup 3)
+  stop_from=$(date +%s%N)
   kill -TERM "$pid"
   wait "$pid" || true
-  echo "$out" | tr -d '\n'
+  stopped=$(date +%s%N)
+  kill -TERM "$listener" 2>/dev/null || true  # it ends by itself at STOPPING=1
+  wait "$listener" || true
+  ready=$(value ready_unix_ns "$notify.json")
+  # raymap-load's object, its closing brace replaced by the service's figures.
+  echo "$out" | tr -d '\n' | sed 's/}[[:space:]]*$//'
+  awk -v started="$started" -v ready="${ready:--1}" -v stop_from="$stop_from" \
+    -v stopped="$stopped" -v pings="$(value watchdog_pings "$notify.json")" \
+    -v gap_max="$(value watchdog_gap_max_ms "$notify.json")" \
+    -v gap_p99="$(value watchdog_gap_p99_ms "$notify.json")" 'BEGIN {
+      ready_ms = -1
+      if (ready > 0) ready_ms = (ready - started) / 1e6
+      printf ", \"service\": {\"ready_ms\": %.1f, \"watchdog_pings\": %d, ", ready_ms, pings
+      printf "\"watchdog_gap_max_ms\": %.1f, \"watchdog_gap_p99_ms\": %.1f, ", gap_max, gap_p99
+      printf "\"stop_ms\": %.1f}}", (stopped - stop_from) / 1e6
+    }'
 }

@@ -3,6 +3,8 @@
 // from 0.6 m up, looking down and forward) decoded and back-projected, and integrated on the CPU
 // backend with one thread through raymapd's path (ScanPoint -> world Ray by PointDeskewer at a
 // fixed pose -> RayPreparer/RayBatcher -> backend) into a 0.1 m occupancy map at 2 m range.
+// And the simulator's render time of a 640 × 480 frame of a stairs-like scene (what the depth
+// playback of raymap-load and the tests costs per frame; the unit tests only check the image).
 // Prints JSON: medians of the repetitions.
 // Run: build/release/tools/raymap-depth-bench [repetitions (default 7)]
 #include <algorithm>
@@ -28,6 +30,7 @@
 #include "src/map/voxel_map.hpp"
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pose_history.hpp"
+#include "src/sim/depth_camera.hpp"
 
 namespace raymap {
 namespace {
@@ -232,6 +235,42 @@ std::string integrateRun(const std::vector<std::byte>& bytes, const PixelRayTabl
   return text;
 }
 
+/// The simulator (sim::DepthCamera) rendering a 640 × 480 frame of six steps between two walls,
+/// the camera on a body 0.55 m up, pitched 45° down: milliseconds per frame, median of the
+/// repetitions of 5 frames each.
+double simulatorRenderMs(int repetitions) {
+  sim::Scene scene;
+  for (int k = 1; k <= 6; ++k) {
+    scene.boxes.push_back({{2.0 + 0.3 * (k - 1), -0.6, 0.0}, {2.0 + 0.3 * k, 0.6, 0.17 * k}});
+  }
+  scene.boxes.push_back({{3.8, -0.6, 0.0}, {5.0, 0.6, 1.02}});
+  scene.boxes.push_back({{1.9, -0.85, 0.0}, {5.1, -0.65, 2.5}});
+  scene.boxes.push_back({{1.9, 0.65, 0.0}, {5.1, 0.85, 2.5}});
+  scene.boxes.push_back({{5.0, -0.85, 0.0}, {5.2, 0.85, 2.5}});
+  sim::DepthCameraModel m;
+  m.width = kWidth;
+  m.height = kHeight;
+  m.mount = {{0.3, 0.0, 0.0}, 0.0, 45.0, 0.0};
+  m.depth_noise_m = 0.002;
+  const auto camera = sim::DepthCamera::create(m);
+  if (!camera) {
+    die("depth camera: " + camera.error().message);
+  }
+  const sim::SensorPose body{0.0, {1.0, 0.0, 0.55}, 0.0};
+  std::vector<float> depth(camera->pixels());
+  constexpr int kFrames = 5;
+  std::vector<double> ms;
+  std::uint64_t seed = 0;
+  for (int r = 0; r < repetitions; ++r) {
+    const auto start = Clock::now();
+    for (int f = 0; f < kFrames; ++f) {
+      camera->render(scene, sim::cameraPose(m.mount, body), seed++, depth);
+    }
+    ms.push_back(secondsSince(start) * 1e3 / kFrames);
+  }
+  return median(ms);
+}
+
 }  // namespace
 }  // namespace raymap
 
@@ -278,6 +317,7 @@ int main(int argc, char** argv) {
       first = false;
     }
   }
-  std::printf("\n  ]\n}\n");
+  std::printf("\n  ],\n  \"simulator_render_640x480_ms\": %.1f\n}\n",
+              simulatorRenderMs(repetitions));
   return 0;
 }

@@ -231,12 +231,15 @@ struct StressResult {
   std::uint64_t acquire_failed = 0;
 };
 
-/// One producer and one consumer, each on its own thread, for `duration`.
+/// One producer and one consumer, each on its own thread, for `duration`, and on until the
+/// consumer has taken some scans: on a loaded machine a thread may not run at all for that long.
 StressResult runStress(std::uint32_t slots, std::chrono::milliseconds duration) {
   constexpr std::uint32_t kMaxPoints = 48;
+  constexpr std::uint64_t kMinTaken = 100;
   ScanMailbox mailbox(slots, kMaxPoints);
   std::atomic<bool> stop{false};
   std::atomic<std::uint64_t> acquire_failed{0};
+  std::atomic<std::uint64_t> taken_so_far{0};
   StressResult result;
 
   std::thread producer([&] {
@@ -268,6 +271,7 @@ StressResult runStress(std::uint32_t slots, std::chrono::milliseconds duration) 
         continue;
       }
       ++result.taken;
+      taken_so_far.store(result.taken, std::memory_order_relaxed);
       if (!checkPattern(*slot, slot->sequence)) {
         ++result.corrupt;
       }
@@ -288,6 +292,11 @@ StressResult runStress(std::uint32_t slots, std::chrono::milliseconds duration) 
   });
 
   std::this_thread::sleep_for(duration);
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (taken_so_far.load(std::memory_order_relaxed) < kMinTaken &&
+         std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
   stop.store(true);
   producer.join();
   consumer.join();

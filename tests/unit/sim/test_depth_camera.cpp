@@ -1,8 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The simulated depth camera: intrinsics from the field of view, the mount convention, depth as
 // z along the optical axis (with and without distortion), an edge at its projected pixel, noise,
-// determinism, REP 117 invalid pixels, and the render time of a 640 × 480 frame.
-#include <chrono>
+// determinism, REP 117 invalid pixels, and a full 640 × 480 frame.
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -259,9 +258,10 @@ TEST(DepthCamera, InvalidPixelsFollowRep117) {
   EXPECT_NEAR(at(150, 119), 1.0 / p.y, 1e-5);  // ground 1 m down: z = 1 / (y/z)
 }
 
-/// Not a benchmark: prints the time of one 640 × 480 frame of a stairs-like scene (the report
-/// quotes it), and fails only when it is absurdly slow.
-TEST(DepthCamera, RendersA640x480FrameQuickly) {
+/// A full-size frame of a stairs-like scene: every pixel, looking down at the floor, the steps
+/// and the walls around them, gets a depth. (How long the render takes is a figure for
+/// raymap-depth-bench, "simulator_render_640x480_ms", not for a test: docs/testing.md.)
+TEST(DepthCamera, RendersA640x480FrameOfTheStairsWithADepthAtEveryPixel) {
   Scene scene;
   for (int k = 1; k <= 6; ++k) {
     scene.boxes.push_back({{2.0 + 0.3 * (k - 1), -0.6, 0.0}, {2.0 + 0.3 * k, 0.6, 0.17 * k}});
@@ -280,17 +280,13 @@ TEST(DepthCamera, RendersA640x480FrameQuickly) {
   const SensorPose body{0.0, {1.0, 0.0, 0.55}, 0.0};
   std::vector<float> depth(camera->pixels());
 
-  constexpr int kFrames = 5;
-  const auto start = std::chrono::steady_clock::now();
-  for (int f = 0; f < kFrames; ++f) {
-    camera->render(scene, cameraPose(m.mount, body), static_cast<std::uint64_t>(f), depth);
-  }
-  const std::chrono::duration<double, std::milli> elapsed =
-      std::chrono::steady_clock::now() - start;
+  camera->render(scene, cameraPose(m.mount, body), 0, depth);
 
-  const double per_frame_ms = elapsed.count() / kFrames;
-  std::printf("640 x 480 depth frame of the stairs: %.1f ms\n", per_frame_ms);
-  EXPECT_LT(per_frame_ms, 500.0);
+  std::size_t valid = 0;
+  for (const float z : depth) {
+    valid += std::isfinite(z) && z > 0.0F && z <= static_cast<float>(m.max_range_m) ? 1U : 0U;
+  }
+  EXPECT_EQ(valid, depth.size());
 }
 
 }  // namespace
