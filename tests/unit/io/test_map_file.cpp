@@ -16,6 +16,7 @@
 #include "kernels/common/scan_mark.h"
 #include "src/io/map_file.hpp"
 #include "tests/support/file_bytes.hpp"
+#include "tests/support/map_file_layout.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -31,9 +32,6 @@ using test::writeFileBytes;
 
 // ---- file bytes (the layout of docs/map-format.md) ----
 
-constexpr std::size_t kPrefixBytes = 16;
-constexpr std::size_t kFooterBytes = 24;
-constexpr std::size_t kIndexEntryBytes = 20;
 // Offsets inside the header body (see docs/map-format.md).
 constexpr std::size_t kBodyLayerCount = 34;
 constexpr std::size_t kBodyFirstLayerKind = 36;
@@ -47,24 +45,24 @@ std::size_t headerBodyBytes(const std::vector<std::uint8_t>& bytes) {
 
 /// Recomputes the header CRC after a test edited the header.
 void resealHeader(std::vector<std::uint8_t>& bytes) {
-  const std::size_t covered = kPrefixBytes + headerBodyBytes(bytes);
+  const std::size_t covered = test::kMapPrefixBytes + headerBodyBytes(bytes);
   putLe(bytes, covered, crc32(bytes.data(), covered), 4);
 }
 
 /// File offset of the first region block (right after the header CRC).
 std::size_t firstBlockOffset(const std::vector<std::uint8_t>& bytes) {
-  return kPrefixBytes + headerBodyBytes(bytes) + 4;
+  return test::kMapPrefixBytes + headerBodyBytes(bytes) + 4;
 }
 
 /// Block offsets from the region index the footer points to.
 std::vector<std::size_t> blockOffsets(const std::vector<std::uint8_t>& bytes) {
-  const std::size_t footer = bytes.size() - kFooterBytes;
+  const std::size_t footer = bytes.size() - test::kMapFooterBytes;
   const auto count = static_cast<std::size_t>(getLe(bytes, footer + 4, 8));
   const auto index = static_cast<std::size_t>(getLe(bytes, footer + 12, 8));
   std::vector<std::size_t> offsets;
   for (std::size_t i = 0; i < count; ++i) {
     offsets.push_back(
-        static_cast<std::size_t>(getLe(bytes, index + 4 + i * kIndexEntryBytes + 12, 8)));
+        static_cast<std::size_t>(getLe(bytes, index + 4 + i * test::kMapIndexEntryBytes + 12, 8)));
   }
   return offsets;
 }
@@ -553,7 +551,7 @@ TEST_F(DamagedMapFile, EveryFlippedByteFails) {
 TEST_F(DamagedMapFile, AFlippedHeaderByteIsAHeaderChecksumMismatch) {
   // Arrange: a byte of the resolution.
   std::vector<std::uint8_t> bad = good_;
-  bad[kPrefixBytes + 3] ^= 0x10u;
+  bad[test::kMapPrefixBytes + 3] ^= 0x10u;
   writeFileBytes(bad_path_, bad);
 
   // Act
@@ -634,9 +632,9 @@ TEST_F(DamagedMapFile, ADuplicateRegionIsRejected) {
 TEST_F(DamagedMapFile, AnUnknownLayerKindIsUnsupported) {
   // Arrange: the first layer's kind becomes 200, header checksum made to match.
   std::vector<std::uint8_t> bad = good_;
-  ASSERT_EQ(getLe(bad, kPrefixBytes + kBodyLayerCount, 2), 2u);
-  ASSERT_EQ(bad[kPrefixBytes + kBodyFirstLayerKind], 1u);
-  bad[kPrefixBytes + kBodyFirstLayerKind] = 200;
+  ASSERT_EQ(getLe(bad, test::kMapPrefixBytes + kBodyLayerCount, 2), 2u);
+  ASSERT_EQ(bad[test::kMapPrefixBytes + kBodyFirstLayerKind], 1u);
+  bad[test::kMapPrefixBytes + kBodyFirstLayerKind] = 200;
   resealHeader(bad);
   writeFileBytes(bad_path_, bad);
 
@@ -653,7 +651,8 @@ TEST_F(DamagedMapFile, AnUnknownLayerKindIsUnsupported) {
 TEST_F(DamagedMapFile, AnImpossibleRegionCountFailsBeforeAllocating) {
   // Arrange: the header claims 2^29 regions (its checksum made to match).
   std::vector<std::uint8_t> bad = good_;
-  const std::size_t count_at = kPrefixBytes + headerBodyBytes(bad) - kBodyModeAndNdtBytes - 8;
+  const std::size_t count_at =
+      test::kMapPrefixBytes + headerBodyBytes(bad) - kBodyModeAndNdtBytes - 8;
   ASSERT_EQ(getLe(bad, count_at, 8), 3u);
   putLe(bad, count_at, std::uint64_t{1} << 29, 8);
   resealHeader(bad);
@@ -671,9 +670,9 @@ TEST_F(DamagedMapFile, ForgedHeaderFieldsNeverCrash) {
   // Every header byte set to 0, 0xFF and its value + 1, with the checksum made to match: the
   // parser must reject what is wrong without reading out of bounds or allocating wildly. Some
   // edits are harmless (a letter of an info string), so success is allowed, not required.
-  const std::size_t body_end = kPrefixBytes + headerBodyBytes(good_);
+  const std::size_t body_end = test::kMapPrefixBytes + headerBodyBytes(good_);
   std::size_t failures = 0;
-  for (std::size_t at = kPrefixBytes; at < body_end; ++at) {
+  for (std::size_t at = test::kMapPrefixBytes; at < body_end; ++at) {
     for (const int edit : {0, 1, 2}) {
       // Arrange
       std::vector<std::uint8_t> bad = good_;

@@ -10,6 +10,7 @@
 
 #include "src/io/map_file.hpp"
 #include "tests/support/file_bytes.hpp"
+#include "tests/support/map_file_layout.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -25,7 +26,6 @@ using test::writeFileBytes;
 
 // ---- file bytes (docs/map-format.md) ----
 
-constexpr std::size_t kPrefixBytes = 16;
 // The version-2 tail of the header body: mode, reserved, block size, then the NDT block; version 3
 // appends the TSDF block (size, reserved, 3 f64) after it.
 constexpr std::size_t kModeAndNdtBytes = 4 + 52;
@@ -43,11 +43,11 @@ std::size_t bodyBytes(const std::vector<std::uint8_t>& bytes) {
 
 /// File offset of the version-2 tail of the header body.
 std::size_t tailOffset(const std::vector<std::uint8_t>& bytes) {
-  return kPrefixBytes + bodyBytes(bytes) - kModeAndNdtBytes - kTsdfBytes;
+  return test::kMapPrefixBytes + bodyBytes(bytes) - kModeAndNdtBytes - kTsdfBytes;
 }
 
 void resealHeader(std::vector<std::uint8_t>& bytes) {
-  const std::size_t covered = kPrefixBytes + bodyBytes(bytes);
+  const std::size_t covered = test::kMapPrefixBytes + bodyBytes(bytes);
   putLe(bytes, covered, crc32(bytes.data(), covered), 4);
 }
 
@@ -57,7 +57,7 @@ void resealHeader(std::vector<std::uint8_t>& bytes) {
 std::vector<std::uint8_t> asVersion(const std::vector<std::uint8_t>& v3, std::uint32_t version) {
   std::vector<std::uint8_t> old = v3;
   const std::size_t removed = version == 1 ? kModeAndNdtBytes + kTsdfBytes : kTsdfBytes;
-  const std::size_t cut = kPrefixBytes + bodyBytes(v3) - removed;
+  const std::size_t cut = test::kMapPrefixBytes + bodyBytes(v3) - removed;
   old.erase(old.begin() + static_cast<std::ptrdiff_t>(cut),
             old.begin() + static_cast<std::ptrdiff_t>(cut + removed));
   putLe(old, 8, version, 4);
@@ -337,7 +337,7 @@ TEST_F(DamagedNdtFile, ABodyCutInsideTheNdtBlockIsNamed) {
   std::vector<std::uint8_t> bad(good_.begin(),
                                 good_.begin() + static_cast<std::ptrdiff_t>(tail_ + 24));
   bad.resize(bad.size() + 4 + 4096, 0);  // CRC, then stand-ins for the regions
-  putLe(bad, 12, tail_ + 24 - kPrefixBytes, 4);
+  putLe(bad, 12, tail_ + 24 - test::kMapPrefixBytes, 4);
   const Error error = loadFails(bad);
   EXPECT_EQ(error.code, ErrorCode::kCorrupt);
   EXPECT_NE(error.message.find("NDT parameters run past the header"), std::string::npos)

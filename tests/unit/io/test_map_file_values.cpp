@@ -16,6 +16,7 @@
 
 #include "src/io/map_file.hpp"
 #include "tests/support/file_bytes.hpp"
+#include "tests/support/map_file_layout.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -32,27 +33,22 @@ using test::writeFileBytes;
 
 // ---- file bytes (docs/map-format.md) ----
 
-constexpr std::size_t kPrefixBytes = 16;
-constexpr std::size_t kBlockHeaderBytes = 32;
-constexpr std::size_t kFooterBytes = 24;
-constexpr std::size_t kIndexEntryBytes = 20;
-
 /// The file with region block `block` (in file order) re-encoded after `edit` changed its
 /// decoded voxel bytes, and every size, offset and checksum after it made to match, as a writer
 /// would have written those voxels.
 Bytes withEditedRegion(const Bytes& file, std::size_t block,
                        const std::function<void(Bytes& raw)>& edit) {
-  const std::size_t footer = file.size() - kFooterBytes;
+  const std::size_t footer = file.size() - test::kMapFooterBytes;
   const auto index = static_cast<std::size_t>(getLe(file, footer + 12, 8));
-  std::size_t at = kPrefixBytes + static_cast<std::size_t>(getLe(file, 12, 4)) + 4;
+  std::size_t at = test::kMapPrefixBytes + static_cast<std::size_t>(getLe(file, 12, 4)) + 4;
   for (std::size_t b = 0; b < block; ++b) {
-    at += kBlockHeaderBytes + static_cast<std::size_t>(getLe(file, at + 20, 4));
+    at += test::kMapBlockHeaderBytes + static_cast<std::size_t>(getLe(file, at + 20, 4));
   }
   const auto raw_bytes = static_cast<std::size_t>(getLe(file, at + 16, 4));
   const auto packed_bytes = static_cast<std::size_t>(getLe(file, at + 20, 4));
   Bytes raw(raw_bytes);
   uLongf raw_size = static_cast<uLongf>(raw.size());
-  EXPECT_EQ(::uncompress(raw.data(), &raw_size, file.data() + at + kBlockHeaderBytes,
+  EXPECT_EQ(::uncompress(raw.data(), &raw_size, file.data() + at + test::kMapBlockHeaderBytes,
                          static_cast<uLong>(packed_bytes)),
             Z_OK);
   edit(raw);
@@ -63,8 +59,9 @@ Bytes withEditedRegion(const Bytes& file, std::size_t block,
             Z_OK);
   packed.resize(packed_size);
 
-  const std::size_t old_end = at + kBlockHeaderBytes + packed_bytes;
-  Bytes out(file.begin(), file.begin() + static_cast<std::ptrdiff_t>(at + kBlockHeaderBytes));
+  const std::size_t old_end = at + test::kMapBlockHeaderBytes + packed_bytes;
+  Bytes out(file.begin(),
+            file.begin() + static_cast<std::ptrdiff_t>(at + test::kMapBlockHeaderBytes));
   out.insert(out.end(), packed.begin(), packed.end());
   out.insert(out.end(), file.begin() + static_cast<std::ptrdiff_t>(old_end), file.end());
   putLe(out, at + 20, packed.size(), 4);
@@ -73,16 +70,16 @@ Bytes withEditedRegion(const Bytes& file, std::size_t block,
   // Blocks after this one moved: the index's offsets, its checksum, and the footer's pointer.
   const std::size_t shift = packed.size() - packed_bytes;  // modulo 2^64 for a shrink
   const std::size_t new_index = index + shift;
-  const std::size_t new_footer = out.size() - kFooterBytes;
+  const std::size_t new_footer = out.size() - test::kMapFooterBytes;
   const auto regions = static_cast<std::size_t>(getLe(out, new_footer + 4, 8));
   for (std::size_t i = 0; i < regions; ++i) {
-    const std::size_t entry = new_index + 4 + i * kIndexEntryBytes + 12;
+    const std::size_t entry = new_index + 4 + i * test::kMapIndexEntryBytes + 12;
     const std::uint64_t offset = getLe(out, entry, 8);
     if (offset > at) {
       putLe(out, entry, offset + shift, 8);
     }
   }
-  const std::size_t index_crc = new_index + 4 + regions * kIndexEntryBytes;
+  const std::size_t index_crc = new_index + 4 + regions * test::kMapIndexEntryBytes;
   putLe(out, index_crc, crc32(out.data() + new_index, index_crc - new_index), 4);
   putLe(out, new_footer + 12, new_index, 8);
   putLe(out, new_footer + 20, crc32(out.data() + new_footer, 20), 4);
