@@ -4,8 +4,10 @@
 // /tf_static), raymapd maps it alone, the GridMaps give the stairs' true heights, and the
 // camera's own diagnostics status counts what came and what was refused, by reason.
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -127,6 +129,14 @@ TEST(RaymapdDepth, RefusedImagesAreCountedByReasonAndTheCameraWarns) {
                              dds::imageType(), dds::Reliability::kBestEffort, 8);
   ASSERT_TRUE(image);
   ASSERT_TRUE(rig.waitForService(kStartWaitS)) << daemon.log();
+  // Best effort: a sample written before this writer has found raymapd's reader is lost (seen on
+  // a loaded machine: 2 refusals counted of 3). Wait for the match, not for a time.
+  const auto match_deadline =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(kStartWaitS);
+  while (image->matchedReaders() == 0 && std::chrono::steady_clock::now() < match_deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_GE(image->matchedReaders(), 1u) << daemon.log();
   // Before any CameraInfo: an image raymapd cannot back-project.
   std::vector<std::byte> cdr;
   std::vector<float> depth(16 * 12, 1.0f);
