@@ -24,12 +24,12 @@ std::pair<Vec3d, Vec3d> mapBounds(const VoxelMap& map) {
   constexpr std::int32_t kBig = std::numeric_limits<std::int32_t>::max();
   Vec3i lo{kBig, kBig, kBig};
   Vec3i hi{-kBig, -kBig, -kBig};
-  map.store().forEachRegion([&](std::uint32_t, Vec3i r) {
+  for (const Vec3i r : map.regionCoordsInOrder()) {  // every tier of a tiered map
     for (int a = 0; a < 3; ++a) {
       lo[a] = std::min(lo[a], r[a]);
       hi[a] = std::max(hi[a], r[a]);
     }
-  });
+  }
   if (lo.x > hi.x) {
     return {Vec3d{}, Vec3d{}};
   }
@@ -151,13 +151,25 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
                           static_cast<std::size_t>(p.regions_z);
   plan.region_table.resize(table_size);
   plan.region_slots.clear();
+  // A tiered map brings the box's cold regions into its pool; all of them are used in this epoch,
+  // so none is evicted while the plan is built, nor before the next epoch but one.
+  map.beginEpoch();
   std::size_t t = 0;
   for (std::int32_t z = 0; z < p.regions_z; ++z) {
     for (std::int32_t y = 0; y < p.regions_y; ++y) {
       for (std::int32_t x = 0; x < p.regions_x; ++x) {
         const Vec3i region{p.region_x0 + x, p.region_y0 + y, p.region_z0 + z};
-        const std::uint32_t slot =
-            RegionStore::inRange(region) ? map.store().find(region) : RegionStore::kNoSlot;
+        auto resident = map.residentSlot(region);
+        if (!resident) {
+          if (resident.error() == StoreError::kFull) {
+            return fail(ErrorCode::kCapacity,
+                        "--size " + metres(o.size) + ": the box covers more regions than the " +
+                            std::to_string(map.store().capacity()) +
+                            " the map's memory budget holds at once (--max-memory)");
+          }
+          return Unexpected(map.tierError(resident.error()));
+        }
+        const std::uint32_t slot = *resident;
         if (slot == RegionStore::kNoSlot) {
           plan.region_table[t++] = RM_HM_NO_REGION;
         } else {

@@ -34,18 +34,22 @@ struct Point {
 };
 
 /// Calls fn(point) for every voxel `mode` selects: regions in coordinate order (z, y, x), voxels
-/// in index order, so the output is deterministic.
+/// in index order, so the output is deterministic. A tiered map's regions stream through its
+/// pool; a cold region that cannot be read back fails the walk.
 template <class Fn>
-void forEachPoint(const VoxelMap& map, ExportMode mode, const ExportOptions& options, Fn&& fn) {
+Expected<void, Error> forEachPoint(const VoxelMap& map, ExportMode mode,
+                                   const ExportOptions& options, Fn&& fn) {
   const RegionStore& store = map.store();
-  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
+  RegionCursor cursor(map);
 
   const std::int32_t n = map.geometry().region_voxels;
   const double resolution = map.geometry().resolution;
   const float threshold = map.occupancy().threshold;
   const int mean_layer = map.meanLayer();
   const auto decay_threshold = static_cast<float>(options.decay_threshold);
-  for (const auto& [region, slot] : regions) {
+  while (cursor.next()) {
+    const Vec3i region = cursor.region();
+    const std::uint32_t slot = cursor.slot();
     // Maps of decay rates only have no occupancy: every voxel reads as unobserved.
     const float* occupancy =
         map.occupancyLayer() >= 0 ? store.layerData<float>(slot, map.occupancyLayer()) : nullptr;
@@ -103,6 +107,7 @@ void forEachPoint(const VoxelMap& map, ExportMode mode, const ExportOptions& opt
       }
     }
   }
+  return cursor.status();
 }
 
 std::string headerText(const VoxelMap& map, ExportMode mode, std::uint64_t count) {
@@ -184,7 +189,9 @@ Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std:
   // Count first so that the header is final before any point is written (one cheap extra pass
   // over the voxels instead of patching the file).
   std::uint64_t count = 0;
-  forEachPoint(map, mode, options, [&](const Point&) { ++count; });
+  if (auto ok = forEachPoint(map, mode, options, [&](const Point&) { ++count; }); !ok) {
+    return Unexpected(ok.error());
+  }
 
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {
@@ -202,7 +209,7 @@ Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std:
     }
     buffer.clear();
   };
-  forEachPoint(map, mode, options, [&](const Point& point) {
+  auto walked = forEachPoint(map, mode, options, [&](const Point& point) {
     std::byte record[kDecayRecordBytes];
     std::byte* out = record;
     putF32(out, static_cast<float>(point.p_world.x));
@@ -220,6 +227,9 @@ Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std:
     }
   });
   flush();
+  if (!walked) {
+    return Unexpected(walked.error());
+  }
   if (!status) {
     return Unexpected(status.error());
   }

@@ -17,11 +17,13 @@
 #include <span>
 #include <string_view>
 #include <tuple>
+#include <unordered_set>
 
 #include <zlib.h>
 
 #include "src/io/atomic_file.hpp"
 #include "src/io/layer_values.hpp"
+#include "src/map/region_planes.hpp"
 
 namespace raymap::io {
 namespace {
@@ -208,42 +210,7 @@ std::uint64_t minBytesPerRegion(std::uint64_t raw_bytes) noexcept {
   return kBlockHeaderBytes + kZlibOverheadBytes + raw_bytes / kDeflateMaxRatio + kIndexEntryBytes;
 }
 
-// Region payload: for each saved layer, for each 32-bit word j of a voxel, for each byte
-// significance b (0 = least significant), byte b of word j of every voxel in voxel-index order.
-// Splitting words into byte planes is what makes zlib effective here: the high bytes of counts
-// and the exponent bytes of log-odds are long runs of equal bytes. Reading whole native words and
-// shifting makes the encoding independent of the host's byte order.
-
-void encodeLayer(const std::byte* src, std::uint32_t voxels, std::uint32_t words_per_voxel,
-                 std::byte* out) noexcept {
-  const std::size_t n = voxels;
-  for (std::uint32_t j = 0; j < words_per_voxel; ++j) {
-    std::byte* plane = out + std::size_t{j} * 4u * n;
-    for (std::size_t v = 0; v < n; ++v) {
-      std::uint32_t word = 0;
-      std::memcpy(&word, src + (v * words_per_voxel + j) * 4u, sizeof(word));
-      plane[v] = static_cast<std::byte>(word & 0xFFu);
-      plane[n + v] = static_cast<std::byte>((word >> 8) & 0xFFu);
-      plane[2 * n + v] = static_cast<std::byte>((word >> 16) & 0xFFu);
-      plane[3 * n + v] = static_cast<std::byte>(word >> 24);
-    }
-  }
-}
-
-void decodeLayer(const std::byte* in, std::uint32_t voxels, std::uint32_t words_per_voxel,
-                 std::byte* dst) noexcept {
-  const std::size_t n = voxels;
-  for (std::uint32_t j = 0; j < words_per_voxel; ++j) {
-    const std::byte* plane = in + std::size_t{j} * 4u * n;
-    for (std::size_t v = 0; v < n; ++v) {
-      const std::uint32_t word = std::to_integer<std::uint32_t>(plane[v]) |
-                                 std::to_integer<std::uint32_t>(plane[n + v]) << 8 |
-                                 std::to_integer<std::uint32_t>(plane[2 * n + v]) << 16 |
-                                 std::to_integer<std::uint32_t>(plane[3 * n + v]) << 24;
-      std::memcpy(dst + (v * words_per_voxel + j) * 4u, &word, sizeof(word));
-    }
-  }
-}
+// Region payload: for each saved layer in order, the layer's byte planes (src/map/region_planes).
 
 // ---- reading ----
 
@@ -749,6 +716,7 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
 
   std::vector<IndexEntry> blocks;
   blocks.reserve(static_cast<std::size_t>(count));  // bounded by the file size (readHeader)
+  std::unordered_set<std::uint64_t> seen;           // tiered maps: the regions read so far
   std::vector<std::byte> packed;
   std::vector<std::byte> raw(raw_bytes);
   for (std::uint64_t r = 0; r < count; ++r) {
@@ -803,7 +771,9 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
       return fail(ErrorCode::kCorrupt,
                   where + ": region coordinate " + coordText(coord) + " is out of range");
     }
-    if (map.store().find(coord) != RegionStore::kNoSlot) {
+    const bool duplicate = map.tiered() ? !seen.insert(RegionStore::packCoord(coord)).second
+                                        : map.store().find(coord) != RegionStore::kNoSlot;
+    if (duplicate) {
       return fail(ErrorCode::kCorrupt, where + ": duplicate region " + coordText(coord));
     }
     packed.resize(stored_packed);
@@ -821,16 +791,19 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
       return fail(ErrorCode::kCorrupt,
                   where + ": compressed voxels do not decode (zlib " + std::to_string(z) + ")");
     }
-    const auto slot = map.store().findOrCreate(coord);
+    // A tiered map streams the file through its pool: earlier regions move to the cold tiers.
+    map.beginEpoch();
+    const auto slot = map.tiered() ? map.acquireRegion(coord) : map.store().findOrCreate(coord);
     if (!slot) {
-      // The pool was sized for region_count regions; this is a bug, not a file problem.
-      return fail(ErrorCode::kCapacity, where + ": cannot store region: " + toString(slot.error()));
+      // Untiered, the pool was sized for region_count regions: a bug, not a file problem.
+      return fail(ErrorCode::kCapacity,
+                  where + ": cannot store region: " + map.tierError(slot.error()).message);
     }
     std::size_t at = 0;
     for (std::size_t l = 0; l < parsed.layers.size(); ++l) {
       const LayerSpec& spec = parsed.layers[l];
       std::byte* layer = map.store().layerBytes(*slot, schema_layers[l]);
-      decodeLayer(raw.data() + at, voxels, spec.bytes_per_voxel / 4u, layer);
+      decodeBytePlanes(raw.data() + at, voxels, spec.bytes_per_voxel / 4u, layer);
       at += std::size_t{spec.bytes_per_voxel} * voxels;
       // The checksums only say the bytes are those written; a forged or buggy writer's NaN
       // would otherwise be taken for a value (a NaN occupancy compares as free).
@@ -896,7 +869,7 @@ std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSp
     body.u32(static_cast<std::uint32_t>(value.size()));
     body.raw(value);
   }
-  body.u64(map.store().size());
+  body.u64(map.regionCount());  // every tier of a tiered map
   // Version 2: mode and NDT parameters (written for every mode, so a config round-trips whole).
   const NdtParams& ndt = config.ndt;
   body.u8(static_cast<std::uint8_t>(config.mode));
@@ -945,8 +918,9 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
   const auto raw_bytes = static_cast<std::size_t>(rawRegionBytes(layers, voxels));
 
   // Regions in coordinate order (z, y, x), so that equal maps give equal files whatever order
-  // their regions were created in.
-  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
+  // their regions were created in (and whatever tier they are in: a tiered map streams them
+  // through its pool).
+  RegionCursor cursor(map);
 
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {
@@ -960,11 +934,15 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
   std::vector<std::byte> packed(::compressBound(static_cast<uLong>(raw_bytes)));
   ByteWriter index;
   index.u32(kIndexTag);
-  for (const auto& [coord, slot] : regions) {
+  std::uint64_t written = 0;
+  while (cursor.next()) {
+    const Vec3i coord = cursor.region();
+    const std::uint32_t slot = cursor.slot();
+    ++written;
     std::size_t at = 0;
     for (std::size_t l = 0; l < layers.size(); ++l) {
-      encodeLayer(store.layerBytes(slot, schema_layers[l]), voxels, layers[l].bytes_per_voxel / 4u,
-                  raw.data() + at);
+      encodeBytePlanes(store.layerBytes(slot, schema_layers[l]), voxels,
+                       layers[l].bytes_per_voxel / 4u, raw.data() + at);
       at += std::size_t{layers[l].bytes_per_voxel} * voxels;
     }
     uLongf packed_bytes = static_cast<uLongf>(packed.size());
@@ -998,6 +976,12 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
     }
   }
 
+  if (auto ok = cursor.status(); !ok) {
+    return Unexpected(Error{ok.error().code, path + ": " + ok.error().message});
+  }
+  if (written != cursor.size()) {
+    return fail(ErrorCode::kCorrupt, path + ": the map's regions changed while it was saved");
+  }
   const std::uint64_t index_offset = writer->size();
   index.u32(crc32Of(index.bytes()));
   if (auto ok = writer->write(index.bytes()); !ok) {
@@ -1005,7 +989,7 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
   }
   ByteWriter footer;
   footer.u32(kEndTag);
-  footer.u64(regions.size());
+  footer.u64(written);
   footer.u64(index_offset);
   footer.u32(crc32Of(footer.bytes()));
   if (auto ok = writer->write(footer.bytes()); !ok) {
@@ -1036,11 +1020,18 @@ Result<VoxelMap> loadMap(const std::string& path, const MapLoadOptions& options)
     return Unexpected(parsed.error());
   }
   MapConfig config = parsed->header.config;
-  // Pool: the file's regions, or more when the caller wants room to keep integrating.
   const std::uint64_t per_region =
       config.schema().bytesPerRegion(config.geometry.voxelsPerRegion());
-  const std::uint64_t capacity = std::max<std::uint64_t>(
-      {parsed->header.region_count, options.memory_budget_bytes / per_region, 1});
+  std::uint64_t capacity = 0;
+  if (options.tiers.enabled && options.memory_budget_bytes > 0) {
+    // The budget is the pool; regions past it stream through to the cold tiers.
+    capacity = std::max<std::uint64_t>(options.memory_budget_bytes / per_region, 1);
+    config.tiers = options.tiers;
+  } else {
+    // Pool: the file's regions, or more when the caller wants room to keep integrating.
+    capacity = std::max<std::uint64_t>(
+        {parsed->header.region_count, options.memory_budget_bytes / per_region, 1});
+  }
   config.memory_budget_bytes = capacity * per_region;
   auto map = VoxelMap::create(config);
   if (!map) {

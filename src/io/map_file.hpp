@@ -37,6 +37,9 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path);
 struct MapLoadOptions {
   /// Pool size of the loaded map in bytes; 0 = just enough for the file's regions.
   std::uint64_t memory_budget_bytes = 0;
+  /// With tiers.enabled and a memory budget, the pool is the budget alone and a file with more
+  /// regions streams through it into the cold tiers (docs/large-maps.md).
+  RegionTierConfig tiers;
 };
 
 /// @brief Reads a map. A corrupt, truncated or foreign file fails with an error naming the file and

@@ -39,17 +39,19 @@ struct Gaussian {
 };
 
 /// Occupied voxels with a Gaussian, regions in coordinate order (z, y, x) and voxels in index
-/// order, so the output is deterministic.
-std::vector<Gaussian> collect(const VoxelMap& map, const NdtExportOptions& options) {
+/// order, so the output is deterministic (a tiered map's regions stream through its pool).
+Result<std::vector<Gaussian>> collect(const VoxelMap& map, const NdtExportOptions& options) {
   const RegionStore& store = map.store();
-  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
+  RegionCursor cursor(map);
   const std::int32_t n = map.geometry().region_voxels;
   const double resolution = map.geometry().resolution;
   const double min_axis =
       options.min_axis_m.value_or(NdtExportOptions::kDefaultMinAxisVoxels * resolution);
   const float threshold = map.occupancy().threshold;
   std::vector<Gaussian> out;
-  for (const auto& [region, slot] : regions) {
+  while (cursor.next()) {
+    const Vec3i region = cursor.region();
+    const std::uint32_t slot = cursor.slot();
     const float* occupancy = store.layerData<float>(slot, map.occupancyLayer());
     const rm_ndt_voxel* ndt = store.layerData<rm_ndt_voxel>(slot, map.ndtLayer());
     const rm_ndt_hit_miss* hit_miss =
@@ -103,6 +105,9 @@ std::vector<Gaussian> collect(const VoxelMap& map, const NdtExportOptions& optio
         }
       }
     }
+  }
+  if (auto ok = cursor.status(); !ok) {
+    return Unexpected(ok.error());
   }
   return out;
 }
@@ -269,7 +274,11 @@ Result<std::uint64_t> exportNdtEllipsoids(const VoxelMap& map, const NdtExportOp
   if (auto ok = checkMap(map, options); !ok) {
     return Unexpected(ok.error());
   }
-  const std::vector<Gaussian> gaussians = collect(map, options);
+  auto collected = collect(map, options);
+  if (!collected) {
+    return Unexpected(collected.error());
+  }
+  const std::vector<Gaussian>& gaussians = *collected;
   const std::uint64_t vertex_count = gaussians.size() * std::uint64_t{kEllipsoidVertices};
   if (vertex_count > static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max())) {
     return fail(ErrorCode::kCapacity, std::to_string(gaussians.size()) +
@@ -331,7 +340,11 @@ Result<std::uint64_t> exportNdtPoints(const VoxelMap& map, const NdtExportOption
   if (auto ok = checkMap(map, options); !ok) {
     return Unexpected(ok.error());
   }
-  const std::vector<Gaussian> gaussians = collect(map, options);
+  auto collected = collect(map, options);
+  if (!collected) {
+    return Unexpected(collected.error());
+  }
+  const std::vector<Gaussian>& gaussians = *collected;
   const std::vector<Rgb8> rgb = colours(gaussians, options.colour);
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {

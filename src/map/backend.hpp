@@ -16,6 +16,7 @@ namespace raymap {
 enum class IntegrateError : std::uint8_t {
   kStoreFull,      ///< a global map's region pool is exhausted; the batch is not (fully) integrated
   kDeviceFailure,  ///< the device reported an error
+  kTierFailed,     ///< a global map's cold tiers failed (VoxelMap::tierFailure() says why)
 };
 
 const char* toString(IntegrateError error) noexcept;

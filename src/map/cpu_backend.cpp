@@ -18,6 +18,8 @@ const char* toString(IntegrateError error) noexcept {
       return "region store full";
     case IntegrateError::kDeviceFailure:
       return "device failure";
+    case IntegrateError::kTierFailed:
+      return "the map's cold tiers failed";
   }
   return "unknown integration error";
 }
@@ -48,6 +50,7 @@ class CpuBackend final : public Backend {
 
   Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept override {
     ctx_.sequence = ctx_.per_scan ? map_.beginScan() : 0u;
+    map_.beginEpoch();  // a tiered map keeps this batch's regions in the pool
     for (detail::RegionSlotCache& cache : caches_) {
       cache.reset();  // regions may have been recycled since the last batch
     }

@@ -167,6 +167,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       if (!slot) {
         if (slot.error() == StoreError::kFull) {
           status = Unexpected(IntegrateError::kStoreFull);
+        } else if (slot.error() == StoreError::kTierFailed) {
+          status = Unexpected(IntegrateError::kTierFailed);
         }
         return;  // outside a rolling window: its spans are skipped and counted in step 4
       }

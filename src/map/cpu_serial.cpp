@@ -16,6 +16,9 @@ Expected<std::uint32_t, IntegrateError> acquire(VoxelMap& map, RegionSlotCache& 
     if (slot.error() == StoreError::kFull) {
       return Unexpected(IntegrateError::kStoreFull);  // not cached: a later call may succeed
     }
+    if (slot.error() == StoreError::kTierFailed) {
+      return Unexpected(IntegrateError::kTierFailed);
+    }
     cache.remember(RegionStore::kNoSlot);
     return RegionStore::kNoSlot;
   }

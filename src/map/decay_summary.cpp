@@ -5,13 +5,13 @@
 
 namespace raymap {
 
-DecaySummary summariseDecay(const VoxelMap& map) noexcept {
+DecaySummary summariseDecay(const VoxelMap& map) {
   DecaySummary summary;
   if (map.traversalLayer() < 0 || map.meanLayer() < 0) {
     return summary;
   }
   const RegionStore& store = map.store();
-  store.forEachRegion([&](std::uint32_t slot, Vec3i) {
+  (void)map.forEachRegionInCoordOrder([&](Vec3i, std::uint32_t slot) {
     const float* traversal = store.layerData<float>(slot, map.traversalLayer());
     const auto* means = store.layerData<rm_voxel_mean>(slot, map.meanLayer());
     for (std::uint32_t i = 0; i < store.voxelsPerRegion(); ++i) {

@@ -16,8 +16,9 @@ struct DecaySummary {
   std::uint64_t samples = 0;       ///< total samples in the crossed voxels
 };
 
-/// @brief Counts over all stored regions (all zero without the traversal or voxel-mean layer).
-/// Thread-safety: const; may run alongside other const queries. @rt allocates: no.
-DecaySummary summariseDecay(const VoxelMap& map) noexcept;
+/// @brief Counts over all regions in every tier (all zero without the traversal or voxel-mean
+/// layer; on a tiered map a region that cannot be read back is left out, see tierFailure()).
+/// Thread-safety: as the map's queries. @rt allocates: on a tiered map.
+DecaySummary summariseDecay(const VoxelMap& map);
 
 }  // namespace raymap

@@ -82,6 +82,18 @@ Expected<void, IntegrateError> RayBatcher::add(RayPreparer& preparer,
 
 Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateError error,
                        std::string_view raise) {
+  if (error == IntegrateError::kTierFailed) {
+    const auto failure = map.tierFailure();
+    return Error{failure ? failure->code : ErrorCode::kIo,
+                 "moving regions between the map's memory tiers failed: " +
+                     (failure ? failure->message : std::string("unknown reason"))};
+  }
+  if (error == IntegrateError::kStoreFull && map.tiered()) {
+    return Error{ErrorCode::kCapacity, "one batch touches more regions than the pool's " +
+                                           std::to_string(map.store().capacity()) +
+                                           " hold at once; raise " + std::string(raise) +
+                                           " or make batches smaller (--batch-rays)"};
+  }
   if (error == IntegrateError::kStoreFull) {
     char gib[32];
     std::snprintf(gib, sizeof gib, "%g",

@@ -24,6 +24,8 @@ const char* toString(StoreError error) noexcept {
       return "region coordinate out of range";
     case StoreError::kOutsideWindow:
       return "region outside the rolling window";
+    case StoreError::kTierFailed:
+      return "the map's cold tiers failed";
   }
   return "unknown store error";
 }

@@ -21,6 +21,7 @@ enum class StoreError : std::uint8_t {
   kFull,           ///< every slot holds a region
   kOutOfRange,     ///< the region coordinate is beyond RegionStore::kMaxRegionCoord
   kOutsideWindow,  ///< a rolling map was asked for a region outside its window
+  kTierFailed,     ///< a global map's cold tiers failed (VoxelMap::tierFailure() says why)
 };
 
 const char* toString(StoreError error) noexcept;
@@ -84,6 +85,10 @@ class RegionStore {
   void release(std::uint32_t slot) noexcept;
   /// @brief Removes every region.
   void clear() noexcept;
+
+  /// @brief Records that a slot's memory was written by someone other than clearRegion() (a
+  /// region restored from the cold tiers), so it is no longer the OS's zero pages.
+  void noteWritten(std::uint32_t slot) noexcept { fresh_[slot] = 0; }
 
   bool inUse(std::uint32_t slot) const noexcept { return used_[slot] != 0; }
   /// @brief For a slot findOrCreateUncleared() has just created: true when no region held it

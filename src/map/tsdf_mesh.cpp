@@ -117,7 +117,10 @@ TsdfMesh tsdfMesh(const VoxelMap& map, float min_weight) {
     step[c] = static_cast<std::uint32_t>(o.x + n * (o.y + n * o.z));
   }
   MeshBuilder builder(map);
-  for (const auto& [region, slot] : store.regionsInCoordOrder()) {
+  RegionCursor cursor(map);  // a tiered map's regions stream through its pool
+  while (cursor.next()) {
+    const Vec3i region = cursor.region();
+    const std::uint32_t slot = cursor.slot();
     const rm_tsdf_voxel* tsdf = store.layerData<rm_tsdf_voxel>(slot, map.tsdfLayer());
     std::uint32_t index = 0;
     for (std::int32_t z = 0; z < n; ++z) {

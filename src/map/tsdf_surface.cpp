@@ -14,13 +14,15 @@ namespace raymap {
 std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_weight) {
   RAYMAP_EXPECTS(map.tsdfLayer() >= 0);
   const RegionStore& store = map.store();
-  const std::vector<std::pair<Vec3i, std::uint32_t>> regions = store.regionsInCoordOrder();
+  RegionCursor cursor(map);  // a tiered map's regions stream through its pool
   const std::int32_t n = map.geometry().region_voxels;
   const auto tau =
       static_cast<float>(map.config().tsdf.truncationMetres(map.geometry().resolution));
   const auto usable = [&](const rm_tsdf_voxel& v) { return tsdfVoxelUsable(v, min_weight); };
   std::vector<TsdfSurfacePoint> points;
-  for (const auto& [region, slot] : regions) {
+  while (cursor.next()) {
+    const Vec3i region = cursor.region();
+    const std::uint32_t slot = cursor.slot();
     const rm_tsdf_voxel* tsdf = store.layerData<rm_tsdf_voxel>(slot, map.tsdfLayer());
     std::uint32_t index = 0;
     for (std::int32_t z = 0; z < n; ++z) {
@@ -62,13 +64,13 @@ std::vector<TsdfSurfacePoint> tsdfZeroCrossings(const VoxelMap& map, float min_w
   return points;
 }
 
-TsdfSummary summariseTsdf(const VoxelMap& map) noexcept {
+TsdfSummary summariseTsdf(const VoxelMap& map) {
   TsdfSummary summary;
   if (map.tsdfLayer() < 0) {
     return summary;
   }
   const auto max_weight = static_cast<float>(map.config().tsdf.max_weight);
-  map.store().forEachRegion([&](std::uint32_t slot, Vec3i) {
+  (void)map.forEachRegionInCoordOrder([&](Vec3i, std::uint32_t slot) {
     const auto* tsdf = map.store().layerData<rm_tsdf_voxel>(slot, map.tsdfLayer());
     for (std::uint32_t i = 0; i < map.store().voxelsPerRegion(); ++i) {
       if (tsdf[i].weight > 0.0f) {

@@ -49,6 +49,6 @@ struct TsdfSummary {
   std::uint64_t saturated = 0;  ///< of those: weight at the maximum
 };
 /// @brief Counts over all stored regions (all zero without a TSDF layer). Const; @rt no.
-TsdfSummary summariseTsdf(const VoxelMap& map) noexcept;
+TsdfSummary summariseTsdf(const VoxelMap& map);
 
 }  // namespace raymap

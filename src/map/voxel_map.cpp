@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <limits>
+#include <new>
+#include <tuple>
 
 #include "kernels/common/key_math.h"
 #include "kernels/common/occupancy.h"
@@ -119,6 +121,10 @@ Expected<void, Error> MapConfig::validate() const {
                 "a map without the occupancy layer needs the traversal layer (decay rate) or the "
                 "TSDF mode: it would have nothing to integrate into");
   }
+  if (policy == StorePolicy::kRolling && tiers.enabled) {
+    return fail(ErrorCode::kInvalidArgument,
+                "a rolling map has no cold tiers: its window is its fixed memory");
+  }
   if (policy == StorePolicy::kRolling) {
     if (window_regions.x < 1 || window_regions.y < 1 || window_regions.z < 1 ||
         window_regions.x > 4096 || window_regions.y > 4096 || window_regions.z > 4096) {
@@ -133,6 +139,13 @@ Expected<void, Error> MapConfig::validate() const {
                                                  std::to_string(memory_budget_bytes) +
                                                  " bytes holds no region (one region takes " +
                                                  std::to_string(per_region) + " bytes)");
+  }
+  if (tiers.enabled && capacity < kMinTieredRegions) {
+    return fail(ErrorCode::kInvalidArgument,
+                "memory budget of " + std::to_string(memory_budget_bytes) + " bytes holds " +
+                    std::to_string(capacity) + " regions; a map with cold tiers needs at least " +
+                    std::to_string(kMinTieredRegions) +
+                    " in its pool (a region and its neighbours are read together)");
   }
   if (capacity > std::numeric_limits<std::uint32_t>::max() / 4u) {
     return fail(ErrorCode::kInvalidArgument,
@@ -156,8 +169,31 @@ Result<VoxelMap> VoxelMap::create(const MapConfig& config) {
   if (!store) {
     return Unexpected(store.error());
   }
-  return VoxelMap(config, std::move(store).value());
+  std::unique_ptr<RegionTiers> tiers;
+  if (config.tiers.enabled) {
+    auto created =
+        RegionTiers::create(config.tiers, store_config.schema, config.geometry.voxelsPerRegion());
+    if (!created) {
+      return Unexpected(created.error());
+    }
+    tiers = std::move(created).value();
+  }
+  VoxelMap map(config, std::move(store).value());
+  if (tiers) {
+    const std::uint32_t capacity = map.store_.capacity();
+    map.tiers_ = std::move(tiers);
+    map.slot_epoch_.assign(capacity, 0);
+    map.slot_dirty_.assign(capacity, 1);
+    map.slot_pins_.assign(capacity, 0);
+    map.victims_.reserve(capacity);
+    map.victim_slots_.reserve(capacity);
+  }
+  return map;
 }
+
+VoxelMap::VoxelMap(VoxelMap&&) noexcept = default;
+VoxelMap& VoxelMap::operator=(VoxelMap&&) noexcept = default;
+VoxelMap::~VoxelMap() = default;
 
 VoxelMap::VoxelMap(MapConfig config, RegionStore store) noexcept
     : config_(config), store_(std::move(store)) {
@@ -223,6 +259,10 @@ bool VoxelMap::inWindow(Vec3i r) const noexcept {
 }
 
 Expected<std::uint32_t, StoreError> VoxelMap::acquireRegion(Vec3i region) noexcept {
+  if (tiers_) {
+    bool created = false;
+    return acquireTiered(region, /*clear=*/true, &created);
+  }
   if (!inWindow(region)) {
     return Unexpected(StoreError::kOutsideWindow);
   }
@@ -232,10 +272,258 @@ Expected<std::uint32_t, StoreError> VoxelMap::acquireRegion(Vec3i region) noexce
 Expected<std::uint32_t, StoreError> VoxelMap::acquireRegionUncleared(Vec3i region,
                                                                      bool* created) noexcept {
   *created = false;
+  if (tiers_) {
+    return acquireTiered(region, /*clear=*/false, created);
+  }
   if (!inWindow(region)) {
     return Unexpected(StoreError::kOutsideWindow);
   }
   return store_.findOrCreateUncleared(region, created);
+}
+
+// ---- cold tiers ----
+
+Expected<std::uint32_t, StoreError> VoxelMap::acquireTiered(Vec3i region, bool clear,
+                                                            bool* created) noexcept {
+  *created = false;
+  if (!RegionStore::inRange(region)) {
+    return Unexpected(StoreError::kOutOfRange);
+  }
+  const std::uint32_t slot = store_.find(region);
+  if (slot == RegionStore::kNoSlot) {
+    return bringIn(region, /*create=*/true, clear, /*write=*/true, created);
+  }
+  slot_epoch_[slot] = epoch_;
+  if (slot_dirty_[slot] == 0) {
+    slot_dirty_[slot] = 1;
+    try {
+      tiers_->dropCopy(RegionStore::packCoord(region));
+    } catch (const std::bad_alloc&) {
+      // dropCopy only frees; a copy left behind is replaced at the next eviction.
+    }
+  }
+  return slot;
+}
+
+Expected<std::uint32_t, StoreError> VoxelMap::findForWrite(Vec3i region) noexcept {
+  if (!tiers_) {
+    return RegionStore::inRange(region) ? store_.find(region) : RegionStore::kNoSlot;
+  }
+  if (!RegionStore::inRange(region)) {
+    return RegionStore::kNoSlot;
+  }
+  if (store_.find(region) == RegionStore::kNoSlot) {
+    bool created = false;
+    return bringIn(region, /*create=*/false, /*clear=*/false, /*write=*/true, &created);
+  }
+  bool created = false;
+  return acquireTiered(region, /*clear=*/false, &created);
+}
+
+Expected<std::uint32_t, StoreError> VoxelMap::residentSlot(Vec3i region) const noexcept {
+  if (!RegionStore::inRange(region)) {
+    return RegionStore::kNoSlot;
+  }
+  const std::uint32_t slot = store_.find(region);
+  if (!tiers_) {
+    return slot;
+  }
+  if (slot != RegionStore::kNoSlot) {
+    slot_epoch_[slot] = epoch_;
+    return slot;
+  }
+  bool created = false;
+  return bringIn(region, /*create=*/false, /*clear=*/false, /*write=*/false, &created);
+}
+
+Expected<std::uint32_t, StoreError> VoxelMap::bringIn(Vec3i region, bool create, bool clear,
+                                                      bool write, bool* created) const noexcept {
+  *created = false;
+  const std::uint64_t key = RegionStore::packCoord(region);
+  try {
+    const bool cold = tiers_->holdsCold(key);
+    if (!cold && !create) {
+      return RegionStore::kNoSlot;
+    }
+    if (store_.size() == store_.capacity()) {
+      if (auto room = makeRoom(); !room) {
+        return Unexpected(room.error());
+      }
+    }
+    bool fresh = false;
+    auto slot = store_.findOrCreateUncleared(region, &fresh);
+    if (!slot) {
+      return slot;
+    }
+    if (cold) {
+      auto restored = tiers_->restore(key, store_, *slot, /*keep_copy=*/!write);
+      if (!restored || !*restored) {
+        store_.release(*slot);
+        if (restored) {
+          tier_error_ = Error{ErrorCode::kCorrupt, "a cold region vanished from the tiers"};
+        }
+        return Unexpected(StoreError::kTierFailed);
+      }
+      store_.noteWritten(*slot);
+      slot_dirty_[*slot] = write ? 1 : 0;
+    } else {
+      *created = true;
+      if (clear) {
+        store_.clearRegion(*slot);
+      }
+      slot_dirty_[*slot] = 1;
+    }
+    slot_epoch_[*slot] = epoch_;
+    return *slot;
+  } catch (const std::bad_alloc&) {
+    tier_error_ = Error{ErrorCode::kCapacity, "out of memory while moving regions between tiers"};
+    return Unexpected(StoreError::kTierFailed);
+  }
+}
+
+Expected<void, StoreError> VoxelMap::makeRoom() const noexcept {
+  victims_.clear();
+  for (std::uint32_t slot = 0; slot < store_.capacity(); ++slot) {
+    if (store_.inUse(slot) && slot_pins_[slot] == 0 && slot_epoch_[slot] + kept_epochs_ <= epoch_) {
+      victims_.emplace_back(slot_epoch_[slot], slot);
+    }
+  }
+  if (victims_.empty()) {
+    return Unexpected(StoreError::kFull);  // every region is in use now: the pool is too small
+  }
+  // A burst of the least recently used: the scan above is paid once per burst, not per region.
+  const std::size_t burst = std::clamp<std::size_t>(store_.capacity() / 16u, 1u, 256u);
+  if (victims_.size() > burst) {
+    std::nth_element(victims_.begin(), victims_.begin() + static_cast<std::ptrdiff_t>(burst),
+                     victims_.end());
+    victims_.resize(burst);
+  }
+  victim_slots_.clear();
+  for (const auto& [epoch, slot] : victims_) {
+    victim_slots_.push_back(slot);
+  }
+  if (eviction_hook_ != nullptr && !eviction_hook_->beforeEviction(victim_slots_)) {
+    tier_error_ = Error{ErrorCode::kIo, "the device could not write back regions leaving the pool"};
+    return Unexpected(StoreError::kTierFailed);
+  }
+  for (const auto& [epoch, slot] : victims_) {
+    auto ok = tiers_->evict(RegionStore::packCoord(store_.coordOf(slot)), store_, slot, epoch,
+                            slot_dirty_[slot] != 0);
+    if (!ok) {
+      return Unexpected(StoreError::kTierFailed);
+    }
+    store_.release(slot);
+  }
+  regions_recycled_ += victims_.size();  // device caches revalidate their slots
+  return {};
+}
+
+void VoxelMap::pin(std::uint32_t slot) const noexcept {
+  if (tiers_) {
+    ++slot_pins_[slot];
+  }
+}
+
+void VoxelMap::unpin(std::uint32_t slot) const noexcept {
+  if (tiers_ && slot_pins_[slot] > 0) {
+    --slot_pins_[slot];
+  }
+}
+
+std::uint64_t VoxelMap::regionCount() const {
+  return store_.size() + (tiers_ ? tiers_->coldCount() : 0u);
+}
+
+std::vector<Vec3i> VoxelMap::regionCoordsInOrder() const {
+  std::vector<Vec3i> coords;
+  coords.reserve(static_cast<std::size_t>(regionCount()));
+  store_.forEachRegion([&](std::uint32_t, Vec3i coord) { coords.push_back(coord); });
+  if (tiers_) {
+    for (const std::uint64_t key : tiers_->coldKeys()) {
+      coords.push_back(RegionStore::unpackCoord(key));
+    }
+  }
+  std::sort(coords.begin(), coords.end(), [](const Vec3i& a, const Vec3i& b) {
+    return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+  });
+  return coords;
+}
+
+std::optional<RegionTierStats> VoxelMap::tierStats() const {
+  if (!tiers_) {
+    return std::nullopt;
+  }
+  return tiers_->stats();
+}
+
+std::optional<Error> VoxelMap::tierFailure() const {
+  if (tiers_) {
+    if (auto failure = tiers_->failure()) {
+      return failure;
+    }
+  }
+  return tier_error_;
+}
+
+Expected<void, Error> VoxelMap::drainTiers() const {
+  if (!tiers_) {
+    return {};
+  }
+  return tiers_->drain();
+}
+
+RegionCursor::RegionCursor(const VoxelMap& map) : map_(&map), coords_(map.regionCoordsInOrder()) {}
+
+RegionCursor::~RegionCursor() { release(); }
+
+void RegionCursor::release() noexcept {
+  if (slot_ != RegionStore::kNoSlot) {
+    map_->unpin(slot_);
+    slot_ = RegionStore::kNoSlot;
+  }
+}
+
+bool RegionCursor::next() {
+  release();
+  if (failure_) {
+    return false;
+  }
+  while (next_ < coords_.size()) {
+    region_ = coords_[next_++];
+    map_->beginEpoch();
+    auto slot = map_->residentSlot(region_);
+    if (!slot) {
+      failure_ = map_->tierError(slot.error());
+      return false;
+    }
+    if (*slot != RegionStore::kNoSlot) {
+      slot_ = *slot;
+      map_->pin(slot_);
+      return true;
+    }
+  }
+  return false;
+}
+
+Expected<void, Error> RegionCursor::status() const {
+  if (failure_) {
+    return Unexpected(*failure_);
+  }
+  return {};
+}
+
+Error VoxelMap::tierError(StoreError error) const {
+  if (error == StoreError::kTierFailed) {
+    if (auto failure = tierFailure()) {
+      return *failure;
+    }
+  }
+  if (error == StoreError::kFull) {
+    return Error{ErrorCode::kCapacity,
+                 "every one of the pool's " + std::to_string(store_.capacity()) +
+                     " regions is in use at once; raise the memory budget (--max-memory)"};
+  }
+  return Error{ErrorCode::kCapacity, toString(error)};
 }
 
 std::uint32_t VoxelMap::setWindowCentre(Vec3d p) noexcept {
@@ -287,7 +575,15 @@ std::optional<std::pair<std::uint32_t, std::uint32_t>> VoxelMap::locate(
     Vec3i voxel) const noexcept {
   const std::int32_t n = config_.geometry.region_voxels;
   const rm_vec3i region = rm_region_of_voxel(toKernel(voxel), n);
-  const std::uint32_t slot = store_.find(fromKernel(region));
+  std::uint32_t slot = store_.find(fromKernel(region));
+  if (slot == RegionStore::kNoSlot && tiers_) {
+    // A point query holds nothing: a new epoch lets the regions earlier queries brought in go.
+    beginEpoch();
+    auto resident = residentSlot(fromKernel(region));
+    slot = resident ? *resident : RegionStore::kNoSlot;
+  } else if (tiers_) {
+    slot_epoch_[slot] = epoch_;
+  }
   if (slot == RegionStore::kNoSlot) {
     return std::nullopt;
   }
@@ -360,7 +656,7 @@ rm_tsdf_voxel VoxelMap::tsdf(Vec3i voxel) const noexcept {
   return store_.layerData<rm_tsdf_voxel>(at->first, tsdf_layer_)[at->second];
 }
 
-MapSummary VoxelMap::summarise() const noexcept {
+MapSummary VoxelMap::summarise() const {
   MapSummary s;
   const std::int32_t n = config_.geometry.region_voxels;
   const float threshold = config_.occupancy.threshold;
@@ -368,7 +664,9 @@ MapSummary VoxelMap::summarise() const noexcept {
            std::numeric_limits<std::int32_t>::max()};
   Vec3i hi{std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::min(),
            std::numeric_limits<std::int32_t>::min()};
-  store_.forEachRegion([&](std::uint32_t slot, Vec3i region) {
+  // A tiered map's cold regions are counted too (a failure to read one back is kept in
+  // tierFailure() for the caller to report).
+  (void)forEachRegionInCoordOrder([&](Vec3i region, std::uint32_t slot) {
     ++s.regions;
     if (occupancy_layer_ < 0) {
       s.voxels_unobserved += config_.geometry.voxelsPerRegion();

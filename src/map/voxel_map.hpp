@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -17,12 +19,15 @@
 #include "src/map/layer_schema.hpp"
 #include "src/map/map_params.hpp"
 #include "src/map/region_store.hpp"
+#include "src/map/region_tiers.hpp"
 
 namespace raymap {
 
 /// How the region store is managed.
 enum class StorePolicy : std::uint8_t {
-  kGlobal = 0,   ///< offline maps: regions are created up to capacity; then integration fails
+  /// Offline maps: regions are created up to the pool's capacity; past it, integration fails, or
+  /// with MapConfig::tiers enabled the least recently used regions move to the cold tiers.
+  kGlobal = 0,
   kRolling = 1,  ///< robot-centric window that follows a centre; regions leaving it are recycled
 };
 
@@ -31,6 +36,8 @@ const char* toString(StorePolicy policy) noexcept;
 /// @brief Everything needed to build a map. Aggregate with defaults; checked by validate().
 struct MapConfig {
   static constexpr std::uint64_t kDefaultMemoryBudget = std::uint64_t{4} << 30;  // 4 GiB
+  /// Smallest pool a map with cold tiers may have, regions.
+  static constexpr std::uint64_t kMinTieredRegions = 16;
 
   MapGeometry geometry;
   OccupancyParams occupancy;
@@ -53,6 +60,9 @@ struct MapConfig {
   StorePolicy policy = StorePolicy::kGlobal;
   /// Global policy: the pool holds floor(memory_budget / bytes-per-region) regions.
   std::uint64_t memory_budget_bytes = kDefaultMemoryBudget;
+  /// Global policy: what happens past the pool (off: integration fails with kStoreFull; on: cold
+  /// regions are compressed, then spilled; docs/large-maps.md). Not for rolling maps.
+  RegionTierConfig tiers;
   /// Rolling policy: window size in regions per axis (the pool holds exactly this many).
   Vec3i window_regions{16, 16, 4};
   bool prefault = false;  ///< touch all pool pages at creation (real-time users)
@@ -99,15 +109,37 @@ struct MapSummary {
   Vec3d observed_max{};                 ///< max corner
 };
 
+/// @brief Told before a tiered map moves regions out of its pool, by whoever keeps its own copy
+/// of pool slots (a device region cache): it writes back what it changed and forgets the slots.
+class RegionEvictionHook {
+ public:
+  RegionEvictionHook() = default;
+  RegionEvictionHook(const RegionEvictionHook&) = delete;
+  RegionEvictionHook& operator=(const RegionEvictionHook&) = delete;
+  virtual ~RegionEvictionHook() = default;
+  /// @brief The regions in `slots` leave the pool once this returns true; false fails the
+  /// eviction (the map reports kTierFailed).
+  virtual bool beforeEviction(std::span<const std::uint32_t> slots) noexcept = 0;
+
+ protected:
+  RegionEvictionHook(RegionEvictionHook&&) = default;
+  RegionEvictionHook& operator=(RegionEvictionHook&&) = default;
+};
+
 /// @brief The map. Owns its store; move-only.
-/// Thread-safety: const queries may run concurrently; anything that creates, recycles or updates
-/// regions needs exclusive access (the backends coordinate their own workers).
+/// Thread-safety: const queries may run concurrently on a map without cold tiers; on a tiered map
+/// a query that reaches a cold region brings it into the pool, so every call needs exclusive
+/// access. Anything that creates, recycles or updates regions needs exclusive access (the
+/// backends coordinate their own workers).
 class VoxelMap {
  public:
   static Result<VoxelMap> create(const MapConfig& config);
 
-  VoxelMap(VoxelMap&&) noexcept = default;
-  VoxelMap& operator=(VoxelMap&&) noexcept = default;
+  VoxelMap(VoxelMap&&) noexcept;
+  VoxelMap& operator=(VoxelMap&&) noexcept;
+  VoxelMap(const VoxelMap&) = delete;
+  VoxelMap& operator=(const VoxelMap&) = delete;
+  ~VoxelMap();
 
   const MapConfig& config() const noexcept { return config_; }
   const MapGeometry& geometry() const noexcept { return config_.geometry; }
@@ -148,6 +180,46 @@ class VoxelMap {
   /// it with store().clearRegion() before use (see RegionStore::findOrCreateUncleared).
   Expected<std::uint32_t, StoreError> acquireRegionUncleared(Vec3i region, bool* created) noexcept;
 
+  // ---- cold tiers (global maps past their pool; docs/large-maps.md) ----
+  /// Pool slots, region coordinates and layer pointers from store() stay valid only until the
+  /// next call that may bring a region in (acquire, a query, residentSlot()), unless pinned.
+  bool tiered() const noexcept { return tiers_ != nullptr; }
+  /// @brief Regions of the map in every tier (store().size() counts the pool only).
+  std::uint64_t regionCount() const;
+  /// @brief Every region's coordinate, in every tier, in coordinate order (z, y, x).
+  std::vector<Vec3i> regionCoordsInOrder() const;
+  /// @brief Slot of a region the map holds, brought into the pool (its cold copy kept: reading it
+  /// changes nothing) when it is cold; kNoSlot when the map has no such region. kFull when every
+  /// slot is pinned or used in the last two epochs. @rt allocates: only on a tiered map.
+  Expected<std::uint32_t, StoreError> residentSlot(Vec3i region) const noexcept;
+  /// @brief Like residentSlot(), for a region about to change (its cold copy is dropped).
+  Expected<std::uint32_t, StoreError> findForWrite(Vec3i region) noexcept;
+  /// @brief Starts a new access epoch. Regions used in the current epoch are never evicted (nor
+  /// in the one before, after keepPreviousEpoch()): a backend calls it once per batch. Without
+  /// tiers: a counter only.
+  void beginEpoch() const noexcept { ++epoch_; }
+  /// @brief Also keeps the regions of the previous epoch: for a device backend, whose previous
+  /// batch may still be running while the next is planned.
+  void keepPreviousEpoch() noexcept { kept_epochs_ = 2; }
+  /// @brief Keeps a resident region in the pool until unpin() (pins nest).
+  void pin(std::uint32_t slot) const noexcept;
+  void unpin(std::uint32_t slot) const noexcept;
+  /// @brief Calls fn(coord, slot) for every region in every tier, in coordinate order; the slot
+  /// is pinned during the call. Fails when a cold region cannot be read back.
+  template <class Fn>
+  Expected<void, Error> forEachRegionInCoordOrder(Fn&& fn) const;
+  /// @brief Statistics of the cold tiers (nullopt without tiers).
+  std::optional<RegionTierStats> tierStats() const;
+  /// @brief Why the last kTierFailed happened (the tiers' I/O error, or a write-back failure).
+  std::optional<Error> tierFailure() const;
+  /// @brief The error a StoreError from acquireRegion()/residentSlot() stands for, with the
+  /// tiers' reason for kTierFailed.
+  Error tierError(StoreError error) const;
+  /// @brief Waits until the background compressor has caught up (statistics are then final).
+  Expected<void, Error> drainTiers() const;
+  /// @brief Registers the one hook told before regions leave the pool (nullptr: none).
+  void setEvictionHook(RegionEvictionHook* hook) noexcept { eviction_hook_ = hook; }
+
   // ---- rolling window ----
   /// @brief Moves the window so that it is centred (to the nearest region) on p_world; regions
   /// that leave it are recycled (their voxels become unobserved when reused). Global maps: no-op.
@@ -183,7 +255,9 @@ class VoxelMap {
   /// @brief TSDF distance (metres) and weight of a voxel (weight 0 where never updated, or
   /// without the layer).
   rm_tsdf_voxel tsdf(Vec3i voxel) const noexcept;
-  MapSummary summarise() const noexcept;
+  /// @brief Counts over every region in every tier. On a tiered map a region that cannot be read
+  /// back is left out and tierFailure() says why. @rt allocates: on a tiered map.
+  MapSummary summarise() const;
 
   /// @brief Provenance stored with the map (source file, ray counts, ranges...), in order.
   std::vector<std::pair<std::string, std::string>>& info() noexcept { return info_; }
@@ -194,9 +268,19 @@ class VoxelMap {
   VoxelMap(MapConfig config, RegionStore store) noexcept;
   /// @brief Slot and in-region index of a voxel, or nullopt if its region is absent.
   std::optional<std::pair<std::uint32_t, std::uint32_t>> locate(Vec3i voxel) const noexcept;
+  /// @brief Tiered maps: the region not in the pool brought in (restored, or created when
+  /// `create`); kNoSlot when absent and not created.
+  Expected<std::uint32_t, StoreError> bringIn(Vec3i region, bool create, bool clear, bool write,
+                                              bool* created) const noexcept;
+  /// @brief Tiered maps: moves the least recently used unpinned regions to the tiers.
+  Expected<void, StoreError> makeRoom() const noexcept;
+  Expected<std::uint32_t, StoreError> acquireTiered(Vec3i region, bool clear,
+                                                    bool* created) noexcept;
 
   MapConfig config_;
-  RegionStore store_;
+  // Mutable: on a tiered map, reading a cold region brings it into the pool, which changes what
+  // is resident, never what the map holds.
+  mutable RegionStore store_;
   double inv_resolution_ = 10.0;
   std::int32_t max_voxel_coord_ = 0;
   int occupancy_layer_ = -1;
@@ -209,8 +293,63 @@ class VoxelMap {
   int tsdf_layer_ = -1;
   Vec3i window_min_{};
   std::uint32_t scan_sequence_ = 0;
-  std::uint64_t regions_recycled_ = 0;
+  mutable std::uint64_t regions_recycled_ = 0;
   std::vector<std::pair<std::string, std::string>> info_;
+  // Cold tiers (global maps with MapConfig::tiers.enabled; empty vectors otherwise).
+  std::unique_ptr<RegionTiers> tiers_;
+  RegionEvictionHook* eviction_hook_ = nullptr;
+  mutable std::uint64_t epoch_ = 2;
+  std::uint64_t kept_epochs_ = 1;                  // epochs whose regions stay in the pool
+  mutable std::vector<std::uint64_t> slot_epoch_;  // epoch of each slot's last use
+  mutable std::vector<std::uint8_t> slot_dirty_;   // changed since restored with its cold copy
+  mutable std::vector<std::uint8_t> slot_pins_;
+  mutable std::vector<std::pair<std::uint64_t, std::uint32_t>> victims_;  // (epoch, slot)
+  mutable std::vector<std::uint32_t> victim_slots_;
+  mutable std::optional<Error> tier_error_;  // failures outside the tiers (hook, memory)
 };
+
+/// @brief Walks every region of a map, in every tier, in coordinate order (z, y, x), so equal
+/// maps give equal output whatever order their regions were created in. On a tiered map each cold
+/// region is brought into the pool in turn (read-only: its cold copy is kept) and the current one
+/// stays pinned until next() or the cursor's end, so a map larger than memory streams through.
+/// Usage: `RegionCursor c(map); while (c.next()) { use c.region(), c.slot() } check c.status()`.
+/// Thread-safety: one thread, with the map's exclusive access on a tiered map.
+class RegionCursor {
+ public:
+  explicit RegionCursor(const VoxelMap& map);
+  ~RegionCursor();
+  RegionCursor(const RegionCursor&) = delete;
+  RegionCursor& operator=(const RegionCursor&) = delete;
+  RegionCursor(RegionCursor&&) = delete;
+  RegionCursor& operator=(RegionCursor&&) = delete;
+
+  /// @brief Moves to the next region; false at the end, or when a cold region cannot be read
+  /// back (status() then says why).
+  bool next();
+  Vec3i region() const noexcept { return region_; }
+  std::uint32_t slot() const noexcept { return slot_; }
+  /// @brief Regions in the walk.
+  std::size_t size() const noexcept { return coords_.size(); }
+  Expected<void, Error> status() const;
+
+ private:
+  void release() noexcept;
+
+  const VoxelMap* map_;
+  std::vector<Vec3i> coords_;
+  std::size_t next_ = 0;
+  Vec3i region_{};
+  std::uint32_t slot_ = RegionStore::kNoSlot;
+  std::optional<Error> failure_;
+};
+
+template <class Fn>
+Expected<void, Error> VoxelMap::forEachRegionInCoordOrder(Fn&& fn) const {
+  RegionCursor cursor(*this);
+  while (cursor.next()) {
+    fn(cursor.region(), cursor.slot());
+  }
+  return cursor.status();
+}
 
 }  // namespace raymap

@@ -13,6 +13,7 @@
 
 #include "src/io/map_file.hpp"
 #include "tests/device/device_under_test.hpp"
+#include "tests/support/file_bytes.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -260,6 +261,40 @@ TEST_P(DeviceMemoryMode, SavedMapEqualsTheCpuMap) {
   const test::MapComparison cmp = test::compareMaps(cpu.map, *loaded);
   EXPECT_EQ(cmp.exact_value, cmp.compared);
   EXPECT_EQ(meanDifferences(cpu.map, *loaded), 0u);
+}
+
+TEST_P(DeviceMemoryMode, AMapLargerThanItsPoolStreamsThroughTheTiersAndEqualsTheCpuMap) {
+  REQUIRE_DEVICE();
+  // docs/large-maps.md: a pool of an eighth of the map, a compressed tier of a few dozen
+  // regions. Regions leave the pool while the device still holds (cache) or wrote (shared) them:
+  // the backend writes them back first, and the saved file is the CPU's, byte for byte.
+  test::TempDir dir;
+  const std::vector<Ray> rays = test::corridorDrive(120.0, 0.5);
+  for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    const MapConfig config = test::smallConfig(semantics, 16);
+    VoxelMap cpu = test::makeMap(config);
+    auto cpu_backend = test::cpuBackend(cpu, 1);
+    test::integrateEachScan(cpu, *cpu_backend, rays);
+    MapConfig tiered = config;
+    tiered.memory_budget_bytes =
+        cpu.regionCount() / 8 * config.schema().bytesPerRegion(config.geometry.voxelsPerRegion());
+    tiered.tiers.enabled = true;
+    tiered.tiers.compressed_bytes = 64u << 10;
+    tiered.tiers.spill_dir = dir.path().string();
+    VoxelMap map = test::makeMap(tiered);
+    DeviceBackendOptions options;
+    options.memory = GetParam();
+    auto backend = createDeviceBackend(map, options);
+    ASSERT_TRUE(backend);
+    test::integrateEachScan(map, *backend, rays);
+    ASSERT_FALSE(map.tierFailure().has_value()) << map.tierFailure()->message;
+    EXPECT_GT(map.tierStats()->evictions, cpu.regionCount() / 2);
+    ASSERT_TRUE(io::saveMap(cpu, (dir.path() / "cpu.rmap").string()));
+    ASSERT_TRUE(io::saveMap(map, (dir.path() / "device.rmap").string()));
+    EXPECT_EQ(test::readFileBytes((dir.path() / "device.rmap").string()),
+              test::readFileBytes((dir.path() / "cpu.rmap").string()))
+        << toString(semantics);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(DeviceBackend, DeviceMemoryMode,

@@ -2,6 +2,7 @@
 // Test helpers for maps and rays.
 #include "tests/support/test_rays.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -98,6 +99,66 @@ void writeRayCloud(const std::string& path, const std::vector<Ray>& rays) {
   ASSERT_TRUE(writer.has_value()) << writer.error().message;
   ASSERT_TRUE((*writer)->write(rays).has_value());
   ASSERT_TRUE((*writer)->finish().has_value());
+}
+
+namespace {
+
+constexpr double kHalfWidth = 3.0;  // corridor walls at y = +-3 m
+constexpr double kCeiling = 2.5;    // floor at z = 0, ceiling at 2.5 m
+constexpr double kMaxRange = 4.0;   // metres; farther: a no-return ray
+
+}  // namespace
+
+std::vector<Ray> corridorDrive(double length, double step) {
+  std::vector<Ray> rays;
+  std::uint64_t scan = 0;
+  for (double x = 0.0; x <= length; x += step, ++scan) {
+    const Vec3d origin{x, 0.05, 1.0};
+    for (int e = 0; e < 8; ++e) {
+      const double elevation = (-40.0 + 80.0 * e / 7.0) * M_PI / 180.0;
+      for (int a = 0; a < 32; ++a) {
+        const double azimuth = (2.0 * M_PI * a) / 32.0 + 0.013 * static_cast<double>(scan % 7);
+        const Vec3d d{std::cos(elevation) * std::cos(azimuth),
+                      std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
+        double t = kMaxRange;
+        if (d.y != 0.0) {
+          t = std::min(t, ((d.y > 0 ? kHalfWidth : -kHalfWidth) - origin.y) / d.y);
+        }
+        if (d.z < 0.0) {
+          t = std::min(t, -origin.z / d.z);
+        } else if (d.z > 0.0) {
+          t = std::min(t, (kCeiling - origin.z) / d.z);
+        }
+        // Crates: 1 m cubes against the walls every 10 m.
+        const double next_crate = std::floor(x / 10.0) * 10.0 + 5.0;
+        const double crate_y = static_cast<long>(next_crate / 10.0) % 2 == 0 ? 2.0 : -3.0;
+        if (d.x != 0.0) {
+          const double tc = (next_crate - origin.x) / d.x;
+          const Vec3d p = origin + d * tc;
+          if (tc > 0.0 && tc < t && p.y >= crate_y && p.y <= crate_y + 1.0 && p.z <= 1.0) {
+            t = tc;
+          }
+        }
+        Ray ray = makeRay(origin, origin + d * t, t >= kMaxRange ? kRayNoReturn : 0u, scan);
+        ray.intensity = static_cast<float>(0.2 + 0.1 * (a % 5));
+        rays.push_back(ray);
+      }
+    }
+  }
+  return rays;
+}
+
+void integrateEachScan(VoxelMap& map, Backend& backend, const std::vector<Ray>& rays) {
+  std::size_t begin = 0;
+  while (begin < rays.size()) {
+    std::size_t end = begin;
+    while (end < rays.size() && rays[end].scan == rays[begin].scan) {
+      ++end;
+    }
+    integrate(map, backend, std::span<const Ray>(rays).subspan(begin, end - begin));
+    begin = end;
+  }
+  ASSERT_TRUE(backend.synchronise().has_value());
 }
 
 MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels) {

@@ -38,6 +38,17 @@ RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays
 /// origins within +-2 m; every 17th ray is a no-return ray. Deterministic for a seed.
 std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan);
 
+/// @brief A drive down a long corridor (walls at y = +-3 m, floor at 0, ceiling at 2.5 m, a 1 m
+/// crate every 10 m): a scan every `step` metres from (x, 0, 1) for x in [0, length], 32
+/// azimuths x 8 elevations, each ray ending on the first surface or as a no-return at 4 m.
+/// A scan touches only the regions within 4 m of the sensor while the map grows with the length:
+/// the data of the tests of maps larger than their memory. Deterministic.
+std::vector<Ray> corridorDrive(double length, double step);
+
+/// @brief integrate() one scan (run of equal `scan`) per batch, then synchronise(): a batch's
+/// regions must fit a tiered map's pool at once.
+void integrateEachScan(VoxelMap& map, Backend& backend, const std::vector<Ray>& rays);
+
 /// @brief Writes `rays` as a ray-cloud PLY (io::RayCloudWriter) or fails the test.
 void writeRayCloud(const std::string& path, const std::vector<Ray>& rays);
 

@@ -309,8 +309,8 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                              "default to --reverse)");
   reverse->excludes(forward);
   c.add_flag("--no-mean", f.no_mean, "Do not keep the voxel-mean layer");
-  c.add_option("--max-memory", f.max_memory, "Region pool size, e.g. 512MiB, 4GiB")
-      ->capture_default_str();
+  addMaxMemoryOption(c, f.max_memory);
+  addTierOptions(c, f.tiers);
   c.add_option("--batch-rays", f.batch_rays, "Prepared rays per backend call")
       ->check(CLI::Range(std::size_t{1024}, std::size_t{1} << 26))
       ->capture_default_str();
@@ -454,6 +454,11 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
     return fail(ErrorCode::kInvalidArgument, "--max-memory: " + budget.error().message);
   }
   o.map.memory_budget_bytes = *budget;
+  auto tiers = toTierConfig(f.tiers, "");  // the spill folder follows the output (runPopulate)
+  if (!tiers) {
+    return Unexpected(tiers.error());
+  }
+  o.map.tiers = *tiers;
   auto probability_option = [](const std::optional<double>& p, const char* name,
                                float* log_odds) -> Expected<void, Error> {
     if (!p) {

@@ -9,6 +9,7 @@
 #include "raymap/error.hpp"
 #include <CLI/CLI.hpp>
 
+#include "tools/raymap/memory_tiers.hpp"
 #include "tools/raymap/populate.hpp"
 
 namespace raymap::cli {
@@ -55,6 +56,7 @@ struct MappingFlags {
   bool forward = false;
   bool no_mean = false;
   std::string max_memory = "4GiB";
+  TierFlags tiers;  ///< --compressed-memory, --spill-dir, --no-tiers
   std::size_t batch_rays = PopulateOptions::kDefaultBatchRays;
   // rosbag2 input (a bag directory, .mcap or .db3)
   std::vector<std::string> topics;  ///< --topic: PointCloud2 or depth Image topics

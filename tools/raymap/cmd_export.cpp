@@ -13,6 +13,7 @@
 #include "src/io/tsdf_export.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
+#include "tools/raymap/memory_tiers.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
@@ -31,6 +32,8 @@ struct ExportFlags {
   std::optional<double> threshold;   ///< decay: lowest rate exported, per metre
   std::optional<double> min_weight;  ///< tsdf, tsdf-mesh: lightest voxel exported
   bool quiet = false;
+  std::string max_memory = "4GiB";  ///< a larger map streams through the tiers
+  TierFlags tiers;
 };
 
 /// Stages --ply (refused when it is the map, failing when it cannot be written), then loads the
@@ -45,7 +48,13 @@ std::optional<VoxelMap> openMapForExport(const ExportFlags& f, StagedOutputs& st
     return std::nullopt;
   }
   *ply_temp = std::move(*temp);
-  auto map = io::loadMap(f.map);
+  auto load = toLoadOptions(f.max_memory, f.tiers, f.ply);
+  if (!load) {
+    printError("export", load.error().message);
+    *exit_code = kExitUsage;
+    return std::nullopt;
+  }
+  auto map = io::loadMap(f.map, *load);
   if (!map) {
     printError("export", map.error().message);
     *exit_code = kExitFailure;
@@ -54,8 +63,13 @@ std::optional<VoxelMap> openMapForExport(const ExportFlags& f, StagedOutputs& st
   return std::move(*map);
 }
 
-/// Puts the written PLY in place; prints why not. @return the command's exit code.
-int commitExport(StagedOutputs& staged) {
+/// Puts the written PLY in place; prints why not. A tiered map that could not read a region back
+/// (a damaged spill file) wrote an incomplete PLY: it is not committed. @return the exit code.
+int commitExport(StagedOutputs& staged, const VoxelMap& map) {
+  if (auto ok = checkTiers(map); !ok) {
+    printError("export", ok.error().message);
+    return kExitFailure;
+  }
   if (auto ok = staged.commit(); !ok) {
     printError("export", ok.error().message);
     return kExitFailure;
@@ -94,7 +108,7 @@ int runNdtExport(const ExportFlags& f) {
     printError(command, f.map + ": " + count.error().message);
     return kExitFailure;
   }
-  if (const int committed = commitExport(staged); committed != kExitOk) {
+  if (const int committed = commitExport(staged, *map); committed != kExitOk) {
     return committed;
   }
   if (!f.quiet) {
@@ -130,7 +144,7 @@ int runTsdfExport(const ExportFlags& f) {
       printError(command, f.map + ": " + counts.error().message);
       return kExitFailure;
     }
-    if (const int committed = commitExport(staged); committed != kExitOk) {
+    if (const int committed = commitExport(staged, *map); committed != kExitOk) {
       return committed;
     }
     if (!f.quiet) {
@@ -147,7 +161,7 @@ int runTsdfExport(const ExportFlags& f) {
     printError(command, f.map + ": " + count.error().message);
     return kExitFailure;
   }
-  if (const int committed = commitExport(staged); committed != kExitOk) {
+  if (const int committed = commitExport(staged, *map); committed != kExitOk) {
     return committed;
   }
   if (!f.quiet) {
@@ -211,7 +225,7 @@ int runExport(const ExportFlags& f) {
     printError("export", f.map + ": " + count.error().message);
     return kExitFailure;
   }
-  if (const int committed = commitExport(staged); committed != kExitOk) {
+  if (const int committed = commitExport(staged, *map); committed != kExitOk) {
     return committed;
   }
   if (!f.quiet) {
@@ -255,6 +269,8 @@ void addExportCommand(CLI::App& app, int* exit_code) {
                 "tsdf: leave out crossings between voxels lighter than this; tsdf-mesh: leave out "
                 "cubes with a voxel lighter than this; rays (default 1)");
   c->add_flag("-q,--quiet", flags->quiet, "Print nothing on success");
+  addMaxMemoryOption(*c, flags->max_memory);
+  addTierOptions(*c, flags->tiers);
   c->callback([flags, exit_code] { *exit_code = runExport(*flags); });
 }
 

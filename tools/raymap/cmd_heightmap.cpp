@@ -19,6 +19,7 @@
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/memory_tiers.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
@@ -44,6 +45,8 @@ struct HeightmapFlags {
   int repeat = 1;
   bool json = false;
   bool quiet = false;
+  std::string max_memory = "4GiB";  ///< a larger map streams through the tiers
+  TierFlags tiers;
 };
 
 /// Default centre: the middle of the observed area, at the lowest observed height (the ground of
@@ -90,7 +93,12 @@ int runHeightmap(const HeightmapFlags& f) {
       *temp = std::move(*staged_path);
     }
   }
-  auto map = io::loadMap(f.map);
+  auto load = toLoadOptions(f.max_memory, f.tiers, !f.png.empty() ? f.png : f.csv);
+  if (!load) {
+    printError("heightmap", load.error().message);
+    return kExitUsage;
+  }
+  auto map = io::loadMap(f.map, *load);
   if (!map) {
     printError("heightmap", map.error().message);
     return kExitFailure;
@@ -157,6 +165,10 @@ int runHeightmap(const HeightmapFlags& f) {
       printError("heightmap", "--csv: " + ok.error().message);
       return kExitFailure;
     }
+  }
+  if (auto ok = checkTiers(*map); !ok) {
+    printError("heightmap", ok.error().message);
+    return kExitFailure;
   }
   if (auto ok = staged.commit(); !ok) {
     printError("heightmap", ok.error().message);
@@ -274,6 +286,8 @@ void addHeightmapCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   c->add_flag("--json", f->json, "Print a JSON summary");
   c->add_flag("-q,--quiet", f->quiet, "Print nothing on success");
+  addMaxMemoryOption(*c, f->max_memory);
+  addTierOptions(*c, f->tiers);
   c->callback([f, exit_code] { *exit_code = runHeightmap(*f); });
 }
 

@@ -11,6 +11,7 @@
 #include "tools/raymap/bag_info.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/memory_tiers.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -18,7 +19,9 @@ namespace {
 struct InfoFlags {
   std::string map;
   bool json = false;
-  bool read_all = false;  ///< bags: count by reading every message, even with a summary
+  bool read_all = false;            ///< bags: count by reading every message, even with a summary
+  std::string max_memory = "4GiB";  ///< a larger map streams through the tiers
+  TierFlags tiers;
 };
 
 std::string vectorJson(Vec3d v) {
@@ -66,14 +69,33 @@ int runInfo(const InfoFlags& f) {
     printError("info", header.error().message);
     return kExitFailure;
   }
-  auto map = io::loadMap(f.map);
+  auto load = toLoadOptions(f.max_memory, f.tiers, "");
+  if (!load) {
+    printError("info", load.error().message);
+    return kExitUsage;
+  }
+  auto map = io::loadMap(f.map, *load);
   if (!map) {
     printError("info", map.error().message);
     return kExitFailure;
   }
   const std::uint32_t version = header->format_version;
   const MapConfig& c = map->config();
+  // Every count before anything is printed: a tiered map that cannot read a region back fails
+  // instead of printing counts that leave it out.
   const MapSummary s = map->summarise();
+  const TsdfSummary t = c.mode == MapMode::kTsdf ? summariseTsdf(*map) : TsdfSummary{};
+  const DecaySummary d = c.decay_rate ? summariseDecay(*map) : DecaySummary{};
+  if (auto ok = map->drainTiers(); !ok) {
+    printError("info", f.map + ": " + ok.error().message);
+    return kExitFailure;
+  }
+  if (auto ok = checkTiers(*map); !ok) {
+    printError("info", f.map + ": " + ok.error().message);
+    return kExitFailure;
+  }
+  const std::optional<TierReport> tiers = tierReport(*map);
+  const bool tiers_used = tiers && tiers->stats.evictions > 0;
   const OccupancyParams& o = c.occupancy;
   std::string layers;
   const LayerSchema& schema = map->store().schema();
@@ -139,7 +161,6 @@ int runInfo(const InfoFlags& f) {
       j.raw("ndt", ndtJson(c).str());
     }
     if (c.mode == MapMode::kTsdf) {
-      const TsdfSummary t = summariseTsdf(*map);
       JsonObject tsdf;
       tsdf.add("truncation_m", c.tsdf.truncationMetres(c.geometry.resolution))
           .add("max_weight", c.tsdf.max_weight)
@@ -150,7 +171,6 @@ int runInfo(const InfoFlags& f) {
       j.raw("tsdf", tsdf.str());
     }
     if (c.decay_rate) {
-      const DecaySummary d = summariseDecay(*map);
       JsonObject decay;
       decay.add("voxels_crossed", d.crossed)
           .add("voxels_with_samples", d.with_samples)
@@ -165,6 +185,9 @@ int runInfo(const InfoFlags& f) {
         .add("voxels_unobserved", s.voxels_unobserved);
     if (s.voxels_free + s.voxels_occupied > 0) {
       j.raw("extent_min", vectorJson(s.observed_min)).raw("extent_max", vectorJson(s.observed_max));
+    }
+    if (tiers_used) {
+      j.raw("memory_tiers", tierJson(*tiers));
     }
     j.raw("info", info.str());
     std::printf("%s\n", j.str().c_str());
@@ -188,7 +211,6 @@ int runInfo(const InfoFlags& f) {
     printNdt(c);
   }
   if (c.mode == MapMode::kTsdf) {
-    const TsdfSummary t = summariseTsdf(*map);
     std::printf("tsdf           truncation %g m, max weight %g, drop-off %g m\n",
                 c.tsdf.truncationMetres(c.geometry.resolution), c.tsdf.max_weight,
                 c.tsdf.dropoffMetres(c.geometry.resolution));
@@ -197,7 +219,6 @@ int runInfo(const InfoFlags& f) {
                 withCommas(t.saturated).c_str());
   }
   if (c.decay_rate) {
-    const DecaySummary d = summariseDecay(*map);
     std::printf("decay voxels   %s crossed, %s with samples; %.6g m of ray path, %s samples\n",
                 withCommas(d.crossed).c_str(), withCommas(d.with_samples).c_str(), d.metres,
                 withCommas(d.samples).c_str());
@@ -214,6 +235,9 @@ int runInfo(const InfoFlags& f) {
     std::printf("extent         [%.2f, %.2f, %.2f] to [%.2f, %.2f, %.2f] m\n", s.observed_min.x,
                 s.observed_min.y, s.observed_min.z, s.observed_max.x, s.observed_max.y,
                 s.observed_max.z);
+  }
+  if (tiers_used) {
+    std::printf("memory tiers   %s\n", tierSummaryLine(*tiers).c_str());
   }
   for (const auto& [key, value] : map->info()) {
     std::printf("%-14s %s\n", key.c_str(), value.c_str());
@@ -233,6 +257,8 @@ void addInfoCommand(CLI::App& app, int* exit_code) {
   c->add_flag("--read-all", flags->read_all,
               "Bags: count by reading every message (also gives bytes per topic), not from the "
               "MCAP summary");
+  addMaxMemoryOption(*c, flags->max_memory);
+  addTierOptions(*c, flags->tiers);
   c->callback([flags, exit_code] { *exit_code = runInfo(*flags); });
 }
 

@@ -94,6 +94,9 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
         withCommas(r.summary.regions).c_str(), o.map.geometry.resolution, toString(o.map.semantics),
         mapModeName(o.map).c_str());
   }
+  if (r.tiers && r.tiers->stats.evictions > 0) {
+    std::printf("memory tiers   %s\n", tierSummaryLine(*r.tiers).c_str());
+  }
   if (r.device.empty()) {
     std::printf("integration    %.3f s, %.3g M rays/s (%s, %u threads); reading %.3f s\n",
                 r.integrate_seconds, rate / 1e6, r.backend_name.c_str(), r.threads, r.read_seconds);
@@ -183,6 +186,15 @@ int runPopulate(const PopulateFlags& f) {
       *temp = std::move(*staged_path);
     }
   }
+  // The spill file goes next to the first output (the user chose that disk for the map).
+  const std::string& first_output =
+      !output.empty() ? output : (!f.ply.empty() ? f.ply : f.stats_json);
+  auto tiers = toTierConfig(f.mapping.tiers, first_output);
+  if (!tiers) {
+    printError(command, tiers.error().message);
+    return kExitUsage;
+  }
+  options->map.tiers = *tiers;
   const std::string pool_note = limitPoolToMemory(options->map);
   if (!pool_note.empty() && !f.quiet) {
     std::fprintf(stderr, "raymap populate: note: %s\n", pool_note.c_str());
@@ -234,6 +246,10 @@ int runPopulate(const PopulateFlags& f) {
       printError(command, "--ply: " + count.error().message);
       return kExitFailure;
     }
+  }
+  if (auto ok = checkTiers(*map); !ok) {
+    printError(command, ok.error().message);
+    return kExitFailure;
   }
   if (!f.stats_json.empty()) {
     const std::string json = statsJson(*report, *options);

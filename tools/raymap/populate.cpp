@@ -99,9 +99,9 @@ Result<PopulateReport> integrateStream(
       return Unexpected(integrate_failed(ok.error()));
     }
     const double seconds = report.integrate_seconds;
-    bar.update(
-        progress(), preparer.counters().rays_in,
-        seconds > 0 ? static_cast<double>(preparer.counters().rays_accepted) / seconds : 0.0);
+    bar.update(progress(), preparer.counters().rays_in,
+               seconds > 0 ? static_cast<double>(preparer.counters().rays_accepted) / seconds : 0.0,
+               bar.due() ? tierProgressText(map) : std::string());
   }
   {
     const Clock::time_point t_integrate = Clock::now();
@@ -127,6 +127,13 @@ Result<PopulateReport> integrateStream(
   report.summary = map.summarise();
   report.tsdf = summariseTsdf(map);
   report.decay = summariseDecay(map);
+  if (auto ok = map.drainTiers(); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (auto ok = checkTiers(map); !ok) {
+    return Unexpected(ok.error());
+  }
+  report.tiers = tierReport(map);
   report.total_seconds = secondsSince(start);
   report.peak_rss_bytes = platform::peakResidentBytes();
   return report;
@@ -246,6 +253,9 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
         .add("sync_seconds", b.sync_seconds)
         .add("cache_hit_rate",
              lookups > 0 ? static_cast<double>(b.cache_hits) / static_cast<double>(lookups) : 0.0);
+  }
+  if (r.tiers) {
+    j.raw("memory_tiers", tierJson(*r.tiers));
   }
   if (r.bag) {
     const bag::BagRaysReport& b = *r.bag;

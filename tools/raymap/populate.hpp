@@ -18,6 +18,7 @@
 #include "src/map/ray_preparer.hpp"
 #include "src/map/tsdf_surface.hpp"
 #include "src/map/voxel_map.hpp"
+#include "tools/raymap/memory_tiers.hpp"
 
 namespace raymap::cli {
 
@@ -63,6 +64,7 @@ struct PopulateReport {
   TsdfSummary tsdf;    ///< TSDF maps (zero otherwise)
   DecaySummary decay;  ///< maps with decay rates (zero otherwise)
   std::uint64_t peak_rss_bytes = 0;
+  std::optional<TierReport> tiers;  ///< maps with cold tiers (after the compressor drained)
 };
 
 /// @brief Integrates rays into `map` with a new backend, batching by size (per-ray) or by scan

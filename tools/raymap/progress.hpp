@@ -18,7 +18,11 @@ class ProgressBar {
   ProgressBar& operator=(const ProgressBar&) = delete;
 
   /// @brief fraction in [0, 1]; rays so far; rays per second of integration.
-  void update(double fraction, std::uint64_t rays, double rays_per_second);
+  /// @brief Redraws (at most five times a second) with `extra` after the rate (may be empty).
+  void update(double fraction, std::uint64_t rays, double rays_per_second,
+              const std::string& extra = {});
+  /// @brief True when the next update() would draw: compute costly extra text only then.
+  bool due() const;
   /// @brief Clears the line.
   void finish();
 

@@ -163,6 +163,9 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
         if (host.error() == StoreError::kFull) {
           return Unexpected(IntegrateError::kStoreFull);
         }
+        if (host.error() == StoreError::kTierFailed) {
+          return Unexpected(IntegrateError::kTierFailed);
+        }
         ++stats_.spans_outside_window;  // outside a rolling window (or the index's range)
         batch_regions_.remember(DeviceRegionCache::kNoSlot);
         continue;
@@ -202,7 +205,10 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
       } else if (cache_ != nullptr) {
         slot = cache_->find(region);
       } else {
-        slot = map_->store().find(region);  // RegionStore::kNoSlot == DeviceRegionCache::kNoSlot
+        // RegionStore::kNoSlot == DeviceRegionCache::kNoSlot. A tiered map brings a cold region
+        // back (the device writes the hit into it).
+        auto found = map_->findForWrite(region);
+        slot = found ? *found : RegionStore::kNoSlot;
       }
       if (slot != DeviceRegionCache::kNoSlot) {
         const std::uint64_t voxel = std::uint64_t{slot} * voxels_per_region_ + index;
@@ -248,6 +254,28 @@ Expected<void, IntegrateError> BatchPlanner::downloadAll() noexcept {
     }
   }
   return {};
+}
+
+Expected<void, IntegrateError> BatchPlanner::writeBack(
+    std::span<const std::uint32_t> host_slots) noexcept {
+  if (cache_ == nullptr) {
+    return {};
+  }
+  const RegionStore& store = map_->store();
+  for (const std::uint32_t host_slot : host_slots) {
+    const std::uint32_t slot = cache_->find(store.coordOf(host_slot));
+    if (slot == DeviceRegionCache::kNoSlot || cache_->entry(slot).host_slot != host_slot) {
+      continue;
+    }
+    if (cache_->entry(slot).dirty) {
+      if (auto ok = transfer_->download(slot, host_slot); !ok) {
+        return ok;
+      }
+      host_uninitialised_[host_slot] = 0;
+    }
+    cache_->drop(slot);
+  }
+  return transfer_->waitForDevice();
 }
 
 Expected<bool, IntegrateError> BatchPlanner::placeForRead(

@@ -120,6 +120,10 @@ class BatchPlanner {
   /// the backend has waited for the device.
   Expected<void, IntegrateError> downloadAll() noexcept;
 
+  /// @brief Before a tiered map moves the regions in host slots `host_slots` out of its pool:
+  /// downloads the dirty device copies among them, forgets them all, and waits for the device.
+  Expected<void, IntegrateError> writeBack(std::span<const std::uint32_t> host_slots) noexcept;
+
   /// @brief Makes the regions in host store slots `host_slots` readable on the device by work
   /// enqueued next, and writes each one's device slot into `device_slots` (same size): for a
   /// reader such as the height map. Shared mode: the host slots themselves, nothing moves.

@@ -51,6 +51,28 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
   for (StagingSet& set : sets_) {
     planner_.reserve(set.arrays);
   }
+  if (map.tiered()) {
+    map.setEvictionHook(this);
+    map.keepPreviousEpoch();  // the batch in flight keeps its regions while the next is planned
+  }
+}
+
+StagedBackend::~StagedBackend() {
+  if (map_->tiered()) {
+    map_->setEvictionHook(nullptr);
+  }
+}
+
+bool StagedBackend::beforeEviction(std::span<const std::uint32_t> host_slots) noexcept {
+  // Nothing in flight may still write the regions leaving (the map pins the batch being planned
+  // and the one before it; this also covers work enqueued for readers).
+  if (!makeCurrent() || !finish()) {
+    return false;
+  }
+  if (!cache_) {
+    return syncSharedMemory();  // the device worked in the pool itself: make its writes visible
+  }
+  return planner_.writeBack(host_slots).has_value();
 }
 
 std::uint32_t StagedBackend::layerRegions() const noexcept {
@@ -83,6 +105,7 @@ Expected<void, IntegrateError> StagedBackend::integrate(
     }
     const Clock::time_point t_plan = Clock::now();
     stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
+    map_->beginEpoch();  // a tiered map keeps this batch's and the in-flight batch's regions
     auto consumed = planner_.plan(rays, sets_[set].arrays);
     stats_.plan_seconds += secondsSince(t_plan);
     if (!consumed) {

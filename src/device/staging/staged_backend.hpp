@@ -50,9 +50,16 @@ enum class NdtKernel : std::uint8_t {
 /// synchronise(), except for rolling-window moves, which the next integrate() takes into account.
 /// Real-time: integrate() allocates nothing once constructed; it blocks only to wait for the
 /// device's batch before last.
-class StagedBackend : public Backend, private RegionTransfer {
+class StagedBackend : public Backend, private RegionTransfer, private RegionEvictionHook {
  public:
   static constexpr unsigned kStagingSets = 2;
+
+  /// Unregisters from a tiered map (the map outlives the backend).
+  ~StagedBackend() override;
+  StagedBackend(const StagedBackend&) = delete;
+  StagedBackend& operator=(const StagedBackend&) = delete;
+  StagedBackend(StagedBackend&&) = delete;
+  StagedBackend& operator=(StagedBackend&&) = delete;
 
   Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept final;
   Expected<void, IntegrateError> synchronise() noexcept final;
@@ -134,6 +141,9 @@ class StagedBackend : public Backend, private RegionTransfer {
   virtual bool syncSharedMemory() noexcept { return true; }
 
  private:
+  // ---- RegionEvictionHook (a tiered map moving regions out of its pool, while planning) ----
+  bool beforeEviction(std::span<const std::uint32_t> host_slots) noexcept final;
+
   // ---- RegionTransfer (called by the planner) ----
   Expected<void, IntegrateError> download(std::uint32_t device_slot,
                                           std::uint32_t host_slot) noexcept final;

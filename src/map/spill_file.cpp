@@ -1,0 +1,160 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// SpillFile: an unnamed append-only file of compressed regions (see spill_file.hpp).
+#include "src/map/spill_file.hpp"
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <utility>
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <zlib.h>
+
+namespace raymap {
+namespace {
+
+constexpr std::uint32_t kRecordTag = 0x4C505352u;  // "RSPL" as a little-endian u32
+
+std::uint32_t crc32Of(std::span<const std::byte> bytes) noexcept {
+  return static_cast<std::uint32_t>(
+      ::crc32(0L, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(bytes.size())));
+}
+
+void putLe(std::byte* at, std::uint64_t value, int bytes) noexcept {
+  for (int i = 0; i < bytes; ++i) {
+    at[i] = static_cast<std::byte>((value >> (8 * i)) & 0xFFu);
+  }
+}
+
+std::uint64_t getLe(const std::byte* at, int bytes) noexcept {
+  std::uint64_t value = 0;
+  for (int i = 0; i < bytes; ++i) {
+    value |= std::to_integer<std::uint64_t>(at[i]) << (8 * i);
+  }
+  return value;
+}
+
+std::string errnoText(int error) { return std::strerror(error); }
+
+}  // namespace
+
+Result<SpillFile> SpillFile::create(const std::string& folder) {
+  SpillFile file;
+  file.description_ = "the spill file in " + folder;
+  // An unnamed file: nothing to clean up after a crash. Some file systems lack O_TMPFILE (and
+  // answer EOPNOTSUPP or EISDIR): then a named file, removed before it holds anything.
+  int fd = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+  if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
+    std::string pattern = folder + "/.raymap-spill-XXXXXX";
+    fd = ::mkostemp(pattern.data(), O_CLOEXEC);
+    if (fd >= 0) {
+      ::unlink(pattern.c_str());
+    }
+  }
+  if (fd < 0) {
+    const int error = errno;
+    return fail(ErrorCode::kIo, "cannot create a spill file in " + folder + ": " +
+                                    errnoText(error) +
+                                    " (--spill-dir names a writable folder for regions that fit "
+                                    "neither memory budget)");
+  }
+  file.fd_ = fd;
+  return file;
+}
+
+SpillFile::SpillFile(SpillFile&& other) noexcept
+    : fd_(std::exchange(other.fd_, -1)),
+      end_(other.end_),
+      garbage_bytes_(other.garbage_bytes_),
+      description_(std::move(other.description_)) {}
+
+SpillFile& SpillFile::operator=(SpillFile&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) {
+      ::close(fd_);
+    }
+    fd_ = std::exchange(other.fd_, -1);
+    end_ = other.end_;
+    garbage_bytes_ = other.garbage_bytes_;
+    description_ = std::move(other.description_);
+  }
+  return *this;
+}
+
+SpillFile::~SpillFile() {
+  if (fd_ >= 0) {
+    ::close(fd_);
+  }
+}
+
+Result<SpillRecord> SpillFile::append(std::uint64_t key, std::uint32_t raw_bytes,
+                                      std::span<const std::byte> packed) {
+  std::array<std::byte, kHeaderBytes> header{};
+  putLe(header.data(), kRecordTag, 4);
+  putLe(header.data() + 4, key, 8);
+  putLe(header.data() + 12, raw_bytes, 4);
+  putLe(header.data() + 16, packed.size(), 4);
+  putLe(header.data() + 20, crc32Of(packed), 4);
+  putLe(header.data() + 24, crc32Of(std::span(header).first(24)), 4);
+  const SpillRecord record{end_, static_cast<std::uint32_t>(packed.size())};
+  std::uint64_t at = end_;
+  for (std::span<const std::byte> part : {std::span<const std::byte>(header), packed}) {
+    while (!part.empty()) {
+      const ssize_t n = ::pwrite(fd_, part.data(), part.size(), static_cast<off_t>(at));
+      if (n <= 0) {
+        const int error = n < 0 ? errno : ENOSPC;
+        if (n < 0 && error == EINTR) {
+          continue;
+        }
+        // The end does not move: a later append overwrites the partial record.
+        return fail(ErrorCode::kIo, description_ + ": writing " +
+                                        std::to_string(kHeaderBytes + packed.size()) +
+                                        " bytes at offset " + std::to_string(end_) +
+                                        " failed: " + errnoText(error));
+      }
+      part = part.subspan(static_cast<std::size_t>(n));
+      at += static_cast<std::uint64_t>(n);
+    }
+  }
+  end_ = at;
+  return record;
+}
+
+Expected<void, Error> SpillFile::read(const SpillRecord& record, std::uint64_t key,
+                                      std::uint32_t raw_bytes,
+                                      std::vector<std::byte>& packed) const {
+  const std::string where =
+      description_ + ": the record at offset " + std::to_string(record.offset);
+  std::array<std::byte, kHeaderBytes> header{};
+  packed.resize(record.packed_bytes);
+  std::uint64_t at = record.offset;
+  for (std::span<std::byte> part : {std::span<std::byte>(header), std::span<std::byte>(packed)}) {
+    while (!part.empty()) {
+      const ssize_t n = ::pread(fd_, part.data(), part.size(), static_cast<off_t>(at));
+      if (n < 0 && errno == EINTR) {
+        continue;
+      }
+      if (n <= 0) {
+        return fail(ErrorCode::kIo, where + ": reading failed: " +
+                                        (n < 0 ? errnoText(errno) : std::string("end of file")));
+      }
+      part = part.subspan(static_cast<std::size_t>(n));
+      at += static_cast<std::uint64_t>(n);
+    }
+  }
+  if (getLe(header.data(), 4) != kRecordTag ||
+      getLe(header.data() + 24, 4) != crc32Of(std::span(header).first(24))) {
+    return fail(ErrorCode::kCorrupt, where + ": damaged record header");
+  }
+  if (getLe(header.data() + 4, 8) != key || getLe(header.data() + 12, 4) != raw_bytes ||
+      getLe(header.data() + 16, 4) != record.packed_bytes) {
+    return fail(ErrorCode::kCorrupt, where + ": holds another region than the one expected");
+  }
+  if (getLe(header.data() + 20, 4) != crc32Of(packed)) {
+    return fail(ErrorCode::kCorrupt, where + ": payload checksum mismatch");
+  }
+  return {};
+}
+
+}  // namespace raymap

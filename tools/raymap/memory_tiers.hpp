@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The command line's memory options for maps larger than memory (--max-memory,
+// --compressed-memory, --spill-dir, --no-tiers) and how the tiers are reported.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "raymap/error.hpp"
+
+#include "src/io/map_file.hpp"
+#include "src/map/voxel_map.hpp"
+
+namespace CLI {
+class App;
+}  // namespace CLI
+
+namespace raymap::cli {
+
+/// @brief The tier flags as typed. Shared by populate, bench, info, export and heightmap.
+struct TierFlags {
+  std::string compressed_memory = "1GiB";
+  std::string spill_dir;  ///< empty: next to the first output (or the system's temporary folder)
+  bool no_tiers = false;
+};
+
+/// @brief Registers --compressed-memory, --spill-dir and --no-tiers on a subcommand.
+void addTierOptions(CLI::App& command, TierFlags& flags);
+
+/// @brief The tier configuration the flags ask for. `output` (may be empty) gives the default
+/// spill folder: the folder the output goes to; without one, $TMPDIR or /tmp. Errors name the
+/// option.
+Result<RegionTierConfig> toTierConfig(const TierFlags& flags, const std::string& output);
+
+/// @brief Load options for a command that reads a map: the pool is --max-memory and a larger
+/// file streams through the tiers (unless --no-tiers: then the whole file is loaded).
+Result<io::MapLoadOptions> toLoadOptions(const std::string& max_memory, const TierFlags& flags,
+                                         const std::string& output);
+
+/// @brief Registers --max-memory (the region pool) on a subcommand that reads maps.
+void addMaxMemoryOption(CLI::App& command, std::string& max_memory);
+
+/// @brief Where a tiered map's regions are at the end of a command. Value type.
+struct TierReport {
+  std::uint32_t pool_regions = 0;  ///< the pool's capacity
+  std::uint32_t hot_regions = 0;   ///< regions in the pool
+  RegionTierStats stats;
+};
+/// @brief The report of a tiered map; nullopt without tiers.
+std::optional<TierReport> tierReport(const VoxelMap& map);
+
+/// @brief One line for a summary: pool use, compressed and spilled regions, ratio, waits.
+std::string tierSummaryLine(const TierReport& report);
+/// @brief A short text for the progress line ("pool 812/1024, cold 6,400 (spilled 3,000)").
+std::string tierProgressText(const VoxelMap& map);
+/// @brief The tiers as a one-line JSON object (for --stats-json and info --json).
+std::string tierJson(const TierReport& report);
+
+/// @brief Fails with the tiers' error when a tiered map lost a region on the way (a query or a
+/// summary that met a damaged spill file): a command must not report success then.
+Expected<void, Error> checkTiers(const VoxelMap& map);
+
+}  // namespace raymap::cli
