@@ -61,6 +61,9 @@ Result<std::uint64_t> exportTsdfSurface(const VoxelMap& map, const std::string& 
   }
   const std::vector<TsdfSurfacePoint> points =
       tsdfZeroCrossings(map, static_cast<float>(min_weight));
+  if (auto failure = map.tierFailure()) {
+    return Unexpected(*failure);  // a cold region could not be read back: no partial surface
+  }
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {
     return Unexpected(writer.error());
@@ -89,6 +92,9 @@ Result<TsdfMeshCounts> exportTsdfMesh(const VoxelMap& map, const std::string& pa
     return Unexpected(ok.error());
   }
   const TsdfMesh mesh = tsdfMesh(map, static_cast<float>(min_weight));
+  if (auto failure = map.tierFailure()) {
+    return Unexpected(*failure);  // a cold region could not be read back: no partial mesh
+  }
   if (mesh.vertices.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) {
     return fail(ErrorCode::kCapacity, std::to_string(mesh.vertices.size()) +
                                           " vertices are too many for one PLY mesh (int vertex "

@@ -57,12 +57,11 @@ RegionTiers::RegionTiers(const RegionTierConfig& config, const LayerSchema& sche
     layer_bytes_.push_back(std::size_t{schema_.at(l).bytes_per_voxel} * voxels_);
     region_bytes_ += layer_bytes_.back();
   }
+  // Buffers are sized on first use: a map that never outgrows its pool pays nothing for them.
   staging_.resize(config_.staging_regions);
   for (std::uint32_t i = 0; i < config_.staging_regions; ++i) {
-    staging_[i].resize(region_bytes_);
     free_staging_.push_back(config_.staging_regions - 1 - i);
   }
-  restore_planes_.resize(region_bytes_);
 }
 
 RegionTiers::~RegionTiers() {
@@ -111,6 +110,9 @@ Expected<void, Error> RegionTiers::evict(std::uint64_t key, const RegionStore& s
   free_staging_.pop_back();
   lock.unlock();
   // The buffer is this thread's until it is queued: copy without holding the lock.
+  if (staging_[buffer].empty()) {
+    staging_[buffer].resize(region_bytes_);
+  }
   std::byte* out = staging_[buffer].data();
   for (int l = 0; l < schema_.size(); ++l) {
     std::memcpy(out, store.layerBytes(slot, l), layer_bytes_[static_cast<std::size_t>(l)]);
@@ -269,9 +271,8 @@ int RegionTiers::spillDescriptorForTests() const {
 }
 
 void RegionTiers::run() {
-  std::vector<std::byte> planes(region_bytes_);
-  std::vector<std::byte> packed(
-      static_cast<std::size_t>(LZ4_compressBound(static_cast<int>(region_bytes_))));
+  std::vector<std::byte> planes;  // sized by the first job
+  std::vector<std::byte> packed;
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     work_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
@@ -302,6 +303,10 @@ void RegionTiers::compressJob(const Job& job, std::vector<std::byte>& planes,
                               std::vector<std::byte>& packed, std::unique_lock<std::mutex>& lock) {
   // Called without the lock (the staging buffer stays this job's until it is pushed back free);
   // returns with it.
+  if (planes.empty()) {
+    planes.resize(region_bytes_);
+    packed.resize(static_cast<std::size_t>(LZ4_compressBound(static_cast<int>(region_bytes_))));
+  }
   const std::byte* in = staging_[job.staging].data();
   std::byte* out = planes.data();
   for (int l = 0; l < schema_.size(); ++l) {
@@ -381,6 +386,9 @@ void RegionTiers::eraseLocked(std::unordered_map<std::uint64_t, Entry>::iterator
 
 Expected<void, Error> RegionTiers::decodeInto(std::span<const std::byte> packed, RegionStore& store,
                                               std::uint32_t slot, std::uint64_t key) {
+  if (restore_planes_.empty()) {
+    restore_planes_.resize(region_bytes_);
+  }
   const int n = LZ4_decompress_safe(
       reinterpret_cast<const char*>(packed.data()), reinterpret_cast<char*>(restore_planes_.data()),
       static_cast<int>(packed.size()), static_cast<int>(restore_planes_.size()));
