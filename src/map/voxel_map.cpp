@@ -145,7 +145,8 @@ Expected<void, Error> MapConfig::validate() const {
                 "memory budget of " + std::to_string(memory_budget_bytes) + " bytes holds " +
                     std::to_string(capacity) + " regions; a map with cold tiers needs at least " +
                     std::to_string(kMinTieredRegions) +
-                    " in its pool (a region and its neighbours are read together)");
+                    " in its pool (a region and its neighbours are read together): raise the "
+                    "memory budget (--max-memory), or turn the tiers off (--no-tiers)");
   }
   if (capacity > std::numeric_limits<std::uint32_t>::max() / 4u) {
     return fail(ErrorCode::kInvalidArgument,

@@ -618,14 +618,20 @@ TEST(Cli, MapTooBigForMaxMemoryFailsAndLeavesNoOutput) {
   writeRayCloud(input, yardRays(kYardScans));
   const std::set<std::string> before = listFiles(dir.path());
 
-  // Act
-  const RunResult r =
+  // Act: without the cold tiers (docs/large-maps.md) the pool is all the map may have.
+  const RunResult r = runRaymap(concat(
+      {"populate", input, "--max-memory", "1MiB", "--no-tiers", "--quiet"}, allOutputs(dir)));
+  // With them, 1 MiB (two regions) is too small a pool to stream through.
+  const RunResult tiered =
       runRaymap(concat({"populate", input, "--max-memory", "1MiB", "--quiet"}, allOutputs(dir)));
 
   // Assert
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
   EXPECT_TRUE(contains(r.err, "--max-memory"));
+  EXPECT_EQ(tiered.exit_code, 2) << describe(tiered);
+  EXPECT_TRUE(contains(tiered.err, "at least 16"));
+  EXPECT_TRUE(contains(tiered.err, "--max-memory"));
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
