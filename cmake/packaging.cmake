@@ -32,7 +32,7 @@ set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")
 # Building against the installed library needs Eigen and zlib headers (and OpenCL's, where the
 # package was built with OpenCL).
-set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, zlib1g-dev, liblz4-dev, ocl-icd-opencl-dev, pocl-opencl-icd")
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, zlib1g-dev, libzstd-dev, ocl-icd-opencl-dev, pocl-opencl-icd")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
   ${PROJECT_SOURCE_DIR}/cmake/debian/postinst
   ${PROJECT_SOURCE_DIR}/cmake/debian/prerm

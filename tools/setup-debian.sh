@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
-  zlib1g-dev liblz4-dev libeigen3-dev  # the map library: gzip, map files, cold tiers; host geometry and the public API
+  zlib1g-dev libzstd-dev libeigen3-dev  # the map library: gzip, map files, cold tiers; host geometry and the public API
   libcli11-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   liboctomap-dev          # OctoMap: the reference in benchmarks and agreement tests only
@@ -13,7 +13,7 @@ packages=(
   cyclonedds-dev cyclonedds-tools  # raymapd's DDS I/O (C API; idlc is in -tools)
   libsystemd-dev systemd  # sd_notify for Type=notify; systemd-analyze lints the unit in the tests
   libboost-dev            # Boost.Lockfree SPSC queues (header-only)
-  libzstd-dev liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks, SQLite (.db3) bags
+  liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks (zstd: above), SQLite (.db3) bags
   clang-format
   clang libclang-rt-14-dev clang-tidy  # the asan/tsan/fuzz presets (libFuzzer), clang-tidy
   patchelf                # tools/device-kit.sh: the kit's executables find its own libraries

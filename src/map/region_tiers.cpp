@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// RegionTiers: staging, background LZ4 compression and the spill file (see region_tiers.hpp).
+// RegionTiers: staging, background zstd compression and the spill file (see region_tiers.hpp).
 #include "src/map/region_tiers.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 
-#include <lz4.h>
+#include <zstd.h>
 
 #include "src/map/region_planes.hpp"
 #include "src/map/region_store.hpp"
@@ -33,12 +33,6 @@ Result<std::unique_ptr<RegionTiers>> RegionTiers::create(const RegionTierConfig&
     return fail(ErrorCode::kInvalidArgument, "the cold tiers need at least one staging region");
   }
   std::unique_ptr<RegionTiers> tiers(new RegionTiers(config, schema, voxels_per_region));
-  if (tiers->region_bytes_ > static_cast<std::size_t>(LZ4_MAX_INPUT_SIZE)) {
-    return fail(ErrorCode::kInvalidArgument,
-                "a region of " + std::to_string(tiers->region_bytes_) +
-                    " bytes is too large for the compressed tier (LZ4 takes at most " +
-                    std::to_string(LZ4_MAX_INPUT_SIZE) + ")");
-  }
   if (!config.spill_dir.empty()) {
     auto spill = SpillFile::create(config.spill_dir);
     if (!spill) {
@@ -270,9 +264,13 @@ int RegionTiers::spillDescriptorForTests() const {
   return spill_.descriptorForTests();
 }
 
+void RegionTiers::ZstdDeleter::operator()(ZSTD_CCtx_s* c) const noexcept { ZSTD_freeCCtx(c); }
+void RegionTiers::ZstdDeleter::operator()(ZSTD_DCtx_s* d) const noexcept { ZSTD_freeDCtx(d); }
+
 void RegionTiers::run() {
   std::vector<std::byte> planes;  // sized by the first job
   std::vector<std::byte> packed;
+  const std::unique_ptr<ZSTD_CCtx_s, ZstdDeleter> context(ZSTD_createCCtx());
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     work_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
@@ -290,7 +288,7 @@ void RegionTiers::run() {
     if (live() && !failure_) {
       lock.unlock();
       const Clock::time_point start = Clock::now();
-      compressJob(job, planes, packed, lock);
+      compressJob(job, context.get(), planes, packed, lock);
       stats_.compress_seconds += secondsSince(start);
     }
     free_staging_.push_back(job.staging);
@@ -299,13 +297,13 @@ void RegionTiers::run() {
   }
 }
 
-void RegionTiers::compressJob(const Job& job, std::vector<std::byte>& planes,
+void RegionTiers::compressJob(const Job& job, ZSTD_CCtx_s* context, std::vector<std::byte>& planes,
                               std::vector<std::byte>& packed, std::unique_lock<std::mutex>& lock) {
   // Called without the lock (the staging buffer stays this job's until it is pushed back free);
   // returns with it.
   if (planes.empty()) {
     planes.resize(region_bytes_);
-    packed.resize(static_cast<std::size_t>(LZ4_compressBound(static_cast<int>(region_bytes_))));
+    packed.resize(ZSTD_compressBound(region_bytes_));
   }
   const std::byte* in = staging_[job.staging].data();
   std::byte* out = planes.data();
@@ -314,12 +312,18 @@ void RegionTiers::compressJob(const Job& job, std::vector<std::byte>& planes,
     in += layer_bytes_[static_cast<std::size_t>(l)];
     out += layer_bytes_[static_cast<std::size_t>(l)];
   }
-  const int n = LZ4_compress_default(
-      reinterpret_cast<const char*>(planes.data()), reinterpret_cast<char*>(packed.data()),
-      static_cast<int>(region_bytes_), static_cast<int>(packed.size()));
+  // Level 1: twice LZ4's ratio on map regions at 0.8 of its speed (docs/large-maps.md); the
+  // speed matters less here, off the map's thread, than how many regions the budget holds.
+  const std::size_t n = context == nullptr
+                            ? 0
+                            : ZSTD_compressCCtx(context, packed.data(), packed.size(),
+                                                planes.data(), region_bytes_, kZstdLevel);
   lock.lock();
-  if (n <= 0) {
-    failure_ = Error{ErrorCode::kIo, "compressing a region for the compressed tier failed"};
+  if (context == nullptr || ZSTD_isError(n) != 0u) {
+    failure_ = Error{ErrorCode::kIo, std::string("compressing a region for the compressed tier "
+                                                 "failed: ") +
+                                         (context == nullptr ? "no memory for zstd's context"
+                                                             : ZSTD_getErrorName(n))};
     return;
   }
   const auto it = entries_.find(job.key);
@@ -327,12 +331,12 @@ void RegionTiers::compressJob(const Job& job, std::vector<std::byte>& planes,
       it->second.generation == job.generation) {
     Entry& e = it->second;
     e.state = State::kCompressed;
-    e.packed.assign(packed.begin(), packed.begin() + n);
+    e.packed.assign(packed.begin(), packed.begin() + static_cast<std::ptrdiff_t>(n));
     cold_order_.insert({e.last_use, job.key});
     ++stats_.compressions;
     stats_.raw_bytes_compressed += region_bytes_;
-    stats_.packed_bytes += static_cast<std::uint64_t>(n);
-    stats_.compressed_bytes += static_cast<std::uint64_t>(n);
+    stats_.packed_bytes += n;
+    stats_.compressed_bytes += n;
     stats_.compressed_peak_bytes = std::max(stats_.compressed_peak_bytes, stats_.compressed_bytes);
   }
   while (stats_.compressed_bytes > config_.compressed_bytes && !failure_) {
@@ -389,10 +393,15 @@ Expected<void, Error> RegionTiers::decodeInto(std::span<const std::byte> packed,
   if (restore_planes_.empty()) {
     restore_planes_.resize(region_bytes_);
   }
-  const int n = LZ4_decompress_safe(
-      reinterpret_cast<const char*>(packed.data()), reinterpret_cast<char*>(restore_planes_.data()),
-      static_cast<int>(packed.size()), static_cast<int>(restore_planes_.size()));
-  if (n != static_cast<int>(region_bytes_)) {
+  if (!decompressor_) {
+    decompressor_.reset(ZSTD_createDCtx());
+  }
+  const std::size_t n =
+      decompressor_ == nullptr
+          ? 0
+          : ZSTD_decompressDCtx(decompressor_.get(), restore_planes_.data(), restore_planes_.size(),
+                                packed.data(), packed.size());
+  if (ZSTD_isError(n) != 0u || n != region_bytes_) {
     const Vec3i c = RegionStore::unpackCoord(key);
     return fail(ErrorCode::kCorrupt, "region (" + std::to_string(c.x) + ", " + std::to_string(c.y) +
                                          ", " + std::to_string(c.z) + ") does not decompress");

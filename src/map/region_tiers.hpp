@@ -23,6 +23,9 @@
 #include "src/map/layer_schema.hpp"
 #include "src/map/spill_file.hpp"
 
+struct ZSTD_CCtx_s;
+struct ZSTD_DCtx_s;
+
 namespace raymap {
 
 class RegionStore;
@@ -80,7 +83,7 @@ struct RegionTierStats {
 /// Design: the map's thread evicts a region by copying it (every layer, scan marks included, so a
 /// region evicted between two batches of one scan keeps its marks) into one of a few staging
 /// buffers and releasing its slot at once; a background thread turns staged regions into byte
-/// planes (src/map/region_planes) compressed with LZ4, and moves the coldest compressed regions
+/// planes (src/map/region_planes) compressed with zstd, and moves the coldest compressed regions
 /// to the SpillFile when the compressed tier passes its budget. Bringing a region back copies it
 /// from wherever it is (a staging buffer, memory or the file). A region brought back only to be
 /// read keeps its cold copy, so evicting it again costs nothing (a "clean" eviction).
@@ -146,8 +149,14 @@ class RegionTiers {
   RegionTiers(const RegionTierConfig& config, const LayerSchema& schema,
               std::uint32_t voxels_per_region);
   void run();
-  void compressJob(const Job& job, std::vector<std::byte>& planes, std::vector<std::byte>& packed,
-                   std::unique_lock<std::mutex>& lock);
+  struct ZstdDeleter {
+    void operator()(ZSTD_CCtx_s* c) const noexcept;
+    void operator()(ZSTD_DCtx_s* d) const noexcept;
+  };
+  static constexpr int kZstdLevel = 1;
+
+  void compressJob(const Job& job, ZSTD_CCtx_s* context, std::vector<std::byte>& planes,
+                   std::vector<std::byte>& packed, std::unique_lock<std::mutex>& lock);
   Expected<void, Error> spillColdest(std::unique_lock<std::mutex>& lock);
   void eraseLocked(std::unordered_map<std::uint64_t, Entry>::iterator it);
   Expected<void, Error> decodeInto(std::span<const std::byte> packed, RegionStore& store,
@@ -173,7 +182,8 @@ class RegionTiers {
   std::optional<Error> failure_;
   SpillFile spill_;
   RegionTierStats stats_;
-  std::vector<std::byte> restore_planes_;  // map thread's scratch
+  std::vector<std::byte> restore_planes_;                   // map thread's scratch
+  std::unique_ptr<ZSTD_DCtx_s, ZstdDeleter> decompressor_;  // map thread's
   std::vector<std::byte> restore_packed_;
   std::thread worker_;
 };
