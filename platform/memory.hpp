@@ -34,6 +34,10 @@ class PageBlock {
   void adviseHugePages(std::size_t offset, std::size_t bytes) noexcept;
   /// @brief Writes every page once so later accesses never fault (for real-time users).
   void prefault() noexcept;
+  /// @brief Gives the pages of [offset, offset + bytes) back to the OS: they read as zeros again
+  /// and take no memory until written. Only whole pages: returns false (and does nothing) when
+  /// the range does not start and end on page boundaries, or the OS refuses.
+  bool discard(std::size_t offset, std::size_t bytes) noexcept;
 
  private:
   PageBlock(std::byte* data, std::size_t size) noexcept : data_(data), size_(size) {}

@@ -70,6 +70,15 @@ void PageBlock::adviseHugePages(std::size_t offset, std::size_t bytes) noexcept 
 #endif
 }
 
+bool PageBlock::discard(std::size_t offset, std::size_t bytes) noexcept {
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  if (data_ == nullptr || offset % page != 0 || bytes % page != 0 || offset + bytes > size_) {
+    return false;
+  }
+  // Private anonymous memory: after MADV_DONTNEED the next read finds the zero page.
+  return madvise(data_ + offset, bytes, MADV_DONTNEED) == 0;
+}
+
 void PageBlock::prefault() noexcept {
   const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
   for (std::size_t offset = 0; offset < size_; offset += page) {

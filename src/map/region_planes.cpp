@@ -23,7 +23,7 @@ void encodeBytePlanes(const std::byte* src, std::uint32_t voxels, std::uint32_t 
 }
 
 void decodeBytePlanes(const std::byte* in, std::uint32_t voxels, std::uint32_t words_per_voxel,
-                      std::byte* dst) noexcept {
+                      std::byte* dst, bool skip_zero_words) noexcept {
   const std::size_t n = voxels;
   for (std::uint32_t j = 0; j < words_per_voxel; ++j) {
     const std::byte* plane = in + std::size_t{j} * 4u * n;
@@ -32,7 +32,9 @@ void decodeBytePlanes(const std::byte* in, std::uint32_t voxels, std::uint32_t w
                                  std::to_integer<std::uint32_t>(plane[n + v]) << 8 |
                                  std::to_integer<std::uint32_t>(plane[2 * n + v]) << 16 |
                                  std::to_integer<std::uint32_t>(plane[3 * n + v]) << 24;
-      std::memcpy(dst + (v * words_per_voxel + j) * 4u, &word, sizeof(word));
+      if (word != 0 || !skip_zero_words) {
+        std::memcpy(dst + (v * words_per_voxel + j) * 4u, &word, sizeof(word));
+      }
     }
   }
 }

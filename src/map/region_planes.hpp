@@ -21,7 +21,9 @@ void encodeBytePlanes(const std::byte* src, std::uint32_t voxels, std::uint32_t 
                       std::byte* out) noexcept;
 
 /// @brief Inverse of encodeBytePlanes(): `in` holds the planes, `dst` takes the native words.
+/// `skip_zero_words`: `dst` already reads as zeros, and words that are zero are not written, so
+/// that pages of `dst` no non-zero word falls in are never touched (and never become resident).
 void decodeBytePlanes(const std::byte* in, std::uint32_t voxels, std::uint32_t words_per_voxel,
-                      std::byte* dst) noexcept;
+                      std::byte* dst, bool skip_zero_words = false) noexcept;
 
 }  // namespace raymap

@@ -71,6 +71,7 @@ Result<RegionStore> RegionStore::create(const Config& config) {
   store.coords_.assign(config.capacity, Vec3i{});
   store.used_.assign(config.capacity, 0);
   store.fresh_.assign(config.capacity, 1);  // prefault() writes zeros: still zero pages
+  store.sparse_zero_.assign(config.capacity, 0);
   store.free_slots_.reserve(config.capacity);
   for (std::uint32_t s = config.capacity; s > 0; --s) {
     store.free_slots_.push_back(s - 1);  // slot 0 is handed out first
@@ -139,12 +140,31 @@ Expected<std::uint32_t, StoreError> RegionStore::findOrCreateUncleared(Vec3i reg
 void RegionStore::clearRegion(std::uint32_t slot) noexcept {
   for (int l = 0; l < schema_.size(); ++l) {
     // A slot's first use finds the OS's zero pages: zero-valued layers need no writes, and pages
-    // that are never written (voxel means away from surfaces) never become resident.
-    if (!(schema_.at(l).clearsToZero() && fresh_[slot] != 0)) {
+    // that are never written (voxel means away from surfaces) never become resident. The same
+    // holds for sparse layers whose pages discardSparseLayers() gave back.
+    const LayerSpec& spec = schema_.at(l);
+    const bool zero_pages = fresh_[slot] != 0 || (sparse_zero_[slot] != 0 && !spec.dense);
+    if (!(spec.clearsToZero() && zero_pages)) {
       clearLayer(slot, l);
     }
   }
   fresh_[slot] = 0;
+  sparse_zero_[slot] = 0;
+}
+
+void RegionStore::discardSparseLayers(std::uint32_t slot) noexcept {
+  bool all = true;
+  for (int l = 0; l < schema_.size(); ++l) {
+    const LayerSpec& spec = schema_.at(l);
+    if (spec.dense || !spec.clearsToZero()) {
+      continue;
+    }
+    const auto u = static_cast<std::size_t>(l);
+    all = pool_.discard(layer_offset_[u] + std::size_t{slot} * layer_region_bytes_[u],
+                        layer_region_bytes_[u]) &&
+          all;
+  }
+  sparse_zero_[slot] = all ? 1 : 0;
 }
 
 void RegionStore::clearLayer(std::uint32_t slot, int layer) noexcept {

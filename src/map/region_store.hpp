@@ -88,7 +88,19 @@ class RegionStore {
 
   /// @brief Records that a slot's memory was written by someone other than clearRegion() (a
   /// region restored from the cold tiers), so it is no longer the OS's zero pages.
-  void noteWritten(std::uint32_t slot) noexcept { fresh_[slot] = 0; }
+  void noteWritten(std::uint32_t slot) noexcept {
+    fresh_[slot] = 0;
+    sparse_zero_[slot] = 0;
+  }
+  /// @brief For a slot about to be released: gives the pages of its sparse zero-clearing layers
+  /// (LayerSpec::dense false: voxel means, NDT Gaussians...) back to the OS, so that the region
+  /// that takes the slot next makes resident only the pages it writes, as a fresh slot does
+  /// (clearRegion() then skips them; restoring writes only their non-zero words). Not for memory
+  /// a device uses in place. Real-time: no (a system call per layer).
+  void discardSparseLayers(std::uint32_t slot) noexcept;
+  /// @brief True between discardSparseLayers() and the slot's next use: its sparse zero-clearing
+  /// layers read as zeros and none of their pages is resident.
+  bool sparseLayersZero(std::uint32_t slot) const noexcept { return sparse_zero_[slot] != 0; }
 
   bool inUse(std::uint32_t slot) const noexcept { return used_[slot] != 0; }
   /// @brief For a slot findOrCreateUncleared() has just created: true when no region held it
@@ -152,6 +164,7 @@ class RegionStore {
   std::vector<Vec3i> coords_;
   std::vector<std::uint8_t> used_;
   std::vector<std::uint8_t> fresh_;  // slot never used: its pages are still the OS's zero pages
+  std::vector<std::uint8_t> sparse_zero_;  // sparse zero-clearing layers discarded, not yet used
   std::vector<std::uint32_t> free_slots_;  // stack
   RegionIndex index_;                      // packed coordinate -> slot
 };

@@ -408,7 +408,12 @@ Expected<void, Error> RegionTiers::decodeInto(std::span<const std::byte> packed,
   }
   const std::byte* in = restore_planes_.data();
   for (int l = 0; l < schema_.size(); ++l) {
-    decodeBytePlanes(in, voxels_, schema_.at(l).bytes_per_voxel / 4u, store.layerBytes(slot, l));
+    // Sparse layers of a slot whose pages were given back: write only the non-zero words, so a
+    // restored region is as resident as it was when it was built.
+    const LayerSpec& spec = schema_.at(l);
+    const bool zero = (store.onZeroPages(slot) || store.sparseLayersZero(slot)) && !spec.dense &&
+                      spec.clearsToZero();
+    decodeBytePlanes(in, voxels_, spec.bytes_per_voxel / 4u, store.layerBytes(slot, l), zero);
     in += layer_bytes_[static_cast<std::size_t>(l)];
   }
   return {};

@@ -42,7 +42,7 @@ struct RegionTierConfig {
   std::string spill_dir;
   /// Regions copied out of the pool and waiting for the compressor: the most eviction gets ahead
   /// of compression before the map waits (memory: this many regions, uncompressed).
-  std::uint32_t staging_regions = 16;
+  std::uint32_t staging_regions = 32;
 };
 
 /// @brief What the tiers hold and what moving regions through them cost. Value type; counters

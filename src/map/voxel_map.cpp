@@ -393,7 +393,10 @@ Expected<void, StoreError> VoxelMap::makeRoom() const noexcept {
     return Unexpected(StoreError::kFull);  // every region is in use now: the pool is too small
   }
   // A burst of the least recently used: the scan above is paid once per burst, not per region.
-  const std::size_t burst = std::clamp<std::size_t>(store_.capacity() / 16u, 1u, 256u);
+  // No larger than the staging buffers, or the burst would wait for the compressor (measured:
+  // bursts of 156 regions with 16 buffers waited 6.2 s of a 35 s run).
+  const std::size_t burst = std::clamp<std::size_t>(
+      std::min<std::size_t>(store_.capacity() / 16u, config_.tiers.staging_regions), 1u, 256u);
   if (victims_.size() > burst) {
     std::nth_element(victims_.begin(), victims_.begin() + static_cast<std::ptrdiff_t>(burst),
                      victims_.end());
@@ -412,6 +415,11 @@ Expected<void, StoreError> VoxelMap::makeRoom() const noexcept {
                             slot_dirty_[slot] != 0);
     if (!ok) {
       return Unexpected(StoreError::kTierFailed);
+    }
+    if (eviction_hook_ == nullptr) {
+      // Not while a device may use the pool in place (or have it page-locked): the pages of
+      // the sparse layers go back to the OS, so the slot's next region costs what it writes.
+      store_.discardSparseLayers(slot);
     }
     store_.release(slot);
   }

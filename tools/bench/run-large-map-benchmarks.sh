@@ -54,6 +54,9 @@ for round in $(seq "$repeat"); do
   done
 done
 
+tvalue() {  # tvalue KEY FILE: a number of the compact memory_tiers object
+  grep -o "\"$1\":[0-9.e+-]*" "$2" | head -1 | cut -d: -f2
+}
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 base=$(for r in $(seq "$repeat"); do value rays_per_second "$out/unlimited.$r.json"; done | median)
 summary="$out/large-map-summary.md"
@@ -62,7 +65,7 @@ summary="$out/large-map-summary.md"
   echo
   echo "drive: $km km, $(value rays_in "$out/unlimited.0.json") rays, $regions regions of 32^3 at 0.1 m ($(( regions * region_bytes >> 20 )) MiB of pool when unlimited)"
   echo
-  echo "| pool | compressed tier | rays/s | / unlimited | peak RSS (MiB) | regions compressed / spilled at the end | spill file (MiB) | restores | waits | ratio | file equal |"
+  echo "| pool | compressed tier | rays/s | / unlimited | peak RSS (MiB) | regions compressed / spilled at the end | spill file (MiB) | restores | waits (time) | ratio | file equal |"
   echo "| --- | --- | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | --- |"
   for c in "${configs[@]}"; do
     rate=$(for r in $(seq "$repeat"); do value rays_per_second "$out/$c.$r.json"; done | median)
@@ -73,7 +76,7 @@ summary="$out/large-map-summary.md"
     if [ "$c" = unlimited ]; then
       tiers="| - | - | - | - | - "
     else
-      tiers="| $(value regions_compressed "$last") / $(value regions_spilled "$last") | $(awk -v b="$(value spill_file_bytes "$last")" 'BEGIN{printf "%.0f", b/1048576}') | $(value restores "$last") | $(value waits "$last") | $(awk -v r="$(value compression_ratio "$last")" 'BEGIN{printf "%.1f", r}') "
+      tiers="| $(tvalue regions_compressed "$last") / $(tvalue regions_spilled "$last") | $(awk -v b="$(tvalue spill_file_bytes "$last")" 'BEGIN{printf "%.0f", b/1048576}') | $(tvalue restores "$last") | $(tvalue waits "$last") ($(awk -v w="$(tvalue wait_seconds "$last")" 'BEGIN{printf "%.1f", w}') s) | $(awk -v r="$(tvalue compression_ratio "$last")" 'BEGIN{printf "%.1f", r}') "
     fi
     printf "| %s | %s | %.0f | %.2f | %.0f %s| %s |\n" "$c" \
       "$(case $c in eighth-spill) echo 32MiB ;; unlimited) echo - ;; *) echo 1GiB ;; esac)" \
