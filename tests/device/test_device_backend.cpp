@@ -275,12 +275,8 @@ TEST_P(DeviceMemoryMode, AMapLargerThanItsPoolStreamsThroughTheTiersAndEqualsThe
     VoxelMap cpu = test::makeMap(config);
     auto cpu_backend = test::cpuBackend(cpu, 1);
     test::integrateEachScan(cpu, *cpu_backend, rays);
-    MapConfig tiered = config;
-    tiered.memory_budget_bytes =
-        cpu.regionCount() / 8 * config.schema().bytesPerRegion(config.geometry.voxelsPerRegion());
-    tiered.tiers.enabled = true;
-    tiered.tiers.compressed_bytes = 64u << 10;
-    tiered.tiers.spill_dir = dir.path().string();
+    const MapConfig tiered =
+        test::withTiers(config, cpu.regionCount() / 8, 64u << 10, dir.path().string());
     VoxelMap map = test::makeMap(tiered);
     DeviceBackendOptions options;
     options.memory = GetParam();

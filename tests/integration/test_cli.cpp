@@ -38,13 +38,6 @@ namespace fs = std::filesystem;
 // Running the program
 // ---------------------------------------------------------------------------------------------
 
-testing::AssertionResult contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) {
-    return testing::AssertionSuccess();
-  }
-  return testing::AssertionFailure() << "'" << part << "' not found in:\n" << text;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Files
 // ---------------------------------------------------------------------------------------------

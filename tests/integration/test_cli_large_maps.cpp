@@ -19,13 +19,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-testing::AssertionResult contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) {
-    return testing::AssertionSuccess();
-  }
-  return testing::AssertionFailure() << "'" << part << "' not found in:\n" << text;
-}
-
 /// The drive (test::corridorDrive, 120 m) as a ray cloud in `dir`; regions of 16^3 voxels of
 /// 0.1 m (384 regions of 48 KiB with the voxel mean), of which a scan touches about 60.
 struct Drive {

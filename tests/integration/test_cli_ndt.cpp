@@ -57,13 +57,6 @@ void writeRayCloudWithoutIntensity(const std::string& path) {
   writePly(path, file);
 }
 
-testing::AssertionResult contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) {
-    return testing::AssertionSuccess();
-  }
-  return testing::AssertionFailure() << "'" << part << "' not found in:\n" << text;
-}
-
 /// A binary little-endian PLY as the exports write it: header lines and the data bytes.
 struct PlyFile {
   std::vector<std::string> header;

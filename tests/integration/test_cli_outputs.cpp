@@ -36,13 +36,6 @@ namespace fs = std::filesystem;
 
 const std::string kScenes = RAYMAP_SCENES_DIR;
 
-testing::AssertionResult contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) {
-    return testing::AssertionSuccess();
-  }
-  return testing::AssertionFailure() << "'" << part << "' not found in:\n" << text;
-}
-
 std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
   a.insert(a.end(), b.begin(), b.end());
   return a;

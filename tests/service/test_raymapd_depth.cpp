@@ -4,10 +4,8 @@
 // /tf_static), raymapd maps it alone, the GridMaps give the stairs' true heights, and the
 // camera's own diagnostics status counts what came and what was refused, by reason.
 #include <algorithm>
-#include <chrono>
 #include <cstring>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -129,21 +127,23 @@ TEST(RaymapdDepth, RefusedImagesAreCountedByReasonAndTheCameraWarns) {
                              dds::imageType(), dds::Reliability::kBestEffort, 8);
   ASSERT_TRUE(image);
   ASSERT_TRUE(rig.waitForService(kStartWaitS)) << daemon.log();
-  // Best effort: a sample written before this writer has found raymapd's reader is lost (seen on
-  // a loaded machine: 2 refusals counted of 3). Wait for the match, not for a time.
-  const auto match_deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(kStartWaitS);
-  while (image->matchedReaders() == 0 && std::chrono::steady_clock::now() < match_deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ASSERT_GE(image->matchedReaders(), 1u) << daemon.log();
-  // Before any CameraInfo: an image raymapd cannot back-project.
+  // Before any CameraInfo: an image raymapd cannot back-project. Best effort, and raymapd's
+  // reader may not know this writer yet when the writer already knows the reader (discovery is
+  // not symmetric): seen twice on loaded CI runs, 2 refusals counted of 3. So it is written until
+  // raymapd reports it, waiting for the event rather than for a time.
+  const std::string s = std::string("raymapd: sensor ") + kCamera + "/";
   std::vector<std::byte> cdr;
   std::vector<float> depth(16 * 12, 1.0f);
   dds::serializeDepthImage(platform::realtimeNowNs(), "body_front_optical_frame", 16, 12,
                            dds::DepthEncoding::k32FC1, false, depth, cdr);
-  ASSERT_TRUE(image->write(cdr));
   std::vector<driver::ReceivedGridMap> maps;
+  const auto counted = [&] { return rig.value(s + "images_without_camera_info") >= 1.0; };
+  for (int attempt = 0; attempt < 30 && !counted(); ++attempt) {
+    ASSERT_TRUE(image->write(cdr));
+    rig.ros.settleUntil(1.5, counted, &maps);
+  }
+  const double without = rig.value(s + "images_without_camera_info");
+  ASSERT_GE(without, 1.0) << daemon.log();
   rig.play(2.0, maps);  // the camera's own frames, with their CameraInfo
   // Then one in an encoding raymap does not take ("32FC1" turned into "mono8": same length), and
   // one whose size is not the camera's.
@@ -157,12 +157,11 @@ TEST(RaymapdDepth, RefusedImagesAreCountedByReasonAndTheCameraWarns) {
   ASSERT_TRUE(image->write(cdr));  // 16 x 12: not the camera's 424 x 240
   rig.ros.settle(2.5, &maps);
 
-  const std::string s = std::string("raymapd: sensor ") + kCamera + "/";
-  EXPECT_EQ(rig.value(s + "images_without_camera_info"), 1.0) << daemon.log();
-  EXPECT_EQ(rig.value(s + "rejected"), 3.0);
+  EXPECT_EQ(rig.value(s + "images_without_camera_info"), without) << daemon.log();
+  EXPECT_EQ(rig.value(s + "rejected"), without + 2.0);
   EXPECT_EQ(rig.value("raymapd: pipeline/images_malformed_unsupported_encoding"), 1.0);
   EXPECT_EQ(rig.value("raymapd: pipeline/images_malformed_camera_info_mismatch"), 1.0);
-  EXPECT_EQ(rig.value("raymapd: pipeline/images_without_camera_info"), 1.0);
+  EXPECT_EQ(rig.value("raymapd: pipeline/images_without_camera_info"), without);
   EXPECT_GT(rig.value(s + "scans_integrated"), 3.0);  // the good frames still went in
 }
 

@@ -126,4 +126,11 @@ std::string readFile(const std::string& path) {
   return text.str();
 }
 
+testing::AssertionResult contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) {
+    return testing::AssertionSuccess();
+  }
+  return testing::AssertionFailure() << "'" << part << "' not found in:\n" << text;
+}
+
 }  // namespace raymap::test

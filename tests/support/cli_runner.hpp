@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 namespace raymap::test {
 
 /// What one run of the program did.
@@ -22,6 +24,9 @@ RunResult runProgram(std::vector<std::string> words);
 
 /// @brief A run for failure messages: exit code, stdout and stderr.
 std::string describe(const RunResult& r);
+
+/// @brief Success when `text` contains `part`; the failure shows the whole text.
+testing::AssertionResult contains(const std::string& text, const std::string& part);
 
 /// @brief The whole content of a file ("" when it cannot be read).
 std::string readFile(const std::string& path);

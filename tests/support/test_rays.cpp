@@ -161,6 +161,32 @@ void integrateEachScan(VoxelMap& map, Backend& backend, const std::vector<Ray>& 
   ASSERT_TRUE(backend.synchronise().has_value());
 }
 
+MapConfig withTiers(MapConfig config, std::uint64_t regions, std::uint64_t compressed_bytes,
+                    const std::string& spill_dir) {
+  config.memory_budget_bytes =
+      regions * config.schema().bytesPerRegion(config.geometry.voxelsPerRegion());
+  config.tiers.enabled = true;
+  config.tiers.compressed_bytes = compressed_bytes;
+  config.tiers.spill_dir = spill_dir;
+  return config;
+}
+
+Expected<void, IntegrateError> integrateUntilFailure(VoxelMap& map, Backend& backend,
+                                                     const std::vector<Ray>& rays) {
+  RayPreparer preparer(map, RayFilter{});
+  std::vector<PreparedRay> prepared(rays.size() + 64);
+  for (std::size_t begin = 0; begin < rays.size(); begin += 256) {
+    const std::size_t n = std::min<std::size_t>(256, rays.size() - begin);
+    const auto p = preparer.prepare(std::span<const Ray>(rays).subspan(begin, n), prepared);
+    auto status = backend.integrate(std::span<const PreparedRay>(prepared.data(), p.written));
+    if (!status) {
+      return status;
+    }
+    (void)map.drainTiers();  // its failure is the next batch's
+  }
+  return {};
+}
+
 MapConfig smallConfig(Semantics semantics, std::int32_t region_voxels) {
   MapConfig c;
   c.semantics = semantics;

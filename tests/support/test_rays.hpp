@@ -45,6 +45,16 @@ std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan);
 /// the data of the tests of maps larger than their memory. Deterministic.
 std::vector<Ray> corridorDrive(double length, double step);
 
+/// @brief `config` with a pool of `regions` regions and the cold tiers on: a compressed tier of
+/// `compressed_bytes`, the spill file in `spill_dir` (empty: none).
+MapConfig withTiers(MapConfig config, std::uint64_t regions, std::uint64_t compressed_bytes,
+                    const std::string& spill_dir);
+
+/// @brief Integrates `rays` 256 at a time (one corridorDrive() scan), letting the compressor catch
+/// up after each batch, until a batch fails; returns the first failure, or success.
+Expected<void, IntegrateError> integrateUntilFailure(VoxelMap& map, Backend& backend,
+                                                     const std::vector<Ray>& rays);
+
 /// @brief integrate() one scan (run of equal `scan`) per batch, then synchronise(): a batch's
 /// regions must fit a tiered map's pool at once.
 void integrateEachScan(VoxelMap& map, Backend& backend, const std::vector<Ray>& rays);

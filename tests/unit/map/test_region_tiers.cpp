@@ -47,13 +47,8 @@ TEST(RegionTiers, RegionsComeBackBitForBitFromEveryTierWhileTheCompressorRuns) {
     auto whole_backend = test::cpuBackend(whole, 2);
     test::integrateEachScan(whole, *whole_backend, rays);
 
-    MapConfig tiered = config;
-    tiered.memory_budget_bytes =
-        64 * config.schema().bytesPerRegion(config.geometry.voxelsPerRegion());
-    tiered.tiers.enabled = true;
-    tiered.tiers.compressed_bytes = 32u << 10;  // a few regions: the rest spill
-    tiered.tiers.staging_regions = 2;           // eviction often waits for the compressor
-    tiered.tiers.spill_dir = dir.path().string();
+    MapConfig tiered = test::withTiers(config, 64, 32u << 10, dir.path().string());
+    tiered.tiers.staging_regions = 2;  // eviction often waits for the compressor
     VoxelMap map = test::makeMap(tiered);
     auto backend = test::cpuBackend(map, 2);
     test::integrateEachScan(map, *backend, rays);
