@@ -90,7 +90,8 @@ TEST_P(TieredMap, AnEighthOfTheMemoryGivesTheSameFileAsUnlimitedMemory) {
 
   // An eighth of the regions in the pool, a compressed tier that holds a few dozen regions: most
   // of the drive ends up in the spill file.
-  VoxelMap small = test::makeMap(test::withTiers(base, regions / 8, 64u << 10, dir.path().string()));
+  VoxelMap small =
+      test::makeMap(test::withTiers(base, regions / 8, 64u << 10, dir.path().string()));
   auto small_backend = test::cpuBackend(small, threads);
   test::integrateEachScan(small, *small_backend, drive());
   ASSERT_FALSE(small.tierFailure().has_value()) << small.tierFailure()->message;
@@ -144,17 +145,16 @@ TEST_P(TieredMap, AnEighthOfTheMemoryGivesTheSameFileAsUnlimitedMemory) {
 
 // Every mode on one thread, and the two occupancy semantics also on two (the parallel path's
 // own region creation): each case builds the drive twice, which under the sanitizers is seconds.
-INSTANTIATE_TEST_SUITE_P(
-    EveryMode, TieredMap,
-    ::testing::Values(std::tuple{kModes[0], 1u}, std::tuple{kModes[0], 2u},
-                      std::tuple{kModes[1], 1u}, std::tuple{kModes[1], 2u},
-                      std::tuple{kModes[2], 1u}, std::tuple{kModes[3], 1u},
-                      std::tuple{kModes[4], 1u}, std::tuple{kModes[5], 2u},
-                      std::tuple{kModes[6], 1u}),
-    [](const ::testing::TestParamInfo<std::tuple<ModeCase, unsigned>>& param) {
-      return std::string(std::get<0>(param.param).name) + "_" +
-             std::to_string(std::get<1>(param.param)) + "_threads";
-    });
+INSTANTIATE_TEST_SUITE_P(EveryMode, TieredMap,
+                         ::testing::Values(std::tuple{kModes[0], 1u}, std::tuple{kModes[0], 2u},
+                                           std::tuple{kModes[1], 1u}, std::tuple{kModes[1], 2u},
+                                           std::tuple{kModes[2], 1u}, std::tuple{kModes[3], 1u},
+                                           std::tuple{kModes[4], 1u}, std::tuple{kModes[5], 2u},
+                                           std::tuple{kModes[6], 1u}),
+                         [](const ::testing::TestParamInfo<std::tuple<ModeCase, unsigned>>& param) {
+                           return std::string(std::get<0>(param.param).name) + "_" +
+                                  std::to_string(std::get<1>(param.param)) + "_threads";
+                         });
 
 /// Builds the drive's occupancy map with unlimited memory and saves it to `path`.
 VoxelMap wholeDrive(const std::string& path) {
@@ -258,7 +258,8 @@ TEST(TieredMapFile, HeightMapsOfAColdPartOfTheMapMatchTheWholeMap) {
 // ---- failures ----
 
 TEST(TieredMapFailure, AMissingSpillFolderFailsAtCreationNamingIt) {
-  MapConfig c = test::withTiers(corridorConfig(Semantics::kPerRay), 32, 1u << 20, "/nonexistent/spill");
+  MapConfig c =
+      test::withTiers(corridorConfig(Semantics::kPerRay), 32, 1u << 20, "/nonexistent/spill");
   auto map = VoxelMap::create(c);
   ASSERT_FALSE(map.has_value());
   EXPECT_NE(map.error().message.find("/nonexistent/spill"), std::string::npos)
@@ -310,8 +311,8 @@ class FileSizeLimit {
 
 TEST(TieredMapFailure, AFullDiskFailsIntegrationNamingTheSpillFile) {
   TempDir dir;
-  VoxelMap map =
-      test::makeMap(test::withTiers(corridorConfig(Semantics::kPerRay), 64, 16u << 10, dir.path().string()));
+  VoxelMap map = test::makeMap(
+      test::withTiers(corridorConfig(Semantics::kPerRay), 64, 16u << 10, dir.path().string()));
   auto backend = test::cpuBackend(map, 1);
   Expected<void, IntegrateError> status;
   {
