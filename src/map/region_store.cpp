@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
-#include <tuple>
 #include <utility>
 
 namespace raymap {
@@ -202,16 +201,6 @@ void RegionStore::clear() noexcept {
       release(slot);
     }
   }
-}
-
-std::vector<std::pair<Vec3i, std::uint32_t>> RegionStore::regionsInCoordOrder() const {
-  std::vector<std::pair<Vec3i, std::uint32_t>> regions;
-  regions.reserve(size());
-  forEachRegion([&](std::uint32_t slot, Vec3i coord) { regions.emplace_back(coord, slot); });
-  std::sort(regions.begin(), regions.end(), [](const auto& a, const auto& b) {
-    return std::tie(a.first.z, a.first.y, a.first.x) < std::tie(b.first.z, b.first.y, b.first.x);
-  });
-  return regions;
 }
 
 }  // namespace raymap

@@ -135,11 +135,6 @@ class RegionStore {
     }
   }
 
-  /// @brief Every region as (coord, slot), in coordinate order (z, y, x): what exports and files
-  /// walk so that equal maps give equal output whatever order their regions were created in.
-  /// @rt allocates: yes.
-  std::vector<std::pair<Vec3i, std::uint32_t>> regionsInCoordOrder() const;
-
   /// @brief The 63-bit index key of an in-range region coordinate (never all ones).
   static std::uint64_t packCoord(Vec3i region) noexcept;
   /// @brief Inverse of packCoord().

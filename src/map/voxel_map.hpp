@@ -186,7 +186,9 @@ class VoxelMap {
   bool tiered() const noexcept { return tiers_ != nullptr; }
   /// @brief Regions of the map in every tier (store().size() counts the pool only).
   std::uint64_t regionCount() const;
-  /// @brief Every region's coordinate, in every tier, in coordinate order (z, y, x).
+  /// @brief Every region's coordinate, in every tier, in coordinate order (z, y, x): what exports
+  /// and files walk (RegionCursor), so equal maps give equal output whatever order their regions
+  /// were created in. @rt allocates: yes.
   std::vector<Vec3i> regionCoordsInOrder() const;
   /// @brief Slot of a region the map holds, brought into the pool (its cold copy kept: reading it
   /// changes nothing) when it is cold; kNoSlot when the map has no such region. kFull when every

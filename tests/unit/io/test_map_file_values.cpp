@@ -168,7 +168,7 @@ TEST_P(NonFiniteVoxel, IsRefusedNamingTheRegionLayerAndVoxel) {
   writeFileBytes(bad, withEditedRegion(readFileBytes(good), 1, [&](Bytes& raw) {
                    putWord(raw, layer_offset, voxels, c.word, kVoxel, c.value);
                  }));
-  const Vec3i region = map.store().regionsInCoordOrder()[1].first;
+  const Vec3i region = map.regionCoordsInOrder()[1];
   const Vec3i voxel = map.voxelAt(region, kVoxel);
 
   // Act
