@@ -6,8 +6,10 @@
 #   devices    raymap devices (CUDA, and OpenCL where NVIDIA's OpenCL driver is present)
 #   tests      the CUDA unit, device and data-agreement tests and the height-map tests
 #   sanitizer  compute-sanitizer memcheck and racecheck over a short integration of each map mode
+#              and of a map larger than its memory pool
 #   bench      raymap bench on the Ouster data and a synthetic scene, every map mode, CUDA
 #              against the CPU backend on all cores
+#   scaling    the CPU backend's rays/s at 1, 2, 4, 8 and 16 threads, both semantics (issue 29)
 #   heightmap  the CUDA height-map generator against the CPU one: the same cells, and timings
 #   raymapd    raymapd on CUDA for 30 s at an Ouster OS-1-128's rate, then at rising rates to the
 #              highest it keeps up with (loopback DDS only)
@@ -22,8 +24,8 @@
 # CPU parts passed), 2 bad arguments.
 set -uo pipefail
 kit=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-all_sections=(devices tests sanitizer bench heightmap raymapd profile)
-json_lists=(devices tests agreement sanitizer bench heightmap raymapd profile)  # results.json's lists
+all_sections=(devices tests sanitizer bench scaling heightmap raymapd profile)
+json_lists=(devices tests agreement sanitizer bench scaling heightmap raymapd profile)  # results.json's lists
 only=""
 budget=360
 while [ $# -gt 0 ]; do

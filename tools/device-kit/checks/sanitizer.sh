@@ -1,7 +1,9 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # Section "sanitizer" of the device kit (sourced by run.sh): compute-sanitizer's memcheck (out of
 # bounds and misaligned device accesses, bad API calls) and racecheck (shared-memory hazards) over
-# a short integration of every map mode and over both height-map modes, on 2 scans of the yard
+# a short integration of every map mode, over both height-map modes and over a map streamed
+# through a pool smaller than itself (the tiers of docs/large-maps.md: regions leave the device's
+# cache for the compressed tier and the spill file and come back), on 2 scans of the yard
 # (65,536 rays). The runs go side by side; run.sh's tests section starts them before its tests
 # so that the two overlap.
 
@@ -53,10 +55,18 @@ sanitizer_start() {
   local tool job args
   for tool in memcheck racecheck; do
     for job in occupancy:ray occupancy:scan ndt-om:ray ndt-tm:ray decay:ray tsdf:ray \
-      occupancy+decay:ray heightmap:planar heightmap:fill; do
+      occupancy+decay:ray heightmap:planar heightmap:fill tiers:ray; do
       local what=${job%%:*} how=${job#*:}
       if [ "$what" = heightmap ]; then
         args=(heightmap "$work/small.rmap" --backend cuda --mode "$how" --virtual-surfaces -q)
+      elif [ "$what" = tiers ]; then
+        # A pool of 64 regions for a map of 289, batches of 2,048 rays (a batch must fit the
+        # pool) and a 64 KiB compressed tier: regions leave the device about 800 times and much
+        # of the map goes to the spill file.
+        mkdir -p "$work/tiers-$tool"
+        args=(populate "$work/small.ply" --backend cuda --max-range 20 --max-memory 24MiB --batch-rays 2048
+          --compressed-memory 64KiB --spill-dir "$work/tiers-$tool"
+          --output "$work/tiers-$tool/small.rmap" -q)
       else
         args=(bench "$work/small.ply" --backend cuda --mode "$what" --semantics-list "$how"
           --repeat 1 --resolution 0.1 --max-range 20 --json "$work/logs/sanitizer-$tool-$what-$how.json")
