@@ -13,7 +13,7 @@ bench_common=(--resolution 0.1 --max-range 20 --hit 0.7 --miss 0.4 --steady-stat
 # bench_reserve: seconds the sections after this one need.
 bench_reserve() {
   local r=10
-  wanted scaling && r=$((r + 110))
+  wanted scaling && r=$((r + 120))
   wanted heightmap && r=$((r + 25))
   if wanted raymapd; then
     if [ "$have_cuda" = 1 ]; then r=$((r + 100)); else r=$((r + 30)); fi
