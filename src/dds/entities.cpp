@@ -126,7 +126,35 @@ RawReader::~RawReader() {
   deleteEntity(topic_);
 }
 
-int RawReader::take(SampleFn fn, void* context, int max_samples) noexcept {
+HeldSample& HeldSample::operator=(HeldSample&& other) noexcept {
+  if (this != &other) {
+    reset();
+    sample_ = std::exchange(other.sample_, nullptr);
+    ref_ = std::exchange(other.ref_, nullptr);
+    ref_base_ = std::exchange(other.ref_base_, nullptr);
+    bytes_ = std::exchange(other.bytes_, {});
+    source_timestamp_ns_ = other.source_timestamp_ns_;
+  }
+  return *this;
+}
+
+void HeldSample::reset() noexcept {
+  if (ref_ != nullptr) {
+    ddsrt_iovec_t ref{};
+    ref.iov_base = ref_base_;
+    ref.iov_len = static_cast<decltype(ref.iov_len)>(bytes_.size());
+    ddsi_serdata_to_ser_unref(ref_, &ref);
+    ref_ = nullptr;
+    ref_base_ = nullptr;
+  }
+  if (sample_ != nullptr) {
+    ddsi_serdata_unref(sample_);
+    sample_ = nullptr;
+  }
+  bytes_ = {};
+}
+
+int RawReader::takeHeld(HeldSampleFn fn, void* context, int max_samples) noexcept {
   // Samples are taken in small batches into a stack array: no allocation on our side.
   constexpr int kBatch = 16;
   struct ddsi_serdata* samples[kBatch];
@@ -144,24 +172,26 @@ int RawReader::take(SampleFn fn, void* context, int max_samples) noexcept {
       return delivered > 0 ? delivered : taken;
     }
     for (int i = 0; i < taken; ++i) {
-      struct ddsi_serdata* sample = samples[i];
-      if (infos[i].valid_data) {
-        // The default serdata is one contiguous block: the 4-byte encapsulation header followed
-        // by the payload, and ddsi_serdata_size() counts both. to_ser_ref hands out a reference
-        // to it (no copy, no allocation).
-        const std::uint32_t size = ddsi_serdata_size(sample);
-        ddsrt_iovec_t ref{};
-        struct ddsi_serdata* held = ddsi_serdata_to_ser_ref(sample, 0, size, &ref);
-        if (held != nullptr) {
-          fn(context,
-             std::span<const std::byte>(static_cast<const std::byte*>(ref.iov_base),
-                                        static_cast<std::size_t>(ref.iov_len)),
-             infos[i].source_timestamp);
-          ddsi_serdata_to_ser_unref(held, &ref);
-          ++delivered;
-        }
+      HeldSample held;
+      held.sample_ = samples[i];  // given back by `held` whatever happens below
+      if (!infos[i].valid_data) {
+        continue;
       }
-      ddsi_serdata_unref(sample);
+      // The default serdata is one contiguous block: the 4-byte encapsulation header followed
+      // by the payload, and ddsi_serdata_size() counts both. to_ser_ref hands out a reference
+      // to it (no copy, no allocation).
+      const std::uint32_t size = ddsi_serdata_size(samples[i]);
+      ddsrt_iovec_t ref{};
+      held.ref_ = ddsi_serdata_to_ser_ref(samples[i], 0, size, &ref);
+      if (held.ref_ == nullptr) {
+        continue;
+      }
+      held.ref_base_ = ref.iov_base;
+      held.bytes_ = std::span<const std::byte>(static_cast<const std::byte*>(ref.iov_base),
+                                               static_cast<std::size_t>(ref.iov_len));
+      held.source_timestamp_ns_ = infos[i].source_timestamp;
+      fn(context, held);
+      ++delivered;
     }
     remaining -= taken;
     if (taken < batch) {
@@ -169,6 +199,19 @@ int RawReader::take(SampleFn fn, void* context, int max_samples) noexcept {
     }
   }
   return delivered;
+}
+
+int RawReader::take(SampleFn fn, void* context, int max_samples) noexcept {
+  struct Forward {
+    SampleFn fn;
+    void* context;
+  } forward{fn, context};
+  return takeHeld(
+      [](void* c, HeldSample& sample) {
+        const auto* f = static_cast<const Forward*>(c);
+        f->fn(f->context, sample.bytes(), sample.sourceTimestampNs());
+      },
+      &forward, max_samples);
 }
 
 std::uint32_t RawReader::matchedWriters() const noexcept {

@@ -61,6 +61,40 @@ enum class Origin : std::uint8_t { kAny, kOtherParticipants };
 using SampleFn = void (*)(void* context, std::span<const std::byte> cdr,
                           std::int64_t source_timestamp_ns);
 
+/// @brief One received sample kept past RawReader::takeHeld's callback without copying it: a
+/// reference to Cyclone's receive buffer that is given back on destruction (or reset()). Lets
+/// the service hold a scan as received and decode it only once it will be integrated.
+/// Thread-safety: none (one owner at a time; moving it hands it over).
+/// @rt moving: no allocation; destruction and reset() free Cyclone's buffer (its allocator).
+class HeldSample {
+ public:
+  HeldSample() = default;
+  HeldSample(HeldSample&& other) noexcept { *this = std::move(other); }
+  HeldSample& operator=(HeldSample&& other) noexcept;
+  HeldSample(const HeldSample&) = delete;
+  HeldSample& operator=(const HeldSample&) = delete;
+  ~HeldSample() { reset(); }
+
+  /// @brief The serialized sample with its 4-byte encapsulation header; empty when none is held.
+  std::span<const std::byte> bytes() const noexcept { return bytes_; }
+  /// @brief The writer's source timestamp (DDS time, nanoseconds).
+  std::int64_t sourceTimestampNs() const noexcept { return source_timestamp_ns_; }
+  bool empty() const noexcept { return sample_ == nullptr; }
+  /// @brief Gives the buffer back to Cyclone now.
+  void reset() noexcept;
+
+ private:
+  friend class RawReader;
+  struct ddsi_serdata* sample_ = nullptr;  // the taken sample (one reference)
+  struct ddsi_serdata* ref_ = nullptr;     // ddsi_serdata_to_ser_ref's reference to its bytes
+  void* ref_base_ = nullptr;               // and its iovec's base, as Cyclone wants it back
+  std::span<const std::byte> bytes_;
+  std::int64_t source_timestamp_ns_ = 0;
+};
+
+/// @brief Called once per sample by RawReader::takeHeld; may move the sample out to keep it.
+using HeldSampleFn = void (*)(void* context, HeldSample& sample);
+
 /// @brief A keep-last reader that hands out samples as serialized XCDR1 bytes, never
 /// deserialised into heap-allocated structs (dds_takecdr + ddsi_serdata_to_ser_ref: the bytes
 /// are Cyclone's own receive buffer, so a 2 MB cloud is not copied).
@@ -91,6 +125,21 @@ class RawReader {
   /// @rt allocates: no on our side (Cyclone frees the taken samples); blocks: on Cyclone's
   /// reader lock only (held briefly by its receive thread).
   int take(SampleFn fn, void* context, int max_samples) noexcept;
+
+  /// @brief take(), handing each sample over as a HeldSample that `fn` may keep (move out);
+  /// one it leaves is given back when `fn` returns.
+  /// @rt as take(); a kept sample holds its receive buffer until it is destroyed.
+  int takeHeld(HeldSampleFn fn, void* context, int max_samples) noexcept;
+
+  /// @brief takeHeld() with a callable `f(HeldSample&)`; the callable must not throw.
+  template <class F>
+  int takeEachHeld(F&& f, int max_samples) noexcept {
+    return takeHeld(
+        [](void* context, HeldSample& sample) {
+          (*static_cast<std::remove_reference_t<F>*>(context))(sample);
+        },
+        static_cast<void*>(&f), max_samples);
+  }
 
   /// @brief take() with a callable `f(std::span<const std::byte> cdr, std::int64_t
   /// source_timestamp_ns)`; the callable must not throw.

@@ -2,6 +2,8 @@
 // WorkerPool implementation.
 #include "src/map/worker_pool.hpp"
 
+#include <pthread.h>
+
 namespace raymap {
 
 WorkerPool::WorkerPool(unsigned workers) {
@@ -38,6 +40,9 @@ void WorkerPool::runErased(Trampoline trampoline, void* context) {
 }
 
 void WorkerPool::workerLoop(unsigned worker) {
+  // Named, so that top -H and raymapd's benchmarks tell the CPU backend's helpers from the
+  // thread that created them (they would otherwise carry the program's name).
+  static_cast<void>(pthread_setname_np(pthread_self(), "raymap-worker"));
   std::uint64_t seen = 0;
   for (;;) {
     Trampoline trampoline = nullptr;

@@ -88,6 +88,11 @@ void ScanMailbox::abandon(ScanSlot* slot) noexcept {
   entry.state.store(kFree, std::memory_order_release);
 }
 
+void ScanMailbox::noteDroppedUndecoded() noexcept {
+  dropped_oldest_.fetch_add(1, std::memory_order_relaxed);
+  dropped_undecoded_.fetch_add(1, std::memory_order_relaxed);
+}
+
 ScanSlot* ScanMailbox::take() noexcept {
   for (std::uint32_t attempt = 0; attempt < 4 * slot_count_ + 4; ++attempt) {
     const std::uint32_t oldest = oldestReady();
@@ -121,6 +126,21 @@ void ScanMailbox::release(ScanSlot* slot) noexcept {
   Entry& entry = entryOf(slot);
   RAYMAP_EXPECTS(entry.state.load(std::memory_order_relaxed) == kReading);
   entry.state.store(kFree, std::memory_order_release);
+  if (release_listener_ != nullptr) {
+    // Pairs with PendingScans' sequentially consistent size: the released state is visible to
+    // an ingest thread that looks after pushing, or the listener reads the size it pushed.
+    std::atomic_thread_fence(std::memory_order_seq_cst);
+    release_listener_(release_listener_context_);
+  }
+}
+
+bool ScanMailbox::consumerHolds() const noexcept {
+  for (std::uint32_t i = 0; i < slot_count_; ++i) {
+    if (entries_[i].state.load(std::memory_order_relaxed) == kReading) {
+      return true;
+    }
+  }
+  return false;
 }
 
 std::uint32_t ScanMailbox::waiting() const noexcept {

@@ -63,6 +63,20 @@ class ScanMailbox {
   void publish(ScanSlot* slot) noexcept;
   /// @brief Returns an acquired slot unused (the message was malformed). @rt producer thread.
   void abandon(ScanSlot* slot) noexcept;
+  /// @brief Counts a scan dropped before it was decoded (the producer held it as received
+  /// while a decoded scan waited, and a newer one took its place: see PendingScans). It is an
+  /// overflow drop like those of acquire(). @rt producer thread.
+  void noteDroppedUndecoded() noexcept;
+
+  /// @brief Called by the consumer after each release(): it is done with a scan and will want
+  /// the next (the service wakes its ingest thread with it, to decode the oldest scan it holds
+  /// as received). Set at start-up, before either thread runs; the function must not block and
+  /// must not throw.
+  using ReleaseListener = void (*)(void* context) noexcept;
+  void setReleaseListener(ReleaseListener listener, void* context) noexcept {
+    release_listener_ = listener;
+    release_listener_context_ = context;
+  }
 
   // ---- consumer ----
   /// @brief The oldest published scan, or nullptr when none waits. @rt consumer thread.
@@ -75,9 +89,16 @@ class ScanMailbox {
   std::uint32_t maxPoints() const noexcept { return max_points_; }
   /// @brief Scans published and not yet taken (a snapshot).
   std::uint32_t waiting() const noexcept;
-  /// @brief Scans overwritten before the consumer took them (the overflow counter).
+  /// @brief Whether the consumer holds a scan it took and has not released (a snapshot).
+  bool consumerHolds() const noexcept;
+  /// @brief Scans dropped on overflow, oldest first: overwritten before the consumer took them,
+  /// or dropped before they were decoded (noteDroppedUndecoded).
   std::uint64_t droppedOldest() const noexcept {
     return dropped_oldest_.load(std::memory_order_relaxed);
+  }
+  /// @brief Of droppedOldest(), those dropped before they were decoded.
+  std::uint64_t droppedUndecoded() const noexcept {
+    return dropped_undecoded_.load(std::memory_order_relaxed);
   }
   /// @brief Scans published so far.
   std::uint64_t published() const noexcept {
@@ -102,6 +123,9 @@ class ScanMailbox {
   std::unique_ptr<dds::ScanPoint[]> points_;
   std::atomic<std::uint64_t> next_sequence_{0};  // written by the producer only
   std::atomic<std::uint64_t> dropped_oldest_{0};
+  std::atomic<std::uint64_t> dropped_undecoded_{0};
+  ReleaseListener release_listener_ = nullptr;
+  void* release_listener_context_ = nullptr;
 };
 
 }  // namespace raymap::pipeline

@@ -6,6 +6,9 @@
 #include <cstring>
 #include <utility>
 
+#include "src/dds/cdr_reader.hpp"
+#include "src/dds/ros_time.hpp"
+
 namespace raymap::pipeline {
 namespace {
 
@@ -53,17 +56,37 @@ Expected<void, dds::CameraInfoError> SensorDecoder::onCameraInfo(std::span<const
   return {};
 }
 
-bool SensorDecoder::rateAllows(std::int64_t stamp_ns) noexcept {
+bool SensorDecoder::rateAllows(bool any, std::int64_t last_ns,
+                               std::int64_t stamp_ns) const noexcept {
   if (settings_.max_rate_hz <= 0.0) {
     return true;
   }
   const auto period = static_cast<std::int64_t>(std::llround(1e9 / settings_.max_rate_hz));
-  if (accepted_any_ && stamp_ns >= last_accepted_ns_ &&
-      stamp_ns - last_accepted_ns_ < period - kRateJitterNs) {
+  if (any && stamp_ns >= last_ns && stamp_ns - last_ns < period - kRateJitterNs) {
     return false;
   }
   // A stamp that went backwards (a replay restarted, a clock reset) starts the schedule again.
   return true;
+}
+
+bool SensorDecoder::overRateOnArrival(std::span<const std::byte> cdr) noexcept {
+  if (settings_.max_rate_hz <= 0.0) {
+    return false;
+  }
+  // PointCloud2 and Image alike begin with std_msgs/Header, whose stamp comes first.
+  dds::CdrReader reader(cdr);
+  std::int32_t sec = 0;
+  std::uint32_t nanosec = 0;
+  if (!reader.readI32(sec) || !reader.readU32(nanosec)) {
+    return false;
+  }
+  const std::int64_t stamp_ns = dds::nanosecondsOf(sec, nanosec);
+  if (!rateAllows(arrived_any_, last_arrival_ns_, stamp_ns)) {
+    return true;
+  }
+  last_arrival_ns_ = stamp_ns;
+  arrived_any_ = true;
+  return false;
 }
 
 DecodedScan SensorDecoder::decode(std::span<const std::byte> cdr,
@@ -136,7 +159,7 @@ DecodeOutcome SensorDecoder::admit(const char* frame_id, std::int64_t stamp_ns,
   if (!settings_.frame.empty() && std::strcmp(frame_id, settings_.frame.c_str()) != 0) {
     return DecodeOutcome::kWrongFrame;
   }
-  if (!rateAllows(stamp_ns)) {
+  if (!rateAllows(accepted_any_, last_accepted_ns_, stamp_ns)) {
     return DecodeOutcome::kRateLimited;
   }
   if (commit) {

@@ -84,12 +84,21 @@ class SensorDecoder {
   /// @brief Decodes a PointCloud2 or depth Image into `out` (the sensor's frame).
   DecodedScan decode(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
 
+  /// @brief Whether a message comes faster than max_rate_hz, from its header stamp alone (no
+  /// decoding). raymapd asks on arrival, before it holds a message undecoded, so that a camera
+  /// publishing faster than its limit never pushes a scan out of the queue for an image that
+  /// decode() would then drop. A message it lets through starts the next period of this
+  /// arrival-side schedule (decode() keeps its own, which then agrees); one whose stamp cannot
+  /// be read is let through (decode() names its fault). @rt allocates: no.
+  bool overRateOnArrival(std::span<const std::byte> cdr) noexcept;
+
   const SensorDecodeSettings& settings() const noexcept { return settings_; }
   /// @brief Whether a depth camera has usable intrinsics (always true for point clouds).
   bool ready() const noexcept { return settings_.kind != SensorInputKind::kDepth || rays_.built(); }
 
  private:
-  bool rateAllows(std::int64_t stamp_ns) noexcept;
+  /// Whether `stamp_ns` is at least a period after `last_ns` (or any is false).
+  bool rateAllows(bool any, std::int64_t last_ns, std::int64_t stamp_ns) const noexcept;
   DecodedScan decodeCloud(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
   DecodedScan decodeDepth(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
   /// The configured frame and the rate limit; `commit`: an accepted message starts the next
@@ -106,6 +115,8 @@ class SensorDecoder {
   bool refused_any_ = false;
   std::int64_t last_accepted_ns_ = 0;
   bool accepted_any_ = false;
+  std::int64_t last_arrival_ns_ = 0;  // overRateOnArrival's schedule
+  bool arrived_any_ = false;
 };
 
 /// @brief The CameraInfo topic ROS drivers publish beside an image topic: its namespace plus

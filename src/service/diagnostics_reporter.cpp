@@ -71,6 +71,7 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   t.too_large = stats_.clouds_too_large.get();
   t.wrong_frame = stats_.clouds_unknown_frame.get();
   t.overflow = mailbox_.droppedOldest();
+  t.overflow_undecoded = mailbox_.droppedUndecoded();
   t.scans = stats_.scans_integrated.get();
   t.no_pose = stats_.scans_no_pose.get();
   t.rays = stats_.rays_integrated.get();
@@ -329,6 +330,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "clouds_received", "%" PRIu64, c.clouds);
   message_.addValue(s, "cloud_rate_hz", "%.2f", rate(c.clouds, p.clouds));
   message_.addValue(s, "clouds_dropped_overflow", "%" PRIu64, c.overflow);
+  message_.addValue(s, "clouds_dropped_before_decode", "%" PRIu64, c.overflow_undecoded);
   message_.addValue(s, "clouds_malformed", "%" PRIu64, c.malformed);
   message_.addValue(s, "clouds_too_large", "%" PRIu64, c.too_large);
   message_.addValue(s, "clouds_wrong_frame", "%" PRIu64, c.wrong_frame);
@@ -391,7 +393,8 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "extrinsics_from_tf", "%u",
                     stats_.extrinsics_from_tf.load(std::memory_order_relaxed));
   message_.addValue(s, "integrate_errors", "%" PRIu64, c.integrate_errors);
-  message_.addValue(s, "scan_queue_depth", "%u", mailbox_.waiting());
+  message_.addValue(s, "scan_queue_depth", "%u",
+                    mailbox_.waiting() + (pending_ != nullptr ? pending_->size() : 0u));
   message_.addValue(s, "scan_queue_capacity", "%u", mailbox_.capacity() - 1);
   message_.addValue(s, "pose_queue_depth", "%zu", poses_.read_available());
   message_.addValue(s, "poses_received", "%" PRIu64, c.poses);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "src/dds/diagnostics_message.hpp"
+#include "src/pipeline/pending_scans.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_update.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
@@ -59,6 +60,10 @@ class DiagnosticsReporter {
                       const pipeline::PoseQueue& poses, ReporterSettings settings,
                       std::int64_t started_ns);
 
+  /// @brief Scans the ingest thread holds undecoded: counted in `scan_queue_depth` with the
+  /// mailbox's (start-up, before update() runs).
+  void countHeldScans(const pipeline::PendingScans* pending) noexcept { pending_ = pending; }
+
   /// @brief Takes a snapshot at `now_ns` (monotonic) and decides the levels and messages.
   /// @param other_map_publishers writers of the height-map topic in other participants
   void update(std::int64_t now_ns, const RealtimeReport& realtime,
@@ -81,6 +86,7 @@ class DiagnosticsReporter {
  private:
   struct Totals {
     std::uint64_t clouds = 0, malformed = 0, too_large = 0, wrong_frame = 0, overflow = 0;
+    std::uint64_t overflow_undecoded = 0;  // of overflow, dropped before decoding
     std::uint64_t scans = 0, no_pose = 0, rays = 0, rejected = 0, no_return = 0, bad_time = 0;
     std::uint64_t scans_shed = 0, scans_cut_short = 0, points_shed = 0;
     std::uint64_t maps = 0, withheld = 0, late = 0, hm_errors = 0, integrate_errors = 0;
@@ -113,6 +119,7 @@ class DiagnosticsReporter {
 
   const pipeline::PipelineStats& stats_;
   const pipeline::ScanMailbox& mailbox_;
+  const pipeline::PendingScans* pending_ = nullptr;
   const pipeline::PoseQueue& poses_;
   ReporterSettings settings_;
   std::string pipeline_name_, heightmap_name_, realtime_name_;

@@ -35,6 +35,7 @@
 #include "src/io/map_file.hpp"
 #include "src/pipeline/heightmap_cycle.hpp"
 #include "src/pipeline/integrator.hpp"
+#include "src/pipeline/pending_scans.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
 #include "src/pipeline/tf_router.hpp"
@@ -110,6 +111,9 @@ struct Service::Impl {
   std::optional<dds::RawReader> tf_reader;
   std::optional<dds::RawReader> tf_static_reader;
   std::optional<dds::Waitset> waitset;
+  /// Ingest thread: scans held as received while a decoded one waits (drop before decode).
+  /// Declared after the readers, so their buffers go back to Cyclone before the participant.
+  std::unique_ptr<pipeline::PendingScans> pending;
   std::optional<dds::Writer> grid_map_writer;
   std::optional<dds::Writer> diagnostics_writer;
   std::optional<dds::Writer> voxels_writer;
@@ -150,7 +154,12 @@ struct Service::Impl {
   void integratorLoop();
   void publisherLoop();
   void diagnosticsLoop();
-  void onCloud(std::uint32_t sensor, std::span<const std::byte> cdr);
+  void receiveCloud(std::uint32_t sensor, dds::HeldSample& sample);
+  void decodePending();
+  void decodeCloud(std::uint32_t sensor, std::span<const std::byte> cdr, std::int64_t arrival_ns);
+  /// ScanMailbox's release listener (integrator thread, done with a scan): wakes the ingest
+  /// thread when it holds scans as received, to decode the oldest for the integrator.
+  static void onScanReleased(void* context) noexcept;
   void onCameraInfo(std::uint32_t sensor, std::span<const std::byte> cdr);
   void onOdometry(std::span<const std::byte> cdr);
   void onTf(std::span<const std::byte> cdr, bool is_static);
@@ -215,6 +224,10 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     max_points = std::max(max_points, s.max_points);
   }
   impl->mailbox = std::make_unique<pipeline::ScanMailbox>(config.queues.scan_slots + 1, max_points);
+  // The scan_slots scans that may wait do so as received; one is decoded when the integrator
+  // is ready for it (drop before decode: docs/raymapd.md, Overflow).
+  impl->pending = std::make_unique<pipeline::PendingScans>(config.queues.scan_slots);
+  impl->mailbox->setReleaseListener(&Impl::onScanReleased, impl.get());
   impl->poses = std::make_unique<pipeline::PoseQueue>(config.queues.pose_queue);
   impl->arrivals = std::make_unique<pipeline::ArrivalQueue>(4096);
   pipeline::IntegratorSettings settings;
@@ -415,6 +428,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   }
   impl->reporter = std::make_unique<DiagnosticsReporter>(
       impl->stats, *impl->mailbox, *impl->poses, std::move(reporting), platform::monotonicNowNs());
+  impl->reporter->countHeldScans(impl->pending.get());
   return std::unique_ptr<Service>(new Service(std::move(impl)));
 }
 
@@ -471,10 +485,50 @@ void Service::Impl::applyThreadSettings(const char* name, const ThreadConfig& t)
   threads_set_up.fetch_add(1, std::memory_order_release);
 }
 
-void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr) {
+void Service::Impl::receiveCloud(std::uint32_t sensor, dds::HeldSample& sample) {
   stats.clouds_received.add();
+  stats.sensors[sensor].received.add();
+  const std::int64_t arrival_ns = platform::monotonicNowNs();
+  if (decoders[sensor].overRateOnArrival(sample.bytes())) {
+    stats.sensors[sensor].rate_limited.add();  // by configuration: not an input fault
+    return;
+  }
+  if (pending->size() > 0 || mailbox->waiting() > 0 || mailbox->consumerHolds()) {
+    // The integrator is busy: this scan waits as received, and is decoded only if it is still
+    // among the newest scan_slots when the integrator is ready for it (decodePending).
+    platform::ForeignScope dds;  // a full ring gives its oldest buffer back to Cyclone
+    if (pending->push(sensor, arrival_ns, std::move(sample))) {
+      mailbox->noteDroppedUndecoded();
+    }
+    return;
+  }
+  decodeCloud(sensor, sample.bytes(), arrival_ns);
+}
+
+void Service::Impl::decodePending() {
+  while (pending->size() > 0) {
+    std::atomic_thread_fence(std::memory_order_seq_cst);  // pairs with ScanMailbox::release
+    if (mailbox->waiting() > 0 || mailbox->consumerHolds()) {
+      return;  // the integrator's next release wakes this thread again (onScanReleased)
+    }
+    pipeline::PendingScans::Entry next = pending->pop();
+    decodeCloud(next.sensor, next.sample.bytes(), next.arrival_ns);
+    platform::ForeignScope dds;
+    next.sample.reset();
+  }
+}
+
+void Service::Impl::onScanReleased(void* context) noexcept {
+  auto* impl = static_cast<Impl*>(context);
+  if (impl->pending->size() > 0) {
+    platform::ForeignScope dds;
+    impl->waitset->wake();
+  }
+}
+
+void Service::Impl::decodeCloud(std::uint32_t sensor, std::span<const std::byte> cdr,
+                                std::int64_t arrival_ns) {
   pipeline::SensorCounters& counters = stats.sensors[sensor];
-  counters.received.add();
   pipeline::ScanSlot* slot = mailbox->acquire();
   if (slot == nullptr) {
     stats.clouds_malformed.add();  // unreachable with >= 2 slots; never block
@@ -528,7 +582,7 @@ void Service::Impl::onCloud(std::uint32_t sensor, std::span<const std::byte> cdr
   tf_router->learnSensorFrame(sensor, decoded.header.frame_id, pose_sink);
   slot->header = decoded.header;
   slot->sensor = sensor;
-  slot->arrival_ns = platform::monotonicNowNs();
+  slot->arrival_ns = arrival_ns;
   stats.points_received.add(slot->header.points);
   counters.accepted.add();
   mailbox->publish(slot);
@@ -584,10 +638,10 @@ void Service::Impl::ingestLoop() {
       if (token >= 0 && token < static_cast<std::intptr_t>(cloud_readers.size())) {
         const auto sensor = static_cast<std::uint32_t>(token);
         platform::ForeignScope dds;  // dds_takecdr; our callback counts again
-        cloud_readers[sensor].takeEach(
-            [&](std::span<const std::byte> cdr, std::int64_t) {
+        cloud_readers[sensor].takeEachHeld(
+            [&](dds::HeldSample& sample) {
               platform::RealtimeScope ours;
-              onCloud(sensor, cdr);
+              receiveCloud(sensor, sample);
             },
             kTakePerWake);
       } else if (token >= kCameraInfoToken &&
@@ -617,7 +671,11 @@ void Service::Impl::ingestLoop() {
             256);
       }
     }
+    // After every wake-up, the integrator's take (kWakeToken) or a new scan alike.
+    decodePending();
   }
+  platform::ForeignScope dds;
+  pending->clear();
 }
 
 void Service::Impl::integratorLoop() {

@@ -216,6 +216,10 @@ TEST(Raymapd, OverflowAtTenTimesTheInputRateDropsOldestScansAndKeepsPublishing) 
   const double integrated =
       ros.diagnostics->number("raymapd: pipeline/scans_integrated").value_or(0.0);
   EXPECT_GT(dropped, 0.0) << "100 Hz of 32k-point scans should overflow 2 slots";
+  // Dropped before they were decoded: one scan waits decoded, the other as received, and only
+  // undecoded ones are dropped (docs/raymapd.md, Overflow).
+  EXPECT_EQ(ros.diagnostics->number("raymapd: pipeline/clouds_dropped_before_decode").value_or(-1),
+            dropped);
   EXPECT_GT(integrated, 0.0);
   EXPECT_LE(integrated + dropped, received);  // every received cloud is counted once
   EXPECT_LE(ros.diagnostics->number("raymapd: pipeline/scan_queue_depth").value_or(99.0), 2.0);

@@ -295,6 +295,46 @@ TEST_F(DdsLoopback, PointCloudRoundTripsThroughRawReader) {
   }
 }
 
+TEST_F(DdsLoopback, HeldSamplesStayReadableAfterTheirTakeUntilGivenBack) {
+  // raymapd holds scans as received (no copy) and decodes them later, or drops them undecoded:
+  // the bytes must stay valid after takeHeld returns, in the order they arrived.
+  PointCloudMessage message(16);
+  auto writer = Writer::create(*participant_, "rt/held_points", PointCloudMessage::descriptor(),
+                               Reliability::kReliable, 8);
+  ASSERT_TRUE(writer.has_value()) << writer.error().message;
+  auto raw = RawReader::create(*participant_, "rt/held_points", pointCloud2Type(),
+                               Reliability::kReliable, 8);
+  ASSERT_TRUE(raw.has_value()) << raw.error().message;
+  ASSERT_TRUE(waitFor([&] { return writer->matchedReaders() == 1; }));
+  std::vector<ScanPoint> points(16, ScanPoint{1.0F, 2.0F, 3.0F, 0.0F, 0.0F, 0U});
+  for (int k = 0; k < 3; ++k) {
+    message.fill(points, {}, 1'000'000'000LL * (k + 1), "lidar");
+    ASSERT_TRUE(writer->write(message.sample()).has_value());
+  }
+  std::vector<HeldSample> held;
+  ASSERT_TRUE(waitFor([&] {
+    raw->takeEachHeld([&held](HeldSample& sample) { held.push_back(std::move(sample)); }, 16);
+    return held.size() >= 3;
+  }));
+  ASSERT_EQ(held.size(), 3U);
+  EXPECT_TRUE(takeAll(*raw).empty());  // taken: the reader no longer has them
+  std::vector<ScanPoint> out(16);
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    ASSERT_FALSE(held[k].empty());
+    auto decoded = decodePointCloud2(held[k].bytes(), out, {});
+    ASSERT_TRUE(decoded.has_value()) << toString(decoded.error());
+    EXPECT_EQ(decoded->stamp_ns, 1'000'000'000LL * static_cast<std::int64_t>(k + 1));
+    EXPECT_EQ(decoded->points, 16U);
+    EXPECT_EQ(out[15].z, 3.0F);
+  }
+  held[1].reset();  // given back early, as a dropped scan is
+  EXPECT_TRUE(held[1].empty());
+  EXPECT_TRUE(held[1].bytes().empty());
+  HeldSample moved = std::move(held[2]);
+  EXPECT_TRUE(held[2].empty());
+  EXPECT_FALSE(moved.empty());
+}
+
 TEST_F(DdsLoopback, XyzPointCloudRoundTrips) {
   PointCloudMessage message(8);
   EXPECT_EQ(message.pointStep(), 12U);

@@ -202,6 +202,37 @@ TEST(ScanMailbox, AbandonedSlotIsReusedAndNotCounted) {
   EXPECT_EQ(publishTagged(mailbox, 3), 0u) << "an abandoned slot uses no sequence number";
 }
 
+TEST(ScanMailbox, TheReleaseListenerHearsEveryReleaseAndTheConsumerIsSeenHolding) {
+  ScanMailbox mailbox(3, 4);
+  int heard = 0;
+  mailbox.setReleaseListener([](void* context) noexcept { ++*static_cast<int*>(context); }, &heard);
+  EXPECT_FALSE(mailbox.consumerHolds());
+  ScanSlot* slot = mailbox.acquire();
+  mailbox.publish(slot);
+  EXPECT_FALSE(mailbox.consumerHolds());  // published, not taken
+  ScanSlot* taken = mailbox.take();
+  ASSERT_NE(taken, nullptr);
+  EXPECT_TRUE(mailbox.consumerHolds());
+  EXPECT_EQ(heard, 0);
+  mailbox.release(taken);
+  EXPECT_FALSE(mailbox.consumerHolds());
+  EXPECT_EQ(heard, 1);
+}
+
+TEST(ScanMailbox, ScansDroppedBeforeDecodingAreOverflowDrops) {
+  ScanMailbox mailbox(3, 4);
+  mailbox.noteDroppedUndecoded();
+  mailbox.noteDroppedUndecoded();
+  EXPECT_EQ(mailbox.droppedUndecoded(), 2U);
+  EXPECT_EQ(mailbox.droppedOldest(), 2U);
+  // A decoded scan overwritten in the mailbox counts in droppedOldest only.
+  for (int i = 0; i < 4; ++i) {
+    mailbox.publish(mailbox.acquire());
+  }
+  EXPECT_EQ(mailbox.droppedOldest(), 3U);
+  EXPECT_EQ(mailbox.droppedUndecoded(), 2U);
+}
+
 TEST(ScanMailboxDeathTest, ReleasingASlotThatWasNotTakenAborts) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   ScanMailbox mailbox(2, 4);

@@ -113,6 +113,26 @@ TEST(SensorDecoder, TheRateLimitAndTheFrameApplyBeforeBackProjection) {
   EXPECT_EQ(typo.decode(image(64, 48, kStamp, "camera"), out).outcome, DecodeOutcome::kWrongFrame);
 }
 
+TEST(SensorDecoder, TheRateLimitIsKnownOnArrivalFromTheStampAlone) {
+  // raymapd asks before it holds an image undecoded: a 30 Hz camera limited to 5 Hz must not
+  // take a queue place from a lidar scan for an image decode() would drop.
+  SensorDecodeSettings settings = depthSettings();
+  settings.max_rate_hz = 5.0;
+  SensorDecoder decoder(settings);  // no CameraInfo needed: only the header is read
+  int let_through = 0;
+  for (int k = 0; k < 30; ++k) {  // one second at 30 Hz
+    let_through += decoder.overRateOnArrival(image(64, 48, kStamp + k * 33333333)) ? 0 : 1;
+  }
+  EXPECT_EQ(let_through, 5);
+  // A stamp that goes back starts again; unreadable bytes are let through for decode() to name.
+  EXPECT_FALSE(decoder.overRateOnArrival(image(64, 48, kStamp - 1000000000)));
+  EXPECT_FALSE(decoder.overRateOnArrival(std::vector<std::byte>(3)));
+  // Without a limit nothing is held back, point clouds included.
+  SensorDecoder unlimited(depthSettings());
+  EXPECT_FALSE(unlimited.overRateOnArrival(image(64, 48, kStamp)));
+  EXPECT_FALSE(unlimited.overRateOnArrival(image(64, 48, kStamp + 1)));
+}
+
 TEST(SensorDecoder, AnImageLargerThanItsBufferIsTooLarge) {
   SensorDecoder decoder(depthSettings());
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
