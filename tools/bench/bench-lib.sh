@@ -27,8 +27,11 @@ daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: ray
   # SECONDS after a 3 s warm-up; prints raymap-load's JSON on one line, with a "service" object
   # added: what systemd sees of the service (tools/bench/notify_listener.py on its NOTIFY_SOCKET):
   # ready_ms (start to READY=1), watchdog_pings and watchdog_gap_max_ms / _p99_ms (READY=1 to
-  # STOPPING=1), and stop_ms (SIGTERM to exit). The tests check only that these happen, with
-  # generous bounds; the figures are recorded here (docs/testing.md).
+  # STOPPING=1), and stop_ms (SIGTERM to exit); and "thread_cpu_s": the CPU seconds (user +
+  # system) each of raymapd's threads used over the whole run, by thread name (raymap-ingest,
+  # raymap-integr, raymap-publish, Cyclone's recv threads, ...; "all" is the process). The tests
+  # check only that these happen, with generous bounds; the figures are recorded here
+  # (docs/testing.md).
   local build=$1 config=$2 domain=$3 rate=$4 seconds=$5 pid out
   local notify="${config%.yaml}.notify" listener started ready stop_from stopped
   python3 tools/bench/notify_listener.py "$notify" > "$notify.json" &
@@ -43,6 +46,8 @@ daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: ray
   sleep 2
   out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
     --scan-rate "$rate" --duration "$seconds" --warmup 3)
+  local cpu
+  cpu=$(thread_cpu "$pid")
   stop_from=$(date +%s%N)
   kill -TERM "$pid"
   wait "$pid" || true
@@ -60,6 +65,18 @@ daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: ray
       if (ready > 0) ready_ms = (ready - started) / 1e6
       printf ", \"service\": {\"ready_ms\": %.1f, \"watchdog_pings\": %d, ", ready_ms, pings
       printf "\"watchdog_gap_max_ms\": %.1f, \"watchdog_gap_p99_ms\": %.1f, ", gap_max, gap_p99
-      printf "\"stop_ms\": %.1f}}", (stopped - stop_from) / 1e6
+      printf "\"stop_ms\": %.1f}", (stopped - stop_from) / 1e6
     }'
+  printf ', "thread_cpu_s": {%s}}\n' "$cpu"
+}
+
+thread_cpu() {  # thread_cpu PID: '"name": seconds, ...' per thread name of PID, and "all"
+  local hz task
+  hz=$(getconf CLK_TCK)
+  for task in /proc/"$1"/task/*; do
+    # comm is field 2 in parentheses; utime and stime are fields 14 and 15 after it.
+    printf '%s %s\n' "$(cat "$task/comm" 2>/dev/null | tr -d ' ')" \
+      "$(sed 's/^.*) //' "$task/stat" 2>/dev/null | awk '{print $12 + $13}')"
+  done | awk -v hz="$hz" 'NF == 2 { t[$1] += $2; all += $2 }
+    END { for (n in t) printf "\"%s\": %.2f, ", n, t[n] / hz; printf "\"all\": %.2f", all / hz }'
 }
