@@ -24,7 +24,7 @@ run_data_sets() {  # run_data_sets FUNCTION DATA_DIR: FUNCTION NAME INPUT [optio
 
 daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: raymap-load's JSON
   # raymapd on CONFIG, driven by raymap-load (an OS-1-128, 128 x 1024 points) at RATE scans/s for
-  # SECONDS after a 3 s warm-up; prints raymap-load's JSON on one line, with a "service" object
+  # SECONDS after a 3 s warm-up (SUBSCRIBER_PRIORITY: raymap-load's --subscriber-priority); prints raymap-load's JSON on one line, with a "service" object
   # added: what systemd sees of the service (tools/bench/notify_listener.py on its NOTIFY_SOCKET):
   # ready_ms (start to READY=1), watchdog_pings and watchdog_gap_max_ms / _p99_ms (READY=1 to
   # STOPPING=1), and stop_ms (SIGTERM to exit); and "thread_cpu_s": the CPU seconds (user +
@@ -45,7 +45,8 @@ daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: ray
   pid=$!
   sleep 2
   out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
-    --scan-rate "$rate" --duration "$seconds" --warmup 3)
+    --scan-rate "$rate" --duration "$seconds" --warmup 3 \
+    --subscriber-priority "${SUBSCRIBER_PRIORITY:-0}")
   local cpu
   cpu=$(thread_cpu "$pid")
   stop_from=$(date +%s%N)

@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 
 #include "platform/clock.hpp"
+#include "platform/rt.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tools/dds_driver/depth_playback.hpp"
 #include "tools/dds_driver/lidar_playback.hpp"
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
   double period_nominal_s = 0.2;
   std::vector<std::string> sensors;
   double depth_rate = 0.0;
+  int subscriber_priority = 0;
   app.add_option("--scene", scene_path, "scene file (its lidar and path are the defaults)");
   app.add_option("--beams", beams, "lidar beams (128: an Ouster OS-1-128)");
   app.add_option("--columns", columns, "lidar columns per revolution");
@@ -78,6 +80,11 @@ int main(int argc, char** argv) {
   app.add_option("--depth-rate", depth_rate,
                  "frames per second of every depth camera (0: each "
                  "camera's own rate)");
+  app.add_option(
+         "--subscriber-priority", subscriber_priority,
+         "SCHED_FIFO priority of the thread that takes the GridMaps (1-99; 0: normal), as a "
+         "real-time planner's would run; refused without the privilege (reported)")
+      ->check(CLI::Range(0, 99));
   CLI11_PARSE(app, argc, argv);
 
   auto scene_file = sim::loadSceneFile(scene_path);
@@ -165,7 +172,12 @@ int main(int argc, char** argv) {
   // there added its own delays to the measured period).
   std::mutex arrivals_mutex;
   std::atomic<bool> subscribing{true};
+  std::atomic<bool> subscriber_rt_refused{false};
   std::thread subscriber([&] {
+    if (subscriber_priority > 0) {
+      const platform::RtStatus status = platform::applyRealtime({subscriber_priority, 0});
+      subscriber_rt_refused.store(status.scheduling != platform::RtOutcome::kApplied);
+    }
     std::vector<driver::ReceivedGridMap> received;
     while (subscribing.load(std::memory_order_relaxed)) {
       received.clear();
@@ -198,6 +210,10 @@ int main(int argc, char** argv) {
   }
   subscribing.store(false, std::memory_order_relaxed);
   subscriber.join();
+  if (subscriber_rt_refused.load()) {
+    std::fprintf(stderr, "raymap-load: --subscriber-priority %d refused: normal scheduling\n",
+                 subscriber_priority);
+  }
   const std::uint64_t published = playback.scansPublished() - scans_before;
   const std::uint64_t frames = depth ? depth->framesPublished() - frames_before : 0;
   const std::uint64_t points = playback.pointsPublished() - points_before;
