@@ -17,6 +17,12 @@ scaling_threads() {
 
 section_scaling() {
   local threads inputs=() entry name file
+  # A curve of this machine's CPU is what a GPU machine's host is lent for; without a CUDA device
+  # (a workstation, CI's bare chroot) it runs only when asked for by name (--only scaling).
+  if [ "$have_cuda" != 1 ] && [[ ",$only," != *",scaling,"* ]]; then
+    note "scaling: skipped without a CUDA device (run.sh --only scaling measures this host)"
+    return 0
+  fi
   threads=$(scaling_threads)
   md scaling "## CPU scaling (raymap bench --backend cpu)" "" \
     "Occupancy, 0.1 m voxels, 20 m range, OctoMap's probabilities, steady state, median of 5; $cpu_model, $(nproc) cores; × 1 thread: against the same input and semantics on one thread." "" \
