@@ -33,10 +33,10 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // The settings of docs/benchmarks.md: 0.1 m voxels, rays clipped at 20 m, OctoMap's probabilities.
-constexpr double kResolution = 0.1;        // metres
-constexpr double kMaxRange = 20.0;         // metres
-constexpr double kCountTolerance = 0.005;  // relative difference of free or occupied counts
-constexpr double kMinAgreement = 0.999;    // voxels with the same state, of those either observed
+constexpr double kAgreementResolution = 0.1;  // metres
+constexpr double kAgreementMaxRange = 20.0;   // metres
+constexpr double kCountTolerance = 0.005;     // relative difference of free or occupied counts
+constexpr double kMinAgreement = 0.999;  // voxels with the same state, of those either observed
 
 /// A raymap map of the rays and what building it took.
 struct RaymapRun {
@@ -47,7 +47,7 @@ struct RaymapRun {
 
 MapConfig mapConfig(Semantics semantics) {
   MapConfig config;
-  config.geometry.resolution = kResolution;
+  config.geometry.resolution = kAgreementResolution;
   config.occupancy = OccupancyParams::octomap();
   config.semantics = semantics;
   config.voxel_mean = false;  // not compared; saves memory and time
@@ -59,7 +59,7 @@ RaymapRun buildRaymap(std::span<const Ray> rays, Semantics semantics, unsigned t
   RaymapRun run{makeMap(mapConfig(semantics)), {}, 0.0};
   std::unique_ptr<Backend> backend = cpuBackend(run.map, threads);
   RayFilter filter;
-  filter.max_range_m = kMaxRange;
+  filter.max_range_m = kAgreementMaxRange;
   RayPreparer preparer(run.map, filter);
   std::vector<PreparedRay> prepared;
   const Clock::time_point start = Clock::now();
@@ -94,8 +94,8 @@ TEST_P(OctomapAgreement, CountsAndVoxelStatesMatchOctomap) {
   const std::vector<Ray> rays = loadRays(files.file, files.trajectory);
   ASSERT_FALSE(rays.empty());
   bench::OctomapOptions octomap_options;
-  octomap_options.resolution = kResolution;
-  octomap_options.max_range_m = kMaxRange;
+  octomap_options.resolution = kAgreementResolution;
+  octomap_options.max_range_m = kAgreementMaxRange;
   octomap_options.occupancy = OccupancyParams::octomap();
   octomap_options.semantics = param.semantics;
   bench::OctomapReference octomap(octomap_options);

@@ -19,7 +19,7 @@ Result<std::unique_ptr<Backend>> create(VoxelMap& map, const DeviceBackendOption
   return createCudaBackend(map, options);
 }
 
-bool sharesMemory() {
+bool cudaSharesMemory() {
   auto devices = cuda::listDevices();
   return devices && !devices->empty() && devices->front().integrated &&
          devices->front().can_map_host_memory;
@@ -32,7 +32,7 @@ Result<std::unique_ptr<heightmap::HeightmapGenerator>> createHeightmap(Backend& 
 }  // namespace
 
 const DeviceUnderTest& deviceUnderTest() {
-  static const DeviceUnderTest device{"CUDA", &unavailable, &create, &sharesMemory,
+  static const DeviceUnderTest device{"CUDA", &unavailable, &create, &cudaSharesMemory,
                                       &createHeightmap};
   return device;
 }

@@ -23,7 +23,7 @@ Result<std::unique_ptr<Backend>> create(VoxelMap& map, const DeviceBackendOption
   return createOpenClBackend(map, options);
 }
 
-bool sharesMemory() {
+bool openclSharesMemory() {
   auto devices = opencl::listDevices();
   if (!devices) {
     return false;
@@ -39,7 +39,7 @@ Result<std::unique_ptr<heightmap::HeightmapGenerator>> createHeightmap(Backend& 
 }  // namespace
 
 const DeviceUnderTest& deviceUnderTest() {
-  static const DeviceUnderTest device{"OpenCL", &unavailable, &create, &sharesMemory,
+  static const DeviceUnderTest device{"OpenCL", &unavailable, &create, &openclSharesMemory,
                                       &createHeightmap};
   return device;
 }

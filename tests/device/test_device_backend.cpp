@@ -22,8 +22,6 @@ namespace {
 
 using test::makeRay;
 
-bool sharesMemory() { return deviceUnderTest().shares_memory(); }
-
 /// Voxel means that differ between two maps (packed word or count), over the union of regions.
 std::uint64_t meanDifferences(const VoxelMap& a, const VoxelMap& b) {
   std::set<std::tuple<int, int, int>> regions;
@@ -67,7 +65,8 @@ TEST(DeviceBackend, AgreesWithTheCpuReferenceOnRandomScans) {
       // semantics, walk and memory is covered without running all eight.
       VoxelMap map = test::makeMap(test::smallConfig(semantics));
       DeviceBackendOptions options;
-      options.memory = reverse || !sharesMemory() ? DeviceMemory::kCache : DeviceMemory::kShared;
+      options.memory = reverse || !deviceUnderTest().shares_memory() ? DeviceMemory::kCache
+                                                                     : DeviceMemory::kShared;
       auto backend = createDeviceBackend(map, options);
       ASSERT_TRUE(backend);
       test::integrate(map, *backend, rays, filter);
@@ -198,7 +197,7 @@ class DeviceMemoryMode : public ::testing::TestWithParam<DeviceMemory> {
  protected:
   void SetUp() override {
     if (GetParam() == DeviceMemory::kShared && deviceUnderTest().unavailable().empty() &&
-        !sharesMemory()) {
+        !deviceUnderTest().shares_memory()) {
       GTEST_SKIP() << "the device does not share memory with the host";
     }
   }

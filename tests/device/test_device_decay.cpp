@@ -26,8 +26,8 @@ namespace {
 // The device adds each voxel's lengths with atomics in another order than the CPU: the sums
 // differ by float rounding only (below 1e-6 of the total per add, decay.h), far below these.
 constexpr double kTraversalRelative = 1e-4;
-constexpr double kTraversalAbsolute = 1e-6;  // metres, for sums near zero
-constexpr double kMinAgreement = 0.999;      // fraction of voxels with path within tolerance
+constexpr double kTraversalAbsolute = 1e-6;   // metres, for sums near zero
+constexpr double kDecayMinAgreement = 0.999;  // fraction of voxels with path within tolerance
 
 /// Traversal and sample counts of two maps, voxel by voxel over the union of their regions.
 struct DecayComparison {
@@ -173,7 +173,7 @@ TEST_P(DeviceDecay, AgreesWithTheCpuReferenceOnRandomScans) {
                                 (memory == DeviceMemory::kCache ? ", region cache" : ", shared");
       std::cout << "[device-decay] " << reportLine(label, cmp, stats) << std::endl;
       EXPECT_GT(cmp.with_path, 100000u) << label;
-      EXPECT_GE(double(cmp.within), kMinAgreement * double(cmp.with_path)) << label;
+      EXPECT_GE(double(cmp.within), kDecayMinAgreement * double(cmp.with_path)) << label;
       EXPECT_EQ(cmp.count_differs, 0u) << label;
       EXPECT_EQ(stats.updates_dropped, 0u) << label;
       EXPECT_EQ(stats.rays_skipped, 0u) << label;
@@ -228,7 +228,7 @@ TEST(DeviceDecay, CacheSmallerThanTheWorkingSetEvictsAndStillAgrees) {
     EXPECT_EQ(stats.cache_slots, 60u) << label;
     EXPECT_GT(stats.cache_evictions, 200u) << label;
     EXPECT_GT(cmp.with_path, 10000u) << label;
-    EXPECT_GE(double(cmp.within), kMinAgreement * double(cmp.with_path)) << label;
+    EXPECT_GE(double(cmp.within), kDecayMinAgreement * double(cmp.with_path)) << label;
     EXPECT_EQ(cmp.count_differs, 0u) << label;
     EXPECT_EQ(stats.updates_dropped, 0u) << label;
     EXPECT_EQ(stats.rays_skipped, 0u) << label;

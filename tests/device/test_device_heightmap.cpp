@@ -94,14 +94,12 @@ std::unique_ptr<heightmap::HeightmapGenerator> residentGenerator(Backend& backen
   return generator ? std::move(*generator) : nullptr;
 }
 
-bool sharesMemory() { return deviceUnderTest().shares_memory(); }
-
 /// Memory mode x map mode (occupancy with voxel means; NDT-OM, whose height maps have normals).
 class DeviceHeightmap : public ::testing::TestWithParam<std::tuple<DeviceMemory, MapMode>> {
  protected:
   void SetUp() override {
     if (std::get<0>(GetParam()) == DeviceMemory::kShared &&
-        deviceUnderTest().unavailable().empty() && !sharesMemory()) {
+        deviceUnderTest().unavailable().empty() && !deviceUnderTest().shares_memory()) {
       GTEST_SKIP() << "the device does not share memory with the host";
     }
   }

@@ -22,7 +22,7 @@ namespace {
 // float rounding, and OpenCL's sqrt (3 ulp) moves distances by about 1e-7 m.
 constexpr double kDistanceTolerance = 1e-4;  // metres
 constexpr double kWeightTolerance = 1e-4;    // relative
-constexpr double kMinAgreement = 0.999;
+constexpr double kTsdfMinAgreement = 0.999;
 
 TEST(DeviceTsdf, AgreesWithTheCpuReferenceOnASphereAndABox) {
   REQUIRE_DEVICE();
@@ -62,7 +62,7 @@ TEST(DeviceTsdf, AgreesWithTheCpuReferenceOnASphereAndABox) {
             cmp.max_weight_difference,
             static_cast<unsigned long long>(device->stats().updates_dropped));
         EXPECT_GT(cmp.updated, 5000u) << label;
-        EXPECT_GE(double(cmp.within), kMinAgreement * double(cmp.updated)) << label;
+        EXPECT_GE(double(cmp.within), kTsdfMinAgreement * double(cmp.updated)) << label;
         EXPECT_EQ(device->stats().updates_dropped, 0u) << label;
         EXPECT_EQ(device->stats().rays_skipped, 0u) << label;
       }

@@ -19,7 +19,7 @@ using heightmap::HeightmapMode;
 using heightmap::HeightmapOptions;
 
 using test::ColumnMap;
-constexpr float kOccupied = ColumnMap::kOccupied;
+constexpr float kColumnOccupied = ColumnMap::kOccupied;
 constexpr double kRes = 0.1;
 
 class HeightmapColumns : public ::testing::TestWithParam<std::string> {
@@ -177,7 +177,7 @@ TEST_P(HeightmapColumns, ASurfaceBeatsAVirtualSurfaceAtTheSameDistance) {
   ColumnMap m;
   // Virtual candidate at -0.2 (free over unseen) and a surface at +0.2 (voxel centre 0.15+0.05).
   m.freeRange(3, 3, -2, 0);
-  m.set(3, 3, 1, kOccupied, 1.0f);  // height 0.2 exactly
+  m.set(3, 3, 1, kColumnOccupied, 1.0f);  // height 0.2 exactly
   m.freeRange(3, 3, 2, 9);
   HeightmapOptions o = options();
   o.virtual_surfaces = true;

@@ -29,8 +29,8 @@ using heightmap::HeightmapPlan;
 using heightmap::kMaxCellsPerSide;
 using heightmap::planHeightmap;
 
-constexpr double kRes = MapGeometry::kDefaultResolution;
-constexpr double kExtent = kRes * MapGeometry::kDefaultRegionVoxels;  // 3.2 m
+constexpr double kPlanRes = MapGeometry::kDefaultResolution;
+constexpr double kExtent = kPlanRes * MapGeometry::kDefaultRegionVoxels;  // 3.2 m
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Coordinates computed from the grid and from the map agree to rounding only.
@@ -195,8 +195,8 @@ TEST(HeightmapPlanErrors, SizeLargerThanTheRollingWindow) {
 TEST(HeightmapPlanErrors, SizeBelowTheResolution) {
   auto map = globalMap();
   ASSERT_NE(map, nullptr);
-  EXPECT_TRUE(plans(*map, request({0.0, 0.0, 0.0}, kRes)));
-  for (const double size : {0.5 * kRes, 0.0, -1.0, kNaN, kInf, -kInf}) {
+  EXPECT_TRUE(plans(*map, request({0.0, 0.0, 0.0}, kPlanRes)));
+  for (const double size : {0.5 * kPlanRes, 0.0, -1.0, kNaN, kInf, -kInf}) {
     SCOPED_TRACE(size);
     EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, size), ErrorCode::kInvalidArgument,
                         {"--size", "finite size of at least the map resolution"}));
@@ -206,7 +206,7 @@ TEST(HeightmapPlanErrors, SizeBelowTheResolution) {
 TEST(HeightmapPlanErrors, SizeAboveTheCellLimit) {
   auto map = globalMap();
   ASSERT_NE(map, nullptr);
-  const double size = (kMaxCellsPerSide + 1) * kRes;
+  const double size = (kMaxCellsPerSide + 1) * kPlanRes;
   EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, size), ErrorCode::kInvalidArgument,
                       {"--size", std::to_string(kMaxCellsPerSide + 1) + " cells per side",
                        "at most " + std::to_string(kMaxCellsPerSide)}));
@@ -222,7 +222,8 @@ TEST(HeightmapPlanErrors, TheCellLimitItselfIsAccepted) {
   auto map = makeMap(config);
   ASSERT_NE(map, nullptr);
   ASSERT_TRUE(map->acquireRegion({0, 0, 0}));
-  const HeightmapPlan plan = planOrFail(*map, request({1.0, 1.0, 1.0}, kMaxCellsPerSide * kRes));
+  const HeightmapPlan plan =
+      planOrFail(*map, request({1.0, 1.0, 1.0}, kMaxCellsPerSide * kPlanRes));
   EXPECT_EQ(plan.params.cells_x, kMaxCellsPerSide);
   EXPECT_EQ(plan.grid.cells_y, kMaxCellsPerSide);
   EXPECT_EQ(plan.region_slots.size(), 1u);
@@ -304,7 +305,7 @@ TEST(HeightmapPlanGeometry, CellsAreTheSizeOverTheResolutionRounded) {
     EXPECT_EQ(plan.params.cells_y, cells);
     EXPECT_EQ(plan.grid.cells_x, cells);
     EXPECT_EQ(plan.grid.cells_y, cells);
-    EXPECT_EQ(plan.grid.resolution, kRes);
+    EXPECT_EQ(plan.grid.resolution, kPlanRes);
     EXPECT_TRUE(plan.grid.elevation.empty());  // geometry only
   }
 }
@@ -395,10 +396,10 @@ TEST(HeightmapPlanGeometry, EveryCellCentreLiesInItsOwnCellAndVoxelColumn) {
     EXPECT_GT(corner.y, far.y);
     int i = 0;
     int j = 0;
-    EXPECT_FALSE(g.cellOf(corner.x + kRes, corner.y, &i, &j));
-    EXPECT_FALSE(g.cellOf(corner.x, corner.y + kRes, &i, &j));
-    EXPECT_FALSE(g.cellOf(far.x - kRes, far.y, &i, &j));
-    EXPECT_FALSE(g.cellOf(far.x, far.y - kRes, &i, &j));
+    EXPECT_FALSE(g.cellOf(corner.x + kPlanRes, corner.y, &i, &j));
+    EXPECT_FALSE(g.cellOf(corner.x, corner.y + kPlanRes, &i, &j));
+    EXPECT_FALSE(g.cellOf(far.x - kPlanRes, far.y, &i, &j));
+    EXPECT_FALSE(g.cellOf(far.x, far.y - kPlanRes, &i, &j));
   }
 }
 
@@ -421,7 +422,7 @@ TEST(HeightmapPlanGeometry, RegionTableHoldsSlotIndicesForPresentRegionsOnly) {
   // The table spans the box: the grid's columns, and z from one voxel below its bottom (the
   // search looks at the voxel under a candidate) to its top.
   const Vec3i voxel = map->voxelOf(centre);
-  const auto half = static_cast<std::int32_t>(std::lround(0.5 * size / kRes));
+  const auto half = static_cast<std::int32_t>(std::lround(0.5 * size / kPlanRes));
   EXPECT_EQ(p.box_z_min, voxel.z - half);
   EXPECT_EQ(p.box_z_max, voxel.z + half);
   const Vec3i lo =

@@ -33,8 +33,8 @@ using heightmap::HeightmapOptions;
 using heightmap::HeightmapPlan;
 using test::ColumnMap;
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kRefNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kRefInf = std::numeric_limits<float>::infinity();
 
 // ---------------------------------------------------------------------------------------------
 // The reference.
@@ -70,8 +70,8 @@ Column readColumn(const VoxelMap& map, const rm_heightmap_params& p, std::int32_
 }
 
 struct RefCell {
-  float elevation = kNaN;
-  float clearance = kNaN;
+  float elevation = kRefNaN;
+  float clearance = kRefNaN;
   std::uint32_t kind = RM_HM_UNKNOWN;
   std::uint32_t samples = 0;
 };
@@ -108,7 +108,7 @@ RefCell searchColumn(const Column& c, const rm_heightmap_params& p, float refere
         return static_cast<float>(u) * res - height;
       }
     }
-    return kInf;
+    return kRefInf;
   };
   // The lowest voxel the underside rule may look at (below it, the column counts as unobserved).
   const std::int32_t context = p.box_z_min - 1;

@@ -13,7 +13,7 @@
 namespace raymap {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kNormalPi = 3.14159265358979323846;
 
 /// A Gaussian folded from samples given in voxel units (voxel frame).
 rm_ndt_voxel fold(const std::vector<std::array<float, 3>>& samples) {
@@ -56,7 +56,7 @@ std::vector<std::array<float, 3>> planeSamples(const std::array<double, 3>& n) {
 double angleDegrees(rm_vec3f n, const std::array<double, 3>& truth) {
   const double c = static_cast<double>(n.x) * truth[0] + static_cast<double>(n.y) * truth[1] +
                    static_cast<double>(n.z) * truth[2];
-  return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / kPi;
+  return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / kNormalPi;
 }
 
 TEST(NdtNormal, APlanesNormalPointsUp) {
@@ -64,8 +64,8 @@ TEST(NdtNormal, APlanesNormalPointsUp) {
   // result must be flipped up.
   for (double slope = 0.0; slope <= 80.0; slope += 20.0) {
     for (double azimuth = 0.0; azimuth < 360.0; azimuth += 45.0) {
-      const double s = slope * kPi / 180.0;
-      const double a = azimuth * kPi / 180.0;
+      const double s = slope * kNormalPi / 180.0;
+      const double a = azimuth * kNormalPi / 180.0;
       const std::array<double, 3> up{-std::sin(s) * std::cos(a), -std::sin(s) * std::sin(a),
                                      std::cos(s)};
       const rm_ndt_voxel v = fold(planeSamples({-up[0], -up[1], -up[2]}));

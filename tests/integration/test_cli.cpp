@@ -52,12 +52,6 @@ testing::AssertionResult noTemporaryFilesIn(const fs::path& dir) {
   return testing::AssertionSuccess();
 }
 
-void writeText(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  ASSERT_TRUE(out.good()) << "cannot write " << path;
-}
-
 /// The vertex count in a PLY header, or nullopt when there is none.
 std::optional<std::uint64_t> plyVertexCount(const std::string& path) {
   const std::string text = readFile(path);
@@ -73,26 +67,6 @@ std::optional<std::uint64_t> plyVertexCount(const std::string& path) {
 // ---------------------------------------------------------------------------------------------
 // JSON (the program's flat output: enough to read one value by key)
 // ---------------------------------------------------------------------------------------------
-
-/// The raw text of the first value of `"key"`: a string without quotes, or a number as written.
-std::optional<std::string> jsonValue(const std::string& json, const std::string& key) {
-  const std::string tag = "\"" + key + "\":";
-  std::size_t at = json.find(tag);
-  if (at == std::string::npos) {
-    return std::nullopt;
-  }
-  at += tag.size();
-  while (at < json.size() && json[at] == ' ') {
-    ++at;
-  }
-  if (at < json.size() && json[at] == '"') {
-    const std::size_t end = json.find('"', at + 1);
-    return end == std::string::npos ? std::nullopt
-                                    : std::optional<std::string>(json.substr(at + 1, end - at - 1));
-  }
-  const std::size_t end = json.find_first_of(",}\n", at);
-  return json.substr(at, end == std::string::npos ? std::string::npos : end - at);
-}
 
 /// A numeric value by key; NaN (which fails every comparison) when it is missing or not a number.
 double jsonNumber(const std::string& json, const std::string& key) {
@@ -169,11 +143,6 @@ PlyTestFile smallRayCloud(int count) {
 std::vector<std::string> allOutputs(const TempDir& dir) {
   return {"--output",          dir.file("out.rmap"), "--ply",
           dir.file("out.ply"), "--stats-json",       dir.file("out.json")};
-}
-
-std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -28,10 +28,6 @@ void writeRays(const std::string& path) {
   writeRayCloud(path, rays);
 }
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 TEST(CliDecay, PopulateInfoAndExportADecayRateMap) {
   TempDir dir;
   const std::string rays = dir.file("rays.ply");
@@ -44,22 +40,22 @@ TEST(CliDecay, PopulateInfoAndExportADecayRateMap) {
   ASSERT_EQ(populated.exit_code, 0) << describe(populated);
   const RunResult info = runRaymap({"info", map});
   ASSERT_EQ(info.exit_code, 0) << describe(info);
-  EXPECT_TRUE(has(info.out, "mode           decay\n")) << info.out;
-  EXPECT_TRUE(has(info.out, "traversal (4 B)")) << info.out;
+  EXPECT_TRUE(contains(info.out, "mode           decay\n")) << info.out;
+  EXPECT_TRUE(contains(info.out, "traversal (4 B)")) << info.out;
   // Decay rates only: no occupancy layer, parameters or voxel counts.
-  EXPECT_FALSE(has(info.out, "occupancy (4 B)")) << info.out;
-  EXPECT_FALSE(has(info.out, "occupancy      hit")) << info.out;
-  EXPECT_TRUE(has(info.out, "decay voxels   24 crossed, 4 with samples")) << info.out;
+  EXPECT_FALSE(contains(info.out, "occupancy (4 B)")) << info.out;
+  EXPECT_FALSE(contains(info.out, "occupancy      hit")) << info.out;
+  EXPECT_TRUE(contains(info.out, "decay voxels   24 crossed, 4 with samples")) << info.out;
   const RunResult occupied = runRaymap({"export", map, "--mode", "occupied", "--ply", ply});
   EXPECT_NE(occupied.exit_code, 0);
-  EXPECT_TRUE(has(occupied.err, "no occupancy layer")) << occupied.err;
+  EXPECT_TRUE(contains(occupied.err, "no occupancy layer")) << occupied.err;
   const RunResult exported =
       runRaymap({"export", map, "--mode", "decay", "--threshold", "4.5", "--ply", ply});
   ASSERT_EQ(exported.exit_code, 0) << describe(exported);
-  EXPECT_TRUE(has(exported.out, "wrote 3 points (decay)")) << exported.out;
+  EXPECT_TRUE(contains(exported.out, "wrote 3 points (decay)")) << exported.out;
   const std::string text = readFile(ply);
-  EXPECT_TRUE(has(text, "element vertex 3\n"));
-  EXPECT_TRUE(has(text, "property float decay_rate\n"));
+  EXPECT_TRUE(contains(text, "element vertex 3\n"));
+  EXPECT_TRUE(contains(text, "property float decay_rate\n"));
 }
 
 TEST(CliDecay, DecayRateCombinesWithOccupancyAndNdt) {
@@ -72,16 +68,16 @@ TEST(CliDecay, DecayRateCombinesWithOccupancyAndNdt) {
         runRaymap({"populate", rays, "--output", map, "--mode", mode, "--decay-rate", "--quiet"});
     ASSERT_EQ(populated.exit_code, 0) << describe(populated);
     const RunResult info = runRaymap({"info", map});
-    EXPECT_TRUE(has(info.out, "mode           " + mode + "+decay\n")) << info.out;
-    EXPECT_TRUE(has(info.out, "occupancy (4 B)")) << info.out;
-    EXPECT_TRUE(has(info.out, "decay voxels   24 crossed, 4 with samples")) << info.out;
+    EXPECT_TRUE(contains(info.out, "mode           " + mode + "+decay\n")) << info.out;
+    EXPECT_TRUE(contains(info.out, "occupancy (4 B)")) << info.out;
+    EXPECT_TRUE(contains(info.out, "decay voxels   24 crossed, 4 with samples")) << info.out;
   }
   // The name info prints is also a --mode.
   const std::string map = dir.file("named.rmap");
   const RunResult named =
       runRaymap({"populate", rays, "--output", map, "--mode", "occupancy+decay", "--quiet"});
   ASSERT_EQ(named.exit_code, 0) << describe(named);
-  EXPECT_TRUE(has(runRaymap({"info", map}).out, "mode           occupancy+decay\n"));
+  EXPECT_TRUE(contains(runRaymap({"info", map}).out, "mode           occupancy+decay\n"));
 }
 
 TEST(CliDecay, ErrorsNameTheMapAndTheReason) {
@@ -93,21 +89,22 @@ TEST(CliDecay, ErrorsNameTheMapAndTheReason) {
   const RunResult no_layer =
       runRaymap({"export", map, "--mode", "decay", "--ply", dir.file("x.ply")});
   EXPECT_NE(no_layer.exit_code, 0);
-  EXPECT_TRUE(has(no_layer.err, map)) << no_layer.err;
-  EXPECT_TRUE(has(no_layer.err, "no traversal layer")) << no_layer.err;
+  EXPECT_TRUE(contains(no_layer.err, map)) << no_layer.err;
+  EXPECT_TRUE(contains(no_layer.err, "no traversal layer")) << no_layer.err;
   const RunResult wrong_mode = runRaymap(
       {"export", map, "--mode", "occupied", "--threshold", "2", "--ply", dir.file("y.ply")});
   EXPECT_NE(wrong_mode.exit_code, 0);
-  EXPECT_TRUE(has(wrong_mode.err, "--threshold applies only to --mode decay")) << wrong_mode.err;
+  EXPECT_TRUE(contains(wrong_mode.err, "--threshold applies only to --mode decay"))
+      << wrong_mode.err;
   const RunResult no_mean =
       runRaymap({"populate", rays, "--output", dir.file("z.rmap"), "--mode", "decay", "--no-mean"});
   EXPECT_NE(no_mean.exit_code, 0);
-  EXPECT_TRUE(has(no_mean.err, "voxel mean")) << no_mean.err;
+  EXPECT_TRUE(contains(no_mean.err, "voxel mean")) << no_mean.err;
   const RunResult per_scan = runRaymap(
       {"populate", rays, "--output", dir.file("s.rmap"), "--mode", "decay", "--semantics", "scan"});
   EXPECT_NE(per_scan.exit_code, 0);
-  EXPECT_TRUE(has(per_scan.err, "--mode decay needs --semantics ray")) << per_scan.err;
-  EXPECT_FALSE(has(readFile(map), "traversal")) << "the plain map was not touched";
+  EXPECT_TRUE(contains(per_scan.err, "--mode decay needs --semantics ray")) << per_scan.err;
+  EXPECT_FALSE(contains(readFile(map), "traversal")) << "the plain map was not touched";
 }
 
 }  // namespace

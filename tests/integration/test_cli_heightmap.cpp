@@ -28,21 +28,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kScenes = RAYMAP_SCENES_DIR;
 constexpr int kCells = 80;  // --size 8 at the map's 0.1 m
 /// The stair treads are at 0.17 m steps; measured surfaces are within a voxel of them.
 constexpr double kTreadTolerance = 0.1;
 /// Cell centres are written with 4 decimals.
 constexpr double kCsvCoordTolerance = 1e-3;
-
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
-std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
 
 /// The stairs scene (config/scenes/stairs.yaml), 5 scans simulated and mapped once per process;
 /// empty (and a test failure) when either step fails.
@@ -52,7 +42,8 @@ const std::string& stairsMap() {
     const std::string rays = dir.file("stairs.ply");
     const std::string path = dir.file("stairs.rmap");
     const RunResult simulated =
-        runRaymap({"simulate", kScenes + "/stairs.yaml", "--scans", "5", "--rays", rays, "-q"});
+        runRaymap({"simulate", std::string(RAYMAP_SCENES_DIR) + "/stairs.yaml", "--scans", "5",
+                   "--rays", rays, "-q"});
     if (simulated.exit_code != 0) {
       ADD_FAILURE() << "simulate: " << describe(simulated);
       return std::string();
@@ -139,35 +130,6 @@ void expectStairsAndGround(const std::vector<CsvCell>& cells) {
     EXPECT_EQ(c->kind, "surface");
     EXPECT_NEAR(c->elevation, elevation, kTreadTolerance);
   }
-}
-
-/// A number or string value of the JSON summary (`"key": value`), as its text.
-std::optional<std::string> jsonValue(const std::string& json, const std::string& key) {
-  const std::size_t at = json.find("\"" + key + "\"");
-  if (at == std::string::npos) {
-    return std::nullopt;
-  }
-  std::size_t begin = json.find(':', at);
-  if (begin == std::string::npos) {
-    return std::nullopt;
-  }
-  begin = json.find_first_not_of(" \t", begin + 1);
-  if (begin == std::string::npos) {
-    return std::nullopt;
-  }
-  if (json[begin] == '"') {
-    const std::size_t end = json.find('"', begin + 1);
-    return end == std::string::npos ? std::nullopt
-                                    : std::optional(json.substr(begin + 1, end - begin - 1));
-  }
-  const std::size_t end = json.find_first_of(",\n}", begin);
-  return json.substr(begin, end - begin);
-}
-
-/// Why `--backend <device>` cannot run here, or "" when it can (as `raymap devices` says).
-std::string deviceUnavailable(const std::string& device) {
-  const RunResult r = runRaymap({"devices"});
-  return contains(r.out, "default for --backend " + device) ? std::string() : r.out + r.err;
 }
 
 /// The CSV of `device` equals the CPU's byte for byte, planar and fill with virtual surfaces

@@ -34,13 +34,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kScenes = RAYMAP_SCENES_DIR;
-
-std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
-
 /// Runs raymap with its file-size limit (RLIMIT_FSIZE) at `kib` KiB and SIGXFSZ ignored: a
 /// write that would make a file larger fails with EFBIG, as on a full disk (the tests run as
 /// root, for whom a read-only directory is no obstacle).
@@ -119,7 +112,7 @@ TEST(CliOutputs, SimulateOnAFullDiskLeavesNoOutput) {
   TempDir reference;
   const auto request = [](const TempDir& where) {
     return std::vector<std::string>{"simulate",
-                                    kScenes + "/stairs.yaml",
+                                    std::string(RAYMAP_SCENES_DIR) + "/stairs.yaml",
                                     "--scans",
                                     "1",
                                     "--sensors",
@@ -316,12 +309,6 @@ pid_t deadPid() {
   return pid;
 }
 
-void writeText(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  ASSERT_TRUE(out.good()) << "cannot write " << path;
-}
-
 TEST(CliOutputs, StaleTemporariesOfDeadProcessesAreRemovedAndReported) {
   // Arrange: what SIGKILLed runs left for out.rmap (a pid beyond any pid_max, and one that has
   // exited), and files that are not such leftovers and must stay.
@@ -437,7 +424,7 @@ TEST(CliOutputs, EveryCommandRefusesToOverwriteItsInputs) {
   const std::string map = yardMap(dir);
   ASSERT_FALSE(map.empty());
   const std::string scene = dir.file("stairs.yaml");
-  fs::copy_file(kScenes + "/stairs.yaml", scene);
+  fs::copy_file(std::string(RAYMAP_SCENES_DIR) + "/stairs.yaml", scene);
   const std::string trajectory = dir.file("path.txt");
   writeText(trajectory, "0 0 0 1\n100 0 0 1\n");
   struct Case {

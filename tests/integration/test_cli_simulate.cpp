@@ -27,8 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kScenes = RAYMAP_SCENES_DIR;
-
 /// A number in the stats JSON `populate --stats-json -` prints ("key": value).
 double statsValue(const std::string& json, const std::string& key) {
   const std::string tag = "\"" + key + "\":";
@@ -96,8 +94,8 @@ TEST(CliSimulate, RayCloudMapsWithPopulate) {
   TempDir dir;
   const std::string rays = dir.file("stairs.ply");
 
-  const RunResult sim =
-      runRaymap({"simulate", kScenes + "/stairs.yaml", "--rays", rays, "--scans", "3"});
+  const RunResult sim = runRaymap({"simulate", std::string(RAYMAP_SCENES_DIR) + "/stairs.yaml",
+                                   "--rays", rays, "--scans", "3"});
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
   const std::optional<Summary> summary = parseSummary(sim.out);
   ASSERT_TRUE(summary.has_value()) << sim.out;
@@ -123,8 +121,8 @@ TEST(CliSimulate, PointsWithTrajectoryMapWithPopulate) {
   const std::string trajectory = dir.file("trajectory.txt");
 
   const RunResult sim =
-      runRaymap({"simulate", kScenes + "/stairs.yaml", "--rays", rays, "--points", points,
-                 "--trajectory", trajectory, "--scans", "3", "--seed", "5"});
+      runRaymap({"simulate", std::string(RAYMAP_SCENES_DIR) + "/stairs.yaml", "--rays", rays,
+                 "--points", points, "--trajectory", trajectory, "--scans", "3", "--seed", "5"});
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
   const std::optional<Summary> summary = parseSummary(sim.out);
   ASSERT_TRUE(summary.has_value()) << sim.out;
@@ -155,8 +153,8 @@ TEST(CliSimulate, TruthCsvHoldsTheDitchAndItsSides) {
   TempDir dir;
   const std::string csv = dir.file("truth.csv");
 
-  const RunResult sim = runRaymap(
-      {"simulate", kScenes + "/ditch.yaml", "--truth", csv, "--truth-box", "1.5,-0.5,3.5,0.5"});
+  const RunResult sim = runRaymap({"simulate", std::string(RAYMAP_SCENES_DIR) + "/ditch.yaml",
+                                   "--truth", csv, "--truth-box", "1.5,-0.5,3.5,0.5"});
 
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
   EXPECT_NE(sim.out.find("(200 cells)"), std::string::npos) << sim.out;
@@ -171,7 +169,7 @@ TEST(CliSimulate, TruthUnderATableDependsOnTheClearance) {
   TempDir dir;
   const std::string low = dir.file("low.csv");
   const std::string high = dir.file("high.csv");
-  const std::string room = kScenes + "/room.yaml";
+  const std::string room = std::string(RAYMAP_SCENES_DIR) + "/room.yaml";
 
   ASSERT_EQ(runRaymap({"simulate", room, "--truth", low, "-q"}).exit_code, 0);
   ASSERT_EQ(
@@ -208,7 +206,7 @@ TEST(CliSimulate, TruthCellsWithoutSurfaceAreEmpty) {
 
 TEST(CliSimulate, SameSeedSameFileOtherSeedOtherFile) {
   TempDir dir;
-  const std::string scene = kScenes + "/ditch.yaml";
+  const std::string scene = std::string(RAYMAP_SCENES_DIR) + "/ditch.yaml";
   const std::string a = dir.file("a.ply");
   const std::string b = dir.file("b.ply");
   const std::string c = dir.file("c.ply");
@@ -246,7 +244,7 @@ TEST(CliSimulate, BadSceneFileNamesTheKeyAndWritesNothing) {
 
 TEST(CliSimulate, UsageErrors) {
   TempDir dir;
-  const std::string scene = kScenes + "/room.yaml";
+  const std::string scene = std::string(RAYMAP_SCENES_DIR) + "/room.yaml";
 
   const RunResult nothing = runRaymap({"simulate", scene});
   const RunResult points_alone = runRaymap({"simulate", scene, "--points", dir.file("p.ply")});

@@ -29,8 +29,7 @@
 namespace raymap::test {
 namespace {
 
-const std::string kScenes = RAYMAP_SCENES_DIR;
-constexpr double kResolution = 0.1;  // populate's default voxel size
+constexpr double kPopulateResolution = 0.1;  // populate's default voxel size
 /// The camera's reach along a ray (2 m of depth), what populate integrates.
 const std::string kMaxRange = "2";
 /// A moderate barrel lens with a little tangential distortion (invertible over a 87° image).
@@ -39,16 +38,12 @@ const std::string kLens = "[-0.2, 0.05, 0.001, 0.002, 0]";
 using CellKey = std::pair<long, long>;  // floor(x / resolution), floor(y / resolution)
 
 CellKey cellOf(double x, double y) {
-  return {static_cast<long>(std::floor(x / kResolution)),
-          static_cast<long>(std::floor(y / kResolution))};
+  return {static_cast<long>(std::floor(x / kPopulateResolution)),
+          static_cast<long>(std::floor(y / kPopulateResolution))};
 }
 
 double share(std::size_t part, std::size_t whole) {
   return static_cast<double>(part) / static_cast<double>(whole);
-}
-
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
 }
 
 /// The elevations of a height-map CSV (x,y,elevation,clearance,kind), NaN where none.
@@ -72,7 +67,7 @@ std::map<CellKey, double> readElevations(const std::string& path) {
 }
 
 /// The true heights of a `simulate --truth` CSV (x,y,height,clearance); absent = no surface.
-std::map<CellKey, double> readTruth(const std::string& path) {
+std::map<CellKey, double> readDepthTruth(const std::string& path) {
   std::map<CellKey, double> cells;
   std::istringstream in(readFile(path));
   std::string line;
@@ -128,7 +123,7 @@ std::set<CellKey> cameraFootprint(const sim::SceneFile& file) {
 
 /// "name.yaml" copied into `dir` with the camera's distortion set to kLens.
 std::string withLens(const TempDir& dir, const std::string& scene) {
-  std::string text = readFile(kScenes + "/" + scene);
+  std::string text = readFile(std::string(RAYMAP_SCENES_DIR) + "/" + scene);
   const std::string anchor = "    hfov_deg: 87\n";
   const std::size_t at = text.find(anchor);
   EXPECT_NE(at, std::string::npos);
@@ -136,15 +131,6 @@ std::string withLens(const TempDir& dir, const std::string& scene) {
   const std::string path = dir.file(scene);
   std::ofstream(path) << text;
   return path;
-}
-
-/// Why `--backend <device>` cannot run here, or "" when it can (as `raymap devices` says).
-std::string deviceUnavailable(const std::string& device) {
-  if (device == "cpu") {
-    return std::string();
-  }
-  const RunResult r = runRaymap({"devices"});
-  return contains(r.out, "default for --backend " + device) ? std::string() : r.out + r.err;
 }
 
 /// simulate --rays -> populate -> heightmap --csv; returns the CSV path ("" and a failure when a
@@ -188,8 +174,8 @@ TEST_P(DepthStairs, HeightMapMatchesTheTrueStepsInTheCameraFootprint) {
     GTEST_SKIP() << why;
   }
   TempDir dir;
-  const std::string scene =
-      c.distorted ? withLens(dir, "stairs_depth.yaml") : kScenes + "/stairs_depth.yaml";
+  const std::string scene = c.distorted ? withLens(dir, "stairs_depth.yaml")
+                                        : std::string(RAYMAP_SCENES_DIR) + "/stairs_depth.yaml";
   const auto file = sim::loadSceneFile(scene);
   ASSERT_TRUE(file.has_value()) << file.error().message;
   ASSERT_FALSE(file->has_lidar);
@@ -200,7 +186,7 @@ TEST_P(DepthStairs, HeightMapMatchesTheTrueStepsInTheCameraFootprint) {
 
   ASSERT_FALSE(csv.empty());
   const std::map<CellKey, double> heights = readElevations(csv);
-  const std::map<CellKey, double> truth = readTruth(truth_csv);
+  const std::map<CellKey, double> truth = readDepthTruth(truth_csv);
   const std::set<CellKey> footprint = cameraFootprint(*file);
   ASSERT_GT(footprint.size(), 300u);
   std::size_t with_elevation = 0;
@@ -213,18 +199,18 @@ TEST_P(DepthStairs, HeightMapMatchesTheTrueStepsInTheCameraFootprint) {
       continue;
     }
     ++with_elevation;
-    const Vec3d centre{(static_cast<double>(cell.first) + 0.5) * kResolution,
-                       (static_cast<double>(cell.second) + 0.5) * kResolution, 0.0};
+    const Vec3d centre{(static_cast<double>(cell.first) + 0.5) * kPopulateResolution,
+                       (static_cast<double>(cell.second) + 0.5) * kPopulateResolution, 0.0};
     // Cells at a step's edge are left out, as in the lidar's height-map tests: noise along the
     // view puts a riser's points into the column before it.
-    if (!unambiguousTruth(file->scene, centre, kResolution, 0.0, 0.5)) {
+    if (!unambiguousTruth(file->scene, centre, kPopulateResolution, 0.0, 0.5)) {
       continue;
     }
     const auto t = truth.find(cell);
     ASSERT_NE(t, truth.end()) << "no true surface at " << centre.x << ", " << centre.y;
     ++judged;
     const double error = std::fabs(h->second - t->second);
-    within_voxel += error <= kResolution ? 1U : 0U;
+    within_voxel += error <= kPopulateResolution ? 1U : 0U;
     within_3cm += error <= 0.03 ? 1U : 0U;
   }
   const double observed = share(with_elevation, footprint.size());
@@ -253,8 +239,8 @@ double observedNearTheRobot(const std::string& csv) {
   std::size_t near = 0;
   std::size_t observed = 0;
   for (const auto& [cell, elevation] : readElevations(csv)) {
-    const double x = (static_cast<double>(cell.first) + 0.5) * kResolution;
-    const double y = (static_cast<double>(cell.second) + 0.5) * kResolution;
+    const double x = (static_cast<double>(cell.first) + 0.5) * kPopulateResolution;
+    const double y = (static_cast<double>(cell.second) + 0.5) * kPopulateResolution;
     if (std::hypot(x, y) <= 2.0) {
       ++near;
       observed += std::isnan(elevation) ? 0U : 1U;
@@ -265,7 +251,7 @@ double observedNearTheRobot(const std::string& csv) {
 }
 
 TEST(CliSimulateDepth, CameraFillsTheLidarsNearBlindZone) {
-  const std::string scene = kScenes + "/blind_zone.yaml";
+  const std::string scene = std::string(RAYMAP_SCENES_DIR) + "/blind_zone.yaml";
   TempDir lidar_dir;
   TempDir both_dir;
 
@@ -291,7 +277,7 @@ TEST(CliSimulateDepth, SummaryCountsFramesAndRaysAndIsDeterministic) {
   TempDir dir;
   const std::string a = dir.file("a.ply");
   const std::string b = dir.file("b.ply");
-  const std::string scene = kScenes + "/stairs_depth.yaml";
+  const std::string scene = std::string(RAYMAP_SCENES_DIR) + "/stairs_depth.yaml";
 
   const RunResult first = runRaymap({"simulate", scene, "--rays", a});
   const RunResult second = runRaymap({"simulate", scene, "--rays", b, "-q"});
@@ -306,7 +292,7 @@ TEST(CliSimulateDepth, SummaryCountsFramesAndRaysAndIsDeterministic) {
 
 TEST(CliSimulateDepth, LidarAndCamerasShareTheRecordingAndSensorsChooses) {
   TempDir dir;
-  const std::string scene = kScenes + "/blind_zone.yaml";
+  const std::string scene = std::string(RAYMAP_SCENES_DIR) + "/blind_zone.yaml";
 
   const RunResult both = runRaymap({"simulate", scene, "--rays", dir.file("both.ply")});
   const RunResult lidar =
@@ -340,8 +326,8 @@ TEST(CliSimulateDepth, LidarAndCamerasShareTheRecordingAndSensorsChooses) {
 
 TEST(CliSimulateDepth, SensorOptionErrors) {
   TempDir dir;
-  const std::string stairs = kScenes + "/stairs_depth.yaml";
-  const std::string lidar_scene = kScenes + "/stairs.yaml";
+  const std::string stairs = std::string(RAYMAP_SCENES_DIR) + "/stairs_depth.yaml";
+  const std::string lidar_scene = std::string(RAYMAP_SCENES_DIR) + "/stairs.yaml";
 
   const RunResult no_lidar =
       runRaymap({"simulate", stairs, "--rays", dir.file("a.ply"), "--sensors", "lidar"});

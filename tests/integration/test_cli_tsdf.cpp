@@ -22,10 +22,6 @@
 namespace raymap::test {
 namespace {
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 // The body of a binary PLY written by export --mode tsdf: 7 floats a point (x y z nx ny nz
 // weight).
 std::vector<float> plyFloats(const std::string& text) {
@@ -50,14 +46,15 @@ TEST(CliTsdf, PopulateInfoAndExportThePlanesSurface) {
       runRaymap({"populate", rays, "--output", map, "--mode", "tsdf", "--tsdf-truncation", "0.25",
                  "--tsdf-max-weight", "500", "--tsdf-dropoff", "0.05"});
   ASSERT_EQ(populated.exit_code, 0) << describe(populated);
-  EXPECT_TRUE(has(populated.out, "TSDF voxels updated")) << populated.out;
+  EXPECT_TRUE(contains(populated.out, "TSDF voxels updated")) << populated.out;
   const RunResult info = runRaymap({"info", map});
   ASSERT_EQ(info.exit_code, 0) << describe(info);
-  EXPECT_TRUE(has(info.out, "mode           tsdf")) << info.out;
-  EXPECT_TRUE(has(info.out, "tsdf           truncation 0.25 m, max weight 500, drop-off 0.05 m"))
+  EXPECT_TRUE(contains(info.out, "mode           tsdf")) << info.out;
+  EXPECT_TRUE(
+      contains(info.out, "tsdf           truncation 0.25 m, max weight 500, drop-off 0.05 m"))
       << info.out;
-  EXPECT_TRUE(has(info.out, "tsdf (8 B)")) << info.out;
-  EXPECT_FALSE(has(info.out, "occupancy      hit")) << info.out;
+  EXPECT_TRUE(contains(info.out, "tsdf (8 B)")) << info.out;
+  EXPECT_FALSE(contains(info.out, "occupancy      hit")) << info.out;
 
   // The file keeps the parameters and the field.
   auto loaded = io::loadMap(map);
@@ -72,9 +69,9 @@ TEST(CliTsdf, PopulateInfoAndExportThePlanesSurface) {
   const RunResult exported =
       runRaymap({"export", map, "--mode", "tsdf", "--min-weight", "20", "--ply", ply});
   ASSERT_EQ(exported.exit_code, 0) << describe(exported);
-  EXPECT_TRUE(has(exported.out, "TSDF surface points")) << exported.out;
+  EXPECT_TRUE(contains(exported.out, "TSDF surface points")) << exported.out;
   const std::string text = readFile(ply);
-  EXPECT_TRUE(has(text, "property float weight\n"));
+  EXPECT_TRUE(contains(text, "property float weight\n"));
   const std::vector<float> values = plyFloats(text);
   ASSERT_GT(values.size(), 7u * 100u);
   ASSERT_EQ(values.size() % 7, 0u);
@@ -103,7 +100,7 @@ TEST(CliTsdf, ExportThePlanesSurfaceAsATriangleMesh) {
   const RunResult exported =
       runRaymap({"export", map, "--mode", "tsdf-mesh", "--min-weight", "20", "--ply", ply});
   ASSERT_EQ(exported.exit_code, 0) << describe(exported);
-  EXPECT_TRUE(has(exported.out, "TSDF surface mesh of")) << exported.out;
+  EXPECT_TRUE(contains(exported.out, "TSDF surface mesh of")) << exported.out;
   const std::string text = readFile(ply);
   auto header = io::parsePlyHeader(std::string_view(text), ply);
   ASSERT_TRUE(header) << header.error().message;
@@ -150,43 +147,44 @@ TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
   const RunResult dropoff = runRaymap(
       {"populate", rays, "--output", dir.file("x.rmap"), "--mode", "tsdf", "--tsdf-dropoff", "1"});
   EXPECT_NE(dropoff.exit_code, 0);
-  EXPECT_TRUE(has(dropoff.err, "--tsdf-dropoff")) << dropoff.err;
+  EXPECT_TRUE(contains(dropoff.err, "--tsdf-dropoff")) << dropoff.err;
   const RunResult scan = runRaymap(
       {"populate", rays, "--output", dir.file("x.rmap"), "--mode", "tsdf", "--semantics", "scan"});
   EXPECT_NE(scan.exit_code, 0);
-  EXPECT_TRUE(has(scan.err, "--semantics ray")) << scan.err;
+  EXPECT_TRUE(contains(scan.err, "--semantics ray")) << scan.err;
   const RunResult stray =
       runRaymap({"populate", rays, "--output", dir.file("x.rmap"), "--tsdf-truncation", "0.3"});
   EXPECT_NE(stray.exit_code, 0);
-  EXPECT_TRUE(has(stray.err, "--tsdf-truncation applies only to --mode tsdf")) << stray.err;
+  EXPECT_TRUE(contains(stray.err, "--tsdf-truncation applies only to --mode tsdf")) << stray.err;
 
   const RunResult no_layer =
       runRaymap({"export", plain, "--mode", "tsdf", "--ply", dir.file("x.ply")});
   EXPECT_NE(no_layer.exit_code, 0);
-  EXPECT_TRUE(has(no_layer.err, "no TSDF layer")) << no_layer.err;
+  EXPECT_TRUE(contains(no_layer.err, "no TSDF layer")) << no_layer.err;
   const RunResult occupied = runRaymap({"export", tsdf, "--ply", dir.file("x.ply")});
   EXPECT_NE(occupied.exit_code, 0);
-  EXPECT_TRUE(has(occupied.err, "no occupancy layer")) << occupied.err;
+  EXPECT_TRUE(contains(occupied.err, "no occupancy layer")) << occupied.err;
   const RunResult weight = runRaymap(
       {"export", plain, "--mode", "occupied", "--min-weight", "3", "--ply", dir.file("x.ply")});
   EXPECT_NE(weight.exit_code, 0);
-  EXPECT_TRUE(has(weight.err, "--min-weight applies only to --mode tsdf")) << weight.err;
+  EXPECT_TRUE(contains(weight.err, "--min-weight applies only to --mode tsdf")) << weight.err;
   const RunResult mesh_of_plain =
       runRaymap({"export", plain, "--mode", "tsdf-mesh", "--ply", dir.file("x.ply")});
   EXPECT_NE(mesh_of_plain.exit_code, 0);
-  EXPECT_TRUE(has(mesh_of_plain.err, "no TSDF layer")) << mesh_of_plain.err;
+  EXPECT_TRUE(contains(mesh_of_plain.err, "no TSDF layer")) << mesh_of_plain.err;
   const RunResult mesh_threshold = runRaymap(
       {"export", tsdf, "--mode", "tsdf-mesh", "--threshold", "1", "--ply", dir.file("x.ply")});
   EXPECT_NE(mesh_threshold.exit_code, 0);
-  EXPECT_TRUE(has(mesh_threshold.err, "do not apply to --mode tsdf-mesh")) << mesh_threshold.err;
+  EXPECT_TRUE(contains(mesh_threshold.err, "do not apply to --mode tsdf-mesh"))
+      << mesh_threshold.err;
   const RunResult unknown =
       runRaymap({"export", tsdf, "--mode", "mesh", "--ply", dir.file("x.ply")});
   EXPECT_NE(unknown.exit_code, 0);
-  EXPECT_TRUE(has(unknown.err, "unknown mode 'mesh'")) << unknown.err;
-  EXPECT_TRUE(has(unknown.err, "tsdf-mesh")) << unknown.err;
+  EXPECT_TRUE(contains(unknown.err, "unknown mode 'mesh'")) << unknown.err;
+  EXPECT_TRUE(contains(unknown.err, "tsdf-mesh")) << unknown.err;
   const RunResult heightmap = runRaymap({"heightmap", tsdf, "--csv", dir.file("h.csv")});
   EXPECT_NE(heightmap.exit_code, 0);
-  EXPECT_TRUE(has(heightmap.err, "occupancy")) << heightmap.err;
+  EXPECT_TRUE(contains(heightmap.err, "occupancy")) << heightmap.err;
 }
 
 }  // namespace

@@ -22,7 +22,7 @@
 namespace raymap::test {
 namespace {
 
-constexpr std::int64_t kT0 = 1700000000000000000;
+constexpr std::int64_t kDepthT0 = 1700000000000000000;
 constexpr std::int64_t kFramePeriod = 200000000;  // 5 Hz
 constexpr std::int64_t kPosePeriod = 20000000;    // 50 Hz odometry
 constexpr double kMaxRange = 3.0;                 // the camera reports nothing further away
@@ -61,7 +61,7 @@ CameraIntrinsics bodyCamera(bool distorted) {
 /// The walking body: 0.55 m above the ground, towards the stairs (their foot at x = 2.0) at
 /// 0.5 m/s.
 io::Pose bodyAt(std::int64_t t_ns) {
-  const double t = static_cast<double>(t_ns - kT0) * 1e-9;
+  const double t = static_cast<double>(t_ns - kDepthT0) * 1e-9;
   return io::Pose{{0.2 + 0.5 * t, 0.0, 0.55}, Eigen::Quaterniond::Identity()};
 }
 
@@ -93,13 +93,13 @@ DepthBag makeDepthBag(const TempDir& dir, int frames, bool distorted, bool encod
   spec.channel("/odom", "nav_msgs/msg/Odometry");
   spec.channel(kImageTopic, "sensor_msgs/msg/Image");
   spec.channel(kInfoTopic, "sensor_msgs/msg/CameraInfo");
-  spec.tf("/tf_static", kT0 - 1000000000, {{kT0, "base_link", kFrame, mount}});
+  spec.tf("/tf_static", kDepthT0 - 1000000000, {{kDepthT0, "base_link", kFrame, mount}});
 
   PlyTestFile ply = float64RayCloud();
-  std::int64_t next_pose = kT0 - 5 * kPosePeriod;
+  std::int64_t next_pose = kDepthT0 - 5 * kPosePeriod;
   std::vector<float> depth(std::size_t{camera.width} * camera.height);
   for (int k = 0; k < frames; ++k) {
-    const std::int64_t stamp = kT0 + kFramePeriod * k;
+    const std::int64_t stamp = kDepthT0 + kFramePeriod * k;
     while (next_pose <= stamp + 5 * kPosePeriod) {
       spec.odometry("/odom", next_pose, next_pose, "odom", "base_link", bodyAt(next_pose));
       next_pose += kPosePeriod;
@@ -125,7 +125,7 @@ DepthBag makeDepthBag(const TempDir& dir, int frames, bool distorted, bool encod
         const Eigen::Vector3d point(static_cast<double>(d * r[0]), static_cast<double>(d * r[1]),
                                     static_cast<double>(d));
         addRay(ply, toVec3(sensor.position), toVec3(sensor.transform(point)),
-               static_cast<double>(stamp - kT0) * 1e-9);
+               static_cast<double>(stamp - kDepthT0) * 1e-9);
         ++bag.rays;
       }
     }
@@ -158,7 +158,7 @@ struct Stats {
   double no_info = -1, skipped = -1, rate_limited = -1, camera_infos = -1;
 };
 
-Stats populate(const TempDir& dir, const std::string& input, std::vector<std::string> extra) {
+Stats populateDepth(const TempDir& dir, const std::string& input, std::vector<std::string> extra) {
   static int run = 0;
   const std::string stats = dir.file("depth_stats" + std::to_string(run++) + ".json");
   std::vector<std::string> args{"populate", input, "--stats-json", stats, "-q"};
@@ -188,8 +188,8 @@ TEST(BagDepth, DepthImagesGiveTheVoxelsOfTheirPixelRays) {
       ASSERT_GT(bag.rays, 50000u);
       const std::string out = dir.file("depth_bag");
       writeBag(bag.spec, out, {});
-      const Stats from_ply = populate(dir, bag.ply, {});
-      const Stats from_bag = populate(dir, out, {});
+      const Stats from_ply = populateDepth(dir, bag.ply, {});
+      const Stats from_bag = populateDepth(dir, out, {});
       // Every valid pixel is one ray; the voxels agree with the PLY's rays to float rounding of
       // the back-projection (a ray ending on a voxel face may end on its other side).
       EXPECT_EQ(from_bag.rays, static_cast<double>(bag.rays));
@@ -237,18 +237,18 @@ TEST(BagDepth, ImagesBeforeTheirCameraInfoMalformedImagesAndTheRateLimitAreCount
                                     /*bad_image=*/true);
   const std::string out = dir.file("counted_bag");
   writeBag(bag.spec, out, {});
-  const Stats all = populate(dir, out, {});
+  const Stats all = populateDepth(dir, out, {});
   EXPECT_EQ(all.no_info, 1.0);  // the first image came before any CameraInfo
   EXPECT_EQ(all.skipped, 1.0);  // the rgb8 image
   EXPECT_EQ(all.camera_infos, 5.0);
   EXPECT_EQ(all.rate_limited, 0.0);
   // 5 Hz frames at most 2 Hz (0.5 s apart by stamp): of frames 1 to 5 (0.2 to 1.0 s), 1 and 4
   // are taken; 2 and 3 follow 1 by 0.2 and 0.4 s, 5 follows 4 by 0.2 s.
-  const Stats limited = populate(dir, out, {"--max-rate", "2"});
+  const Stats limited = populateDepth(dir, out, {"--max-rate", "2"});
   EXPECT_EQ(limited.rate_limited, 3.0);
   EXPECT_LT(limited.rays, all.rays);
   // Down-sampling: each 4 x 4 block gives one point.
-  const Stats down = populate(dir, out, {"--downsample", "4"});
+  const Stats down = populateDepth(dir, out, {"--downsample", "4"});
   EXPECT_LE(down.rays, all.rays / 16 + 1200);
   EXPECT_GT(down.rays, all.rays / 20);
   // --invalid-as-free needs the length of its free rays.
@@ -265,8 +265,8 @@ TEST(BagDepth, InvalidPixelsClearFreeSpaceOnlyWhenAsked) {
   const DepthBag bag = makeDepthBag(dir, 4, false, false);
   const std::string out = dir.file("free_bag");
   writeBag(bag.spec, out, {});
-  const Stats plain = populate(dir, out, {"--max-range", "3"});
-  const Stats freed = populate(dir, out, {"--max-range", "3", "--invalid-as-free"});
+  const Stats plain = populateDepth(dir, out, {"--max-range", "3"});
+  const Stats freed = populateDepth(dir, out, {"--max-range", "3", "--invalid-as-free"});
   EXPECT_GT(freed.rays, plain.rays);  // the sky above the stairs: no depth
   EXPECT_GT(freed.free, plain.free);
   // Free rays into open space cross no surface; at most they graze a voxel near 3 m.

@@ -17,7 +17,7 @@
 namespace raymap::test {
 namespace {
 
-constexpr std::int64_t kT0 = 1700000000000000000;
+constexpr std::int64_t kOusterT0 = 1700000000000000000;
 
 std::int64_t nanoseconds(double seconds) {
   return static_cast<std::int64_t>(std::llround(seconds * 1e9));
@@ -49,7 +49,8 @@ TEST(BagOuster, TheOusterDataSetAsABagGivesTheVoxelsOfItsRays) {
     spec.channel("/tf_static", "tf2_msgs/msg/TFMessage");
     spec.channel("/odom", "nav_msgs/msg/Odometry");
     spec.channel("/ouster/points", "sensor_msgs/msg/PointCloud2");
-    spec.tf("/tf_static", kT0 - 1000000000, {{kT0, "base_link", "os_sensor", io::Pose{}}});
+    spec.tf("/tf_static", kOusterT0 - 1000000000,
+            {{kOusterT0, "base_link", "os_sensor", io::Pose{}}});
     forEachScan(rays, [&](std::span<const Ray> scan) {
       // The scan's origin as the base's pose (identity rotation) over its time span, the rays'
       // ends in its frame as float32 as the Ouster driver publishes them; the PLY gets the rays
@@ -63,13 +64,13 @@ TEST(BagOuster, TheOusterDataSetAsABagGivesTheVoxelsOfItsRays) {
         first = std::min(first, r.time_s);
         last = std::max(last, r.time_s);
       }
-      const std::int64_t stamp = kT0 + nanoseconds(first);
+      const std::int64_t stamp = kOusterT0 + nanoseconds(first);
       const io::Pose pose{toEigen(origin)};  // identity rotation
       // 10 us either side: inside the 98 us between a scan's last column and the next's first,
       // so that no point is interpolated between two scans' origins.
       spec.odometry("/odom", stamp - 10000, stamp - 10000, "odom", "base_link", pose);
-      spec.odometry("/odom", kT0 + nanoseconds(last) + 10000, kT0 + nanoseconds(last) + 10000,
-                    "odom", "base_link", pose);
+      spec.odometry("/odom", kOusterT0 + nanoseconds(last) + 10000,
+                    kOusterT0 + nanoseconds(last) + 10000, "odom", "base_link", pose);
       std::vector<dds::ScanPoint> points;
       for (const Ray& r : scan) {
         if ((r.flags & kRayNoReturn) != 0u) {
@@ -85,7 +86,7 @@ TEST(BagOuster, TheOusterDataSetAsABagGivesTheVoxelsOfItsRays) {
         addRay(ply, origin, {origin.x + double(x), origin.y + double(y), origin.z + double(z)},
                r.time_s);
       }
-      spec.ousterCloud("/ouster/points", kT0 + nanoseconds(last) + 100000, stamp, "os_sensor",
+      spec.ousterCloud("/ouster/points", kOusterT0 + nanoseconds(last) + 100000, stamp, "os_sensor",
                        points, {});
       ++scans;
     });

@@ -207,4 +207,10 @@ HeightCheck checkHeights(const driver::ReceivedGridMap& map, const sim::Scene& s
   return check;
 }
 
+void expectCleanStop(RunningDaemon& daemon) {
+  const auto stopped = daemon.process->stop(SIGTERM, kStopWait);
+  ASSERT_TRUE(stopped.has_value());
+  EXPECT_EQ(stopped->first, 0) << daemon.log();
+}
+
 }  // namespace raymap::test

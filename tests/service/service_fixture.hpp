@@ -86,6 +86,9 @@ struct RunningDaemon {
   std::unique_ptr<DaemonProcess> process;
 };
 
+/// @brief Stops the service with SIGTERM and expects a clean exit (status 0).
+void expectCleanStop(RunningDaemon& daemon);
+
 /// @brief The test's side of the DDS graph, in its own participants (the publisher and the
 /// subscribers are independent of each other, like separate ROS nodes).
 struct RosSide {

@@ -311,13 +311,6 @@ std::string expectSceneHeightsAfterPlaying(RosSide& ros, RunningDaemon& daemon,
   return maps.back().frame_id;
 }
 
-/// Stops the service with SIGTERM and expects a clean exit.
-void expectCleanStop(RunningDaemon& daemon) {
-  const auto stopped = daemon.process->stop(SIGTERM, kStopWait);
-  ASSERT_TRUE(stopped.has_value());
-  EXPECT_EQ(stopped->first, 0) << daemon.log();
-}
-
 TEST(Raymapd, UsesTheLatchedTfStaticExtrinsicPublishedBeforeItStarted) {
   const std::uint32_t domain = uniqueDomain();
   // The lidar sits 0.5 m above base_link; only /tf_static says so (the YAML's extrinsic is the

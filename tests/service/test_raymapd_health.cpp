@@ -25,13 +25,6 @@ std::string pipelineValue(const RosSide& ros, const std::string& key) {
   return it == values.end() ? std::string() : it->second;
 }
 
-/// Stops raymapd and expects a clean exit.
-void expectCleanStop(RunningDaemon& daemon) {
-  const auto stopped = daemon.process->stop(SIGTERM, kStopWait);
-  ASSERT_TRUE(stopped.has_value());
-  EXPECT_EQ(stopped->first, 0) << daemon.log();
-}
-
 /// raymapd started and discovered, with the test's DDS side.
 struct Started {
   explicit Started(const std::string& config)

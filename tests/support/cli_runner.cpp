@@ -133,4 +133,50 @@ testing::AssertionResult contains(const std::string& text, const std::string& pa
   return testing::AssertionFailure() << "'" << part << "' not found in:\n" << text;
 }
 
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  ASSERT_TRUE(out.good()) << "cannot write " << path;
+}
+
+std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+std::optional<std::string> jsonValue(const std::string& json, const std::string& key) {
+  const std::string quoted = "\"" + key + "\"";
+  // The key is a quoted name followed by a colon (a string value equal to the key is not).
+  std::size_t at = 0;
+  for (at = json.find(quoted); at != std::string::npos; at = json.find(quoted, at + 1)) {
+    const std::size_t colon = json.find_first_not_of(" \t", at + quoted.size());
+    if (colon != std::string::npos && json[colon] == ':') {
+      at = colon + 1;
+      break;
+    }
+  }
+  if (at == std::string::npos) {
+    return std::nullopt;
+  }
+  at = json.find_first_not_of(" \t", at);
+  if (at == std::string::npos) {
+    return std::nullopt;
+  }
+  if (json[at] == '"') {
+    const std::size_t end = json.find('"', at + 1);
+    return end == std::string::npos ? std::nullopt
+                                    : std::optional<std::string>(json.substr(at + 1, end - at - 1));
+  }
+  const std::size_t end = json.find_first_of(",}\n", at);
+  return json.substr(at, end == std::string::npos ? std::string::npos : end - at);
+}
+
+std::string deviceUnavailable(const std::string& device) {
+  if (device == "cpu") {
+    return std::string();
+  }
+  const RunResult r = runRaymap({"devices"});
+  return contains(r.out, "default for --backend " + device) ? std::string() : r.out + r.err;
+}
+
 }  // namespace raymap::test

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Running the raymap program from tests: its exit code, stdout and stderr.
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,5 +31,18 @@ testing::AssertionResult contains(const std::string& text, const std::string& pa
 
 /// @brief The whole content of a file ("" when it cannot be read).
 std::string readFile(const std::string& path);
+/// @brief Writes `text` to `path` (a test failure when it cannot).
+void writeText(const std::string& path, const std::string& text);
+
+/// @brief `a` followed by `b` (command-line arguments).
+std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b);
+
+/// @brief The raw text of the first value of `"key"` in the program's flat JSON output: a string
+/// without its quotes, or a number as written; nullopt when the key is missing.
+std::optional<std::string> jsonValue(const std::string& json, const std::string& key);
+
+/// @brief Why `--backend <device>` cannot run here, or "" when it can (as `raymap devices` says;
+/// the CPU always can).
+std::string deviceUnavailable(const std::string& device);
 
 }  // namespace raymap::test

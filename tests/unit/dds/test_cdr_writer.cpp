@@ -13,11 +13,10 @@
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
+#include "tests/unit/dds/test_domain.hpp"
 
 namespace raymap::dds {
 namespace {
-
-std::uint32_t testDomain() { return 100U + static_cast<std::uint32_t>(getpid() % 100); }
 
 std::vector<std::vector<std::byte>> receive(RawReader& reader, std::size_t count,
                                             std::chrono::milliseconds timeout) {

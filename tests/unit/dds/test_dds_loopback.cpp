@@ -24,6 +24,7 @@
 #include "src/dds/topic_types.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
+#include "tests/unit/dds/test_domain.hpp"
 
 namespace raymap::dds {
 namespace {
@@ -32,8 +33,6 @@ namespace {
 constexpr auto kDeadline = std::chrono::seconds(10);
 
 /// Each test process has its own domain, so parallel test runs never see each other.
-std::uint32_t testDomain() { return 100U + static_cast<std::uint32_t>(getpid() % 100); }
-
 template <class Predicate>
 bool waitFor(Predicate predicate) {
   const auto end = std::chrono::steady_clock::now() + kDeadline;

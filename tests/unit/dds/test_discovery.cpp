@@ -21,7 +21,7 @@ namespace raymap::dds {
 namespace {
 
 // Waits for discovery end as soon as it happens; the bound is for a loaded machine.
-constexpr auto kDeadline = std::chrono::seconds(10);
+constexpr auto kDiscoveryDeadline = std::chrono::seconds(10);
 
 std::array<std::uint8_t, 16> guidOf(const Participant& participant) {
   dds_guid_t guid{};
@@ -42,7 +42,7 @@ const DiscoveredEndpoint* findEndpoint(const std::vector<DiscoveredEndpoint>& en
 /// Polls endpoints() until `predicate` holds for them (or the deadline).
 template <class Predicate>
 std::vector<DiscoveredEndpoint> endpointsWhen(Discovery& discovery, Predicate predicate) {
-  const auto end = std::chrono::steady_clock::now() + kDeadline;
+  const auto end = std::chrono::steady_clock::now() + kDiscoveryDeadline;
   std::vector<DiscoveredEndpoint> endpoints = discovery.endpoints();
   while (!predicate(endpoints) && std::chrono::steady_clock::now() < end) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));

@@ -20,7 +20,7 @@ namespace raymap::dds {
 namespace {
 
 /// A 5 x 3 map with NaN, +inf and every kind.
-heightmap::HeightMap makeMap() {
+heightmap::HeightMap makeDecodeMap() {
   heightmap::HeightMap map;
   map.resolution = 0.2;
   map.cells_x = 5;
@@ -42,9 +42,9 @@ heightmap::HeightMap makeMap() {
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
 
-/// The bytes of GridMapMessage::fill(makeMap(), ...) as Cyclone serializes them.
+/// The bytes of GridMapMessage::fill(makeDecodeMap(), ...) as Cyclone serializes them.
 std::vector<std::byte> cycloneGridMapBytes() {
-  const heightmap::HeightMap map = makeMap();
+  const heightmap::HeightMap map = makeDecodeMap();
   GridMapMessage message(map.cells_x, map.cells_y);
   message.fill(map, 1'700'000'123'456'789'012LL, "odom");
   auto bytes = test::cyclonesBytes("rt/decode_test_grid_map", gridMapType(), {message.sample()});
@@ -103,7 +103,7 @@ std::vector<std::byte> encodeHandMap(const HandMap& m) {
 }
 
 TEST(DecodeGridMap, WhatGridMapMessageSendsDecodesToTheHeightMap) {
-  const heightmap::HeightMap map = makeMap();
+  const heightmap::HeightMap map = makeDecodeMap();
   const std::vector<std::byte> cdr = cycloneGridMapBytes();
   ASSERT_FALSE(cdr.empty());
 
@@ -150,7 +150,7 @@ TEST(DecodeGridMap, WhatGridMapMessageSendsDecodesToTheHeightMap) {
 }
 
 TEST(DecodeGridMap, AMessageWithNormalsCarriesTheNormalLayers) {
-  heightmap::HeightMap map = makeMap();
+  heightmap::HeightMap map = makeDecodeMap();
   map.has_normals = true;
   map.resizeLayers();
   for (std::size_t i = 0; i < map.cellCount(); ++i) {

@@ -18,21 +18,9 @@
 #include "src/heightmap/height_map.hpp"
 #include "src/io/heightmap_export.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/unit/io/decoded_png.hpp"
 
 namespace raymap::io {
-namespace png_test {
-
-struct DecodedPng {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint8_t> rgb;
-  std::vector<std::string> chunk_types;
-  std::set<int> filters;
-};
-/// Defined in test_png_writer.cpp (the same test executable): decodes and checks a PNG file.
-std::optional<DecodedPng> decodePng(const std::string& path);
-
-}  // namespace png_test
 
 namespace {
 
@@ -40,8 +28,8 @@ using heightmap::CellKind;
 using heightmap::HeightMap;
 using test::TempDir;
 
-constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
-constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNanCell = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInfCell = std::numeric_limits<float>::infinity();
 
 /// A map with every cell unknown.
 HeightMap emptyMap(int cells_x, int cells_y, double resolution = 0.5) {
@@ -52,8 +40,8 @@ HeightMap emptyMap(int cells_x, int cells_y, double resolution = 0.5) {
   map.centre_x = 10.0;
   map.centre_y = -5.0;
   map.resizeLayers();
-  std::fill(map.elevation.begin(), map.elevation.end(), kNan);
-  std::fill(map.clearance.begin(), map.clearance.end(), kNan);
+  std::fill(map.elevation.begin(), map.elevation.end(), kNanCell);
+  std::fill(map.clearance.begin(), map.clearance.end(), kNanCell);
   std::fill(map.kind.begin(), map.kind.end(), static_cast<std::uint32_t>(CellKind::kUnknown));
   return map;
 }
@@ -72,10 +60,10 @@ constexpr int kHighI = 0, kHighJ = 0, kLowI = 3, kLowJ = 2, kVirtualI = 1, kVirt
               kVacantI = 2, kVacantJ = 1, kUnknownI = 3, kUnknownJ = 0;
 HeightMap sampleMap() {
   HeightMap map = emptyMap(4, 3);
-  setCell(map, kHighI, kHighJ, CellKind::kSurface, 2.0f, kInf);
+  setCell(map, kHighI, kHighJ, CellKind::kSurface, 2.0f, kInfCell);
   setCell(map, kLowI, kLowJ, CellKind::kSurface, 1.0f, 0.75f);
   setCell(map, kVirtualI, kVirtualJ, CellKind::kVirtualSurface, 1.5f, 0.3f);
-  setCell(map, kVacantI, kVacantJ, CellKind::kVacant, kNan, kNan);
+  setCell(map, kVacantI, kVacantJ, CellKind::kVacant, kNanCell, kNanCell);
   return map;
 }
 
@@ -150,8 +138,8 @@ TEST(HeightmapCsv, ANegativeNanIsWrittenAsNan) {
   TempDir dir;
   const std::string path = dir.file("map.csv");
   HeightMap map = emptyMap(1, 1);
-  map.elevation[0] = std::copysign(kNan, -1.0f);
-  map.clearance[0] = std::copysign(kNan, -1.0f);
+  map.elevation[0] = std::copysign(kNanCell, -1.0f);
+  map.clearance[0] = std::copysign(kNanCell, -1.0f);
 
   // Act
   auto written = writeHeightmapCsv(path, map);
@@ -329,7 +317,7 @@ TEST(HeightmapImage, PlusXIsRightAndPlusYIsUp) {
   // Arrange: one surface cell at the +x/-y corner (i = 0, j = cells_y - 1) of a 6 x 5 map.
   TempDir dir;
   HeightMap map = emptyMap(6, 5);
-  setCell(map, 0, 4, CellKind::kSurface, 0.0f, kInf);
+  setCell(map, 0, 4, CellKind::kSurface, 0.0f, kInfCell);
   ASSERT_GT(map.cellCentre(0, 4).x, map.cellCentre(1, 4).x);
   ASSERT_LT(map.cellCentre(0, 4).y, map.cellCentre(0, 3).y);
 
@@ -463,7 +451,7 @@ TEST(HeightmapImage, AutomaticScaleKeepsTheMapBetween400And1600Pixels) {
 TEST(HeightmapImage, AMapWithoutSurfacesStillRenders) {
   // Arrange
   HeightMap map = emptyMap(5, 5);
-  setCell(map, 2, 2, CellKind::kVacant, kNan, kNan);
+  setCell(map, 2, 2, CellKind::kVacant, kNanCell, kNanCell);
 
   // Act
   const auto layout = layoutHeightmapImage(map);

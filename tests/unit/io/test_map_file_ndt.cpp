@@ -46,7 +46,7 @@ std::size_t tailOffset(const std::vector<std::uint8_t>& bytes) {
   return test::kMapPrefixBytes + bodyBytes(bytes) - kModeAndNdtBytes - kTsdfBytes;
 }
 
-void resealHeader(std::vector<std::uint8_t>& bytes) {
+void resealVersionedHeader(std::vector<std::uint8_t>& bytes) {
   const std::size_t covered = test::kMapPrefixBytes + bodyBytes(bytes);
   putLe(bytes, covered, crc32(bytes.data(), covered), 4);
 }
@@ -62,7 +62,7 @@ std::vector<std::uint8_t> asVersion(const std::vector<std::uint8_t>& v3, std::ui
             old.begin() + static_cast<std::ptrdiff_t>(cut + removed));
   putLe(old, 8, version, 4);
   putLe(old, 12, bodyBytes(v3) - removed, 4);
-  resealHeader(old);
+  resealVersionedHeader(old);
   // Footer: region count at +4, index offset at +12; index entries: coord (12) + offset (8).
   const std::size_t footer = old.size() - 24;
   const std::size_t count = static_cast<std::size_t>(getLe(old, footer + 4, 8));
@@ -264,7 +264,7 @@ class DamagedNdtFile : public ::testing::Test {
 
   /// Loads `bad` (after resealing its header) and returns the error.
   Error loadFails(std::vector<std::uint8_t> bad) {
-    resealHeader(bad);
+    resealVersionedHeader(bad);
     writeFileBytes(bad_path_, bad);
     auto loaded = loadMap(bad_path_);
     EXPECT_FALSE(loaded.has_value());

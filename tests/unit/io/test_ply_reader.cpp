@@ -29,7 +29,7 @@ using test::PlyTestFile;
   return ::testing::AssertionFailure() << "'" << text << "' does not contain '" << part << "'";
 }
 
-std::string readFileBytes(const std::string& path) {
+std::string fileAsString(const std::string& path) {
   std::string bytes;
   std::FILE* in = std::fopen(path.c_str(), "rb");
   if (in == nullptr) {
@@ -168,7 +168,7 @@ TEST(ByteReader, SkipsAndEnsuresAcrossRefills) {
 std::string gzipped(const test::TempDir& dir, const std::string& text) {
   const std::string path = dir.file("member.gz");
   test::writeBytes(path, text, /*gzip=*/true);
-  return readFileBytes(path);
+  return fileAsString(path);
 }
 
 /// Everything a reader decodes, or its error.
@@ -264,7 +264,7 @@ TEST(ByteReader, CutGzipStreamIsTruncated) {
     bytes += static_cast<char>((i * 7919) % 256);
   }
   test::writeBytes(whole, bytes, /*gzip=*/true);
-  const std::string compressed = readFileBytes(whole);
+  const std::string compressed = fileAsString(whole);
   const std::string cut = dir.file("cut.gz");
   test::writeBytes(cut, compressed.substr(0, compressed.size() / 2));
   auto reader = ByteReader::open(cut, 4096);

@@ -16,17 +16,9 @@
 
 #include "src/io/png_writer.hpp"
 #include "tests/support/temp_dir.hpp"
+#include "tests/unit/io/decoded_png.hpp"
 
 namespace raymap::io::png_test {
-
-/// A PNG read back by decodePng().
-struct DecodedPng {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint8_t> rgb;         ///< rows top to bottom, R G B
-  std::vector<std::string> chunk_types;  ///< in file order
-  std::set<int> filters;                 ///< row filter types seen
-};
 
 namespace {
 
@@ -78,7 +70,7 @@ std::optional<DecodedPng> decodePng(const std::string& path) {
     const std::string type(bytes.begin() + static_cast<std::ptrdiff_t>(at + 4),
                            bytes.begin() + static_cast<std::ptrdiff_t>(at + 8));
     const std::uint8_t* data = bytes.data() + at + 8;
-    const uLong crc = crc32(crc32(0L, bytes.data() + at + 4, 4), data, length);
+    const uLong crc = ::crc32(::crc32(0L, bytes.data() + at + 4, 4), data, length);
     if (be32(bytes, at + 8 + length) != static_cast<std::uint32_t>(crc)) {
       ADD_FAILURE() << path << ": bad CRC in chunk " << type;
       return std::nullopt;

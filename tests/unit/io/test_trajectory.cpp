@@ -14,7 +14,7 @@
 namespace raymap::io {
 namespace {
 
-constexpr double kTolerance = 1e-12;
+constexpr double kTrajectoryTolerance = 1e-12;
 
 Result<Trajectory> loadText(const test::TempDir& dir, const std::string& text) {
   const std::string path = dir.file("trajectory.txt");
@@ -55,9 +55,9 @@ TEST(Trajectory, InterpolatesPositionLinearlyAndHitsSamplesExactly) {
   const auto middle = trajectory->poseAt(2.0);
 
   ASSERT_TRUE(quarter && at_sample && middle);
-  EXPECT_NEAR(quarter->position.x(), 0.5, kTolerance);
-  EXPECT_NEAR(quarter->position.y(), -1.0, kTolerance);
-  EXPECT_NEAR(quarter->position.z(), 0.025, kTolerance);
+  EXPECT_NEAR(quarter->position.x(), 0.5, kTrajectoryTolerance);
+  EXPECT_NEAR(quarter->position.y(), -1.0, kTrajectoryTolerance);
+  EXPECT_NEAR(quarter->position.z(), 0.025, kTrajectoryTolerance);
   EXPECT_EQ(at_sample->position, Eigen::Vector3d(0.3, 0.7, 1e-3));  // exactly, no rounding
   EXPECT_EQ(middle->position, Eigen::Vector3d(2, -4, 0.1));
 }
@@ -109,7 +109,7 @@ TEST(Trajectory, InterpolatesOrientationOnTheShortArc) {
   const Eigen::Vector3d x_axis = halfway->orientation * Eigen::Vector3d::UnitX();
   const double angle = std::atan2(x_axis.y(), x_axis.x());
   EXPECT_NEAR(angle, std::numbers::pi / 4.0, 1e-6);  // midpoint of nlerp = midpoint of slerp
-  EXPECT_NEAR(std::sqrt(halfway->orientation.dot(halfway->orientation)), 1.0, kTolerance);
+  EXPECT_NEAR(std::sqrt(halfway->orientation.dot(halfway->orientation)), 1.0, kTrajectoryTolerance);
 }
 
 TEST(Trajectory, NormalisesQuaternionsAndTransformsPoints) {
@@ -122,9 +122,9 @@ TEST(Trajectory, NormalisesQuaternionsAndTransformsPoints) {
 
   ASSERT_TRUE(pose.has_value());
   const Eigen::Vector3d p_world = pose->transform({1, 0, 0});
-  EXPECT_NEAR(p_world.x(), 10.0, kTolerance);
-  EXPECT_NEAR(p_world.y(), 21.0, kTolerance);
-  EXPECT_NEAR(p_world.z(), 30.0, kTolerance);
+  EXPECT_NEAR(p_world.x(), 10.0, kTrajectoryTolerance);
+  EXPECT_NEAR(p_world.y(), 21.0, kTrajectoryTolerance);
+  EXPECT_NEAR(p_world.z(), 30.0, kTrajectoryTolerance);
 }
 
 TEST(PoseMaths, InterpolationIsNlerpOnTheShortArcAndExactAtItsEnds) {
@@ -139,8 +139,8 @@ TEST(PoseMaths, InterpolationIsNlerpOnTheShortArcAndExactAtItsEnds) {
 
   EXPECT_EQ(at_a.position, a.position);  // exactly
   EXPECT_EQ(at_a.orientation.coeffs(), a.orientation.coeffs());
-  EXPECT_NEAR(quarter.position.x(), 1.5, kTolerance);
-  EXPECT_NEAR(quarter.position.z(), 2.0, kTolerance);
+  EXPECT_NEAR(quarter.position.x(), 1.5, kTrajectoryTolerance);
+  EXPECT_NEAR(quarter.position.z(), 2.0, kTrajectoryTolerance);
   // nlerp's angle at f: 2 atan2(f sin(turn / 2), 1 - f + f cos(turn / 2)) past a's; slerp's
   // would be f * turn, about 0.0157 rad more here.
   const double f = 0.25;
@@ -149,8 +149,8 @@ TEST(PoseMaths, InterpolationIsNlerpOnTheShortArcAndExactAtItsEnds) {
   const Eigen::Vector3d x_axis = quarter.orientation * Eigen::Vector3d::UnitX();
   EXPECT_NEAR(std::atan2(x_axis.y(), x_axis.x()), 0.2 + nlerp, 1e-12);
   EXPECT_GT(f * turn - nlerp, 0.01) << "this is slerp, not nlerp";
-  EXPECT_NEAR(quarter.orientation.norm(), 1.0, kTolerance);
-  EXPECT_NEAR(std::abs(at_b.orientation.dot(b.orientation)), 1.0, kTolerance);
+  EXPECT_NEAR(quarter.orientation.norm(), 1.0, kTrajectoryTolerance);
+  EXPECT_NEAR(std::abs(at_b.orientation.dot(b.orientation)), 1.0, kTrajectoryTolerance);
 }
 
 TEST(PoseMaths, ComposeTransformAndIsometriesAgree) {
@@ -165,11 +165,13 @@ TEST(PoseMaths, ComposeTransformAndIsometriesAgree) {
   const Eigen::Isometry3d t_a_c = a_b.toIsometry() * b_c.toIsometry();
   const Pose back = Pose::fromIsometry(t_a_c);
 
-  EXPECT_NEAR((a_c.transform(p_c) - a_b.transform(b_c.transform(p_c))).norm(), 0.0, kTolerance);
-  EXPECT_NEAR((a_c.transform(p_c) - t_a_c * p_c).norm(), 0.0, kTolerance);
-  EXPECT_NEAR((back.position - a_c.position).norm(), 0.0, kTolerance);
-  EXPECT_NEAR(std::abs(back.orientation.dot(a_c.orientation)), 1.0, kTolerance);  // q or -q
-  EXPECT_NEAR(back.orientation.norm(), 1.0, kTolerance);
+  EXPECT_NEAR((a_c.transform(p_c) - a_b.transform(b_c.transform(p_c))).norm(), 0.0,
+              kTrajectoryTolerance);
+  EXPECT_NEAR((a_c.transform(p_c) - t_a_c * p_c).norm(), 0.0, kTrajectoryTolerance);
+  EXPECT_NEAR((back.position - a_c.position).norm(), 0.0, kTrajectoryTolerance);
+  EXPECT_NEAR(std::abs(back.orientation.dot(a_c.orientation)), 1.0,
+              kTrajectoryTolerance);  // q or -q
+  EXPECT_NEAR(back.orientation.norm(), 1.0, kTrajectoryTolerance);
   EXPECT_TRUE(Pose{}.toIsometry().isApprox(Eigen::Isometry3d::Identity()));
   EXPECT_EQ(Pose{}.transform(p_c), p_c);  // the default pose is the identity, exactly
 }
@@ -248,7 +250,7 @@ TEST(Trajectory, SavedTrajectoriesLoadBackExactly) {
     const TrajectorySample& b = loaded->samples()[i];
     EXPECT_EQ(a.time_s, b.time_s);
     EXPECT_EQ(a.position, b.position);
-    EXPECT_NEAR(a.orientation.dot(b.orientation), 1.0, kTolerance);
+    EXPECT_NEAR(a.orientation.dot(b.orientation), 1.0, kTrajectoryTolerance);
   }
 }
 

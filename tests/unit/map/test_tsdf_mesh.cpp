@@ -26,7 +26,7 @@
 namespace raymap {
 namespace {
 
-constexpr double kResolution = 0.1;
+constexpr double kMeshResolution = 0.1;
 constexpr double kTau = 0.3;  // tsdfConfig()'s truncation, metres
 
 Vec3d normalOf(const TsdfMesh& mesh, const std::array<std::uint32_t, 3>& t) {
@@ -211,9 +211,9 @@ TEST(TsdfMesh, AnExactSpheresMeshIsClosedOnTheSphereAndFacesOutwards) {
   std::printf(
       "exact sphere: %zu triangles, %zu vertices, worst %.4f voxel off, area %.4f of "
       "the sphere's, worst vertex normal . radial %.3f\n",
-      mesh.triangles.size(), mesh.vertices.size(), worst / kResolution, area / true_area,
+      mesh.triangles.size(), mesh.vertices.size(), worst / kMeshResolution, area / true_area,
       worst_normal);
-  EXPECT_LE(worst / kResolution, 0.25);
+  EXPECT_LE(worst / kMeshResolution, 0.25);
   EXPECT_NEAR(area / true_area, 1.0, 0.02);
   EXPECT_EQ(inward, 0u);
   EXPECT_GT(worst_normal, 0.9);
@@ -243,8 +243,8 @@ TEST(TsdfMesh, ASimulatedSpheresMeshIsWithinAQuarterVoxelAndFacesOutwards) {
     outward += normalOf(mesh, t).dot(gradient) > 0.0 ? 1u : 0u;
   }
   std::printf("simulated sphere: %zu triangles, worst vertex %.3f voxel off, %zu outward\n",
-              mesh.triangles.size(), worst / kResolution, outward);
-  EXPECT_LE(worst / kResolution, 0.25);
+              mesh.triangles.size(), worst / kMeshResolution, outward);
+  EXPECT_LE(worst / kMeshResolution, 0.25);
   EXPECT_GE(outward, mesh.triangles.size() * 99 / 100);
 }
 
@@ -269,7 +269,7 @@ TEST(TsdfMesh, CubesWithALightVoxelAreLeftOut) {
       const Vec3d d = mesh.vertices[v] - map.voxelCentre(light);
       const int off_axes =
           (std::fabs(d.x) > 1e-9) + (std::fabs(d.y) > 1e-9) + (std::fabs(d.z) > 1e-9);
-      EXPECT_FALSE(off_axes <= 1 && d.norm() < kResolution - 1e-9);
+      EXPECT_FALSE(off_axes <= 1 && d.norm() < kMeshResolution - 1e-9);
     }
   }
   // With the light voxel's weight accepted, the hole closes.

@@ -14,12 +14,13 @@
 #include "src/pipeline/heightmap_cycle.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_update.hpp"
+#include "tests/support/nanoseconds.hpp"
 #include "tests/support/test_rays.hpp"
 
 namespace raymap::pipeline {
 namespace {
 
-constexpr std::int64_t kMs = 1000000;
+using test::kMs;
 constexpr double kFloorZ = -0.95;              // floor samples: the centre of voxel layer z = -10
 constexpr double kBaseHeight = 0.9;            // base above the ground
 constexpr double kElevationTolerance = 0.051;  // half a voxel

@@ -20,12 +20,13 @@
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_update.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
+#include "tests/support/nanoseconds.hpp"
 #include "tests/support/test_rays.hpp"
 
 namespace raymap::pipeline {
 namespace {
 
-constexpr std::int64_t kMs = 1000000;
+using test::kMs;
 constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
 constexpr std::int64_t kStamp = 1000 * kMs;  // header.stamp of the scans (pose clock)
 constexpr std::int64_t kNow = 5000 * kMs;    // monotonic "now" of the integrator thread

@@ -12,12 +12,13 @@
 
 #include "src/pipeline/pose_history.hpp"
 #include "src/pipeline/pose_update.hpp"
+#include "tests/support/nanoseconds.hpp"
 
 namespace raymap::pipeline {
 namespace {
 
 constexpr double kTolerance = 1e-12;
-constexpr std::int64_t kMs = 1000000;
+using test::kMs;
 
 /// A pose at (x, 2x, -x) with a yaw of `yaw` radians.
 io::Pose pose(double x, double yaw = 0.0) {

@@ -12,7 +12,7 @@
 namespace raymap::pipeline {
 namespace {
 
-constexpr std::int64_t kStamp = 1700000000000000000;
+constexpr std::int64_t kDecoderStamp = 1700000000000000000;
 
 CameraIntrinsics camera(std::uint32_t width, std::uint32_t height) {
   CameraIntrinsics c;
@@ -27,7 +27,7 @@ CameraIntrinsics camera(std::uint32_t width, std::uint32_t height) {
 
 std::vector<std::byte> info(const CameraIntrinsics& c, const char* frame = "cam") {
   std::vector<std::byte> cdr;
-  dds::serializeCameraInfo(kStamp, frame, c, cdr);
+  dds::serializeCameraInfo(kDecoderStamp, frame, c, cdr);
   return cdr;
 }
 
@@ -52,12 +52,14 @@ SensorDecodeSettings depthSettings() {
 TEST(SensorDecoder, ImagesWaitForTheCameraInfoOfTheirOwnFrame) {
   SensorDecoder decoder(depthSettings());
   std::vector<dds::ScanPoint> out(64 * 48);
-  EXPECT_EQ(decoder.decode(image(64, 48, kStamp), out).outcome, DecodeOutcome::kNoCameraInfo);
+  EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp), out).outcome,
+            DecodeOutcome::kNoCameraInfo);
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48), "other")));
   // Another camera's intrinsics (even of another size) are not this image's.
-  EXPECT_EQ(decoder.decode(image(32, 24, kStamp), out).outcome, DecodeOutcome::kNoCameraInfo);
+  EXPECT_EQ(decoder.decode(image(32, 24, kDecoderStamp), out).outcome,
+            DecodeOutcome::kNoCameraInfo);
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
-  const DecodedScan scan = decoder.decode(image(64, 48, kStamp), out);
+  const DecodedScan scan = decoder.decode(image(64, 48, kDecoderStamp), out);
   ASSERT_EQ(scan.outcome, DecodeOutcome::kAccepted);
   EXPECT_EQ(scan.header.points, 64U * 48U);
   EXPECT_STREQ(scan.header.frame_id, "cam");
@@ -98,19 +100,20 @@ TEST(SensorDecoder, TheRateLimitAndTheFrameApplyBeforeBackProjection) {
   SensorDecoder decoder(settings);
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
   std::vector<dds::ScanPoint> out(64 * 48);
-  EXPECT_EQ(decoder.decode(image(64, 48, kStamp), out).outcome, DecodeOutcome::kAccepted);
+  EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp), out).outcome, DecodeOutcome::kAccepted);
   // 33 ms later: above 5 Hz; 200 ms after the accepted one: taken (1 ms of jitter allowed).
-  EXPECT_EQ(decoder.decode(image(64, 48, kStamp + 33000000), out).outcome,
+  EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp + 33000000), out).outcome,
             DecodeOutcome::kRateLimited);
-  EXPECT_EQ(decoder.decode(image(64, 48, kStamp + 199500000), out).outcome,
+  EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp + 199500000), out).outcome,
             DecodeOutcome::kAccepted);
   // A stamp that goes back (a replay restarted) starts again.
-  EXPECT_EQ(decoder.decode(image(64, 48, kStamp - 1000000000), out).outcome,
+  EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp - 1000000000), out).outcome,
             DecodeOutcome::kAccepted);
   // An image in another frame than the configured one, whose CameraInfo came too.
   SensorDecoder typo(settings);
   ASSERT_TRUE(typo.onCameraInfo(info(camera(64, 48), "camera")));
-  EXPECT_EQ(typo.decode(image(64, 48, kStamp, "camera"), out).outcome, DecodeOutcome::kWrongFrame);
+  EXPECT_EQ(typo.decode(image(64, 48, kDecoderStamp, "camera"), out).outcome,
+            DecodeOutcome::kWrongFrame);
 }
 
 TEST(SensorDecoder, TheRateLimitIsKnownOnArrivalFromTheStampAlone) {
@@ -121,23 +124,23 @@ TEST(SensorDecoder, TheRateLimitIsKnownOnArrivalFromTheStampAlone) {
   SensorDecoder decoder(settings);  // no CameraInfo needed: only the header is read
   int let_through = 0;
   for (int k = 0; k < 30; ++k) {  // one second at 30 Hz
-    let_through += decoder.overRateOnArrival(image(64, 48, kStamp + k * 33333333)) ? 0 : 1;
+    let_through += decoder.overRateOnArrival(image(64, 48, kDecoderStamp + k * 33333333)) ? 0 : 1;
   }
   EXPECT_EQ(let_through, 5);
   // A stamp that goes back starts again; unreadable bytes are let through for decode() to name.
-  EXPECT_FALSE(decoder.overRateOnArrival(image(64, 48, kStamp - 1000000000)));
+  EXPECT_FALSE(decoder.overRateOnArrival(image(64, 48, kDecoderStamp - 1000000000)));
   EXPECT_FALSE(decoder.overRateOnArrival(std::vector<std::byte>(3)));
   // Without a limit nothing is held back, point clouds included.
   SensorDecoder unlimited(depthSettings());
-  EXPECT_FALSE(unlimited.overRateOnArrival(image(64, 48, kStamp)));
-  EXPECT_FALSE(unlimited.overRateOnArrival(image(64, 48, kStamp + 1)));
+  EXPECT_FALSE(unlimited.overRateOnArrival(image(64, 48, kDecoderStamp)));
+  EXPECT_FALSE(unlimited.overRateOnArrival(image(64, 48, kDecoderStamp + 1)));
 }
 
 TEST(SensorDecoder, AnImageLargerThanItsBufferIsTooLarge) {
   SensorDecoder decoder(depthSettings());
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
   std::vector<dds::ScanPoint> out(100);  // the sensor's own max_points (raymapd slices slots)
-  const DecodedScan scan = decoder.decode(image(64, 48, kStamp), out);
+  const DecodedScan scan = decoder.decode(image(64, 48, kDecoderStamp), out);
   EXPECT_EQ(scan.outcome, DecodeOutcome::kTooLarge);
   EXPECT_EQ(scan.image_error, dds::DepthImageError::kTooManyPoints);
 }

@@ -10,11 +10,12 @@
 #include <signal.h>
 
 #include "platform/clock.hpp"
+#include "tests/support/nanoseconds.hpp"
 
 namespace raymap::platform {
 namespace {
 
-constexpr std::int64_t kMs = 1'000'000;
+using test::kMs;
 
 TEST(Clock, MonotonicNeverGoesBack) {
   std::int64_t previous = monotonicNowNs();

@@ -11,12 +11,13 @@
 
 #include "platform/clock.hpp"
 #include "platform/signals.hpp"
+#include "tests/support/nanoseconds.hpp"
 #include "tests/unit/platform/child_process.hpp"
 
 namespace raymap::platform {
 namespace {
 
-constexpr std::int64_t kMs = 1'000'000;
+using test::kMs;
 
 TEST(ShutdownSignals, ReceivesARaisedSigterm) {
   const int code = test::runInChild([] {

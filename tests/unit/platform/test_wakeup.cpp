@@ -8,11 +8,12 @@
 
 #include "platform/clock.hpp"
 #include "platform/wakeup.hpp"
+#include "tests/support/nanoseconds.hpp"
 
 namespace raymap::platform {
 namespace {
 
-constexpr std::int64_t kMs = 1'000'000;
+using test::kMs;
 
 TEST(Wakeup, TimesOutWithoutNotificationAndNotEarly) {
   Wakeup wakeup;

@@ -12,11 +12,12 @@
 #include "src/dds/point_cloud.hpp"
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/service.hpp"
+#include "tests/support/nanoseconds.hpp"
 
 namespace raymap::service {
 namespace {
 
-constexpr std::int64_t kMs = 1000000;
+using test::kMs;
 constexpr std::int64_t kStart = 1000 * kMs;
 
 /// The pipeline around a reporter, with the clock in the test's hands.

@@ -14,7 +14,7 @@
 namespace raymap::sim {
 namespace {
 
-constexpr double kTolerance = 1e-9;
+constexpr double kSceneTolerance = 1e-9;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Vec3d unit(Vec3d v) { return v * (1.0 / v.norm()); }
@@ -39,13 +39,13 @@ TEST(CastRay, BoxFacesFromEachSide) {
   Scene scene = floating();
   scene.boxes.push_back({{1.0, -1.0, 0.0}, {2.0, 1.0, 1.0}});
 
-  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 0.5}, {1.0, 0.0, 0.0}), 1.0, kTolerance);   // -x face
-  EXPECT_NEAR(castRay(scene, {5.0, 0.0, 0.5}, {-1.0, 0.0, 0.0}), 3.0, kTolerance);  // +x face
-  EXPECT_NEAR(castRay(scene, {1.5, 0.0, 3.0}, {0.0, 0.0, -1.0}), 2.0, kTolerance);  // top
-  EXPECT_NEAR(castRay(scene, {1.5, -4.0, 0.2}, {0.0, 1.0, 0.0}), 3.0, kTolerance);  // -y face
+  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 0.5}, {1.0, 0.0, 0.0}), 1.0, kSceneTolerance);   // -x face
+  EXPECT_NEAR(castRay(scene, {5.0, 0.0, 0.5}, {-1.0, 0.0, 0.0}), 3.0, kSceneTolerance);  // +x face
+  EXPECT_NEAR(castRay(scene, {1.5, 0.0, 3.0}, {0.0, 0.0, -1.0}), 2.0, kSceneTolerance);  // top
+  EXPECT_NEAR(castRay(scene, {1.5, -4.0, 0.2}, {0.0, 1.0, 0.0}), 3.0, kSceneTolerance);  // -y face
   // Slanted: x = 1 is reached at t = sqrt(5) / 2 with y = 0.5, inside the face.
   EXPECT_NEAR(castRay(scene, {0.0, 0.0, 0.5}, unit({2.0, 1.0, 0.0})), std::sqrt(5.0) / 2.0,
-              kTolerance);
+              kSceneTolerance);
 }
 
 TEST(CastRay, MissesAndRaysPointingAwayAreInfinite) {
@@ -69,10 +69,10 @@ TEST(CastRay, GroundPlaneAtItsHeight) {
   Scene scene;
   scene.ground_height = -0.5;
 
-  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 1.5}, {0.0, 0.0, -1.0}), 2.0, kTolerance);
+  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 1.5}, {0.0, 0.0, -1.0}), 2.0, kSceneTolerance);
   // 45 degrees down from 2 m above the ground: 2 sqrt(2).
   EXPECT_NEAR(castRay(scene, {0.0, 0.0, 1.5}, unit({1.0, 0.0, -1.0})), 2.0 * std::sqrt(2.0),
-              kTolerance);
+              kSceneTolerance);
 }
 
 TEST(CastRay, RampSlopeFromEveryDirectionItRises) {
@@ -90,7 +90,7 @@ TEST(CastRay, RampSlopeFromEveryDirectionItRises) {
     Scene scene = floating();
     scene.ramps.push_back({{0.0, -1.0, 0.0}, {4.0, 1.0, 1.0}, c.axis});
 
-    EXPECT_NEAR(castRay(scene, c.above, {0.0, 0.0, -1.0}), 3.0 - c.top, kTolerance)
+    EXPECT_NEAR(castRay(scene, c.above, {0.0, 0.0, -1.0}), 3.0 - c.top, kSceneTolerance)
         << "axis " << static_cast<int>(c.axis);
   }
 }
@@ -100,9 +100,9 @@ TEST(CastRay, RampHitOnTheSlopeAndOnTheHighFace) {
   scene.ramps.push_back({{0.0, -1.0, 0.0}, {4.0, 1.0, 1.0}, RampAxis::kPlusX});
 
   // Level at z = 0.5 towards +x: the slope is at 0.5 where x = 2.
-  EXPECT_NEAR(castRay(scene, {-1.0, 0.0, 0.5}, {1.0, 0.0, 0.0}), 3.0, kTolerance);
+  EXPECT_NEAR(castRay(scene, {-1.0, 0.0, 0.5}, {1.0, 0.0, 0.0}), 3.0, kSceneTolerance);
   // From beyond the high end towards -x: the vertical face at x = 4.
-  EXPECT_NEAR(castRay(scene, {5.0, 0.0, 0.5}, {-1.0, 0.0, 0.0}), 1.0, kTolerance);
+  EXPECT_NEAR(castRay(scene, {5.0, 0.0, 0.5}, {-1.0, 0.0, 0.0}), 1.0, kSceneTolerance);
   // Above the ramp's top everywhere: a miss.
   EXPECT_EQ(castRay(scene, {-1.0, 0.0, 1.1}, {1.0, 0.0, 0.0}), kInf);
 }
@@ -111,10 +111,10 @@ TEST(CastRay, PoleSideAndTop) {
   Scene scene = floating();
   scene.poles.push_back({0.0, 0.0, 0.5, 0.0, 2.0});
 
-  EXPECT_NEAR(castRay(scene, {-3.0, 0.0, 1.0}, {1.0, 0.0, 0.0}), 2.5, kTolerance);
+  EXPECT_NEAR(castRay(scene, {-3.0, 0.0, 1.0}, {1.0, 0.0, 0.0}), 2.5, kSceneTolerance);
   // Off centre by 0.3: the side is at x = -sqrt(0.25 - 0.09) = -0.4.
-  EXPECT_NEAR(castRay(scene, {-3.0, 0.3, 1.0}, {1.0, 0.0, 0.0}), 2.6, kTolerance);
-  EXPECT_NEAR(castRay(scene, {0.1, 0.1, 5.0}, {0.0, 0.0, -1.0}), 3.0, kTolerance);
+  EXPECT_NEAR(castRay(scene, {-3.0, 0.3, 1.0}, {1.0, 0.0, 0.0}), 2.6, kSceneTolerance);
+  EXPECT_NEAR(castRay(scene, {0.1, 0.1, 5.0}, {0.0, 0.0, -1.0}), 3.0, kSceneTolerance);
   EXPECT_EQ(castRay(scene, {-3.0, 0.0, 2.5}, {1.0, 0.0, 0.0}), kInf);  // over it
   EXPECT_EQ(castRay(scene, {-3.0, 0.6, 1.0}, {1.0, 0.0, 0.0}), kInf);  // beside it
 }
@@ -122,10 +122,11 @@ TEST(CastRay, PoleSideAndTop) {
 TEST(CastRay, DitchBottomAndGroundBesideIt) {
   const Scene scene = ditchScene();
 
-  EXPECT_NEAR(castRay(scene, {2.5, 0.0, 1.2}, {0.0, 0.0, -1.0}), 2.0, kTolerance);
-  EXPECT_NEAR(castRay(scene, {1.5, 0.0, 1.2}, {0.0, 0.0, -1.0}), 1.2, kTolerance);
+  EXPECT_NEAR(castRay(scene, {2.5, 0.0, 1.2}, {0.0, 0.0, -1.0}), 2.0, kSceneTolerance);
+  EXPECT_NEAR(castRay(scene, {1.5, 0.0, 1.2}, {0.0, 0.0, -1.0}), 1.2, kSceneTolerance);
   // Steep: the opening at x = 2.4, the bottom (z = -0.8) at x = 2.8.
-  EXPECT_NEAR(castRay(scene, {1.8, 0.0, 1.2}, unit({1.0, 0.0, -2.0})), std::sqrt(5.0), kTolerance);
+  EXPECT_NEAR(castRay(scene, {1.8, 0.0, 1.2}, unit({1.0, 0.0, -2.0})), std::sqrt(5.0),
+              kSceneTolerance);
 }
 
 TEST(CastRay, RayIntoTheDitchEndsOnTheFarWall) {
@@ -135,25 +136,25 @@ TEST(CastRay, RayIntoTheDitchEndsOnTheFarWall) {
 
   const double range = castRay(scene, {0.0, 0.0, 1.2}, dir);
 
-  EXPECT_NEAR(range, 3.0 * std::sqrt(1.25), kTolerance);
+  EXPECT_NEAR(range, 3.0 * std::sqrt(1.25), kSceneTolerance);
   const Vec3d hit = Vec3d{0.0, 0.0, 1.2} + dir * range;
-  EXPECT_NEAR(hit.x, 3.0, kTolerance);
-  EXPECT_NEAR(hit.z, -0.3, kTolerance);
+  EXPECT_NEAR(hit.x, 3.0, kSceneTolerance);
+  EXPECT_NEAR(hit.z, -0.3, kSceneTolerance);
 }
 
 TEST(CastRay, RayPassingOverTheDitchMeetsTheGroundBeyond) {
   const Scene scene = ditchScene();
   const Vec3d dir = unit({1.0, 0.0, -0.2});  // the ground at x = 6
 
-  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 1.2}, dir), 6.0 * std::sqrt(1.04), kTolerance);
+  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 1.2}, dir), 6.0 * std::sqrt(1.04), kSceneTolerance);
 }
 
 TEST(CastRay, FromInsideTheDitch) {
   const Scene scene = ditchScene();
   const Vec3d inside{2.5, 0.0, -0.4};
 
-  EXPECT_NEAR(castRay(scene, inside, {-1.0, 0.0, 0.0}), 0.5, kTolerance);  // a wall
-  EXPECT_NEAR(castRay(scene, inside, {0.0, 0.0, -1.0}), 0.4, kTolerance);  // the bottom
+  EXPECT_NEAR(castRay(scene, inside, {-1.0, 0.0, 0.0}), 0.5, kSceneTolerance);  // a wall
+  EXPECT_NEAR(castRay(scene, inside, {0.0, 0.0, -1.0}), 0.4, kSceneTolerance);  // the bottom
   EXPECT_EQ(castRay(scene, inside, {0.0, 0.0, 1.0}), kInf);           // out through the opening
   EXPECT_EQ(castRay(scene, {2.5, 0.0, -1.0}, {0.0, 0.0, 1.0}), 0.0);  // below the bottom
 }
@@ -163,7 +164,7 @@ TEST(CastRay, NearestOfSeveralSolids) {
   scene.boxes.push_back({{3.0, -1.0, 0.0}, {4.0, 1.0, 2.0}});
   scene.poles.push_back({1.5, 0.0, 0.1, 0.0, 2.0});
 
-  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}), 1.4, kTolerance);
+  EXPECT_NEAR(castRay(scene, {0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}), 1.4, kSceneTolerance);
 }
 
 // ---- solidIntervals and trueSurface ----
@@ -207,7 +208,7 @@ TEST(TrueSurface, UnderATableTheGroundWithTheTablesClearance) {
 
   ASSERT_TRUE(surface.has_value());
   EXPECT_EQ(surface->height, 0.0);
-  EXPECT_NEAR(surface->clearance, 0.71, kTolerance);
+  EXPECT_NEAR(surface->clearance, 0.71, kSceneTolerance);
 }
 
 TEST(TrueSurface, TheTableTopWhenTheClearanceNeededIsLarger) {
@@ -238,7 +239,7 @@ TEST(TrueSurface, StairTreads) {
     const double x = 2.0 + 0.3 * (k - 0.5);
     const auto surface = trueSurface(scene, x, 0.0, 0.0, 0.5);
     ASSERT_TRUE(surface.has_value());
-    EXPECT_NEAR(surface->height, 0.17 * k, kTolerance) << "step " << k;
+    EXPECT_NEAR(surface->height, 0.17 * k, kSceneTolerance) << "step " << k;
   }
   EXPECT_EQ(trueSurface(scene, 1.5, 0.0, 0.0, 0.5)->height, 0.0);
 }
@@ -247,9 +248,9 @@ TEST(TrueSurface, RampHeightIsLinear) {
   Scene scene;
   scene.ramps.push_back({{-2.0, -5.0, 0.0}, {2.0, -3.0, 0.8}, RampAxis::kPlusX});
 
-  EXPECT_NEAR(trueSurface(scene, 0.0, -4.0, 0.0, 0.5)->height, 0.4, kTolerance);
-  EXPECT_NEAR(trueSurface(scene, 1.5, -4.0, 0.0, 0.5)->height, 0.7, kTolerance);
-  EXPECT_NEAR(trueSurface(scene, -1.9, -4.0, 0.0, 0.5)->height, 0.02, kTolerance);
+  EXPECT_NEAR(trueSurface(scene, 0.0, -4.0, 0.0, 0.5)->height, 0.4, kSceneTolerance);
+  EXPECT_NEAR(trueSurface(scene, 1.5, -4.0, 0.0, 0.5)->height, 0.7, kSceneTolerance);
+  EXPECT_NEAR(trueSurface(scene, -1.9, -4.0, 0.0, 0.5)->height, 0.02, kSceneTolerance);
 }
 
 TEST(TrueSurface, DitchBottomAndItsSides) {

@@ -21,7 +21,7 @@
 namespace raymap::sim {
 namespace {
 
-constexpr double kTolerance = 1e-12;
+constexpr double kSceneFileTolerance = 1e-12;
 
 /// A trajectory of 1 s at 1 m/s: 10 scans at the default 10 Hz.
 const std::string kTrajectory =
@@ -37,7 +37,8 @@ SceneFile parseOk(const std::string& text) {
 
 bool sameBox(const Box& a, const Box& b) {
   for (int i = 0; i < 3; ++i) {
-    if (std::abs(a.min[i] - b.min[i]) > kTolerance || std::abs(a.max[i] - b.max[i]) > kTolerance) {
+    if (std::abs(a.min[i] - b.min[i]) > kSceneFileTolerance ||
+        std::abs(a.max[i] - b.max[i]) > kSceneFileTolerance) {
       return false;
     }
   }
@@ -220,7 +221,7 @@ TEST(SceneFile, PosesTakeTheHeadingInDegrees) {
       "  poses: [[0, 0, 0, 1, 0], [2, 2, 0, 1, 90]]\n");
 
   ASSERT_EQ(file.simulation.path.knots().size(), 2u);
-  EXPECT_NEAR(file.simulation.path.knots()[1].yaw_rad, std::numbers::pi / 2.0, kTolerance);
+  EXPECT_NEAR(file.simulation.path.knots()[1].yaw_rad, std::numbers::pi / 2.0, kSceneFileTolerance);
   EXPECT_EQ(file.simulation.scans, 20);
 }
 
