@@ -57,7 +57,7 @@ Vec3d defaultCentre(const VoxelMap& map) {
           s.observed_min.z + 0.5 * map.geometry().resolution};
 }
 
-std::string number(double value) {
+std::string threeDecimals(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3f", value);
   return text;
@@ -223,14 +223,15 @@ int runHeightmap(const HeightmapFlags& f) {
     std::printf(
         "height map %d x %d cells at %s m around (%s, %s), reference z %s m, %s mode: "
         "%s surface, %s virtual, %s vacant, %s unknown",
-        result.cells_x, result.cells_y, number(result.resolution).c_str(),
-        number(result.centre_x).c_str(), number(result.centre_y).c_str(),
-        number(result.reference_z).c_str(), std::string(heightmap::toString(options.mode)).c_str(),
+        result.cells_x, result.cells_y, threeDecimals(result.resolution).c_str(),
+        threeDecimals(result.centre_x).c_str(), threeDecimals(result.centre_y).c_str(),
+        threeDecimals(result.reference_z).c_str(),
+        std::string(heightmap::toString(options.mode)).c_str(),
         withCommas(counts[RM_HM_SURFACE]).c_str(), withCommas(counts[RM_HM_VIRTUAL]).c_str(),
         withCommas(counts[RM_HM_VACANT]).c_str(), withCommas(counts[RM_HM_UNKNOWN]).c_str());
     if (counts[RM_HM_SURFACE] > 0) {
-      std::printf("; elevation %s .. %s m", number(static_cast<double>(lowest)).c_str(),
-                  number(static_cast<double>(highest)).c_str());
+      std::printf("; elevation %s .. %s m", threeDecimals(static_cast<double>(lowest)).c_str(),
+                  threeDecimals(static_cast<double>(highest)).c_str());
     }
     if (result.has_normals) {
       std::printf("; %s with normals", withCommas(normal_cells).c_str());

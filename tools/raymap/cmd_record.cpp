@@ -23,7 +23,7 @@
 namespace raymap::cli {
 namespace {
 
-constexpr std::int32_t kReaderDepth = 256;  // ~25 s of 10 Hz clouds if the disk stalls
+constexpr std::int32_t kRecordReaderDepth = 256;  // ~25 s of 10 Hz clouds if the disk stalls
 constexpr int kTakeBatch = 32;
 constexpr double kDiscoveryPeriod_s = 0.1;
 
@@ -95,7 +95,7 @@ class RosbagSink final : public RecordSink {
     // Bags name types the ROS way (sensor_msgs/msg/PointCloud2), DDS the IDL way.
     const dds::KnownTopicType* known = dds::findTopicType(type);
     return bag_->addTopic(dds::rosTopicName(dds_topic), known != nullptr ? known->ros_name : type,
-                          bag::offeredQosYaml(reliable, latched, latched ? 1 : kReaderDepth));
+                          bag::offeredQosYaml(reliable, latched, latched ? 1 : kRecordReaderDepth));
   }
   Result<void> write(std::uint32_t id, std::int64_t receive_unix_ns, std::int64_t,
                      std::int64_t source_unix_ns, std::span<const std::byte> cdr) override {
@@ -275,7 +275,8 @@ class Recorder {
       }
       auto reader = dds::RawReader::create(
           *participant_, e.topic.c_str(), known->descriptor,
-          all_reliable ? dds::Reliability::kReliable : dds::Reliability::kBestEffort, kReaderDepth,
+          all_reliable ? dds::Reliability::kReliable : dds::Reliability::kBestEffort,
+          kRecordReaderDepth,
           all_latched ? dds::Durability::kTransientLocal : dds::Durability::kVolatile);
       if (!reader) {
         return Unexpected(std::move(reader).error());
