@@ -609,12 +609,15 @@ float VoxelMap::occupancyValue(Vec3i voxel) const noexcept {
 }
 
 VoxelState VoxelMap::state(Vec3i voxel) const noexcept {
-  const float v = occupancyValue(voxel);
-  if (!rm_occupancy_observed(v)) {
+  return stateOfValue(occupancyValue(voxel));
+}
+
+VoxelState VoxelMap::stateOfValue(float log_odds) const noexcept {
+  if (!rm_occupancy_observed(log_odds)) {
     return VoxelState::kUnobserved;
   }
-  return rm_occupancy_occupied(v, config_.occupancy.threshold) ? VoxelState::kOccupied
-                                                               : VoxelState::kFree;
+  return rm_occupancy_occupied(log_odds, config_.occupancy.threshold) ? VoxelState::kOccupied
+                                                                      : VoxelState::kFree;
 }
 
 rm_voxel_mean VoxelMap::mean(Vec3i voxel) const noexcept {

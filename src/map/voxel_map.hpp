@@ -245,6 +245,9 @@ class VoxelMap {
   // ---- queries ----
   float occupancyValue(Vec3i voxel) const noexcept;  ///< log-odds, +inf when unobserved
   VoxelState state(Vec3i voxel) const noexcept;
+  /// @brief The state an occupancy value (log-odds) stands for under this map's threshold; what
+  /// state() returns for a voxel holding it. For code that reads the occupancy layer directly.
+  VoxelState stateOfValue(float log_odds) const noexcept;
   /// @brief Voxel mean of a voxel (zero count when absent or without the layer).
   rm_voxel_mean mean(Vec3i voxel) const noexcept;
   /// @brief NDT Gaussian of a voxel (count 0 when absent or without the layer).

@@ -242,47 +242,21 @@ const float* regionOccupancy(const VoxelMap& map, const std::tuple<int, int, int
   return map.store().layerData<float>(slot, map.occupancyLayer());
 }
 
-VoxelState stateOf(float value, float threshold) {
-  if (!rm_occupancy_observed(value)) {
-    return VoxelState::kUnobserved;
-  }
-  return rm_occupancy_occupied(value, threshold) ? VoxelState::kOccupied : VoxelState::kFree;
-}
-
 }  // namespace
 
 MapComparison compareMaps(const VoxelMap& a, const VoxelMap& b) {
   MapComparison result;
+  const int n = a.geometry().region_voxels;
+  if (n != b.geometry().region_voxels) {
+    ADD_FAILURE() << "compareMaps compares maps of one region size (" << n << " and "
+                  << b.geometry().region_voxels << " voxels)";
+    return result;
+  }
   std::set<std::tuple<int, int, int>> regions;
   a.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
   b.store().forEachRegion([&](std::uint32_t, Vec3i r) { regions.insert({r.x, r.y, r.z}); });
-  const int n = a.geometry().region_voxels;
-  const auto add = [&result](VoxelState sa, VoxelState sb, float va, float vb) {
-    if (sa == VoxelState::kUnobserved && sb == VoxelState::kUnobserved) {
-      return;
-    }
-    ++result.compared;
-    result.same_state += sa == sb ? 1u : 0u;
-    result.exact_value += std::memcmp(&va, &vb, sizeof(float)) == 0 ? 1u : 0u;
-  };
-  if (n != b.geometry().region_voxels) {
-    // Different region sizes: voxel by voxel through the public queries (slow, but general).
-    for (const auto& [rx, ry, rz] : regions) {
-      for (int z = 0; z < n; ++z) {
-        for (int y = 0; y < n; ++y) {
-          for (int x = 0; x < n; ++x) {
-            const Vec3i voxel{rx * n + x, ry * n + y, rz * n + z};
-            add(a.state(voxel), b.state(voxel), a.occupancyValue(voxel), b.occupancyValue(voxel));
-          }
-        }
-      }
-    }
-    return result;
-  }
-  // Same layout: region by region over the occupancy layers (a hash lookup per region, not per
-  // voxel; the comparison the sanitizer stages spend most of these tests' time on otherwise).
-  const float ta = a.config().occupancy.threshold;
-  const float tb = b.config().occupancy.threshold;
+  // Region by region over the occupancy layers: a hash lookup per region, not per voxel (per
+  // voxel, the lookups were most of these tests' time under the sanitizers).
   const std::size_t voxels =
       static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
   for (const auto& region : regions) {
@@ -291,7 +265,14 @@ MapComparison compareMaps(const VoxelMap& a, const VoxelMap& b) {
     for (std::size_t i = 0; i < voxels; ++i) {
       const float va = la != nullptr ? la[i] : RM_OCC_UNOBSERVED;
       const float vb = lb != nullptr ? lb[i] : RM_OCC_UNOBSERVED;
-      add(stateOf(va, ta), stateOf(vb, tb), va, vb);
+      const VoxelState sa = a.stateOfValue(va);
+      const VoxelState sb = b.stateOfValue(vb);
+      if (sa == VoxelState::kUnobserved && sb == VoxelState::kUnobserved) {
+        continue;
+      }
+      ++result.compared;
+      result.same_state += sa == sb ? 1u : 0u;
+      result.exact_value += std::memcmp(&va, &vb, sizeof(float)) == 0 ? 1u : 0u;
     }
   }
   return result;

@@ -81,6 +81,9 @@ struct MapComparison {
     return compared ? double(same_state) / double(compared) : 1.0;
   }
 };
+/// @brief Voxel by voxel over the regions either map holds (resident ones, on a tiered map): how
+/// many are observed in either, in the same state, and bit-identical in occupancy. The maps must
+/// have one region size (a test failure otherwise).
 MapComparison compareMaps(const VoxelMap& a, const VoxelMap& b);
 
 }  // namespace raymap::test
