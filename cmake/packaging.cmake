@@ -1,14 +1,18 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # The Debian package: `cpack -G DEB` in a Release build directory gives raymap_<version>_<arch>.deb
 # with raymap, raymapd, the systemd unit, /etc/raymapd/{raymapd.yaml,cyclonedds.xml} (conffiles),
-# the static libraries, include/raymap and the CMake package, installed under /usr. Depends: is
-# computed from the executables' shared libraries (dpkg-shlibdeps, from dpkg-dev), plus adduser
+# /usr/share/raymap/cyclonedds-realtime-receive.xml, the static libraries, include/raymap and the
+# CMake package, installed under /usr. Depends: is computed from the executables' shared libraries (dpkg-shlibdeps, from dpkg-dev), plus adduser
 # for the raymapd system user that postinst creates. docs/packaging.md.
 if(RAYMAP_BUILD_SERVICE)
   install(CODE "set(RAYMAP_SOURCE_DIR \"${PROJECT_SOURCE_DIR}\")
 set(RAYMAP_BINARY_DIR \"${PROJECT_BINARY_DIR}\")
 set(RAYMAP_BINDIR \"${CMAKE_INSTALL_BINDIR}\")" COMPONENT runtime)
   install(SCRIPT ${PROJECT_SOURCE_DIR}/cmake/install_service_files.cmake COMPONENT runtime)
+  # For a planner taking the height maps (not for raymapd): Cyclone's receive path at real-time
+  # priority (docs/raymapd.md, "On the planner's side").
+  install(FILES ${PROJECT_SOURCE_DIR}/config/cyclonedds-realtime-receive.xml
+    DESTINATION ${CMAKE_INSTALL_DATADIR}/raymap COMPONENT runtime)
 endif()
 
 set(CPACK_PACKAGE_NAME raymap)

@@ -34,7 +34,8 @@ done
 contents=$(dpkg-deb -c "$deb")
 for path in ./usr/bin/raymap ./usr/bin/raymapd ./usr/lib/systemd/system/raymapd.service \
   ./etc/raymapd/raymapd.yaml ./etc/raymapd/cyclonedds.xml ./usr/include/raymap/mapper.hpp \
-  ./usr/include/raymap/version.hpp ./usr/lib/cmake/raymap/raymapConfig.cmake; do
+  ./usr/include/raymap/version.hpp ./usr/lib/cmake/raymap/raymapConfig.cmake \
+  ./usr/share/raymap/cyclonedds-realtime-receive.xml; do
   grep -q " $path\$" <<<"$contents" || { echo "check-deb: the package lacks $path" >&2; exit 1; }
 done
 

@@ -24,8 +24,8 @@ run_data_sets() {  # run_data_sets FUNCTION DATA_DIR: FUNCTION NAME INPUT [optio
 
 daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: raymap-load's JSON
   # raymapd on CONFIG, driven by raymap-load (an OS-1-128, 128 x 1024 points) at RATE scans/s for
-  # SECONDS after a 3 s warm-up (SUBSCRIBER_PRIORITY: raymap-load's --subscriber-priority); prints raymap-load's JSON on one line, with a "service" object
-  # added: what systemd sees of the service (tools/bench/notify_listener.py on its NOTIFY_SOCKET):
+  # SECONDS after a 3 s warm-up (SUBSCRIBER_PRIORITY: see below); prints raymap-load's JSON on
+  # one line, with a "service" object added: what systemd sees of the service (tools/bench/notify_listener.py on its NOTIFY_SOCKET):
   # ready_ms (start to READY=1), watchdog_pings and watchdog_gap_max_ms / _p99_ms (READY=1 to
   # STOPPING=1), and stop_ms (SIGTERM to exit); and "thread_cpu_s": the CPU seconds (user +
   # system) each of raymapd's threads used over the whole run, by thread name (raymap-ingest,
@@ -44,7 +44,13 @@ daemon_under_load() {  # daemon_under_load BUILD CONFIG DOMAIN RATE SECONDS: ray
   NOTIFY_SOCKET="$notify" "$build/src/service/raymapd" --config "$config" 2> "${config%.yaml}.log" &
   pid=$!
   sleep 2
-  out=$("$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
+  # SUBSCRIBER_PRIORITY > 0: a real-time subscriber, its thread and its DDS receive path
+  # (config/cyclonedds-realtime-receive.xml) at real-time priority, as a planner's would run.
+  local load_dds=$CYCLONEDDS_URI
+  if [ "${SUBSCRIBER_PRIORITY:-0}" -gt 0 ]; then
+    load_dds="$CYCLONEDDS_URI,file://$PWD/config/cyclonedds-realtime-receive.xml"
+  fi
+  out=$(CYCLONEDDS_URI="$load_dds" "$build/tools/raymap-load" --domain "$domain" --beams 128 --columns 1024 \
     --scan-rate "$rate" --duration "$seconds" --warmup 3 \
     --subscriber-priority "${SUBSCRIBER_PRIORITY:-0}")
   local cpu

@@ -12,7 +12,9 @@
 # each raymapd thread: thread_cpu_s) to stdout.
 #   tools/bench/run-overload-benchmarks.sh [BUILD_DIR] [SECONDS]
 # defaults: build/release, 20 (after a 3 s warm-up). RATES (scans/s, default "10 20 50 100 200") and
-# POLICIES (default "bounded always unbounded") select runs.
+# POLICIES (default "bounded always unbounded") select runs. SUBSCRIBER_PRIORITY=50 makes raymap-load
+# a real-time subscriber: its GridMap thread at SCHED_FIFO 50 and its Cyclone receive path at 50
+# too (config/cyclonedds-realtime-receive.xml), as a planner that needs the maps on time runs.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 build=${1:-build/release}

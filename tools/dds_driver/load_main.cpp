@@ -83,7 +83,9 @@ int main(int argc, char** argv) {
   app.add_option(
          "--subscriber-priority", subscriber_priority,
          "SCHED_FIFO priority of the thread that takes the GridMaps (1-99; 0: normal), as a "
-         "real-time planner's would run; refused without the privilege (reported)")
+         "real-time planner's would run; refused without the privilege (reported). Its DDS "
+         "receive thread takes its priority from CYCLONEDDS_URI: add "
+         "config/cyclonedds-realtime-receive.xml (tools/bench does with this option)")
       ->check(CLI::Range(0, 99));
   CLI11_PARSE(app, argc, argv);
 
