@@ -73,6 +73,24 @@ std::map<std::string, ThreadScheduling> waitForThread(DaemonProcess& process,
   return threads;
 }
 
+/// Waits until `raymap echo` has found raymapd's writer (its first line on standard error,
+/// written to `stderr_path`, comes after the participant, every Cyclone thread and discovery);
+/// returns its threads then (none if it exited or did not get there within kStartWait).
+std::map<std::string, ThreadScheduling> threadsOnceReading(DaemonProcess& echo,
+                                                           const std::string& stderr_path) {
+  const std::int64_t until =
+      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  while (echo.running() && platform::monotonicNowNs() < until) {
+    std::ifstream err(stderr_path);
+    std::string line;
+    if (std::getline(err, line) && line.rfind("raymap echo: rt/height_map", 0) == 0) {
+      return threadsOf(echo.pid());
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return {};
+}
+
 bool realtimeAllowed() {
   bool allowed = false;
   std::thread probe([&] {
@@ -118,7 +136,7 @@ TEST(PlannerDdsConfig, ARealTimeSubscriberTakesTheMapsThroughOneRealTimeReceiveT
       RAYMAP_CLI_PATH,
       {"echo", "rt/height_map", "--domain", std::to_string(domain), "--count", "3", "--wait", "60"},
       {"CYCLONEDDS_URI=" + uri}, (dir.path() / "realtime.err").string());
-  const auto threads = waitForThread(echo, "recv");
+  const auto threads = threadsOnceReading(echo, (dir.path() / "realtime.err").string());
   ASSERT_EQ(threads.count("recv"), 1u) << "the subscriber did not start its receive thread";
   EXPECT_EQ(threads.count("recvUC"), 0u) << "a receive thread the file cannot schedule";
   EXPECT_EQ(threads.at("recv").policy, SCHED_FIFO);
