@@ -66,6 +66,14 @@ case "$mode" in
     findings=$(echo "$list" | run_tidy "$regex")
     ;;
   all)
+    # A unity build's database names its generated unity files, not the sources they include:
+    # the test programs and the CLI would be left out without a word.
+    if grep -q '/Unity/unity_' "$db"; then
+      echo "clang-tidy.sh: $build is a unity build; --all needs one without (docs/static-analysis.md):" >&2
+      echo "  cmake --preset asan -B build/tidy -DRAYMAP_UNITY_BUILD=OFF && cmake --build build/tidy --target raymap_dds_types" >&2
+      echo "  tools/clang-tidy.sh --build build/tidy --all" >&2
+      exit 2
+    fi
     list=$(project_files)
     echo "clang-tidy: the whole tree, $(echo "$list" | wc -l) files"
     findings=$(echo "$list" | run_tidy "^$PWD/(src|include|platform|tools|tests|examples)/")
@@ -78,7 +86,7 @@ esac
 if [ -n "$findings" ]; then
   echo "$findings"
   echo "== findings per check"
-  echo "$findings" | sed -n 's/.*\[\([a-z0-9.-]*\).*\]$/\1/p' | sort | uniq -c | sort -rn
+  echo "$findings" | sed -n 's/.*\[\([A-Za-z0-9.-]*\).*\]$/\1/p' | sort | uniq -c | sort -rn
 fi
 count=$(echo -n "$findings" | grep -c . || true)
 if [ "$mode" = all ]; then
