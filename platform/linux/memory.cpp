@@ -14,6 +14,8 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
+
 namespace raymap::platform {
 
 Result<PageBlock> PageBlock::create(std::size_t bytes) {
@@ -28,7 +30,7 @@ Result<PageBlock> PageBlock::create(std::size_t bytes) {
     return fail(ErrorCode::kCapacity,
                 "cannot reserve " + std::to_string(rounded) + " bytes of memory: " +
                     // NOLINTNEXTLINE(concurrency-mt-unsafe): start-up only, before any thread
-                    std::strerror(errno));
+                    platform::errnoText(errno));
   }
   return PageBlock(static_cast<std::byte*>(p), rounded);
 }

@@ -16,6 +16,7 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include "platform/errno_text.hpp"
 #include "src/bag/mcap_records.hpp"
 #include "src/bag/ros2_definitions.hpp"
 
@@ -72,7 +73,7 @@ class McapRosbagWriter final : public RosbagWriter {
     file_path_ = (fs::path(partial_) / file_name_).string();
     file_ = std::fopen(file_path_.c_str(), "wb");
     if (file_ == nullptr) {
-      return fail(ErrorCode::kIo, file_path_ + ": cannot create: " + std::strerror(errno));
+      return fail(ErrorCode::kIo, file_path_ + ": cannot create: " + platform::errnoText(errno));
     }
     Builder b;
     b.raw(mcap::kMagic);
@@ -173,7 +174,7 @@ class McapRosbagWriter final : public RosbagWriter {
     }
     if (std::fflush(file_) != 0 || ::fsync(fileno(file_)) != 0 || std::fclose(file_) != 0) {
       file_ = nullptr;
-      return fail(ErrorCode::kIo, file_path_ + ": cannot write: " + std::strerror(errno));
+      return fail(ErrorCode::kIo, file_path_ + ": cannot write: " + platform::errnoText(errno));
     }
     file_ = nullptr;
     if (auto ok = writeMetadata(); !ok) {
@@ -200,7 +201,7 @@ class McapRosbagWriter final : public RosbagWriter {
   /// Writes `bytes` at the end of the file; `data` bytes count into the data section's CRC.
   Expected<void, Error> append(std::span<const std::byte> bytes, bool data) {
     if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) {
-      return fail(ErrorCode::kIo, file_path_ + ": cannot write: " + std::strerror(errno));
+      return fail(ErrorCode::kIo, file_path_ + ": cannot write: " + platform::errnoText(errno));
     }
     if (data) {
       data_crc_ = crcOf(data_crc_, bytes);
@@ -364,11 +365,11 @@ class McapRosbagWriter final : public RosbagWriter {
     const std::string path = (fs::path(partial_) / "metadata.yaml").string();
     std::FILE* f = std::fopen(path.c_str(), "wb");
     if (f == nullptr) {
-      return fail(ErrorCode::kIo, path + ": cannot create: " + std::strerror(errno));
+      return fail(ErrorCode::kIo, path + ": cannot create: " + platform::errnoText(errno));
     }
     const bool written = std::fwrite(yaml.data(), 1, yaml.size(), f) == yaml.size();
     if (std::fclose(f) != 0 || !written) {
-      return fail(ErrorCode::kIo, path + ": cannot write: " + std::strerror(errno));
+      return fail(ErrorCode::kIo, path + ": cannot write: " + platform::errnoText(errno));
     }
     return {};
   }

@@ -11,6 +11,7 @@
 #include <sys/types.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
 #include "src/io/temp_files.hpp"
 
 namespace raymap::io {
@@ -31,11 +32,11 @@ Result<AtomicFileWriter> AtomicFileWriter::open(const std::string& path) {
   const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | O_NOFOLLOW | (in_place ? O_TRUNC : O_EXCL);
   const int fd = ::open(temp.c_str(), flags, 0666);
   if (fd < 0) {
-    return fail(ErrorCode::kIo, "cannot write '" + path + "': " + std::strerror(errno));
+    return fail(ErrorCode::kIo, "cannot write '" + path + "': " + platform::errnoText(errno));
   }
   std::FILE* file = ::fdopen(fd, "wb");
   if (file == nullptr) {
-    const std::string reason = std::strerror(errno);
+    const std::string reason = platform::errnoText(errno);
     ::close(fd);
     ::unlink(temp.c_str());
     return fail(ErrorCode::kIo, "cannot write '" + path + "': " + reason);
@@ -86,7 +87,7 @@ Expected<void, Error> AtomicFileWriter::write(std::span<const std::byte> bytes) 
     return {};
   }
   if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) {
-    const std::string reason = std::strerror(errno);
+    const std::string reason = platform::errnoText(errno);
     abandon();
     return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + reason);
   }
@@ -118,7 +119,7 @@ Expected<void, Error> AtomicFileWriter::patch(std::size_t offset,
                   std::fwrite(bytes.data(), 1, bytes.size(), file_) == bytes.size() &&
                   ::fseeko(file_, 0, SEEK_END) == 0;
   if (!ok) {
-    const std::string reason = std::strerror(errno);
+    const std::string reason = platform::errnoText(errno);
     abandon();
     return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + reason);
   }
@@ -134,7 +135,7 @@ Expected<void, Error> AtomicFileWriter::commit() {
     return fail(ErrorCode::kIo, "cannot write '" + path_ + "': file already closed");
   }
   const bool flushed = std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
-  const std::string reason = std::strerror(errno);
+  const std::string reason = platform::errnoText(errno);
   if (!flushed) {
     abandon();
     return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + reason);
@@ -142,7 +143,7 @@ Expected<void, Error> AtomicFileWriter::commit() {
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
   if (!closed) {
-    const std::string why = std::strerror(errno);
+    const std::string why = platform::errnoText(errno);
     std::remove(temp_path_.c_str());
     return fail(ErrorCode::kIo, "cannot write '" + path_ + "': " + why);
   }
@@ -150,7 +151,7 @@ Expected<void, Error> AtomicFileWriter::commit() {
     return {};  // the owner of the temporary name renames it with the other outputs
   }
   if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
+    const std::string why = platform::errnoText(errno);
     std::remove(temp_path_.c_str());
     return fail(ErrorCode::kIo, "cannot replace '" + path_ + "': " + why);
   }

@@ -21,6 +21,7 @@
 
 #include <zlib.h>
 
+#include "platform/errno_text.hpp"
 #include "src/io/atomic_file.hpp"
 #include "src/io/layer_values.hpp"
 #include "src/map/region_planes.hpp"
@@ -234,7 +235,7 @@ class FileReader {
     }
     std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
     if (!file) {
-      return fail(ErrorCode::kIo, path + ": cannot open: " + std::strerror(errno));
+      return fail(ErrorCode::kIo, path + ": cannot open: " + platform::errnoText(errno));
     }
     const std::uint64_t size = std::filesystem::file_size(path, ec);
     if (ec) {
@@ -258,7 +259,7 @@ class FileReader {
       const bool eof = std::feof(file_.get()) != 0;
       return fail(eof ? ErrorCode::kTruncated : ErrorCode::kIo,
                   path_ + ": read failed at offset " + std::to_string(offset_) + ": " +
-                      (eof ? std::string("unexpected end of file") : std::strerror(errno)));
+                      (eof ? std::string("unexpected end of file") : platform::errnoText(errno)));
     }
     offset_ += out.size();
     return {};

@@ -13,6 +13,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
+
 namespace raymap::io {
 namespace {
 
@@ -82,7 +84,7 @@ StaleTemporaries removeStaleTemporaries(const std::string& path) {
     if (::unlink(stale.c_str()) == 0) {
       result.removed.push_back(stale);
     } else {
-      result.errors.push_back(stale + ": " + std::strerror(errno));
+      result.errors.push_back(stale + ": " + platform::errnoText(errno));
     }
   }
   return result;

@@ -11,6 +11,8 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include "platform/errno_text.hpp"
+
 namespace raymap {
 namespace {
 
@@ -35,8 +37,6 @@ std::uint64_t getLe(const std::byte* at, int bytes) noexcept {
   return value;
 }
 
-std::string errnoText(int error) { return std::strerror(error); }
-
 }  // namespace
 
 Result<SpillFile> SpillFile::create(const std::string& folder) {
@@ -55,7 +55,7 @@ Result<SpillFile> SpillFile::create(const std::string& folder) {
   if (fd < 0) {
     const int error = errno;
     return fail(ErrorCode::kIo, "cannot create a spill file in " + folder + ": " +
-                                    errnoText(error) +
+                                    platform::errnoText(error) +
                                     " (--spill-dir names a writable folder for regions that fit "
                                     "neither memory budget)");
   }
@@ -111,7 +111,7 @@ Result<SpillRecord> SpillFile::append(std::uint64_t key, std::uint32_t raw_bytes
         return fail(ErrorCode::kIo, description_ + ": writing " +
                                         std::to_string(kHeaderBytes + packed.size()) +
                                         " bytes at offset " + std::to_string(end_) +
-                                        " failed: " + errnoText(error));
+                                        " failed: " + platform::errnoText(error));
       }
       part = part.subspan(static_cast<std::size_t>(n));
       at += static_cast<std::uint64_t>(n);
@@ -136,8 +136,9 @@ Expected<void, Error> SpillFile::read(const SpillRecord& record, std::uint64_t k
         continue;
       }
       if (n <= 0) {
-        return fail(ErrorCode::kIo, where + ": reading failed: " +
-                                        (n < 0 ? errnoText(errno) : std::string("end of file")));
+        return fail(ErrorCode::kIo,
+                    where + ": reading failed: " +
+                        (n < 0 ? platform::errnoText(errno) : std::string("end of file")));
       }
       part = part.subspan(static_cast<std::size_t>(n));
       at += static_cast<std::uint64_t>(n);

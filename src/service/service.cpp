@@ -19,6 +19,7 @@
 
 #include "platform/allocation_scope.hpp"
 #include "platform/clock.hpp"
+#include "platform/errno_text.hpp"
 #include "platform/notify.hpp"
 #include "platform/pi_mutex.hpp"
 #include "platform/rt.hpp"
@@ -476,11 +477,11 @@ void Service::Impl::applyThreadSettings(const char* name, const ThreadConfig& t)
             "%s thread: SCHED_FIFO priority %d refused (%s): running with normal scheduling. "
             "Give the service CAP_SYS_NICE or LimitRTPRIO, and no CPU accounting options in "
             "its unit (RT group scheduling).",
-            name, t.priority, std::strerror(status.scheduling_errno));
+            name, t.priority, platform::errnoText(status.scheduling_errno).c_str());
   }
   if (status.affinity == platform::RtOutcome::kRefused) {
     logLine(LogLevel::kWarning, "%s thread: CPU affinity refused (%s): running on any CPU", name,
-            std::strerror(status.affinity_errno));
+            platform::errnoText(status.affinity_errno).c_str());
   }
   threads_set_up.fetch_add(1, std::memory_order_release);
 }
@@ -900,7 +901,7 @@ void Service::start() {
           LogLevel::kWarning,
           "memory not locked (%s; RLIMIT_MEMLOCK %s): page faults may stall the real-time "
           "threads. Set LimitMEMLOCK=infinity in the unit.",
-          std::strerror(lock.error_no),
+          platform::errnoText(lock.error_no).c_str(),
           lock.limit_bytes == std::numeric_limits<std::uint64_t>::max() ? "unlimited" : "finite");
     }
   }

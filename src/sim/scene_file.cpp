@@ -24,6 +24,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "platform/errno_text.hpp"
 #include "src/config/yaml_reader.hpp"
 
 namespace raymap::sim {
@@ -478,7 +479,7 @@ Result<SceneFile> parseSceneFile(const std::string& text, const std::string& nam
 Result<SceneFile> loadSceneFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    return fail(ErrorCode::kIo, "cannot open '" + path + "': " + std::strerror(errno));
+    return fail(ErrorCode::kIo, "cannot open '" + path + "': " + platform::errnoText(errno));
   }
   std::ostringstream text;
   text << in.rdbuf();

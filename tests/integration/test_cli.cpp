@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
 #include "src/sim/yard_scan.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/dir_listing.hpp"
@@ -389,7 +390,7 @@ TEST(Cli, NonexistentInputFails) {
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
   EXPECT_TRUE(contains(r.err, input));
-  EXPECT_TRUE(contains(r.err, std::strerror(ENOENT)));
+  EXPECT_TRUE(contains(r.err, platform::errnoText(ENOENT)));
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
@@ -429,7 +430,7 @@ TEST_P(UnwritableOutput, InMissingDirectoryFailsBeforeWork) {
   EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
   EXPECT_TRUE(contains(r.err, GetParam()));
   EXPECT_TRUE(contains(r.err, bad_path));
-  EXPECT_TRUE(contains(r.err, std::strerror(ENOENT)));
+  EXPECT_TRUE(contains(r.err, platform::errnoText(ENOENT)));
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
@@ -460,7 +461,7 @@ TEST_P(UnwritableOutput, InReadOnlyDirectoryFails) {
   EXPECT_TRUE(contains(r.err, "raymap populate: error: "));
   EXPECT_TRUE(contains(r.err, GetParam()));
   EXPECT_TRUE(contains(r.err, bad_path));
-  EXPECT_TRUE(contains(r.err, std::strerror(EACCES)));
+  EXPECT_TRUE(contains(r.err, platform::errnoText(EACCES)));
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 
@@ -1004,7 +1005,7 @@ TEST(Cli, BenchWithUnwritableJsonFailsNamingThePathAndReason) {
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, "raymap bench: error: "));
   EXPECT_TRUE(contains(r.err, bad_path));
-  EXPECT_TRUE(contains(r.err, std::strerror(ENOENT)));
+  EXPECT_TRUE(contains(r.err, platform::errnoText(ENOENT)));
   EXPECT_TRUE(nothingNewIn(dir.path(), before));
 }
 

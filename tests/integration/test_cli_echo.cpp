@@ -26,6 +26,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
 #include "src/dds/diagnostics_message.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/grid_map_message.hpp"
@@ -589,7 +590,7 @@ TEST_P(SignalledEcho, StreamsLinesLiveAndExitsCleanlyOnTheSignal) {
   }
   argv.push_back(nullptr);
   int out_pipe[2] = {-1, -1};
-  ASSERT_EQ(::pipe2(out_pipe, O_CLOEXEC), 0) << std::strerror(errno);
+  ASSERT_EQ(::pipe2(out_pipe, O_CLOEXEC), 0) << platform::errnoText(errno);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_adddup2(&actions, out_pipe[1], STDOUT_FILENO);
@@ -597,7 +598,7 @@ TEST_P(SignalledEcho, StreamsLinesLiveAndExitsCleanlyOnTheSignal) {
   const int spawned = ::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   ::close(out_pipe[1]);
-  ASSERT_EQ(spawned, 0) << std::strerror(spawned);
+  ASSERT_EQ(spawned, 0) << platform::errnoText(spawned);
 
   // Read until two complete lines arrived: the process is still running, so they can only be
   // here because echo flushes each line.

@@ -23,6 +23,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
 #include "src/sim/yard_scan.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/dir_listing.hpp"
@@ -190,7 +191,7 @@ Started startRaymap(const TempDir& dir, const std::vector<std::string>& args) {
   posix_spawn_file_actions_destroy(&actions);
   posix_spawnattr_destroy(&attributes);
   if (spawned != 0) {
-    ADD_FAILURE() << "cannot start raymap: " << std::strerror(spawned);
+    ADD_FAILURE() << "cannot start raymap: " << platform::errnoText(spawned);
     started.pid = -1;
   }
   return started;

@@ -6,6 +6,7 @@
 // otherwise). What this buys in period at the subscriber is the benchmarks' to record
 // (docs/benchmarks.md, "The period a real-time subscriber sees").
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,7 +17,6 @@
 
 #include <gtest/gtest.h>
 #include <sched.h>
-#include <signal.h>
 
 #include "platform/clock.hpp"
 #include "platform/rt.hpp"
@@ -39,7 +39,7 @@ std::map<std::string, ThreadScheduling> threadsOf(pid_t pid) {
   std::error_code error;  // the process may have ended: then no threads
   for (const auto& entry : std::filesystem::directory_iterator(task_dir, error)) {
     const std::string tid = entry.path().filename().string();
-    std::ifstream comm(task_dir + "/" + tid + "/comm");
+    std::ifstream comm(entry.path() / "comm");
     std::string name;
     if (!std::getline(comm, name)) {
       continue;  // the thread ended meanwhile
@@ -106,6 +106,7 @@ TEST(PlannerDdsConfig, ARealTimeSubscriberTakesTheMapsThroughOneRealTimeReceiveT
   if (!realtimeAllowed()) {
     GTEST_SKIP() << "SCHED_FIFO 50 is not allowed here: Cyclone would abort the subscriber";
   }
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): read before this test starts any thread
   const char* base_uri = std::getenv("CYCLONEDDS_URI");
   ASSERT_NE(base_uri, nullptr) << "the tests pin Cyclone DDS to loopback";
   const std::uint32_t domain = uniqueDomain();

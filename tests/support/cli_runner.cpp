@@ -13,6 +13,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
+
 namespace raymap::test {
 
 namespace {
@@ -53,11 +55,11 @@ RunResult runProgram(std::vector<std::string> words) {
   int out_pipe[2] = {-1, -1};
   int err_pipe[2] = {-1, -1};
   if (::pipe2(out_pipe, O_CLOEXEC) != 0) {
-    ADD_FAILURE() << "pipe2: " << std::strerror(errno);
+    ADD_FAILURE() << "pipe2: " << platform::errnoText(errno);
     return result;
   }
   if (::pipe2(err_pipe, O_CLOEXEC) != 0) {
-    ADD_FAILURE() << "pipe2: " << std::strerror(errno);
+    ADD_FAILURE() << "pipe2: " << platform::errnoText(errno);
     ::close(out_pipe[0]);
     ::close(out_pipe[1]);
     return result;
@@ -74,7 +76,7 @@ RunResult runProgram(std::vector<std::string> words) {
   if (spawned != 0) {
     ::close(out_pipe[0]);
     ::close(err_pipe[0]);
-    ADD_FAILURE() << "cannot start " << argv[0] << ": " << std::strerror(spawned);
+    ADD_FAILURE() << "cannot start " << argv[0] << ": " << platform::errnoText(spawned);
     return result;
   }
   // Read both pipes as they fill, so a chatty child never blocks on a full pipe.
@@ -86,7 +88,7 @@ RunResult runProgram(std::vector<std::string> words) {
       if (errno == EINTR) {
         continue;
       }
-      ADD_FAILURE() << "poll: " << std::strerror(errno);
+      ADD_FAILURE() << "poll: " << platform::errnoText(errno);
       break;
     }
     for (int i = 0; i < 2; ++i) {

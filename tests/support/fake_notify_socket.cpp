@@ -16,13 +16,15 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
+
 namespace raymap::test {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
 std::runtime_error systemError(const std::string& what) {
-  return std::runtime_error("fake notify socket: " + what + ": " + std::strerror(errno));
+  return std::runtime_error("fake notify socket: " + what + ": " + platform::errnoText(errno));
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/heightmap_export.hpp"
@@ -284,7 +285,7 @@ int demoInto(const DemoFlags& f, StagedOutputs& staged) {
 int runDemo(const DemoFlags& f) {
   const bool created = ::mkdir(f.output_dir.c_str(), 0755) == 0;
   if (!created && errno != EEXIST) {
-    printError("demo", "cannot create '" + f.output_dir + "': " + std::strerror(errno));
+    printError("demo", "cannot create '" + f.output_dir + "': " + platform::errnoText(errno));
     return kExitFailure;
   }
   int code = kExitFailure;

@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
 #include "src/io/temp_files.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/interrupt_cleanup.hpp"
@@ -120,7 +121,7 @@ Result<std::string> StagedOutputs::add(const std::string& path, const std::strin
   const int fd =
       ::open(output.temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
   if (fd < 0) {
-    const std::string reason = std::strerror(errno);
+    const std::string reason = platform::errnoText(errno);
     InterruptCleanup::remove(output.signal_slot);
     return fail(ErrorCode::kIo, option + ": cannot write '" + path + "': " + reason);
   }
@@ -136,7 +137,7 @@ Expected<void, Error> StagedOutputs::commit() {
   for (std::size_t i = 0; i < outputs_.size(); ++i) {
     const Output& output = outputs_[i];
     if (std::rename(output.temp.c_str(), output.path.c_str()) != 0) {
-      const std::string reason = std::strerror(errno);
+      const std::string reason = platform::errnoText(errno);
       const std::string option = output.option;
       const std::string path = output.path;
       outputs_.erase(outputs_.begin(), outputs_.begin() + static_cast<std::ptrdiff_t>(i));

@@ -17,6 +17,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include "platform/errno_text.hpp"
 #include "platform/process.hpp"
 #include "platform/rt.hpp"
 #include "tests/unit/platform/child_process.hpp"
@@ -214,7 +215,7 @@ TEST(LockMemory, FollowsTheContractForThisProcessLimit) {
       }
       if (!status.locked) {
         std::fprintf(stderr, "child: unlimited but mlockall failed: %s\n",
-                     std::strerror(status.error_no));
+                     platform::errnoText(status.error_no).c_str());
         return status.error_no == EPERM ? 0 : 12;  // no CAP_IPC_LOCK: a clean refusal
       }
       return status.error_no == 0 && lockedKiB() > 0 ? 0 : 13;
