@@ -2,6 +2,7 @@
 // Canary: in a sanitizer build, proves that AddressSanitizer and UndefinedBehaviorSanitizer (the
 // asan preset) or ThreadSanitizer (the tsan preset) really stop the program on a bug, so that a
 // green sanitizer run means something. Skipped in other builds.
+#include <atomic>
 #include <climits>
 #include <cstdlib>
 #include <memory>
@@ -35,15 +36,32 @@ extern "C" const char* __tsan_default_options() { return "halt_on_error=1"; }
 
 int g_racy = 0;  // written by two threads without synchronisation: the race the canary wants
 
+// Both threads write while the other is running: a relaxed flag (no happens-before for
+// ThreadSanitizer) holds the second until the first has started, and each writes many times, so
+// the accesses overlap whatever the scheduler does on a busy machine (one write each once missed
+// the race in CI).
 __attribute__((noinline)) void raceOnAnInt() {
-  std::thread other([] { g_racy = g_racy + 1; });
-  g_racy = g_racy + 1;
+  std::atomic<bool> started{false};
+  std::thread other([&] {
+    started.store(true, std::memory_order_relaxed);
+    for (int i = 0; i < 100000; ++i) {
+      g_racy = g_racy + 1;
+    }
+  });
+  while (!started.load(std::memory_order_relaxed)) {
+  }
+  for (int i = 0; i < 100000; ++i) {
+    g_racy = g_racy + 1;
+  }
   other.join();
 }
 #endif
 
 TEST(SanitizerCanaryDeathTest, ThreadSanitizerCatchesADataRace) {
 #if defined(RAYMAP_TSAN_BUILD)
+  // The child re-executes the test instead of a bare fork(): ThreadSanitizer's runtime has
+  // threads of its own, and a fork of a threaded process is where its detection is unreliable.
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
   EXPECT_DEATH(raceOnAnInt(), "ThreadSanitizer: data race");
 #else
   GTEST_SKIP() << "not a ThreadSanitizer build";
