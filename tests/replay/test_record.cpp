@@ -69,8 +69,7 @@ void publishDrive(driver::DriverPublisher& publisher, int scans, Capture& clouds
   // The last messages reach the witnesses (as long as that takes on a loaded machine), and the
   // recorder, which reads the same loopback traffic, a moment more.
   const auto all = static_cast<std::size_t>(scans);
-  const std::int64_t give_up =
-      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  const std::int64_t give_up = startWaitEndNs();
   do {
     platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 300'000'000);
     clouds.poll();
@@ -100,8 +99,7 @@ std::pair<Payloads, Payloads> recordDrive(const TempDir& dir, std::uint32_t doma
       << readFile(recorder_log);
   // Until the recorder's readers are matched on this side too (the witnesses' are the other
   // two), as long as that takes: best-effort data sent before would not reach it.
-  const std::int64_t give_up =
-      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  const std::int64_t give_up = startWaitEndNs();
   while ((publisher->matchedCloudReaders() < 2 || publisher->matchedOdometryReaders() < 2) &&
          platform::monotonicNowNs() < give_up) {
     platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 20'000'000);

@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "platform/clock.hpp"
 #include "src/dds/entities.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tests/service/daemon_process.hpp"
@@ -32,6 +33,12 @@ namespace raymap::test {
 /// well under a second. The waits end as soon as the event happens.
 inline constexpr std::chrono::seconds kStartWait{30};
 inline constexpr double kStartWaitS = static_cast<double>(kStartWait.count());
+
+/// @brief The monotonic instant (nanoseconds) kStartWait from now: where a polling wait for
+/// start-up or discovery gives up.
+inline std::int64_t startWaitEndNs() {
+  return platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+}
 
 /// @brief The mean publish period a test accepts from raymapd at heightmap.rate_hz 5 (nominal
 /// 200 ms), in milliseconds: a factor of two either way. Publish instants are absolute deadlines

@@ -60,8 +60,7 @@ std::map<std::string, ThreadScheduling> threadsOf(pid_t pid) {
 /// participant is created); returns every thread then.
 std::map<std::string, ThreadScheduling> waitForThread(DaemonProcess& process,
                                                       const std::string& name) {
-  const std::int64_t until =
-      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  const std::int64_t until = startWaitEndNs();
   std::map<std::string, ThreadScheduling> threads;
   while (process.running() && platform::monotonicNowNs() < until) {
     threads = threadsOf(process.pid());
@@ -78,8 +77,7 @@ std::map<std::string, ThreadScheduling> waitForThread(DaemonProcess& process,
 /// returns its threads then (none if it exited or did not get there within kStartWait).
 std::map<std::string, ThreadScheduling> threadsOnceReading(DaemonProcess& echo,
                                                            const std::string& stderr_path) {
-  const std::int64_t until =
-      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  const std::int64_t until = startWaitEndNs();
   while (echo.running() && platform::monotonicNowNs() < until) {
     std::ifstream err(stderr_path);
     std::string line;
@@ -149,8 +147,7 @@ TEST(PlannerDdsConfig, ARealTimeSubscriberTakesTheMapsThroughOneRealTimeReceiveT
   // And it receives the maps: echo exits 0 after three.
   std::vector<driver::ReceivedGridMap> maps;
   const driver::SimulatedLidar lidar = yardLidar(32, 1024, /*moving=*/false);
-  const std::int64_t until =
-      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  const std::int64_t until = startWaitEndNs();
   while (echo.running() && platform::monotonicNowNs() < until) {
     ros.play(lidar, driver::PlaybackOptions{}, 1.0, maps);
   }

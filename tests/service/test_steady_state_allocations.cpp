@@ -89,8 +89,7 @@ TEST(RaymapdSteadyState, ADepthCameraMakesNoHeapAllocationAfterWarmUp) {
                                     file->depth_cameras, still, file->simulation.seed, {});
   ASSERT_TRUE(created.has_value()) << created.error().message;
   driver::DepthPlayback& playback = *created.value();
-  const std::int64_t give_up =
-      platform::monotonicNowNs() + static_cast<std::int64_t>(kStartWaitS * 1e9);
+  const std::int64_t give_up = startWaitEndNs();
   while (!(playback.matched() && ros.grid_maps->matchedWriters() > 0) &&
          platform::monotonicNowNs() < give_up) {
     platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 20000000);
