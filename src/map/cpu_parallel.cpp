@@ -72,13 +72,18 @@ ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_cap
                                        std::size_t expected_batch_rays)
     : pool_(workers) {
   const unsigned n = pool_.size();
-  tables_.reserve(n);
-  spans_.resize(n);
+  scratch_.reserve(n);
   for (unsigned w = 0; w < n; ++w) {
-    tables_.emplace_back(store_capacity);
-    spans_[w].reserve(expected_batch_rays * 6u / n + 1024u);
+    WorkerScratch& scratch = scratch_.emplace_back(store_capacity);
+    scratch.spans.reserve(expected_batch_rays * 6u / n + 1024u);
+    scratch.steps_for.resize(n);
+    scratch.hits_for.resize(n);
+    for (unsigned owner = 0; owner < n; ++owner) {
+      // A ray range's steps (its spans and sample hits) dealt evenly over the owners.
+      scratch.steps_for[owner].reserve(expected_batch_rays * 7u / (n * n) + 256u);
+      scratch.hits_for[owner].reserve(expected_batch_rays / (n * n) + 256u);
+    }
   }
-  overflow_.assign(n, 0);
   rays_.resize(expected_batch_rays);
   owner_.assign(store_capacity, kNoOwner);
   created_.assign(store_capacity, 0);
@@ -113,10 +118,11 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   // 1. Survey.
   auto survey = [&](unsigned w) {
     const auto [begin, end] = rangeOf(w, rays.size());
-    WorkTable& table = tables_[w];
-    std::vector<SpanRecord>& spans = spans_[w];
+    WorkerScratch& scratch = scratch_[w];
+    WorkTable& table = scratch.table;
+    std::vector<SpanRecord>& spans = scratch.spans;
     spans.clear();
-    overflow_[w] = 0;
+    scratch.overflow = false;
     for (std::size_t r = begin; r < end; ++r) {
       RayRegionWalk walk(rays[r], ctx.region_voxels);
       const rm_ray_walk_frame& f = walk.frame();
@@ -132,7 +138,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       while (walk.next(&span)) {
         const std::uint64_t key = RegionStore::packCoord(span.region);
         if (!table.add(key, 1.0 + steps * static_cast<double>(span.t1 - span.t0))) {
-          overflow_[w] = 1;
+          scratch.overflow = true;
           return;
         }
         spans.push_back(SpanRecord{key, RegionStore::kNoSlot,
@@ -145,20 +151,20 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       record.sample_index = index;
     }
     if (!table.flush()) {
-      overflow_[w] = 1;
+      scratch.overflow = true;
     }
   };
   pool_.run(survey);
 
   // 2. Create the batch's regions (serial: the store is not thread-safe for inserts).
   Expected<void, IntegrateError> status;
-  for (unsigned w = 0; w < workers; ++w) {
-    if (overflow_[w] != 0) {
+  for (const WorkerScratch& scratch : scratch_) {
+    if (scratch.overflow) {
       status = Unexpected(IntegrateError::kStoreFull);
     }
   }
   for (unsigned w = 0; w < workers && status; ++w) {
-    tables_[w].forEach([&](std::uint64_t key, double work) {
+    scratch_[w].table.forEach([&](std::uint64_t key, double work) {
       if (!status) {
         return;
       }
@@ -185,8 +191,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       slot_work_[*slot] += work + clear_work;
     });
   }
-  for (WorkTable& table : tables_) {
-    table.clear();
+  for (WorkerScratch& scratch : scratch_) {
+    scratch.table.clear();
   }
   if (!status) {
     // Regions created before the failure still need their clear values.
@@ -216,9 +222,11 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     loads_[lightest] += work;
   }
 
-  // 4. Resolve (parallel): slots into the records, each worker its own survey's records, and
-  //    first touch of the new regions by their owners.
+  // 4. Resolve (parallel): slots into the records and the records dealt to their owners, each
+  //    worker its own survey's ray range, and first touch of the new regions by their owners.
+  const bool hit_lists = ctx.per_scan || ctx.ndt;
   auto resolve = [&](unsigned w) {
+    WorkerScratch& scratch = scratch_[w];
     RegionSlotCache& cache = caches[w];
     RegionStore& store = map.store();
     for (std::uint32_t slot : touched_) {
@@ -227,75 +235,89 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         created_[slot] = 0;
       }
     }
-    for (SpanRecord& rec : spans_[w]) {
-      rec.slot = findSlot(store, cache, rec.region_key);
+    for (unsigned owner = 0; owner < workers; ++owner) {
+      scratch.steps_for[owner].clear();
+      scratch.hits_for[owner].clear();
     }
+    scratch.spans_outside_window = 0;
     const auto [begin, end] = rangeOf(w, rays.size());
     for (std::size_t r = begin; r < end; ++r) {
-      rays_[r].sample_slot = findSlot(store, cache, rays_[r].sample_key);
+      RayRecord& record = rays_[r];
+      const auto ray = static_cast<std::uint32_t>(r);
+      for (std::uint32_t s = 0; s < record.span_count; ++s) {
+        const SpanRecord& rec = scratch.spans[record.first_span + s];
+        const std::uint32_t slot = findSlot(store, cache, rec.region_key);
+        if (slot == RegionStore::kNoSlot) {
+          ++scratch.spans_outside_window;
+          continue;
+        }
+        scratch.steps_for[owner_[slot]].push_back(
+            OwnedStep{ray, slot, rec.flags, rec.t0, rec.t1, rec.box_lo});
+      }
+      record.sample_slot = findSlot(store, cache, record.sample_key);
+      if ((rays[r].flags & RM_RAY_END_HIT) == 0u || record.sample_slot == RegionStore::kNoSlot) {
+        continue;
+      }
+      const std::uint8_t owner = owner_[record.sample_slot];
+      if (!ctx.ndt) {
+        scratch.steps_for[owner].push_back(
+            OwnedStep{ray, record.sample_slot, kHit, 0.0f, 0.0f, rm_vec3i_make(0, 0, 0)});
+      }
+      if (hit_lists) {
+        scratch.hits_for[owner].push_back(ray);
+      }
     }
   };
   pool_.run(resolve);
 
-  // 5. Apply (parallel): every worker goes through all spans in ray order and walks its own.
+  // 5. Apply (parallel): every worker walks the steps dealt to it, range by range (ray order).
   auto apply = [&](unsigned w) {
-    WorkerStats& ws = stats[w];
+    WorkerStats local;  // summed here: a counter written per span beside another worker's would
+                        // share its cache line
     if (ctx.per_scan) {
-      for (std::size_t r = 0; r < rays.size(); ++r) {
-        const std::uint32_t slot = rays_[r].sample_slot;
-        if ((rays[r].flags & RM_RAY_END_HIT) != 0u && slot != RegionStore::kNoSlot &&
-            owner_[slot] == w) {
-          applyScanHit(regionLayers(map, slot), rays_[r].sample_index, ctx.sequence, ctx.params);
+      for (const WorkerScratch& from : scratch_) {
+        for (std::uint32_t r : from.hits_for[w]) {
+          applyScanHit(regionLayers(map, rays_[r].sample_slot), rays_[r].sample_index, ctx.sequence,
+                       ctx.params);
         }
       }
     }
     const std::int32_t n = ctx.region_voxels;
-    for (unsigned v = 0; v < workers; ++v) {
-      const auto [begin, end] = rangeOf(v, rays.size());
-      const std::vector<SpanRecord>& spans = spans_[v];
-      for (std::size_t r = begin; r < end; ++r) {
-        const RayRecord& record = rays_[r];
-        for (std::uint32_t s = 0; s < record.span_count; ++s) {
-          const SpanRecord& rec = spans[record.first_span + s];
-          if (rec.slot == RegionStore::kNoSlot) {
-            ws.spans_outside_window += w == 0 ? 1u : 0u;  // counted once
-            continue;
-          }
-          if (owner_[rec.slot] != w) {
-            continue;
-          }
-          RaySpan span;
-          span.t0 = rec.t0;
-          span.t1 = rec.t1;
-          span.box_lo = rec.box_lo;
-          span.box_hi =
-              rm_vec3i_make(rec.box_lo.x + n - 1, rec.box_lo.y + n - 1, rec.box_lo.z + n - 1);
-          span.first = (rec.flags & kFirst) != 0u;
-          span.last = (rec.flags & kLast) != 0u;
-          ws.voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, rays[r].flags,
-                                        rays[r].tsdf_end_m, span, regionLayers(map, rec.slot));
+    for (const WorkerScratch& from : scratch_) {
+      local.spans_outside_window += w == 0 ? from.spans_outside_window : 0u;  // counted once
+      for (const OwnedStep& step : from.steps_for[w]) {
+        const PreparedRay& ray = rays[step.ray];
+        const RayRecord& record = rays_[step.ray];
+        if (step.flags == kHit) {
+          applySampleHit(ray, regionLayers(map, step.slot), record.sample_index, ctx.per_scan,
+                         ctx.params);
+          ++local.voxels_visited;
+          continue;
         }
-        const PreparedRay& ray = rays[r];
-        if ((ray.flags & RM_RAY_END_HIT) != 0u && record.sample_slot != RegionStore::kNoSlot &&
-            owner_[record.sample_slot] == w && !ctx.ndt) {
-          applySampleHit(ray, regionLayers(map, record.sample_slot), record.sample_index,
-                         ctx.per_scan, ctx.params);
-          ++ws.voxels_visited;
-        }
+        RaySpan span;
+        span.t0 = step.t0;
+        span.t1 = step.t1;
+        span.box_lo = step.box_lo;
+        span.box_hi =
+            rm_vec3i_make(step.box_lo.x + n - 1, step.box_lo.y + n - 1, step.box_lo.z + n - 1);
+        span.first = (step.flags & kFirst) != 0u;
+        span.last = (step.flags & kLast) != 0u;
+        local.voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, ray.flags,
+                                         ray.tsdf_end_m, span, regionLayers(map, step.slot));
       }
     }
     if (ctx.ndt) {
       // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
-      for (std::size_t r = 0; r < rays.size(); ++r) {
-        const RayRecord& record = rays_[r];
-        if ((rays[r].flags & RM_RAY_END_HIT) != 0u && record.sample_slot != RegionStore::kNoSlot &&
-            owner_[record.sample_slot] == w) {
-          applyNdtHit(rays[r], regionLayers(map, record.sample_slot), record.sample_index,
+      for (const WorkerScratch& from : scratch_) {
+        for (std::uint32_t r : from.hits_for[w]) {
+          applyNdtHit(rays[r], regionLayers(map, rays_[r].sample_slot), rays_[r].sample_index,
                       ctx.params, ctx.ndt_params);
-          ++ws.voxels_visited;
+          ++local.voxels_visited;
         }
       }
     }
+    stats[w].voxels_visited += local.voxels_visited;
+    stats[w].spans_outside_window += local.spans_outside_window;
   };
   pool_.run(apply);
   releaseOwners();

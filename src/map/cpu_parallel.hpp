@@ -25,13 +25,15 @@ namespace raymap::detail {
 ///  2. Create (serial): the regions of the batch are inserted into the store, uncleared; if the
 ///     store is full the batch fails here, before any voxel changes.
 ///  3. Assign (serial): regions sorted by work, each to the least-loaded worker.
-///  4. Resolve (parallel): each worker clears the new regions it owns (their first touch) and
-///     looks up the slots of the spans it recorded.
-///  5. Apply (parallel): each worker goes through all recorded spans in ray order and walks only
-///     those in its own regions (and the sample hits there).
+///  4. Resolve (parallel): each worker clears the new regions it owns (their first touch), looks
+///     up the slots of the spans it recorded and deals them, in ray order, into one list per
+///     owner (the sample hits with them).
+///  5. Apply (parallel): each worker walks the lists dealt to it, survey range by survey range,
+///     so in ray order; it reads only its own share of the batch.
 /// Each voxel is written by one worker, in ray order, so the map is bit-identical to the
-/// single-threaded one and needs no atomics. The survey's records are read twice per worker
-/// instead of walking every ray at region level once per worker.
+/// single-threaded one and needs no atomics. What one worker writes during a step lives in its
+/// own cache lines (WorkerScratch is aligned to them, counters are summed locally): two workers
+/// writing to one line cost the second core most of its worth (measured, docs/benchmarks.md).
 ///
 /// Scratch is sized at construction for `expected_batch_rays` rays of up to 6 regions each; a
 /// larger batch grows it once (an allocation outside the steady state). Not thread-safe:
@@ -108,13 +110,38 @@ class ParallelIntegrator {
     std::size_t limit_ = 0;
   };
 
+  /// One step of the apply phase in the list of the worker owning its region: a span of a ray
+  /// (kFirst | kLast) or the ray's sample hit (kHit).
+  struct OwnedStep {
+    std::uint32_t ray;
+    std::uint32_t slot;
+    std::uint32_t flags;
+    float t0;
+    float t1;
+    rm_vec3i box_lo;
+  };
+  static constexpr std::uint32_t kHit = 4u;
+
+  /// Everything one worker writes in the survey and the resolve steps, on cache lines of its
+  /// own.
+  struct alignas(64) WorkerScratch {
+    explicit WorkerScratch(std::size_t max_regions) : table(max_regions) {}
+    WorkTable table;
+    std::vector<SpanRecord> spans;  // survey: this worker's ray range, in ray order
+    /// resolve: per owning worker, the steps of this worker's ray range, in ray order
+    std::vector<std::vector<OwnedStep>> steps_for;
+    /// resolve: per owning worker, the rays of this range whose sample hit is there (per-scan
+    /// marks before the misses, NDT hits after them)
+    std::vector<std::vector<std::uint32_t>> hits_for;
+    bool overflow = false;  // survey: the work table is full
+    std::uint64_t spans_outside_window = 0;
+  };
+
   std::pair<std::size_t, std::size_t> rangeOf(unsigned worker, std::size_t count) const noexcept;
   void releaseOwners() noexcept;
 
   WorkerPool pool_;
-  std::vector<WorkTable> tables_;               // one per worker
-  std::vector<std::vector<SpanRecord>> spans_;  // one per worker
-  std::vector<std::uint8_t> overflow_;          // one per worker: work table full
+  std::vector<WorkerScratch> scratch_;  // one per worker
   std::vector<RayRecord> rays_;
   std::vector<std::uint8_t> owner_;     // per slot: owning worker in this batch
   std::vector<std::uint8_t> created_;   // per slot: created in this batch, not cleared yet

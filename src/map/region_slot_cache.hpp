@@ -19,8 +19,10 @@ inline std::size_t directMappedIndex(std::uint64_t key) noexcept {
 /// @brief Direct-mapped cache in front of the store's index (region coordinate -> slot), one per
 /// worker: a ray visits a handful of regions and neighbouring rays the same ones, so most lookups
 /// hit a few kilobytes instead of probing the store's large index. Valid for one batch only
-/// (regions may be recycled between batches). Not thread-safe; allocation-free.
-class RegionSlotCache {
+/// (regions may be recycled between batches). Not thread-safe; allocation-free. Aligned to a
+/// cache line: find() writes to the cache on every lookup, and the caches of two workers lie side
+/// by side in one array.
+class alignas(64) RegionSlotCache {
  public:
   static constexpr std::size_t kEntries = 256;
 
