@@ -41,6 +41,13 @@ struct BackendStats {
   double plan_seconds = 0;                     ///< host: region walk, region moves, hit grouping
   double wait_seconds = 0;  ///< host waiting for the device to finish earlier batches
   double sync_seconds = 0;  ///< synchronise(): final wait plus downloads
+  // ---- the CPU backend on several threads (0 otherwise): where its batches' time went ----
+  double survey_seconds = 0;      ///< parallel: rays walked at region level, spans recorded
+  double serial_seconds = 0;      ///< one thread: the batches' regions created, assigned to workers
+  double resolve_seconds = 0;     ///< parallel: new regions cleared, spans dealt to their owners
+  double apply_seconds = 0;       ///< parallel: voxel walks, until the last worker finished
+  double apply_busy_seconds = 0;  ///< the workers' voxel-walk times summed (balance: this over
+                                  ///< apply_seconds x threads)
 };
 
 /// @brief Integrates batches of prepared rays into the map it was created for.

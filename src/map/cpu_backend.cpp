@@ -70,7 +70,18 @@ class CpuBackend final : public Backend {
   }
 
   Expected<void, IntegrateError> synchronise() noexcept override { return {}; }
-  BackendStats stats() const noexcept override { return stats_; }
+  BackendStats stats() const noexcept override {
+    BackendStats s = stats_;
+    if (parallel_) {
+      const detail::ParallelIntegrator::StepSeconds& steps = parallel_->stepSeconds();
+      s.survey_seconds = steps.survey;
+      s.serial_seconds = steps.serial;
+      s.resolve_seconds = steps.resolve;
+      s.apply_seconds = steps.apply;
+      s.apply_busy_seconds = steps.apply_busy;
+    }
+    return s;
+  }
 
  private:
   VoxelMap& map_;

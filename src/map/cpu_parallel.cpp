@@ -4,9 +4,19 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <cmath>
 
 namespace raymap::detail {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) noexcept {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
 
 ParallelIntegrator::WorkTable::WorkTable(std::size_t max_regions) {
   const std::size_t buckets = std::bit_ceil(max_regions * 2u + 2u);
@@ -116,6 +126,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   }
 
   // 1. Survey.
+  Clock::time_point step_start = Clock::now();
   auto survey = [&](unsigned w) {
     const auto [begin, end] = rangeOf(w, rays.size());
     WorkerScratch& scratch = scratch_[w];
@@ -137,7 +148,11 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       RaySpan span;
       while (walk.next(&span)) {
         const std::uint64_t key = RegionStore::packCoord(span.region);
-        if (!table.add(key, 1.0 + steps * static_cast<double>(span.t1 - span.t0))) {
+        // A region outside a rolling window is never created (its span is counted in step 4):
+        // it must not count against the store's capacity either, or a long ray would fail a
+        // batch that the single-threaded path integrates.
+        if (map.inWindow(span.region) &&
+            !table.add(key, 1.0 + steps * static_cast<double>(span.t1 - span.t0))) {
           scratch.overflow = true;
           return;
         }
@@ -155,6 +170,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     }
   };
   pool_.run(survey);
+  steps_.survey += secondsSince(step_start);
+  step_start = Clock::now();
 
   // 2. Create the batch's regions (serial: the store is not thread-safe for inserts).
   Expected<void, IntegrateError> status;
@@ -222,6 +239,9 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     loads_[lightest] += work;
   }
 
+  steps_.serial += secondsSince(step_start);
+  step_start = Clock::now();
+
   // 4. Resolve (parallel): slots into the records and the records dealt to their owners, each
   //    worker its own survey's ray range, and first touch of the new regions by their owners.
   const bool hit_lists = ctx.per_scan || ctx.ndt;
@@ -269,9 +289,12 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     }
   };
   pool_.run(resolve);
+  steps_.resolve += secondsSince(step_start);
+  step_start = Clock::now();
 
   // 5. Apply (parallel): every worker walks the steps dealt to it, range by range (ray order).
   auto apply = [&](unsigned w) {
+    const Clock::time_point apply_start = Clock::now();
     WorkerStats local;  // summed here: a counter written per span beside another worker's would
                         // share its cache line
     if (ctx.per_scan) {
@@ -318,8 +341,13 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     }
     stats[w].voxels_visited += local.voxels_visited;
     stats[w].spans_outside_window += local.spans_outside_window;
+    scratch_[w].apply_seconds = secondsSince(apply_start);
   };
   pool_.run(apply);
+  steps_.apply += secondsSince(step_start);
+  for (const WorkerScratch& scratch : scratch_) {
+    steps_.apply_busy += scratch.apply_seconds;
+  }
   releaseOwners();
   return {};
 }

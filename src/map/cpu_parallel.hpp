@@ -45,6 +45,17 @@ class ParallelIntegrator {
 
   unsigned workers() const noexcept { return pool_.size(); }
 
+  /// Seconds spent in each step, summed over the batches integrated so far (the backend's
+  /// statistics: what limits the speed-up, measured where it runs).
+  struct StepSeconds {
+    double survey = 0;
+    double serial = 0;  // create and assign
+    double resolve = 0;
+    double apply = 0;
+    double apply_busy = 0;  // every worker's apply time, summed
+  };
+  const StepSeconds& stepSeconds() const noexcept { return steps_; }
+
   /// @param caches one region cache per worker (reset for this batch)
   /// @param stats one counter set per worker
   Expected<void, IntegrateError> integrate(const IntegrationContext& ctx,
@@ -135,6 +146,7 @@ class ParallelIntegrator {
     std::vector<std::vector<std::uint32_t>> hits_for;
     bool overflow = false;  // survey: the work table is full
     std::uint64_t spans_outside_window = 0;
+    double apply_seconds = 0;  // apply: this worker's time in the current batch
   };
 
   std::pair<std::size_t, std::size_t> rangeOf(unsigned worker, std::size_t count) const noexcept;
@@ -149,6 +161,7 @@ class ParallelIntegrator {
   std::vector<std::uint32_t> touched_;  // slots of this batch
   std::vector<std::pair<double, std::uint32_t>> order_;
   std::vector<double> loads_;  // per worker
+  StepSeconds steps_;
 };
 
 }  // namespace raymap::detail

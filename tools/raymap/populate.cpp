@@ -45,6 +45,11 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   d.plan_seconds -= before.plan_seconds;
   d.wait_seconds -= before.wait_seconds;
   d.sync_seconds -= before.sync_seconds;
+  d.survey_seconds -= before.survey_seconds;
+  d.serial_seconds -= before.serial_seconds;
+  d.resolve_seconds -= before.resolve_seconds;
+  d.apply_seconds -= before.apply_seconds;
+  d.apply_busy_seconds -= before.apply_busy_seconds;
   return d;  // cache_slots is a size, not a counter
 }
 
@@ -236,6 +241,16 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
       .add("device", r.device)
       .add("threads", r.threads)
       .add("updates_dropped", r.backend.updates_dropped);
+  if (r.backend_name == "cpu" && r.threads > 1) {
+    // Where the parallel integrator's time went; balance 1 = every worker walked as long.
+    const BackendStats& b = r.backend;
+    const double capacity = b.apply_seconds * static_cast<double>(r.threads);
+    j.add("survey_seconds", b.survey_seconds)
+        .add("serial_seconds", b.serial_seconds)
+        .add("resolve_seconds", b.resolve_seconds)
+        .add("apply_seconds", b.apply_seconds)
+        .add("apply_balance", capacity > 0 ? b.apply_busy_seconds / capacity : 0.0);
+  }
   if (r.backend_name != "cpu") {
     const BackendStats& b = r.backend;
     const std::uint64_t lookups = b.cache_hits + b.cache_misses;

@@ -199,6 +199,50 @@ TEST(Threads, MultiThreadedMapIsBitIdenticalToSingleThreaded) {
   }
 }
 
+TEST(Threads, StepTimesAccountForTheParallelBatchesOnly) {
+  // What raymap bench reports as survey/serial/resolve/apply seconds and the apply balance: set
+  // on several threads, zero on the single-threaded path, the workers' summed walk time within
+  // threads x the step's wall time.
+  const std::vector<Ray> rays = test::randomScans(7, 2, 4000);
+  for (unsigned threads : {1u, 3u}) {
+    VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
+    auto backend = test::cpuBackend(map, threads);
+    test::integrate(map, *backend, rays);
+    const BackendStats s = backend->stats();
+    if (threads == 1) {
+      EXPECT_EQ(s.survey_seconds + s.serial_seconds + s.resolve_seconds + s.apply_seconds, 0.0);
+      continue;
+    }
+    EXPECT_GT(s.survey_seconds, 0.0);
+    EXPECT_GT(s.serial_seconds, 0.0);
+    EXPECT_GT(s.resolve_seconds, 0.0);
+    EXPECT_GT(s.apply_seconds, 0.0);
+    EXPECT_GT(s.apply_busy_seconds, 0.0);
+    EXPECT_LE(s.apply_busy_seconds, s.apply_seconds * threads);
+  }
+}
+
+TEST(Threads, SpansOutsideTheWindowAreCountedOncePerSpan) {
+  MapConfig config = test::smallConfig(Semantics::kPerRay);
+  config.policy = StorePolicy::kRolling;
+  config.window_regions = {4, 4, 4};
+  const std::vector<Ray> rays = test::randomScans(11, 2, 3000);
+  std::uint64_t single = 0;
+  for (unsigned threads : {1u, 2u, 5u}) {
+    VoxelMap map = test::makeMap(config);
+    map.setWindowCentre({0, 0, 0});
+    auto backend = test::cpuBackend(map, threads);
+    test::integrate(map, *backend, rays);
+    const std::uint64_t outside = backend->stats().spans_outside_window;
+    if (threads == 1) {
+      single = outside;
+      EXPECT_GT(single, 0u);
+    } else {
+      EXPECT_EQ(outside, single) << threads << " threads";
+    }
+  }
+}
+
 TEST(Threads, ReverseAndForwardWalksAgree) {
   const std::vector<Ray> rays = test::randomScans(99, 4, 5000);
   VoxelMap forward = test::makeMap(test::smallConfig(Semantics::kPerRay));
