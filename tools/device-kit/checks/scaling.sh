@@ -74,4 +74,48 @@ section_scaling() {
     done
     publish_results
   done
+  scaling_identical
+}
+
+# Every thread count must give the map file of one thread byte for byte (the parallel integrator
+# gives each region to one worker and keeps ray order), in every map mode: checked here where 16
+# cores are lent, beyond the 2 to 5 threads of the unit tests on a development machine.
+scaling_identical() {
+  local input mode semantics t list
+  input=$kit/data/ouster/ouster_os1_lb_n3_raycloud.ply.gz
+  [ -f "$input" ] || input=$work/scaling-yard.ply
+  [ -f "$input" ] || return 0
+  # Even and odd counts (an odd one splits the regions unevenly), and every core.
+  list=$(printf '%s\n' 2 3 7 "$(nproc)" | awk '$1 > 1' | sort -nu | tr '\n' ' ')
+  md scaling "" "### The same map on every thread count ($(basename "$input"): raymap populate, map files compared byte for byte)" "" \
+    "| mode | semantics | threads compared with 1 | identical |" "| --- | --- | --- | --- |"
+  for entry in occupancy:ray occupancy:scan ndt-om:ray ndt-tm+decay:ray decay:ray tsdf:ray; do
+    mode=${entry%%:*}
+    semantics=${entry##*:}
+    if [ "$(remaining)" -lt 40 ]; then
+      note "scaling: identical maps, $mode ($semantics) skipped: out of time"
+      continue
+    fi
+    local base=$work/tmp/identical-$mode-$semantics same=yes differ=""
+    for t in 1 $list; do
+      if ! "$bin/raymap" populate "$input" -o "$base-$t.rmap" --resolution 0.1 --max-range 20 \
+        --hit 0.7 --miss 0.4 --mode "$mode" --semantics "$semantics" --threads "$t" -q \
+        >"$work/logs/identical-$mode-$semantics-$t.log" 2>&1; then
+        fail "scaling: raymap populate $mode ($semantics) on $t threads failed: $(tail -2 "$work/logs/identical-$mode-$semantics-$t.log" | tr '\n' ' ')"
+        same=""
+        break
+      fi
+      if [ "$t" != 1 ] && ! cmp -s "$base-1.rmap" "$base-$t.rmap"; then
+        same=no
+        differ+="${differ:+, }$t"
+      fi
+      [ "$t" = 1 ] || rm -f "$base-$t.rmap"
+    done
+    rm -f "$base-1.rmap"
+    [ -n "$same" ] || continue
+    [ "$same" = no ] && fail "scaling: $mode ($semantics): the map on $differ threads differs from the map on 1 thread"
+    md scaling "| $mode | $semantics | ${list% } | $same |"
+    record scaling "{\"identical\": \"$mode\", \"semantics\": \"$semantics\", \"threads\": \"${list% }\", \"same\": $([ "$same" = yes ] && echo true || echo false)}"
+    publish_results
+  done
 }
