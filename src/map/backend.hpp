@@ -69,6 +69,13 @@ class Backend {
   virtual std::string startupWarning() const { return {}; }
   /// @brief Host threads used for integration.
   virtual unsigned threads() const noexcept = 0;
+  /// A job for runOnHostThreads(): called once for each part 0..parts-1.
+  using HostJob = void (*)(void* context, unsigned part, unsigned parts);
+  /// @brief Runs `job` on the backend's own host threads, one part each, the calling thread among
+  /// them, and returns when every part is done; a backend without host threads runs one part on
+  /// the calling thread. RayBatcher prepares a batch's rays so. Not concurrently with integrate().
+  /// @rt allocates: no; throws: no (wakes the workers: a mutex and a condition variable).
+  virtual void runOnHostThreads(HostJob job, void* context) noexcept { job(context, 0, 1); }
   /// @brief Integrates one batch. @rt allocates: no; throws: no.
   virtual Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept = 0;
   /// @brief Waits for the device and makes the host region store current (device backends

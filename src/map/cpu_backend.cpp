@@ -47,6 +47,15 @@ class CpuBackend final : public Backend {
 
   const char* name() const noexcept override { return "cpu"; }
   unsigned threads() const noexcept override { return parallel_ ? parallel_->workers() : 1u; }
+  void runOnHostThreads(HostJob job, void* context) noexcept override {
+    if (!parallel_) {
+      job(context, 0, 1);
+      return;
+    }
+    const unsigned parts = parallel_->workers();
+    auto run = [&](unsigned part) { job(context, part, parts); };
+    parallel_->pool().run(run);
+  }
 
   Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept override {
     ctx_.sequence = ctx_.per_scan ? map_.beginScan() : 0u;

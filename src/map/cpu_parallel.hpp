@@ -44,6 +44,8 @@ class ParallelIntegrator {
                      std::size_t expected_batch_rays);
 
   unsigned workers() const noexcept { return pool_.size(); }
+  /// The integrator's threads, for other work between batches (Backend::runOnHostThreads).
+  WorkerPool& pool() noexcept { return pool_; }
 
   /// Seconds spent in each step, summed over the batches integrated so far (the backend's
   /// statistics: what limits the speed-up, measured where it runs).

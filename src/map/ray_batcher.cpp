@@ -2,17 +2,74 @@
 // RayBatcher: see the header.
 #include "src/map/ray_batcher.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
 #include "raymap/assert.hpp"
 
 namespace raymap {
+namespace {
+
+/// Below this many rays per host thread a run is prepared on the calling thread: waking the
+/// workers costs tens of microseconds, preparing a ray about 60 ns.
+constexpr std::size_t kMinRaysPerHostThread = 2048;
+
+}  // namespace
 
 RayBatcher::RayBatcher(const VoxelMap& map, Backend& backend, std::size_t batch_rays)
     : backend_(&backend), per_scan_(map.semantics() == Semantics::kPerScan) {
   RAYMAP_EXPECTS(batch_rays > 0);
   batch_.resize(batch_rays);
+  parts_.resize(std::max(backend.threads(), 1u));
+}
+
+RayPreparer::Progress RayBatcher::prepareOnHostThreads(RayPreparer& preparer,
+                                                       std::span<const Ray> in) noexcept {
+  struct Context {
+    const RayPreparer* preparer;
+    std::span<const Ray> in;
+    PreparedRay* out;
+    PartResult* results;
+    std::size_t max_parts;
+    unsigned parts;  // written by part 0 (the calling thread)
+  };
+  Context context{&preparer, in, batch_.data() + fill_, parts_.data(), parts_.size(), 1};
+  backend_->runOnHostThreads(
+      [](void* c, unsigned part, unsigned parts) {
+        Context& ctx = *static_cast<Context*>(c);
+        if (part == 0) {
+          ctx.parts = parts;
+        }
+        if (parts > ctx.max_parts) {
+          return;  // more threads than the batcher was made for: prepared below, serially
+        }
+        const std::size_t n = ctx.in.size();
+        const std::size_t begin = n * part / parts;
+        const std::size_t end = n * (part + 1u) / parts;
+        RayCounters counters;  // counted per ray: a local, not a line another thread writes
+        const RayPreparer::Progress p =
+            ctx.preparer->prepare(ctx.in.subspan(begin, end - begin),
+                                  std::span<PreparedRay>(ctx.out + begin, end - begin), counters);
+        ctx.results[part] = PartResult{counters, p.written};
+      },
+      &context);
+  ++counters_.parallel_prepares;
+  if (context.parts > parts_.size()) {
+    return preparer.prepare(in, std::span<PreparedRay>(context.out, in.size()));
+  }
+  // Each range's prepared rays follow the previous range's (rejected rays leave gaps).
+  std::size_t written = 0;
+  for (unsigned part = 0; part < context.parts; ++part) {
+    const std::size_t begin = in.size() * part / context.parts;
+    const PartResult& result = parts_[part];
+    if (written != begin) {
+      std::copy(context.out + begin, context.out + begin + result.written, context.out + written);
+    }
+    written += result.written;
+    preparer.addCounters(result.counters);
+  }
+  return RayPreparer::Progress{in.size(), written};
 }
 
 Expected<void, IntegrateError> RayBatcher::flush() noexcept {
@@ -56,9 +113,14 @@ Expected<void, IntegrateError> RayBatcher::add(RayPreparer& preparer,
       scan_ = rays[i].scan;
     }
     while (i < run_end) {
+      const std::size_t room = batch_.size() - fill_;
+      const std::size_t fits = std::min(run_end - i, room);  // one prepared ray each, unsegmented
       const RayPreparer::Progress p =
-          preparer.prepare(rays.subspan(i, run_end - i),
-                           std::span<PreparedRay>(batch_.data() + fill_, batch_.size() - fill_));
+          parts_.size() > 1 && preparer.filter().segment_length_m <= 0.0 &&
+                  fits >= kMinRaysPerHostThread * parts_.size()
+              ? prepareOnHostThreads(preparer, rays.subspan(i, fits))
+              : preparer.prepare(rays.subspan(i, run_end - i),
+                                 std::span<PreparedRay>(batch_.data() + fill_, room));
       fill_ += p.written;
       i += p.consumed;
       if (fill_ == batch_.size() || (p.consumed == 0 && i < run_end)) {

@@ -27,6 +27,7 @@ struct BatcherCounters {
   std::uint64_t batches_failed = 0;   ///< integrate() calls that returned an error (rays lost)
   std::uint64_t scans = 0;            ///< distinct scans (runs of one Ray::scan) seen
   std::uint64_t scans_split = 0;      ///< per-scan: scans larger than a batch, integrated in parts
+  std::uint64_t parallel_prepares = 0;  ///< runs of rays prepared on the backend's host threads
 };
 
 /// @brief Prepares rays (RayPreparer) into a fixed batch and hands full batches to a backend.
@@ -39,6 +40,11 @@ struct BatcherCounters {
 ///
 /// A failed backend call loses that batch's rays (counted: batches_failed); later rays still go
 /// in, and the call that saw the failure returns the first error it met.
+///
+/// With a backend that has several host threads (the CPU backend on N threads), a long enough run
+/// of rays is prepared on those threads, each a contiguous range, and the ranges are joined in
+/// order: the batch is the one a single thread prepares (not with segmented rays, whose piece
+/// counts are not known in advance: those are prepared on the calling thread).
 ///
 /// Thread-safety: one thread. @rt add(), flush(): allocate no memory and throw nothing (the batch
 /// is allocated by the constructor); they block only in the backend.
@@ -69,6 +75,17 @@ class RayBatcher {
   bool scan_split_ = false;  // the current scan already went in in parts
   std::uint64_t scan_ = 0;   // Ray::scan of the rays in the batch
   BatcherCounters counters_;
+
+  /// What one host thread's range gave (on a cache line of its own).
+  struct alignas(64) PartResult {
+    RayCounters counters;
+    std::size_t written = 0;
+  };
+  /// Prepares all of `in` into the batch after its `fill_` rays on the backend's host threads;
+  /// the caller makes sure every ray fits (no segmentation, room for in.size()).
+  RayPreparer::Progress prepareOnHostThreads(RayPreparer& preparer,
+                                             std::span<const Ray> in) noexcept;
+  std::vector<PartResult> parts_;  // one per host thread of the backend
 };
 
 /// @brief The error a failed batch means for whoever integrates: a full store is kCapacity ("the

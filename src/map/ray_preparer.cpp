@@ -87,23 +87,23 @@ bool RayPreparer::toKey(Vec3d p, rm_vec3i* voxel, rm_vec3f* local) const noexcep
   return true;
 }
 
-RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
-                                           std::span<PreparedRay> out) noexcept {
+RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in, std::span<PreparedRay> out,
+                                           RayCounters& counters) const noexcept {
   Progress progress;
   const bool rolling = map_->config().policy == StorePolicy::kRolling;
   for (const Ray& ray : in) {
     Vec3d origin = ray.origin;
     Vec3d sample = ray.sample;
     if (!origin.isFinite() || !sample.isFinite()) {
-      ++counters_.rays_in;
-      ++counters_.rays_invalid;
+      ++counters.rays_in;
+      ++counters.rays_invalid;
       ++progress.consumed;
       continue;
     }
     const double length = (sample - origin).norm();
     if (length < filter_.min_range_m) {
-      ++counters_.rays_in;
-      ++counters_.rays_too_short;
+      ++counters.rays_in;
+      ++counters.rays_too_short;
       ++progress.consumed;
       continue;
     }
@@ -140,8 +140,8 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
       double t0 = 0.0;
       double t1 = 1.0;
       if (!clipToBox(origin, sample, lo, hi, &t0, &t1)) {
-        ++counters_.rays_in;
-        ++counters_.rays_outside_window;
+        ++counters.rays_in;
+        ++counters.rays_outside_window;
         ++progress.consumed;
         continue;
       }
@@ -164,8 +164,8 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
     rm_vec3f sample_local;
     if (kept * inv_resolution_ > kMaxRayVoxels || !toKey(origin, &origin_voxel, &origin_local) ||
         !toKey(sample, &sample_voxel, &sample_local)) {
-      ++counters_.rays_in;
-      ++counters_.rays_out_of_bounds;
+      ++counters.rays_in;
+      ++counters.rays_out_of_bounds;
       ++progress.consumed;
       continue;
     }
@@ -177,11 +177,11 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in,
     if (progress.written + pieces > out.size()) {
       break;  // no room for this ray's pieces: the caller integrates and calls again
     }
-    ++counters_.rays_in;
-    ++counters_.rays_accepted;
-    counters_.rays_clipped += clipped ? 1u : 0u;
-    counters_.rays_no_return += no_return ? 1u : 0u;
-    counters_.pieces_out += pieces;
+    ++counters.rays_in;
+    ++counters.rays_accepted;
+    counters.rays_clipped += clipped ? 1u : 0u;
+    counters.rays_no_return += no_return ? 1u : 0u;
+    counters.pieces_out += pieces;
     ++progress.consumed;
     const std::uint32_t walk_flag = filter_.reverse ? RM_RAY_REVERSE : 0u;
     if (pieces == 1) {

@@ -41,6 +41,18 @@ struct RayCounters {
   std::uint64_t rejected() const noexcept {
     return rays_invalid + rays_too_short + rays_out_of_bounds + rays_outside_window;
   }
+  RayCounters& operator+=(const RayCounters& o) noexcept {
+    rays_in += o.rays_in;
+    rays_invalid += o.rays_invalid;
+    rays_too_short += o.rays_too_short;
+    rays_out_of_bounds += o.rays_out_of_bounds;
+    rays_outside_window += o.rays_outside_window;
+    rays_clipped += o.rays_clipped;
+    rays_no_return += o.rays_no_return;
+    rays_accepted += o.rays_accepted;
+    pieces_out += o.pieces_out;
+    return *this;
+  }
 };
 
 /// @brief Turns Rays into PreparedRays for one map.
@@ -49,7 +61,9 @@ struct RayCounters {
 /// the inner pieces of a segmented ray leave their end voxel to the next piece, which starts there.
 /// TSDF maps: a ray with a return is walked on by the truncation distance behind its sample and
 /// gets no hit; every prepared ray carries its signed distance at its end (tsdf_end_m).
-/// Thread-safety: one preparer per thread. @rt prepare() allocates: no; throws: no.
+/// Thread-safety: one preparer per thread, except that the const prepare() (own counters) may run
+/// on several threads at once while nothing else uses the preparer or changes the map (RayBatcher
+/// prepares a batch's ranges on the backend's workers so). @rt prepare() allocates: no; throws: no.
 class RayPreparer {
  public:
   /// @pre filter.validate() succeeded; `map` outlives the preparer.
@@ -62,7 +76,14 @@ class RayPreparer {
 
   /// @brief Prepares input rays in order until all are consumed or `out` has no room for the
   /// pieces of the next ray.
-  Progress prepare(std::span<const Ray> in, std::span<PreparedRay> out) noexcept;
+  Progress prepare(std::span<const Ray> in, std::span<PreparedRay> out) noexcept {
+    return prepare(in, out, counters_);
+  }
+  /// @brief The same, counting into `counters` instead of the preparer's own.
+  Progress prepare(std::span<const Ray> in, std::span<PreparedRay> out,
+                   RayCounters& counters) const noexcept;
+  /// @brief Adds counters of the const prepare() to the preparer's own.
+  void addCounters(const RayCounters& counters) noexcept { counters_ += counters; }
 
   const RayCounters& counters() const noexcept { return counters_; }
   void resetCounters() noexcept { counters_ = RayCounters{}; }

@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// RayBatcher: batches prepared on the CPU backend's threads are the batches one thread prepares
+// (same map bit for bit, same counters), rejected rays and all.
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "src/map/cpu_backend.hpp"
+#include "src/map/ray_batcher.hpp"
+#include "tests/support/test_rays.hpp"
+
+namespace raymap {
+namespace {
+
+/// Random scans with rays the preparer rejects spread through them (NaN, too short, beyond the
+/// map's key range), so that the ranges prepared side by side leave gaps to close.
+std::vector<Ray> raysWithRejects() {
+  std::vector<Ray> rays = test::randomScans(4242, 3, 30000);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t i = 0; i < rays.size(); i += 7) {
+    switch (i % 3) {
+      case 0:
+        rays[i].sample.x = nan;
+        break;
+      case 1:
+        rays[i].sample = rays[i].origin + Vec3d{0.01, 0.0, 0.0};  // under --min-range
+        break;
+      default:
+        rays[i].origin = Vec3d{1e12, 0.0, 0.0};  // outside the key range
+        rays[i].sample = Vec3d{1e12 + 1.0, 0.0, 0.0};
+        break;
+    }
+  }
+  return rays;
+}
+
+struct BatchedRun {
+  RayCounters rays;
+  BatcherCounters batches;
+};
+
+/// Feeds `rays` in chunks of 10,000 (runs cross chunk and batch boundaries) through a batcher of
+/// 16,384 rays.
+BatchedRun batchAll(VoxelMap& map, Backend& backend, const std::vector<Ray>& rays,
+                    const RayFilter& filter) {
+  RayPreparer preparer(map, filter);
+  RayBatcher batcher(map, backend, 16384);
+  for (std::size_t begin = 0; begin < rays.size(); begin += 10000) {
+    const std::size_t n = std::min<std::size_t>(10000, rays.size() - begin);
+    EXPECT_TRUE(batcher.add(preparer, std::span<const Ray>(rays.data() + begin, n)).has_value());
+  }
+  EXPECT_TRUE(batcher.flush().has_value());
+  return {preparer.counters(), batcher.counters()};
+}
+
+void expectSameCounters(const RayCounters& a, const RayCounters& b) {
+  EXPECT_EQ(a.rays_in, b.rays_in);
+  EXPECT_EQ(a.rays_invalid, b.rays_invalid);
+  EXPECT_EQ(a.rays_too_short, b.rays_too_short);
+  EXPECT_EQ(a.rays_out_of_bounds, b.rays_out_of_bounds);
+  EXPECT_EQ(a.rays_outside_window, b.rays_outside_window);
+  EXPECT_EQ(a.rays_clipped, b.rays_clipped);
+  EXPECT_EQ(a.rays_no_return, b.rays_no_return);
+  EXPECT_EQ(a.rays_accepted, b.rays_accepted);
+  EXPECT_EQ(a.pieces_out, b.pieces_out);
+}
+
+TEST(RayBatcher, RaysPreparedOnTheBackendsThreadsMakeTheSingleThreadedMap) {
+  const std::vector<Ray> rays = raysWithRejects();
+  RayFilter filter;
+  filter.min_range_m = 0.1;
+  filter.max_range_m = 9.0;
+  for (Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    VoxelMap reference = test::makeMap(test::smallConfig(semantics));
+    auto single = test::cpuBackend(reference, 1);
+    const BatchedRun one = batchAll(reference, *single, rays, filter);
+    EXPECT_EQ(one.batches.parallel_prepares, 0u);
+    EXPECT_GT(one.rays.rays_invalid + one.rays.rays_too_short, 0u);
+    EXPECT_GT(one.rays.rays_out_of_bounds, 0u);
+    for (unsigned threads : {2u, 3u}) {
+      VoxelMap map = test::makeMap(test::smallConfig(semantics));
+      auto multi = test::cpuBackend(map, threads);
+      const BatchedRun many = batchAll(map, *multi, rays, filter);
+      EXPECT_GT(many.batches.parallel_prepares, 0u) << threads << " threads";
+      expectSameCounters(one.rays, many.rays);
+      EXPECT_EQ(one.batches.batches, many.batches.batches);
+      EXPECT_EQ(one.batches.rays_integrated, many.batches.rays_integrated);
+      EXPECT_EQ(one.batches.scans_split, many.batches.scans_split);
+      const test::MapComparison cmp = test::compareMaps(reference, map);
+      EXPECT_GT(cmp.compared, 100000u);
+      EXPECT_EQ(cmp.exact_value, cmp.compared) << toString(semantics) << ", " << threads;
+    }
+  }
+}
+
+TEST(RayBatcher, SegmentedRaysArePreparedOnTheCallingThread) {
+  // A segmented ray's piece count is known only once it is prepared: no ranges side by side.
+  const std::vector<Ray> rays = test::randomScans(77, 2, 20000);
+  RayFilter filter;
+  filter.segment_length_m = 2.0;
+  VoxelMap reference = test::makeMap(test::smallConfig(Semantics::kPerRay));
+  auto single = test::cpuBackend(reference, 1);
+  const BatchedRun one = batchAll(reference, *single, rays, filter);
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
+  auto multi = test::cpuBackend(map, 2);
+  const BatchedRun many = batchAll(map, *multi, rays, filter);
+  EXPECT_EQ(many.batches.parallel_prepares, 0u);
+  EXPECT_GT(many.rays.pieces_out, many.rays.rays_accepted);
+  expectSameCounters(one.rays, many.rays);
+  const test::MapComparison cmp = test::compareMaps(reference, map);
+  EXPECT_EQ(cmp.exact_value, cmp.compared);
+}
+
+}  // namespace
+}  // namespace raymap
