@@ -17,7 +17,7 @@ namespace {
 /// Random scans with rays the preparer rejects spread through them (NaN, too short, beyond the
 /// map's key range), so that the ranges prepared side by side leave gaps to close.
 std::vector<Ray> raysWithRejects() {
-  std::vector<Ray> rays = test::randomScans(4242, 3, 30000);
+  std::vector<Ray> rays = test::randomScans(4242, 2, 16000);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (std::size_t i = 0; i < rays.size(); i += 7) {
     switch (i % 3) {
@@ -97,7 +97,7 @@ TEST(RayBatcher, RaysPreparedOnTheBackendsThreadsMakeTheSingleThreadedMap) {
 
 TEST(RayBatcher, SegmentedRaysArePreparedOnTheCallingThread) {
   // A segmented ray's piece count is known only once it is prepared: no ranges side by side.
-  const std::vector<Ray> rays = test::randomScans(77, 2, 20000);
+  const std::vector<Ray> rays = test::randomScans(77, 2, 12000);
   RayFilter filter;
   filter.segment_length_m = 2.0;
   VoxelMap reference = test::makeMap(test::smallConfig(Semantics::kPerRay));
