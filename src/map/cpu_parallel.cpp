@@ -267,7 +267,9 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       for (std::uint32_t s = 0; s < record.span_count; ++s) {
         const SpanRecord& rec = scratch.spans[record.first_span + s];
         const std::uint32_t slot = findSlot(store, cache, rec.region_key);
-        if (slot == RegionStore::kNoSlot) {
+        // Every region of the batch has an owner; a slot without one would be a region the
+        // survey left out (outside the window), which the store does not keep: skipped the same.
+        if (slot == RegionStore::kNoSlot || owner_[slot] == kNoOwner) {
           ++scratch.spans_outside_window;
           continue;
         }
@@ -275,7 +277,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
             OwnedStep{ray, slot, rec.flags, rec.t0, rec.t1, rec.box_lo});
       }
       record.sample_slot = findSlot(store, cache, record.sample_key);
-      if ((rays[r].flags & RM_RAY_END_HIT) == 0u || record.sample_slot == RegionStore::kNoSlot) {
+      if ((rays[r].flags & RM_RAY_END_HIT) == 0u || record.sample_slot == RegionStore::kNoSlot ||
+          owner_[record.sample_slot] == kNoOwner) {
         continue;
       }
       const std::uint8_t owner = owner_[record.sample_slot];
