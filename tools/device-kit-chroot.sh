@@ -6,6 +6,8 @@
 # say "no CUDA device" on its first line, run and pass the CPU parts, and exit 77.
 #   tools/device-kit-chroot.sh KIT_DIR [RESULTS_DIR]
 # RESULTS_DIR (default build/kit-chroot-results) receives run.sh's results folder.
+# RAYMAP_KIT_SECTIONS (e.g. devices,tests,raymapd) runs only those sections of run.sh (--only);
+# unset, all of them.
 # The root file system is cached as a tarball in $RAYMAP_CHROOT_CACHE (default ~/.cache/raymap)
 # and unpacked fresh for each run, so no run sees another's leftovers. Needs root (chroot, mount)
 # and debootstrap (installed with apt-get when missing); $RAYMAP_DEBIAN_MIRROR overrides
@@ -39,7 +41,8 @@ echo "== run.sh inside the minimal Debian 12 root file system (no GPU: CUDA part
 start=$SECONDS
 set +e
 timeout 600 chroot "$root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root \
-  OUT=/results /kit/run.sh 2>&1 | tee "$root/run-output.txt"
+  OUT=/results /kit/run.sh ${RAYMAP_KIT_SECTIONS:+--only "$RAYMAP_KIT_SECTIONS"} 2>&1 |
+  tee "$root/run-output.txt"
 rc=${PIPESTATUS[0]}
 set -e
 seconds=$((SECONDS - start))
