@@ -156,9 +156,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
           scratch.overflow = true;
           return;
         }
-        spans.push_back(SpanRecord{key, RegionStore::kNoSlot,
-                                   (span.first ? kFirst : 0u) | (span.last ? kLast : 0u), span.t0,
-                                   span.t1, span.box_lo});
+        spans.push_back(SpanRecord{key, (span.first ? kFirst : 0u) | (span.last ? kLast : 0u),
+                                   span.t0, span.t1, span.box_lo});
       }
       record.span_count = static_cast<std::uint32_t>(spans.size()) - record.first_span;
       const auto [region, index] = walk.sampleCell();
@@ -259,7 +258,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       scratch.steps_for[owner].clear();
       scratch.hits_for[owner].clear();
     }
-    scratch.spans_outside_window = 0;
+    std::uint64_t outside_window = 0;  // counted in a local, written to stats[w] once
     const auto [begin, end] = rangeOf(w, rays.size());
     for (std::size_t r = begin; r < end; ++r) {
       RayRecord& record = rays_[r];
@@ -270,7 +269,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         // Every region of the batch has an owner; a slot without one would be a region the
         // survey left out (outside the window), which the store does not keep: skipped the same.
         if (slot == RegionStore::kNoSlot || owner_[slot] == kNoOwner) {
-          ++scratch.spans_outside_window;
+          ++outside_window;
           continue;
         }
         scratch.steps_for[owner_[slot]].push_back(
@@ -290,6 +289,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         scratch.hits_for[owner].push_back(ray);
       }
     }
+    stats[w].spans_outside_window += outside_window;
   };
   pool_.run(resolve);
   steps_.resolve += secondsSince(step_start);
@@ -298,8 +298,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   // 5. Apply (parallel): every worker walks the steps dealt to it, range by range (ray order).
   auto apply = [&](unsigned w) {
     const Clock::time_point apply_start = Clock::now();
-    WorkerStats local;  // summed here: a counter written per span beside another worker's would
-                        // share its cache line
+    std::uint64_t voxels_visited = 0;  // summed here: a counter written per span beside another
+                                       // worker's would share its cache line
     if (ctx.per_scan) {
       for (const WorkerScratch& from : scratch_) {
         for (std::uint32_t r : from.hits_for[w]) {
@@ -310,14 +310,13 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     }
     const std::int32_t n = ctx.region_voxels;
     for (const WorkerScratch& from : scratch_) {
-      local.spans_outside_window += w == 0 ? from.spans_outside_window : 0u;  // counted once
       for (const OwnedStep& step : from.steps_for[w]) {
         const PreparedRay& ray = rays[step.ray];
         const RayRecord& record = rays_[step.ray];
         if (step.flags == kHit) {
           applySampleHit(ray, regionLayers(map, step.slot), record.sample_index, ctx.per_scan,
                          ctx.params);
-          ++local.voxels_visited;
+          ++voxels_visited;
           continue;
         }
         RaySpan span;
@@ -328,8 +327,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
             rm_vec3i_make(step.box_lo.x + n - 1, step.box_lo.y + n - 1, step.box_lo.z + n - 1);
         span.first = (step.flags & kFirst) != 0u;
         span.last = (step.flags & kLast) != 0u;
-        local.voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, ray.flags,
-                                         ray.tsdf_end_m, span, regionLayers(map, step.slot));
+        voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, ray.flags,
+                                   ray.tsdf_end_m, span, regionLayers(map, step.slot));
       }
     }
     if (ctx.ndt) {
@@ -338,12 +337,11 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         for (std::uint32_t r : from.hits_for[w]) {
           applyNdtHit(rays[r], regionLayers(map, rays_[r].sample_slot), rays_[r].sample_index,
                       ctx.params, ctx.ndt_params);
-          ++local.voxels_visited;
+          ++voxels_visited;
         }
       }
     }
-    stats[w].voxels_visited += local.voxels_visited;
-    stats[w].spans_outside_window += local.spans_outside_window;
+    stats[w].voxels_visited += voxels_visited;
     scratch_[w].apply_seconds = secondsSince(apply_start);
   };
   pool_.run(apply);

@@ -68,10 +68,10 @@ class ParallelIntegrator {
  private:
   static constexpr std::uint8_t kNoOwner = 0xFF;
 
-  /// One region piece of a ray, recorded by the survey; `slot` is filled in after creation.
+  /// One region piece of a ray, recorded by the survey (its slot is looked up in the resolve
+  /// step, once the batch's regions exist).
   struct SpanRecord {
     std::uint64_t region_key;  // RegionStore::packCoord
-    std::uint32_t slot;        // RegionStore::kNoSlot: outside a rolling window
     std::uint32_t flags;       // kFirst | kLast
     float t0;
     float t1;
@@ -146,8 +146,7 @@ class ParallelIntegrator {
     /// resolve: per owning worker, the rays of this range whose sample hit is there (per-scan
     /// marks before the misses, NDT hits after them)
     std::vector<std::vector<std::uint32_t>> hits_for;
-    bool overflow = false;  // survey: the work table is full
-    std::uint64_t spans_outside_window = 0;
+    bool overflow = false;     // survey: the work table is full
     double apply_seconds = 0;  // apply: this worker's time in the current batch
   };
 

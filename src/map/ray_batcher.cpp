@@ -54,10 +54,10 @@ RayPreparer::Progress RayBatcher::prepareOnHostThreads(RayPreparer& preparer,
         ctx.results[part] = PartResult{counters, p.written};
       },
       &context);
-  ++counters_.parallel_prepares;
   if (context.parts > parts_.size()) {
     return preparer.prepare(in, std::span<PreparedRay>(context.out, in.size()));
   }
+  ++counters_.parallel_prepares;
   // Each range's prepared rays follow the previous range's (rejected rays leave gaps).
   std::size_t written = 0;
   for (unsigned part = 0; part < context.parts; ++part) {
