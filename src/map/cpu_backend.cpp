@@ -9,6 +9,7 @@
 #include "platform/process.hpp"
 #include "src/map/cpu_parallel.hpp"
 #include "src/map/cpu_serial.hpp"
+#include "src/map/scan_bits.hpp"
 
 namespace raymap {
 
@@ -41,6 +42,10 @@ class CpuBackend final : public Backend {
     if (threads > 1) {
       parallel_.emplace(threads, map.store().capacity(), expected_batch_rays);
     }
+    if (ctx_.per_scan) {
+      scan_bits_.emplace(map.store().capacity(), ctx_.region_voxels);
+      ctx_.scan_bits = &*scan_bits_;
+    }
     caches_.assign(this->threads(), detail::RegionSlotCache{});
     worker_stats_.assign(this->threads(), detail::WorkerStats{});
   }
@@ -59,6 +64,9 @@ class CpuBackend final : public Backend {
 
   Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept override {
     ctx_.sequence = ctx_.per_scan ? map_.beginScan() : 0u;
+    if (scan_bits_) {
+      scan_bits_->beginBatch(ctx_.sequence);
+    }
     map_.beginEpoch();  // a tiered map keeps this batch's regions in the pool
     for (detail::RegionSlotCache& cache : caches_) {
       cache.reset();  // regions may have been recycled since the last batch
@@ -96,6 +104,7 @@ class CpuBackend final : public Backend {
   VoxelMap& map_;
   detail::IntegrationContext ctx_;
   std::optional<detail::ParallelIntegrator> parallel_;
+  std::optional<detail::ScanBits> scan_bits_;      // per-scan semantics
   std::vector<detail::RegionSlotCache> caches_;    // one per worker
   std::vector<detail::WorkerStats> worker_stats_;  // one per worker
   BackendStats stats_;

@@ -303,8 +303,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     if (ctx.per_scan) {
       for (const WorkerScratch& from : scratch_) {
         for (std::uint32_t r : from.hits_for[w]) {
-          applyScanHit(regionLayers(map, rays_[r].sample_slot), rays_[r].sample_index, ctx.sequence,
-                       ctx.params);
+          applyScanHit(regionLayers(ctx, rays_[r].sample_slot), rays_[r].sample_index, ctx.params);
         }
       }
     }
@@ -314,7 +313,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         const PreparedRay& ray = rays[step.ray];
         const RayRecord& record = rays_[step.ray];
         if (step.flags == kHit) {
-          applySampleHit(ray, regionLayers(map, step.slot), record.sample_index, ctx.per_scan,
+          applySampleHit(ray, regionLayers(ctx, step.slot), record.sample_index, ctx.per_scan,
                          ctx.params);
           ++voxels_visited;
           continue;
@@ -328,14 +327,14 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         span.first = (step.flags & kFirst) != 0u;
         span.last = (step.flags & kLast) != 0u;
         voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, ray.flags,
-                                   ray.tsdf_end_m, span, regionLayers(map, step.slot));
+                                   ray.tsdf_end_m, span, regionLayers(ctx, step.slot));
       }
     }
     if (ctx.ndt) {
       // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
       for (const WorkerScratch& from : scratch_) {
         for (std::uint32_t r : from.hits_for[w]) {
-          applyNdtHit(rays[r], regionLayers(map, rays_[r].sample_slot), rays_[r].sample_index,
+          applyNdtHit(rays[r], regionLayers(ctx, rays_[r].sample_slot), rays_[r].sample_index,
                       ctx.params, ctx.ndt_params);
           ++voxels_visited;
         }

@@ -29,21 +29,21 @@ Expected<std::uint32_t, IntegrateError> acquire(VoxelMap& map, RegionSlotCache& 
 /// Calls apply(ray, layers, index) for the sample voxel of every ray with a hit, in ray order
 /// (regions created on demand; samples outside a rolling window are skipped).
 template <class Apply>
-Expected<void, IntegrateError> forEachSampleHit(VoxelMap& map, RegionSlotCache& cache,
-                                                std::int32_t region_voxels,
+Expected<void, IntegrateError> forEachSampleHit(const IntegrationContext& ctx,
+                                                RegionSlotCache& cache,
                                                 std::span<const PreparedRay> rays,
                                                 Apply&& apply) noexcept {
   for (const PreparedRay& ray : rays) {
     if ((ray.flags & RM_RAY_END_HIT) == 0u) {
       continue;
     }
-    const auto [region, index] = sampleCellOf(ray, region_voxels);
-    auto slot = acquire(map, cache, region);
+    const auto [region, index] = sampleCellOf(ray, ctx.region_voxels);
+    auto slot = acquire(*ctx.map, cache, region);
     if (!slot) {
       return Unexpected(slot.error());
     }
     if (*slot != RegionStore::kNoSlot) {
-      apply(ray, regionLayers(map, *slot), index);
+      apply(ray, regionLayers(ctx, *slot), index);
     }
   }
   return {};
@@ -58,11 +58,10 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
   VoxelMap& map = *ctx.map;
   if (ctx.per_scan) {
     // Hits first: a voxel hit anywhere in the scan takes no miss from it (occupied wins).
-    auto hits =
-        forEachSampleHit(map, cache, ctx.region_voxels, rays,
-                         [&](const PreparedRay&, const RegionLayers& layers, std::uint32_t index) {
-                           applyScanHit(layers, index, ctx.sequence, ctx.params);
-                         });
+    auto hits = forEachSampleHit(
+        ctx, cache, rays, [&](const PreparedRay&, const RegionLayers& layers, std::uint32_t index) {
+          applyScanHit(layers, index, ctx.params);
+        });
     if (!hits) {
       return hits;
     }
@@ -81,7 +80,7 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
         continue;
       }
       stats.voxels_visited += missSpan(ctx, walk.voxelRay(), sample_is_start, ray.flags,
-                                       ray.tsdf_end_m, span, regionLayers(map, *slot));
+                                       ray.tsdf_end_m, span, regionLayers(ctx, *slot));
     }
     if ((ray.flags & RM_RAY_END_HIT) != 0u && !ctx.ndt) {
       const auto [region, index] = walk.sampleCell();
@@ -90,7 +89,7 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
         return Unexpected(slot.error());
       }
       if (*slot != RegionStore::kNoSlot) {
-        applySampleHit(ray, regionLayers(map, *slot), index, ctx.per_scan, ctx.params);
+        applySampleHit(ray, regionLayers(ctx, *slot), index, ctx.per_scan, ctx.params);
         ++stats.voxels_visited;
       }
     }
@@ -98,7 +97,7 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
   if (ctx.ndt) {
     // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
     return forEachSampleHit(
-        map, cache, ctx.region_voxels, rays,
+        ctx, cache, rays,
         [&](const PreparedRay& ray, const RegionLayers& layers, std::uint32_t index) {
           applyNdtHit(ray, layers, index, ctx.params, ctx.ndt_params);
           ++stats.voxels_visited;

@@ -17,12 +17,12 @@
 #include "kernels/common/ndt.h"
 #include "kernels/common/occupancy.h"
 #include "kernels/common/ray.h"
-#include "kernels/common/scan_mark.h"
 #include "kernels/common/span_walk.h"
 #include "kernels/common/tsdf.h"
 #include "kernels/common/voxel_mean.h"
 #include "src/map/ray_region_walk.hpp"
 #include "src/map/region_slot_cache.hpp"
+#include "src/map/scan_bits.hpp"
 #include "src/map/voxel_map.hpp"
 
 namespace raymap::detail {
@@ -144,16 +144,14 @@ struct PerRayMiss {
 };
 
 /// Per-scan miss: the first crossing in this scan lowers the occupancy, unless the scan hit the
-/// voxel (occupied wins).
+/// voxel (occupied wins: the scan's hits claimed their bits first).
 struct PerScanMiss {
   float* occupancy;
-  std::uint32_t* marks;
-  std::uint32_t sequence;
+  std::uint64_t* scan_bits;  ///< ScanBits::bitsFor the region
   rm_occupancy_params params;
   void operator()(std::uint32_t i) const noexcept {
-    if (rm_scan_needs_miss(marks[i], sequence)) {
+    if (ScanBits::claim(scan_bits, i)) {
       occupancy[i] = rm_occupancy_miss(occupancy[i], params);
-      marks[i] = rm_scan_mark_miss(sequence);
     }
   }
 };
@@ -199,7 +197,7 @@ inline std::uint32_t tsdfSpan(const rm_line_walk_ray& ray, bool sample_is_start,
 struct RegionLayers {
   float* occupancy = nullptr;
   rm_voxel_mean* mean = nullptr;
-  std::uint32_t* marks = nullptr;
+  std::uint64_t* scan_bits = nullptr;  ///< per-scan semantics: ScanBits::bitsFor the region
   rm_ndt_voxel* ndt = nullptr;
   rm_ndt_hit_miss* hit_miss = nullptr;
   rm_ndt_intensity* intensity = nullptr;
@@ -292,11 +290,10 @@ inline void applyNdtHit(const rm_prepared_ray& ray, const RegionLayers& layers, 
 }
 
 /// @brief Per-scan hit pass: the first hit of a voxel in this scan raises its occupancy once.
-inline void applyScanHit(const RegionLayers& layers, std::uint32_t i, std::uint32_t sequence,
+inline void applyScanHit(const RegionLayers& layers, std::uint32_t i,
                          const rm_occupancy_params& params) noexcept {
-  if (rm_scan_needs_hit(layers.marks[i], sequence)) {
+  if (ScanBits::claim(layers.scan_bits, i)) {
     layers.occupancy[i] = rm_occupancy_hit(layers.occupancy[i], params);
-    layers.marks[i] = rm_scan_mark_hit(sequence);
   }
 }
 
@@ -307,6 +304,9 @@ struct IntegrationContext {
   rm_occupancy_params params{};
   bool per_scan = false;
   std::uint32_t sequence = 0;  ///< scan sequence of this batch (per-scan semantics)
+  /// Per-scan semantics: the batch's once-per-scan bits (ScanBits::beginBatch called with
+  /// `sequence`); null per ray.
+  ScanBits* scan_bits = nullptr;
   /// NDT maps: a batch's misses all come before its hits (see kernels/common/ndt.h).
   bool ndt = false;
   rm_ndt_params ndt_params{};
@@ -314,8 +314,10 @@ struct IntegrationContext {
   rm_tsdf_params tsdf_params{};  ///< TSDF maps
 };
 
-/// @brief Pointers to the layers of the region in `slot`.
-inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexcept {
+/// @brief Pointers to the layers of the region in `slot` (and, per scan, to its bits: call from
+/// the thread that owns the region in this batch).
+inline RegionLayers regionLayers(const IntegrationContext& ctx, std::uint32_t slot) noexcept {
+  const VoxelMap& map = *ctx.map;
   const RegionStore& store = map.store();
   RegionLayers layers;
   if (map.occupancyLayer() >= 0) {
@@ -324,8 +326,8 @@ inline RegionLayers regionLayers(const VoxelMap& map, std::uint32_t slot) noexce
   if (map.meanLayer() >= 0) {
     layers.mean = store.layerData<rm_voxel_mean>(slot, map.meanLayer());
   }
-  if (map.scanMarkLayer() >= 0) {
-    layers.marks = store.layerData<std::uint32_t>(slot, map.scanMarkLayer());
+  if (ctx.scan_bits != nullptr) {
+    layers.scan_bits = ctx.scan_bits->bitsFor(slot);
   }
   if (map.ndtLayer() >= 0) {
     layers.ndt = store.layerData<rm_ndt_voxel>(slot, map.ndtLayer());
@@ -373,7 +375,7 @@ inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_
                         ctx.params, ctx.ndt_params});
   }
   if (ctx.per_scan) {
-    return walk(PerScanMiss{layers.occupancy, layers.marks, ctx.sequence, ctx.params});
+    return walk(PerScanMiss{layers.occupancy, layers.scan_bits, ctx.params});
   }
   return walk(PerRayMiss{layers.occupancy, ctx.params});
 }
