@@ -13,9 +13,13 @@ namespace raymap::detail {
 /// also means "occupied wins").
 ///
 /// Why bits and not the map's 32-bit scan-mark layer (which the device backends keep for their
-/// atomic_max election): a walk touching a mark word beside each occupancy value doubled the
-/// cache lines a voxel costs, and per-scan ran at 0.82-0.90 of per-ray on one thread. A bit
-/// word covers 64 voxels, 512 in one cache line, so the bits of a ray's voxels mostly stay in L1.
+/// atomic_max election): the marks cost 4 bytes per voxel that a CPU map must keep resident
+/// (a per-scan map of the Ouster data peaked at 188 MB with them, 133 MB with the bits), and a
+/// second cache line beside the occupancy for every voxel a walk crosses. A bit word covers 64
+/// voxels, 512 in one cache line, so the bits of a ray's voxels mostly stay in L1. The speed did
+/// not change measurably (per scan 0.74-0.89 of per ray on one thread, before and after; a
+/// diagnostic build without the hit pass ran at 0.89-0.92, so the claims and the hit pass each
+/// cost a few per cent; docs/benchmarks.md).
 ///
 /// A slot's bits are cleared lazily, when the slot is first used in a batch (its stamp is not
 /// the batch's sequence), so a batch costs 4 KiB of clearing per region it touches and nothing
