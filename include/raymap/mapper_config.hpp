@@ -51,8 +51,8 @@ struct BackendOptions {
   int cuda_device = 0;          ///< CUDA device ordinal
   /// Use the CPU backend (MapperCounters::fallback_warning says why) if the device cannot start.
   bool fallback_cpu = false;
-  /// Prepared rays per backend call; 0 = the backend's default (16,384 on the CPU, 262,144 on a
-  /// device).
+  /// Prepared rays per backend call; 0 = the backend's preference (32,768 on the CPU for per-ray
+  /// maps other than NDT; 262,144 for per-scan and NDT maps and on a device).
   std::size_t batch_rays = 0;
 };
 

@@ -2,6 +2,7 @@
 // The interface every integration backend (CPU, OpenCL, CUDA) implements.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -69,6 +70,13 @@ class Backend {
   virtual std::string startupWarning() const { return {}; }
   /// @brief Host threads used for integration.
   virtual unsigned threads() const noexcept = 0;
+  /// @brief Prepared rays per batch (RayBatcher's capacity) this backend works best with, for
+  /// callers that leave the batch size to it (`--batch-rays` not given, MapperConfig::batch_rays
+  /// 0). Devices want large launches; the CPU backend asks for less where the map does not
+  /// depend on batch boundaries (cpu_backend.cpp).
+  virtual std::size_t preferredBatchRays() const noexcept { return kLargeBatchRays; }
+  /// The batch size of the devices and of maps whose result depends on batch boundaries.
+  static constexpr std::size_t kLargeBatchRays = std::size_t{1} << 18;
   /// A job for runOnHostThreads(): called once for each part 0..parts-1.
   using HostJob = void (*)(void* context, unsigned part, unsigned parts);
   /// @brief Runs `job` on the backend's own host threads, one part each, the calling thread among

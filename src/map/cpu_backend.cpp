@@ -52,6 +52,16 @@ class CpuBackend final : public Backend {
 
   const char* name() const noexcept override { return "cpu"; }
   unsigned threads() const noexcept override { return parallel_ ? parallel_->workers() : 1u; }
+  /// Per-ray maps other than NDT give the same map whatever the batch boundaries (updates in ray
+  /// order), and smaller batches keep a batch's prepared rays and the parallel integrator's span
+  /// records in cache and resident: on the Ouster data, a fresh map per ray ran at 1.03 M rays/s
+  /// on 2 threads with 32,768-ray batches and 0.51 M with 262,144 (peak RSS 160 MB against
+  /// 307 MB), and 0.70 M against 0.62 M on one thread. A per-scan batch holds a whole scan, and
+  /// an NDT batch's misses come before its hits: those keep the large batch.
+  std::size_t preferredBatchRays() const noexcept override {
+    return ctx_.per_scan || ctx_.ndt ? kLargeBatchRays : kCpuBatchRays;
+  }
+  static constexpr std::size_t kCpuBatchRays = std::size_t{1} << 15;
   void runOnHostThreads(HostJob job, void* context) noexcept override {
     if (!parallel_) {
       job(context, 0, 1);

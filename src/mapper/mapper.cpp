@@ -22,8 +22,6 @@ namespace {
 
 /// Rays converted from the caller's scan per RayBatcher::add() call (the conversion buffer).
 constexpr std::size_t kChunkRays = 4096;
-/// Prepared rays per backend call when BackendOptions::batch_rays is 0 (as `raymap populate`).
-constexpr std::size_t kDefaultBatchRays = std::size_t{1} << 18;
 
 }  // namespace
 
@@ -51,7 +49,8 @@ struct Mapper::State {
     }
     backend = std::move(*made);
     batcher = std::make_unique<RayBatcher>(
-        map, *backend.backend, choice.batch_rays != 0 ? choice.batch_rays : kDefaultBatchRays);
+        map, *backend.backend,
+        choice.batch_rays != 0 ? choice.batch_rays : backend.backend->preferredBatchRays());
     return {};
   }
   Error integrateError(IntegrateError error) const {

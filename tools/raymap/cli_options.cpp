@@ -311,9 +311,10 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_flag("--no-mean", f.no_mean, "Do not keep the voxel-mean layer");
   addMaxMemoryOption(c, f.max_memory);
   addTierOptions(c, f.tiers);
-  c.add_option("--batch-rays", f.batch_rays, "Prepared rays per backend call")
-      ->check(CLI::Range(std::size_t{1024}, std::size_t{1} << 26))
-      ->capture_default_str();
+  c.add_option("--batch-rays", f.batch_rays,
+               "Prepared rays per backend call (default: 32768 on the CPU per ray, except NDT; "
+               "262144 otherwise)")
+      ->check(CLI::Range(std::size_t{1024}, std::size_t{1} << 26));
 }
 
 Result<std::uint64_t> parseByteSize(const std::string& text) {
@@ -511,7 +512,9 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.backend.cuda_device = f.cuda_device;
   o.backend.fallback_cpu = f.fallback == "cpu";
   o.backend.gpu_memory = f.gpu_memory;
-  o.backend.gpu_batch_rays = f.batch_rays;
+  if (f.batch_rays != 0) {
+    o.backend.gpu_batch_rays = f.batch_rays;
+  }
   if (auto cache = parseCacheSize(f.gpu_cache, &o.backend); !cache) {
     return Unexpected(cache.error());
   }

@@ -56,8 +56,8 @@ struct MappingFlags {
   bool forward = false;
   bool no_mean = false;
   std::string max_memory = "4GiB";
-  TierFlags tiers;  ///< --compressed-memory, --spill-dir, --no-tiers
-  std::size_t batch_rays = PopulateOptions::kDefaultBatchRays;
+  TierFlags tiers;             ///< --compressed-memory, --spill-dir, --no-tiers
+  std::size_t batch_rays = 0;  // 0: the backend's Backend::preferredBatchRays()
   // rosbag2 input (a bag directory, .mcap or .db3)
   std::vector<std::string> topics;  ///< --topic: PointCloud2 or depth Image topics
   std::string pose_topic;           ///< --pose-topic: nav_msgs/msg/Odometry topic

@@ -72,7 +72,8 @@ Result<PopulateReport> integrateStream(
   Backend& backend = *created->backend;
   const BackendStats stats_before = backend.stats();
   RayPreparer preparer(map, options.filter);
-  RayBatcher batcher(map, backend, options.batch_rays);
+  RayBatcher batcher(map, backend,
+                     options.batch_rays != 0 ? options.batch_rays : backend.preferredBatchRays());
 
   PopulateReport report;
   report.backend_name = backend.name();

@@ -32,16 +32,14 @@ using backends::createHeightmapGenerator;
 
 /// @brief Everything `raymap populate` needs besides output paths.
 struct PopulateOptions {
-  static constexpr std::size_t kDefaultBatchRays = std::size_t{1} << 18;
-
   std::string input;
   io::RaySourceOptions source;  ///< PLY input
   bag::BagRaysOptions bag;      ///< rosbag2 input (a directory, .mcap or .db3)
   MapConfig map;
   RayFilter filter;
-  BackendChoice backend;                       ///< backend, CPU threads, device options
-  std::size_t batch_rays = kDefaultBatchRays;  ///< prepared rays per backend call
-  bool progress = true;                        ///< progress bar on a terminal
+  BackendChoice backend;       ///< backend, CPU threads, device options
+  std::size_t batch_rays = 0;  ///< prepared rays per backend call; 0: the backend's preference
+  bool progress = true;        ///< progress bar on a terminal
 };
 
 /// @brief What a run did and how long it took.

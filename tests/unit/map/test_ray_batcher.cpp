@@ -67,6 +67,36 @@ void expectSameCounters(const RayCounters& a, const RayCounters& b) {
   EXPECT_EQ(a.pieces_out, b.pieces_out);
 }
 
+/// The CPU backend asks for small batches only where batch boundaries cannot change the map:
+/// per ray (occupancy, decay, TSDF) a map from batches of 1,024 rays is the map from one batch;
+/// per scan a batch holds a scan, and an NDT batch's misses come before its hits.
+TEST(RayBatcher, TheCpuPrefersSmallBatchesOnlyWhereBoundariesDoNotMatter) {
+  MapConfig ndt = test::smallConfig(Semantics::kPerRay);
+  ndt.mode = MapMode::kNdtOm;
+  VoxelMap ndt_map = test::makeMap(ndt);
+  EXPECT_EQ(test::cpuBackend(ndt_map, 2)->preferredBatchRays(), Backend::kLargeBatchRays);
+  VoxelMap per_scan = test::makeMap(test::smallConfig(Semantics::kPerScan));
+  EXPECT_EQ(test::cpuBackend(per_scan, 2)->preferredBatchRays(), Backend::kLargeBatchRays);
+
+  const std::vector<Ray> rays = test::randomScans(777, 3, 6000);
+  RayFilter filter;
+  filter.max_range_m = 9.0;
+  VoxelMap one_batch = test::makeMap(test::smallConfig(Semantics::kPerRay));
+  auto backend = test::cpuBackend(one_batch, 2);
+  EXPECT_LT(backend->preferredBatchRays(), Backend::kLargeBatchRays);
+  test::integrate(one_batch, *backend, rays, filter);
+  VoxelMap small_batches = test::makeMap(test::smallConfig(Semantics::kPerRay));
+  auto small_backend = test::cpuBackend(small_batches, 2);
+  RayPreparer preparer(small_batches, filter);
+  RayBatcher batcher(small_batches, *small_backend, 1024);
+  ASSERT_TRUE(batcher.add(preparer, rays).has_value());
+  ASSERT_TRUE(batcher.flush().has_value());
+  EXPECT_GT(batcher.counters().batches, 10u);
+  const test::MapComparison cmp = test::compareMaps(one_batch, small_batches);
+  EXPECT_GT(cmp.compared, 10000u);
+  EXPECT_EQ(cmp.exact_value, cmp.compared);
+}
+
 TEST(RayBatcher, RaysPreparedOnTheBackendsThreadsMakeTheSingleThreadedMap) {
   const std::vector<Ray> rays = raysWithRejects();
   RayFilter filter;
