@@ -1,6 +1,8 @@
 /* SPDX-License-Identifier: BSD-3-Clause */
 /* Per-scan semantics: each voxel is updated at most once per scan, and occupied wins (OctoMap's
- * insertPointCloud). Shared by every backend.
+ * insertPointCloud). The device backends elect the one update with these marks; the CPU backend
+ * keeps the same rule with one bit per voxel and batch instead (src/map/scan_bits.hpp: no atomics
+ * there, and a 32-bit mark beside every occupancy value cost it memory).
  *
  * A scratch layer keeps one 32-bit mark per voxel: (scan_sequence << 1) | hit. Scan sequences start
  * at 1 and only grow, so marks from earlier scans compare lower than any mark of the current scan

@@ -40,7 +40,8 @@ class CpuBackend final : public Backend {
     ctx_.ndt_params =
         map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
     if (threads > 1) {
-      parallel_.emplace(threads, map.store().capacity(), expected_batch_rays);
+      parallel_.emplace(threads, map.store().capacity(),
+                        expected_batch_rays != 0 ? expected_batch_rays : preferredBatchRays());
     }
     if (ctx_.per_scan) {
       scan_bits_.emplace(map.store().capacity(), ctx_.region_voxels);

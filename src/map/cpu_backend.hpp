@@ -17,8 +17,9 @@ struct CpuBackendOptions {
   static constexpr unsigned kMaxThreads = 64;
   /// Worker threads: 1 = the single-threaded reference, 0 = one per available core.
   unsigned threads = 1;
-  /// Rays per integrate() call the multi-threaded scratch is sized for (larger batches grow it).
-  std::size_t expected_batch_rays = std::size_t{1} << 18;
+  /// Rays per integrate() call the multi-threaded scratch is sized for (larger batches grow it);
+  /// 0: the backend's preferredBatchRays(), the batch a caller gets when it leaves the size to it.
+  std::size_t expected_batch_rays = 0;
 };
 
 /// @brief Creates a CPU backend integrating into `map` (which must outlive it).
