@@ -8,8 +8,9 @@
 
 namespace raymap::cuda {
 
-cudaError_t launchNdtKernel(NdtKernelId kernel, cudaStream_t stream, unsigned block_threads,
-                            const NdtKernelBuffers& b, const rm_integrate_params& params,
+cudaError_t launchNdtKernel(NdtKernelId kernel, std::uint32_t mode, cudaStream_t stream,
+                            unsigned block_threads, const NdtKernelBuffers& b,
+                            const rm_integrate_params& params,
                             const rm_ndt_params& ndt_params) noexcept {
   if (params.item_count == 0 || block_threads == 0) {
     return cudaSuccess;
@@ -17,10 +18,19 @@ cudaError_t launchNdtKernel(NdtKernelId kernel, cudaStream_t stream, unsigned bl
   const unsigned blocks = (params.item_count + block_threads - 1) / block_threads;
   switch (kernel) {
     case NdtKernelId::kIntegrateSpans:
-      rm_ndt_integrate_spans<<<blocks, block_threads, 0, stream>>>(
-          b.rays, b.spans, b.occupancy, b.ndt, b.means,
-          reinterpret_cast<std::uint32_t*>(b.hit_miss), b.traversal, params, ndt_params,
-          b.counters);
+      switch (mode) {
+#define RM_LAUNCH_MODE_(bits)                                                                \
+  case (bits):                                                                               \
+    rm_ndt_integrate_spans<(bits)>                                                           \
+        <<<blocks, block_threads, 0, stream>>>(b.rays, b.spans, b.occupancy, b.ndt, b.means, \
+                                               reinterpret_cast<std::uint32_t*>(b.hit_miss), \
+                                               b.traversal, params, ndt_params, b.counters); \
+    break;
+        RM_NDT_PROGRAM_MODES(RM_LAUNCH_MODE_)
+#undef RM_LAUNCH_MODE_
+        default:
+          return cudaErrorInvalidValue;  // no kernel for this mode (rm_map_mode_has_kernels)
+      }
       break;
     case NdtKernelId::kApplyHitGroups:
       rm_ndt_apply_hit_groups<<<blocks, block_threads, 0, stream>>>(

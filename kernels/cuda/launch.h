@@ -38,9 +38,11 @@ struct OccupancyKernelBuffers {
 enum class OccupancyKernelId : std::uint8_t { kTagHitGroups, kIntegrateSpans, kApplyHitGroups };
 
 /// @brief Enqueues `kernel` on `stream` over params.item_count threads in blocks of
-/// `block_threads`; returns the launch status (cudaSuccess, or why the launch was refused).
+/// `block_threads`, the kernel made for map mode `mode` (rm_map_mode_bits,
+/// kernels/common/map_mode.h); returns the launch status (cudaSuccess, or why the launch was
+/// refused: cudaErrorInvalidValue for a mode without kernels).
 /// Real-time: allocates nothing; does not wait for the kernel.
-cudaError_t launchOccupancyKernel(OccupancyKernelId kernel, cudaStream_t stream,
+cudaError_t launchOccupancyKernel(OccupancyKernelId kernel, std::uint32_t mode, cudaStream_t stream,
                                   unsigned block_threads, const OccupancyKernelBuffers& buffers,
                                   const rm_integrate_params& params) noexcept;
 

@@ -36,9 +36,12 @@ struct NdtKernelBuffers {
 enum class NdtKernelId : std::uint8_t { kIntegrateSpans, kApplyHitGroups };
 
 /// @brief Enqueues `kernel` on `stream` over params.item_count threads in blocks of
-/// `block_threads`; returns the launch status. Real-time: allocates nothing; does not wait.
-cudaError_t launchNdtKernel(NdtKernelId kernel, cudaStream_t stream, unsigned block_threads,
-                            const NdtKernelBuffers& buffers, const rm_integrate_params& params,
+/// `block_threads`, the span kernel made for map mode `mode` (rm_map_mode_bits,
+/// kernels/common/map_mode.h); returns the launch status (cudaErrorInvalidValue for a mode
+/// without kernels). Real-time: allocates nothing; does not wait.
+cudaError_t launchNdtKernel(NdtKernelId kernel, std::uint32_t mode, cudaStream_t stream,
+                            unsigned block_threads, const NdtKernelBuffers& buffers,
+                            const rm_integrate_params& params,
                             const rm_ndt_params& ndt_params) noexcept;
 
 }  // namespace raymap::cuda

@@ -16,6 +16,11 @@
 #define RM_DEVICE_FN static inline
 #define RM_DEVICE_COLD_FN static __attribute__((noinline))
 #define RM_KERNEL __kernel
+/* Made for one map mode (kernels/common/map_mode.h): in OpenCL the program is built for one
+ * mode, RM_MAP_MODE is a -D, and these are plain functions and kernels. */
+#define RM_MODE_FN static inline
+#define RM_MODE_KERNEL __kernel
+#define RM_MODE_CALL(fn) fn
 #define RM_GLOBAL __global
 /* Memory updated by atomics from several work-items. */
 #define RM_ATOMIC_GLOBAL volatile __global
@@ -54,6 +59,15 @@ RM_DEVICE_FN rm_u64 rm_load_u64(RM_ATOMIC_GLOBAL rm_u64* p) { return *p; }
 #define RM_DEVICE_FN static inline __device__
 #define RM_DEVICE_COLD_FN static __noinline__ __device__
 #define RM_KERNEL extern "C" __global__
+/* Made for one map mode (kernels/common/map_mode.h): in CUDA one source holds every mode's
+ * kernels, templates over RM_MAP_MODE that the launchers instantiate once per mode. */
+#define RM_MODE_FN              \
+  template <rm_u32 RM_MAP_MODE> \
+  static inline __device__
+#define RM_MODE_KERNEL          \
+  template <rm_u32 RM_MAP_MODE> \
+  __global__
+#define RM_MODE_CALL(fn) fn<RM_MAP_MODE>
 #define RM_GLOBAL
 #define RM_ATOMIC_GLOBAL
 #ifndef RM_HAVE_INT64_ATOMICS

@@ -22,13 +22,18 @@
  *     and the fold is sequential in ray order anyway; grouping per voxel on the host means every
  *     work-item has work (no idle work-item per duplicate sample, unlike one thread per ray).
  *
- * Decay-rate maps (p.has_traversal): launch 1 also adds each span's metres of path to the
+ * Decay-rate maps (RM_MODE_TRAVERSAL): launch 1 also adds each span's metres of path to the
  * traversal layer (traversal.h), as the occupancy kernel does. */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_H
 
+#if defined(__OPENCL_C_VERSION__) && !defined(RM_MAP_MODE)
+#error "build the NDT program with -DRM_MAP_MODE=<bits> (kernels/common/map_mode.h)"
+#endif
+
 #include "../common/batch.h"
 #include "../common/line_walk.h"
+#include "../common/map_mode.h"
 #include "../common/ndt.h"
 #include "../common/occupancy.h"
 #include "../common/ray.h"
@@ -114,15 +119,15 @@ RM_DEVICE_COLD_FN rm_u32 rm_ndt_shaped_miss(RM_ATOMIC_GLOBAL rm_u32* word, rm_u3
 /* Launch 1. Work-item `id`: walks span `id` and applies the NDT miss to each voxel it crosses
  * (means: the voxel-mean layer, read when p.has_mean);
  * NDT-TM (p.traversability) counts the passes that are misses in hit_miss; decay-rate maps
- * (p.has_traversal) add the span's path to `traversal` (float metres as bits). */
-RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
-                                        const RM_GLOBAL rm_span_record* spans,
-                                        RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                        const RM_GLOBAL rm_ndt_voxel* ndt,
-                                        const RM_GLOBAL rm_voxel_mean* means,
-                                        RM_ATOMIC_GLOBAL rm_u32* hit_miss,
-                                        RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params p,
-                                        rm_ndt_params np, RM_ATOMIC_GLOBAL rm_counter* counters) {
+ * (RM_MODE_TRAVERSAL) add the span's path to `traversal` (float metres as bits). */
+RM_MODE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
+                                      const RM_GLOBAL rm_span_record* spans,
+                                      RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                      const RM_GLOBAL rm_ndt_voxel* ndt,
+                                      const RM_GLOBAL rm_voxel_mean* means,
+                                      RM_ATOMIC_GLOBAL rm_u32* hit_miss,
+                                      RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params p,
+                                      rm_ndt_params np, RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_span_record span = spans[id];
   rm_prepared_ray ray = rays[span.ray];
   rm_ray_walk_frame frame = rm_ray_walk_frame_make(ray);
@@ -134,7 +139,7 @@ RM_DEVICE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_r
   rm_i32 count = rm_span_walk_init(&walk, &walk_ray, span.t0, span.t1, span.box_lo, p.region_voxels,
                                    span.flags, frame.sample_is_start);
   rm_i32 k;
-  if (p.has_traversal != 0u) {
+  if (RM_MAP_MODE_HAS(RM_MODE_TRAVERSAL)) {
     dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
                                      frame.sample_is_start, p.region_voxels, p.resolution);
   }

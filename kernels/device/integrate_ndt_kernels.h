@@ -6,13 +6,14 @@
  * rounds the work-item count up to whole work-groups, so each entry point checks its index.
  * Layers a map lacks (NDT-TM's hit_miss and intensity in NDT-OM, the mean, the traversal layer)
  * are bound to a small placeholder and never touched (ndt_params.traversability, params.has_mean,
- * params.has_traversal). */
+ * the map mode's RM_MODE_TRAVERSAL). The span kernel is made for one map mode (RM_MAP_MODE,
+ * kernels/common/map_mode.h: a -D of the OpenCL build, a template parameter in CUDA). */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H
 
 #include "integrate_ndt.h"
 
-RM_KERNEL void rm_ndt_integrate_spans(
+RM_MODE_KERNEL void rm_ndt_integrate_spans(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
     RM_ATOMIC_GLOBAL rm_u32* occupancy, const RM_GLOBAL rm_ndt_voxel* ndt,
     const RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* hit_miss,
@@ -20,8 +21,8 @@ RM_KERNEL void rm_ndt_integrate_spans(
     RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
-    rm_ndt_integrate_span(id, rays, spans, occupancy, ndt, means, hit_miss, traversal, params,
-                          ndt_params, counters);
+    RM_MODE_CALL(rm_ndt_integrate_span)
+    (id, rays, spans, occupancy, ndt, means, hit_miss, traversal, params, ndt_params, counters);
   }
 }
 

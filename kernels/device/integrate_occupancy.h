@@ -27,14 +27,14 @@
  * Voxel means: one work-item per voxel folds all of the batch's samples of that voxel in ray
  * order, so means match the CPU reference bit for bit and need no atomics.
  *
- * Decay-rate maps (p.has_traversal): rm_integrate_span also adds each span's metres of path to
+ * Decay-rate maps (RM_MODE_TRAVERSAL): rm_integrate_span also adds each span's metres of path to
  * the traversal layer (traversal.h), in either semantics, with float atomics; the sums equal the
  * CPU's up to rounding (the order of the adds differs).
  *
- * TSDF maps (p.has_tsdf): no occupancy layer and no hits; rm_integrate_span fuses each ray into
+ * TSDF maps (RM_MODE_TSDF): no occupancy layer and no hits; rm_integrate_span fuses each ray into
  * the TSDF layer of the voxels of its spans (tsdf.h), and that is the whole batch.
  *
- * Decay-rate-only maps (p.has_occupancy 0, p.has_traversal 1; per-ray semantics): no occupancy
+ * Decay-rate-only maps (RM_MODE_TRAVERSAL alone; per-ray semantics): no occupancy
  * and so no tags; rm_integrate_span adds the path lengths, then rm_apply_hit_group folds the
  * voxel means (their counts are the samples). */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_H
@@ -42,6 +42,7 @@
 
 #include "../common/batch.h"
 #include "../common/line_walk.h"
+#include "../common/map_mode.h"
 #include "../common/occupancy.h"
 #include "../common/ray.h"
 #include "../common/scan_mark.h"
@@ -51,6 +52,10 @@
 #include "device.h"
 #include "traversal.h"
 #include "tsdf.h"
+
+#if defined(__OPENCL_C_VERSION__) && !defined(RM_MAP_MODE)
+#error "build the occupancy program with -DRM_MAP_MODE=<bits> (kernels/common/map_mode.h)"
+#endif
 
 /* A tagged occupancy word: a quiet NaN whose low 22 bits hold the hit group (occupancy values
  * are never NaN: rays are validated, and +inf marks "unobserved"). */
@@ -92,15 +97,59 @@ RM_DEVICE_FN void rm_tag_hit_group(rm_u32 id, const RM_GLOBAL rm_hit_group* grou
   occupancy[i] = RM_TAG_BITS | id;
 }
 
-/* Work-item `id`: walks span `id` and applies the semantics' miss rule to its voxels; decay-rate
- * maps add the span's path to `traversal` (float metres as bits; unused without the layer); TSDF
- * maps fuse the ray into `tsdf` (distance, weight float pairs as bits) instead of any miss. */
-RM_DEVICE_FN void rm_integrate_span(
-    rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
-    const RM_GLOBAL rm_hit_group* groups, const RM_GLOBAL rm_u32* hit_rays,
-    RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_ATOMIC_GLOBAL rm_u32* marks,
-    RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal,
-    RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_integrate_params p, RM_ATOMIC_GLOBAL rm_counter* counters) {
+/* Per-ray misses along a span (the mode's rule): an untagged voxel takes the miss by
+ * compare-and-swap; a tagged one (samples in this batch) has the miss counted in its place among
+ * the group's hits. Returns the updates given up. */
+RM_DEVICE_FN rm_u32 rm_ray_miss_span(rm_span_walk walk, rm_i32 count, rm_u32 base, rm_u32 ray,
+                                     const RM_GLOBAL rm_hit_group* groups,
+                                     const RM_GLOBAL rm_u32* hit_rays,
+                                     RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                     RM_ATOMIC_GLOBAL rm_u32* scratch, rm_integrate_params p) {
+  rm_u32 dropped = 0u;
+  rm_i32 k;
+  for (k = 0; k < count; ++k) {
+    rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
+    rm_u32 word = rm_load_u32(occupancy + i);
+    if (rm_is_tag(word)) {
+      rm_u32 g = word & RM_TAG_GROUP_MASK;
+      rm_hit_group group = groups[g];
+      rm_u32 run = rm_runs_offset(group, g, p) + rm_hits_before(hit_rays, group, ray);
+      (void)rm_atomic_add_u32(scratch + run, 1u);
+    } else if (!rm_occupancy_miss_atomic(occupancy + i, word, p.occupancy)) {
+      dropped += 1u;
+    }
+  }
+  return dropped;
+}
+
+/* Per-scan misses along a span (the mode's rule): the first miss of this scan wins the voxel's
+ * mark and is its only writer (a voxel the scan hit already holds the hit mark). */
+RM_DEVICE_FN void rm_scan_miss_span(rm_span_walk walk, rm_i32 count, rm_u32 base,
+                                    RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                    RM_ATOMIC_GLOBAL rm_u32* marks, rm_integrate_params p) {
+  rm_u32 miss_mark = rm_scan_mark_miss(p.sequence);
+  rm_i32 k;
+  for (k = 0; k < count; ++k) {
+    rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
+    if (rm_load_u32(marks + i) < miss_mark && rm_atomic_max_u32(marks + i, miss_mark) < miss_mark) {
+      occupancy[i] = rm_as_u32(rm_occupancy_miss(rm_as_float(occupancy[i]), p.occupancy));
+    }
+  }
+}
+
+/* Work-item `id`: walks span `id` and applies the map mode's rules to its voxels (RM_MAP_MODE,
+ * kernels/common/map_mode.h; each `if` below is a constant of the kernel's mode): TSDF maps fuse
+ * the ray into `tsdf` (distance, weight float pairs as bits) and nothing else; decay-rate maps
+ * add the span's path to `traversal` (float metres as bits); occupancy maps apply their
+ * semantics' miss. Layers the mode lacks are placeholders and never touched. */
+RM_MODE_FN void rm_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
+                                  const RM_GLOBAL rm_span_record* spans,
+                                  const RM_GLOBAL rm_hit_group* groups,
+                                  const RM_GLOBAL rm_u32* hit_rays,
+                                  RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                  RM_ATOMIC_GLOBAL rm_u32* marks, RM_ATOMIC_GLOBAL rm_u32* scratch,
+                                  RM_ATOMIC_GLOBAL rm_u32* traversal, RM_ATOMIC_GLOBAL rm_u32* tsdf,
+                                  rm_integrate_params p, RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_span_record span = spans[id];
   rm_prepared_ray ray = rays[span.ray];
   rm_ray_walk_frame frame = rm_ray_walk_frame_make(ray);
@@ -110,40 +159,20 @@ RM_DEVICE_FN void rm_integrate_span(
   rm_u32 dropped = 0u;
   rm_i32 count = rm_span_walk_init(&walk, &walk_ray, span.t0, span.t1, span.box_lo, p.region_voxels,
                                    span.flags, frame.sample_is_start);
-  rm_i32 misses = count;
-  rm_i32 k;
-  rm_u32 miss_mark = rm_scan_mark_miss(p.sequence);
-  if (p.has_tsdf != 0u) {
-    /* TSDF maps: the span's voxels take the TSDF update and no miss. */
-    dropped = rm_tsdf_span(tsdf, base, walk, count, &walk_ray, frame.sample_is_start,
-                           ray.tsdf_end_m, p.tsdf);
-    misses = 0;
-  } else if (p.has_traversal != 0u) {
+  if (RM_MAP_MODE_HAS(RM_MODE_TSDF)) {
+    dropped += rm_tsdf_span(tsdf, base, walk, count, &walk_ray, frame.sample_is_start,
+                            ray.tsdf_end_m, p.tsdf);
+  }
+  if (RM_MAP_MODE_HAS(RM_MODE_TRAVERSAL)) {
     dropped += rm_traversal_add_span(traversal, base, walk, count, &walk_ray, span,
                                      frame.sample_is_start, p.region_voxels, p.resolution);
-    if (p.has_occupancy == 0u) {
-      misses = 0; /* decay rates only: the path is the whole update */
-    }
   }
-  for (k = 0; k < misses; ++k) {
-    rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
-    if (p.per_scan != 0u) {
-      /* The first miss of this scan wins the mark and is the only writer of the voxel. */
-      if (rm_load_u32(marks + i) < miss_mark &&
-          rm_atomic_max_u32(marks + i, miss_mark) < miss_mark) {
-        occupancy[i] = rm_as_u32(rm_occupancy_miss(rm_as_float(occupancy[i]), p.occupancy));
-      }
+  if (RM_MAP_MODE_HAS(RM_MODE_OCCUPANCY)) {
+    if (RM_MAP_MODE_HAS(RM_MODE_PER_SCAN)) {
+      rm_scan_miss_span(walk, count, base, occupancy, marks, p);
     } else {
-      rm_u32 word = rm_load_u32(occupancy + i);
-      if (rm_is_tag(word)) {
-        /* A voxel with samples in this batch: count the miss in its place among the hits. */
-        rm_u32 g = word & RM_TAG_GROUP_MASK;
-        rm_hit_group group = groups[g];
-        rm_u32 run = rm_runs_offset(group, g, p) + rm_hits_before(hit_rays, group, span.ray);
-        (void)rm_atomic_add_u32(scratch + run, 1u);
-      } else if (!rm_occupancy_miss_atomic(occupancy + i, word, p.occupancy)) {
-        dropped += 1u;
-      }
+      dropped +=
+          rm_ray_miss_span(walk, count, base, span.ray, groups, hit_rays, occupancy, scratch, p);
     }
   }
   if (count > 0) {
@@ -157,13 +186,13 @@ RM_DEVICE_FN void rm_integrate_span(
 /* Work-item `id`: applies hit group `id` to its voxel, the only work-item writing it during the
  * launch: folds the samples into the voxel mean in ray order; per ray, replays the voxel's hits
  * and the runs of misses between them from the saved value; per scan, applies the scan's hit. */
-RM_DEVICE_FN void rm_apply_hit_group(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
-                                     const RM_GLOBAL rm_hit_group* groups,
-                                     const RM_GLOBAL rm_u32* hit_rays,
-                                     RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                     RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* marks,
-                                     const RM_GLOBAL rm_u32* scratch, rm_integrate_params p,
-                                     RM_ATOMIC_GLOBAL rm_counter* counters) {
+RM_MODE_FN void rm_apply_hit_group(rm_u32 id, const RM_GLOBAL rm_prepared_ray* rays,
+                                   const RM_GLOBAL rm_hit_group* groups,
+                                   const RM_GLOBAL rm_u32* hit_rays,
+                                   RM_ATOMIC_GLOBAL rm_u32* occupancy,
+                                   RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* marks,
+                                   const RM_GLOBAL rm_u32* scratch, rm_integrate_params p,
+                                   RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_hit_group group = groups[id];
   rm_u32 i = group.slot * p.voxels_per_region + group.index;
   rm_u32 k;
@@ -176,9 +205,9 @@ RM_DEVICE_FN void rm_apply_hit_group(rm_u32 id, const RM_GLOBAL rm_prepared_ray*
     }
     means[i] = mean;
   }
-  if (p.has_occupancy == 0u) {
+  if (!RM_MAP_MODE_HAS(RM_MODE_OCCUPANCY)) {
     /* Decay rates only: the mean is the whole hit. */
-  } else if (p.per_scan != 0u) {
+  } else if (RM_MAP_MODE_HAS(RM_MODE_PER_SCAN)) {
     if (rm_scan_needs_hit(marks[i], p.sequence)) {
       occupancy[i] = rm_as_u32(rm_occupancy_hit(rm_as_float(occupancy[i]), p.occupancy));
       marks[i] = rm_scan_mark_hit(p.sequence);

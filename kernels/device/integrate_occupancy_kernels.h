@@ -6,7 +6,9 @@
  * rounds the work-item count up to whole work-groups, so each entry point checks its index.
  * Layers a map lacks (scan marks per ray, the traversal layer without decay rates, occupancy and
  * TSDF layers each in the other's maps) are bound to a small placeholder and never touched
- * (params.per_scan, params.has_traversal, params.has_tsdf). */
+ * (the map mode's bits). The span and hit kernels are made for one map mode (RM_MAP_MODE,
+ * kernels/common/map_mode.h: a -D of the OpenCL build, a template parameter in CUDA); tagging is
+ * the same in every mode. */
 #ifndef RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H
 
@@ -21,33 +23,30 @@ RM_KERNEL void rm_tag_hit_groups(const RM_GLOBAL rm_hit_group* groups,
   }
 }
 
-RM_KERNEL void rm_integrate_spans(const RM_GLOBAL rm_prepared_ray* rays,
-                                  const RM_GLOBAL rm_span_record* spans,
-                                  const RM_GLOBAL rm_hit_group* groups,
-                                  const RM_GLOBAL rm_u32* hit_rays,
-                                  RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                  RM_ATOMIC_GLOBAL rm_u32* marks, RM_ATOMIC_GLOBAL rm_u32* scratch,
-                                  RM_ATOMIC_GLOBAL rm_u32* traversal, RM_ATOMIC_GLOBAL rm_u32* tsdf,
-                                  rm_integrate_params params,
-                                  RM_ATOMIC_GLOBAL rm_counter* counters) {
+RM_MODE_KERNEL void rm_integrate_spans(
+    const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
+    const RM_GLOBAL rm_hit_group* groups, const RM_GLOBAL rm_u32* hit_rays,
+    RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_ATOMIC_GLOBAL rm_u32* marks,
+    RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal,
+    RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_integrate_params params,
+    RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
-    rm_integrate_span(id, rays, spans, groups, hit_rays, occupancy, marks, scratch, traversal, tsdf,
-                      params, counters);
+    RM_MODE_CALL(rm_integrate_span)
+    (id, rays, spans, groups, hit_rays, occupancy, marks, scratch, traversal, tsdf, params,
+     counters);
   }
 }
 
-RM_KERNEL void rm_apply_hit_groups(const RM_GLOBAL rm_prepared_ray* rays,
-                                   const RM_GLOBAL rm_hit_group* groups,
-                                   const RM_GLOBAL rm_u32* hit_rays,
-                                   RM_ATOMIC_GLOBAL rm_u32* occupancy,
-                                   RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* marks,
-                                   const RM_GLOBAL rm_u32* scratch, rm_integrate_params params,
-                                   RM_ATOMIC_GLOBAL rm_counter* counters) {
+RM_MODE_KERNEL void rm_apply_hit_groups(
+    const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_hit_group* groups,
+    const RM_GLOBAL rm_u32* hit_rays, RM_ATOMIC_GLOBAL rm_u32* occupancy,
+    RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* marks, const RM_GLOBAL rm_u32* scratch,
+    rm_integrate_params params, RM_ATOMIC_GLOBAL rm_counter* counters) {
   rm_u32 id = rm_global_id();
   if (id < params.item_count) {
-    rm_apply_hit_group(id, rays, groups, hit_rays, occupancy, means, marks, scratch, params,
-                       counters);
+    RM_MODE_CALL(rm_apply_hit_group)
+    (id, rays, groups, hit_rays, occupancy, means, marks, scratch, params, counters);
   }
 }
 

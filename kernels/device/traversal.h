@@ -2,8 +2,8 @@
 /* Decay-rate maps on a device: what a span adds to the traversal layer (metres of ray path per
  * voxel), by the rules of kernels/common/decay.h, exactly what the CPU's walkSpanAddingPath
  * (src/map/cpu_voxel_ops.hpp) adds for the same span. Shared by the occupancy and NDT span
- * kernels, which call rm_traversal_add_span only when rm_integrate_params.has_traversal is set (a
- * uniform branch, once a span: maps without the layer run the miss loop they ran before).
+ * kernels, whose modes with RM_MODE_TRAVERSAL (kernels/common/map_mode.h) call
+ * rm_traversal_add_span once a span; the kernels of the other modes do not contain it.
  *
  * Every ray adds its path, whatever the semantics: per-scan marks elect one occupancy writer per
  * voxel and scan, but path length is physical and every ray's counts. Adds of many work-items to

@@ -57,6 +57,9 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
 
   /// Allocates device memory and page-locks host memory; called once by the factory.
   Expected<void, Error> initialise() {
+    if (auto ok = checkMapModeHasKernels(); !ok) {
+      return ok;
+    }
     if (const cudaError_t s = cudaSetDevice(device_.index); s != cudaSuccess) {
       return Unexpected(cuda::cudaFailure("CUDA device " + std::to_string(device_.index), s));
     }
@@ -256,8 +259,9 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
         kernel == OccupancyKernel::kTagHitGroups     ? cuda::OccupancyKernelId::kTagHitGroups
         : kernel == OccupancyKernel::kIntegrateSpans ? cuda::OccupancyKernelId::kIntegrateSpans
                                                      : cuda::OccupancyKernelId::kApplyHitGroups;
-    return succeeded(cuda::launchOccupancyKernel(id, stream_.get(), block_threads_, buffers, p),
-                     "occupancy kernel launch");
+    return succeeded(
+        cuda::launchOccupancyKernel(id, mapMode(), stream_.get(), block_threads_, buffers, p),
+        "occupancy kernel launch");
   }
 
   bool launchNdt(NdtKernel kernel, unsigned set, const rm_integrate_params& p,
@@ -279,8 +283,9 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
     const cuda::NdtKernelId id = kernel == NdtKernel::kIntegrateSpans
                                      ? cuda::NdtKernelId::kIntegrateSpans
                                      : cuda::NdtKernelId::kApplyHitGroups;
-    return succeeded(cuda::launchNdtKernel(id, stream_.get(), block_threads_, buffers, p, ndt),
-                     "NDT kernel launch");
+    return succeeded(
+        cuda::launchNdtKernel(id, mapMode(), stream_.get(), block_threads_, buffers, p, ndt),
+        "NDT kernel launch");
   }
 
   bool endBatch(unsigned set) noexcept override {

@@ -56,8 +56,14 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
 
   /// Allocates device memory and builds kernels; called once by the factory.
   Expected<void, Error> initialise(const OpenClBackendOptions& options) {
+    if (auto ok = checkMapModeHasKernels(); !ok) {
+      return ok;
+    }
+    // The program is built for the map's mode (kernels/common/map_mode.h): kernels without the
+    // branches of other modes. Each mode's binary has its own entry in the program cache.
     const std::string options_text =
-        std::string("-cl-std=CL1.2") + (int64_counters_ ? " -DRM_HAVE_INT64_ATOMICS=1" : "") +
+        std::string("-cl-std=CL1.2 -DRM_MAP_MODE=") + std::to_string(mapMode()) + "u" +
+        (int64_counters_ ? " -DRM_HAVE_INT64_ATOMICS=1" : "") +
         (options.extra_build_options.empty() ? "" : " " + options.extra_build_options);
     // A map is integrated by one program: the occupancy kernels, or the NDT ones for NDT maps.
     const bool ndt = isNdt(map().mode());

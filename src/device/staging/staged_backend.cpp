@@ -3,6 +3,9 @@
 #include "src/device/staging/staged_backend.hpp"
 
 #include <chrono>
+#include <string>
+
+#include "kernels/common/map_mode.h"
 
 namespace raymap::gpu {
 namespace {
@@ -22,6 +25,13 @@ double secondsSince(Clock::time_point start) noexcept {
 }
 
 }  // namespace
+
+std::uint32_t mapModeBits(const VoxelMap& map) noexcept {
+  return rm_map_mode_bits(map.occupancyLayer() >= 0 ? 1u : 0u,
+                          map.semantics() == Semantics::kPerScan ? 1u : 0u,
+                          map.traversalLayer() >= 0 ? 1u : 0u, map.tsdfLayer() >= 0 ? 1u : 0u,
+                          isNdt(map.mode()) ? 1u : 0u);
+}
 
 StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_counters,
                              const DeviceBackendOptions& options,
@@ -47,6 +57,7 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
   if (ndt_) {
     ndt_params_ = map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
   }
+  map_mode_ = mapModeBits(map);
   stats_.cache_slots = layerRegions();
   for (StagingSet& set : sets_) {
     planner_.reserve(set.arrays);
@@ -73,6 +84,15 @@ bool StagedBackend::beforeEviction(std::span<const std::uint32_t> host_slots) no
     return syncSharedMemory();  // the device worked in the pool itself: make its writes visible
   }
   return planner_.writeBack(host_slots).has_value();
+}
+
+Expected<void, Error> StagedBackend::checkMapModeHasKernels() const {
+  if (rm_map_mode_has_kernels(map_mode_) != 0) {
+    return {};
+  }
+  return fail(ErrorCode::kUnsupported,
+              "device backends have no kernels for this map's mode (mode bits " +
+                  std::to_string(map_mode_) + ", kernels/common/map_mode.h): use the CPU backend");
 }
 
 std::uint32_t StagedBackend::layerRegions() const noexcept {

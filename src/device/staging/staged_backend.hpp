@@ -37,6 +37,10 @@ enum class NdtKernel : std::uint8_t {
   kApplyHitGroups,  ///< one work-item per voxel with samples: its hits folded in ray order
 };
 
+/// @brief The mode bits of `map` (kernels/common/map_mode.h): which device kernels integrate it.
+/// rm_map_mode_has_kernels() of the result is false for a map no device program can run.
+std::uint32_t mapModeBits(const VoxelMap& map) noexcept;
+
 /// @brief A device backend over an API-specific queue of copies and kernels.
 ///
 /// integrate() plans a batch into one of two staging sets (waiting first for the batch that set
@@ -102,6 +106,10 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   std::size_t counterBytes() const noexcept;
   /// 32-bit words of a set's scratch buffer (one for NDT maps, which do not use it).
   std::size_t scratchWords() const noexcept;
+  /// The map's mode bits (kernels/common/map_mode.h): which span and hit kernels run it.
+  std::uint32_t mapMode() const noexcept { return map_mode_; }
+  /// Fails with kUnsupported, naming the map, when no device program has kernels for its mode.
+  Expected<void, Error> checkMapModeHasKernels() const;
 
   // ---- what the API layer supplies; every call goes to the backend's one in-order queue ----
 
@@ -182,6 +190,7 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   rm_integrate_params params_{};
   bool ndt_;                    // the map is NDT-OM or NDT-TM: the NDT kernels, per-ray batches
   rm_ndt_params ndt_params_{};  // NDT maps: the rules' parameters in voxel units
+  std::uint32_t map_mode_ = 0;  // rm_map_mode_bits of the map (fixed for the backend's life)
   BackendStats stats_;
 };
 

@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include "kernels/common/map_mode.h"
 #include "src/device/opencl/opencl_backend.hpp"
+#include "src/device/staging/staged_backend.hpp"
 #include "src/io/map_file.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -78,6 +80,53 @@ TEST(OpenClBackend, TsdfWithoutSixtyFourBitAtomicsAgreesWithTheCpu) {
   EXPECT_GT(cmp.updated, 5000u);
   EXPECT_GE(double(cmp.within), 0.999 * double(cmp.updated));
   EXPECT_EQ(narrow->stats().updates_dropped, 0u);
+}
+
+// Each device program is built (OpenCL) or instantiated (CUDA) for the map modes of
+// kernels/common/map_mode.h only. Every map configuration the library accepts must have one:
+// otherwise a valid map would be refused by the devices at start-up.
+TEST(MapModeKernels, EveryMapTheLibraryAcceptsHasDeviceKernels) {
+  int accepted = 0;
+  std::set<std::uint32_t> modes;
+  for (const MapMode mode :
+       {MapMode::kOccupancy, MapMode::kNdtOm, MapMode::kNdtTm, MapMode::kTsdf}) {
+    for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+      for (const int layers : {0, 1, 2, 3, 4, 5, 6, 7}) {
+        MapConfig config = test::smallConfig(semantics);
+        config.mode = mode;
+        config.voxel_mean = (layers & 1) != 0;
+        config.decay_rate = (layers & 2) != 0;
+        config.occupancy_layer = (layers & 4) != 0;
+        config.memory_budget_bytes = std::uint64_t{64} << 20;
+        auto map = VoxelMap::create(config);
+        if (!map) {
+          continue;  // a configuration validate() refuses
+        }
+        ++accepted;
+        const std::uint32_t bits = gpu::mapModeBits(*map);
+        modes.insert(bits);
+        EXPECT_TRUE(rm_map_mode_has_kernels(bits))
+            << mapModeName(config) << ", semantics " << static_cast<int>(semantics) << ", layers "
+            << layers << ": mode bits " << bits;
+      }
+    }
+  }
+  // Occupancy per ray and per scan with and without decay rates, decay rates alone, TSDF, NDT
+  // with and without decay rates: the eight modes the programs have kernels for.
+  EXPECT_GE(accepted, 8);
+  EXPECT_EQ(modes.size(), 8u);
+}
+
+TEST(MapModeKernels, ModeBitsFollowTheLayers) {
+  EXPECT_EQ(rm_map_mode_bits(1u, 0u, 0u, 0u, 0u), RM_MODE_OCCUPANCY);
+  EXPECT_EQ(rm_map_mode_bits(1u, 1u, 1u, 0u, 0u),
+            RM_MODE_OCCUPANCY | RM_MODE_PER_SCAN | RM_MODE_TRAVERSAL);
+  EXPECT_EQ(rm_map_mode_bits(0u, 0u, 0u, 1u, 0u), RM_MODE_TSDF);
+  EXPECT_EQ(rm_map_mode_bits(1u, 0u, 1u, 0u, 1u),
+            RM_MODE_NDT | RM_MODE_OCCUPANCY | RM_MODE_TRAVERSAL);
+  EXPECT_FALSE(rm_map_mode_has_kernels(RM_MODE_NDT | RM_MODE_PER_SCAN | RM_MODE_OCCUPANCY));
+  EXPECT_FALSE(rm_map_mode_has_kernels(RM_MODE_TSDF | RM_MODE_OCCUPANCY));
+  EXPECT_FALSE(rm_map_mode_has_kernels(0u));
 }
 
 TEST(OpenClBackend, KernelBuildFailureIsAClearError) {
