@@ -41,7 +41,7 @@ LayerSchema MapConfig::schema() const {
   if (voxel_mean) {
     (void)schema.add(LayerKind::kVoxelMean);
   }
-  if (semantics == Semantics::kPerScan) {
+  if (semantics == Semantics::kPerScan && device_scan_marks) {
     (void)schema.add(LayerKind::kScanMark);
   }
   if (isNdt(mode)) {

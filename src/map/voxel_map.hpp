@@ -66,6 +66,13 @@ struct MapConfig {
   /// Rolling policy: window size in regions per axis (the pool holds exactly this many).
   Vec3i window_regions{16, 16, 4};
   bool prefault = false;  ///< touch all pool pages at creation (real-time users)
+  /// Per-scan maps: keep the 32-bit scan-mark layer (4 bytes a voxel, never saved) with which
+  /// the device backends elect one writer per voxel and scan (kernels/common/scan_mark.h). The
+  /// CPU backend keeps its once-per-scan rule in a bit per voxel outside the map (ScanBits) and
+  /// never reads the layer: a map only the CPU integrates can leave it out and hold a third more
+  /// regions in the same memory budget (the tools and raymapd do so when the backend is the
+  /// CPU). A device backend refuses a per-scan map without it, with an error that says so.
+  bool device_scan_marks = true;
 
   Expected<void, Error> validate() const;
   /// @brief This configuration as a TSDF-only map: mode kTsdf, no occupancy, mean or traversal.

@@ -130,6 +130,7 @@ Result<Mapper> Mapper::create(const MapperConfig& config) {
   if (!map_config) {
     return Unexpected(map_config.error());
   }
+  map_config->device_scan_marks = config.backend.name != "cpu";  // the CPU keeps bits
   auto map = VoxelMap::create(*map_config);
   if (!map) {
     return Unexpected(map.error());

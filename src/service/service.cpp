@@ -178,7 +178,11 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     // Read by Cyclone when the participant's domain is created below.
     ::setenv("CYCLONEDDS_URI", config.dds.cyclonedds_uri.c_str(), 1);
   }
-  auto map = VoxelMap::create(config.map);
+  MapConfig map_config = config.map;
+  // The CPU keeps its once-per-scan bits outside the map; a device (or a fallback from one to
+  // the CPU) needs the scan-mark layer.
+  map_config.device_scan_marks = config.backend.name != "cpu";
+  auto map = VoxelMap::create(map_config);
   if (!map) {
     return fail(map.error().code, file + ": map: " + map.error().message);
   }

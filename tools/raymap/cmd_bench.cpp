@@ -114,6 +114,7 @@ int runBench(const BenchFlags& f) {
     for (const std::string& threads_text : thread_runs) {
       PopulateOptions options = *base;
       options.map.semantics = semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
+      options.map.device_scan_marks = options.backend.name != "cpu";  // the CPU keeps bits
       try {
         options.backend.threads = static_cast<unsigned>(std::stoul(threads_text));
       } catch (const std::exception&) {

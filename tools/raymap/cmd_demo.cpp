@@ -206,6 +206,7 @@ int demoInto(const DemoFlags& f, StagedOutputs& staged) {
   options.backend.threads = f.threads;
   options.filter.max_range_m = 30.0;
   options.progress = !f.quiet;
+  options.map.device_scan_marks = options.backend.name != "cpu";  // the CPU keeps bits
   auto map = VoxelMap::create(options.map);
   if (!map) {
     printError(command, map.error().message);

@@ -195,6 +195,7 @@ int runPopulate(const PopulateFlags& f) {
     return kExitUsage;
   }
   options->map.tiers = *tiers;
+  options->map.device_scan_marks = options->backend.name != "cpu";  // the CPU keeps bits
   const std::string pool_note = limitPoolToMemory(options->map);
   if (!pool_note.empty() && !f.quiet) {
     std::fprintf(stderr, "raymap populate: note: %s\n", pool_note.c_str());

@@ -57,7 +57,7 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
 
   /// Allocates device memory and page-locks host memory; called once by the factory.
   Expected<void, Error> initialise() {
-    if (auto ok = checkMapModeHasKernels(); !ok) {
+    if (auto ok = checkMapIsSupported(); !ok) {
       return ok;
     }
     if (const cudaError_t s = cudaSetDevice(device_.index); s != cudaSuccess) {

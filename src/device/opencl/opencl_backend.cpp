@@ -56,7 +56,7 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
 
   /// Allocates device memory and builds kernels; called once by the factory.
   Expected<void, Error> initialise(const OpenClBackendOptions& options) {
-    if (auto ok = checkMapModeHasKernels(); !ok) {
+    if (auto ok = checkMapIsSupported(); !ok) {
       return ok;
     }
     // The program is built for the map's mode (kernels/common/map_mode.h): kernels without the

@@ -86,7 +86,12 @@ bool StagedBackend::beforeEviction(std::span<const std::uint32_t> host_slots) no
   return planner_.writeBack(host_slots).has_value();
 }
 
-Expected<void, Error> StagedBackend::checkMapModeHasKernels() const {
+Expected<void, Error> StagedBackend::checkMapIsSupported() const {
+  if (params_.per_scan != 0u && map_->scanMarkLayer() < 0) {
+    return fail(ErrorCode::kUnsupported,
+                "per-scan map without scan marks (MapConfig::device_scan_marks false, for the CPU "
+                "backend only): device backends need them; create the map with them");
+  }
   if (rm_map_mode_has_kernels(map_mode_) != 0) {
     return {};
   }

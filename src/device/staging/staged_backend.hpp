@@ -108,8 +108,9 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   std::size_t scratchWords() const noexcept;
   /// The map's mode bits (kernels/common/map_mode.h): which span and hit kernels run it.
   std::uint32_t mapMode() const noexcept { return map_mode_; }
-  /// Fails with kUnsupported, naming the map, when no device program has kernels for its mode.
-  Expected<void, Error> checkMapModeHasKernels() const;
+  /// Fails with kUnsupported, saying why, when no device program has kernels for the map's mode
+  /// or a per-scan map lacks its scan-mark layer (MapConfig::device_scan_marks).
+  Expected<void, Error> checkMapIsSupported() const;
 
   // ---- what the API layer supplies; every call goes to the backend's one in-order queue ----
 

@@ -17,6 +17,34 @@ TEST(VoxelMapConfig, SchemaFollowsTheOptions) {
   config.voxel_mean = false;
   EXPECT_TRUE(config.schema().has(LayerKind::kScanMark));
   EXPECT_FALSE(config.schema().has(LayerKind::kVoxelMean));
+  config.device_scan_marks = false;  // a map for the CPU only
+  EXPECT_FALSE(config.schema().has(LayerKind::kScanMark));
+}
+
+// A per-scan map the CPU integrates needs no scan-mark layer (the CPU's once-per-scan rule is a
+// bit per voxel outside the map): without it the same budget holds more regions, and the map is
+// the same, bit for bit, on one thread and on three.
+TEST(VoxelMapConfig, PerScanMapsForTheCpuNeedNoScanMarks) {
+  MapConfig with_marks = test::smallConfig(Semantics::kPerScan);
+  with_marks.memory_budget_bytes = std::uint64_t{384} << 20;  // 8^3-voxel regions: 49,152 or 65,536
+  MapConfig without = with_marks;
+  without.device_scan_marks = false;
+  // Occupancy 4 + mean 8 bytes a voxel, against 16 with the marks.
+  EXPECT_EQ(without.capacityRegions() * 3, with_marks.capacityRegions() * 4);
+  const std::vector<Ray> rays = test::randomScans(77, 4, 2000);
+  for (const unsigned threads : {1u, 3u}) {
+    VoxelMap a = test::makeMap(with_marks);
+    VoxelMap b = test::makeMap(without);
+    ASSERT_GE(a.scanMarkLayer(), 0);
+    ASSERT_LT(b.scanMarkLayer(), 0);
+    auto cpu_a = test::cpuBackend(a, threads);
+    auto cpu_b = test::cpuBackend(b, threads);
+    test::integrate(a, *cpu_a, rays);
+    test::integrate(b, *cpu_b, rays);
+    const test::MapComparison cmp = test::compareMaps(a, b);
+    EXPECT_GT(cmp.compared, 10000u);
+    EXPECT_EQ(cmp.exact_value, cmp.compared) << threads << " threads";
+  }
 }
 
 TEST(VoxelMapConfig, BudgetSetsTheCapacity) {

@@ -129,6 +129,22 @@ TEST(MapModeKernels, ModeBitsFollowTheLayers) {
   EXPECT_FALSE(rm_map_mode_has_kernels(0u));
 }
 
+TEST(OpenClBackend, PerScanMapWithoutScanMarksIsRefusedWithAClearError) {
+  if (!opencl::listDevices()) {
+    GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
+  }
+  MapConfig config = test::smallConfig(Semantics::kPerScan);
+  config.device_scan_marks = false;  // a map made for the CPU backend
+  VoxelMap map = test::makeMap(config);
+  OpenClBackendOptions options;
+  options.program_cache.enabled = false;
+  auto backend = createOpenClBackend(map, options);
+  ASSERT_FALSE(backend);
+  EXPECT_EQ(backend.error().code, ErrorCode::kUnsupported);
+  EXPECT_NE(backend.error().message.find("device_scan_marks"), std::string::npos)
+      << backend.error().message;
+}
+
 TEST(OpenClBackend, KernelBuildFailureIsAClearError) {
   if (!opencl::listDevices()) {
     GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
