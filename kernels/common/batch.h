@@ -32,7 +32,9 @@ typedef struct rm_hit_group {
   rm_u32 count; /* number of samples */
 } rm_hit_group;
 
-/* Launch parameters of the occupancy kernels. */
+/* Launch parameters of the occupancy kernels. per_scan, has_traversal, has_tsdf and
+ * has_occupancy describe the map for the host, which picks the kernels made for its mode from them
+ * (map_mode.h: rm_map_mode_bits); the kernels themselves test RM_MAP_MODE, not these. */
 typedef struct rm_integrate_params {
   rm_occupancy_params occupancy;
   rm_i32 region_voxels;     /* voxels per region edge */
