@@ -80,27 +80,25 @@ void ParallelIntegrator::WorkTable::clear() noexcept {
 
 ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_capacity,
                                        std::size_t expected_batch_rays)
-    : pool_(workers) {
+    : pool_(workers), slots_(store_capacity) {
   const unsigned n = pool_.size();
   scratch_.reserve(n);
   for (unsigned w = 0; w < n; ++w) {
     WorkerScratch& scratch = scratch_.emplace_back(store_capacity);
     scratch.spans.reserve(expected_batch_rays * 6u / n + 1024u);
-    scratch.steps_for.resize(n);
-    scratch.hits_for.resize(n);
-    for (unsigned owner = 0; owner < n; ++owner) {
-      // A ray range's steps (its spans and sample hits) dealt evenly over the owners.
-      scratch.steps_for[owner].reserve(expected_batch_rays * 7u / (n * n) + 256u);
-      scratch.hits_for[owner].reserve(expected_batch_rays / (n * n) + 256u);
-    }
   }
   rays_.resize(expected_batch_rays);
-  owner_.assign(store_capacity, kNoOwner);
+  in_batch_.assign(store_capacity, 0);
   created_.assign(store_capacity, 0);
   slot_work_.assign(store_capacity, 0.0);
   touched_.reserve(store_capacity);
   order_.reserve(store_capacity);
-  loads_.assign(n, 0.0);
+  regions_.reserve(store_capacity);
+  step_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
+  hit_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
+  // A batch's steps: its spans (up to 6 per ray) and sample hits.
+  steps_.resize(expected_batch_rays * 7u + 1024u);
+  hits_.resize(expected_batch_rays + 1024u);
 }
 
 std::pair<std::size_t, std::size_t> ParallelIntegrator::rangeOf(unsigned worker,
@@ -109,9 +107,14 @@ std::pair<std::size_t, std::size_t> ParallelIntegrator::rangeOf(unsigned worker,
   return {count * worker / n, count * (worker + 1u) / n};
 }
 
-void ParallelIntegrator::releaseOwners() noexcept {
+void ParallelIntegrator::releaseSlots() noexcept {
+  const unsigned workers = pool_.size();
   for (std::uint32_t slot : touched_) {
-    owner_[slot] = kNoOwner;
+    in_batch_[slot] = 0;
+    for (unsigned w = 0; w < workers; ++w) {
+      stepCursor(w, slot) = 0;
+      hitCursor(w, slot) = 0;
+    }
   }
   touched_.clear();
 }
@@ -169,7 +172,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     }
   };
   pool_.run(survey);
-  steps_.survey += secondsSince(step_start);
+  steps_seconds_.survey += secondsSince(step_start);
   step_start = Clock::now();
 
   // 2. Create the batch's regions (serial: the store is not thread-safe for inserts).
@@ -194,14 +197,14 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         }
         return;  // outside a rolling window: its spans are skipped and counted in step 4
       }
-      if (owner_[*slot] == kNoOwner) {
-        owner_[*slot] = 0;
+      if (in_batch_[*slot] == 0) {
+        in_batch_[*slot] = 1;
         slot_work_[*slot] = 0.0;
         touched_.push_back(*slot);
       }
       created_[*slot] = created ? 1 : created_[*slot];
-      // Its owner clears a new region: writing it and faulting its pages in costs about a
-      // quarter of its voxels' worth of walk steps.
+      // A new region is cleared by the worker that applies it: writing it and faulting its
+      // pages in costs about a quarter of its voxels' worth of walk steps.
       const double clear_work =
           created ? 0.25 * static_cast<double>(map.store().voxelsPerRegion()) : 0.0;
       slot_work_[*slot] += work + clear_work;
@@ -218,11 +221,11 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         created_[slot] = 0;
       }
     }
-    releaseOwners();
+    releaseSlots();
     return status;
   }
 
-  // 3. Largest region first, to the least-loaded worker.
+  // 3. Largest region first: the apply step hands them out in this order.
   order_.clear();
   for (std::uint32_t slot : touched_) {
     order_.emplace_back(slot_work_[slot], slot);
@@ -230,91 +233,141 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   std::sort(order_.begin(), order_.end(), [](const auto& a, const auto& b) {
     return a.first > b.first || (a.first == b.first && a.second < b.second);
   });
-  std::fill(loads_.begin(), loads_.end(), 0.0);
-  for (const auto& [work, slot] : order_) {
-    const auto lightest =
-        static_cast<std::size_t>(std::min_element(loads_.begin(), loads_.end()) - loads_.begin());
-    owner_[slot] = static_cast<std::uint8_t>(lightest);
-    loads_[lightest] += work;
-  }
 
-  steps_.serial += secondsSince(step_start);
+  steps_seconds_.serial += secondsSince(step_start);
   step_start = Clock::now();
 
-  // 4. Resolve (parallel): slots into the records and the records dealt to their owners, each
-  //    worker its own survey's ray range, and first touch of the new regions by their owners.
+  // 4. Resolve: (a) slots into the records, steps and hits counted per region by each worker
+  //    for its survey's ray range; (b) the counts become places in the flat lists; (c) each
+  //    worker writes its steps and hits there.
   const bool hit_lists = ctx.per_scan || ctx.ndt;
-  auto resolve = [&](unsigned w) {
+  auto count = [&](unsigned w) {
     WorkerScratch& scratch = scratch_[w];
     RegionSlotCache& cache = caches[w];
-    RegionStore& store = map.store();
-    for (std::uint32_t slot : touched_) {
-      if (owner_[slot] == w && created_[slot] != 0) {
-        store.clearRegion(slot);
-        created_[slot] = 0;
-      }
-    }
-    for (unsigned owner = 0; owner < workers; ++owner) {
-      scratch.steps_for[owner].clear();
-      scratch.hits_for[owner].clear();
-    }
+    const RegionStore& store = map.store();
     std::uint64_t outside_window = 0;  // counted in a local, written to stats[w] once
     const auto [begin, end] = rangeOf(w, rays.size());
     for (std::size_t r = begin; r < end; ++r) {
       RayRecord& record = rays_[r];
-      const auto ray = static_cast<std::uint32_t>(r);
       for (std::uint32_t s = 0; s < record.span_count; ++s) {
-        const SpanRecord& rec = scratch.spans[record.first_span + s];
-        const std::uint32_t slot = findSlot(store, cache, rec.region_key);
-        // Every region of the batch has an owner; a slot without one would be a region the
+        SpanRecord& rec = scratch.spans[record.first_span + s];
+        const std::uint32_t slot = findSlot(store, cache, rec.region);
+        // Every region of the batch was created in step 2; a slot outside it is a region the
         // survey left out (outside the window), which the store does not keep: skipped the same.
-        if (slot == RegionStore::kNoSlot || owner_[slot] == kNoOwner) {
+        if (slot == RegionStore::kNoSlot || in_batch_[slot] == 0) {
+          rec.region = RegionStore::kNoSlot;
           ++outside_window;
           continue;
         }
-        scratch.steps_for[owner_[slot]].push_back(
-            OwnedStep{ray, slot, rec.flags, rec.t0, rec.t1, rec.box_lo});
+        rec.region = slot;
+        ++stepCursor(w, slot);
       }
-      record.sample_slot = findSlot(store, cache, record.sample_key);
-      if ((rays[r].flags & RM_RAY_END_HIT) == 0u || record.sample_slot == RegionStore::kNoSlot ||
-          owner_[record.sample_slot] == kNoOwner) {
-        continue;
+      std::uint32_t sample_slot = findSlot(store, cache, record.sample_key);
+      if ((rays[r].flags & RM_RAY_END_HIT) == 0u || sample_slot == RegionStore::kNoSlot ||
+          in_batch_[sample_slot] == 0) {
+        sample_slot = RegionStore::kNoSlot;  // no hit to apply
+      } else {
+        stepCursor(w, sample_slot) += ctx.ndt ? 0u : 1u;
+        hitCursor(w, sample_slot) += hit_lists ? 1u : 0u;
       }
-      const std::uint8_t owner = owner_[record.sample_slot];
-      if (!ctx.ndt) {
-        scratch.steps_for[owner].push_back(
-            OwnedStep{ray, record.sample_slot, kHit, 0.0f, 0.0f, rm_vec3i_make(0, 0, 0)});
-      }
-      if (hit_lists) {
-        scratch.hits_for[owner].push_back(ray);
-      }
+      record.sample_slot = sample_slot;
     }
     stats[w].spans_outside_window += outside_window;
   };
-  pool_.run(resolve);
-  steps_.resolve += secondsSince(step_start);
+  pool_.run(count);
+
+  regions_.clear();
+  std::uint32_t steps_total = 0;
+  std::uint32_t hits_total = 0;
+  for (const auto& entry : order_) {
+    const std::uint32_t slot = entry.second;
+    RegionWork& region = regions_.emplace_back();
+    region.slot = slot;
+    region.steps_begin = steps_total;
+    region.hits_begin = hits_total;
+    for (unsigned w = 0; w < workers; ++w) {
+      std::uint32_t& steps = stepCursor(w, slot);
+      std::uint32_t& hits = hitCursor(w, slot);
+      const std::uint32_t step_count = steps;
+      const std::uint32_t hit_count = hits;
+      steps = steps_total;
+      hits = hits_total;
+      steps_total += step_count;
+      hits_total += hit_count;
+    }
+    region.steps_end = steps_total;
+    region.hits_end = hits_total;
+  }
+  if (steps_.size() < steps_total) {
+    steps_.resize(steps_total);  // a batch larger than expected: grows once
+  }
+  if (hits_.size() < hits_total) {
+    hits_.resize(hits_total);
+  }
+
+  auto place = [&](unsigned w) {
+    const WorkerScratch& scratch = scratch_[w];
+    const auto [begin, end] = rangeOf(w, rays.size());
+    for (std::size_t r = begin; r < end; ++r) {
+      const RayRecord& record = rays_[r];
+      const auto ray = static_cast<std::uint32_t>(r);
+      for (std::uint32_t s = 0; s < record.span_count; ++s) {
+        const SpanRecord& rec = scratch.spans[record.first_span + s];
+        if (rec.region == RegionStore::kNoSlot) {
+          continue;
+        }
+        const auto slot = static_cast<std::uint32_t>(rec.region);
+        steps_[stepCursor(w, slot)++] = RegionStep{ray, rec.flags, rec.t0, rec.t1, rec.box_lo};
+      }
+      const std::uint32_t sample_slot = record.sample_slot;
+      if (sample_slot == RegionStore::kNoSlot) {
+        continue;
+      }
+      if (!ctx.ndt) {
+        steps_[stepCursor(w, sample_slot)++] =
+            RegionStep{ray, kHit, 0.0f, 0.0f, rm_vec3i_make(0, 0, 0)};
+      }
+      if (hit_lists) {
+        hits_[hitCursor(w, sample_slot)++] = ray;
+      }
+    }
+  };
+  pool_.run(place);
+  steps_seconds_.resolve += secondsSince(step_start);
   step_start = Clock::now();
 
-  // 5. Apply (parallel): every worker walks the steps dealt to it, range by range (ray order).
+  // 5. Apply (parallel): regions taken one at a time, largest first; each region's steps in ray
+  //    order.
+  next_region_.store(0, std::memory_order_relaxed);
   auto apply = [&](unsigned w) {
     const Clock::time_point apply_start = Clock::now();
     std::uint64_t voxels_visited = 0;  // summed here: a counter written per span beside another
                                        // worker's would share its cache line
-    if (ctx.per_scan) {
-      for (const WorkerScratch& from : scratch_) {
-        for (std::uint32_t r : from.hits_for[w]) {
-          applyScanHit(regionLayers(ctx, rays_[r].sample_slot), rays_[r].sample_index, ctx.params);
+    const std::int32_t n = ctx.region_voxels;
+    for (;;) {
+      // Relaxed: the lists were written before this step started (the pool's hand-off orders
+      // them); the counter only has to give each region to one worker.
+      const std::size_t next = next_region_.fetch_add(1, std::memory_order_relaxed);
+      if (next >= regions_.size()) {
+        break;
+      }
+      const RegionWork& region = regions_[next];
+      if (created_[region.slot] != 0) {
+        map.store().clearRegion(region.slot);  // first touch by the worker that writes it
+        created_[region.slot] = 0;
+      }
+      const RegionLayers layers = regionLayers(ctx, region.slot);
+      if (ctx.per_scan) {
+        for (std::uint32_t h = region.hits_begin; h < region.hits_end; ++h) {
+          applyScanHit(layers, rays_[hits_[h]].sample_index, ctx.params);
         }
       }
-    }
-    const std::int32_t n = ctx.region_voxels;
-    for (const WorkerScratch& from : scratch_) {
-      for (const OwnedStep& step : from.steps_for[w]) {
+      for (std::uint32_t k = region.steps_begin; k < region.steps_end; ++k) {
+        const RegionStep& step = steps_[k];
         const PreparedRay& ray = rays[step.ray];
         const RayRecord& record = rays_[step.ray];
         if (step.flags == kHit) {
-          applySampleHit(ray, regionLayers(ctx, step.slot), record.sample_index, ctx.per_scan,
-                         ctx.params);
+          applySampleHit(ray, layers, record.sample_index, ctx.per_scan, ctx.params);
           ++voxels_visited;
           continue;
         }
@@ -327,15 +380,16 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         span.first = (step.flags & kFirst) != 0u;
         span.last = (step.flags & kLast) != 0u;
         voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, ray.flags,
-                                   ray.tsdf_end_m, span, regionLayers(ctx, step.slot));
+                                   ray.tsdf_end_m, span, layers);
       }
-    }
-    if (ctx.ndt) {
-      // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
-      for (const WorkerScratch& from : scratch_) {
-        for (std::uint32_t r : from.hits_for[w]) {
-          applyNdtHit(rays[r], regionLayers(ctx, rays_[r].sample_slot), rays_[r].sample_index,
-                      ctx.params, ctx.ndt_params);
+      if (ctx.per_scan) {
+        applyScanMisses(layers, ctx.scan_bits->voxelWords(), ctx.params);  // the scan's misses
+      }
+      if (ctx.ndt) {
+        // NDT: the batch's hits after all its misses, in ray order (kernels/common/ndt.h).
+        for (std::uint32_t h = region.hits_begin; h < region.hits_end; ++h) {
+          const std::uint32_t r = hits_[h];
+          applyNdtHit(rays[r], layers, rays_[r].sample_index, ctx.params, ctx.ndt_params);
           ++voxels_visited;
         }
       }
@@ -344,11 +398,11 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     scratch_[w].apply_seconds = secondsSince(apply_start);
   };
   pool_.run(apply);
-  steps_.apply += secondsSince(step_start);
+  steps_seconds_.apply += secondsSince(step_start);
   for (const WorkerScratch& scratch : scratch_) {
-    steps_.apply_busy += scratch.apply_seconds;
+    steps_seconds_.apply_busy += scratch.apply_seconds;
   }
-  releaseOwners();
+  releaseSlots();
   return {};
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <utility>
@@ -24,16 +25,24 @@ namespace raymap::detail {
 ///     sums the estimated work (voxel steps) per region in a private table.
 ///  2. Create (serial): the regions of the batch are inserted into the store, uncleared; if the
 ///     store is full the batch fails here, before any voxel changes.
-///  3. Assign (serial): regions sorted by work, each to the least-loaded worker.
-///  4. Resolve (parallel): each worker clears the new regions it owns (their first touch), looks
-///     up the slots of the spans it recorded and deals them, in ray order, into one list per
-///     owner (the sample hits with them).
-///  5. Apply (parallel): each worker walks the lists dealt to it, survey range by survey range,
-///     so in ray order; it reads only its own share of the batch.
+///  3. Order (serial): regions sorted by estimated work, largest first.
+///  4. Resolve (parallel, then a short serial prefix sum, then parallel): each worker looks up the
+///     slots of the spans it recorded and counts them per region; the counts become each
+///     worker's place in one flat list of steps grouped by region (the regions in step 3's order,
+///     within a region survey range by survey range, so in ray order); each worker then writes
+///     its steps and sample hits there.
+///  5. Apply (parallel): workers take the regions one at a time from a shared counter, largest
+///     first, and apply each region's steps in ray order, clearing a new region first (its first
+///     touch is by the worker that writes it).
 /// Each voxel is written by one worker, in ray order, so the map is bit-identical to the
-/// single-threaded one and needs no atomics. What one worker writes during a step lives in its
-/// own cache lines (WorkerScratch is aligned to them, counters are summed locally): two workers
-/// writing to one line cost the second core most of its worth (measured, docs/benchmarks.md).
+/// single-threaded one and needs no atomics on voxels. Taking regions as workers come free keeps
+/// every worker busy to the end of the batch, whatever the error of the work estimate (a static
+/// assignment by estimated work left one worker idle 10-16 % of the apply step; measured,
+/// docs/benchmarks.md), and one region's steps are applied together while its voxels are in
+/// cache. What one worker writes during the survey and resolve steps lives in its own cache lines
+/// (WorkerScratch is aligned to them, per-region counts are rows of their own, counters are
+/// summed locally): two workers writing to one line cost the second core most of its worth
+/// (measured, docs/benchmarks.md).
 ///
 /// Scratch is sized at construction for `expected_batch_rays` rays of up to 6 regions each; a
 /// larger batch grows it once (an allocation outside the steady state). Not thread-safe:
@@ -51,12 +60,12 @@ class ParallelIntegrator {
   /// statistics: what limits the speed-up, measured where it runs).
   struct StepSeconds {
     double survey = 0;
-    double serial = 0;  // create and assign
+    double serial = 0;  // create and order
     double resolve = 0;
     double apply = 0;
     double apply_busy = 0;  // every worker's apply time, summed
   };
-  const StepSeconds& stepSeconds() const noexcept { return steps_; }
+  const StepSeconds& stepSeconds() const noexcept { return steps_seconds_; }
 
   /// @param caches one region cache per worker (reset for this batch)
   /// @param stats one counter set per worker
@@ -66,13 +75,13 @@ class ParallelIntegrator {
                                            std::span<WorkerStats> stats) noexcept;
 
  private:
-  static constexpr std::uint8_t kNoOwner = 0xFF;
-
   /// One region piece of a ray, recorded by the survey (its slot is looked up in the resolve
   /// step, once the batch's regions exist).
   struct SpanRecord {
-    std::uint64_t region_key;  // RegionStore::packCoord
-    std::uint32_t flags;       // kFirst | kLast
+    /// RegionStore::packCoord in the survey; the region's slot from the resolve step on
+    /// (RegionStore::kNoSlot: outside the batch, skipped)
+    std::uint64_t region;
+    std::uint32_t flags;  // kFirst | kLast
     float t0;
     float t1;
     rm_vec3i box_lo;  // the region's voxels relative to the walk's start voxel
@@ -123,11 +132,10 @@ class ParallelIntegrator {
     std::size_t limit_ = 0;
   };
 
-  /// One step of the apply phase in the list of the worker owning its region: a span of a ray
+  /// One step of the apply phase in its region's part of the step list: a span of a ray
   /// (kFirst | kLast) or the ray's sample hit (kHit).
-  struct OwnedStep {
+  struct RegionStep {
     std::uint32_t ray;
-    std::uint32_t slot;
     std::uint32_t flags;
     float t0;
     float t1;
@@ -141,28 +149,48 @@ class ParallelIntegrator {
     explicit WorkerScratch(std::size_t max_regions) : table(max_regions) {}
     WorkTable table;
     std::vector<SpanRecord> spans;  // survey: this worker's ray range, in ray order
-    /// resolve: per owning worker, the steps of this worker's ray range, in ray order
-    std::vector<std::vector<OwnedStep>> steps_for;
-    /// resolve: per owning worker, the rays of this range whose sample hit is there (per-scan
-    /// marks before the misses, NDT hits after them)
-    std::vector<std::vector<std::uint32_t>> hits_for;
-    bool overflow = false;     // survey: the work table is full
-    double apply_seconds = 0;  // apply: this worker's time in the current batch
+    bool overflow = false;          // survey: the work table is full
+    double apply_seconds = 0;       // apply: this worker's time in the current batch
+  };
+
+  /// One region of the batch in the apply step: its slot and its parts of the flat lists.
+  struct RegionWork {
+    std::uint32_t slot;
+    std::uint32_t steps_begin;
+    std::uint32_t steps_end;
+    std::uint32_t hits_begin;  // rays whose sample hit is here (per scan: before the misses;
+    std::uint32_t hits_end;    // NDT: after them)
   };
 
   std::pair<std::size_t, std::size_t> rangeOf(unsigned worker, std::size_t count) const noexcept;
-  void releaseOwners() noexcept;
+  void releaseSlots() noexcept;
+  /// Counts of worker `w`'s steps (or hits) per slot, then its next place in the flat list.
+  std::uint32_t& stepCursor(unsigned w, std::uint32_t slot) noexcept {
+    return step_cursors_[static_cast<std::size_t>(w) * slots_ + slot];
+  }
+  std::uint32_t& hitCursor(unsigned w, std::uint32_t slot) noexcept {
+    return hit_cursors_[static_cast<std::size_t>(w) * slots_ + slot];
+  }
 
   WorkerPool pool_;
+  std::uint32_t slots_;                 // the store's capacity
   std::vector<WorkerScratch> scratch_;  // one per worker
   std::vector<RayRecord> rays_;
-  std::vector<std::uint8_t> owner_;     // per slot: owning worker in this batch
+  std::vector<std::uint8_t> in_batch_;  // per slot: a region of this batch
   std::vector<std::uint8_t> created_;   // per slot: created in this batch, not cleared yet
   std::vector<double> slot_work_;       // per slot
   std::vector<std::uint32_t> touched_;  // slots of this batch
   std::vector<std::pair<double, std::uint32_t>> order_;
-  std::vector<double> loads_;  // per worker
-  StepSeconds steps_;
+  /// Per worker a row of one counter per slot (rows of their own: no shared cache lines while
+  /// the workers count).
+  std::vector<std::uint32_t> step_cursors_;
+  std::vector<std::uint32_t> hit_cursors_;
+  std::vector<RegionWork> regions_;  // step 3's order
+  std::vector<RegionStep> steps_;    // every region's steps, grouped by region
+  std::vector<std::uint32_t> hits_;  // every region's hit rays, grouped by region
+  /// The next entry of regions_ to apply; on a cache line of its own.
+  alignas(64) std::atomic<std::size_t> next_region_{0};
+  StepSeconds steps_seconds_;
 };
 
 }  // namespace raymap::detail

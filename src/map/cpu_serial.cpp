@@ -49,12 +49,9 @@ Expected<void, IntegrateError> forEachSampleHit(const IntegrationContext& ctx,
   return {};
 }
 
-}  // namespace
-
-Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
-                                               std::span<const PreparedRay> rays,
-                                               RegionSlotCache& cache,
-                                               WorkerStats& stats) noexcept {
+Expected<void, IntegrateError> integrateRays(const IntegrationContext& ctx,
+                                             std::span<const PreparedRay> rays,
+                                             RegionSlotCache& cache, WorkerStats& stats) noexcept {
   VoxelMap& map = *ctx.map;
   if (ctx.per_scan) {
     // Hits first: a voxel hit anywhere in the scan takes no miss from it (occupied wins).
@@ -104,6 +101,23 @@ Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
         });
   }
   return {};
+}
+
+}  // namespace
+
+Expected<void, IntegrateError> integrateSerial(const IntegrationContext& ctx,
+                                               std::span<const PreparedRay> rays,
+                                               RegionSlotCache& cache,
+                                               WorkerStats& stats) noexcept {
+  Expected<void, IntegrateError> result = integrateRays(ctx, rays, cache, stats);
+  if (ctx.per_scan) {
+    // The scan's misses, region by region (also after a failed batch: what its walks crossed
+    // takes its miss, as the rays' hits up to the failure took theirs).
+    const std::size_t words = ctx.scan_bits->voxelWords();
+    ctx.scan_bits->forEachSlotOfBatch(
+        [&](std::uint32_t slot) { applyScanMisses(regionLayers(ctx, slot), words, ctx.params); });
+  }
+  return result;
 }
 
 }  // namespace raymap::detail

@@ -143,17 +143,11 @@ struct PerRayMiss {
   }
 };
 
-/// Per-scan miss: the first crossing in this scan lowers the occupancy, unless the scan hit the
-/// voxel (occupied wins: the scan's hits claimed their bits first).
+/// Per-scan miss: marks the voxel crossed in this scan; applyScanMisses() lowers the occupancy
+/// of each marked voxel once at the end of the batch, unless the scan hit it (occupied wins).
 struct PerScanMiss {
-  float* occupancy;
-  std::uint64_t* scan_bits;  ///< ScanBits::bitsFor the region
-  rm_occupancy_params params;
-  void operator()(std::uint32_t i) const noexcept {
-    if (ScanBits::claim(scan_bits, i)) {
-      occupancy[i] = rm_occupancy_miss(occupancy[i], params);
-    }
-  }
+  std::uint64_t* misses;  ///< ScanBits::missPlane of the region
+  void operator()(std::uint32_t i) const noexcept { ScanBits::mark(misses, i); }
 };
 
 /// @brief Walks one span of a TSDF map's ray and fuses the ray into each voxel
@@ -197,7 +191,8 @@ inline std::uint32_t tsdfSpan(const rm_line_walk_ray& ray, bool sample_is_start,
 struct RegionLayers {
   float* occupancy = nullptr;
   rm_voxel_mean* mean = nullptr;
-  std::uint64_t* scan_bits = nullptr;  ///< per-scan semantics: ScanBits::bitsFor the region
+  std::uint64_t* scan_bits = nullptr;    ///< per-scan semantics: ScanBits::bitsFor the region
+  std::uint64_t* scan_misses = nullptr;  ///< per-scan semantics: its ScanBits::missPlane
   rm_ndt_voxel* ndt = nullptr;
   rm_ndt_hit_miss* hit_miss = nullptr;
   rm_ndt_intensity* intensity = nullptr;
@@ -297,6 +292,22 @@ inline void applyScanHit(const RegionLayers& layers, std::uint32_t i,
   }
 }
 
+/// @brief Per-scan miss pass of one region, after all of the batch's walks through it: every
+/// voxel a ray crossed (miss plane) that the scan did not hit (hit plane) takes one miss. Word
+/// by word, so the occupancy is read in index order and only where a bit is set.
+inline void applyScanMisses(const RegionLayers& layers, std::size_t words,
+                            const rm_occupancy_params& params) noexcept {
+  for (std::size_t w = 0; w < words; ++w) {
+    std::uint64_t pending = layers.scan_misses[w] & ~layers.scan_bits[w];
+    float* occupancy = layers.occupancy + (w * 64u);
+    while (pending != 0u) {
+      const int bit = __builtin_ctzll(pending);
+      occupancy[bit] = rm_occupancy_miss(occupancy[bit], params);
+      pending &= pending - 1u;
+    }
+  }
+}
+
 /// @brief What every integration step needs to know about the map and the batch.
 struct IntegrationContext {
   VoxelMap* map = nullptr;
@@ -328,6 +339,7 @@ inline RegionLayers regionLayers(const IntegrationContext& ctx, std::uint32_t sl
   }
   if (ctx.scan_bits != nullptr) {
     layers.scan_bits = ctx.scan_bits->bitsFor(slot);
+    layers.scan_misses = ctx.scan_bits->missPlane(layers.scan_bits);
   }
   if (map.ndtLayer() >= 0) {
     layers.ndt = store.layerData<rm_ndt_voxel>(slot, map.ndtLayer());
@@ -375,7 +387,7 @@ inline std::uint32_t missSpan(const IntegrationContext& ctx, const rm_line_walk_
                         ctx.params, ctx.ndt_params});
   }
   if (ctx.per_scan) {
-    return walk(PerScanMiss{layers.occupancy, layers.scan_bits, ctx.params});
+    return walk(PerScanMiss{layers.scan_misses});
   }
   return walk(PerRayMiss{layers.occupancy, ctx.params});
 }

@@ -12,9 +12,13 @@ namespace {
 /// one (two workers own two slots).
 constexpr std::size_t kLineBytes = 64;
 
-std::size_t wordsPerSlot(std::int32_t region_voxels) {
+std::size_t voxelWordsOf(std::int32_t region_voxels) {
   const auto n = static_cast<std::size_t>(region_voxels);
-  const std::size_t words = (n * n * n + 63u) / 64u;
+  return (n * n * n + 63u) / 64u;
+}
+
+std::size_t wordsPerSlot(std::int32_t region_voxels) {
+  const std::size_t words = voxelWordsOf(region_voxels);
   constexpr std::size_t kLineWords = kLineBytes / sizeof(std::uint64_t);
   return (words + kLineWords - 1u) / kLineWords * kLineWords;
 }
@@ -22,15 +26,17 @@ std::size_t wordsPerSlot(std::int32_t region_voxels) {
 }  // namespace
 
 ScanBits::ScanBits(std::uint32_t slots, std::int32_t region_voxels)
-    : words_per_slot_(wordsPerSlot(region_voxels)),
+    : voxel_words_(voxelWordsOf(region_voxels)),
+      words_per_slot_(wordsPerSlot(region_voxels)),
       stamps_(slots, 0u),
       // Default-initialised: pages of slots never used stay untouched (make_unique would zero
-      // them all). Seven words more, to start the first slot on a line.
-      storage_(std::make_unique_for_overwrite<std::uint64_t[]>((words_per_slot_ * slots) + 7u)) {
+      // them all). Two planes per slot, and seven words more to start the first slot on a line.
+      storage_(
+          std::make_unique_for_overwrite<std::uint64_t[]>((2u * words_per_slot_ * slots) + 7u)) {
   void* start = storage_.get();
-  std::size_t space = ((words_per_slot_ * slots) + 7u) * sizeof(std::uint64_t);
+  std::size_t space = ((2u * words_per_slot_ * slots) + 7u) * sizeof(std::uint64_t);
   words_ = static_cast<std::uint64_t*>(
-      std::align(kLineBytes, words_per_slot_ * slots * sizeof(std::uint64_t), start, space));
+      std::align(kLineBytes, 2u * words_per_slot_ * slots * sizeof(std::uint64_t), start, space));
 }
 
 void ScanBits::beginBatch(std::uint32_t sequence) noexcept {
@@ -41,9 +47,9 @@ void ScanBits::beginBatch(std::uint32_t sequence) noexcept {
 }
 
 std::uint64_t* ScanBits::bitsFor(std::uint32_t slot) noexcept {
-  std::uint64_t* bits = words_ + (std::size_t{slot} * words_per_slot_);
+  std::uint64_t* bits = words_ + (std::size_t{slot} * 2u * words_per_slot_);
   if (stamps_[slot] != sequence_) {
-    std::memset(bits, 0, words_per_slot_ * sizeof(std::uint64_t));
+    std::memset(bits, 0, 2u * words_per_slot_ * sizeof(std::uint64_t));  // both planes
     stamps_[slot] = sequence_;
   }
   return bits;

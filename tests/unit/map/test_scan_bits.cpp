@@ -1,11 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // ScanBits: the CPU's once-per-scan bits are claimed once per batch, start clear in every batch,
 // never pass an old batch's bits off as new ones when the map restarts its sequences, and keep
-// each slot's bits apart (two workers own two slots).
+// each slot's bits apart (two workers own two slots); the misses marked on their own plane take
+// one miss per voxel at the end of the batch, and none where the scan hit.
 #include <cstdint>
+#include <set>
+#include <vector>
 
 #include <gtest/gtest.h>
 
+#include "src/map/cpu_voxel_ops.hpp"
 #include "src/map/scan_bits.hpp"
 
 namespace raymap::detail {
@@ -57,6 +61,73 @@ TEST(ScanBits, SlotsKeepTheirBitsOnSeparateCacheLines) {
   for (std::uint32_t i = 0; i < 64; ++i) {
     EXPECT_TRUE(ScanBits::claim(b, i)) << "voxel " << i;
   }
+}
+
+TEST(ScanBits, MissesAreMarkedOnAPlaneOfTheirOwnAndClearedWithTheHits) {
+  ScanBits bits(3, 8);  // 512 voxels: 8 words per plane
+  EXPECT_EQ(bits.voxelWords(), 8u);
+  bits.beginBatch(1);
+  std::uint64_t* hits = bits.bitsFor(1);
+  std::uint64_t* misses = bits.missPlane(hits);
+  ScanBits::mark(misses, 5);
+  ScanBits::mark(misses, 5);
+  ScanBits::mark(misses, 511);
+  EXPECT_EQ(misses[0], std::uint64_t{1} << 5u);
+  EXPECT_EQ(misses[7], std::uint64_t{1} << 63u);
+  EXPECT_TRUE(ScanBits::claim(hits, 5)) << "a marked miss is not a hit";
+  // Slot 2's planes lie after slot 1's miss plane.
+  EXPECT_GE(bits.bitsFor(2), misses + bits.voxelWords());
+
+  std::set<std::uint32_t> used;
+  bits.forEachSlotOfBatch([&](std::uint32_t slot) { used.insert(slot); });
+  EXPECT_EQ(used, (std::set<std::uint32_t>{1, 2}));
+
+  bits.beginBatch(2);
+  used.clear();
+  bits.forEachSlotOfBatch([&](std::uint32_t slot) { used.insert(slot); });
+  EXPECT_TRUE(used.empty());
+  hits = bits.bitsFor(1);
+  misses = bits.missPlane(hits);
+  for (std::size_t w = 0; w < bits.voxelWords(); ++w) {
+    EXPECT_EQ(hits[w], 0u) << "word " << w;
+    EXPECT_EQ(misses[w], 0u) << "word " << w;
+  }
+}
+
+// The per-scan rule with the miss plane: a voxel crossed by any number of the scan's rays takes
+// one miss, a voxel the scan hit takes no miss (its hit was applied in the hit pass), and the
+// others are not touched.
+TEST(ScanBits, EachMarkedVoxelTakesOneMissUnlessTheScanHitIt) {
+  constexpr std::int32_t kEdge = 8;
+  ScanBits bits(1, kEdge);
+  bits.beginBatch(1);
+  std::vector<float> occupancy(kEdge * kEdge * kEdge, RM_OCC_UNOBSERVED);
+  occupancy[200] = 1.0f;
+  occupancy[300] = 1.0f;
+  const rm_occupancy_params params{0.85f, -0.4f, -2.0f, 3.5f, 0.0f};
+  RegionLayers layers;
+  layers.occupancy = occupancy.data();
+  layers.scan_bits = bits.bitsFor(0);
+  layers.scan_misses = bits.missPlane(layers.scan_bits);
+
+  applyScanHit(layers, 300, params);   // the hit pass: 1.0 -> 1.85
+  for (int ray = 0; ray < 5; ++ray) {  // five rays cross voxels 3, 200 and 300
+    PerScanMiss{layers.scan_misses}(3);
+    PerScanMiss{layers.scan_misses}(200);
+    PerScanMiss{layers.scan_misses}(300);
+  }
+  PerScanMiss{layers.scan_misses}(511);
+  applyScanMisses(layers, bits.voxelWords(), params);
+
+  EXPECT_FLOAT_EQ(occupancy[3], -0.4f);  // unobserved: one miss from 0
+  EXPECT_FLOAT_EQ(occupancy[200], 0.6f);
+  EXPECT_FLOAT_EQ(occupancy[300], 1.85f);  // hit in this scan: no miss
+  EXPECT_FLOAT_EQ(occupancy[511], -0.4f);
+  int touched = 0;
+  for (const float value : occupancy) {
+    touched += value != RM_OCC_UNOBSERVED ? 1 : 0;
+  }
+  EXPECT_EQ(touched, 4);
 }
 
 }  // namespace
