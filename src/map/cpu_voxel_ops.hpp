@@ -287,7 +287,7 @@ inline void applyNdtHit(const rm_prepared_ray& ray, const RegionLayers& layers, 
 /// @brief Per-scan hit pass: the first hit of a voxel in this scan raises its occupancy once.
 inline void applyScanHit(const RegionLayers& layers, std::uint32_t i,
                          const rm_occupancy_params& params) noexcept {
-  if (ScanBits::claim(layers.scan_bits, i)) {
+  if (ScanBits::claim(layers.scan_bits, i) && layers.occupancy != nullptr) {
     layers.occupancy[i] = rm_occupancy_hit(layers.occupancy[i], params);
   }
 }
@@ -297,6 +297,9 @@ inline void applyScanHit(const RegionLayers& layers, std::uint32_t i,
 /// by word, so the occupancy is read in index order and only where a bit is set.
 inline void applyScanMisses(const RegionLayers& layers, std::size_t words,
                             const rm_occupancy_params& params) noexcept {
+  if (layers.occupancy == nullptr || layers.scan_misses == nullptr) {
+    return;  // not a per-scan occupancy map (MapConfig::validate allows none)
+  }
   for (std::size_t w = 0; w < words; ++w) {
     std::uint64_t pending = layers.scan_misses[w] & ~layers.scan_bits[w];
     float* occupancy = layers.occupancy + (w * 64u);

@@ -3,9 +3,9 @@
 // never pass an old batch's bits off as new ones when the map restarts its sequences, and keep
 // each slot's bits apart (two workers own two slots); the misses marked on their own plane take
 // one miss per voxel at the end of the batch, and none where the scan hit.
+#include <array>
 #include <cstdint>
 #include <set>
-#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -101,7 +101,8 @@ TEST(ScanBits, EachMarkedVoxelTakesOneMissUnlessTheScanHitIt) {
   constexpr std::int32_t kEdge = 8;
   ScanBits bits(1, kEdge);
   bits.beginBatch(1);
-  std::vector<float> occupancy(kEdge * kEdge * kEdge, RM_OCC_UNOBSERVED);
+  std::array<float, kEdge * kEdge * kEdge> occupancy{};
+  occupancy.fill(RM_OCC_UNOBSERVED);
   occupancy[200] = 1.0f;
   occupancy[300] = 1.0f;
   const rm_occupancy_params params{0.85f, -0.4f, -2.0f, 3.5f, 0.0f};
