@@ -97,8 +97,8 @@ ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_cap
   step_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
   hit_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
   // A batch's steps: its spans (up to 6 per ray) and sample hits.
-  steps_.resize(expected_batch_rays * 7u + 1024u);
-  hits_.resize(expected_batch_rays + 1024u);
+  steps_.reserve(expected_batch_rays * 7u + 1024u);
+  hits_.reserve(expected_batch_rays + 1024u);
 }
 
 std::pair<std::size_t, std::size_t> ParallelIntegrator::rangeOf(unsigned worker,
@@ -298,12 +298,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     region.steps_end = steps_total;
     region.hits_end = hits_total;
   }
-  if (steps_.size() < steps_total) {
-    steps_.resize(steps_total);  // a batch larger than expected: grows once
-  }
-  if (hits_.size() < hits_total) {
-    hits_.resize(hits_total);
-  }
+  steps_.reserve(steps_total);  // a batch larger than expected: grows once
+  hits_.reserve(hits_total);
 
   auto place = [&](unsigned w) {
     const WorkerScratch& scratch = scratch_[w];
