@@ -8,12 +8,6 @@
 #include <utility>
 
 namespace raymap {
-namespace {
-
-constexpr std::int32_t kCoordBias = 1 << 20;
-constexpr std::uint64_t kCoordMask = (std::uint64_t{1} << 21) - 1;
-
-}  // namespace
 
 const char* toString(StoreError error) noexcept {
   switch (error) {
@@ -77,19 +71,6 @@ Result<RegionStore> RegionStore::create(const Config& config) {
   }
   store.index_ = RegionIndex(config.capacity);
   return store;
-}
-
-std::uint64_t RegionStore::packCoord(Vec3i region) noexcept {
-  const auto x = static_cast<std::uint64_t>(region.x + kCoordBias) & kCoordMask;
-  const auto y = static_cast<std::uint64_t>(region.y + kCoordBias) & kCoordMask;
-  const auto z = static_cast<std::uint64_t>(region.z + kCoordBias) & kCoordMask;
-  return x | (y << 21) | (z << 42);
-}
-
-Vec3i RegionStore::unpackCoord(std::uint64_t key) noexcept {
-  return Vec3i{static_cast<std::int32_t>(key & kCoordMask) - kCoordBias,
-               static_cast<std::int32_t>((key >> 21) & kCoordMask) - kCoordBias,
-               static_cast<std::int32_t>((key >> 42) & kCoordMask) - kCoordBias};
 }
 
 std::uint32_t RegionStore::find(Vec3i region) const noexcept {

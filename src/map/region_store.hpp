@@ -45,6 +45,9 @@ class RegionStore {
   static constexpr std::uint32_t kNoSlot = 0xFFFFFFFFu;
   /// Largest |region coordinate| on any axis (coordinates are packed into 21 bits each).
   static constexpr std::int32_t kMaxRegionCoord = (1 << 20) - 1;
+  /// packCoord(): 21 bits per axis, biased to be non-negative.
+  static constexpr std::int32_t kCoordBias = 1 << 20;
+  static constexpr std::uint64_t kCoordMask = (std::uint64_t{1} << 21) - 1;
 
   struct Config {
     LayerSchema schema;
@@ -135,10 +138,22 @@ class RegionStore {
     }
   }
 
-  /// @brief The 63-bit index key of an in-range region coordinate (never all ones).
-  static std::uint64_t packCoord(Vec3i region) noexcept;
+  /// @brief The 63-bit index key of an in-range region coordinate (never all ones). Inline: it
+  /// runs for every span a walk makes, and as a call its Vec3i argument was stored as three
+  /// 32-bit words and reloaded as a 64-bit register, a store-forwarding stall that took half of
+  /// the parallel integrator's survey step (perf, docs/benchmarks.md).
+  static std::uint64_t packCoord(Vec3i region) noexcept {
+    const auto x = static_cast<std::uint64_t>(region.x + kCoordBias) & kCoordMask;
+    const auto y = static_cast<std::uint64_t>(region.y + kCoordBias) & kCoordMask;
+    const auto z = static_cast<std::uint64_t>(region.z + kCoordBias) & kCoordMask;
+    return x | (y << 21) | (z << 42);
+  }
   /// @brief Inverse of packCoord().
-  static Vec3i unpackCoord(std::uint64_t key) noexcept;
+  static Vec3i unpackCoord(std::uint64_t key) noexcept {
+    return Vec3i{static_cast<std::int32_t>(key & kCoordMask) - kCoordBias,
+                 static_cast<std::int32_t>((key >> 21) & kCoordMask) - kCoordBias,
+                 static_cast<std::int32_t>((key >> 42) & kCoordMask) - kCoordBias};
+  }
 
   /// @brief True when every component of `region` fits the index.
   static bool inRange(Vec3i region) noexcept {

@@ -250,15 +250,6 @@ Vec3i VoxelMap::voxelAt(Vec3i region, std::uint32_t index) const noexcept {
   return Vec3i{region.x * n + local.x, region.y * n + local.y, region.z * n + local.z};
 }
 
-bool VoxelMap::inWindow(Vec3i r) const noexcept {
-  if (config_.policy != StorePolicy::kRolling) {
-    return true;
-  }
-  const Vec3i hi = windowMaxRegion();
-  return r.x >= window_min_.x && r.x <= hi.x && r.y >= window_min_.y && r.y <= hi.y &&
-         r.z >= window_min_.z && r.z <= hi.z;
-}
-
 Expected<std::uint32_t, StoreError> VoxelMap::acquireRegion(Vec3i region) noexcept {
   if (tiers_) {
     bool created = false;

@@ -241,7 +241,16 @@ class VoxelMap {
   Vec3i windowMaxRegion() const noexcept {
     return window_min_ + config_.window_regions - Vec3i{1, 1, 1};
   }
-  bool inWindow(Vec3i region) const noexcept;
+  /// True when `r` lies in the rolling window (always for a growing map). Inline: the parallel
+  /// integrator's survey asks it for every span.
+  bool inWindow(Vec3i r) const noexcept {
+    if (config_.policy != StorePolicy::kRolling) {
+      return true;
+    }
+    const Vec3i hi = windowMaxRegion();
+    return r.x >= window_min_.x && r.x <= hi.x && r.y >= window_min_.y && r.y <= hi.y &&
+           r.z >= window_min_.z && r.z <= hi.z;
+  }
   /// @brief World-frame box of the window, metres: {min corner, max corner}.
   std::pair<Vec3d, Vec3d> windowBounds() const noexcept;
 
