@@ -37,8 +37,9 @@ namespace raymap::detail {
 ///     touch is by the worker that writes it).
 /// Each voxel is written by one worker, in ray order, so the map is bit-identical to the
 /// single-threaded one and needs no atomics on voxels. Taking regions as workers come free keeps
-/// every worker busy to the end of the batch, whatever the error of the work estimate (a static
-/// assignment by estimated work left one worker idle 10-16 % of the apply step; measured,
+/// every worker busy to the end of the batch, whatever the error of the work estimate or the
+/// load of the machine (a static assignment by estimated work left one worker idle for 2-9 % of
+/// the apply step on an idle 2-core VM and 10-17 % beside other processes; now 0-2 %;
 /// docs/benchmarks.md), and one region's steps are applied together while its voxels are in
 /// cache. What one worker writes during the survey and resolve steps lives in its own cache lines
 /// (WorkerScratch is aligned to them, per-region counts are rows of their own, counters are
