@@ -18,6 +18,7 @@ enum class IntegrateError : std::uint8_t {
   kStoreFull,      ///< a global map's region pool is exhausted; the batch is not (fully) integrated
   kDeviceFailure,  ///< the device reported an error
   kTierFailed,     ///< a global map's cold tiers failed (VoxelMap::tierFailure() says why)
+  kOutOfMemory,    ///< the host refused scratch memory for a batch larger than any before
 };
 
 const char* toString(IntegrateError error) noexcept;

@@ -21,6 +21,8 @@ const char* toString(IntegrateError error) noexcept {
       return "device failure";
     case IntegrateError::kTierFailed:
       return "the map's cold tiers failed";
+    case IntegrateError::kOutOfMemory:
+      return "the host refused memory for the batch's scratch lists";
   }
   return "unknown integration error";
 }

@@ -85,9 +85,10 @@ ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_cap
   scratch_.reserve(n);
   for (unsigned w = 0; w < n; ++w) {
     WorkerScratch& scratch = scratch_.emplace_back(store_capacity);
-    scratch.spans.reserve(expected_batch_rays * 6u / n + 1024u);
+    // Address space only: pages become resident as batches write them.
+    (void)scratch.spans.reserve(expected_batch_rays * 6u / n + 1024u);
   }
-  rays_.resize(expected_batch_rays);
+  (void)rays_.reserve(expected_batch_rays);
   in_batch_.assign(store_capacity, 0);
   created_.assign(store_capacity, 0);
   slot_work_.assign(store_capacity, 0.0);
@@ -97,8 +98,8 @@ ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_cap
   step_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
   hit_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
   // A batch's steps: its spans (up to 6 per ray) and sample hits.
-  steps_.reserve(expected_batch_rays * 7u + 1024u);
-  hits_.reserve(expected_batch_rays + 1024u);
+  (void)steps_.reserve(expected_batch_rays * 7u + 1024u);
+  (void)hits_.reserve(expected_batch_rays + 1024u);
 }
 
 std::pair<std::size_t, std::size_t> ParallelIntegrator::rangeOf(unsigned worker,
@@ -119,13 +120,24 @@ void ParallelIntegrator::releaseSlots() noexcept {
   touched_.clear();
 }
 
+void ParallelIntegrator::abandonBatch(VoxelMap& map) noexcept {
+  // Regions created for the batch still need their clear values.
+  for (std::uint32_t slot : touched_) {
+    if (created_[slot] != 0) {
+      map.store().clearRegion(slot);
+      created_[slot] = 0;
+    }
+  }
+  releaseSlots();
+}
+
 Expected<void, IntegrateError> ParallelIntegrator::integrate(
     const IntegrationContext& ctx, std::span<const PreparedRay> rays,
     std::span<RegionSlotCache> caches, std::span<WorkerStats> stats) noexcept {
   VoxelMap& map = *ctx.map;
   const unsigned workers = pool_.size();
-  if (rays_.size() < rays.size()) {
-    rays_.resize(rays.size());  // a batch larger than expected: grows once
+  if (!rays_.reserve(rays.size())) {  // a batch larger than expected: grows once
+    return Unexpected(IntegrateError::kOutOfMemory);
   }
 
   // 1. Survey.
@@ -134,9 +146,10 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     const auto [begin, end] = rangeOf(w, rays.size());
     WorkerScratch& scratch = scratch_[w];
     WorkTable& table = scratch.table;
-    std::vector<SpanRecord>& spans = scratch.spans;
-    spans.clear();
+    platform::PageArray<SpanRecord>& spans = scratch.spans;
+    std::size_t span_count = 0;
     scratch.overflow = false;
+    scratch.out_of_memory = false;
     for (std::size_t r = begin; r < end; ++r) {
       RayRegionWalk walk(rays[r], ctx.region_voxels);
       const rm_ray_walk_frame& f = walk.frame();
@@ -147,7 +160,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       RayRecord& record = rays_[r];
       record.walk = walk.voxelRay();
       record.sample_is_start = f.sample_is_start != 0;
-      record.first_span = static_cast<std::uint32_t>(spans.size());
+      record.first_span = static_cast<std::uint32_t>(span_count);
       RaySpan span;
       while (walk.next(&span)) {
         const std::uint64_t key = RegionStore::packCoord(span.region);
@@ -159,14 +172,19 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
           scratch.overflow = true;
           return;
         }
-        spans.push_back(SpanRecord{key, (span.first ? kFirst : 0u) | (span.last ? kLast : 0u),
-                                   span.t0, span.t1, span.box_lo});
+        if (span_count == spans.capacity() && !spans.reserve(2u * span_count + 1024u, span_count)) {
+          scratch.out_of_memory = true;  // a batch larger than expected and no memory to grow
+          return;
+        }
+        spans[span_count++] = SpanRecord{key, (span.first ? kFirst : 0u) | (span.last ? kLast : 0u),
+                                         span.t0, span.t1, span.box_lo};
       }
-      record.span_count = static_cast<std::uint32_t>(spans.size()) - record.first_span;
+      record.span_count = static_cast<std::uint32_t>(span_count) - record.first_span;
       const auto [region, index] = walk.sampleCell();
       record.sample_key = RegionStore::packCoord(region);
       record.sample_index = index;
     }
+    scratch.span_count = span_count;
     if (!table.flush()) {
       scratch.overflow = true;
     }
@@ -180,6 +198,9 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   for (const WorkerScratch& scratch : scratch_) {
     if (scratch.overflow) {
       status = Unexpected(IntegrateError::kStoreFull);
+    }
+    if (scratch.out_of_memory) {
+      status = Unexpected(IntegrateError::kOutOfMemory);
     }
   }
   for (unsigned w = 0; w < workers && status; ++w) {
@@ -214,14 +235,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     scratch.table.clear();
   }
   if (!status) {
-    // Regions created before the failure still need their clear values.
-    for (std::uint32_t slot : touched_) {
-      if (created_[slot] != 0) {
-        map.store().clearRegion(slot);
-        created_[slot] = 0;
-      }
-    }
-    releaseSlots();
+    abandonBatch(map);
     return status;
   }
 
@@ -298,8 +312,11 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     region.steps_end = steps_total;
     region.hits_end = hits_total;
   }
-  steps_.reserve(steps_total);  // a batch larger than expected: grows once
-  hits_.reserve(hits_total);
+  // A batch larger than expected: grows once. Nothing was written to the map yet.
+  if (!steps_.reserve(steps_total) || !hits_.reserve(hits_total)) {
+    abandonBatch(map);
+    return Unexpected(IntegrateError::kOutOfMemory);
+  }
 
   auto place = [&](unsigned w) {
     const WorkerScratch& scratch = scratch_[w];

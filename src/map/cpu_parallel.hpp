@@ -12,6 +12,7 @@
 
 #include "raymap/expected.hpp"
 
+#include "platform/page_array.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/cpu_voxel_ops.hpp"
 #include "src/map/worker_pool.hpp"
@@ -150,9 +151,11 @@ class ParallelIntegrator {
   struct alignas(64) WorkerScratch {
     explicit WorkerScratch(std::size_t max_regions) : table(max_regions) {}
     WorkTable table;
-    std::vector<SpanRecord> spans;  // survey: this worker's ray range, in ray order
-    bool overflow = false;          // survey: the work table is full
-    double apply_seconds = 0;       // apply: this worker's time in the current batch
+    platform::PageArray<SpanRecord> spans;  // survey: this worker's ray range, in ray order
+    std::size_t span_count = 0;             // of spans
+    bool overflow = false;                  // survey: the work table is full
+    bool out_of_memory = false;             // survey: the span list could not grow
+    double apply_seconds = 0;               // apply: this worker's time in the current batch
   };
 
   /// One region of the batch in the apply step: its slot and its parts of the flat lists.
@@ -166,6 +169,8 @@ class ParallelIntegrator {
 
   std::pair<std::size_t, std::size_t> rangeOf(unsigned worker, std::size_t count) const noexcept;
   void releaseSlots() noexcept;
+  /// Gives up a batch before its apply step: the regions it created get their clear values.
+  void abandonBatch(VoxelMap& map) noexcept;
   /// Counts of worker `w`'s steps (or hits) per slot, then its next place in the flat list.
   std::uint32_t& stepCursor(unsigned w, std::uint32_t slot) noexcept {
     return step_cursors_[static_cast<std::size_t>(w) * slots_ + slot];
@@ -175,41 +180,25 @@ class ParallelIntegrator {
   }
 
   WorkerPool pool_;
-  std::uint32_t slots_;                 // the store's capacity
-  std::vector<WorkerScratch> scratch_;  // one per worker
-  std::vector<RayRecord> rays_;
-  std::vector<std::uint8_t> in_batch_;  // per slot: a region of this batch
-  std::vector<std::uint8_t> created_;   // per slot: created in this batch, not cleared yet
-  std::vector<double> slot_work_;       // per slot
-  std::vector<std::uint32_t> touched_;  // slots of this batch
+  std::uint32_t slots_;                  // the store's capacity
+  std::vector<WorkerScratch> scratch_;   // one per worker
+  platform::PageArray<RayRecord> rays_;  // per ray of the batch, written by the survey
+  std::vector<std::uint8_t> in_batch_;   // per slot: a region of this batch
+  std::vector<std::uint8_t> created_;    // per slot: created in this batch, not cleared yet
+  std::vector<double> slot_work_;        // per slot
+  std::vector<std::uint32_t> touched_;   // slots of this batch
   std::vector<std::pair<double, std::uint32_t>> order_;
   /// Per worker a row of one counter per slot (rows of their own: no shared cache lines while
   /// the workers count).
   std::vector<std::uint32_t> step_cursors_;
   std::vector<std::uint32_t> hit_cursors_;
   std::vector<RegionWork> regions_;  // step 3's order
-  /// Elements written before they are read: allocated without being zeroed, so that its pages
-  /// become resident only as batches use them (a zeroed list sized for the largest batch cost a
-  /// per-scan run 16-31 MB of peak memory it never used).
-  template <class T>
-  class WriteFirstBuffer {
-   public:
-    /// Room for `n` elements; reallocates (contents lost) only when it grows.
-    void reserve(std::size_t n) {
-      if (n > capacity_) {
-        data_ = std::make_unique_for_overwrite<T[]>(n);
-        capacity_ = n;
-      }
-    }
-    T& operator[](std::size_t i) noexcept { return data_[i]; }
-    const T& operator[](std::size_t i) const noexcept { return data_[i]; }
-
-   private:
-    std::unique_ptr<T[]> data_;
-    std::size_t capacity_ = 0;
-  };
-  WriteFirstBuffer<RegionStep> steps_;    // every region's steps, grouped by region
-  WriteFirstBuffer<std::uint32_t> hits_;  // every region's hit rays, grouped by region
+  /// Written before they are read, page-backed (platform::PageArray): pages become resident
+  /// only as batches use them, 2 MiB at a time where the OS gives huge pages (a zeroed list
+  /// sized for the largest batch cost a per-scan run 16-31 MB of peak memory it never used, and
+  /// faulting the lists in 4 KiB at a time cost a fresh scan more than its survey).
+  platform::PageArray<RegionStep> steps_;    // every region's steps, grouped by region
+  platform::PageArray<std::uint32_t> hits_;  // every region's hit rays, grouped by region
   /// The next entry of regions_ to apply; on a cache line of its own.
   alignas(64) std::atomic<std::size_t> next_region_{0};
   StepSeconds steps_seconds_;

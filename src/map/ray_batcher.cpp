@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <new>
 #include <string>
 
 #include "raymap/assert.hpp"
@@ -18,9 +19,11 @@ constexpr std::size_t kMinRaysPerHostThread = 2048;
 }  // namespace
 
 RayBatcher::RayBatcher(const VoxelMap& map, Backend& backend, std::size_t batch_rays)
-    : backend_(&backend), per_scan_(map.semantics() == Semantics::kPerScan) {
+    : backend_(&backend), per_scan_(map.semantics() == Semantics::kPerScan), capacity_(batch_rays) {
   RAYMAP_EXPECTS(batch_rays > 0);
-  batch_.resize(batch_rays);
+  if (!batch_.reserve(batch_rays)) {
+    throw std::bad_alloc();  // as a std::vector of the batch would
+  }
   parts_.resize(std::max(backend.threads(), 1u));
 }
 
@@ -113,7 +116,7 @@ Expected<void, IntegrateError> RayBatcher::add(RayPreparer& preparer,
       scan_ = rays[i].scan;
     }
     while (i < run_end) {
-      const std::size_t room = batch_.size() - fill_;
+      const std::size_t room = capacity_ - fill_;
       const std::size_t fits = std::min(run_end - i, room);  // one prepared ray each, unsegmented
       const RayPreparer::Progress p =
           parts_.size() > 1 && preparer.filter().segment_length_m <= 0.0 &&
@@ -123,7 +126,7 @@ Expected<void, IntegrateError> RayBatcher::add(RayPreparer& preparer,
                                  std::span<PreparedRay>(batch_.data() + fill_, room));
       fill_ += p.written;
       i += p.consumed;
-      if (fill_ == batch_.size() || (p.consumed == 0 && i < run_end)) {
+      if (fill_ == capacity_ || (p.consumed == 0 && i < run_end)) {
         // Full (or no room for the next ray's pieces): in it goes.
         if (per_scan_ && i < run_end && !scan_split_) {
           ++counters_.scans_split;
@@ -164,6 +167,11 @@ Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateErr
                                            std::to_string(map.store().capacity()) + " regions (" +
                                            gib + " GiB) its memory budget allows; raise " +
                                            std::string(raise)};
+  }
+  if (error == IntegrateError::kOutOfMemory) {
+    return Error{ErrorCode::kCapacity, std::string("integration failed on the ") + backend.name() +
+                                           " backend: " + toString(error) +
+                                           "; make batches smaller (--batch-rays)"};
   }
   return Error{ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
                                    " backend: " + toString(error)};

@@ -13,6 +13,7 @@
 #include "raymap/error.hpp"
 #include "raymap/expected.hpp"
 
+#include "platform/page_array.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/ray.hpp"
 #include "src/map/ray_preparer.hpp"
@@ -62,14 +63,18 @@ class RayBatcher {
 
   /// Prepared rays waiting in the batch.
   std::size_t pending() const noexcept { return fill_; }
-  std::size_t capacity() const noexcept { return batch_.size(); }
+  std::size_t capacity() const noexcept { return capacity_; }
   const BatcherCounters& counters() const noexcept { return counters_; }
   Backend& backend() noexcept { return *backend_; }
 
  private:
   Backend* backend_;
   bool per_scan_;
-  std::vector<PreparedRay> batch_;
+  /// Page-backed, never initialised: a prepared ray is written before it is read, and a batch
+  /// larger than the input (a 262,144-ray per-scan batch for one 8,000-ray scan) makes only the
+  /// pages it fills resident.
+  platform::PageArray<PreparedRay> batch_;
+  std::size_t capacity_;
   std::size_t fill_ = 0;
   bool have_scan_ = false;
   bool scan_split_ = false;  // the current scan already went in in parts
