@@ -95,26 +95,33 @@ ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_cap
   touched_.reserve(store_capacity);
   order_.reserve(store_capacity);
   regions_.reserve(store_capacity);
-  step_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
-  hit_cursors_.assign(static_cast<std::size_t>(n) * store_capacity, 0u);
+  blocks_ = n == 1 ? 1u : std::min(n * kBlocksPerWorker, kMaxBlocks);
+  block_worker_.assign(blocks_, 0u);
+  step_cursors_.assign(static_cast<std::size_t>(blocks_) * store_capacity, 0u);
+  hit_cursors_.assign(static_cast<std::size_t>(blocks_) * store_capacity, 0u);
   // A batch's steps: its spans (up to 6 per ray) and sample hits.
   (void)steps_.reserve(expected_batch_rays * 7u + 1024u);
   (void)hits_.reserve(expected_batch_rays + 1024u);
 }
 
-std::pair<std::size_t, std::size_t> ParallelIntegrator::rangeOf(unsigned worker,
+std::pair<std::size_t, std::size_t> ParallelIntegrator::rangeOf(unsigned block,
                                                                 std::size_t count) const noexcept {
-  const std::size_t n = pool_.size();
-  return {count * worker / n, count * (worker + 1u) / n};
+  return {count * block / blocks_, count * (block + 1u) / blocks_};
+}
+
+unsigned ParallelIntegrator::takeBlock() noexcept {
+  // Relaxed: the counter only has to give each block to one worker; what a block's worker wrote
+  // in the previous step is ordered by the pool's hand-off between steps.
+  const std::size_t b = next_block_.fetch_add(1, std::memory_order_relaxed);
+  return b < blocks_ ? static_cast<unsigned>(b) : kNoBlock;
 }
 
 void ParallelIntegrator::releaseSlots() noexcept {
-  const unsigned workers = pool_.size();
   for (std::uint32_t slot : touched_) {
     in_batch_[slot] = 0;
-    for (unsigned w = 0; w < workers; ++w) {
-      stepCursor(w, slot) = 0;
-      hitCursor(w, slot) = 0;
+    for (unsigned b = 0; b < blocks_; ++b) {
+      stepCursor(b, slot) = 0;
+      hitCursor(b, slot) = 0;
     }
   }
   touched_.clear();
@@ -142,47 +149,53 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
 
   // 1. Survey.
   Clock::time_point step_start = Clock::now();
+  next_block_.store(0, std::memory_order_relaxed);
   auto survey = [&](unsigned w) {
-    const auto [begin, end] = rangeOf(w, rays.size());
     WorkerScratch& scratch = scratch_[w];
     WorkTable& table = scratch.table;
     platform::PageArray<SpanRecord>& spans = scratch.spans;
     std::size_t span_count = 0;
     scratch.overflow = false;
     scratch.out_of_memory = false;
-    for (std::size_t r = begin; r < end; ++r) {
-      RayRegionWalk walk(rays[r], ctx.region_voxels);
-      const rm_ray_walk_frame& f = walk.frame();
-      // Voxel steps of the whole ray: a span's share is proportional to its length.
-      const double steps = std::abs(static_cast<double>(f.end.x - f.start.x)) +
-                           std::abs(static_cast<double>(f.end.y - f.start.y)) +
-                           std::abs(static_cast<double>(f.end.z - f.start.z));
-      RayRecord& record = rays_[r];
-      record.walk = walk.voxelRay();
-      record.sample_is_start = f.sample_is_start != 0;
-      record.first_span = static_cast<std::uint32_t>(span_count);
-      RaySpan span;
-      while (walk.next(&span)) {
-        const std::uint64_t key = RegionStore::packCoord(span.region);
-        // A region outside a rolling window is never created (its span is counted in step 4):
-        // it must not count against the store's capacity either, or a long ray would fail a
-        // batch that the single-threaded path integrates.
-        if (map.inWindow(span.region) &&
-            !table.add(key, 1.0 + steps * static_cast<double>(span.t1 - span.t0))) {
-          scratch.overflow = true;
-          return;
+    for (unsigned b = takeBlock(); b != kNoBlock; b = takeBlock()) {
+      block_worker_[b] = w;  // its spans are in this worker's list
+      const auto [begin, end] = rangeOf(b, rays.size());
+      for (std::size_t r = begin; r < end; ++r) {
+        RayRegionWalk walk(rays[r], ctx.region_voxels);
+        const rm_ray_walk_frame& f = walk.frame();
+        // Voxel steps of the whole ray: a span's share is proportional to its length.
+        const double steps = std::abs(static_cast<double>(f.end.x - f.start.x)) +
+                             std::abs(static_cast<double>(f.end.y - f.start.y)) +
+                             std::abs(static_cast<double>(f.end.z - f.start.z));
+        RayRecord& record = rays_[r];
+        record.walk = walk.voxelRay();
+        record.sample_is_start = f.sample_is_start != 0;
+        record.first_span = static_cast<std::uint32_t>(span_count);
+        RaySpan span;
+        while (walk.next(&span)) {
+          const std::uint64_t key = RegionStore::packCoord(span.region);
+          // A region outside a rolling window is never created (its span is counted in step 4):
+          // it must not count against the store's capacity either, or a long ray would fail a
+          // batch that the single-threaded path integrates.
+          if (map.inWindow(span.region) &&
+              !table.add(key, 1.0 + steps * static_cast<double>(span.t1 - span.t0))) {
+            scratch.overflow = true;
+            return;
+          }
+          if (span_count == spans.capacity() &&
+              !spans.reserve(2u * span_count + 1024u, span_count)) {
+            scratch.out_of_memory = true;  // a batch larger than expected and no memory to grow
+            return;
+          }
+          spans[span_count++] =
+              SpanRecord{key, (span.first ? kFirst : 0u) | (span.last ? kLast : 0u), span.t0,
+                         span.t1, span.box_lo};
         }
-        if (span_count == spans.capacity() && !spans.reserve(2u * span_count + 1024u, span_count)) {
-          scratch.out_of_memory = true;  // a batch larger than expected and no memory to grow
-          return;
-        }
-        spans[span_count++] = SpanRecord{key, (span.first ? kFirst : 0u) | (span.last ? kLast : 0u),
-                                         span.t0, span.t1, span.box_lo};
+        record.span_count = static_cast<std::uint32_t>(span_count) - record.first_span;
+        const auto [region, index] = walk.sampleCell();
+        record.sample_key = RegionStore::packCoord(region);
+        record.sample_index = index;
       }
-      record.span_count = static_cast<std::uint32_t>(span_count) - record.first_span;
-      const auto [region, index] = walk.sampleCell();
-      record.sample_key = RegionStore::packCoord(region);
-      record.sample_index = index;
     }
     scratch.span_count = span_count;
     if (!table.flush()) {
@@ -251,40 +264,43 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   steps_seconds_.serial += secondsSince(step_start);
   step_start = Clock::now();
 
-  // 4. Resolve: (a) slots into the records, steps and hits counted per region by each worker
-  //    for its survey's ray range; (b) the counts become places in the flat lists; (c) each
-  //    worker writes its steps and hits there.
+  // 4. Resolve: (a) slots into the records, steps and hits counted per region for each block
+  //    of rays; (b) the counts become places in the flat lists; (c) each block's steps and hits
+  //    are written there. Blocks are taken as workers come free, as in the survey.
   const bool hit_lists = ctx.per_scan || ctx.ndt;
+  next_block_.store(0, std::memory_order_relaxed);
   auto count = [&](unsigned w) {
-    WorkerScratch& scratch = scratch_[w];
     RegionSlotCache& cache = caches[w];
     const RegionStore& store = map.store();
     std::uint64_t outside_window = 0;  // counted in a local, written to stats[w] once
-    const auto [begin, end] = rangeOf(w, rays.size());
-    for (std::size_t r = begin; r < end; ++r) {
-      RayRecord& record = rays_[r];
-      for (std::uint32_t s = 0; s < record.span_count; ++s) {
-        SpanRecord& rec = scratch.spans[record.first_span + s];
-        const std::uint32_t slot = findSlot(store, cache, rec.region);
-        // Every region of the batch was created in step 2; a slot outside it is a region the
-        // survey left out (outside the window), which the store does not keep: skipped the same.
-        if (slot == RegionStore::kNoSlot || in_batch_[slot] == 0) {
-          rec.region = RegionStore::kNoSlot;
-          ++outside_window;
-          continue;
+    for (unsigned b = takeBlock(); b != kNoBlock; b = takeBlock()) {
+      WorkerScratch& scratch = scratch_[block_worker_[b]];
+      const auto [begin, end] = rangeOf(b, rays.size());
+      for (std::size_t r = begin; r < end; ++r) {
+        RayRecord& record = rays_[r];
+        for (std::uint32_t s = 0; s < record.span_count; ++s) {
+          SpanRecord& rec = scratch.spans[record.first_span + s];
+          const std::uint32_t slot = findSlot(store, cache, rec.region);
+          // Every region of the batch was created in step 2; a slot outside it is a region the
+          // survey left out (outside the window), which the store does not keep: skipped the same.
+          if (slot == RegionStore::kNoSlot || in_batch_[slot] == 0) {
+            rec.region = RegionStore::kNoSlot;
+            ++outside_window;
+            continue;
+          }
+          rec.region = slot;
+          ++stepCursor(b, slot);
         }
-        rec.region = slot;
-        ++stepCursor(w, slot);
+        std::uint32_t sample_slot = findSlot(store, cache, record.sample_key);
+        if ((rays[r].flags & RM_RAY_END_HIT) == 0u || sample_slot == RegionStore::kNoSlot ||
+            in_batch_[sample_slot] == 0) {
+          sample_slot = RegionStore::kNoSlot;  // no hit to apply
+        } else {
+          stepCursor(b, sample_slot) += ctx.ndt ? 0u : 1u;
+          hitCursor(b, sample_slot) += hit_lists ? 1u : 0u;
+        }
+        record.sample_slot = sample_slot;
       }
-      std::uint32_t sample_slot = findSlot(store, cache, record.sample_key);
-      if ((rays[r].flags & RM_RAY_END_HIT) == 0u || sample_slot == RegionStore::kNoSlot ||
-          in_batch_[sample_slot] == 0) {
-        sample_slot = RegionStore::kNoSlot;  // no hit to apply
-      } else {
-        stepCursor(w, sample_slot) += ctx.ndt ? 0u : 1u;
-        hitCursor(w, sample_slot) += hit_lists ? 1u : 0u;
-      }
-      record.sample_slot = sample_slot;
     }
     stats[w].spans_outside_window += outside_window;
   };
@@ -299,9 +315,9 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     region.slot = slot;
     region.steps_begin = steps_total;
     region.hits_begin = hits_total;
-    for (unsigned w = 0; w < workers; ++w) {
-      std::uint32_t& steps = stepCursor(w, slot);
-      std::uint32_t& hits = hitCursor(w, slot);
+    for (unsigned b = 0; b < blocks_; ++b) {  // blocks in ray order: steps in ray order
+      std::uint32_t& steps = stepCursor(b, slot);
+      std::uint32_t& hits = hitCursor(b, slot);
       const std::uint32_t step_count = steps;
       const std::uint32_t hit_count = hits;
       steps = steps_total;
@@ -318,30 +334,33 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     return Unexpected(IntegrateError::kOutOfMemory);
   }
 
-  auto place = [&](unsigned w) {
-    const WorkerScratch& scratch = scratch_[w];
-    const auto [begin, end] = rangeOf(w, rays.size());
-    for (std::size_t r = begin; r < end; ++r) {
-      const RayRecord& record = rays_[r];
-      const auto ray = static_cast<std::uint32_t>(r);
-      for (std::uint32_t s = 0; s < record.span_count; ++s) {
-        const SpanRecord& rec = scratch.spans[record.first_span + s];
-        if (rec.region == RegionStore::kNoSlot) {
+  next_block_.store(0, std::memory_order_relaxed);
+  auto place = [&](unsigned /*worker*/) {
+    for (unsigned b = takeBlock(); b != kNoBlock; b = takeBlock()) {
+      const WorkerScratch& scratch = scratch_[block_worker_[b]];
+      const auto [begin, end] = rangeOf(b, rays.size());
+      for (std::size_t r = begin; r < end; ++r) {
+        const RayRecord& record = rays_[r];
+        const auto ray = static_cast<std::uint32_t>(r);
+        for (std::uint32_t s = 0; s < record.span_count; ++s) {
+          const SpanRecord& rec = scratch.spans[record.first_span + s];
+          if (rec.region == RegionStore::kNoSlot) {
+            continue;
+          }
+          const auto slot = static_cast<std::uint32_t>(rec.region);
+          steps_[stepCursor(b, slot)++] = RegionStep{ray, rec.flags, rec.t0, rec.t1, rec.box_lo};
+        }
+        const std::uint32_t sample_slot = record.sample_slot;
+        if (sample_slot == RegionStore::kNoSlot) {
           continue;
         }
-        const auto slot = static_cast<std::uint32_t>(rec.region);
-        steps_[stepCursor(w, slot)++] = RegionStep{ray, rec.flags, rec.t0, rec.t1, rec.box_lo};
-      }
-      const std::uint32_t sample_slot = record.sample_slot;
-      if (sample_slot == RegionStore::kNoSlot) {
-        continue;
-      }
-      if (!ctx.ndt) {
-        steps_[stepCursor(w, sample_slot)++] =
-            RegionStep{ray, kHit, 0.0f, 0.0f, rm_vec3i_make(0, 0, 0)};
-      }
-      if (hit_lists) {
-        hits_[hitCursor(w, sample_slot)++] = ray;
+        if (!ctx.ndt) {
+          steps_[stepCursor(b, sample_slot)++] =
+              RegionStep{ray, kHit, 0.0f, 0.0f, rm_vec3i_make(0, 0, 0)};
+        }
+        if (hit_lists) {
+          hits_[hitCursor(b, sample_slot)++] = ray;
+        }
       }
     }
   };

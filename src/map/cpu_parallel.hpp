@@ -22,17 +22,18 @@ namespace raymap::detail {
 /// @brief Integrates a batch with several workers, giving every region to exactly one of them.
 ///
 /// Design: five steps per batch.
-///  1. Survey (parallel, rays split into contiguous ranges): each worker walks its rays at region
-///     level once, records every span (region, t0, t1, voxel box) and the sample cell per ray, and
-///     sums the estimated work (voxel steps) per region in a private table.
+///  1. Survey (parallel): the batch's rays are cut into contiguous blocks (a few per worker),
+///     taken by the workers as they come free; each worker walks its blocks' rays at region level
+///     once, records every span (region, t0, t1, voxel box) and the sample cell per ray in a list
+///     of its own, and sums the estimated work (voxel steps) per region in a private table.
 ///  2. Create (serial): the regions of the batch are inserted into the store, uncleared; if the
 ///     store is full the batch fails here, before any voxel changes.
 ///  3. Order (serial): regions sorted by estimated work, largest first.
-///  4. Resolve (parallel, then a short serial prefix sum, then parallel): each worker looks up the
-///     slots of the spans it recorded and counts them per region; the counts become each
-///     worker's place in one flat list of steps grouped by region (the regions in step 3's order,
-///     within a region survey range by survey range, so in ray order); each worker then writes
-///     its steps and sample hits there.
+///  4. Resolve (parallel, then a short serial prefix sum, then parallel; blocks taken as in the
+///     survey): the slots of each block's spans are looked up and counted per region and block;
+///     the counts become each block's place in one flat list of steps grouped by region (the
+///     regions in step 3's order, within a region block by block, so in ray order); then each
+///     block's steps and sample hits are written there.
 ///  5. Apply (parallel): workers take the regions one at a time from a shared counter, largest
 ///     first, and apply each region's steps in ray order, clearing a new region first (its first
 ///     touch is by the worker that writes it).
@@ -167,20 +168,33 @@ class ParallelIntegrator {
     std::uint32_t hits_end;    // NDT: after them)
   };
 
-  std::pair<std::size_t, std::size_t> rangeOf(unsigned worker, std::size_t count) const noexcept;
+  /// The rays of block `block` of a batch of `count`: blocks_ contiguous ranges, in ray order.
+  std::pair<std::size_t, std::size_t> rangeOf(unsigned block, std::size_t count) const noexcept;
+  /// The next block of the current step, or kNoBlock when all are taken.
+  unsigned takeBlock() noexcept;
   void releaseSlots() noexcept;
   /// Gives up a batch before its apply step: the regions it created get their clear values.
   void abandonBatch(VoxelMap& map) noexcept;
-  /// Counts of worker `w`'s steps (or hits) per slot, then its next place in the flat list.
-  std::uint32_t& stepCursor(unsigned w, std::uint32_t slot) noexcept {
-    return step_cursors_[static_cast<std::size_t>(w) * slots_ + slot];
+  /// Counts of block `b`'s steps (or hits) per slot, then its next place in the flat list.
+  std::uint32_t& stepCursor(unsigned b, std::uint32_t slot) noexcept {
+    return step_cursors_[static_cast<std::size_t>(b) * slots_ + slot];
   }
-  std::uint32_t& hitCursor(unsigned w, std::uint32_t slot) noexcept {
-    return hit_cursors_[static_cast<std::size_t>(w) * slots_ + slot];
+  std::uint32_t& hitCursor(unsigned b, std::uint32_t slot) noexcept {
+    return hit_cursors_[static_cast<std::size_t>(b) * slots_ + slot];
   }
+  /// Blocks of rays per worker in the survey and resolve steps: enough that a worker whose rays
+  /// cost more (longer rays, more regions, pages faulted in) does not hold up the step. With one
+  /// range per worker, the first worker's survey of the Ouster data took 1.6 times the second's
+  /// (a warm-up pass and a timed pass together); with blocks, 2 threads gained 1-4 %
+  /// (docs/benchmarks.md).
+  static constexpr unsigned kBlocksPerWorker = 4;
+  static constexpr unsigned kMaxBlocks = 64;  // bounds the cursor rows (blocks x store slots)
+  static constexpr unsigned kNoBlock = ~0u;
 
   WorkerPool pool_;
   std::uint32_t slots_;                  // the store's capacity
+  unsigned blocks_ = 1;                  // blocks of rays per batch
+  std::vector<unsigned> block_worker_;   // per block: the worker whose span list holds its spans
   std::vector<WorkerScratch> scratch_;   // one per worker
   platform::PageArray<RayRecord> rays_;  // per ray of the batch, written by the survey
   std::vector<std::uint8_t> in_batch_;   // per slot: a region of this batch
@@ -188,8 +202,8 @@ class ParallelIntegrator {
   std::vector<double> slot_work_;        // per slot
   std::vector<std::uint32_t> touched_;   // slots of this batch
   std::vector<std::pair<double, std::uint32_t>> order_;
-  /// Per worker a row of one counter per slot (rows of their own: no shared cache lines while
-  /// the workers count).
+  /// Per block a row of one counter per slot (a block is counted and placed by one worker at a
+  /// time; rows of their own keep two workers off each other's cache lines).
   std::vector<std::uint32_t> step_cursors_;
   std::vector<std::uint32_t> hit_cursors_;
   std::vector<RegionWork> regions_;  // step 3's order
@@ -201,6 +215,8 @@ class ParallelIntegrator {
   platform::PageArray<std::uint32_t> hits_;  // every region's hit rays, grouped by region
   /// The next entry of regions_ to apply; on a cache line of its own.
   alignas(64) std::atomic<std::size_t> next_region_{0};
+  /// The next block of rays of the survey, count or place step; on a cache line of its own.
+  alignas(64) std::atomic<std::size_t> next_block_{0};
   StepSeconds steps_seconds_;
 };
 
