@@ -61,6 +61,13 @@ class RayBatcher {
   /// @brief Integrates what the batch holds. Does not wait for a device (Backend::synchronise()).
   Expected<void, IntegrateError> flush() noexcept;
 
+  /// @brief Forgets the scan the last rays belonged to: the next rays start a new scan even when
+  /// they carry the same Ray::scan (a stream read again from its start with the same batcher).
+  /// Call after flush().
+  void endStream() noexcept {
+    have_scan_ = false;
+    scan_split_ = false;
+  }
   /// Prepared rays waiting in the batch.
   std::size_t pending() const noexcept { return fill_; }
   std::size_t capacity() const noexcept { return capacity_; }

@@ -130,9 +130,10 @@ int runBench(const BenchFlags& f) {
           return kExitFailure;
         }
         // Each pass streams the preloaded rays through the same path as populate. In steady
-        // state both passes share one backend, so a device's region cache stays warm too. With
+        // state both passes share one backend and one batcher, as a service keeps them, so a
+        // device's region cache and the batch buffers stay warm too. With
         // height maps the backend is kept here too: the cycles run on it between batches.
-        CreatedBackend shared;
+        StreamState shared;
         const bool keep_backend = f.steady_state || (f.heightmaps.every_rays > 0);
         BenchHeightmaps cycles(f.heightmaps);
         auto pass = [&](bool timed) {
@@ -140,9 +141,9 @@ int runBench(const BenchFlags& f) {
           return integrateStream(
               *map, options,
               [&](std::span<Ray> out) -> Result<std::size_t> {
-                if (timed && next > 0 && shared.backend) {
+                if (timed && next > 0 && shared.created.backend) {
                   auto cycle = cycles.maybeGenerate(next, rays[next - 1].origin, *map,
-                                                    *shared.backend, options.backend);
+                                                    *shared.created.backend, options.backend);
                   if (!cycle) {
                     return Unexpected(cycle.error());
                   }

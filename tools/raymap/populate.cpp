@@ -58,10 +58,11 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
 Result<PopulateReport> integrateStream(
     VoxelMap& map, const PopulateOptions& options,
     const std::function<Result<std::size_t>(std::span<Ray>)>& next_chunk,
-    const std::function<double()>& progress, CreatedBackend* reuse) {
+    const std::function<double()>& progress, StreamState* reuse) {
   const Clock::time_point start = Clock::now();
-  CreatedBackend owned;
-  CreatedBackend* created = reuse != nullptr ? reuse : &owned;
+  StreamState owned;
+  StreamState& state = reuse != nullptr ? *reuse : owned;
+  CreatedBackend* created = &state.created;
   if (!created->backend) {
     auto made = createBackend(map, options.backend);
     if (!made) {
@@ -72,8 +73,13 @@ Result<PopulateReport> integrateStream(
   Backend& backend = *created->backend;
   const BackendStats stats_before = backend.stats();
   RayPreparer preparer(map, options.filter);
-  RayBatcher batcher(map, backend,
-                     options.batch_rays != 0 ? options.batch_rays : backend.preferredBatchRays());
+  if (!state.batcher) {
+    state.batcher = std::make_unique<RayBatcher>(
+        map, backend, options.batch_rays != 0 ? options.batch_rays : backend.preferredBatchRays());
+  }
+  RayBatcher& batcher = *state.batcher;
+  batcher.endStream();  // the input starts again: its first rays are a new scan
+  const BatcherCounters batcher_before = batcher.counters();
 
   PopulateReport report;
   report.backend_name = backend.name();
@@ -117,8 +123,8 @@ Result<PopulateReport> integrateStream(
       return Unexpected(integrate_failed(ok.error()));
     }
   }
-  report.scans = batcher.counters().scans;
-  report.scans_split = batcher.counters().scans_split;
+  report.scans = batcher.counters().scans - batcher_before.scans;
+  report.scans_split = batcher.counters().scans_split - batcher_before.scans_split;
   // Device backends return before the device finishes: the wait and the download of the map
   // belong to the integration time.
   const Clock::time_point t_sync = Clock::now();

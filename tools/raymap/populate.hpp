@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -15,6 +16,7 @@
 #include "src/io/ray_source.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/decay_summary.hpp"
+#include "src/map/ray_batcher.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/tsdf_surface.hpp"
 #include "src/map/voxel_map.hpp"
@@ -65,17 +67,25 @@ struct PopulateReport {
   std::optional<TierReport> tiers;  ///< maps with cold tiers (after the compressor drained)
 };
 
+/// @brief What integrateStream keeps from one call to the next when asked to (`bench
+/// --steady-state`, height-map cycles): the backend, so that a device's cache stays warm, and the
+/// batcher, so that its batch of prepared rays stays resident, as in a service that runs for
+/// hours. Made on first use.
+struct StreamState {
+  CreatedBackend created;
+  std::unique_ptr<RayBatcher> batcher;
+};
+
 /// @brief Integrates rays into `map` with a new backend, batching by size (per-ray) or by scan
 /// (per-scan). `next_chunk` fills a span and returns how many rays it wrote (0 at the end).
 /// `progress` gets the fraction of the input consumed. Fails on read errors and when a global
 /// map's store is full (the message says how to raise --max-memory).
-/// `reuse`: when given, the backend is taken from it (created there on first use) and kept for
-/// the next call, so that a device's cache stays warm; the report's backend counters then cover
-/// this call only.
+/// `reuse`: when given, the backend and the batcher are taken from it (made there on first use)
+/// and kept for the next call; the report's backend and scan counters then cover this call only.
 Result<PopulateReport> integrateStream(
     VoxelMap& map, const PopulateOptions& options,
     const std::function<Result<std::size_t>(std::span<Ray>)>& next_chunk,
-    const std::function<double()>& progress, CreatedBackend* reuse = nullptr);
+    const std::function<double()>& progress, StreamState* reuse = nullptr);
 
 /// @brief Opens options.input and integrates it (integrateStream over a RaySource); records
 /// provenance in the map's info.

@@ -143,5 +143,33 @@ TEST(RayBatcher, SegmentedRaysArePreparedOnTheCallingThread) {
   EXPECT_EQ(cmp.exact_value, cmp.compared);
 }
 
+TEST(RayBatcher, AStreamReadAgainWithTheSameBatcherStartsANewScan) {
+  // A one-scan input integrated twice with one batcher (raymap bench --steady-state keeps it, as
+  // a service does): its rays carry the same Ray::scan both times, yet the second pass is a scan
+  // of its own.
+  std::vector<Ray> rays = test::randomScans(5, 1, 3000);
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerScan));
+  auto backend = test::cpuBackend(map, 1);
+  RayPreparer preparer(map, RayFilter{});
+  RayBatcher batcher(map, *backend, 16384);
+
+  ASSERT_TRUE(batcher.add(preparer, rays).has_value());
+  ASSERT_TRUE(batcher.flush().has_value());
+  const BatcherCounters first = batcher.counters();
+  ASSERT_TRUE(batcher.add(preparer, rays).has_value());  // without endStream(): the same scan
+  ASSERT_TRUE(batcher.flush().has_value());
+  const BatcherCounters second = batcher.counters();
+  batcher.endStream();
+  ASSERT_TRUE(batcher.add(preparer, rays).has_value());
+  ASSERT_TRUE(batcher.flush().has_value());
+  const BatcherCounters third = batcher.counters();
+
+  EXPECT_EQ(first.scans, 1u);
+  EXPECT_EQ(second.scans, 1u);
+  EXPECT_EQ(third.scans, 2u);
+  EXPECT_EQ(third.batches, 3u);
+  EXPECT_EQ(third.rays_integrated, 3u * rays.size());
+}
+
 }  // namespace
 }  // namespace raymap
