@@ -39,8 +39,8 @@ class PageArray {
       return false;
     }
     block->adviseHugePages(0, block->size());
-    if (keep > 0) {
-      std::memcpy(block->data(), block_.data(), std::min(keep, capacity_) * sizeof(T));
+    if (const std::size_t kept = std::min(keep, capacity_); kept > 0) {
+      std::memcpy(block->data(), block_.data(), kept * sizeof(T));
     }
     block_ = std::move(block).value();
     capacity_ = block_.size() / sizeof(T);

@@ -197,7 +197,6 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         record.sample_index = index;
       }
     }
-    scratch.span_count = span_count;
     if (!table.flush()) {
       scratch.overflow = true;
     }

@@ -5,7 +5,6 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
-#include <memory>
 #include <span>
 #include <utility>
 #include <vector>
@@ -153,7 +152,6 @@ class ParallelIntegrator {
     explicit WorkerScratch(std::size_t max_regions) : table(max_regions) {}
     WorkTable table;
     platform::PageArray<SpanRecord> spans;  // survey: this worker's ray range, in ray order
-    std::size_t span_count = 0;             // of spans
     bool overflow = false;                  // survey: the work table is full
     bool out_of_memory = false;             // survey: the span list could not grow
     double apply_seconds = 0;               // apply: this worker's time in the current batch
