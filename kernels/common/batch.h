@@ -22,6 +22,14 @@ typedef struct rm_span_record {
   rm_vec3i box_lo; /* the region's minimum voxel relative to the walk's start voxel */
 } rm_span_record;
 
+/* The span records of one region, when the host has grouped a batch's spans by region (span work
+ * per region, kernels/device/device.h: RM_REGION_OWNED): spans[first .. first + count) all lie in
+ * the region, in ray order. */
+typedef struct rm_span_run {
+  rm_u32 first;
+  rm_u32 count;
+} rm_span_run;
+
 /* All samples of a batch that fell into one voxel: hit_rays[first .. first + count) are their ray
  * indices, in ray order, so folding them one after another gives the same voxel mean as the CPU
  * reference, bit for bit. */

@@ -49,7 +49,7 @@ RM_DEVICE_FN int rm_float_add_atomic(RM_ATOMIC_GLOBAL rm_u32* word, float value)
   }
   old = rm_load_u32(word);
   for (attempt = 0; attempt < RM_CAS_RETRY_LIMIT; ++attempt) {
-    rm_u32 seen = rm_atomic_cas_u32(word, old, rm_as_u32(rm_as_float(old) + value));
+    rm_u32 seen = rm_voxel_cas_u32(word, old, rm_as_u32(rm_as_float(old) + value));
     if (seen == old) {
       return 1;
     }
@@ -71,7 +71,7 @@ RM_DEVICE_FN int rm_occupancy_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 
     if (updated == value) {
       return 1;
     }
-    seen = rm_atomic_cas_u32(word, old, rm_as_u32(updated));
+    seen = rm_voxel_cas_u32(word, old, rm_as_u32(updated));
     if (seen == old) {
       return 1;
     }

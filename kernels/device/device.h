@@ -22,8 +22,14 @@
 #define RM_MODE_KERNEL __kernel
 #define RM_MODE_CALL(fn) fn
 #define RM_GLOBAL __global
-/* Memory updated by atomics from several work-items. */
+/* Memory updated by atomics from several work-items. In a program whose span kernel gives each
+ * region to one work-item (RM_REGION_OWNED, below) only the batch counters are: voxel layers are
+ * plain memory there, so the compiler may keep a voxel in a register between reads. */
+#if defined(RM_REGION_OWNED)
+#define RM_ATOMIC_GLOBAL __global
+#else
 #define RM_ATOMIC_GLOBAL volatile __global
+#endif
 
 RM_DEVICE_FN rm_u32 rm_global_id(void) { return RM_U32(get_global_id(0)); }
 RM_DEVICE_FN float rm_as_float(rm_u32 bits) { return as_float(bits); }
@@ -108,5 +114,58 @@ RM_DEVICE_FN rm_u32 rm_load_u32(RM_ATOMIC_GLOBAL rm_u32* p) {
   return *p;
 #endif
 }
+
+/* Updates of voxel-layer words. The span kernels launched one work-item per span record share
+ * voxels with other work-items and update them with atomics. A program built with
+ * -DRM_REGION_OWNED (OpenCL on CPU devices, docs/architecture.md "Span work on CPU devices")
+ * launches its span kernel one work-item per region instead: the host groups the batch's span
+ * records by region, in ray order, and every voxel then has one writer during the launch. The
+ * same update code does plain reads and writes there, which on a CPU device are several times
+ * cheaper than locked instructions (each compare-and-swap below then succeeds at once). The batch
+ * counters stay atomic (rm_atomic_*). */
+#if defined(RM_REGION_OWNED)
+#if defined(__CUDACC__)
+#error "RM_REGION_OWNED is for OpenCL programs on CPU devices"
+#endif
+RM_DEVICE_FN rm_u32 rm_voxel_cas_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 expected, rm_u32 desired) {
+  rm_u32 seen = *p;
+  if (seen == expected) {
+    *p = desired;
+  }
+  return seen;
+}
+RM_DEVICE_FN rm_u32 rm_voxel_max_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  rm_u32 seen = *p;
+  if (value > seen) {
+    *p = value;
+  }
+  return seen;
+}
+RM_DEVICE_FN rm_u32 rm_voxel_add_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  rm_u32 seen = *p;
+  *p = seen + value;
+  return seen;
+}
+RM_DEVICE_FN rm_u32 rm_voxel_xchg_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  rm_u32 seen = *p;
+  *p = value;
+  return seen;
+}
+#if defined(RM_HAVE_INT64_ATOMICS)
+RM_DEVICE_FN rm_u64 rm_voxel_cas_u64(RM_ATOMIC_GLOBAL rm_u64* p, rm_u64 expected, rm_u64 desired) {
+  rm_u64 seen = *p;
+  if (seen == expected) {
+    *p = desired;
+  }
+  return seen;
+}
+#endif
+#else
+#define rm_voxel_cas_u32 rm_atomic_cas_u32
+#define rm_voxel_max_u32 rm_atomic_max_u32
+#define rm_voxel_add_u32 rm_atomic_add_u32
+#define rm_voxel_xchg_u32 rm_atomic_xchg_u32
+#define rm_voxel_cas_u64 rm_atomic_cas_u64
+#endif
 
 #endif /* RAYMAP_KERNELS_DEVICE_DEVICE_H */

@@ -72,7 +72,7 @@ RM_DEVICE_FN int rm_ndt_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
     if (updated == value) {
       return 1;
     }
-    seen = rm_atomic_cas_u32(word, old, rm_as_u32(updated));
+    seen = rm_voxel_cas_u32(word, old, rm_as_u32(updated));
     if (seen == old) {
       return 1;
     }
@@ -88,7 +88,7 @@ RM_DEVICE_FN int rm_ndt_miss_atomic(RM_ATOMIC_GLOBAL rm_u32* word, rm_u32 old,
 RM_DEVICE_FN void rm_ndt_count_pass(RM_ATOMIC_GLOBAL rm_u32* hit_miss, rm_u32 i) {
   RM_ATOMIC_GLOBAL rm_u32* misses = hit_miss + i + i + 1u; /* not 2u * i: wraps past 2^31 */
   if (rm_load_u32(misses) != 0xFFFFFFFFu) {
-    (void)rm_atomic_add_u32(misses, 1u);
+    (void)rm_voxel_add_u32(misses, 1u);
   }
 }
 

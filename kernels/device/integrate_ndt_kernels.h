@@ -13,6 +13,29 @@
 
 #include "integrate_ndt.h"
 
+#if defined(RM_REGION_OWNED)
+/* Span work per region: as rm_integrate_region_spans (integrate_occupancy_kernels.h), each
+ * work-item takes the next region's run of spans until none is left. */
+RM_MODE_KERNEL void rm_ndt_integrate_region_spans(
+    const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
+    const RM_GLOBAL rm_span_run* runs, RM_ATOMIC_GLOBAL rm_u32* next_run,
+    RM_ATOMIC_GLOBAL rm_u32* occupancy, const RM_GLOBAL rm_ndt_voxel* ndt,
+    const RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* hit_miss,
+    RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params params, rm_ndt_params ndt_params,
+    RM_ATOMIC_GLOBAL rm_counter* counters) {
+  rm_u32 r;
+  for (r = rm_atomic_add_u32(next_run, 1u); r < params.item_count;
+       r = rm_atomic_add_u32(next_run, 1u)) {
+    rm_span_run run = runs[r];
+    rm_u32 k;
+    for (k = 0u; k < run.count; ++k) {
+      RM_MODE_CALL(rm_ndt_integrate_span)
+      (run.first + k, rays, spans, occupancy, ndt, means, hit_miss, traversal, params, ndt_params,
+       counters);
+    }
+  }
+}
+#else
 RM_MODE_KERNEL void rm_ndt_integrate_spans(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
     RM_ATOMIC_GLOBAL rm_u32* occupancy, const RM_GLOBAL rm_ndt_voxel* ndt,
@@ -25,6 +48,7 @@ RM_MODE_KERNEL void rm_ndt_integrate_spans(
     (id, rays, spans, occupancy, ndt, means, hit_miss, traversal, params, ndt_params, counters);
   }
 }
+#endif
 
 RM_KERNEL void rm_ndt_apply_hit_groups(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_hit_group* groups,

@@ -114,7 +114,7 @@ RM_DEVICE_FN rm_u32 rm_ray_miss_span(rm_span_walk walk, rm_i32 count, rm_u32 bas
       rm_u32 g = word & RM_TAG_GROUP_MASK;
       rm_hit_group group = groups[g];
       rm_u32 run = rm_runs_offset(group, g, p) + rm_hits_before(hit_rays, group, ray);
-      (void)rm_atomic_add_u32(scratch + run, 1u);
+      (void)rm_voxel_add_u32(scratch + run, 1u);
     } else if (!rm_occupancy_miss_atomic(occupancy + i, word, p.occupancy)) {
       dropped += 1u;
     }
@@ -131,7 +131,7 @@ RM_DEVICE_FN void rm_scan_miss_span(rm_span_walk walk, rm_i32 count, rm_u32 base
   rm_i32 k;
   for (k = 0; k < count; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(walk.index) : rm_span_walk_advance(&walk));
-    if (rm_load_u32(marks + i) < miss_mark && rm_atomic_max_u32(marks + i, miss_mark) < miss_mark) {
+    if (rm_load_u32(marks + i) < miss_mark && rm_voxel_max_u32(marks + i, miss_mark) < miss_mark) {
       occupancy[i] = rm_as_u32(rm_occupancy_miss(rm_as_float(occupancy[i]), p.occupancy));
     }
   }

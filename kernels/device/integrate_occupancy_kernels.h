@@ -23,6 +23,32 @@ RM_KERNEL void rm_tag_hit_groups(const RM_GLOBAL rm_hit_group* groups,
   }
 }
 
+#if defined(RM_REGION_OWNED)
+/* Span work per region (kernels/device/device.h): each work-item takes the next region's run of
+ * spans (params.item_count runs, longest first) until none is left, and walks it in ray order as
+ * its voxels' only writer. A few work-items per device thread: runs differ in length by orders
+ * of magnitude, and taking them as workers come free balances what a static split would not. */
+RM_MODE_KERNEL void rm_integrate_region_spans(
+    const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
+    const RM_GLOBAL rm_span_run* runs, RM_ATOMIC_GLOBAL rm_u32* next_run,
+    const RM_GLOBAL rm_hit_group* groups, const RM_GLOBAL rm_u32* hit_rays,
+    RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_ATOMIC_GLOBAL rm_u32* marks,
+    RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal,
+    RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_integrate_params params,
+    RM_ATOMIC_GLOBAL rm_counter* counters) {
+  rm_u32 r;
+  for (r = rm_atomic_add_u32(next_run, 1u); r < params.item_count;
+       r = rm_atomic_add_u32(next_run, 1u)) {
+    rm_span_run run = runs[r];
+    rm_u32 k;
+    for (k = 0u; k < run.count; ++k) {
+      RM_MODE_CALL(rm_integrate_span)
+      (run.first + k, rays, spans, groups, hit_rays, occupancy, marks, scratch, traversal, tsdf,
+       params, counters);
+    }
+  }
+}
+#else
 RM_MODE_KERNEL void rm_integrate_spans(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
     const RM_GLOBAL rm_hit_group* groups, const RM_GLOBAL rm_u32* hit_rays,
@@ -37,6 +63,7 @@ RM_MODE_KERNEL void rm_integrate_spans(
      counters);
   }
 }
+#endif
 
 RM_MODE_KERNEL void rm_apply_hit_groups(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_hit_group* groups,

@@ -59,7 +59,7 @@ RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, 
       if (desired == old) {
         return 1;
       }
-      seen = rm_atomic_cas_u64(pair, old, desired);
+      seen = rm_voxel_cas_u64(pair, old, desired);
       if (seen == old) {
         return 1;
       }
@@ -79,16 +79,16 @@ RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, 
     for (spins = 0u; done == 0 && spins < RM_TSDF_LOCK_SPIN_LIMIT; ++spins) {
       rm_u32 bits = rm_load_u32(weight);
       if ((bits & RM_TSDF_LOCK_BIT) == 0u &&
-          rm_atomic_cas_u32(weight, bits, bits | RM_TSDF_LOCK_BIT) == bits) {
+          rm_voxel_cas_u32(weight, bits, bits | RM_TSDF_LOCK_BIT) == bits) {
         rm_tsdf_voxel v;
         rm_tsdf_voxel fused;
         rm_global_fence();
         v.weight = rm_as_float(bits);
-        v.distance = rm_as_float(rm_atomic_xchg_u32(distance, 0u));
+        v.distance = rm_as_float(rm_voxel_xchg_u32(distance, 0u));
         fused = rm_tsdf_fuse(v, sdf, w, p);
-        (void)rm_atomic_xchg_u32(distance, rm_as_u32(fused.distance));
+        (void)rm_voxel_xchg_u32(distance, rm_as_u32(fused.distance));
         rm_global_fence();
-        (void)rm_atomic_xchg_u32(weight, rm_as_u32(fused.weight)); /* releases the voxel */
+        (void)rm_voxel_xchg_u32(weight, rm_as_u32(fused.weight)); /* releases the voxel */
         done = 1;
       }
     }

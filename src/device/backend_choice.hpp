@@ -21,9 +21,10 @@ struct BackendChoice {
   std::string opencl_platform;  ///< index or name substring; empty = default
   std::string opencl_device;    ///< index or name substring; empty = first GPU, else first device
   int cuda_device = 0;          ///< CUDA device ordinal
-  std::uint64_t gpu_cache_bytes = 0;    ///< device region cache; 0 = automatic
-  std::uint32_t gpu_cache_regions = 0;  ///< device region cache in regions (overrides bytes)
-  std::string gpu_memory = "auto";      ///< "auto", "cache" or "shared"
+  std::uint64_t gpu_cache_bytes = 0;      ///< device region cache; 0 = automatic
+  std::uint32_t gpu_cache_regions = 0;    ///< device region cache in regions (overrides bytes)
+  std::string gpu_memory = "auto";        ///< "auto", "cache" or "shared"
+  std::string opencl_span_work = "auto";  ///< "auto", "span" or "region" (SpanWork)
   std::size_t gpu_batch_rays = std::size_t{1} << 18;
   bool fallback_cpu = false;  ///< use the CPU backend (with a warning) if the device fails to start
 };

@@ -296,6 +296,12 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "place, for devices sharing memory with the host), or auto")
       ->check(CLI::IsMember({"auto", "cache", "shared"}))
       ->capture_default_str();
+  c.add_option("--opencl-span-work", f.opencl_span_work,
+               "How OpenCL work-items share a batch's ray spans: span (one per span, atomic voxel "
+               "updates), region (one per region, plain updates), or auto (region on CPU "
+               "devices such as PoCL, span on GPUs)")
+      ->check(CLI::IsMember({"auto", "span", "region"}))
+      ->capture_default_str();
   c.add_option("--fallback", f.fallback,
                "If the device backend cannot start: none (fail) or cpu (warn, map on the CPU)")
       ->check(CLI::IsMember({"none", "cpu"}))
@@ -512,6 +518,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.backend.cuda_device = f.cuda_device;
   o.backend.fallback_cpu = f.fallback == "cpu";
   o.backend.gpu_memory = f.gpu_memory;
+  o.backend.opencl_span_work = f.opencl_span_work;
   if (f.batch_rays != 0) {
     o.backend.gpu_batch_rays = f.batch_rays;
   }

@@ -50,6 +50,7 @@ struct MappingFlags {
   int cuda_device = 0;
   std::string gpu_cache = "auto";
   std::string gpu_memory = "auto";
+  std::string opencl_span_work = "auto";
   std::string fallback = "none";
   double segment_length = 0.0;
   bool reverse = false;

@@ -24,11 +24,16 @@ using gpu::OccupancyKernel;
 
 // Work-group size for the kernels (clamped to the device maximum).
 constexpr std::size_t kWorkGroup = 64;
+// Span work per region: work-items per compute unit. More than one, so a unit whose thread the
+// OS takes away for a while does not hold runs the others could take.
+constexpr std::size_t kRegionWorkersPerUnit = 2;
 
 /// Device buffers of one staging set.
 struct DeviceBatch {
   opencl::BufferHandle rays;
   opencl::BufferHandle spans;
+  opencl::BufferHandle span_runs;  // span work per region: each region's run of spans
+  opencl::BufferHandle next_run;   // span work per region: the next run to take (zeroed a batch)
   opencl::BufferHandle groups;
   opencl::BufferHandle hit_rays;
   opencl::BufferHandle counters;
@@ -59,11 +64,23 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     if (auto ok = checkMapIsSupported(); !ok) {
       return ok;
     }
+    const bool by_region = options.span_work == SpanWork::kPerRegion ||
+                           (options.span_work == SpanWork::kAuto && ctx_.info.type == "CPU");
+    if (by_region) {
+      try {
+        groupSpansByRegion();
+      } catch (const std::bad_alloc&) {
+        return fail(ErrorCode::kCapacity,
+                    "OpenCL backend: no host memory to group span records "
+                    "by region (--batch-rays smaller)");
+      }
+    }
     // The program is built for the map's mode (kernels/common/map_mode.h): kernels without the
     // branches of other modes. Each mode's binary has its own entry in the program cache.
     const std::string options_text =
         std::string("-cl-std=CL1.2 -DRM_MAP_MODE=") + std::to_string(mapMode()) + "u" +
         (int64_counters_ ? " -DRM_HAVE_INT64_ATOMICS=1" : "") +
+        (by_region ? " -DRM_REGION_OWNED=1" : "") +
         (options.extra_build_options.empty() ? "" : " " + options.extra_build_options);
     // A map is integrated by one program: the occupancy kernels, or the NDT ones for NDT maps.
     const bool ndt = isNdt(map().mode());
@@ -75,10 +92,13 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     }
     program_warning_ = program->warning;
     program_ = std::move(program->program);
+    const char* span_name =
+        ndt ? (by_region ? "rm_ndt_integrate_region_spans" : "rm_ndt_integrate_spans")
+            : (by_region ? "rm_integrate_region_spans" : "rm_integrate_spans");
     auto kernels_made =
-        ndt ? opencl::createKernels(program_, {{&span_kernel_, "rm_ndt_integrate_spans"},
-                                               {&hit_kernel_, "rm_ndt_apply_hit_groups"}})
-            : opencl::createKernels(program_, {{&span_kernel_, "rm_integrate_spans"},
+        ndt ? opencl::createKernels(
+                  program_, {{&span_kernel_, span_name}, {&hit_kernel_, "rm_ndt_apply_hit_groups"}})
+            : opencl::createKernels(program_, {{&span_kernel_, span_name},
                                                {&hit_kernel_, "rm_apply_hit_groups"},
                                                {&tag_kernel_, "rm_tag_hit_groups"}});
     if (!kernels_made) {
@@ -97,6 +117,12 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
       for (auto [handle, bytes, what] :
            {std::tuple{&set.rays, limits.max_rays * sizeof(PreparedRay), "ray batch"},
             std::tuple{&set.spans, limits.max_spans * sizeof(rm_span_record), "span batch"},
+            std::tuple{&set.span_runs,
+                       by_region ? std::min<std::size_t>(limits.max_spans, layerRegions()) *
+                                       sizeof(rm_span_run)
+                                 : sizeof(rm_span_run),
+                       "span runs"},
+            std::tuple{&set.next_run, sizeof(std::uint32_t), "span run cursor"},
             std::tuple{&set.groups, limits.max_rays * sizeof(rm_hit_group), "hit groups"},
             std::tuple{&set.hit_rays, limits.max_rays * sizeof(std::uint32_t), "hit list"},
             std::tuple{&set.counters, counterBytes(), "counters"},
@@ -119,7 +145,8 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
   const char* name() const noexcept override { return "opencl"; }
   std::string deviceName() const override {
     return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")" +
-           (sharedMemory() ? ", shared memory" : "");
+           (sharedMemory() ? ", shared memory" : "") +
+           (spansByRegion() ? ", span work per region" : "");
   }
   std::string startupWarning() const override { return program_warning_; }
 
@@ -169,10 +196,15 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
       }
     };
     write(b.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
-    write(b.spans, a.spans.data(), a.spans.size() * sizeof(rm_span_record));
+    write(b.spans, a.deviceSpans().data(), a.deviceSpans().size() * sizeof(rm_span_record));
+    write(b.span_runs, a.span_runs.data(), a.span_runs.size() * sizeof(rm_span_run));
     write(b.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
     write(b.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
     const std::uint32_t zero = 0;
+    if (ok && spansByRegion()) {
+      ok = clEnqueueFillBuffer(q, b.next_run.get(), &zero, sizeof(zero), 0, sizeof(zero), 0,
+                               nullptr, nullptr) == CL_SUCCESS;
+    }
     return ok && clEnqueueFillBuffer(q, b.counters.get(), &zero, sizeof(zero), 0, counterBytes(), 0,
                                      nullptr, nullptr) == CL_SUCCESS;
   }
@@ -195,11 +227,17 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
         break;
       case OccupancyKernel::kIntegrateSpans:
         k = span_kernel_.get();
-        ok = setArgs(k, b.rays.get(), b.spans.get(), b.groups.get(), b.hit_rays.get(),
-                     layerOr(map().occupancyLayer()), layerOr(map().scanMarkLayer()),
-                     b.scratch.get(), layerOr(map().traversalLayer()), layerOr(map().tsdfLayer()),
-                     p, b.counters.get());
-        break;
+        ok = spansByRegion()
+                 ? setArgs(k, b.rays.get(), b.spans.get(), b.span_runs.get(), b.next_run.get(),
+                           b.groups.get(), b.hit_rays.get(), layerOr(map().occupancyLayer()),
+                           layerOr(map().scanMarkLayer()), b.scratch.get(),
+                           layerOr(map().traversalLayer()), layerOr(map().tsdfLayer()), p,
+                           b.counters.get())
+                 : setArgs(k, b.rays.get(), b.spans.get(), b.groups.get(), b.hit_rays.get(),
+                           layerOr(map().occupancyLayer()), layerOr(map().scanMarkLayer()),
+                           b.scratch.get(), layerOr(map().traversalLayer()),
+                           layerOr(map().tsdfLayer()), p, b.counters.get());
+        return ok && (spansByRegion() ? enqueueRegionWorkers(k) : enqueue(k, p.item_count));
       case OccupancyKernel::kApplyHitGroups:
         k = hit_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.groups.get(), b.hit_rays.get(),
@@ -219,10 +257,15 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     switch (kernel) {
       case NdtKernel::kIntegrateSpans:
         k = span_kernel_.get();
-        ok = setArgs(k, b.rays.get(), b.spans.get(), layerOr(m.occupancyLayer()),
-                     layerOr(m.ndtLayer()), layerOr(m.meanLayer()), layerOr(m.hitMissLayer()),
-                     layerOr(m.traversalLayer()), p, ndt, b.counters.get());
-        break;
+        ok = spansByRegion()
+                 ? setArgs(k, b.rays.get(), b.spans.get(), b.span_runs.get(), b.next_run.get(),
+                           layerOr(m.occupancyLayer()), layerOr(m.ndtLayer()),
+                           layerOr(m.meanLayer()), layerOr(m.hitMissLayer()),
+                           layerOr(m.traversalLayer()), p, ndt, b.counters.get())
+                 : setArgs(k, b.rays.get(), b.spans.get(), layerOr(m.occupancyLayer()),
+                           layerOr(m.ndtLayer()), layerOr(m.meanLayer()), layerOr(m.hitMissLayer()),
+                           layerOr(m.traversalLayer()), p, ndt, b.counters.get());
+        return ok && (spansByRegion() ? enqueueRegionWorkers(k) : enqueue(k, p.item_count));
       case NdtKernel::kApplyHitGroups:
         k = hit_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.groups.get(), b.hit_rays.get(), layerOr(m.occupancyLayer()),
@@ -237,6 +280,16 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
   bool enqueue(cl_kernel k, std::uint32_t items) noexcept {
     const std::size_t local = local_size_;
     const std::size_t global = (items + local - 1) / local * local;
+    return clEnqueueNDRangeKernel(ctx_.queue.get(), k, 1, nullptr, &global, &local, 0, nullptr,
+                                  nullptr) == CL_SUCCESS;
+  }
+
+  /// Span work per region: a few work-items per compute unit, each its own work-group, which
+  /// take the regions' runs from a shared cursor until none is left (the kernel's loop).
+  bool enqueueRegionWorkers(cl_kernel k) noexcept {
+    const std::size_t local = 1;
+    const std::size_t global =
+        kRegionWorkersPerUnit * std::max<std::size_t>(ctx_.info.compute_units, 1);
     return clEnqueueNDRangeKernel(ctx_.queue.get(), k, 1, nullptr, &global, &local, 0, nullptr,
                                   nullptr) == CL_SUCCESS;
   }

@@ -19,6 +19,14 @@
 
 namespace raymap {
 
+/// How the span kernel shares a batch's work among work-items (docs/architecture.md, "Span work on
+/// CPU devices").
+enum class SpanWork : std::uint8_t {
+  kAuto,       ///< per region on CPU devices (PoCL), per span record on GPUs
+  kPerSpan,    ///< one work-item per span record; voxel updates are atomic
+  kPerRegion,  ///< one work-item per region, its spans in ray order; voxel updates are plain
+};
+
 /// @brief Options of the OpenCL backend: the shared device options (memory, cache, batches) and
 /// the OpenCL ones.
 struct OpenClBackendOptions : DeviceBackendOptions {
@@ -26,6 +34,7 @@ struct OpenClBackendOptions : DeviceBackendOptions {
   /// Use 32-bit counters even where the device has cl_khr_int64_base_atomics (tests both paths).
   bool force_32bit_atomics = false;
   opencl::ProgramCacheOptions program_cache;
+  SpanWork span_work = SpanWork::kAuto;
   /// Appended to the kernel build options (tuning, tests).
   std::string extra_build_options;
 };

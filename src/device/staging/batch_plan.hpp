@@ -52,13 +52,23 @@ class RegionTransfer {
 /// are reserved once for the batch limits and never grow past them, so their storage never moves.
 struct BatchArrays {
   explicit BatchArrays(std::pmr::memory_resource* memory = std::pmr::get_default_resource())
-      : rays(memory), spans(memory), groups(memory), hit_rays(memory), hit_keys(memory) {}
+      : rays(memory),
+        spans(memory),
+        groups(memory),
+        hit_rays(memory),
+        hit_keys(memory),
+        region_spans(memory),
+        span_runs(memory) {}
 
   std::pmr::vector<PreparedRay> rays;
   std::pmr::vector<rm_span_record> spans;
   std::pmr::vector<rm_hit_group> groups;     ///< one per voxel with samples, sorted by voxel
   std::pmr::vector<std::uint32_t> hit_rays;  ///< ray indices of each group's samples, in ray order
   std::pmr::vector<std::uint64_t> hit_keys;  ///< scratch: (device voxel << 32) | ray
+  /// Span work per region only (RegionSpanGrouper): `spans` grouped by region, in ray order
+  /// within each, and each region's run of them. Empty otherwise.
+  std::pmr::vector<rm_span_record> region_spans;
+  std::pmr::vector<rm_span_run> span_runs;
 
   void clear() noexcept {
     rays.clear();
@@ -66,6 +76,12 @@ struct BatchArrays {
     groups.clear();
     hit_rays.clear();
     hit_keys.clear();
+    region_spans.clear();
+    span_runs.clear();
+  }
+  /// The span records as the span kernel reads them: grouped by region when they have been.
+  const std::pmr::vector<rm_span_record>& deviceSpans() const noexcept {
+    return span_runs.empty() ? spans : region_spans;
   }
 };
 

@@ -86,6 +86,13 @@ bool StagedBackend::beforeEviction(std::span<const std::uint32_t> host_slots) no
   return planner_.writeBack(host_slots).has_value();
 }
 
+void StagedBackend::groupSpansByRegion() {
+  grouper_.emplace(layerRegions());
+  for (StagingSet& set : sets_) {
+    grouper_->reserve(set.arrays, limits_);
+  }
+}
+
 Expected<void, Error> StagedBackend::checkMapIsSupported() const {
   if (params_.per_scan != 0u && map_->scanMarkLayer() < 0) {
     return fail(ErrorCode::kUnsupported,
@@ -287,32 +294,38 @@ bool StagedBackend::launchNdtOver(NdtKernel kernel, unsigned set, std::size_t it
 }
 
 Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
+  if (grouper_) {
+    grouper_->group(sets_[set].arrays);
+  }
   const BatchArrays& a = sets_[set].arrays;
+  // The span kernel's work-items: one per span record, or one per region.
+  const std::size_t span_items = grouper_ ? a.span_runs.size() : a.spans.size();
   bool ok = uploadBatch(set, a);
   stats_.bytes_to_device +=
       a.rays.size() * sizeof(PreparedRay) + a.spans.size() * sizeof(rm_span_record) +
-      a.groups.size() * sizeof(rm_hit_group) + a.hit_rays.size() * sizeof(std::uint32_t);
+      a.span_runs.size() * sizeof(rm_span_run) + a.groups.size() * sizeof(rm_hit_group) +
+      a.hit_rays.size() * sizeof(std::uint32_t);
   if (ndt_) {
     // All misses of the batch against the Gaussians as they were, then the hits voxel by voxel
     // in ray order (kernels/common/ndt.h); no scratch, no tags.
-    ok = ok && launchNdtOver(NdtKernel::kIntegrateSpans, set, a.spans.size()) &&
+    ok = ok && launchNdtOver(NdtKernel::kIntegrateSpans, set, span_items) &&
          launchNdtOver(NdtKernel::kApplyHitGroups, set, a.groups.size());
   } else if (params_.has_occupancy == 0u) {
     // No occupancy to order hits and misses in (TSDF maps, decay rates only): the spans, then the
     // voxel means of the samples (TSDF batches have none).
-    ok = ok && launchOver(OccupancyKernel::kIntegrateSpans, set, a.spans.size()) &&
+    ok = ok && launchOver(OccupancyKernel::kIntegrateSpans, set, span_items) &&
          launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size());
   } else if (params_.per_scan != 0u) {
     // Hits first: the scan mark they leave makes the misses skip those voxels (occupied wins).
     ok = ok && launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size()) &&
-         launchOver(OccupancyKernel::kIntegrateSpans, set, a.spans.size());
+         launchOver(OccupancyKernel::kIntegrateSpans, set, span_items);
   } else {
     // Tag the voxels with samples, walk the misses (counting runs of misses between the samples
     // of tagged voxels), then replay the tagged voxels in ray order.
     const std::size_t runs = a.hit_rays.size() + a.groups.size();
     ok = ok && (runs == 0 || clearScratch(set, a.groups.size(), runs));
     ok = ok && launchOver(OccupancyKernel::kTagHitGroups, set, a.groups.size()) &&
-         launchOver(OccupancyKernel::kIntegrateSpans, set, a.spans.size()) &&
+         launchOver(OccupancyKernel::kIntegrateSpans, set, span_items) &&
          launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size());
   }
   ok = ok && endBatch(set);

@@ -17,6 +17,7 @@
 #include "src/device/staging/batch_plan.hpp"
 #include "src/device/staging/device_options.hpp"
 #include "src/device/staging/device_region_cache.hpp"
+#include "src/device/staging/span_grouping.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/layer_schema.hpp"
 #include "src/map/voxel_map.hpp"
@@ -26,14 +27,16 @@ namespace raymap::gpu {
 /// The kernels of the occupancy integration (kernels/device/integrate_occupancy.h).
 enum class OccupancyKernel : std::uint8_t {
   kTagHitGroups,    ///< per-ray semantics: tag the voxels with samples before the misses
-  kIntegrateSpans,  ///< one work-item per span record: the misses (and per-scan marks)
+  kIntegrateSpans,  ///< one work-item per span record (or per region, when grouped): the misses
+                    ///< (and per-scan marks, path lengths, TSDF)
   kApplyHitGroups,  ///< one work-item per voxel with samples: hits (and, per ray, the replay)
 };
 
 /// The kernels of the NDT-OM / NDT-TM integration (kernels/device/integrate_ndt.h), launched in
 /// this order: the batch's misses against the Gaussians as they were, then its hits per voxel.
 enum class NdtKernel : std::uint8_t {
-  kIntegrateSpans,  ///< one work-item per span record: NDT misses (and NDT-TM miss counts)
+  kIntegrateSpans,  ///< one work-item per span record (or per region, when grouped): NDT misses
+                    ///< (and NDT-TM miss counts)
   kApplyHitGroups,  ///< one work-item per voxel with samples: its hits folded in ray order
 };
 
@@ -108,6 +111,13 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   std::size_t scratchWords() const noexcept;
   /// The map's mode bits (kernels/common/map_mode.h): which span and hit kernels run it.
   std::uint32_t mapMode() const noexcept { return map_mode_; }
+  /// From now on, group each batch's span records by region (BatchArrays::region_spans,
+  /// span_runs) and launch the span kernel over the regions: for programs built with
+  /// RM_REGION_OWNED (kernels/device/device.h). Call before the first integrate(). Throws
+  /// std::bad_alloc when the grouped lists cannot be reserved.
+  void groupSpansByRegion();
+  /// The span kernel runs one work-item per region (groupSpansByRegion()).
+  bool spansByRegion() const noexcept { return grouper_.has_value(); }
   /// Fails with kUnsupported, saying why, when no device program has kernels for the map's mode
   /// or a per-scan map lacks its scan-mark layer (MapConfig::device_scan_marks).
   Expected<void, Error> checkMapIsSupported() const;
@@ -192,6 +202,7 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   bool ndt_;                    // the map is NDT-OM or NDT-TM: the NDT kernels, per-ray batches
   rm_ndt_params ndt_params_{};  // NDT maps: the rules' parameters in voxel units
   std::uint32_t map_mode_ = 0;  // rm_map_mode_bits of the map (fixed for the backend's life)
+  std::optional<RegionSpanGrouper> grouper_;  // span work per region (groupSpansByRegion())
   BackendStats stats_;
 };
 

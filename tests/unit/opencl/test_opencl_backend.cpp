@@ -170,5 +170,57 @@ TEST(OpenClBackend, UnknownDeviceIsAClearError) {
   EXPECT_NE(backend.error().message.find("no-such-device-anywhere"), std::string::npos);
 }
 
+// Span work (docs/architecture.md, "Span work on CPU devices"): a CPU device (PoCL in CI) gives
+// each region to one work-item unless asked otherwise; a GPU keeps one work-item per span.
+TEST(OpenClBackend, SpanWorkIsPerRegionOnCpuDevicesUnlessAskedOtherwise) {
+  auto devices = opencl::listDevices();
+  if (!devices || devices->empty()) {
+    GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
+  }
+  auto device = opencl::selectDevice(*devices, opencl::DeviceSelector{});
+  ASSERT_TRUE(device);
+  const bool cpu_device = device->type == "CPU";
+  for (const SpanWork work : {SpanWork::kAuto, SpanWork::kPerSpan, SpanWork::kPerRegion}) {
+    VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
+    OpenClBackendOptions options;
+    options.span_work = work;
+    auto backend = openClBackend(map, options);
+    ASSERT_TRUE(backend);
+    const bool by_region = work == SpanWork::kPerRegion || (work == SpanWork::kAuto && cpu_device);
+    EXPECT_EQ(backend->deviceName().find("span work per region") != std::string::npos, by_region)
+        << backend->deviceName();
+  }
+}
+
+// Both ways of sharing out the spans give the map the CPU reference gives, bit for bit, in both
+// semantics (voxel means included); the agreement suites (tests/device) run per region on PoCL,
+// and the opencl.span_work_per_span entries of CTest run them again per span.
+TEST(OpenClBackend, SpanWorkPerSpanAndPerRegionGiveTheSameMap) {
+  if (!opencl::listDevices()) {
+    GTEST_SKIP() << "no OpenCL platform (install pocl-opencl-icd to run)";
+  }
+  const std::vector<Ray> rays = test::randomScans(77, 3, 3000);
+  for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    VoxelMap reference = test::makeMap(test::smallConfig(semantics));
+    auto cpu = test::cpuBackend(reference, 1);
+    test::integrate(reference, *cpu, rays);
+    for (const SpanWork work : {SpanWork::kPerSpan, SpanWork::kPerRegion}) {
+      VoxelMap map = test::makeMap(test::smallConfig(semantics));
+      OpenClBackendOptions options;
+      options.span_work = work;
+      auto backend = openClBackend(map, options);
+      ASSERT_TRUE(backend);
+      test::integrate(map, *backend, rays);
+      ASSERT_TRUE(backend->synchronise());
+      const test::MapComparison cmp = test::compareMaps(reference, map);
+      const char* label = work == SpanWork::kPerSpan ? "per span" : "per region";
+      EXPECT_GT(cmp.compared, 10000u) << label;
+      EXPECT_EQ(cmp.exact_value, cmp.compared) << label;
+      EXPECT_EQ(backend->stats().voxels_visited, cpu->stats().voxels_visited) << label;
+      EXPECT_EQ(backend->stats().updates_dropped, 0u) << label;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace raymap
