@@ -12,6 +12,7 @@
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_NDT_KERNELS_H
 
 #include "integrate_ndt.h"
+#include "span_runs.h"
 
 #if defined(RM_REGION_OWNED)
 /* Span work per region: as rm_integrate_region_spans (integrate_occupancy_kernels.h), each
@@ -23,16 +24,11 @@ RM_MODE_KERNEL void rm_ndt_integrate_region_spans(
     const RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* hit_miss,
     RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params params, rm_ndt_params ndt_params,
     RM_ATOMIC_GLOBAL rm_counter* counters) {
-  rm_u32 r;
-  for (r = rm_atomic_add_u32(next_run, 1u); r < params.item_count;
-       r = rm_atomic_add_u32(next_run, 1u)) {
-    rm_span_run run = runs[r];
-    rm_u32 k;
-    for (k = 0u; k < run.count; ++k) {
-      RM_MODE_CALL(rm_ndt_integrate_span)
-      (run.first + k, rays, spans, occupancy, ndt, means, hit_miss, traversal, params, ndt_params,
-       counters);
-    }
+  rm_run_cursor cursor = rm_run_cursor_make();
+  rm_u32 id;
+  while (rm_next_owned_span(&cursor, runs, next_run, params.item_count, &id)) {
+    RM_MODE_CALL(rm_ndt_integrate_span)
+    (id, rays, spans, occupancy, ndt, means, hit_miss, traversal, params, ndt_params, counters);
   }
 }
 #else

@@ -13,6 +13,7 @@
 #define RAYMAP_KERNELS_DEVICE_INTEGRATE_OCCUPANCY_KERNELS_H
 
 #include "integrate_occupancy.h"
+#include "span_runs.h"
 
 RM_KERNEL void rm_tag_hit_groups(const RM_GLOBAL rm_hit_group* groups,
                                  RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_GLOBAL rm_u32* scratch,
@@ -36,16 +37,12 @@ RM_MODE_KERNEL void rm_integrate_region_spans(
     RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal,
     RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_integrate_params params,
     RM_ATOMIC_GLOBAL rm_counter* counters) {
-  rm_u32 r;
-  for (r = rm_atomic_add_u32(next_run, 1u); r < params.item_count;
-       r = rm_atomic_add_u32(next_run, 1u)) {
-    rm_span_run run = runs[r];
-    rm_u32 k;
-    for (k = 0u; k < run.count; ++k) {
-      RM_MODE_CALL(rm_integrate_span)
-      (run.first + k, rays, spans, groups, hit_rays, occupancy, marks, scratch, traversal, tsdf,
-       params, counters);
-    }
+  rm_run_cursor cursor = rm_run_cursor_make();
+  rm_u32 id;
+  while (rm_next_owned_span(&cursor, runs, next_run, params.item_count, &id)) {
+    RM_MODE_CALL(rm_integrate_span)
+    (id, rays, spans, groups, hit_rays, occupancy, marks, scratch, traversal, tsdf, params,
+     counters);
   }
 }
 #else
