@@ -7,7 +7,8 @@
  *
  * Every ray adds its path, whatever the semantics: per-scan marks elect one occupancy writer per
  * voxel and scan, but path length is physical and every ray's counts. Adds of many work-items to
- * one voxel (the sensor's, crossed by every ray of a scan) are atomic; their order changes the
+ * one voxel (the sensor's, crossed by every ray of a scan) are atomic (plain adds in ray order
+ * with span work per region, RM_REGION_OWNED in device.h); their order changes the
  * sums by float rounding only, and so does OpenCL's sqrt in rm_decay_ray_metres (3 ulp in
  * OpenCL 1.2, not correctly rounded as on the host). An add given up under contention (OpenCL's
  * bounded compare-and-swap, counters.h) is counted in RM_COUNTER_DROPPED by the caller. */

@@ -13,7 +13,9 @@
  * writes the fused distance and releases by writing the fused weight, in straight-line code. An
  * update given up under contention is counted in RM_COUNTER_DROPPED by the caller, never lost
  * silently. Updates of one voxel by several rays in one batch land in any order: the averages
- * differ from the CPU's by float rounding only. */
+ * differ from the CPU's by float rounding only. With span work per region (RM_REGION_OWNED,
+ * device.h) the swaps are plain writes that always succeed, and a voxel's updates come in ray
+ * order, as on the CPU. */
 #ifndef RAYMAP_KERNELS_DEVICE_TSDF_H
 #define RAYMAP_KERNELS_DEVICE_TSDF_H
 

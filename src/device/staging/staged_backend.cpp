@@ -12,6 +12,7 @@ namespace {
 
 static_assert(sizeof(rm_span_record) == 32, "device ABI");
 static_assert(sizeof(rm_hit_group) == 16, "device ABI");
+static_assert(sizeof(rm_span_run) == 8, "device ABI");
 static_assert(sizeof(rm_integrate_params) == 80, "device ABI");
 static_assert(sizeof(rm_tsdf_voxel) == 8, "device ABI");
 static_assert(sizeof(rm_ndt_params) == 32, "device ABI");
