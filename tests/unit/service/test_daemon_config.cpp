@@ -61,6 +61,7 @@ TEST(DaemonConfig, EmptyMappingGivesTheDefaults) {
   EXPECT_TRUE(c.map.prefault);
   EXPECT_EQ(c.backend.name, "cpu");
   EXPECT_FALSE(c.backend.fallback_cpu);
+  EXPECT_EQ(c.backend.opencl_span_work, "auto");
   EXPECT_EQ(c.pose.source, PoseConfig::Source::kOdometry);
   EXPECT_EQ(c.pose.odometry_topic, "rt/odom");
   EXPECT_EQ(c.pose.history, 4096u);
@@ -266,6 +267,11 @@ TEST(DaemonConfig, WrongTypesAreNamed) {
   expectError("map:\n  semantics: sometimes\n", "map.semantics", "per-ray or per-scan");
   expectError("queues:\n  scan_slots: 2.5\n", "queues.scan_slots", "expected an integer");
   expectError("backend:\n  name: [cpu]\n", "backend.name", "must be cpu, opencl or cuda");
+  expectError("backend:\n  opencl_span_work: atomics\n", "backend.opencl_span_work",
+              "must be auto, span or region");
+  auto region = parseDaemonConfig("backend:\n  opencl_span_work: region\n", kName);
+  ASSERT_TRUE(region) << region.error().message;
+  EXPECT_EQ(region->backend.opencl_span_work, "region");
   expectError("pose:\n  source: gps\n", "pose.source", "must be odometry or tf");
   expectError("sensors:\n  topic: rt/points\n", "sensors", "expected a list");
   expectError("sensors: []\n", "sensors", "at least one sensor");
