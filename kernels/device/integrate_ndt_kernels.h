@@ -15,15 +15,16 @@
 #include "span_runs.h"
 
 #if defined(RM_REGION_OWNED)
-/* Span work per region: as rm_integrate_region_spans (integrate_occupancy_kernels.h), each
- * work-item takes the next region's run of spans until none is left. */
+/* Span work per region: as rm_integrate_region_spans (integrate_occupancy_kernels.h),
+ * rm_ndt_integrate_spans' parameters, then the batch's runs and the run cursor; each work-item
+ * takes the next region's run of spans until none is left. */
 RM_MODE_KERNEL void rm_ndt_integrate_region_spans(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
-    const RM_GLOBAL rm_span_run* runs, RM_ATOMIC_GLOBAL rm_u32* next_run,
     RM_ATOMIC_GLOBAL rm_u32* occupancy, const RM_GLOBAL rm_ndt_voxel* ndt,
     const RM_GLOBAL rm_voxel_mean* means, RM_ATOMIC_GLOBAL rm_u32* hit_miss,
     RM_ATOMIC_GLOBAL rm_u32* traversal, rm_integrate_params params, rm_ndt_params ndt_params,
-    RM_ATOMIC_GLOBAL rm_counter* counters) {
+    RM_ATOMIC_GLOBAL rm_counter* counters, const RM_GLOBAL rm_span_run* runs,
+    RM_ATOMIC_GLOBAL rm_u32* next_run) {
   rm_run_cursor cursor = rm_run_cursor_make();
   rm_u32 id;
   while (rm_next_owned_span(&cursor, runs, next_run, params.item_count, &id)) {

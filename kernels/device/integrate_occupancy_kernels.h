@@ -25,18 +25,19 @@ RM_KERNEL void rm_tag_hit_groups(const RM_GLOBAL rm_hit_group* groups,
 }
 
 #if defined(RM_REGION_OWNED)
-/* Span work per region (kernels/device/device.h): each work-item takes the next region's run of
- * spans (params.item_count runs, longest first) until none is left, and walks it in ray order as
- * its voxels' only writer. A few work-items per device thread: runs differ in length by orders
- * of magnitude, and taking them as workers come free balances what a static split would not. */
+/* Span work per region (kernels/device/device.h): rm_integrate_spans' parameters, then the
+ * batch's runs and the run cursor. Each work-item takes the next region's run of spans
+ * (params.item_count runs, longest first) until none is left, and walks it in ray order as its
+ * voxels' only writer. A few work-items per device thread: runs differ in length by orders of
+ * magnitude, and taking them as workers come free balances what a static split would not. */
 RM_MODE_KERNEL void rm_integrate_region_spans(
     const RM_GLOBAL rm_prepared_ray* rays, const RM_GLOBAL rm_span_record* spans,
-    const RM_GLOBAL rm_span_run* runs, RM_ATOMIC_GLOBAL rm_u32* next_run,
     const RM_GLOBAL rm_hit_group* groups, const RM_GLOBAL rm_u32* hit_rays,
     RM_ATOMIC_GLOBAL rm_u32* occupancy, RM_ATOMIC_GLOBAL rm_u32* marks,
     RM_ATOMIC_GLOBAL rm_u32* scratch, RM_ATOMIC_GLOBAL rm_u32* traversal,
     RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_integrate_params params,
-    RM_ATOMIC_GLOBAL rm_counter* counters) {
+    RM_ATOMIC_GLOBAL rm_counter* counters, const RM_GLOBAL rm_span_run* runs,
+    RM_ATOMIC_GLOBAL rm_u32* next_run) {
   rm_run_cursor cursor = rm_run_cursor_make();
   rm_u32 id;
   while (rm_next_owned_span(&cursor, runs, next_run, params.item_count, &id)) {

@@ -67,9 +67,7 @@ Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice
     setDeviceOptions(choice, &options);
     options.device.platform = choice.opencl_platform;
     options.device.device = choice.opencl_device;
-    options.span_work = choice.opencl_span_work == "span"     ? SpanWork::kPerSpan
-                        : choice.opencl_span_work == "region" ? SpanWork::kPerRegion
-                                                              : SpanWork::kAuto;
+    options.span_work = spanWorkNamed(choice.opencl_span_work).value_or(SpanWork::kAuto);
     return named(createOpenClBackend(map, options), choice.name);
 #else
     return notBuilt(choice.name);

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The shared device tests against the OpenCL backend (PoCL in CI).
 #include <cstdlib>
-#include <string_view>
 
 #include "src/device/opencl/cl_runtime.hpp"
 #include "src/device/opencl/opencl_backend.hpp"
@@ -26,9 +25,7 @@ Result<std::unique_ptr<Backend>> create(VoxelMap& map, const DeviceBackendOption
   // CTest runs the agreement suites a second time with span work per span (tests/CMakeLists.txt):
   // on a CPU device the default is per region, and both must agree with the CPU.
   if (const char* work = std::getenv("RAYMAP_TEST_OPENCL_SPAN_WORK")) {
-    options.span_work = std::string_view(work) == "span"     ? SpanWork::kPerSpan
-                        : std::string_view(work) == "region" ? SpanWork::kPerRegion
-                                                             : SpanWork::kAuto;
+    options.span_work = spanWorkNamed(work).value_or(SpanWork::kAuto);
   }
   return createOpenClBackend(map, options);
 }

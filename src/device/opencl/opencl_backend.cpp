@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <array>
+#include <optional>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
@@ -227,17 +229,11 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
         break;
       case OccupancyKernel::kIntegrateSpans:
         k = span_kernel_.get();
-        ok = spansByRegion()
-                 ? setArgs(k, b.rays.get(), b.spans.get(), b.span_runs.get(), b.next_run.get(),
-                           b.groups.get(), b.hit_rays.get(), layerOr(map().occupancyLayer()),
-                           layerOr(map().scanMarkLayer()), b.scratch.get(),
-                           layerOr(map().traversalLayer()), layerOr(map().tsdfLayer()), p,
-                           b.counters.get())
-                 : setArgs(k, b.rays.get(), b.spans.get(), b.groups.get(), b.hit_rays.get(),
-                           layerOr(map().occupancyLayer()), layerOr(map().scanMarkLayer()),
-                           b.scratch.get(), layerOr(map().traversalLayer()),
-                           layerOr(map().tsdfLayer()), p, b.counters.get());
-        return ok && (spansByRegion() ? enqueueRegionWorkers(k) : enqueue(k, p.item_count));
+        ok = setSpanArgs(k, b, b.rays.get(), b.spans.get(), b.groups.get(), b.hit_rays.get(),
+                         layerOr(map().occupancyLayer()), layerOr(map().scanMarkLayer()),
+                         b.scratch.get(), layerOr(map().traversalLayer()),
+                         layerOr(map().tsdfLayer()), p, b.counters.get());
+        return ok && enqueueSpans(k, p.item_count);
       case OccupancyKernel::kApplyHitGroups:
         k = hit_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.groups.get(), b.hit_rays.get(),
@@ -257,15 +253,10 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     switch (kernel) {
       case NdtKernel::kIntegrateSpans:
         k = span_kernel_.get();
-        ok = spansByRegion()
-                 ? setArgs(k, b.rays.get(), b.spans.get(), b.span_runs.get(), b.next_run.get(),
-                           layerOr(m.occupancyLayer()), layerOr(m.ndtLayer()),
-                           layerOr(m.meanLayer()), layerOr(m.hitMissLayer()),
-                           layerOr(m.traversalLayer()), p, ndt, b.counters.get())
-                 : setArgs(k, b.rays.get(), b.spans.get(), layerOr(m.occupancyLayer()),
-                           layerOr(m.ndtLayer()), layerOr(m.meanLayer()), layerOr(m.hitMissLayer()),
-                           layerOr(m.traversalLayer()), p, ndt, b.counters.get());
-        return ok && (spansByRegion() ? enqueueRegionWorkers(k) : enqueue(k, p.item_count));
+        ok = setSpanArgs(k, b, b.rays.get(), b.spans.get(), layerOr(m.occupancyLayer()),
+                         layerOr(m.ndtLayer()), layerOr(m.meanLayer()), layerOr(m.hitMissLayer()),
+                         layerOr(m.traversalLayer()), p, ndt, b.counters.get());
+        return ok && enqueueSpans(k, p.item_count);
       case NdtKernel::kApplyHitGroups:
         k = hit_kernel_.get();
         ok = setArgs(k, b.rays.get(), b.groups.get(), b.hit_rays.get(), layerOr(m.occupancyLayer()),
@@ -284,9 +275,13 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
                                   nullptr) == CL_SUCCESS;
   }
 
-  /// Span work per region: a few work-items per compute unit, each its own work-group, which
-  /// take the regions' runs from a shared cursor until none is left (the kernel's loop).
-  bool enqueueRegionWorkers(cl_kernel k) noexcept {
+  /// Enqueues the span kernel: over `items` span records, or, with span work per region, as a
+  /// few work-items per compute unit, each its own work-group, which take the regions' runs from
+  /// a shared cursor until none is left (the kernel's loop).
+  bool enqueueSpans(cl_kernel k, std::uint32_t items) noexcept {
+    if (!spansByRegion()) {
+      return enqueue(k, items);
+    }
     const std::size_t local = 1;
     const std::size_t global =
         kRegionWorkersPerUnit * std::max<std::size_t>(ctx_.info.compute_units, 1);
@@ -372,8 +367,19 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
   /// Sets the kernel's arguments in order (buffers as cl_mem, the parameters by value).
   template <class... Args>
   static bool setArgs(cl_kernel k, const Args&... args) noexcept {
-    cl_uint index = 0;
+    return setArgsFrom(k, 0, args...);
+  }
+  template <class... Args>
+  static bool setArgsFrom(cl_kernel k, cl_uint index, const Args&... args) noexcept {
     return ((clSetKernelArg(k, index++, sizeof(Args), &args) == CL_SUCCESS) && ...);
+  }
+  /// The span kernel's arguments: `args`, then, with span work per region, set `b`'s runs and
+  /// run cursor (the region kernels' two last parameters).
+  template <class... Args>
+  bool setSpanArgs(cl_kernel k, const DeviceBatch& b, const Args&... args) const noexcept {
+    return setArgs(k, args...) &&
+           (!spansByRegion() || setArgsFrom(k, static_cast<cl_uint>(sizeof...(Args)),
+                                            b.span_runs.get(), b.next_run.get()));
   }
 
   opencl::DeviceContext ctx_;  // first member with handles: released last
@@ -399,6 +405,19 @@ gpu::DeviceMemoryLimits memoryLimits(const opencl::DeviceInfo& device) {
 }
 
 }  // namespace
+
+std::optional<SpanWork> spanWorkNamed(std::string_view name) noexcept {
+  if (name == "auto") {
+    return SpanWork::kAuto;
+  }
+  if (name == "span") {
+    return SpanWork::kPerSpan;
+  }
+  if (name == "region") {
+    return SpanWork::kPerRegion;
+  }
+  return std::nullopt;
+}
 
 opencl::BackendDevice* opencl::backendDevice(Backend& backend) noexcept {
   return dynamic_cast<OpenClBackend*>(&backend);

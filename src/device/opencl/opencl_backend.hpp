@@ -6,7 +6,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "raymap/error.hpp"
 
@@ -26,6 +28,10 @@ enum class SpanWork : std::uint8_t {
   kPerSpan,    ///< one work-item per span record; voxel updates are atomic
   kPerRegion,  ///< one work-item per region, its spans in ray order; voxel updates are plain
 };
+
+/// @brief The span work named `name` as `--opencl-span-work` and raymapd's
+/// `backend.opencl_span_work` spell it ("auto", "span", "region"); nullopt for any other name.
+std::optional<SpanWork> spanWorkNamed(std::string_view name) noexcept;
 
 /// @brief Options of the OpenCL backend: the shared device options (memory, cache, batches) and
 /// the OpenCL ones.

@@ -3,6 +3,7 @@
 #include "src/device/staging/span_grouping.hpp"
 
 #include <algorithm>
+#include <numeric>
 
 #include "raymap/assert.hpp"
 
@@ -35,9 +36,7 @@ void RegionSpanGrouper::group(BatchArrays& arrays) noexcept {
   }
   const auto runs = static_cast<std::uint32_t>(run_slot_.size());
   order_.resize(runs);
-  for (std::uint32_t r = 0; r < runs; ++r) {
-    order_[r] = r;
-  }
+  std::iota(order_.begin(), order_.end(), 0u);
   // Ties in first-appearance order: the same batch always gives the same launch.
   std::sort(order_.begin(), order_.end(), [this](std::uint32_t a, std::uint32_t b) {
     return run_count_[a] != run_count_[b] ? run_count_[a] > run_count_[b] : a < b;
