@@ -14,8 +14,12 @@
  * update given up under contention is counted in RM_COUNTER_DROPPED by the caller, never lost
  * silently. Updates of one voxel by several rays in one batch land in any order: the averages
  * differ from the CPU's by float rounding only. With span work per region (RM_REGION_OWNED,
- * device.h) the swaps are plain writes that always succeed, and a voxel's updates come in ray
- * order, as on the CPU. */
+ * device.h) a voxel has one writer and its updates come in ray order: it is updated exactly as on
+ * the CPU (rm_tsdf_update), with plain reads and writes.
+ *
+ * Every walk skips the distance of free space, as the CPU's does: a voxel the ray enters far
+ * enough in front of the surface (rm_tsdf_free_bound) is updated at +tau, the update its
+ * computed distance would give after the clamp. */
 #ifndef RAYMAP_KERNELS_DEVICE_TSDF_H
 #define RAYMAP_KERNELS_DEVICE_TSDF_H
 
@@ -38,6 +42,25 @@
  * weight). Returns 0 when the update was given up. */
 RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, float sdf,
                                        rm_tsdf_params p) {
+#if defined(RM_REGION_OWNED)
+  /* One writer per voxel: the CPU's update (rm_tsdf_update, with its free-space shortcut) on a
+   * private copy, and only the words that changed written back (a voxel of free space crossed
+   * again at full weight, most of a steady map, writes nothing). */
+  RM_ATOMIC_GLOBAL rm_u32* pair = tsdf + i + i; /* not 2u * i: wraps past 2^31 voxels */
+  rm_u32 distance_bits = pair[0];
+  rm_u32 weight_bits = pair[1];
+  rm_tsdf_voxel v;
+  v.distance = rm_as_float(distance_bits);
+  v.weight = rm_as_float(weight_bits);
+  rm_tsdf_update(&v, sdf, p);
+  if (rm_as_u32(v.distance) != distance_bits) {
+    pair[0] = rm_as_u32(v.distance);
+  }
+  if (rm_as_u32(v.weight) != weight_bits) {
+    pair[1] = rm_as_u32(v.weight);
+  }
+  return 1;
+#else
   float w;
   if (!rm_tsdf_in_reach(sdf, p)) {
     return 1;
@@ -97,6 +120,7 @@ RM_DEVICE_FN int rm_tsdf_update_atomic(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 i, 
     return done;
   }
 #endif
+#endif /* RM_REGION_OWNED */
 }
 
 /* Walks `count` voxels of span walk `s` (as rm_span_walk_init left it) and fuses the ray into each.
@@ -106,11 +130,15 @@ RM_DEVICE_FN rm_u32 rm_tsdf_span(RM_ATOMIC_GLOBAL rm_u32* tsdf, rm_u32 base, rm_
                                  rm_i32 count, const rm_line_walk_ray* walk_ray,
                                  int sample_is_start, float end_sdf, rm_tsdf_params p) {
   rm_tsdf_ray ray = rm_tsdf_ray_make(walk_ray, sample_is_start, end_sdf);
+  float free_bound = rm_tsdf_free_bound(&ray, p);
   rm_u32 dropped = 0u;
   rm_i32 k;
   for (k = 0; k < count; ++k) {
     rm_u32 i = base + (k == 0 ? RM_U32(s.index) : rm_span_walk_advance(&s));
-    float sdf = rm_tsdf_sdf(&ray, rm_span_walk_voxel(&s), p.resolution);
+    /* Free space (most voxels of a ray) needs no distance: its update is the one at +tau. */
+    float sdf = rm_tsdf_is_free(rm_line_walk_t_enter(&s.walk), free_bound, sample_is_start)
+                    ? p.truncation
+                    : rm_tsdf_sdf(&ray, rm_span_walk_voxel(&s), p.resolution);
     dropped += rm_tsdf_update_atomic(tsdf, i, sdf, p) ? 0u : 1u;
   }
   return dropped;
