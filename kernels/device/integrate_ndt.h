@@ -149,12 +149,16 @@ RM_MODE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray
     float value = rm_as_float(old);
     rm_u32 samples;
     /* Free space first, inline and without the Gaussian (as on the CPU): an unobserved voxel
-     * has none, and one with fewer samples than the threshold takes a plain miss. (NDT-OM's
-     * lower clamp is not tested separately: it made no difference on PoCL, and on the CPU the
-     * branch cost more than it saved.) The Gaussians do not change during this launch, so the
-     * choice holds on a retry. */
+     * has none, and one with fewer samples than the threshold takes a plain miss. The Gaussians
+     * do not change during this launch, so the choice holds on a retry. */
     if (!rm_occupancy_observed(value)) {
       dropped += rm_occupancy_miss_atomic(occupancy + i, old, p.occupancy) ? 0u : 1u;
+      continue;
+    }
+    /* NDT-OM at the lower clamp: no miss changes the voxel (rm_ndt_miss), so no sample count is
+     * read; most free space of a steady map is there. (NDT-TM still counts the pass. On the CPU
+     * this test cost more than it saved.) */
+    if (np.traversability == 0u && value <= p.occupancy.clamp_min) {
       continue;
     }
     /* The voxel mean's count (8 bytes a voxel) rather than the Gaussian's (40): fewer cache
