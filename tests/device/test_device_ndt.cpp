@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "kernels/common/ndt.h"
+#include "src/device/staging/staged_backend.hpp"
 #include "tests/device/device_under_test.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -203,6 +204,23 @@ NdtComparison compareNdt(const VoxelMap& reference, const VoxelMap& map) {
   return result;
 }
 
+/// The agreement AgreesWithTheCpuReferenceOnRoomScans asks for, of the host map after a
+/// synchronisation.
+void expectAgreement(const VoxelMap& reference, const VoxelMap& map, MapMode mode,
+                     const char* when) {
+  const MapComparison states = compareMaps(reference, map);
+  const NdtComparison ndt = compareNdt(reference, map);
+  EXPECT_GE(states.sameStateFraction(), kMinAgreement) << when;
+  EXPECT_GT(ndt.shaping, 1000u) << when;
+  EXPECT_LE(double(ndt.value_outliers), (1.0 - kMinAgreement) * double(ndt.observed)) << when;
+  EXPECT_GE(double(ndt.count_equal), kMinAgreement * double(ndt.with_gaussian)) << when;
+  EXPECT_EQ(ndt.beyond_tolerance, 0u) << when;
+  if (mode == MapMode::kNdtTm) {  // the misses-only pass counts passes too
+    EXPECT_GE(double(ndt.hit_miss_equal), kMinAgreement * double(ndt.with_counts)) << when;
+    EXPECT_EQ(ndt.intensity_beyond, 0u) << when;
+  }
+}
+
 class DeviceNdt : public testing::TestWithParam<MapMode> {};
 
 TEST_P(DeviceNdt, AgreesWithTheCpuReferenceOnRoomScans) {
@@ -272,6 +290,55 @@ TEST_P(DeviceNdt, AgreesWithTheCpuReferenceOnRoomScans) {
     EXPECT_EQ(stats.updates_dropped, 0u) << label;
     EXPECT_EQ(stats.rays_skipped, 0u) << label;
   }
+}
+
+TEST_P(DeviceNdt, ASynchronisationWithoutNewSamplesDownloadsNoSampleLayer) {
+  REQUIRE_DEVICE();
+  // Arrange: a room mapped and synchronised, then rays without returns through it (misses only,
+  // in regions that hold Gaussians), then more scans with returns; the CPU gets the same calls.
+  const MapMode mode = GetParam();
+  const std::vector<Ray> first = roomScans(20261128, 6, 10000);
+  std::vector<Ray> misses_only = roomScans(20261129, 4, 10000);
+  for (Ray& ray : misses_only) {
+    ray.flags |= kRayNoReturn;
+  }
+  const std::vector<Ray> more = roomScans(20261130, 4, 10000);
+  VoxelMap reference = makeMap(ndtConfig(mode));
+  auto cpu = cpuBackend(reference, 1);
+  VoxelMap map = makeMap(ndtConfig(mode));
+  DeviceBackendOptions options;
+  options.memory = DeviceMemory::kCache;
+  auto device = createDeviceBackend(map, options);
+  ASSERT_TRUE(device);
+  // Bytes of a region's layers without and with the sample layers (voxel means, Gaussians,
+  // NDT-TM's intensities).
+  const RegionStore& store = map.store();
+  std::uint64_t bytes_without_samples = 0;
+  std::uint64_t sample_bytes = 0;
+  for (int l = 0; l < store.schema().size(); ++l) {
+    (gpu::sampleLayer(store.schema().at(l).kind) ? sample_bytes : bytes_without_samples) +=
+        store.layerRegionBytes(l);
+  }
+
+  // Act and assert, pass by pass.
+  integrateByScan(reference, *cpu, first);
+  integrateByScan(map, *device, first);
+  const std::uint64_t before_misses = device->stats().region_bytes_from_device;
+  const std::uint64_t regions_before = store.size();
+  integrateByScan(reference, *cpu, misses_only);
+  integrateByScan(map, *device, misses_only);
+  const std::uint64_t misses_download = device->stats().region_bytes_from_device - before_misses;
+  // Every region at most once, and only the regions the pass created (cleared on the device:
+  // every layer new) with their sample layers.
+  const std::uint64_t created = store.size() - regions_before;
+  EXPECT_GT(misses_download, 0u) << "the misses changed the occupancy of resident regions";
+  EXPECT_LE(misses_download, store.size() * bytes_without_samples + created * sample_bytes)
+      << "a region with no new sample was downloaded with its sample layers";
+  expectAgreement(reference, map, mode, "after the misses-only pass");
+  integrateByScan(reference, *cpu, more);
+  integrateByScan(map, *device, more);
+  expectAgreement(reference, map, mode, "after more scans");
+  EXPECT_EQ(device->stats().updates_dropped, 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes, DeviceNdt, testing::Values(MapMode::kNdtOm, MapMode::kNdtTm),

@@ -86,11 +86,15 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
     return DeviceRegionCache::kNoSlot;
   }
   if (placement->evicted && placement->evicted_entry.dirty) {
-    auto ok = transfer_->download(placement->slot, placement->evicted_entry.host_slot);
+    auto ok = transfer_->download(placement->slot, placement->evicted_entry.host_slot,
+                                  placement->evicted_entry.samples_dirty);
     if (!ok) {
       return Unexpected(ok.error());
     }
     host_uninitialised_[placement->evicted_entry.host_slot] = 0;
+  }
+  if (host_uninitialised_[host_slot] != 0) {
+    cache_->markSamplesWritten(placement->slot);  // the device copy is the only one
   }
   if (!placement->resident) {
     if (host_uninitialised_[host_slot] != 0) {
@@ -211,6 +215,9 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
         slot = found ? *found : RegionStore::kNoSlot;
       }
       if (slot != DeviceRegionCache::kNoSlot) {
+        if (cache_ != nullptr) {
+          cache_->markSamplesWritten(slot);  // the hit writes its sample layers
+        }
         const std::uint64_t voxel = std::uint64_t{slot} * voxels_per_region_ + index;
         out.hit_keys.push_back((voxel << 32) | ray_index);
       }
@@ -245,7 +252,7 @@ Expected<void, IntegrateError> BatchPlanner::downloadAll() noexcept {
   for (std::uint32_t slot = 0; slot < cache_->capacity(); ++slot) {
     const DeviceRegionCache::Entry& e = cache_->entry(slot);
     if (e.used && e.dirty) {
-      auto ok = transfer_->download(slot, e.host_slot);
+      auto ok = transfer_->download(slot, e.host_slot, e.samples_dirty);
       if (!ok) {
         return Unexpected(ok.error());
       }
@@ -268,7 +275,7 @@ Expected<void, IntegrateError> BatchPlanner::writeBack(
       continue;
     }
     if (cache_->entry(slot).dirty) {
-      if (auto ok = transfer_->download(slot, host_slot); !ok) {
+      if (auto ok = transfer_->download(slot, host_slot, cache_->entry(slot).samples_dirty); !ok) {
         return ok;
       }
       host_uninitialised_[host_slot] = 0;

@@ -30,9 +30,12 @@ class RegionTransfer {
   RegionTransfer(const RegionTransfer&) = delete;
   RegionTransfer& operator=(const RegionTransfer&) = delete;
 
-  /// @brief Copies every layer of device slot `device_slot` into host store slot `host_slot`.
+  /// @brief Copies the layers of device slot `device_slot` into host store slot `host_slot`:
+  /// every layer with `sample_layers`, else all but the layers written only where a sample lands
+  /// (DeviceRegionCache::Entry::samples_dirty says which a region needs).
   virtual Expected<void, IntegrateError> download(std::uint32_t device_slot,
-                                                  std::uint32_t host_slot) noexcept = 0;
+                                                  std::uint32_t host_slot,
+                                                  bool sample_layers) noexcept = 0;
   /// @brief Copies every layer of host store slot `host_slot` into device slot `device_slot`.
   virtual Expected<void, IntegrateError> upload(std::uint32_t device_slot,
                                                 std::uint32_t host_slot) noexcept = 0;

@@ -71,7 +71,7 @@ std::optional<DeviceRegionCache::Placement> DeviceRegionCache::place(Vec3i regio
     ++evictions_;
   }
   ++misses_;
-  entries_[slot] = Entry{region, host_slot, batch_, true, write};
+  entries_[slot] = Entry{region, host_slot, batch_, true, write, false};
   index_.insert(key, slot);
   pushBack(slot);
   placement.slot = slot;

@@ -34,6 +34,10 @@ class DeviceRegionCache {
     std::uint64_t batch = 0;
     bool used = false;
     bool dirty = false;  ///< the device copy is newer than the host store
+    /// Its sample layers (written only where a sample lands: sampleLayer() in staged_backend.hpp)
+    /// are newer too: a batch put a sample in the region, or the region was created on the device.
+    /// A dirty region without it is downloaded without those layers.
+    bool samples_dirty = false;
   };
 
   /// @brief Where a region was placed and what the caller must move first.
@@ -59,7 +63,15 @@ class DeviceRegionCache {
   /// @brief Device slot of a resident region, or kNoSlot.
   std::uint32_t find(Vec3i region) const noexcept;
   const Entry& entry(std::uint32_t slot) const noexcept { return entries_[slot]; }
-  void markClean(std::uint32_t slot) noexcept { entries_[slot].dirty = false; }
+  void markClean(std::uint32_t slot) noexcept {
+    entries_[slot].dirty = false;
+    entries_[slot].samples_dirty = false;
+  }
+  /// @brief A batch writes every layer of resident region `slot`, its sample layers included.
+  void markSamplesWritten(std::uint32_t slot) noexcept {
+    entries_[slot].dirty = true;
+    entries_[slot].samples_dirty = true;
+  }
   /// @brief Forgets a region without downloading it (its host region was recycled).
   void drop(std::uint32_t slot) noexcept;
 

@@ -27,6 +27,10 @@ double secondsSince(Clock::time_point start) noexcept {
 
 }  // namespace
 
+bool sampleLayer(LayerKind kind) noexcept {
+  return kind == LayerKind::kVoxelMean || kind == LayerKind::kNdt || kind == LayerKind::kIntensity;
+}
+
 std::uint32_t mapModeBits(const VoxelMap& map) noexcept {
   return rm_map_mode_bits(map.occupancyLayer() >= 0 ? 1u : 0u,
                           map.semantics() == Semantics::kPerScan ? 1u : 0u,
@@ -190,8 +194,9 @@ BackendStats StagedBackend::stats() const noexcept {
 }
 
 Expected<void, IntegrateError> StagedBackend::download(std::uint32_t device_slot,
-                                                       std::uint32_t host_slot) noexcept {
-  return copyRegion(device_slot, host_slot, /*to_device=*/false);
+                                                       std::uint32_t host_slot,
+                                                       bool sample_layers) noexcept {
+  return copyRegion(device_slot, host_slot, /*to_device=*/false, sample_layers);
 }
 
 Expected<void, IntegrateError> StagedBackend::upload(std::uint32_t device_slot,
@@ -236,10 +241,13 @@ Expected<StagedBackend::ReadPlacement, IntegrateError> StagedBackend::placeForRe
 }
 
 Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_slot,
-                                                         std::uint32_t host_slot,
-                                                         bool to_device) noexcept {
+                                                         std::uint32_t host_slot, bool to_device,
+                                                         bool sample_layers) noexcept {
   const RegionStore& store = map_->store();
   for (int l = 0; l < store.schema().size(); ++l) {
+    if (!sample_layers && sampleLayer(store.schema().at(l).kind)) {
+      continue;  // unchanged on the device since the host's copy (no sample in the region)
+    }
     const std::size_t bytes = store.layerRegionBytes(l);
     if (!copyLayer(l, bytes * device_slot, store.layerBytes(host_slot, l), bytes, to_device)) {
       return Unexpected(IntegrateError::kDeviceFailure);

@@ -44,6 +44,13 @@ enum class NdtKernel : std::uint8_t {
 /// rm_map_mode_has_kernels() of the result is false for a map no device program can run.
 std::uint32_t mapModeBits(const VoxelMap& map) noexcept;
 
+/// @brief True for a layer the device kernels write only where a sample lands (the hit-group
+/// kernels): voxel means, NDT Gaussians, NDT-TM intensities. A region no sample reached since
+/// its last download keeps those layers on the host as they are, so they are not downloaded
+/// again (an NDT map's Gaussians are 40 of its 52 bytes a voxel). Every other layer is written
+/// by the span kernels as well (NDT-TM's hit/miss counts count passes there).
+bool sampleLayer(LayerKind kind) noexcept;
+
 /// @brief A device backend over an API-specific queue of copies and kernels.
 ///
 /// integrate() plans a batch into one of two staging sets (waiting first for the batch that set
@@ -164,16 +171,17 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   bool beforeEviction(std::span<const std::uint32_t> host_slots) noexcept final;
 
   // ---- RegionTransfer (called by the planner) ----
-  Expected<void, IntegrateError> download(std::uint32_t device_slot,
-                                          std::uint32_t host_slot) noexcept final;
+  Expected<void, IntegrateError> download(std::uint32_t device_slot, std::uint32_t host_slot,
+                                          bool sample_layers) noexcept final;
   Expected<void, IntegrateError> upload(std::uint32_t device_slot,
                                         std::uint32_t host_slot) noexcept final;
   Expected<void, IntegrateError> fillClear(std::uint32_t device_slot,
                                            bool zero_layers_clear) noexcept final;
   Expected<void, IntegrateError> waitForDevice() noexcept final;
 
+  /// Copies the region's layers, or (sample_layers false) all but sampleLayer() ones.
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
-                                            bool to_device) noexcept;
+                                            bool to_device, bool sample_layers = true) noexcept;
   /// Waits for the set's previous batch (if any) and adds its device counters to the stats.
   Expected<void, IntegrateError> retire(unsigned set) noexcept;
   /// Enqueues the batch planned into `set`: copies, kernels in the semantics' order, read-back.
