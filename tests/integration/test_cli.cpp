@@ -988,6 +988,36 @@ TEST(Cli, BenchPrintsJsonWithARunPerConfiguration) {
   EXPECT_TRUE(noTemporaryFilesIn(dir.path()));
 }
 
+TEST(Cli, BenchTakesSemanticsAndThreadsAsOneRunAndRefusesThemBesideTheirLists) {
+  // Arrange
+  TempDir dir;
+  const std::string input = dir.file("yard.ply");
+  writeRayCloud(input, yardRays(1));
+
+  // Act
+  const RunResult one = runRaymap({"bench", input, "--max-range", "8", "--repeat", "1", "--threads",
+                                   "1", "--semantics", "scan"});
+  const RunResult both = runRaymap({"bench", input, "--max-range", "8", "--repeat", "1",
+                                    "--semantics", "ray", "--semantics-list", "ray,scan"});
+  const RunResult both_threads = runRaymap({"bench", input, "--max-range", "8", "--repeat", "1",
+                                            "--threads", "2", "--threads-list", "1"});
+
+  // Assert
+  ASSERT_EQ(one.exit_code, 0) << describe(one);
+  std::size_t run_count = 0;
+  for (std::size_t at = one.out.find("\"rays_in\":"); at != std::string::npos;
+       at = one.out.find("\"rays_in\":", at + 1)) {
+    ++run_count;
+  }
+  EXPECT_EQ(run_count, 1u) << one.out;
+  EXPECT_TRUE(contains(one.out, "\"semantics\": \"scan\"")) << one.out;
+  EXPECT_FALSE(contains(one.out, "\"semantics\": \"ray\"")) << one.out;
+  EXPECT_EQ(both.exit_code, 2) << describe(both);
+  EXPECT_TRUE(contains(both.err, "--semantics-list")) << both.err;
+  EXPECT_EQ(both_threads.exit_code, 2) << describe(both_threads);
+  EXPECT_TRUE(contains(both_threads.err, "--threads-list")) << both_threads.err;
+}
+
 TEST(Cli, BenchWithUnwritableJsonFailsNamingThePathAndReason) {
   // Arrange
   TempDir dir;

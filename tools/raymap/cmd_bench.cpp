@@ -263,7 +263,27 @@ void addBenchCommand(CLI::App& app, int* exit_code) {
   c->add_flag("--heightmap-from-host", flags->heightmaps.from_host,
               "Device backends: synchronise and generate from the host store with a generator of "
               "its own (the path before one device context), for comparison");
-  c->callback([flags, exit_code] { *exit_code = runBench(*flags); });
+  c->callback([c, flags, exit_code] {
+    // --semantics and --threads, the mapping commands' options, name one run each: on their own
+    // they are the bench's list; beside the list option they are refused rather than ignored.
+    if (c->count("--semantics") > 0) {
+      if (c->count("--semantics-list") > 0) {
+        printError("bench", "--semantics: give --semantics or --semantics-list, not both");
+        *exit_code = kExitUsage;
+        return;
+      }
+      flags->semantics_list = flags->mapping.semantics;
+    }
+    if (c->count("--threads") > 0) {
+      if (c->count("--threads-list") > 0) {
+        printError("bench", "--threads: give --threads or --threads-list, not both");
+        *exit_code = kExitUsage;
+        return;
+      }
+      flags->threads_list = std::to_string(flags->mapping.threads);
+    }
+    *exit_code = runBench(*flags);
+  });
 }
 
 }  // namespace raymap::cli
