@@ -45,7 +45,11 @@ struct SensorCounters {
 /// reads. @rt writes are wait-free and allocate nothing.
 struct PipelineStats {
   // ---- ingest thread ----
-  Counter clouds_received;       ///< PointCloud2 and depth Image messages taken from DDS
+  Counter clouds_received;  ///< PointCloud2 and depth Image messages taken from DDS
+  /// Monotonic time the last of them was taken (0: none yet). Health compares it with
+  /// last_scan_integrated_ns: input that stopped and input that is not integrated read the
+  /// same in counts over a window that still holds the last clouds.
+  std::atomic<std::int64_t> last_cloud_received_ns{0};
   Counter clouds_malformed;      ///< rejected by the decoder (clouds_rejected_by says why)
   Counter clouds_too_large;      ///< more points than the sensor's max_points
   Counter clouds_unknown_frame;  ///< frame_id is not the configured sensors[].frame

@@ -265,13 +265,19 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   if (stale_) {
     appendf(m, size, "%sno scan integrated %s %.1f s", m[0] == '\0' ? "" : "; ",
             last != 0 ? "for" : "since start,", seconds_since_scan_);
+    // Whether input still arrives is decided by time, not by the window's counts: a window
+    // that still holds the last clouds before the input stopped would report them arriving.
     const double dt = static_cast<double>(now.ns - base_->ns) * 1e-9;
-    if (c.clouds == b.clouds) {
+    const std::int64_t last_cloud = stats_.last_cloud_received_ns.load(std::memory_order_relaxed);
+    if (c.clouds == 0 || last_cloud <= (last != 0 ? last : started_ns_)) {
       appendf(m, size, " (no %s arrives%s)",
               has_depth_ ? "point cloud or depth image" : "point cloud",
               c.clouds == 0 ? " at all" : " any more");
-    } else if (dt > 0.0) {
+    } else if (dt > 0.0 && c.clouds > b.clouds) {
       appendf(m, size, " (%.1f clouds/s arrive)", static_cast<double>(c.clouds - b.clouds) / dt);
+    } else {
+      appendf(m, size, " (the last cloud arrived %.1f s ago)",
+              static_cast<double>(now.ns - last_cloud) * 1e-9);
     }
   }
   if (failing) {

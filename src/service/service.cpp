@@ -494,6 +494,7 @@ void Service::Impl::receiveCloud(std::uint32_t sensor, dds::HeldSample& sample) 
   stats.clouds_received.add();
   stats.sensors[sensor].received.add();
   const std::int64_t arrival_ns = platform::monotonicNowNs();
+  stats.last_cloud_received_ns.store(arrival_ns, std::memory_order_relaxed);
   if (decoders[sensor].overRateOnArrival(sample.bytes())) {
     stats.sensors[sensor].rate_limited.add();  // by configuration: not an input fault
     return;

@@ -76,6 +76,7 @@ TEST(DiagnosticsReporter, InputThatStopsTurnsThePipelineToErrorAfterTheStaleTime
   Rig rig;
   for (int ms = 0; ms <= 2000; ms += 100) {
     rig.stats.clouds_received.add();
+    rig.stats.last_cloud_received_ns.store(kStart + ms * kMs);
     rig.stats.scans_integrated.add();
     rig.stats.last_scan_integrated_ns.store(kStart + ms * kMs);
   }
@@ -89,6 +90,48 @@ TEST(DiagnosticsReporter, InputThatStopsTurnsThePipelineToErrorAfterTheStaleTime
   EXPECT_NE(rig.message().find("no scan integrated for 1.5 s"), std::string::npos) << rig.message();
   EXPECT_NE(rig.message().find("no point cloud arrives any more"), std::string::npos)
       << rig.message();
+}
+
+TEST(DiagnosticsReporter, InputThatStoppedIsNotReportedAsArrivingWhileTheWindowStillHoldsIt) {
+  // Reports at 1 Hz, input at 10 Hz until 1.5 s: at 2.6 s the window (from the report at 1.0 s)
+  // still holds clouds, but none came after the last scan went in.
+  Rig rig;
+  rig.report(0);
+  for (int ms = 100; ms <= 1500; ms += 100) {
+    if (ms == 1100) {
+      rig.report(1000);
+    }
+    rig.stats.clouds_received.add();
+    rig.stats.last_cloud_received_ns.store(kStart + ms * kMs);
+    rig.stats.scans_integrated.add();
+    rig.stats.last_scan_integrated_ns.store(kStart + ms * kMs);
+  }
+  rig.report(2000);
+  rig.report(2600);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_NE(rig.message().find("no scan integrated for 1.1 s (no point cloud arrives any more)"),
+            std::string::npos)
+      << rig.message();
+}
+
+TEST(DiagnosticsReporter, CloudsThatArriveButAreNotIntegratedAreReportedArriving) {
+  // The integrator stops at 1.0 s; clouds keep arriving at 10 Hz.
+  Rig rig;
+  for (int ms = 0; ms <= 2500; ms += 100) {
+    if (ms % 1000 == 0) {
+      rig.report(ms);
+    }
+    rig.stats.clouds_received.add();
+    rig.stats.last_cloud_received_ns.store(kStart + ms * kMs);
+    if (ms <= 1000) {
+      rig.stats.scans_integrated.add();
+      rig.stats.last_scan_integrated_ns.store(kStart + ms * kMs);
+    }
+  }
+  rig.report(2600);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_NE(rig.message().find("no scan integrated for 1.6 s"), std::string::npos) << rig.message();
+  EXPECT_NE(rig.message().find("clouds/s arrive)"), std::string::npos) << rig.message();
 }
 
 TEST(DiagnosticsReporter, CloudsInTheWrongFrameAreAWarningNamingBothFramesThenAnError) {
@@ -106,6 +149,7 @@ TEST(DiagnosticsReporter, CloudsInTheWrongFrameAreAWarningNamingBothFramesThenAn
       << rig.message();
   rig.stats.clouds_received.add(5);
   rig.stats.clouds_unknown_frame.add(5);
+  rig.stats.last_cloud_received_ns.store(kStart + 1100 * kMs);
   rig.report(1200);  // and nothing has been integrated since start
   EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
   EXPECT_NE(rig.message().find("clouds/s arrive"), std::string::npos) << rig.message();
