@@ -106,6 +106,11 @@ TEST(RaymapdDepth, ADepthCameraAloneMapsTheStairsAndReportsItsOwnStatus) {
   EXPECT_GE(rig.value(s + "scans_integrated") + rig.value("raymapd: pipeline/scans_shed"),
             received - 2.0);
   // The camera stopped 2.5 s ago: its status says so (the pipeline's says the map is stale).
+  // It takes a whole rate window (up to 2 s at 1 report/s) after the last frame went in, plus
+  // the age of the last report: a slow machine (sanitizers) takes the last frames in late, so
+  // the status is waited for, up to 10 s more, rather than read at a fixed instant.
+  rig.ros.settleUntil(
+      10.0, [&] { return rig.value(s + "level") == 1.0; }, &maps);
   EXPECT_EQ(rig.value(s + "level"), 1.0);  // WARN
   EXPECT_NE(rig.ros.diagnostics->values()
                 .at(s + "message")
