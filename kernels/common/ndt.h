@@ -263,6 +263,12 @@ RAYMAP_FN int rm_ndt_shapes_misses(rm_u32 count, rm_ndt_params p) {
   return count >= p.sample_threshold && count > 0u;
 }
 
+/* True when no NDT miss can change a voxel whose occupancy is `value`: NDT-OM at the lower clamp
+ * (NDT-TM still counts the pass there, so it is never true for NDT-TM). */
+RAYMAP_FN int rm_ndt_miss_is_noop(float value, rm_occupancy_params occ, rm_ndt_params p) {
+  return p.traversability == 0u && value <= occ.clamp_min;
+}
+
 /* NDT miss: a ray from `origin` to `sample` (voxel frame) passes through a voxel whose occupancy
  * is `value`; has_sample is 0 when the ray's end is not a return (RM_RAY_END_HIT unset). Returns
  * the new occupancy. Unobserved voxels and voxels with fewer than sample_threshold samples take a
@@ -277,7 +283,7 @@ RAYMAP_FN float rm_ndt_miss(float value, const rm_ndt_voxel* v, rm_vec3f origin,
   rm_ndt_ray_fit fit;
   float product;
   float p_update;
-  if (!rm_occupancy_observed(value) || (p.traversability == 0u && value <= occ.clamp_min)) {
+  if (!rm_occupancy_observed(value) || rm_ndt_miss_is_noop(value, occ, p)) {
     /* Unobserved: a plain miss. At the lower clamp no miss can change the value, so NDT-OM does
      * not read the Gaussian (most voxels a ray crosses are free space at the clamp, and the
      * 40-byte Gaussian costs a cache line per voxel); NDT-TM still needs it to count the pass. */

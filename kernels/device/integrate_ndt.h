@@ -155,10 +155,9 @@ RM_MODE_FN void rm_ndt_integrate_span(rm_u32 id, const RM_GLOBAL rm_prepared_ray
       dropped += rm_occupancy_miss_atomic(occupancy + i, old, p.occupancy) ? 0u : 1u;
       continue;
     }
-    /* NDT-OM at the lower clamp: no miss changes the voxel (rm_ndt_miss), so no sample count is
-     * read; most free space of a steady map is there. (NDT-TM still counts the pass. On the CPU
-     * this test cost more than it saved.) */
-    if (np.traversability == 0u && value <= p.occupancy.clamp_min) {
+    /* NDT-OM at the lower clamp: no miss changes the voxel, so no sample count is read; most
+     * free space of a steady map is there. (On the CPU this test cost more than it saved.) */
+    if (rm_ndt_miss_is_noop(value, p.occupancy, np)) {
       continue;
     }
     /* The voxel mean's count (8 bytes a voxel) rather than the Gaussian's (40): fewer cache
