@@ -20,6 +20,7 @@
 #include "kernels/common/span_walk.h"
 #include "kernels/common/tsdf.h"
 #include "kernels/common/voxel_mean.h"
+#include "platform/write_intent.hpp"
 #include "src/map/ray_region_walk.hpp"
 #include "src/map/region_slot_cache.hpp"
 #include "src/map/scan_bits.hpp"
@@ -253,6 +254,15 @@ struct NdtMiss {
   }
 };
 
+/// @brief Folds a ray's sample into its voxel's mean. The mean layer's pages stay the OS's zero
+/// pages until a sample lands there: the first access is a write (platform/write_intent.hpp), so
+/// that the update's read does not map the zero page only for its write to copy it.
+inline void foldSampleIntoMean(rm_voxel_mean& m, const rm_prepared_ray& ray) noexcept {
+  platform::touchForWrite(&m);
+  m.packed = rm_mean_fold(m.packed, m.count, ray.sample_local);
+  m.count = rm_mean_count_increment(m.count);
+}
+
 /// @brief Applies a ray's hit to its sample voxel (index `i` of region `layers`). Per-scan hits
 /// change the occupancy in a separate pass (applyScanHit); here they only feed the mean.
 /// @pre ray.flags has RM_RAY_END_HIT.
@@ -262,9 +272,7 @@ inline void applySampleHit(const rm_prepared_ray& ray, const RegionLayers& layer
     layers.occupancy[i] = rm_occupancy_hit(layers.occupancy[i], params);
   }
   if (layers.mean != nullptr) {
-    rm_voxel_mean& m = layers.mean[i];
-    m.packed = rm_mean_fold(m.packed, m.count, ray.sample_local);
-    m.count = rm_mean_count_increment(m.count);
+    foldSampleIntoMean(layers.mean[i], ray);
   }
 }
 
@@ -273,14 +281,20 @@ inline void applySampleHit(const rm_prepared_ray& ray, const RegionLayers& layer
 /// @pre ray.flags has RM_RAY_END_HIT.
 inline void applyNdtHit(const rm_prepared_ray& ray, const RegionLayers& layers, std::uint32_t i,
                         const rm_occupancy_params& params, const rm_ndt_params& ndt) noexcept {
+  // The sample layers' pages may still be zero pages (foldSampleIntoMean).
+  platform::touchForWrite(&layers.ndt[i]);
+  if (layers.hit_miss != nullptr) {
+    platform::touchForWrite(&layers.hit_miss[i]);
+  }
+  if (layers.intensity != nullptr) {
+    platform::touchForWrite(&layers.intensity[i]);
+  }
   rm_ndt_hit(&layers.occupancy[i], &layers.ndt[i],
              layers.hit_miss != nullptr ? &layers.hit_miss[i] : nullptr,
              layers.intensity != nullptr ? &layers.intensity[i] : nullptr,
              rm_ndt_origin_at_sample(ray), ray.sample_local, ray.intensity, params, ndt);
   if (layers.mean != nullptr) {
-    rm_voxel_mean& m = layers.mean[i];
-    m.packed = rm_mean_fold(m.packed, m.count, ray.sample_local);
-    m.count = rm_mean_count_increment(m.count);
+    foldSampleIntoMean(layers.mean[i], ray);
   }
 }
 
