@@ -71,20 +71,27 @@ TEST(WriteIntent, APageReadThenWrittenFaultsOnceWhenFirstTouchedForWrite) {
   }
 }
 
-TEST(WriteIntent, TouchingLeavesEveryByteAsItWas) {
-  // Arrange
+TEST(WriteIntent, TouchingLeavesTheValuesAsTheyWere) {
+  // Arrange: a 4-byte and an 8-byte object with every bit pattern that could carry.
+  struct Pair {
+    std::uint32_t a;
+    std::uint32_t b;
+  };
   std::uint32_t words[3] = {0xDEADBEEFu, 0u, 0xFFFFFFFFu};
+  Pair pair{0xFFFFFFFFu, 0x80000001u};
 
-  // Act: every byte, including the last of a word (no carry out of a byte into the next).
-  auto* bytes = reinterpret_cast<unsigned char*>(words);
-  for (std::size_t i = 0; i < sizeof(words); ++i) {
-    touchForWrite(bytes + i);
+  // Act
+  for (std::uint32_t& word : words) {
+    touchForWrite(&word);
   }
+  touchForWrite(&pair);
 
   // Assert
   EXPECT_EQ(words[0], 0xDEADBEEFu);
   EXPECT_EQ(words[1], 0u);
   EXPECT_EQ(words[2], 0xFFFFFFFFu);
+  EXPECT_EQ(pair.a, 0xFFFFFFFFu);
+  EXPECT_EQ(pair.b, 0x80000001u);
 }
 
 }  // namespace
