@@ -42,7 +42,7 @@ class CpuBackend final : public Backend {
     ctx_.ndt_params =
         map.config().ndt.toKernel(map.geometry().resolution, map.occupancy(), map.mode());
     if (threads > 1) {
-      parallel_.emplace(threads, map.store().capacity(),
+      parallel_.emplace(threads, map.store().capacity(), ctx_.region_voxels,
                         expected_batch_rays != 0 ? expected_batch_rays : preferredBatchRays());
     }
     if (ctx_.per_scan) {

@@ -79,12 +79,13 @@ void ParallelIntegrator::WorkTable::clear() noexcept {
 }
 
 ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_capacity,
-                                       std::size_t expected_batch_rays)
+                                       std::int32_t region_voxels, std::size_t expected_batch_rays)
     : pool_(workers), slots_(store_capacity) {
   const unsigned n = pool_.size();
   scratch_.reserve(n);
   for (unsigned w = 0; w < n; ++w) {
-    WorkerScratch& scratch = scratch_.emplace_back(store_capacity);
+    WorkerScratch& scratch =
+        scratch_.emplace_back(store_capacity, ScanBits::voxelWordsFor(region_voxels));
     // Address space only: pages become resident as batches write them.
     (void)scratch.spans.reserve(expected_batch_rays * 6u / n + 1024u);
   }
@@ -92,6 +93,7 @@ ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_cap
   in_batch_.assign(store_capacity, 0);
   created_.assign(store_capacity, 0);
   slot_work_.assign(store_capacity, 0.0);
+  slot_key_.assign(store_capacity, 0u);
   touched_.reserve(store_capacity);
   order_.reserve(store_capacity);
   regions_.reserve(store_capacity);
@@ -127,6 +129,12 @@ void ParallelIntegrator::releaseSlots() noexcept {
   touched_.clear();
 }
 
+bool ParallelIntegrator::walksInSurvey(const IntegrationContext& ctx) noexcept {
+  const VoxelMap& map = *ctx.map;
+  return ctx.per_scan && ctx.scan_bits != nullptr && !ctx.ndt && map.occupancyLayer() >= 0 &&
+         map.tsdfLayer() < 0 && map.traversalLayer() < 0;
+}
+
 void ParallelIntegrator::abandonBatch(VoxelMap& map) noexcept {
   // Regions created for the batch still need their clear values.
   for (std::uint32_t slot : touched_) {
@@ -150,13 +158,18 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   // 1. Survey.
   Clock::time_point step_start = Clock::now();
   next_block_.store(0, std::memory_order_relaxed);
+  const bool walk_in_survey = walksInSurvey(ctx);
   auto survey = [&](unsigned w) {
     WorkerScratch& scratch = scratch_[w];
     WorkTable& table = scratch.table;
     platform::PageArray<SpanRecord>& spans = scratch.spans;
+    MissPlanes& planes = scratch.planes;
     std::size_t span_count = 0;
+    std::uint64_t voxels_visited = 0;  // summed here, written to stats[w] once
+    std::uint64_t outside_window = 0;
     scratch.overflow = false;
     scratch.out_of_memory = false;
+    planes.clear();
     for (unsigned b = takeBlock(); b != kNoBlock; b = takeBlock()) {
       block_worker_[b] = w;  // its spans are in this worker's list
       const auto [begin, end] = rangeOf(b, rays.size());
@@ -177,10 +190,24 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
           // A region outside a rolling window is never created (its span is counted in step 4):
           // it must not count against the store's capacity either, or a long ray would fail a
           // batch that the single-threaded path integrates.
-          if (map.inWindow(span.region) &&
-              !table.add(key, 1.0 + steps * static_cast<double>(span.t1 - span.t0))) {
+          const bool in_window = map.inWindow(span.region);
+          if (in_window && !table.add(key, 1.0 + steps * static_cast<double>(span.t1 - span.t0))) {
             scratch.overflow = true;
             return;
+          }
+          if (walk_in_survey) {  // the span's misses now, into this worker's plane
+            if (!in_window) {
+              ++outside_window;
+              continue;
+            }
+            std::uint64_t* plane = planes.planeFor(key);
+            if (plane == nullptr) {
+              (planes.full() ? scratch.overflow : scratch.out_of_memory) = true;
+              return;
+            }
+            voxels_visited += walkSpan(record.walk, record.sample_is_start, span, ctx.region_voxels,
+                                       PerScanMiss{plane});
+            continue;
           }
           if (span_count == spans.capacity() &&
               !spans.reserve(2u * span_count + 1024u, span_count)) {
@@ -200,6 +227,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
     if (!table.flush()) {
       scratch.overflow = true;
     }
+    stats[w].voxels_visited += voxels_visited;
+    stats[w].spans_outside_window += outside_window;
   };
   pool_.run(survey);
   steps_seconds_.survey += secondsSince(step_start);
@@ -233,6 +262,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       if (in_batch_[*slot] == 0) {
         in_batch_[*slot] = 1;
         slot_work_[*slot] = 0.0;
+        slot_key_[*slot] = key;
         touched_.push_back(*slot);
       }
       created_[*slot] = created ? 1 : created_[*slot];
@@ -311,6 +341,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   for (const auto& entry : order_) {
     const std::uint32_t slot = entry.second;
     RegionWork& region = regions_.emplace_back();
+    region.key = slot_key_[slot];
     region.slot = slot;
     region.steps_begin = steps_total;
     region.hits_begin = hits_total;
@@ -412,6 +443,16 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         span.last = (step.flags & kLast) != 0u;
         voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, ray.flags,
                                    ray.tsdf_end_m, span, layers);
+      }
+      if (walk_in_survey) {  // the misses the workers marked in the survey
+        const std::size_t words = ctx.scan_bits->voxelWords();
+        for (const WorkerScratch& scratch : scratch_) {
+          if (const std::uint64_t* plane = scratch.planes.find(region.key); plane != nullptr) {
+            for (std::size_t i = 0; i < words; ++i) {
+              layers.scan_misses[i] |= plane[i];
+            }
+          }
+        }
       }
       if (ctx.per_scan) {
         applyScanMisses(layers, ctx.scan_bits->voxelWords(), ctx.params);  // the scan's misses

@@ -14,6 +14,7 @@
 #include "platform/page_array.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/cpu_voxel_ops.hpp"
+#include "src/map/miss_planes.hpp"
 #include "src/map/worker_pool.hpp"
 
 namespace raymap::detail {
@@ -37,7 +38,14 @@ namespace raymap::detail {
 ///     first, and apply each region's steps in ray order, clearing a new region first (its first
 ///     touch is by the worker that writes it).
 /// Each voxel is written by one worker, in ray order, so the map is bit-identical to the
-/// single-threaded one and needs no atomics on voxels. Taking regions as workers come free keeps
+/// single-threaded one and needs no atomics on voxels.
+///
+/// Per-scan occupancy maps (with or without the voxel mean; no NDT, TSDF or decay rate) walk
+/// their rays to the voxel in the survey instead: their misses only set bits that commute
+/// (ScanBits), so each worker marks its own planes (MissPlanes) and lists no span; step 4 places
+/// only the sample hits, and step 5 ors the workers' planes of a region together before its
+/// misses. On short indoor rays the span lists cost a third of the walk they handed out
+/// (docs/benchmarks.md). Taking regions as workers come free keeps
 /// every worker busy to the end of the batch, whatever the error of the work estimate or the
 /// load of the machine (a static assignment by estimated work left one worker idle for 2-9 % of
 /// the apply step on an idle 2-core VM and 10-17 % beside other processes; now 0-2 %;
@@ -52,7 +60,8 @@ namespace raymap::detail {
 /// integrate() must not be called concurrently.
 class ParallelIntegrator {
  public:
-  ParallelIntegrator(unsigned workers, std::uint32_t store_capacity,
+  /// `region_voxels`: voxels along a region's edge (the size of a miss plane).
+  ParallelIntegrator(unsigned workers, std::uint32_t store_capacity, std::int32_t region_voxels,
                      std::size_t expected_batch_rays);
 
   unsigned workers() const noexcept { return pool_.size(); }
@@ -149,16 +158,19 @@ class ParallelIntegrator {
   /// Everything one worker writes in the survey and the resolve steps, on cache lines of its
   /// own.
   struct alignas(64) WorkerScratch {
-    explicit WorkerScratch(std::size_t max_regions) : table(max_regions) {}
+    WorkerScratch(std::size_t max_regions, std::size_t plane_words)
+        : table(max_regions), planes(max_regions, plane_words) {}
     WorkTable table;
     platform::PageArray<SpanRecord> spans;  // survey: this worker's ray range, in ray order
-    bool overflow = false;                  // survey: the work table is full
-    bool out_of_memory = false;             // survey: the span list could not grow
-    double apply_seconds = 0;               // apply: this worker's time in the current batch
+    MissPlanes planes;           // survey, per-scan occupancy: the misses of this worker's rays
+    bool overflow = false;       // survey: the work table is full
+    bool out_of_memory = false;  // survey: the span list could not grow
+    double apply_seconds = 0;    // apply: this worker's time in the current batch
   };
 
   /// One region of the batch in the apply step: its slot and its parts of the flat lists.
   struct RegionWork {
+    std::uint64_t key;  // RegionStore::packCoord
     std::uint32_t slot;
     std::uint32_t steps_begin;
     std::uint32_t steps_end;
@@ -171,6 +183,8 @@ class ParallelIntegrator {
   /// The next block of the current step, or kNoBlock when all are taken.
   unsigned takeBlock() noexcept;
   void releaseSlots() noexcept;
+  /// True when the batch's misses are walked in the survey (MissPlanes; see the class comment).
+  static bool walksInSurvey(const IntegrationContext& ctx) noexcept;
   /// Gives up a batch before its apply step: the regions it created get their clear values.
   void abandonBatch(VoxelMap& map) noexcept;
   /// Counts of block `b`'s steps (or hits) per slot, then its next place in the flat list.
@@ -198,6 +212,7 @@ class ParallelIntegrator {
   std::vector<std::uint8_t> in_batch_;   // per slot: a region of this batch
   std::vector<std::uint8_t> created_;    // per slot: created in this batch, not cleared yet
   std::vector<double> slot_work_;        // per slot
+  std::vector<std::uint64_t> slot_key_;  // per slot of this batch: its region's packed key
   std::vector<std::uint32_t> touched_;   // slots of this batch
   std::vector<std::pair<double, std::uint32_t>> order_;
   /// Per block a row of one counter per slot (a block is counted and placed by one worker at a

@@ -12,13 +12,8 @@ namespace {
 /// one (two workers own two slots).
 constexpr std::size_t kLineBytes = 64;
 
-std::size_t voxelWordsOf(std::int32_t region_voxels) {
-  const auto n = static_cast<std::size_t>(region_voxels);
-  return (n * n * n + 63u) / 64u;
-}
-
 std::size_t wordsPerSlot(std::int32_t region_voxels) {
-  const std::size_t words = voxelWordsOf(region_voxels);
+  const std::size_t words = ScanBits::voxelWordsFor(region_voxels);
   constexpr std::size_t kLineWords = kLineBytes / sizeof(std::uint64_t);
   return (words + kLineWords - 1u) / kLineWords * kLineWords;
 }
@@ -26,7 +21,7 @@ std::size_t wordsPerSlot(std::int32_t region_voxels) {
 }  // namespace
 
 ScanBits::ScanBits(std::uint32_t slots, std::int32_t region_voxels)
-    : voxel_words_(voxelWordsOf(region_voxels)),
+    : voxel_words_(ScanBits::voxelWordsFor(region_voxels)),
       words_per_slot_(wordsPerSlot(region_voxels)),
       stamps_(slots, 0u),
       // Default-initialised: pages of slots never used stay untouched (make_unique would zero

@@ -51,6 +51,11 @@ class ScanBits {
 
   /// Words of one plane that hold voxels (the plane is padded to a whole cache line).
   std::size_t voxelWords() const noexcept { return voxel_words_; }
+  /// Words that hold the voxels of a region `region_voxels` on an edge, one bit each.
+  static std::size_t voxelWordsFor(std::int32_t region_voxels) noexcept {
+    const auto n = static_cast<std::size_t>(region_voxels);
+    return (n * n * n + 63u) / 64u;
+  }
   /// The miss plane that follows the hit plane `hits` (from bitsFor()).
   std::uint64_t* missPlane(std::uint64_t* hits) const noexcept { return hits + words_per_slot_; }
 

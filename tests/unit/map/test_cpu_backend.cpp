@@ -223,22 +223,30 @@ TEST(Threads, StepTimesAccountForTheParallelBatchesOnly) {
 }
 
 TEST(Threads, SpansOutsideTheWindowAreCountedOncePerSpan) {
-  MapConfig config = test::smallConfig(Semantics::kPerRay);
-  config.policy = StorePolicy::kRolling;
-  config.window_regions = {4, 4, 4};
-  const std::vector<Ray> rays = test::randomScans(11, 2, 3000);
-  std::uint64_t single = 0;
-  for (unsigned threads : {1u, 2u, 5u}) {
-    VoxelMap map = test::makeMap(config);
-    map.setWindowCentre({0, 0, 0});
-    auto backend = test::cpuBackend(map, threads);
-    test::integrate(map, *backend, rays);
-    const std::uint64_t outside = backend->stats().spans_outside_window;
-    if (threads == 1) {
-      single = outside;
-      EXPECT_GT(single, 0u);
-    } else {
-      EXPECT_EQ(outside, single) << threads << " threads";
+  // Per scan, the workers walk the misses in the survey (MissPlanes) and count there.
+  for (Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    MapConfig config = test::smallConfig(semantics);
+    config.policy = StorePolicy::kRolling;
+    config.window_regions = {4, 4, 4};
+    const std::vector<Ray> rays = test::randomScans(11, 2, 3000);
+    std::uint64_t single = 0;
+    VoxelMap reference = test::makeMap(config);
+    for (unsigned threads : {1u, 2u, 5u}) {
+      VoxelMap map = test::makeMap(config);
+      map.setWindowCentre({0, 0, 0});
+      auto backend = test::cpuBackend(map, threads);
+      test::integrate(map, *backend, rays);
+      const std::uint64_t outside = backend->stats().spans_outside_window;
+      if (threads == 1) {
+        single = outside;
+        EXPECT_GT(single, 0u);
+        reference = std::move(map);
+        continue;
+      }
+      EXPECT_EQ(outside, single) << toString(semantics) << " " << threads << " threads";
+      const test::MapComparison cmp = test::compareMaps(reference, map);
+      EXPECT_GT(cmp.compared, 1000u);
+      EXPECT_EQ(cmp.exact_value, cmp.compared) << toString(semantics) << " " << threads;
     }
   }
 }
@@ -258,29 +266,32 @@ TEST(Threads, ReverseAndForwardWalksAgree) {
 }
 
 TEST(Capacity, FullStoreIsAnErrorNotASilentLoss) {
-  MapConfig config = test::smallConfig(Semantics::kPerRay);
-  config.memory_budget_bytes = 3u * 8u * 8u * 8u * 12u;  // three 0.8 m regions
-  const std::vector<Ray> rays = {makeRay({0.1, 0.1, 0.1}, {0.5, 0.1, 0.1}),
-                                 makeRay({0.1, 0.1, 0.1}, {5.0, 0.1, 0.1})};
-  for (unsigned threads : {1u, 2u}) {
-    VoxelMap map = test::makeMap(config);
-    auto backend = test::cpuBackend(map, threads);
-    RayPreparer preparer(map, {});
-    std::vector<PreparedRay> prepared(4);
-    const auto p = preparer.prepare(rays, prepared);
-    ASSERT_TRUE(backend->integrate(std::span<const PreparedRay>(prepared.data(), 1)));
-    const MapSummary before = map.summarise();
-    auto result =
-        backend->integrate(std::span<const PreparedRay>(prepared.data() + 1, p.written - 1));
-    ASSERT_FALSE(result);
-    EXPECT_EQ(result.error(), IntegrateError::kStoreFull);
-    if (threads > 1) {
-      // The multi-threaded path checks capacity before touching any voxel.
-      const MapSummary after = map.summarise();
-      EXPECT_EQ(after.voxels_free, before.voxels_free);
-      EXPECT_EQ(after.voxels_occupied, before.voxels_occupied);
+  for (Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    MapConfig config = test::smallConfig(semantics);
+    config.memory_budget_bytes = 3u * 8u * 8u * 8u * 12u;  // three 0.8 m regions
+    const std::vector<Ray> rays = {makeRay({0.1, 0.1, 0.1}, {0.5, 0.1, 0.1}),
+                                   makeRay({0.1, 0.1, 0.1}, {5.0, 0.1, 0.1}, 0, 1)};
+    for (unsigned threads : {1u, 2u}) {
+      VoxelMap map = test::makeMap(config);
+      auto backend = test::cpuBackend(map, threads);
+      RayPreparer preparer(map, {});
+      std::vector<PreparedRay> prepared(4);
+      const auto p = preparer.prepare(rays, prepared);
+      ASSERT_TRUE(backend->integrate(std::span<const PreparedRay>(prepared.data(), 1)));
+      const MapSummary before = map.summarise();
+      auto result =
+          backend->integrate(std::span<const PreparedRay>(prepared.data() + 1, p.written - 1));
+      ASSERT_FALSE(result);
+      EXPECT_EQ(result.error(), IntegrateError::kStoreFull);
+      if (threads > 1) {
+        // The multi-threaded path checks capacity before touching any voxel.
+        const MapSummary after = map.summarise();
+        EXPECT_EQ(after.voxels_free, before.voxels_free);
+        EXPECT_EQ(after.voxels_occupied, before.voxels_occupied);
+      }
+      EXPECT_EQ(map.state({5, 1, 1}), VoxelState::kOccupied)  // earlier data kept
+          << toString(semantics) << " " << threads;
     }
-    EXPECT_EQ(map.state({5, 1, 1}), VoxelState::kOccupied);  // earlier data kept
   }
 }
 
