@@ -97,6 +97,35 @@ TEST_F(Preparer, RaysBeyondTheKeyRangeAreRejected) {
   EXPECT_EQ(c.rays_out_of_bounds, 1u);
 }
 
+TEST_F(Preparer, ShortRaysAreKeptUpToTheKeyRangeOnEveryAxisAndSide) {
+  // Short rays (not rejected by their length) just inside and just outside the map's key range
+  // (VoxelMap::maxVoxelCoord voxels from the origin, exclusive), on each axis, both sides.
+  const double resolution = map_.geometry().resolution;
+  const std::int32_t limit = map_.maxVoxelCoord();
+  const double inside = (limit - 1.5) * resolution;   // in voxel limit - 2 (or 1 - limit)
+  const double outside = (limit + 0.5) * resolution;  // in voxel limit (or -limit - 1)
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double side : {1.0, -1.0}) {
+      Vec3d near_origin{0.05, 0.05, 0.05};
+      Vec3d far_origin = near_origin;
+      near_origin[axis] = side * inside;
+      far_origin[axis] = side * outside;
+      Vec3d near_sample = near_origin;
+      Vec3d far_sample = far_origin;
+      near_sample[(axis + 1) % 3] += 0.5;
+      far_sample[(axis + 1) % 3] += 0.5;
+      RayCounters c;
+      const auto out =
+          run({makeRay(near_origin, near_sample), makeRay(far_origin, far_sample)}, {}, &c);
+      ASSERT_EQ(out.size(), 1u) << "axis " << axis << " side " << side;
+      EXPECT_EQ(c.rays_out_of_bounds, 1u);
+      const rm_vec3i kept = out[0].origin_voxel;
+      EXPECT_EQ(axis == 0 ? kept.x : (axis == 1 ? kept.y : kept.z),
+                side > 0 ? limit - 2 : 1 - limit);
+    }
+  }
+}
+
 TEST_F(Preparer, SegmentsJoinAndOnlyTheLastOneHits) {
   RayFilter f;
   f.segment_length_m = 1.0;
