@@ -187,7 +187,8 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         RaySpan span;
         while (walk.next(&span)) {
           const std::uint64_t key = RegionStore::packCoord(span.region);
-          // A region outside a rolling window is never created (its span is counted in step 4):
+          // A region outside a rolling window is never created (its span is counted in step 4,
+          // or here when the survey walks):
           // it must not count against the store's capacity either, or a long ray would fail a
           // batch that the single-threaded path integrates.
           const bool in_window = map.inWindow(span.region);
