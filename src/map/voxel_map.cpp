@@ -220,10 +220,8 @@ Vec3i VoxelMap::voxelOf(Vec3d p) const noexcept {
 }
 
 bool VoxelMap::voxelInRange(Vec3d p) const noexcept {
-  const double limit = static_cast<double>(max_voxel_coord_);
   for (int a = 0; a < 3; ++a) {
-    const double v = std::floor(p[a] * inv_resolution_);
-    if (!(v > -limit && v < limit)) {  // also false for NaN
+    if (!flooredVoxelInRange(std::floor(p[a] * inv_resolution_))) {
       return false;
     }
   }

@@ -170,6 +170,12 @@ class VoxelMap {
   Vec3i voxelOf(Vec3d p_world) const noexcept;
   /// @brief True when p_world has a voxel whose region the store can index.
   bool voxelInRange(Vec3d p_world) const noexcept;
+  /// @brief voxelInRange()'s test of one axis, on floor(coordinate / resolution) as a double
+  /// (for callers that have taken the floor already). False for NaN.
+  bool flooredVoxelInRange(double voxel) const noexcept {
+    const double limit = static_cast<double>(max_voxel_coord_);
+    return voxel > -limit && voxel < limit;
+  }
   Vec3d voxelMinCorner(Vec3i voxel) const noexcept;
   Vec3d voxelCentre(Vec3i voxel) const noexcept;
   Vec3i regionOfVoxel(Vec3i voxel) const noexcept;
