@@ -93,7 +93,6 @@ ParallelIntegrator::ParallelIntegrator(unsigned workers, std::uint32_t store_cap
   in_batch_.assign(store_capacity, 0);
   created_.assign(store_capacity, 0);
   slot_work_.assign(store_capacity, 0.0);
-  slot_key_.assign(store_capacity, 0u);
   touched_.reserve(store_capacity);
   order_.reserve(store_capacity);
   regions_.reserve(store_capacity);
@@ -263,7 +262,6 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       if (in_batch_[*slot] == 0) {
         in_batch_[*slot] = 1;
         slot_work_[*slot] = 0.0;
-        slot_key_[*slot] = key;
         touched_.push_back(*slot);
       }
       created_[*slot] = created ? 1 : created_[*slot];
@@ -342,7 +340,6 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
   for (const auto& entry : order_) {
     const std::uint32_t slot = entry.second;
     RegionWork& region = regions_.emplace_back();
-    region.key = slot_key_[slot];
     region.slot = slot;
     region.steps_begin = steps_total;
     region.hits_begin = hits_total;
@@ -447,8 +444,9 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       }
       if (walk_in_survey) {  // the misses the workers marked in the survey
         const std::size_t words = ctx.scan_bits->voxelWords();
+        const std::uint64_t key = RegionStore::packCoord(map.store().coordOf(region.slot));
         for (const WorkerScratch& scratch : scratch_) {
-          if (const std::uint64_t* plane = scratch.planes.find(region.key); plane != nullptr) {
+          if (const std::uint64_t* plane = scratch.planes.find(key); plane != nullptr) {
             for (std::size_t i = 0; i < words; ++i) {
               layers.scan_misses[i] |= plane[i];
             }

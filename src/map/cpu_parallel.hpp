@@ -170,7 +170,6 @@ class ParallelIntegrator {
 
   /// One region of the batch in the apply step: its slot and its parts of the flat lists.
   struct RegionWork {
-    std::uint64_t key;  // RegionStore::packCoord
     std::uint32_t slot;
     std::uint32_t steps_begin;
     std::uint32_t steps_end;
@@ -212,7 +211,6 @@ class ParallelIntegrator {
   std::vector<std::uint8_t> in_batch_;   // per slot: a region of this batch
   std::vector<std::uint8_t> created_;    // per slot: created in this batch, not cleared yet
   std::vector<double> slot_work_;        // per slot
-  std::vector<std::uint64_t> slot_key_;  // per slot of this batch: its region's packed key
   std::vector<std::uint32_t> touched_;   // slots of this batch
   std::vector<std::pair<double, std::uint32_t>> order_;
   /// Per block a row of one counter per slot (a block is counted and placed by one worker at a
