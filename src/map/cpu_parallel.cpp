@@ -52,7 +52,7 @@ bool ParallelIntegrator::WorkTable::flush() noexcept {
 }
 
 bool ParallelIntegrator::WorkTable::addToTable(std::uint64_t key, double work) noexcept {
-  for (std::size_t b = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;;
+  for (std::size_t b = static_cast<std::size_t>(regionKeyHash(key) >> 20) & mask_;;
        b = (b + 1) & mask_) {
     if (keys_[b] == key) {
       work_[b] += work;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "platform/page_array.hpp"
+#include "src/map/region_slot_cache.hpp"
 
 namespace raymap::detail {
 
@@ -64,10 +65,10 @@ class MissPlanes {
   static constexpr std::size_t kFrontEntries = 64;
 
   static std::size_t frontIndex(std::uint64_t key) noexcept {
-    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 58);  // top 6 bits
+    return static_cast<std::size_t>(regionKeyHash(key) >> 58);  // top 6 bits
   }
   std::size_t bucketOf(std::uint64_t key) const noexcept {
-    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
+    return static_cast<std::size_t>(regionKeyHash(key) >> 20) & mask_;
   }
   std::uint64_t* plane(std::uint32_t p) noexcept {
     return words_.data() + (std::size_t{p} * plane_words_);

@@ -10,10 +10,16 @@
 
 namespace raymap::detail {
 
-/// @brief Slot of a packed region key in a 256-entry direct-mapped table (Fibonacci hashing: the
-/// top 8 bits of key * 2^64 / golden ratio).
+/// @brief Fibonacci hash of a packed region key (key * 2^64 / golden ratio): its top bits are
+/// the table index; the low bits of a packed key (one axis) alone would cluster.
+inline std::uint64_t regionKeyHash(std::uint64_t key) noexcept {
+  return key * 0x9E3779B97F4A7C15ull;
+}
+
+/// @brief Slot of a packed region key in a 256-entry direct-mapped table (the top 8 bits of
+/// regionKeyHash).
 inline std::size_t directMappedIndex(std::uint64_t key) noexcept {
-  return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 56);
+  return static_cast<std::size_t>(regionKeyHash(key) >> 56);
 }
 
 /// @brief Direct-mapped cache in front of the store's index (region coordinate -> slot), one per
