@@ -214,9 +214,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
             scratch.out_of_memory = true;  // a batch larger than expected and no memory to grow
             return;
           }
-          spans[span_count++] =
-              SpanRecord{key, (span.first ? kFirst : 0u) | (span.last ? kLast : 0u), span.t0,
-                         span.t1, span.box_lo};
+          spans[span_count++] = SpanRecord{key, span.t0, span.t1};
         }
         record.span_count = static_cast<std::uint32_t>(span_count) - record.first_span;
         const auto [region, index] = walk.sampleCell();
@@ -375,16 +373,19 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
           if (rec.region == RegionStore::kNoSlot) {
             continue;
           }
+          // The region walk gives a ray's spans in walk order, every one recorded: the first
+          // holds the walk's start voxel, the last its end voxel (RayRegionWalk::next).
+          const std::uint32_t flags =
+              (s == 0 ? kFirst : 0u) | (s + 1 == record.span_count ? kLast : 0u);
           const auto slot = static_cast<std::uint32_t>(rec.region);
-          steps_[stepCursor(b, slot)++] = RegionStep{ray, rec.flags, rec.t0, rec.t1, rec.box_lo};
+          steps_[stepCursor(b, slot)++] = RegionStep{ray, flags, rec.t0, rec.t1};
         }
         const std::uint32_t sample_slot = record.sample_slot;
         if (sample_slot == RegionStore::kNoSlot) {
           continue;
         }
         if (!ctx.ndt) {
-          steps_[stepCursor(b, sample_slot)++] =
-              RegionStep{ray, kHit, 0.0f, 0.0f, rm_vec3i_make(0, 0, 0)};
+          steps_[stepCursor(b, sample_slot)++] = RegionStep{ray, kHit, 0.0f, 0.0f};
         }
         if (hit_lists) {
           hits_[hitCursor(b, sample_slot)++] = ray;
@@ -417,6 +418,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
         created_[region.slot] = 0;
       }
       const RegionLayers layers = regionLayers(ctx, region.slot);
+      const Vec3i coord = map.store().coordOf(region.slot);
       if (ctx.per_scan) {
         for (std::uint32_t h = region.hits_begin; h < region.hits_end; ++h) {
           applyScanHit(layers, rays_[hits_[h]].sample_index, ctx.params);
@@ -431,12 +433,14 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
           ++voxels_visited;
           continue;
         }
+        // The walk starts on the sample voxel for a reverse ray (rm_ray_walk_frame_make).
         RaySpan span;
         span.t0 = step.t0;
         span.t1 = step.t1;
-        span.box_lo = step.box_lo;
+        span.box_lo = RayRegionWalk::boxLo(
+            coord, record.sample_is_start ? ray.sample_voxel : ray.origin_voxel, n);
         span.box_hi =
-            rm_vec3i_make(step.box_lo.x + n - 1, step.box_lo.y + n - 1, step.box_lo.z + n - 1);
+            rm_vec3i_make(span.box_lo.x + n - 1, span.box_lo.y + n - 1, span.box_lo.z + n - 1);
         span.first = (step.flags & kFirst) != 0u;
         span.last = (step.flags & kLast) != 0u;
         voxels_visited += missSpan(ctx, record.walk, record.sample_is_start, ray.flags,
@@ -444,7 +448,7 @@ Expected<void, IntegrateError> ParallelIntegrator::integrate(
       }
       if (walk_in_survey) {  // the misses the workers marked in the survey
         const std::size_t words = ctx.scan_bits->voxelWords();
-        const std::uint64_t key = RegionStore::packCoord(map.store().coordOf(region.slot));
+        const std::uint64_t key = RegionStore::packCoord(coord);
         for (const WorkerScratch& scratch : scratch_) {
           if (const std::uint64_t* plane = scratch.planes.find(key); plane != nullptr) {
             for (std::size_t i = 0; i < words; ++i) {

@@ -71,6 +71,13 @@ class RayRegionWalk {
     return {Vec3i{end_region_.x, end_region_.y, end_region_.z}, rm_local_index(local, n_)};
   }
 
+  /// @brief A region's first voxel relative to a walk's start voxel (global key): RaySpan's
+  /// box_lo, for callers that keep the region and the ray but not the span's box.
+  static rm_vec3i boxLo(Vec3i region, rm_vec3i walk_start_voxel, std::int32_t n) noexcept {
+    return rm_vec3i_make(region.x * n - walk_start_voxel.x, region.y * n - walk_start_voxel.y,
+                         region.z * n - walk_start_voxel.z);
+  }
+
   /// @brief The next span; false when every region has been visited.
   bool next(RaySpan* span) noexcept {
     if (done_) {
@@ -87,8 +94,7 @@ class RayRegionWalk {
     span->t0 = rm_line_walk_t_enter(&walk_);
     span->t1 = rm_line_walk_t_exit(&walk_);
     span->last = walk_.steps_left == 0;
-    span->box_lo = rm_vec3i_make(walk_.x * n_ - start_local_.x, walk_.y * n_ - start_local_.y,
-                                 walk_.z * n_ - start_local_.z);
+    span->box_lo = boxLo(span->region, frame_.start_voxel, n_);
     span->box_hi =
         rm_vec3i_make(span->box_lo.x + n_ - 1, span->box_lo.y + n_ - 1, span->box_lo.z + n_ - 1);
     return true;
