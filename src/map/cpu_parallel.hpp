@@ -24,7 +24,7 @@ namespace raymap::detail {
 /// Design: five steps per batch.
 ///  1. Survey (parallel): the batch's rays are cut into contiguous blocks (a few per worker),
 ///     taken by the workers as they come free; each worker walks its blocks' rays at region level
-///     once, records every span (region, t0, t1, voxel box) and the sample cell per ray in a list
+///     once, records every span (region, t0, t1) and the sample cell per ray in a list
 ///     of its own, and sums the estimated work (voxel steps) per region in a private table.
 ///  2. Create (serial): the regions of the batch are inserted into the store, uncleared; if the
 ///     store is full the batch fails here, before any voxel changes.
