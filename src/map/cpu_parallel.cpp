@@ -3,7 +3,6 @@
 #include "src/map/cpu_parallel.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cmath>
 
@@ -18,13 +17,8 @@ double secondsSince(Clock::time_point start) noexcept {
 
 }  // namespace
 
-ParallelIntegrator::WorkTable::WorkTable(std::size_t max_regions) {
-  const std::size_t buckets = std::bit_ceil(max_regions * 2u + 2u);
-  keys_.assign(buckets, kEmpty);
-  work_.assign(buckets, 0.0);
-  used_.reserve(max_regions + 1u);
-  mask_ = buckets - 1;
-  limit_ = max_regions;
+ParallelIntegrator::WorkTable::WorkTable(std::size_t max_regions)
+    : keys_(max_regions), work_(keys_.bucketCount(), 0.0) {
   front_keys_.fill(kEmpty);
 }
 
@@ -52,29 +46,17 @@ bool ParallelIntegrator::WorkTable::flush() noexcept {
 }
 
 bool ParallelIntegrator::WorkTable::addToTable(std::uint64_t key, double work) noexcept {
-  for (std::size_t b = static_cast<std::size_t>(regionKeyHash(key) >> 20) & mask_;;
-       b = (b + 1) & mask_) {
-    if (keys_[b] == key) {
-      work_[b] += work;
-      return true;
-    }
-    if (keys_[b] == kEmpty) {
-      if (used_.size() >= limit_) {
-        return false;  // more regions than the store can hold: the batch cannot fit
-      }
-      keys_[b] = key;
-      work_[b] = work;
-      used_.push_back(b);
-      return true;
-    }
+  bool added = false;
+  const std::size_t b = keys_.insert(key, &added);
+  if (b == RegionKeySet::kNoBucket) {
+    return false;  // more regions than the store can hold: the batch cannot fit
   }
+  work_[b] = added ? work : work_[b] + work;
+  return true;
 }
 
 void ParallelIntegrator::WorkTable::clear() noexcept {
-  for (std::size_t b : used_) {
-    keys_[b] = kEmpty;
-  }
-  used_.clear();
+  keys_.clear();
   front_keys_.fill(kEmpty);
 }
 

@@ -15,6 +15,7 @@
 #include "src/map/backend.hpp"
 #include "src/map/cpu_voxel_ops.hpp"
 #include "src/map/miss_planes.hpp"
+#include "src/map/region_key_set.hpp"
 #include "src/map/worker_pool.hpp"
 
 namespace raymap::detail {
@@ -115,9 +116,9 @@ class ParallelIntegrator {
     bool sample_is_start;
   };
 
-  /// Fixed-capacity open-addressing table: region key -> estimated work, behind a small
-  /// direct-mapped write-back front (most spans of neighbouring rays fall in a few regions, so
-  /// most additions stay in a few kilobytes).
+  /// Fixed-capacity table: region key -> estimated work (RegionKeySet, a work sum per bucket),
+  /// behind a small direct-mapped write-back front (most spans of neighbouring rays fall in a few
+  /// regions, so most additions stay in a few kilobytes).
   class WorkTable {
    public:
     explicit WorkTable(std::size_t max_regions);
@@ -127,23 +128,20 @@ class ParallelIntegrator {
     bool flush() noexcept;
     template <class Fn>
     void forEach(Fn&& fn) const {
-      for (std::size_t b : used_) {
-        fn(keys_[b], work_[b]);
+      for (std::size_t b : keys_.usedBuckets()) {
+        fn(keys_.keyAt(b), work_[b]);
       }
     }
     void clear() noexcept;
 
    private:
-    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+    static constexpr std::uint64_t kEmpty = RegionKeySet::kNoKey;
     static constexpr std::size_t kFrontEntries = 256;  // directMappedIndex() range
     bool addToTable(std::uint64_t key, double work) noexcept;
     std::array<std::uint64_t, kFrontEntries> front_keys_{};
     std::array<double, kFrontEntries> front_work_{};
-    std::vector<std::uint64_t> keys_;
-    std::vector<double> work_;
-    std::vector<std::size_t> used_;
-    std::size_t mask_ = 0;
-    std::size_t limit_ = 0;
+    RegionKeySet keys_;
+    std::vector<double> work_;  // per bucket of keys_
   };
 
   /// One step of the apply phase in its region's part of the step list: a span of a ray

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "platform/page_array.hpp"
+#include "src/map/region_key_set.hpp"
 #include "src/map/region_slot_cache.hpp"
 
 namespace raymap::detail {
@@ -57,18 +58,15 @@ class MissPlanes {
 
   /// @brief True when the batch holds `max_regions` planes (planeFor() returned null for want of
   /// room, not of memory).
-  bool full() const noexcept { return used_.size() >= limit_; }
+  bool full() const noexcept { return keys_.full(); }
 
  private:
-  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  static constexpr std::uint64_t kEmpty = RegionKeySet::kNoKey;
   static constexpr std::uint32_t kNoPlane = ~0u;
   static constexpr std::size_t kFrontEntries = 64;
 
   static std::size_t frontIndex(std::uint64_t key) noexcept {
     return static_cast<std::size_t>(regionKeyHash(key) >> 58);  // top 6 bits
-  }
-  std::size_t bucketOf(std::uint64_t key) const noexcept {
-    return static_cast<std::size_t>(regionKeyHash(key) >> 20) & mask_;
   }
   std::uint64_t* plane(std::uint32_t p) noexcept {
     return words_.data() + (std::size_t{p} * plane_words_);
@@ -77,11 +75,8 @@ class MissPlanes {
   std::uint32_t insert(std::uint64_t key) noexcept;
 
   std::size_t plane_words_;
-  std::size_t limit_;
-  std::size_t mask_ = 0;
-  std::vector<std::uint64_t> keys_;   // open addressing, kEmpty when free
-  std::vector<std::uint32_t> plane_;  // per bucket: its plane
-  std::vector<std::size_t> used_;     // buckets in use, to clear
+  RegionKeySet keys_;
+  std::vector<std::uint32_t> plane_;  // per bucket of keys_: its plane
   std::array<std::uint64_t, kFrontEntries> front_keys_{};
   std::array<std::uint32_t, kFrontEntries> front_planes_{};
   platform::PageArray<std::uint64_t> words_;
