@@ -48,6 +48,24 @@ RM_DEVICE_FN rm_u32 rm_atomic_xchg_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value)
 }
 /* Orders this work-item's global memory accesses before and after it. */
 RM_DEVICE_FN void rm_global_fence(void) { mem_fence(CLK_GLOBAL_MEM_FENCE); }
+RM_DEVICE_FN rm_u32 rm_atomic_min_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  return atomic_min(p, value);
+}
+RM_DEVICE_FN rm_u32 rm_atomic_or_u32(RM_ATOMIC_GLOBAL rm_u32* p, rm_u32 value) {
+  return atomic_or(p, value);
+}
+/* Work-group primitives (the device planner's scans and sorts, kernels/device/plan.h): local
+ * memory, the work-item's place in its group, and the group barrier. A kernel that uses them is
+ * launched in groups of exactly the size it names (RM_GROUP_KERNEL). */
+#define RM_LOCAL __local
+#define RM_LOCAL_ARRAY(type, name, count) __local type name[count]
+#define RM_GROUP_KERNEL(size) __kernel __attribute__((reqd_work_group_size(size, 1, 1)))
+RM_DEVICE_FN rm_u32 rm_local_id(void) { return RM_U32(get_local_id(0)); }
+RM_DEVICE_FN rm_u32 rm_group_id(void) { return RM_U32(get_group_id(0)); }
+RM_DEVICE_FN void rm_group_barrier(void) { barrier(CLK_LOCAL_MEM_FENCE); }
+RM_DEVICE_FN rm_u32 rm_local_atomic_add(volatile __local rm_u32* p, rm_u32 value) {
+  return atomic_add(p, value);
+}
 #if defined(RM_HAVE_INT64_ATOMICS)
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 typedef ulong rm_u64;
@@ -91,6 +109,17 @@ RM_DEVICE_FN rm_u32 rm_atomic_max_u32(rm_u32* p, rm_u32 value) { return atomicMa
 RM_DEVICE_FN rm_u32 rm_atomic_add_u32(rm_u32* p, rm_u32 value) { return atomicAdd(p, value); }
 RM_DEVICE_FN rm_u32 rm_atomic_xchg_u32(rm_u32* p, rm_u32 value) { return atomicExch(p, value); }
 RM_DEVICE_FN void rm_global_fence(void) { __threadfence(); }
+RM_DEVICE_FN rm_u32 rm_atomic_min_u32(rm_u32* p, rm_u32 value) { return atomicMin(p, value); }
+RM_DEVICE_FN rm_u32 rm_atomic_or_u32(rm_u32* p, rm_u32 value) { return atomicOr(p, value); }
+#define RM_LOCAL
+#define RM_LOCAL_ARRAY(type, name, count) __shared__ type name[count]
+#define RM_GROUP_KERNEL(size) extern "C" __global__ __launch_bounds__(size)
+RM_DEVICE_FN rm_u32 rm_local_id(void) { return threadIdx.x; }
+RM_DEVICE_FN rm_u32 rm_group_id(void) { return blockIdx.x; }
+RM_DEVICE_FN void rm_group_barrier(void) { __syncthreads(); }
+RM_DEVICE_FN rm_u32 rm_local_atomic_add(volatile rm_u32* p, rm_u32 value) {
+  return atomicAdd(const_cast<rm_u32*>(p), value);
+}
 RM_DEVICE_FN rm_u64 rm_load_u64(rm_u64* p) { return *(volatile rm_u64*)p; }
 RM_DEVICE_FN rm_u64 rm_atomic_add_u64(rm_u64* p, rm_u64 value) { return atomicAdd(p, value); }
 RM_DEVICE_FN rm_u64 rm_atomic_cas_u64(rm_u64* p, rm_u64 expected, rm_u64 desired) {

@@ -35,9 +35,13 @@ struct DeviceUnderTest {
 /// @brief Defined once per executable by the API's file (opencl_device.cpp, cuda_device.cpp).
 const DeviceUnderTest& deviceUnderTest();
 
-/// @brief The backend, with a test failure (and nullptr) when creation fails.
+/// @brief The backend, with a test failure (and nullptr) when creation fails. Planning follows
+/// RAYMAP_TEST_DEVICE_PLANNING ("host", "device") where it is set (CTest's device-planning runs).
 std::unique_ptr<Backend> createDeviceBackend(VoxelMap& map,
                                              const DeviceBackendOptions& options = {});
+/// @brief createDeviceBackend() with the options exactly as given (planning included).
+std::unique_ptr<Backend> createDeviceBackendAsGiven(VoxelMap& map,
+                                                    const DeviceBackendOptions& options);
 
 }  // namespace raymap::test
 

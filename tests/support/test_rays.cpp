@@ -64,7 +64,7 @@ RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays
     const auto progress = preparer.prepare(rays.subspan(begin, end - begin), prepared);
     EXPECT_EQ(progress.consumed, end - begin);
     auto ok = backend.integrate(std::span<const PreparedRay>(prepared.data(), progress.written));
-    EXPECT_TRUE(ok.has_value());
+    EXPECT_TRUE(ok.has_value()) << toString(ok.error());
     begin = end;
   }
   return preparer.counters();

@@ -42,6 +42,7 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   d.cache_hits -= before.cache_hits;
   d.cache_misses -= before.cache_misses;
   d.cache_evictions -= before.cache_evictions;
+  d.plans_on_host -= before.plans_on_host;
   d.plan_seconds -= before.plan_seconds;
   d.wait_seconds -= before.wait_seconds;
   d.sync_seconds -= before.sync_seconds;

@@ -13,6 +13,7 @@
 #include "kernels/common/batch.h"
 #include "kernels/cuda/launch.h"
 #include "kernels/cuda/ndt_launch.h"
+#include "kernels/cuda/plan_launch.h"
 #include "src/device/cuda/cuda_devices.hpp"
 #include "src/device/cuda/cuda_handles.hpp"
 #include "src/device/staging/staged_backend.hpp"
@@ -22,6 +23,7 @@ namespace {
 
 using gpu::NdtKernel;
 using gpu::OccupancyKernel;
+using gpu::PlanBuffer;
 
 /// Device buffers of one staging set, its page-locked counter read-back and its end event.
 struct DeviceBatch {
@@ -33,6 +35,10 @@ struct DeviceBatch {
   cuda::DeviceMemoryHandle scratch;        // per-ray semantics: saved values and runs of misses
   cuda::PinnedMemoryHandle counters_host;  // RM_COUNTER_COUNT 64-bit words
   cuda::EventHandle done;                  // recorded after the counters' read-back
+  // Planning on the device: the planner's own buffers (PlanBuffer ids) and the event recorded
+  // after the plan's read-back.
+  std::array<cuda::DeviceMemoryHandle, gpu::kPlanBufferCount> plan;
+  cuda::EventHandle plan_read;
 };
 
 template <class T>
@@ -47,7 +53,8 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
               const CudaBackendOptions& options)
       : StagedBackend(map, slots, /*wide_counters=*/true, options, cuda::pinnedHostMemory()),
         device_(std::move(device)),
-        block_threads_(options.block_threads) {}
+        block_threads_(options.block_threads),
+        plan_on_device_(options.planning == gpu::Planning::kDevice) {}
 
   ~CudaBackend() override {
     if (stream_ && cudaSetDevice(device_.index) == cudaSuccess) {
@@ -90,7 +97,7 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
       return fail(ErrorCode::kCapacity,
                   "CUDA device region cache: initialising it failed on " + device_.name);
     }
-    return {};
+    return plan_on_device_ ? initialisePlanning() : Expected<void, Error>{};
   }
 
   const char* name() const noexcept override { return "cuda"; }
@@ -98,7 +105,8 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
     return device_.name + " (CUDA " + std::to_string(device_.compute_major) + "." +
            std::to_string(device_.compute_minor) + ", runtime " +
            cuda::versionText(device_.runtime_version) + ")" +
-           (sharedMemory() ? ", shared memory" : "");
+           (sharedMemory() ? ", shared memory" : "") +
+           (planning() == gpu::Planning::kDevice ? ", planned on the device" : "");
   }
 
   // ---- cuda::BackendDevice ----
@@ -213,12 +221,103 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
     return false;
   }
 
+  /// Each set's planning buffers (the kernels are kernels/cuda/plan.cu, blocks of
+  /// RM_PLAN_GROUP threads).
+  Expected<void, Error> initialisePlanning() {
+    auto sizes = devicePlanSizesFor(RM_PLAN_GROUP);
+    if (!sizes) {
+      return Unexpected(sizes.error());
+    }
+    for (DeviceBatch& set : batches_) {
+      for (std::size_t id = 0; id < gpu::kPlanBufferCount; ++id) {
+        const std::size_t bytes = sizes->bytes(static_cast<PlanBuffer>(id));
+        if (bytes == 0) {
+          continue;
+        }
+        auto memory = cuda::allocateDevice(bytes, "device planning");
+        if (!memory) {
+          return Unexpected(memory.error());
+        }
+        set.plan[id] = std::move(*memory);
+      }
+      auto event = cuda::createEvent();
+      if (!event) {
+        return Unexpected(event.error());
+      }
+      set.plan_read = std::move(*event);
+    }
+    try {
+      return planOnDevice(*sizes);
+    } catch (const std::bad_alloc&) {
+      return fail(ErrorCode::kCapacity,
+                  "planning on the device: no page-locked host memory for its arrays");
+    }
+  }
+
+  /// The device buffer a planning kernel's argument `id` names on set `set` (nullptr: none).
+  std::uint32_t* planBuffer(unsigned set, PlanBuffer id) const noexcept {
+    const DeviceBatch& b = batches_[set];
+    switch (id) {
+      case PlanBuffer::kNone:
+      case PlanBuffer::kRegionSpans:  // CUDA has only span work per span record
+      case PlanBuffer::kSpanRuns:
+        return nullptr;
+      case PlanBuffer::kRays:
+        return typed<std::uint32_t>(b.rays);
+      case PlanBuffer::kSpans:
+        return typed<std::uint32_t>(b.spans);
+      case PlanBuffer::kGroups:
+        return typed<std::uint32_t>(b.groups);
+      case PlanBuffer::kHitRays:
+        return typed<std::uint32_t>(b.hit_rays);
+      default:
+        return typed<std::uint32_t>(b.plan[static_cast<std::size_t>(id)]);
+    }
+  }
+
+  // ---- gpu::PlanDevice ----
+  bool launchPlan(unsigned set, const gpu::PlanLaunch& launch) noexcept override {
+    std::uint32_t* buffers[RM_PLAN_BUFFERS] = {};
+    for (std::size_t i = 0; i < RM_PLAN_BUFFERS; ++i) {
+      buffers[i] = planBuffer(set, launch.buffers[i]);
+    }
+    return succeeded(cuda::launchPlanKernel(static_cast<unsigned>(launch.kernel), stream_.get(),
+                                            launch.items, launch.args, buffers),
+                     gpu::planKernelName(launch.kernel));
+  }
+
+  bool writePlanBuffer(unsigned set, PlanBuffer buffer, std::size_t offset, const void* host,
+                       std::size_t bytes) noexcept override {
+    return bytes == 0 ||
+           succeeded(cudaMemcpyAsync(reinterpret_cast<std::byte*>(planBuffer(set, buffer)) + offset,
+                                     host, bytes, cudaMemcpyHostToDevice, stream_.get()),
+                     "planning upload");
+  }
+
+  bool readPlanBuffer(unsigned set, PlanBuffer buffer, std::size_t offset, void* host,
+                      std::size_t bytes) noexcept override {
+    return bytes == 0 ||
+           succeeded(
+               cudaMemcpyAsync(host, reinterpret_cast<std::byte*>(planBuffer(set, buffer)) + offset,
+                               bytes, cudaMemcpyDeviceToHost, stream_.get()),
+               "planning read-back");
+  }
+
+  bool markPlanRead(unsigned set) noexcept override {
+    return succeeded(cudaEventRecord(batches_[set].plan_read.get(), stream_.get()),
+                     "planning event record");
+  }
+
+  bool waitPlanRead(unsigned set) noexcept override {
+    return succeeded(cudaEventSynchronize(batches_[set].plan_read.get()), "planning read-back");
+  }
+
   // ---- gpu::StagedBackend ----
   bool makeCurrent() noexcept override {
     return succeeded(cudaSetDevice(device_.index), "cudaSetDevice");
   }
 
-  bool uploadBatch(unsigned set, const gpu::BatchArrays& a) noexcept override {
+  bool uploadBatch(unsigned set, const gpu::BatchArrays* arrays) noexcept override {
     const DeviceBatch& b = batches_[set];
     bool ok = true;
     auto copy = [&](const cuda::DeviceMemoryHandle& dst, const void* src, std::size_t bytes) {
@@ -226,10 +325,13 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
                                                           cudaMemcpyHostToDevice, stream_.get()),
                                           "batch upload"));
     };
-    copy(b.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
-    copy(b.spans, a.spans.data(), a.spans.size() * sizeof(rm_span_record));
-    copy(b.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
-    copy(b.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
+    if (arrays != nullptr) {
+      const gpu::BatchArrays& a = *arrays;
+      copy(b.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
+      copy(b.spans, a.spans.data(), a.spans.size() * sizeof(rm_span_record));
+      copy(b.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
+      copy(b.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
+    }
     return ok && succeeded(cudaMemsetAsync(b.counters.get(), 0, counterBytes(), stream_.get()),
                            "counter reset");
   }
@@ -346,6 +448,7 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
 
   cuda::DeviceInfo device_;
   unsigned block_threads_;
+  bool plan_on_device_;
   cuda::StreamHandle stream_;
   cuda::EventHandle idle_;
   std::vector<cuda::DeviceMemoryHandle> layers_;  // cache mode: one per schema layer

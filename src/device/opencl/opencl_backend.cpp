@@ -17,12 +17,14 @@ namespace raymap {
 namespace kernels {
 extern const char* const kIntegrateOccupancySource;  // embedded at build time
 extern const char* const kIntegrateNdtSource;        // embedded at build time
+extern const char* const kPlanSource;                // embedded at build time
 }  // namespace kernels
 
 namespace {
 
 using gpu::NdtKernel;
 using gpu::OccupancyKernel;
+using gpu::PlanBuffer;
 
 // Work-group size for the kernels (clamped to the device maximum).
 constexpr std::size_t kWorkGroup = 64;
@@ -42,6 +44,11 @@ struct DeviceBatch {
   opencl::BufferHandle scratch;  // per-ray semantics: saved values and runs of misses
   std::array<std::uint64_t, RM_COUNTER_COUNT> counters_host{};  // 64- or 32-bit words
   opencl::EventHandle done;  // completes when the counters have been read back
+  // Planning on the device: the planner's own buffers (PlanBuffer ids), and with span work per
+  // region the span records as emitted (the kernels read the grouped ones in `spans`).
+  std::array<opencl::BufferHandle, gpu::kPlanBufferCount> plan;
+  opencl::BufferHandle emitted_spans;
+  opencl::EventHandle plan_read;  // completes when the plan's read-back is in
 };
 
 class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDevice {
@@ -141,6 +148,9 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
                                             opencl::errorName(status) + " on " +
                                             ctx_.info.device_name);
     }
+    if (options.planning == gpu::Planning::kDevice) {
+      return initialisePlanning(options);
+    }
     return {};
   }
 
@@ -148,7 +158,8 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
   std::string deviceName() const override {
     return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")" +
            (sharedMemory() ? ", shared memory" : "") +
-           (spansByRegion() ? ", span work per region" : "");
+           (spansByRegion() ? ", span work per region" : "") +
+           (planning() == gpu::Planning::kDevice ? ", planned on the device" : "");
   }
   std::string startupWarning() const override { return program_warning_; }
 
@@ -186,8 +197,147 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     return {};
   }
 
+  /// The planning program (kernels/opencl/plan.cl), its kernels and each set's buffers.
+  Expected<void, Error> initialisePlanning(const OpenClBackendOptions& options) {
+    // The planning kernels run in work-groups of a power of two from 64 to 256 work-items.
+    std::size_t group = 256;
+    while (group > ctx_.info.max_work_group_size && group > 64) {
+      group /= 2;
+    }
+    if (group > ctx_.info.max_work_group_size) {
+      return fail(ErrorCode::kUnsupported,
+                  "planning on the device needs work-groups of 64 work-items; " +
+                      ctx_.info.device_name + " allows " +
+                      std::to_string(ctx_.info.max_work_group_size) +
+                      " (use --device-planning host)");
+    }
+    auto sizes = devicePlanSizesFor(static_cast<std::uint32_t>(group));
+    if (!sizes) {
+      return Unexpected(sizes.error());
+    }
+    auto program = opencl::buildProgram(
+        ctx_, kernels::kPlanSource,
+        "-cl-std=CL1.2 -DRM_PLAN_GROUP=" + std::to_string(group) + "u" +
+            (options.extra_build_options.empty() ? "" : " " + options.extra_build_options),
+        options.program_cache);
+    if (!program) {
+      return Unexpected(program.error());
+    }
+    if (!program->warning.empty() && program_warning_.empty()) {
+      program_warning_ = program->warning;
+    }
+    plan_program_ = std::move(program->program);
+    for (std::size_t k = 0; k < gpu::kPlanKernelCount; ++k) {
+      auto kernel =
+          opencl::createKernel(plan_program_, gpu::planKernelName(static_cast<gpu::PlanKernel>(k)));
+      if (!kernel) {
+        return Unexpected(kernel.error());
+      }
+      plan_kernels_[k] = std::move(*kernel);
+    }
+    plan_group_ = group;
+    const gpu::BatchLimits& limits = this->limits();
+    for (DeviceBatch& set : batches_) {
+      for (std::size_t id = 0; id < gpu::kPlanBufferCount; ++id) {
+        const std::size_t bytes = sizes->bytes(static_cast<PlanBuffer>(id));
+        if (bytes == 0) {
+          continue;
+        }
+        auto buffer = opencl::createBuffer(ctx_, bytes, "device planning");
+        if (!buffer) {
+          return Unexpected(buffer.error());
+        }
+        set.plan[id] = std::move(*buffer);
+      }
+      if (spansByRegion()) {
+        auto buffer = opencl::createBuffer(ctx_, limits.max_spans * sizeof(rm_span_record),
+                                           "device planning, span records");
+        if (!buffer) {
+          return Unexpected(buffer.error());
+        }
+        set.emitted_spans = std::move(*buffer);
+      }
+    }
+    try {
+      return planOnDevice(*sizes);
+    } catch (const std::bad_alloc&) {
+      return fail(ErrorCode::kCapacity, "planning on the device: no host memory for its arrays");
+    }
+  }
+
+  /// The buffer a planning kernel's argument `id` names on set `set`.
+  cl_mem planBuffer(unsigned set, PlanBuffer id) const noexcept {
+    const DeviceBatch& b = batches_[set];
+    switch (id) {
+      case PlanBuffer::kNone:
+        return dummy_.get();
+      case PlanBuffer::kRays:
+        return b.rays.get();
+      case PlanBuffer::kSpans:  // as emitted; grouped by region into `spans` for the kernels
+        return spansByRegion() ? b.emitted_spans.get() : b.spans.get();
+      case PlanBuffer::kRegionSpans:
+        return spansByRegion() ? b.spans.get() : dummy_.get();
+      case PlanBuffer::kSpanRuns:
+        return b.span_runs.get();
+      case PlanBuffer::kGroups:
+        return b.groups.get();
+      case PlanBuffer::kHitRays:
+        return b.hit_rays.get();
+      default:
+        return b.plan[static_cast<std::size_t>(id)].get();
+    }
+  }
+
+  // ---- gpu::PlanDevice ----
+  bool launchPlan(unsigned set, const gpu::PlanLaunch& launch) noexcept override {
+    cl_kernel k = plan_kernels_[static_cast<std::size_t>(launch.kernel)].get();
+    if (clSetKernelArg(k, 0, sizeof(rm_plan_args), &launch.args) != CL_SUCCESS) {
+      return false;
+    }
+    for (cl_uint i = 0; i < RM_PLAN_BUFFERS; ++i) {
+      const cl_mem buffer = planBuffer(set, launch.buffers[i]);
+      if (clSetKernelArg(k, i + 1, sizeof(cl_mem), &buffer) != CL_SUCCESS) {
+        return false;
+      }
+    }
+    const std::size_t local = plan_group_;
+    const std::size_t global = (launch.items + local - 1) / local * local;
+    return clEnqueueNDRangeKernel(ctx_.queue.get(), k, 1, nullptr, &global, &local, 0, nullptr,
+                                  nullptr) == CL_SUCCESS;
+  }
+
+  bool writePlanBuffer(unsigned set, PlanBuffer buffer, std::size_t offset, const void* host,
+                       std::size_t bytes) noexcept override {
+    return bytes == 0 ||
+           clEnqueueWriteBuffer(ctx_.queue.get(), planBuffer(set, buffer), CL_FALSE, offset, bytes,
+                                host, 0, nullptr, nullptr) == CL_SUCCESS;
+  }
+
+  bool readPlanBuffer(unsigned set, PlanBuffer buffer, std::size_t offset, void* host,
+                      std::size_t bytes) noexcept override {
+    return bytes == 0 ||
+           clEnqueueReadBuffer(ctx_.queue.get(), planBuffer(set, buffer), CL_FALSE, offset, bytes,
+                               host, 0, nullptr, nullptr) == CL_SUCCESS;
+  }
+
+  bool markPlanRead(unsigned set) noexcept override {
+    cl_event event = nullptr;
+    if (clEnqueueMarkerWithWaitList(ctx_.queue.get(), 0, nullptr, &event) != CL_SUCCESS) {
+      return false;
+    }
+    batches_[set].plan_read = opencl::EventHandle(event);
+    return clFlush(ctx_.queue.get()) == CL_SUCCESS;
+  }
+
+  bool waitPlanRead(unsigned set) noexcept override {
+    const cl_event event = batches_[set].plan_read.get();
+    const cl_int status = event != nullptr ? clWaitForEvents(1, &event) : CL_INVALID_EVENT;
+    batches_[set].plan_read.reset();
+    return status == CL_SUCCESS;
+  }
+
   // ---- gpu::StagedBackend ----
-  bool uploadBatch(unsigned set, const gpu::BatchArrays& a) noexcept override {
+  bool uploadBatch(unsigned set, const gpu::BatchArrays* arrays) noexcept override {
     DeviceBatch& b = batches_[set];
     cl_command_queue q = ctx_.queue.get();
     bool ok = true;
@@ -197,11 +347,14 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
              CL_SUCCESS;
       }
     };
-    write(b.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
-    write(b.spans, a.deviceSpans().data(), a.deviceSpans().size() * sizeof(rm_span_record));
-    write(b.span_runs, a.span_runs.data(), a.span_runs.size() * sizeof(rm_span_run));
-    write(b.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
-    write(b.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
+    if (arrays != nullptr) {
+      const gpu::BatchArrays& a = *arrays;
+      write(b.rays, a.rays.data(), a.rays.size() * sizeof(PreparedRay));
+      write(b.spans, a.deviceSpans().data(), a.deviceSpans().size() * sizeof(rm_span_record));
+      write(b.span_runs, a.span_runs.data(), a.span_runs.size() * sizeof(rm_span_run));
+      write(b.groups, a.groups.data(), a.groups.size() * sizeof(rm_hit_group));
+      write(b.hit_rays, a.hit_rays.data(), a.hit_rays.size() * sizeof(std::uint32_t));
+    }
     const std::uint32_t zero = 0;
     if (ok && spansByRegion()) {
       ok = clEnqueueFillBuffer(q, b.next_run.get(), &zero, sizeof(zero), 0, sizeof(zero), 0,
@@ -386,7 +539,10 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
   opencl::ProgramHandle program_;
   opencl::KernelHandle span_kernel_;
   opencl::KernelHandle hit_kernel_;
-  opencl::KernelHandle tag_kernel_;           // occupancy maps with per-ray semantics only
+  opencl::KernelHandle tag_kernel_;     // occupancy maps with per-ray semantics only
+  opencl::ProgramHandle plan_program_;  // planning on the device only
+  std::array<opencl::KernelHandle, gpu::kPlanKernelCount> plan_kernels_;
+  std::size_t plan_group_ = 256;
   std::vector<opencl::BufferHandle> layers_;  // one per schema layer
   opencl::BufferHandle dummy_;
   std::array<DeviceBatch, kStagingSets> batches_;

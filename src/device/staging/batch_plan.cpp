@@ -139,7 +139,18 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
     const PreparedRay& ray = rays[consumed];
     const auto ray_index = static_cast<std::uint32_t>(out.rays.size());
     const std::size_t spans_before = out.spans.size();
+    const std::uint64_t outside_before = stats_.spans_outside_window;
     RayRegionWalk walk(ray, region_voxels_);
+    // A ray that might not fit the batch's span records (by the regions it crosses, in a window
+    // or not) starts the next batch before any of its regions is placed; the device planner cuts
+    // its batches at the same ray (kernels/device/plan.h).
+    if (spans_before + walk.regionCount() > limits_.max_spans) {
+      if (out.rays.empty()) {
+        ++stats_.rays_too_long;  // not even an empty batch holds it
+        continue;
+      }
+      break;
+    }
     RaySpan span;
     bool full = false;
     while (walk.next(&span)) {
@@ -189,6 +200,8 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
     }
     if (full) {
       out.spans.resize(spans_before);
+      // The ray is planned again (next batch) or skipped: its spans are counted then, or never.
+      stats_.spans_outside_window = outside_before;
       if (out.rays.empty()) {
         // Even an empty batch cannot hold this ray's regions: skip it, counted.
         ++stats_.rays_too_long;
@@ -226,6 +239,50 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
   }
   buildHitGroups(out);
   return consumed;
+}
+
+void BatchPlanner::beginDevicePlanned() noexcept {
+  if (cache_ != nullptr) {
+    cache_->beginBatch();
+  }
+  batch_regions_.reset();
+}
+
+Expected<std::uint32_t, IntegrateError> BatchPlanner::placeDevicePlanned(
+    Vec3i region, std::uint32_t spans, std::uint32_t samples) noexcept {
+  RAYMAP_DEBUG_ASSERT(spans > 0);
+  bool created = false;
+  auto host = map_->acquireRegionUncleared(region, &created);
+  if (!host) {
+    if (host.error() == StoreError::kFull) {
+      return Unexpected(IntegrateError::kStoreFull);
+    }
+    if (host.error() == StoreError::kTierFailed) {
+      return Unexpected(IntegrateError::kTierFailed);
+    }
+    return Unexpected(IntegrateError::kDeviceFailure);  // outside range or window: a precondition
+  }
+  if (created) {
+    host_uninitialised_[*host] = 1;
+  }
+  if (cache_ == nullptr) {
+    auto slot = sharedRegion(*host);
+    stats_.region_hits += spans - 1u;  // plan(): each further span in the region is a hit
+    return slot;
+  }
+  bool full = false;
+  auto slot = placeRegion(region, *host, &full);
+  if (!slot) {
+    return slot;
+  }
+  if (full) {
+    return Unexpected(IntegrateError::kDeviceFailure);  // more regions than slots: a precondition
+  }
+  cache_->noteHits(spans - 1u);
+  if (samples > 0) {
+    cache_->markSamplesWritten(*slot);
+  }
+  return slot;
 }
 
 void BatchPlanner::buildHitGroups(BatchArrays& out) const {

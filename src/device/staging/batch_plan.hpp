@@ -155,6 +155,23 @@ class BatchPlanner {
 
   const PlanStats& stats() const noexcept { return stats_; }
 
+  // ---- batches planned on the device (DevicePlanner): the same placements, region by region ----
+
+  /// @brief Starts a batch whose regions the device has listed: regions placed from now on are
+  /// pinned until the next batch.
+  void beginDevicePlanned() noexcept;
+  /// @brief Places one region of a device-planned batch, in the batch's order of first
+  /// appearance (what plan() does at the region's first span): creates it in the host store
+  /// (uncleared) if new and gives it a device slot, moving regions as plan() would. `spans`: the
+  /// batch's span records in it (counted as plan() counts them); `samples`: its samples (the
+  /// region's sample layers become dirty). Precondition: the batch has at most as many regions
+  /// as the cache has slots, and `region` is in the store's range and window. kStoreFull,
+  /// kTierFailed, kDeviceFailure as plan().
+  Expected<std::uint32_t, IntegrateError> placeDevicePlanned(Vec3i region, std::uint32_t spans,
+                                                             std::uint32_t samples) noexcept;
+  /// @brief Counts span records a device-planned batch skipped outside the rolling window.
+  void countSpansOutside(std::uint64_t spans) noexcept { stats_.spans_outside_window += spans; }
+
  private:
   /// Shared mode: the region's host slot, cleared on the device if it is new.
   Expected<std::uint32_t, IntegrateError> sharedRegion(std::uint32_t host_slot) noexcept;

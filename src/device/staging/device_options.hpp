@@ -10,6 +10,7 @@
 #include "raymap/error.hpp"
 
 #include "src/device/staging/batch_plan.hpp"
+#include "src/device/staging/device_planner.hpp"
 #include "src/map/voxel_map.hpp"
 
 namespace raymap {
@@ -40,6 +41,10 @@ struct DeviceBackendOptions {
   /// batches of this size: smaller batches let planning overlap the device sooner (measured on
   /// PoCL: 64 Ki rays was faster than 256 Ki; see docs/benchmarks.md).
   std::size_t per_ray_batch_rays = std::size_t{1} << 16;
+  /// Where batches are planned (the region walk of every ray, span records, hit groups): on the
+  /// host, or on the device, where the host only places each batch's distinct regions
+  /// (docs/architecture.md, "Planning on the device"). The maps are the same either way.
+  gpu::Planning planning = gpu::Planning::kHost;
 };
 
 namespace gpu {

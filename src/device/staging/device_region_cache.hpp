@@ -87,6 +87,8 @@ class DeviceRegionCache {
 
   /// @brief Counts a hit the caller resolved itself (a region it already placed in this batch).
   void noteHit() noexcept { ++hits_; }
+  /// @brief Counts `count` such hits at once (a device-planned batch's further spans in a region).
+  void noteHits(std::uint64_t count) noexcept { hits_ += count; }
   std::uint64_t hits() const noexcept { return hits_; }
   std::uint64_t misses() const noexcept { return misses_; }
   std::uint64_t evictions() const noexcept { return evictions_; }

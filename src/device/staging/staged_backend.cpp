@@ -47,7 +47,8 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
       planner_(map, cache_ ? &*cache_ : nullptr, *this, limits_),
       sets_{StagingSet(staging_memory), StagingSet(staging_memory)},
       wide_counters_(wide_counters),
-      ndt_(isNdt(map.mode())) {
+      ndt_(isNdt(map.mode())),
+      staging_memory_(staging_memory) {
   params_.occupancy = map.occupancy().toKernel();
   params_.region_voxels = map.geometry().region_voxels;
   params_.voxels_per_region = map.store().voxelsPerRegion();
@@ -98,6 +99,28 @@ void StagedBackend::groupSpansByRegion() {
   }
 }
 
+Result<DevicePlanSizes> StagedBackend::devicePlanSizesFor(std::uint32_t group_size) const {
+  return devicePlanSizes(*map_, limits_, cache_ ? cache_->capacity() : 0u, layerRegions(),
+                         spansByRegion(), group_size);
+}
+
+Expected<void, Error> StagedBackend::planOnDevice(const DevicePlanSizes& sizes) {
+  device_planner_.emplace(*map_, planner_, cache_ ? cache_->capacity() : 0u, sizes,
+                          static_cast<PlanDevice&>(*this), staging_memory_);
+  if (!makeCurrent() || !device_planner_->initialise() || !finish()) {
+    device_planner_.reset();
+    return fail(ErrorCode::kCapacity, "planning on the device: clearing its region tables failed");
+  }
+  return {};
+}
+
+void StagedBackend::observePlans(PlanObserver* observer) {
+  plan_observer_ = observer;
+  if (observer != nullptr && device_planner_ && !observed_) {
+    observed_.emplace(staging_memory_);
+  }
+}
+
 Expected<void, Error> StagedBackend::checkMapIsSupported() const {
   if (params_.per_scan != 0u && map_->scanMarkLayer() < 0) {
     return fail(ErrorCode::kUnsupported,
@@ -134,6 +157,16 @@ Expected<void, IntegrateError> StagedBackend::integrate(
   }
   params_.sequence = params_.per_scan != 0u ? map_->beginScan() : 0u;
   planner_.revalidate();
+  auto ok = device_planner_ ? integrateDevicePlanned(rays) : integrateHostPlanned(rays);
+  if (!ok) {
+    return ok;
+  }
+  ++stats_.batches;
+  return {};
+}
+
+Expected<void, IntegrateError> StagedBackend::integrateHostPlanned(
+    std::span<const PreparedRay> rays) noexcept {
   while (!rays.empty()) {
     const unsigned set = next_set_;
     const Clock::time_point t_wait = Clock::now();
@@ -157,7 +190,79 @@ Expected<void, IntegrateError> StagedBackend::integrate(
     }
     next_set_ = (next_set_ + 1) % kStagingSets;
   }
-  ++stats_.batches;
+  return {};
+}
+
+bool StagedBackend::enqueueDevicePlan(std::span<const PreparedRay> rays, std::size_t first,
+                                      unsigned* set) noexcept {
+  *set = next_set_;
+  next_set_ = (next_set_ + 1) % kStagingSets;
+  const std::size_t count = std::min(limits_.max_rays, rays.size() - first);
+  // The set's batch before last may still run: its device buffers are rewritten in queue order,
+  // and its host ray array was last read by that batch's plan phase, which is done.
+  return device_planner_->enqueuePlan(*set, rays.subspan(first, count), sets_[*set].arrays.rays);
+}
+
+Expected<void, IntegrateError> StagedBackend::integrateDevicePlanned(
+    std::span<const PreparedRay> rays) noexcept {
+  // Queue order, batch k on set k % 2: ... plan(k), resolve+kernels(k - 1), plan(k + 1),
+  // resolve+kernels(k) ... The host waits for plan(k)'s read-back, enqueues plan(k + 1), then
+  // places batch k's regions while the device integrates batch k - 1 and plans batch k + 1.
+  if (rays.empty()) {
+    return {};
+  }
+  unsigned set = 0;
+  std::size_t first = 0;
+  if (!enqueueDevicePlan(rays, 0, &set)) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  for (bool pending = true; pending;) {
+    pending = false;
+    const Clock::time_point t_wait = Clock::now();
+    auto outcome = device_planner_->finishPlan(set);
+    if (!outcome) {
+      return Unexpected(outcome.error());
+    }
+    // The set's batch before last was enqueued before this plan phase: done, only counted here.
+    if (auto ok = retire(set); !ok) {
+      return ok;
+    }
+    const Clock::time_point t_plan = Clock::now();
+    stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
+    map_->beginEpoch();
+    std::size_t consumed = outcome->rays;
+    if (outcome->host_fallback) {
+      if (!device_planner_->discard(set)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+      auto planned = planner_.plan(rays.subspan(first), sets_[set].arrays);
+      if (!planned) {
+        return Unexpected(planned.error());
+      }
+      consumed = *planned;
+    }
+    const unsigned this_set = set;
+    const std::size_t next = first + consumed;
+    if (next < rays.size()) {
+      if (!enqueueDevicePlan(rays, next, &set)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+      first = next;
+      pending = true;
+    }
+    Expected<void, IntegrateError> submitted;
+    if (!outcome->host_fallback) {
+      auto batch = device_planner_->resolve(this_set);
+      submitted = batch ? submitDevicePlanned(this_set, *batch)
+                        : Expected<void, IntegrateError>(Unexpected(batch.error()));
+    } else if (!sets_[this_set].arrays.rays.empty()) {
+      submitted = submit(this_set);
+    }
+    stats_.plan_seconds += secondsSince(t_plan);
+    if (!submitted) {
+      return submitted;
+    }
+  }
   return {};
 }
 
@@ -184,6 +289,11 @@ Expected<void, IntegrateError> StagedBackend::synchronise() noexcept {
 
 BackendStats StagedBackend::stats() const noexcept {
   BackendStats s = stats_;
+  if (device_planner_) {
+    s.plans_on_host = device_planner_->fallbacks();
+    s.bytes_to_device += device_planner_->bytesToDevice();
+    s.bytes_from_device += device_planner_->bytesFromDevice();
+  }
   const PlanStats& p = planner_.stats();
   s.spans_outside_window = p.spans_outside_window;
   s.rays_skipped = p.rays_too_long;
@@ -287,19 +397,22 @@ Expected<void, IntegrateError> StagedBackend::retire(unsigned set) noexcept {
   return {};
 }
 
-rm_integrate_params StagedBackend::launchParams(unsigned set, std::size_t items) const noexcept {
+rm_integrate_params StagedBackend::launchParams(std::size_t items,
+                                                std::size_t groups) const noexcept {
   rm_integrate_params p = params_;
   p.item_count = static_cast<std::uint32_t>(items);
-  p.group_count = static_cast<std::uint32_t>(sets_[set].arrays.groups.size());
+  p.group_count = static_cast<std::uint32_t>(groups);
   return p;
 }
 
-bool StagedBackend::launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept {
-  return items == 0 || launch(kernel, set, launchParams(set, items));
+bool StagedBackend::launchOver(OccupancyKernel kernel, unsigned set, std::size_t items,
+                               std::size_t groups) noexcept {
+  return items == 0 || launch(kernel, set, launchParams(items, groups));
 }
 
-bool StagedBackend::launchNdtOver(NdtKernel kernel, unsigned set, std::size_t items) noexcept {
-  return items == 0 || launchNdt(kernel, set, launchParams(set, items), ndt_params_);
+bool StagedBackend::launchNdtOver(NdtKernel kernel, unsigned set, std::size_t items,
+                                  std::size_t groups) noexcept {
+  return items == 0 || launchNdt(kernel, set, launchParams(items, groups), ndt_params_);
 }
 
 Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
@@ -307,35 +420,67 @@ Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
     grouper_->group(sets_[set].arrays);
   }
   const BatchArrays& a = sets_[set].arrays;
+  if (plan_observer_ != nullptr) {
+    plan_observer_->planned(a, Planning::kHost);
+  }
+  PlannedBatch batch;
+  batch.rays = a.rays.size();
+  batch.spans = a.spans.size();
   // The span kernel's work-items: one per span record, or one per region.
-  const std::size_t span_items = grouper_ ? a.span_runs.size() : a.spans.size();
-  bool ok = uploadBatch(set, a);
+  batch.span_items = grouper_ ? a.span_runs.size() : a.spans.size();
+  batch.groups = a.groups.size();
+  batch.hits = a.hit_rays.size();
+  if (!uploadBatch(set, &a)) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
   stats_.bytes_to_device +=
       a.rays.size() * sizeof(PreparedRay) + a.spans.size() * sizeof(rm_span_record) +
       a.span_runs.size() * sizeof(rm_span_run) + a.groups.size() * sizeof(rm_hit_group) +
       a.hit_rays.size() * sizeof(std::uint32_t);
+  return launchBatch(set, batch);
+}
+
+Expected<void, IntegrateError> StagedBackend::submitDevicePlanned(
+    unsigned set, const PlannedBatch& batch) noexcept {
+  if (plan_observer_ != nullptr && observed_) {
+    if (!device_planner_->readBack(set, batch, *observed_)) {
+      return Unexpected(IntegrateError::kDeviceFailure);
+    }
+    plan_observer_->planned(*observed_, Planning::kDevice);
+  }
+  if (!uploadBatch(set, nullptr)) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  return launchBatch(set, batch);
+}
+
+Expected<void, IntegrateError> StagedBackend::launchBatch(unsigned set,
+                                                          const PlannedBatch& batch) noexcept {
+  const std::size_t spans = batch.span_items;
+  const std::size_t groups = batch.groups;
+  bool ok = true;
   if (ndt_) {
     // All misses of the batch against the Gaussians as they were, then the hits voxel by voxel
     // in ray order (kernels/common/ndt.h); no scratch, no tags.
-    ok = ok && launchNdtOver(NdtKernel::kIntegrateSpans, set, span_items) &&
-         launchNdtOver(NdtKernel::kApplyHitGroups, set, a.groups.size());
+    ok = launchNdtOver(NdtKernel::kIntegrateSpans, set, spans, groups) &&
+         launchNdtOver(NdtKernel::kApplyHitGroups, set, groups, groups);
   } else if (params_.has_occupancy == 0u) {
     // No occupancy to order hits and misses in (TSDF maps, decay rates only): the spans, then the
     // voxel means of the samples (TSDF batches have none).
-    ok = ok && launchOver(OccupancyKernel::kIntegrateSpans, set, span_items) &&
-         launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size());
+    ok = launchOver(OccupancyKernel::kIntegrateSpans, set, spans, groups) &&
+         launchOver(OccupancyKernel::kApplyHitGroups, set, groups, groups);
   } else if (params_.per_scan != 0u) {
     // Hits first: the scan mark they leave makes the misses skip those voxels (occupied wins).
-    ok = ok && launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size()) &&
-         launchOver(OccupancyKernel::kIntegrateSpans, set, span_items);
+    ok = launchOver(OccupancyKernel::kApplyHitGroups, set, groups, groups) &&
+         launchOver(OccupancyKernel::kIntegrateSpans, set, spans, groups);
   } else {
     // Tag the voxels with samples, walk the misses (counting runs of misses between the samples
     // of tagged voxels), then replay the tagged voxels in ray order.
-    const std::size_t runs = a.hit_rays.size() + a.groups.size();
-    ok = ok && (runs == 0 || clearScratch(set, a.groups.size(), runs));
-    ok = ok && launchOver(OccupancyKernel::kTagHitGroups, set, a.groups.size()) &&
-         launchOver(OccupancyKernel::kIntegrateSpans, set, span_items) &&
-         launchOver(OccupancyKernel::kApplyHitGroups, set, a.groups.size());
+    const std::size_t runs = batch.hits + groups;
+    ok = (runs == 0 || clearScratch(set, groups, runs)) &&
+         launchOver(OccupancyKernel::kTagHitGroups, set, groups, groups) &&
+         launchOver(OccupancyKernel::kIntegrateSpans, set, spans, groups) &&
+         launchOver(OccupancyKernel::kApplyHitGroups, set, groups, groups);
   }
   ok = ok && endBatch(set);
   if (!ok) {
@@ -343,7 +488,7 @@ Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
   }
   sets_[set].in_flight = true;
   stats_.bytes_from_device += counterBytes();
-  stats_.rays += a.rays.size();
+  stats_.rays += batch.rays;
   return {};
 }
 

@@ -16,6 +16,7 @@
 #include "kernels/common/ndt.h"
 #include "src/device/staging/batch_plan.hpp"
 #include "src/device/staging/device_options.hpp"
+#include "src/device/staging/device_planner.hpp"
 #include "src/device/staging/device_region_cache.hpp"
 #include "src/device/staging/span_grouping.hpp"
 #include "src/map/backend.hpp"
@@ -51,6 +52,20 @@ std::uint32_t mapModeBits(const VoxelMap& map) noexcept;
 /// by the span kernels as well (NDT-TM's hit/miss counts count passes there).
 bool sampleLayer(LayerKind kind) noexcept;
 
+/// @brief Told of every batch a device backend plans, as the integration kernels get it (tests,
+/// and `raymap bench --check-plans`, compare device plans with host plans of the same rays).
+/// Observing a device plan reads it back from the device and waits: for checks, not for speed.
+class PlanObserver {
+ public:
+  PlanObserver() = default;
+  PlanObserver(const PlanObserver&) = delete;
+  PlanObserver& operator=(const PlanObserver&) = delete;
+  virtual ~PlanObserver() = default;
+  /// `batch`: the rays, span records (and, with span work per region, the grouped records and
+  /// runs), hit groups and hit rays of one batch; `where`: who planned it.
+  virtual void planned(const BatchArrays& batch, Planning where) = 0;
+};
+
 /// @brief A device backend over an API-specific queue of copies and kernels.
 ///
 /// integrate() plans a batch into one of two staging sets (waiting first for the batch that set
@@ -62,9 +77,19 @@ bool sampleLayer(LayerKind kind) noexcept;
 ///
 /// Thread-safety: none; the map must not be changed by others between integrate() and
 /// synchronise(), except for rolling-window moves, which the next integrate() takes into account.
+/// With planning on the device (DeviceBackendOptions::planning, DevicePlanner), integrate()
+/// uploads a batch's rays and enqueues its plan phase, then, while the device plans it and
+/// integrates the batch before, places the previous batch's distinct regions and enqueues its
+/// resolve phase and kernels: the host's work per batch is a few hundred region placements, not
+/// a region walk per ray. A batch the device plan cannot serve (more regions than the cache has
+/// slots, among others: PlanOutcome) is planned on the host instead, exactly.
+///
 /// Real-time: integrate() allocates nothing once constructed; it blocks only to wait for the
-/// device's batch before last.
-class StagedBackend : public Backend, private RegionTransfer, private RegionEvictionHook {
+/// device's batch before last (device planning: for the read-back of the batch's plan phase).
+class StagedBackend : public Backend,
+                      private RegionTransfer,
+                      private RegionEvictionHook,
+                      private PlanDevice {
  public:
   static constexpr unsigned kStagingSets = 2;
 
@@ -98,6 +123,13 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
       std::span<const std::uint32_t> host_slots, std::span<std::uint32_t> device_slots) noexcept;
   /// The map this backend integrates into.
   const VoxelMap& integratedMap() const noexcept { return *map_; }
+  /// Where batches are planned.
+  Planning planning() const noexcept {
+    return device_planner_ ? Planning::kDevice : Planning::kHost;
+  }
+  /// @brief Tells `observer` (nullptr: nobody) of every batch planned from now on; it must
+  /// outlive the backend or be removed first. Throws std::bad_alloc (the read-back arrays).
+  void observePlans(PlanObserver* observer);
 
  protected:
   /// `slots` == 0: shared memory (the device works on the host store in place). `wide_counters`:
@@ -128,6 +160,13 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   /// Fails with kUnsupported, saying why, when no device program has kernels for the map's mode
   /// or a per-scan map lacks its scan-mark layer (MapConfig::device_scan_marks).
   Expected<void, Error> checkMapIsSupported() const;
+  /// The sizes of the planning buffers for kernels in work-groups of `group_size` (call after
+  /// groupSpansByRegion(), if at all).
+  Result<DevicePlanSizes> devicePlanSizesFor(std::uint32_t group_size) const;
+  /// From now on, plan batches on the device with buffers of `sizes` (which the API layer has
+  /// allocated, PlanDevice), and enqueue what its buffers need first. Call before the first
+  /// integrate(). Throws std::bad_alloc.
+  Expected<void, Error> planOnDevice(const DevicePlanSizes& sizes);
 
   // ---- what the API layer supplies; every call goes to the backend's one in-order queue ----
 
@@ -135,10 +174,10 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   /// the API needs it (CUDA's current device).
   virtual bool makeCurrent() noexcept { return true; }
 
-  /// Copies the batch's arrays into set `set`'s device buffers and zeroes its counters. The copy
-  /// may still run when this returns: the host arrays are not written again before
-  /// waitForBatch(set) has returned.
-  virtual bool uploadBatch(unsigned set, const BatchArrays& arrays) noexcept = 0;
+  /// Copies the batch's arrays into set `set`'s device buffers (none for a batch planned on the
+  /// device, `arrays` null) and zeroes its counters. The copy may still run when this returns:
+  /// the host arrays are not written again before waitForBatch(set) has returned.
+  virtual bool uploadBatch(unsigned set, const BatchArrays* arrays) noexcept = 0;
   /// Zeroes `words` 32-bit words of set `set`'s scratch buffer from `first_word` on.
   virtual bool clearScratch(unsigned set, std::size_t first_word, std::size_t words) noexcept = 0;
   /// Runs `kernel` over params.item_count work-items on set `set`'s buffers (items > 0).
@@ -179,17 +218,31 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
                                            bool zero_layers_clear) noexcept final;
   Expected<void, IntegrateError> waitForDevice() noexcept final;
 
+  // ---- the batch loop ----
+  Expected<void, IntegrateError> integrateHostPlanned(std::span<const PreparedRay> rays) noexcept;
+  Expected<void, IntegrateError> integrateDevicePlanned(std::span<const PreparedRay> rays) noexcept;
+  /// Enqueues the plan phase of the rays from `first` on (at most a batch) into the next set.
+  bool enqueueDevicePlan(std::span<const PreparedRay> rays, std::size_t first,
+                         unsigned* set) noexcept;
+
   /// Copies the region's layers, or (sample_layers false) all but sampleLayer() ones.
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
                                             bool to_device, bool sample_layers = true) noexcept;
   /// Waits for the set's previous batch (if any) and adds its device counters to the stats.
   Expected<void, IntegrateError> retire(unsigned set) noexcept;
-  /// Enqueues the batch planned into `set`: copies, kernels in the semantics' order, read-back.
+  /// Enqueues the batch the host planned into `set`: copies, then launchBatch().
   Expected<void, IntegrateError> submit(unsigned set) noexcept;
-  bool launchOver(OccupancyKernel kernel, unsigned set, std::size_t items) noexcept;
-  bool launchNdtOver(NdtKernel kernel, unsigned set, std::size_t items) noexcept;
-  /// The batch's launch parameters for `items` work-items.
-  rm_integrate_params launchParams(unsigned set, std::size_t items) const noexcept;
+  /// Enqueues the batch the device planned into `set` (resolved): launchBatch().
+  Expected<void, IntegrateError> submitDevicePlanned(unsigned set,
+                                                     const PlannedBatch& batch) noexcept;
+  /// The kernels in the semantics' order over `batch`, then the counters' read-back.
+  Expected<void, IntegrateError> launchBatch(unsigned set, const PlannedBatch& batch) noexcept;
+  bool launchOver(OccupancyKernel kernel, unsigned set, std::size_t items,
+                  std::size_t groups) noexcept;
+  bool launchNdtOver(NdtKernel kernel, unsigned set, std::size_t items,
+                     std::size_t groups) noexcept;
+  /// The batch's launch parameters for `items` work-items, in a batch of `groups` hit groups.
+  rm_integrate_params launchParams(std::size_t items, std::size_t groups) const noexcept;
 
   struct StagingSet {
     explicit StagingSet(std::pmr::memory_resource* memory) : arrays(memory) {}
@@ -210,7 +263,11 @@ class StagedBackend : public Backend, private RegionTransfer, private RegionEvic
   bool ndt_;                    // the map is NDT-OM or NDT-TM: the NDT kernels, per-ray batches
   rm_ndt_params ndt_params_{};  // NDT maps: the rules' parameters in voxel units
   std::uint32_t map_mode_ = 0;  // rm_map_mode_bits of the map (fixed for the backend's life)
-  std::optional<RegionSpanGrouper> grouper_;  // span work per region (groupSpansByRegion())
+  std::optional<RegionSpanGrouper> grouper_;     // span work per region (groupSpansByRegion())
+  std::optional<DevicePlanner> device_planner_;  // planning on the device (planOnDevice())
+  std::pmr::memory_resource* staging_memory_;
+  PlanObserver* plan_observer_ = nullptr;
+  std::optional<BatchArrays> observed_;  // a device plan read back for the observer
   BackendStats stats_;
 };
 
