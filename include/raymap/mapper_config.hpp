@@ -51,6 +51,9 @@ struct BackendOptions {
   int cuda_device = 0;          ///< CUDA device ordinal
   /// Use the CPU backend (MapperCounters::fallback_warning says why) if the device cannot start.
   bool fallback_cpu = false;
+  /// OpenCL and CUDA: where each batch is planned (its rays' regions, span records, hit groups),
+  /// "host" or "device" (the host only places each batch's distinct regions; the same map).
+  std::string device_planning = "host";
   /// Prepared rays per backend call; 0 = the backend's preference (32,768 on the CPU for per-ray
   /// maps other than NDT; 262,144 for per-scan and NDT maps and on a device).
   std::size_t batch_rays = 0;

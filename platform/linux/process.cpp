@@ -6,6 +6,7 @@
 
 #include <sched.h>
 #include <sys/resource.h>
+#include <time.h>
 #include <unistd.h>
 
 namespace raymap::platform {
@@ -17,6 +18,22 @@ std::uint64_t peakResidentBytes() noexcept {
   }
   return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024u;  // Linux reports kibibytes
 }
+
+namespace {
+
+double clockSeconds(clockid_t clock) noexcept {
+  timespec t{};
+  if (clock_gettime(clock, &t) != 0) {
+    return 0.0;
+  }
+  return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
+}
+
+}  // namespace
+
+double processCpuSeconds() noexcept { return clockSeconds(CLOCK_PROCESS_CPUTIME_ID); }
+
+double threadCpuSeconds() noexcept { return clockSeconds(CLOCK_THREAD_CPUTIME_ID); }
 
 bool stderrIsTerminal() noexcept { return isatty(STDERR_FILENO) == 1; }
 

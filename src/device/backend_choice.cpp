@@ -32,6 +32,7 @@ void setDeviceOptions(const BackendChoice& choice, DeviceBackendOptions* options
                     : choice.gpu_memory == "shared" ? DeviceMemory::kShared
                                                     : DeviceMemory::kAuto;
   options->batch_rays = choice.gpu_batch_rays;
+  options->planning = gpu::planningNamed(choice.device_planning).value_or(gpu::Planning::kHost);
 }
 
 /// The backend's creation, with its errors prefixed by the option that chose it.
@@ -141,6 +142,10 @@ Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice)
     }
     created.backend = std::move(*cpu);
     return created;
+  }
+  if (!gpu::planningNamed(choice.device_planning)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "device planning '" + choice.device_planning + "': must be host or device");
   }
   auto device = createDevice(map, choice);
   if (device) {

@@ -25,6 +25,7 @@ struct BackendChoice {
   std::uint32_t gpu_cache_regions = 0;    ///< device region cache in regions (overrides bytes)
   std::string gpu_memory = "auto";        ///< "auto", "cache" or "shared"
   std::string opencl_span_work = "auto";  ///< "auto", "span" or "region" (SpanWork)
+  std::string device_planning = "host";   ///< "host" or "device" (gpu::Planning)
   std::size_t gpu_batch_rays = std::size_t{1} << 18;
   bool fallback_cpu = false;  ///< use the CPU backend (with a warning) if the device fails to start
 };

@@ -40,6 +40,7 @@ struct BackendStats {
   std::uint64_t cache_misses = 0;              ///< it had to be uploaded or created there
   std::uint64_t cache_evictions = 0;           ///< a region left the device to make room
   std::uint64_t cache_slots = 0;               ///< regions the device cache holds
+  bool planned_on_device = false;   ///< batches are planned on the device (DevicePlanner)
   std::uint64_t plans_on_host = 0;  ///< planning on the device: batches the host planned instead
   double plan_seconds = 0;  ///< host: region walk, region moves, hit grouping (device planning:
                             ///< the batch's region placements and the resolve launches)

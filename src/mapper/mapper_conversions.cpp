@@ -93,6 +93,7 @@ backends::BackendChoice toBackendChoice(const BackendOptions& options) {
   choice.opencl_device = options.opencl_device;
   choice.cuda_device = options.cuda_device;
   choice.fallback_cpu = options.fallback_cpu;
+  choice.device_planning = options.device_planning;
   return choice;
 }
 

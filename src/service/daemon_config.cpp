@@ -144,7 +144,7 @@ void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& 
 void readBackend(Context& ctx, const YAML::Node& node, BackendChoice& backend) {
   Fields f(ctx, node, "backend");
   f.knownKeys({"name", "threads", "fallback", "opencl_platform", "opencl_device", "cuda_device",
-               "gpu_cache_mb", "gpu_memory", "opencl_span_work"});
+               "gpu_cache_mb", "gpu_memory", "opencl_span_work", "device_planning"});
   static const std::vector<std::string> kNames = {"cpu", "opencl", "cuda"};
   backend.name = kNames[choiceOr(f, "name", kNames, 0)];
   const std::vector<std::string> available = backends::availableBackends();
@@ -163,6 +163,8 @@ void readBackend(Context& ctx, const YAML::Node& node, BackendChoice& backend) {
   backend.gpu_memory = kMemory[choiceOr(f, "gpu_memory", kMemory, 0)];
   static const std::vector<std::string> kSpanWork = {"auto", "span", "region"};
   backend.opencl_span_work = kSpanWork[choiceOr(f, "opencl_span_work", kSpanWork, 0)];
+  static const std::vector<std::string> kPlanning = {"host", "device"};
+  backend.device_planning = kPlanning[choiceOr(f, "device_planning", kPlanning, 0)];
 }
 
 void readPose(Context& ctx, const YAML::Node& node, PoseConfig& pose) {

@@ -16,6 +16,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fcntl.h>
@@ -1055,16 +1056,19 @@ std::string openClUnavailable() {
   return contains(r.out, "default for --backend opencl") ? std::string() : r.out + r.err;
 }
 
-/// Maps the yard on the CPU and on `device`, and expects the same map and the device report.
+/// Maps the yard on the CPU and on `device` (batches planned on the host, then on the device),
+/// and expects the same map and the device report.
 void expectDeviceMatchesTheCpu(const std::string& device) {
   TempDir dir;
   const std::string input = dir.file("yard.ply");
   writeRayCloud(input, yardRays(kYardScans));
   std::vector<VoxelCounts> counts;
-  for (const std::string& backend : {std::string("cpu"), device}) {
-    SCOPED_TRACE(backend);
-    const std::string map = dir.file(backend + ".rmap");
-    const std::string stats = dir.file(backend + ".json");
+  for (const auto& [backend, planning] :
+       {std::pair{std::string("cpu"), std::string()}, std::pair{device, std::string("host")},
+        std::pair{device, std::string("device")}}) {
+    SCOPED_TRACE(backend + " " + planning);
+    const std::string map = dir.file(backend + planning + ".rmap");
+    const std::string stats = dir.file(backend + planning + ".json");
     // Per-scan semantics: the device map equals the CPU's exactly (docs/architecture.md), for
     // the same walk direction (devices walk in reverse by default).
     std::vector<std::string> args = {"populate",     input,   "--semantics", "scan",
@@ -1072,6 +1076,8 @@ void expectDeviceMatchesTheCpu(const std::string& device) {
                                      "--stats-json", stats};
     if (backend == "cpu") {
       args.push_back("--reverse");
+    } else {
+      args.insert(args.end(), {"--device-planning", planning});
     }
     const RunResult r = runRaymap(concat(args, kSmallMap));
     ASSERT_EQ(r.exit_code, 0) << describe(r);
@@ -1086,6 +1092,8 @@ void expectDeviceMatchesTheCpu(const std::string& device) {
       EXPECT_GT(jsonCount(json, "bytes_to_device"), 0u);
       EXPECT_EQ(jsonCount(json, "rays_skipped"), 0u);
       EXPECT_EQ(jsonValue(json, "walk"), std::optional<std::string>("reverse"));
+      EXPECT_EQ(jsonValue(json, "planning"), std::optional<std::string>(planning));
+      EXPECT_EQ(jsonCount(json, "plans_on_host"), 0u);
     }
     counts.push_back(infoCounts(map));
   }

@@ -302,6 +302,12 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "devices such as PoCL, span on GPUs)")
       ->check(CLI::IsMember({"auto", "span", "region"}))
       ->capture_default_str();
+  c.add_option("--device-planning", f.device_planning,
+               "Where OpenCL and CUDA batches are planned (each ray's regions, span records, hit "
+               "groups): host, or device (the host only places each batch's distinct regions); "
+               "the maps are the same")
+      ->check(CLI::IsMember({"host", "device"}))
+      ->capture_default_str();
   c.add_option("--fallback", f.fallback,
                "If the device backend cannot start: none (fail) or cpu (warn, map on the CPU)")
       ->check(CLI::IsMember({"none", "cpu"}))
@@ -519,6 +525,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.backend.fallback_cpu = f.fallback == "cpu";
   o.backend.gpu_memory = f.gpu_memory;
   o.backend.opencl_span_work = f.opencl_span_work;
+  o.backend.device_planning = f.device_planning;
   if (f.batch_rays != 0) {
     o.backend.gpu_batch_rays = f.batch_rays;
   }

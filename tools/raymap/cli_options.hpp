@@ -51,6 +51,7 @@ struct MappingFlags {
   std::string gpu_cache = "auto";
   std::string gpu_memory = "auto";
   std::string opencl_span_work = "auto";
+  std::string device_planning = "host";
   std::string fallback = "none";
   double segment_length = 0.0;
   bool reverse = false;

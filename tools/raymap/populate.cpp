@@ -26,6 +26,22 @@ std::string number(double value) {
   return buffer;
 }
 
+/// CPU seconds of the process and of the calling thread.
+struct CpuTimes {
+  double process = 0;
+  double thread = 0;
+};
+
+CpuTimes cpuTimes() noexcept {
+  return CpuTimes{platform::processCpuSeconds(), platform::threadCpuSeconds()};
+}
+
+void addCpuSince(const CpuTimes& before, PopulateReport* report) noexcept {
+  const CpuTimes now = cpuTimes();
+  report->integrate_cpu_seconds += now.process - before.process;
+  report->integrate_thread_cpu_seconds += now.thread - before.thread;
+}
+
 /// Counters of `now` minus those of `before` (a reused backend's share of one run).
 BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   BackendStats d = now;
@@ -106,8 +122,10 @@ Result<PopulateReport> integrateStream(
       break;
     }
     const Clock::time_point t_integrate = Clock::now();
+    const CpuTimes cpu_before = cpuTimes();
     auto ok = batcher.add(preparer, std::span<const Ray>(chunk.data(), *count));
     report.integrate_seconds += secondsSince(t_integrate);
+    addCpuSince(cpu_before, &report);
     if (!ok) {
       return Unexpected(integrate_failed(ok.error()));
     }
@@ -118,8 +136,10 @@ Result<PopulateReport> integrateStream(
   }
   {
     const Clock::time_point t_integrate = Clock::now();
+    const CpuTimes cpu_before = cpuTimes();
     auto ok = batcher.flush();
     report.integrate_seconds += secondsSince(t_integrate);
+    addCpuSince(cpu_before, &report);
     if (!ok) {
       return Unexpected(integrate_failed(ok.error()));
     }
@@ -129,11 +149,13 @@ Result<PopulateReport> integrateStream(
   // Device backends return before the device finishes: the wait and the download of the map
   // belong to the integration time.
   const Clock::time_point t_sync = Clock::now();
+  const CpuTimes cpu_before_sync = cpuTimes();
   if (auto ok = backend.synchronise(); !ok) {
     return fail(ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
                                     " backend: " + toString(ok.error()));
   }
   report.integrate_seconds += secondsSince(t_sync);
+  addCpuSince(cpu_before_sync, &report);
   bar.finish();
   report.rays = preparer.counters();
   report.backend = statsSince(backend.stats(), stats_before);
@@ -235,6 +257,12 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
       .add("scans_split", r.scans_split)
       .add("integrate_seconds", r.integrate_seconds)
       .add("rays_per_second", rate)
+      .add("integrate_cpu_seconds", r.integrate_cpu_seconds)
+      .add("integrate_thread_cpu_seconds", r.integrate_thread_cpu_seconds)
+      .add("host_cpu_ns_per_ray",
+           r.rays.rays_accepted > 0
+               ? r.integrate_cpu_seconds * 1e9 / static_cast<double>(r.rays.rays_accepted)
+               : 0.0)
       .add("read_seconds", r.read_seconds)
       .add("total_seconds", r.total_seconds)
       .add("voxels_free", r.summary.voxels_free)
@@ -262,7 +290,9 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
   if (r.backend_name != "cpu") {
     const BackendStats& b = r.backend;
     const std::uint64_t lookups = b.cache_hits + b.cache_misses;
-    j.add("rays_skipped", b.rays_skipped)
+    j.add("planning", b.planned_on_device ? "device" : "host")
+        .add("plans_on_host", b.plans_on_host)
+        .add("rays_skipped", b.rays_skipped)
         .add("bytes_to_device", b.bytes_to_device)
         .add("bytes_from_device", b.bytes_from_device)
         .add("region_bytes_to_device", b.region_bytes_to_device)

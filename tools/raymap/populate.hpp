@@ -57,7 +57,11 @@ struct PopulateReport {
   std::uint64_t scans = 0;        ///< runs of equal scan index seen
   std::uint64_t scans_split = 0;  ///< per-scan: scans larger than a batch, integrated in parts
   double integrate_seconds = 0;   ///< preparation + integration + final device sync; no reading
-  double read_seconds = 0;        ///< reading and decoding the input
+  /// CPU seconds over the same span as integrate_seconds: the whole process (every thread: a
+  /// CPU backend's workers, PoCL's device threads) and the thread that prepares and plans.
+  double integrate_cpu_seconds = 0;
+  double integrate_thread_cpu_seconds = 0;
+  double read_seconds = 0;                ///< reading and decoding the input
   std::optional<bag::BagRaysReport> bag;  ///< rosbag2 input: what its messages gave
   double total_seconds = 0;
   MapSummary summary;

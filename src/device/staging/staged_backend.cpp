@@ -290,6 +290,7 @@ Expected<void, IntegrateError> StagedBackend::synchronise() noexcept {
 BackendStats StagedBackend::stats() const noexcept {
   BackendStats s = stats_;
   if (device_planner_) {
+    s.planned_on_device = true;
     s.plans_on_host = device_planner_->fallbacks();
     s.bytes_to_device += device_planner_->bytesToDevice();
     s.bytes_from_device += device_planner_->bytesFromDevice();

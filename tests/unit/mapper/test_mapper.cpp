@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "raymap/mapper.hpp"
@@ -379,9 +380,11 @@ TEST(Mapper, DeviceBackendsGiveTheCpuMap) {
   auto cpu_heights = cpu->heightmap(request);
   ASSERT_TRUE(cpu_heights) << cpu_heights.error().message;
   int compared = 0;
-  for (const char* device : {"opencl", "cuda"}) {
+  for (const auto& [device, planning] : {std::pair{"opencl", "host"}, std::pair{"opencl", "device"},
+                                         std::pair{"cuda", "host"}, std::pair{"cuda", "device"}}) {
     MapperConfig config = smallMapper(Semantics::kPerRay);
     config.backend.name = device;
+    config.backend.device_planning = planning;
     config.rays.walk = RayOptions::Walk::kForward;  // the CPU's walk: the same voxels either way
     auto mapper = Mapper::create(config);
     if (!mapper) {
@@ -406,6 +409,17 @@ TEST(Mapper, DeviceBackendsGiveTheCpuMap) {
   if (compared == 0) {
     GTEST_SKIP() << "no device backend can run here";
   }
+}
+
+TEST(Mapper, AnUnknownDevicePlanningIsRefusedByName) {
+  MapperConfig config = smallMapper(Semantics::kPerRay);
+  config.backend.name = "opencl";
+  config.backend.device_planning = "gpu";
+  auto mapper = Mapper::create(config);
+  ASSERT_FALSE(mapper);
+  EXPECT_NE(mapper.error().message.find("device planning 'gpu': must be host or device"),
+            std::string::npos)
+      << mapper.error().message;
 }
 
 TEST(Mapper, VersionHeaderMatchesTheProject) {

@@ -62,6 +62,7 @@ TEST(DaemonConfig, EmptyMappingGivesTheDefaults) {
   EXPECT_EQ(c.backend.name, "cpu");
   EXPECT_FALSE(c.backend.fallback_cpu);
   EXPECT_EQ(c.backend.opencl_span_work, "auto");
+  EXPECT_EQ(c.backend.device_planning, "host");
   EXPECT_EQ(c.pose.source, PoseConfig::Source::kOdometry);
   EXPECT_EQ(c.pose.odometry_topic, "rt/odom");
   EXPECT_EQ(c.pose.history, 4096u);
@@ -272,6 +273,11 @@ TEST(DaemonConfig, WrongTypesAreNamed) {
   auto region = parseDaemonConfig("backend:\n  opencl_span_work: region\n", kName);
   ASSERT_TRUE(region) << region.error().message;
   EXPECT_EQ(region->backend.opencl_span_work, "region");
+  expectError("backend:\n  device_planning: gpu\n", "backend.device_planning",
+              "must be host or device");
+  auto planned = parseDaemonConfig("backend:\n  device_planning: device\n", kName);
+  ASSERT_TRUE(planned) << planned.error().message;
+  EXPECT_EQ(planned->backend.device_planning, "device");
   expectError("pose:\n  source: gps\n", "pose.source", "must be odometry or tf");
   expectError("sensors:\n  topic: rt/points\n", "sensors", "expected a list");
   expectError("sensors: []\n", "sensors", "at least one sensor");
