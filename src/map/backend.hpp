@@ -39,7 +39,10 @@ struct BackendStats {
   std::uint64_t cache_hits = 0;                ///< a batch needed a region already on the device
   std::uint64_t cache_misses = 0;              ///< it had to be uploaded or created there
   std::uint64_t cache_evictions = 0;           ///< a region left the device to make room
-  std::uint64_t cache_slots = 0;               ///< regions the device cache holds
+  /// Region moves that waited for the device: the staging ring was full, or an upload needed a
+  /// download still on its way (device caches; 0 in a steady state that fits the ring).
+  std::uint64_t transfer_stalls = 0;
+  std::uint64_t cache_slots = 0;    ///< regions the device cache holds
   bool planned_on_device = false;   ///< batches are planned on the device (DevicePlanner)
   std::uint64_t plans_on_host = 0;  ///< planning on the device: batches the host planned instead
   double plan_seconds = 0;  ///< host: region walk, region moves, hit grouping (device planning:

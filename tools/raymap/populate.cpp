@@ -59,6 +59,7 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   d.cache_misses -= before.cache_misses;
   d.cache_evictions -= before.cache_evictions;
   d.plans_on_host -= before.plans_on_host;
+  d.transfer_stalls -= before.transfer_stalls;
   d.plan_seconds -= before.plan_seconds;
   d.wait_seconds -= before.wait_seconds;
   d.sync_seconds -= before.sync_seconds;
@@ -301,6 +302,7 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
         .add("cache_hits", b.cache_hits)
         .add("cache_misses", b.cache_misses)
         .add("cache_evictions", b.cache_evictions)
+        .add("transfer_stalls", b.transfer_stalls)
         .add("plan_seconds", b.plan_seconds)
         .add("wait_seconds", b.wait_seconds)
         .add("sync_seconds", b.sync_seconds)

@@ -406,18 +406,15 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
                : nullptr;
   }
 
-  /// The host store is pageable: an upload is staged by the driver and then waited for, so the
-  /// host slot may be reused at once (uploads happen only on cache misses of regions the host
-  /// holds). A download into pageable memory returns when it is done; nothing reads the host
-  /// store before synchronise() anyway.
+  /// `host` is the staging ring in page-locked memory (gpu::TransferStaging), untouched until
+  /// the stream is past the copy: both directions are asynchronous DMA, nothing waits.
   bool copyLayer(int layer, std::size_t device_offset, std::byte* host, std::size_t bytes,
                  bool to_device) noexcept override {
     std::byte* device =
         static_cast<std::byte*>(layer_ptrs_[static_cast<std::size_t>(layer)]) + device_offset;
     if (to_device) {
       return succeeded(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_.get()),
-                       "region upload") &&
-             finish();
+                       "region upload");
     }
     return succeeded(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, stream_.get()),
                      "region download");

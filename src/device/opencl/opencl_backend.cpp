@@ -462,13 +462,12 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     return status == CL_SUCCESS ? b.counters_host.data() : nullptr;
   }
 
-  /// Uploads block, so the host store slot may be reused at once (they happen only on cache
-  /// misses of regions that exist on the host). Downloads do not: the in-order queue runs them
-  /// before anything enqueued later (an upload of the same host memory included).
+  /// Neither direction blocks: `host` is the staging ring, untouched until the device is past
+  /// the copy (gpu::TransferStaging); the in-order queue orders it with the kernels.
   bool copyLayer(int layer, std::size_t device_offset, std::byte* host, std::size_t bytes,
                  bool to_device) noexcept override {
     cl_mem buffer = layers_[static_cast<std::size_t>(layer)].get();
-    return (to_device ? clEnqueueWriteBuffer(ctx_.queue.get(), buffer, CL_TRUE, device_offset,
+    return (to_device ? clEnqueueWriteBuffer(ctx_.queue.get(), buffer, CL_FALSE, device_offset,
                                              bytes, host, 0, nullptr, nullptr)
                       : clEnqueueReadBuffer(ctx_.queue.get(), buffer, CL_FALSE, device_offset,
                                             bytes, host, 0, nullptr, nullptr)) == CL_SUCCESS;

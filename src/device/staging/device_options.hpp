@@ -45,6 +45,10 @@ struct DeviceBackendOptions {
   /// host, or on the device, where the host only places each batch's distinct regions
   /// (docs/architecture.md, "Planning on the device"). The maps are the same either way.
   gpu::Planning planning = gpu::Planning::kHost;
+  /// Host staging memory for region moves in and out of the device cache (page-locked on CUDA),
+  /// bytes; 0: 64 MiB. Never less than four regions. A batch that moves more than it holds waits
+  /// for the device (BackendStats::transfer_stalls).
+  std::uint64_t transfer_staging_bytes = 0;
 };
 
 namespace gpu {

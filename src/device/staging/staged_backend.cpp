@@ -2,7 +2,9 @@
 // The API-independent half of the device backends: batch loop, kernel order, region moves.
 #include "src/device/staging/staged_backend.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <string>
 
 #include "kernels/common/map_mode.h"
@@ -25,6 +27,19 @@ double secondsSince(Clock::time_point start) noexcept {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+/// Bytes of the region-move staging ring: the options', or 64 MiB; never less than four regions
+/// of every layer (a region is moved layer by layer, each copy whole).
+std::size_t transferStagingBytes(const VoxelMap& map, const DeviceBackendOptions& options) {
+  std::size_t region = 0;
+  for (int l = 0; l < map.store().schema().size(); ++l) {
+    region += map.store().layerRegionBytes(l);
+  }
+  const std::size_t wanted = options.transfer_staging_bytes != 0
+                                 ? static_cast<std::size_t>(options.transfer_staging_bytes)
+                                 : std::size_t{64} << 20;
+  return std::max(wanted, 4 * region);
+}
+
 }  // namespace
 
 bool sampleLayer(LayerKind kind) noexcept {
@@ -43,6 +58,10 @@ StagedBackend::StagedBackend(VoxelMap& map, std::uint32_t slots, bool wide_count
                              std::pmr::memory_resource* staging_memory)
     : map_(&map),
       cache_(slots > 0 ? std::optional<DeviceRegionCache>(std::in_place, slots) : std::nullopt),
+      transfers_(slots > 0 ? std::optional<TransferStaging>(std::in_place,
+                                                            transferStagingBytes(map, options),
+                                                            map.store().capacity(), staging_memory)
+                           : std::nullopt),
       limits_(batchLimits(map, options)),
       planner_(map, cache_ ? &*cache_ : nullptr, *this, limits_),
       sets_{StagingSet(staging_memory), StagingSet(staging_memory)},
@@ -80,10 +99,20 @@ StagedBackend::~StagedBackend() {
   }
 }
 
+bool StagedBackend::drain() noexcept {
+  if (!finish()) {
+    return false;
+  }
+  if (transfers_) {
+    transfers_->completeAll();
+  }
+  return true;
+}
+
 bool StagedBackend::beforeEviction(std::span<const std::uint32_t> host_slots) noexcept {
   // Nothing in flight may still write the regions leaving (the map pins the batch being planned
   // and the one before it; this also covers work enqueued for readers).
-  if (!makeCurrent() || !finish()) {
+  if (!makeCurrent() || !drain()) {
     return false;
   }
   if (!cache_) {
@@ -268,7 +297,7 @@ Expected<void, IntegrateError> StagedBackend::integrateDevicePlanned(
 
 Expected<void, IntegrateError> StagedBackend::synchronise() noexcept {
   const Clock::time_point start = Clock::now();
-  if (!makeCurrent() || !finish()) {
+  if (!makeCurrent() || !drain()) {
     return Unexpected(IntegrateError::kDeviceFailure);
   }
   for (unsigned set = 0; set < kStagingSets; ++set) {
@@ -277,7 +306,7 @@ Expected<void, IntegrateError> StagedBackend::synchronise() noexcept {
     }
   }
   auto ok = planner_.downloadAll();
-  if (ok && !finish()) {
+  if (ok && !drain()) {
     ok = Unexpected(IntegrateError::kDeviceFailure);
   }
   if (ok && !cache_ && !syncSharedMemory()) {
@@ -331,7 +360,7 @@ Expected<void, IntegrateError> StagedBackend::fillClear(std::uint32_t device_slo
 }
 
 Expected<void, IntegrateError> StagedBackend::waitForDevice() noexcept {
-  if (!finish()) {
+  if (!drain()) {
     return Unexpected(IntegrateError::kDeviceFailure);
   }
   return {};
@@ -355,13 +384,37 @@ Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_sl
                                                          std::uint32_t host_slot, bool to_device,
                                                          bool sample_layers) noexcept {
   const RegionStore& store = map_->store();
+  if (to_device && transfers_->downloadPending(host_slot)) {
+    // Evicted and wanted back before its download reached the host store: let it arrive. (An
+    // upload straight from the download's staging would need the API to read host memory when
+    // the copy runs, not when it is enqueued; OpenCL does not promise that.)
+    ++stats_.transfer_stalls;
+    if (!drain()) {
+      return Unexpected(IntegrateError::kDeviceFailure);
+    }
+  }
   for (int l = 0; l < store.schema().size(); ++l) {
     if (!sample_layers && sampleLayer(store.schema().at(l).kind)) {
       continue;  // unchanged on the device since the host's copy (no sample in the region)
     }
     const std::size_t bytes = store.layerRegionBytes(l);
-    if (!copyLayer(l, bytes * device_slot, store.layerBytes(host_slot, l), bytes, to_device)) {
+    std::byte* host = store.layerBytes(host_slot, l);
+    // The device passes this copy before the next batch submitted completes.
+    std::byte* staged = transfers_->reserve(bytes, submitted_ + 1);
+    if (staged == nullptr) {
+      ++stats_.transfer_stalls;  // the ring is full: wait for the queue, then reuse all of it
+      if (!drain() || (staged = transfers_->reserve(bytes, submitted_ + 1)) == nullptr) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+    }
+    if (to_device) {
+      std::memcpy(staged, host, bytes);
+    }
+    if (!copyLayer(l, bytes * device_slot, staged, bytes, to_device)) {
       return Unexpected(IntegrateError::kDeviceFailure);
+    }
+    if (!to_device) {
+      transfers_->noteDownload(staged, host, bytes, host_slot);
     }
     (to_device ? stats_.bytes_to_device : stats_.bytes_from_device) += bytes;
     (to_device ? stats_.region_bytes_to_device : stats_.region_bytes_from_device) += bytes;
@@ -377,6 +430,9 @@ Expected<void, IntegrateError> StagedBackend::retire(unsigned set) noexcept {
   const void* counters = waitForBatch(set);
   if (counters == nullptr) {
     return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  if (transfers_) {
+    transfers_->complete(sets_[set].number);  // its region moves are done
   }
   std::uint64_t visits = 0;
   std::uint64_t dropped = 0;
@@ -488,6 +544,7 @@ Expected<void, IntegrateError> StagedBackend::launchBatch(unsigned set,
     return Unexpected(IntegrateError::kDeviceFailure);
   }
   sets_[set].in_flight = true;
+  sets_[set].number = ++submitted_;
   stats_.bytes_from_device += counterBytes();
   stats_.rays += batch.rays;
   return {};

@@ -19,6 +19,7 @@
 #include "src/device/staging/device_planner.hpp"
 #include "src/device/staging/device_region_cache.hpp"
 #include "src/device/staging/span_grouping.hpp"
+#include "src/device/staging/transfer_staging.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/layer_schema.hpp"
 #include "src/map/voxel_map.hpp"
@@ -192,9 +193,9 @@ class StagedBackend : public Backend,
   /// Waits for set `set`'s batch; its RM_COUNTER_COUNT counter words (64-bit if wide, else
   /// 32-bit), or nullptr when the device failed.
   virtual const void* waitForBatch(unsigned set) noexcept = 0;
-  /// Copies `bytes` of layer `layer` between the device (byte offset `device_offset`) and host
-  /// memory. Uploads finish before they return (the host slot may be reused at once); downloads
-  /// may still run, and nothing reads the host store before finish().
+  /// Enqueues a copy of `bytes` of layer `layer` between the device (byte offset
+  /// `device_offset`) and `host`, staging memory (TransferStaging, from the staging memory
+  /// resource) that nobody touches until the device has passed the copy. Returns without waiting.
   virtual bool copyLayer(int layer, std::size_t device_offset, std::byte* host, std::size_t bytes,
                          bool to_device) noexcept = 0;
   /// Sets `bytes` of layer `layer` from `device_offset` on to the layer's clear value.
@@ -225,7 +226,11 @@ class StagedBackend : public Backend,
   bool enqueueDevicePlan(std::span<const PreparedRay> rays, std::size_t first,
                          unsigned* set) noexcept;
 
-  /// Copies the region's layers, or (sample_layers false) all but sampleLayer() ones.
+  /// Waits until the queue is empty and the downloads in staging are in the host store.
+  bool drain() noexcept;
+  /// Copies the region's layers, or (sample_layers false) all but sampleLayer() ones, through
+  /// the staging ring: nothing waits unless the ring is full or an upload needs a download still
+  /// on its way (transfer_stalls).
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
                                             bool to_device, bool sample_layers = true) noexcept;
   /// Waits for the set's previous batch (if any) and adds its device counters to the stats.
@@ -248,12 +253,15 @@ class StagedBackend : public Backend,
     explicit StagingSet(std::pmr::memory_resource* memory) : arrays(memory) {}
     BatchArrays arrays;
     bool in_flight = false;
+    std::uint64_t number = 0;  // the batch it carries (1, 2, ... in submission order)
   };
 
   static_assert(kStagingSets == 2, "sets_ is initialised with two sets");
 
   VoxelMap* map_;
-  std::optional<DeviceRegionCache> cache_;  // empty: shared memory
+  std::optional<DeviceRegionCache> cache_;    // empty: shared memory
+  std::optional<TransferStaging> transfers_;  // region moves (cache only)
+  std::uint64_t submitted_ = 0;               // batches submitted so far
   BatchLimits limits_;
   BatchPlanner planner_;
   std::array<StagingSet, kStagingSets> sets_;
