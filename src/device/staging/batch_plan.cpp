@@ -87,7 +87,7 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
   }
   if (placement->evicted && placement->evicted_entry.dirty) {
     auto ok = transfer_->download(placement->slot, placement->evicted_entry.host_slot,
-                                  placement->evicted_entry.samples_dirty);
+                                  placement->evicted_entry.samples_dirty, /*drained=*/false);
     if (!ok) {
       return Unexpected(ok.error());
     }
@@ -309,7 +309,7 @@ Expected<void, IntegrateError> BatchPlanner::downloadAll() noexcept {
   for (std::uint32_t slot = 0; slot < cache_->capacity(); ++slot) {
     const DeviceRegionCache::Entry& e = cache_->entry(slot);
     if (e.used && e.dirty) {
-      auto ok = transfer_->download(slot, e.host_slot, e.samples_dirty);
+      auto ok = transfer_->download(slot, e.host_slot, e.samples_dirty, /*drained=*/true);
       if (!ok) {
         return Unexpected(ok.error());
       }
@@ -332,7 +332,9 @@ Expected<void, IntegrateError> BatchPlanner::writeBack(
       continue;
     }
     if (cache_->entry(slot).dirty) {
-      if (auto ok = transfer_->download(slot, host_slot, cache_->entry(slot).samples_dirty); !ok) {
+      if (auto ok = transfer_->download(slot, host_slot, cache_->entry(slot).samples_dirty,
+                                        /*drained=*/true);
+          !ok) {
         return ok;
       }
       host_uninitialised_[host_slot] = 0;

@@ -32,10 +32,12 @@ class RegionTransfer {
 
   /// @brief Copies the layers of device slot `device_slot` into host store slot `host_slot`:
   /// every layer with `sample_layers`, else all but the layers written only where a sample lands
-  /// (DeviceRegionCache::Entry::samples_dirty says which a region needs).
+  /// (DeviceRegionCache::Entry::samples_dirty says which a region needs). `drained`: the caller
+  /// has waited for the device and waits again before anyone reads the host store
+  /// (synchronising, writing back), so the copy may go straight into the host store.
   virtual Expected<void, IntegrateError> download(std::uint32_t device_slot,
-                                                  std::uint32_t host_slot,
-                                                  bool sample_layers) noexcept = 0;
+                                                  std::uint32_t host_slot, bool sample_layers,
+                                                  bool drained) noexcept = 0;
   /// @brief Copies every layer of host store slot `host_slot` into device slot `device_slot`.
   virtual Expected<void, IntegrateError> upload(std::uint32_t device_slot,
                                                 std::uint32_t host_slot) noexcept = 0;

@@ -334,9 +334,9 @@ BackendStats StagedBackend::stats() const noexcept {
 }
 
 Expected<void, IntegrateError> StagedBackend::download(std::uint32_t device_slot,
-                                                       std::uint32_t host_slot,
-                                                       bool sample_layers) noexcept {
-  return copyRegion(device_slot, host_slot, /*to_device=*/false, sample_layers);
+                                                       std::uint32_t host_slot, bool sample_layers,
+                                                       bool drained) noexcept {
+  return copyRegion(device_slot, host_slot, /*to_device=*/false, sample_layers, drained);
 }
 
 Expected<void, IntegrateError> StagedBackend::upload(std::uint32_t device_slot,
@@ -382,7 +382,8 @@ Expected<StagedBackend::ReadPlacement, IntegrateError> StagedBackend::placeForRe
 
 Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_slot,
                                                          std::uint32_t host_slot, bool to_device,
-                                                         bool sample_layers) noexcept {
+                                                         bool sample_layers,
+                                                         bool drained) noexcept {
   const RegionStore& store = map_->store();
   if (to_device && transfers_->downloadPending(host_slot)) {
     // Evicted and wanted back before its download reached the host store: let it arrive. (An
@@ -399,6 +400,15 @@ Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_sl
     }
     const std::size_t bytes = store.layerRegionBytes(l);
     std::byte* host = store.layerBytes(host_slot, l);
+    if (drained && !to_device) {
+      // Nothing runs and nobody reads the host store before the next drain: straight there.
+      if (!copyLayer(l, bytes * device_slot, host, bytes, false)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+      stats_.bytes_from_device += bytes;
+      stats_.region_bytes_from_device += bytes;
+      continue;
+    }
     // The device passes this copy before the next batch submitted completes.
     std::byte* staged = transfers_->reserve(bytes, submitted_ + 1);
     if (staged == nullptr) {

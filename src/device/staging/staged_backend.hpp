@@ -194,8 +194,10 @@ class StagedBackend : public Backend,
   /// 32-bit), or nullptr when the device failed.
   virtual const void* waitForBatch(unsigned set) noexcept = 0;
   /// Enqueues a copy of `bytes` of layer `layer` between the device (byte offset
-  /// `device_offset`) and `host`, staging memory (TransferStaging, from the staging memory
-  /// resource) that nobody touches until the device has passed the copy. Returns without waiting.
+  /// `device_offset`) and `host`: staging memory (TransferStaging, from the staging memory
+  /// resource) that nobody touches until the device has passed the copy, or, for a download
+  /// while the queue is drained (synchronising, writing back), the host store itself. Returns
+  /// without waiting.
   virtual bool copyLayer(int layer, std::size_t device_offset, std::byte* host, std::size_t bytes,
                          bool to_device) noexcept = 0;
   /// Sets `bytes` of layer `layer` from `device_offset` on to the layer's clear value.
@@ -212,7 +214,7 @@ class StagedBackend : public Backend,
 
   // ---- RegionTransfer (called by the planner) ----
   Expected<void, IntegrateError> download(std::uint32_t device_slot, std::uint32_t host_slot,
-                                          bool sample_layers) noexcept final;
+                                          bool sample_layers, bool drained) noexcept final;
   Expected<void, IntegrateError> upload(std::uint32_t device_slot,
                                         std::uint32_t host_slot) noexcept final;
   Expected<void, IntegrateError> fillClear(std::uint32_t device_slot,
@@ -232,7 +234,8 @@ class StagedBackend : public Backend,
   /// the staging ring: nothing waits unless the ring is full or an upload needs a download still
   /// on its way (transfer_stalls).
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
-                                            bool to_device, bool sample_layers = true) noexcept;
+                                            bool to_device, bool sample_layers = true,
+                                            bool drained = false) noexcept;
   /// Waits for the set's previous batch (if any) and adds its device counters to the stats.
   Expected<void, IntegrateError> retire(unsigned set) noexcept;
   /// Enqueues the batch the host planned into `set`: copies, then launchBatch().
