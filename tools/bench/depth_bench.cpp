@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Depth-camera throughput (issue 26): a synthetic 640 × 480 depth image (a floor plus a box, seen
 // from 0.6 m up, looking down and forward) decoded and back-projected, and integrated on the CPU
-// backend with one thread through raymapd's path (ScanPoint -> world Ray by PointDeskewer at a
-// fixed pose -> RayPreparer/RayBatcher -> backend) into a 0.1 m occupancy map at 2 m range.
+// backend with one thread (or the backend named) through raymapd's path (ScanPoint -> world Ray by
+// PointDeskewer at a fixed pose -> RayPreparer/RayBatcher -> backend) into a 0.1 m occupancy map
+// at 2 m range.
 // And the simulator's render time of a 640 × 480 frame of a stairs-like scene (what the depth
 // playback of raymap-load and the tests costs per frame; the unit tests only check the image).
 // Prints JSON: medians of the repetitions.
-// Run: build/release/tools/raymap-depth-bench [repetitions (default 7)]
+// Run: build/release/tools/raymap-depth-bench [repetitions (default 7)] [--backend cpu|opencl|cuda]
+//        [--device-planning host|device]
+// A device backend walks rays in reverse, as the tools do; its section is "integrate_<backend>".
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -146,7 +149,8 @@ std::string decodeRun(const char* encoding, const std::vector<std::byte>& bytes,
 }
 
 std::string integrateRun(const std::vector<std::byte>& bytes, const PixelRayTable& rays,
-                         std::uint32_t downsample, Semantics semantics, int repetitions) {
+                         std::uint32_t downsample, Semantics semantics, int repetitions,
+                         const backends::BackendChoice& choice) {
   MapConfig config;
   config.geometry.resolution = kResolutionM;
   config.semantics = semantics;
@@ -154,15 +158,13 @@ std::string integrateRun(const std::vector<std::byte>& bytes, const PixelRayTabl
   if (!map) {
     die(map.error().message);
   }
-  backends::BackendChoice choice;
-  choice.name = "cpu";
-  choice.threads = 1;
   auto created = backends::createBackend(*map, choice);
   if (!created) {
     die(created.error().message);
   }
   RayFilter filter;
   filter.max_range_m = kMaxRangeM;
+  filter.reverse = choice.name != "cpu";  // devices walk from the sample back (fewer collisions)
   RayPreparer preparer(*map, filter);
   RayBatcher batcher(*map, *created->backend, kBatchRays);
   pipeline::PoseHistory history(16);
@@ -276,7 +278,20 @@ double simulatorRenderMs(int repetitions) {
 
 int main(int argc, char** argv) {
   using namespace raymap;
-  const int repetitions = argc > 1 ? std::max(5, std::atoi(argv[1])) : 7;
+  int repetitions = 7;
+  backends::BackendChoice choice;
+  choice.threads = 1;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if ((arg == "--backend" || arg == "--device-planning") && a + 1 < argc) {
+      (arg == "--backend" ? choice.name : choice.device_planning) = argv[++a];
+    } else if (!arg.empty() && arg[0] != '-') {
+      repetitions = std::max(5, std::atoi(arg.c_str()));
+    } else {
+      die("usage: raymap-depth-bench [repetitions] [--backend cpu|opencl|cuda] "
+          "[--device-planning host|device]");
+    }
+  }
   CameraIntrinsics camera;
   camera.width = kWidth;
   camera.height = kHeight;
@@ -308,12 +323,15 @@ int main(int argc, char** argv) {
       first = false;
     }
   }
-  std::printf("\n  ],\n  \"integrate_cpu_1_thread\": [\n");
+  std::printf("\n  ],\n  \"integrate_%s\": [\n",
+              choice.name == "cpu"
+                  ? "cpu_1_thread"
+                  : (choice.name + "_" + choice.device_planning + "_planning").c_str());
   first = true;
   for (const std::uint32_t n : {1U, 2U, 6U}) {
     for (const Semantics s : {Semantics::kPerRay, Semantics::kPerScan}) {
       std::printf("%s%s", first ? "" : ",\n",
-                  integrateRun(frames.u16, rays, n, s, repetitions).c_str());
+                  integrateRun(frames.u16, rays, n, s, repetitions, choice).c_str());
       first = false;
     }
   }

@@ -7,6 +7,9 @@
 #   tests      the CUDA unit, device and data-agreement tests and the height-map tests
 #   sanitizer  compute-sanitizer memcheck and racecheck over a short integration of each map mode
 #              and of a map larger than its memory pool
+#   pipeline   batches planned on the device against the host planner: rays/s and host CPU per
+#              ray in every map mode, on all host cores and on 2 (taskset), a depth camera, and
+#              raymapd at 10x an OS-1-128 planned on the device (issue 51)
 #   bench      raymap bench on the Ouster data and a synthetic scene, every map mode, CUDA
 #              against the CPU backend on all cores
 #   scaling    the CPU backend's rays/s at 1, 2, 4, 8 and 16 threads, both semantics (issue 29)
@@ -24,8 +27,8 @@
 # CPU parts passed), 2 bad arguments.
 set -uo pipefail
 kit=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-all_sections=(devices tests sanitizer bench scaling heightmap raymapd profile)
-json_lists=(devices tests agreement sanitizer bench scaling heightmap raymapd profile)  # results.json's lists
+all_sections=(devices tests sanitizer pipeline bench scaling heightmap raymapd profile)
+json_lists=(devices tests agreement sanitizer pipeline bench scaling heightmap raymapd profile)  # results.json's lists
 only=""
 budget=360
 while [ $# -gt 0 ]; do

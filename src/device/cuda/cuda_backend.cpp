@@ -457,12 +457,15 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
   unsigned failures_reported_ = 0;
 };
 
-gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device) {
+gpu::DeviceMemoryLimits memoryLimits(const cuda::DeviceInfo& device,
+                                     const CudaBackendOptions& options) {
   gpu::DeviceMemoryLimits limits;
   limits.device_name = device.name;
   limits.global_mem_bytes = device.global_mem_bytes;
   limits.max_alloc_bytes = device.global_mem_bytes;  // CUDA has no per-allocation limit
-  limits.unified_memory = device.integrated;
+  // A discrete GPU reaches mapped host memory across the bus: only where asked (tests).
+  limits.unified_memory = device.integrated || (options.map_host_memory_on_discrete &&
+                                                options.memory == DeviceMemory::kShared);
   limits.can_map_host_memory = device.can_map_host_memory;
   return limits;
 }
@@ -489,7 +492,7 @@ Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
   if (!device) {
     return Unexpected(device.error());
   }
-  auto slots = gpu::deviceCacheSlots(map, memoryLimits(*device), options, "CUDA");
+  auto slots = gpu::deviceCacheSlots(map, memoryLimits(*device, options), options, "CUDA");
   if (!slots) {
     return Unexpected(slots.error());
   }

@@ -21,6 +21,10 @@ namespace raymap {
 struct CudaBackendOptions : DeviceBackendOptions {
   int device = -1;               ///< CUDA device ordinal (after CUDA_VISIBLE_DEVICES); -1: device 0
   unsigned block_threads = 256;  ///< threads per block of the integration kernels
+  /// Tests and benchmarks: let DeviceMemory::kShared map the host store into a discrete GPU too
+  /// (page-locked, every access across the bus), so that a workstation GPU runs the code path of
+  /// a Jetson, whose GPU shares the host's memory. Never faster on a discrete GPU.
+  bool map_host_memory_on_discrete = false;
 };
 
 /// @brief Creates a CUDA backend integrating into `map` (which must outlive it).

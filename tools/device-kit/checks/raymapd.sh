@@ -42,17 +42,19 @@ section_raymapd() {
   record raymapd "{\"highest_multiple_kept_up\": $(json_number "$best")}"
 }
 
-# daemon_run BACKEND MULTIPLE BEAMS COLUMNS RATE SECONDS: one run; prints yes when it kept up.
+# daemon_run BACKEND MULTIPLE BEAMS COLUMNS RATE SECONDS [PLANNING]: one run (PLANNING: where
+# device batches are planned, host by default); prints yes when it kept up.
 daemon_run() {
-  local backend=$1 multiple=$2 beams=$3 columns=$4 rate=$5 seconds=$6
+  local backend=$1 multiple=$2 beams=$3 columns=$4 rate=$5 seconds=$6 planning=${7:-host}
   # A private DDS domain per run (runs are called in subshells: the count lives in a file).
   local domain
   domain=$(($(cat "$work/daemon-domain" 2>/dev/null || echo 70) + 1))
   echo "$domain" >"$work/daemon-domain"
-  local tag=raymapd-$backend-${multiple}x-${seconds}s
+  local tag=raymapd-$backend-${multiple}x-${seconds}s-$planning
   local config=$work/$tag.yaml lead=0.015
   [ "$backend" = cpu ] || lead=0.05
-  sed -e "s/^  name: cpu/  name: $backend/" -e "s/^  domain: 0 /  domain: $domain /" \
+  sed -e "s/^  name: cpu/  name: $backend\n  device_planning: $planning/" \
+    -e "s/^  domain: 0 /  domain: $domain /" \
     -e "s/^  voxels_topic: .*/  voxels_topic: \"\"/" \
     -e "s/^  publish_lead_s: [0-9.]*/  publish_lead_s: $lead/" "$kit/config/cpu.yaml" >"$config"
   "$bin/raymapd" --config "$config" >"$work/logs/$tag.log" 2>&1 &
@@ -98,8 +100,10 @@ daemon_run() {
   if [ "$backend" = cpu ] && awk -v m="$maps" 'BEGIN { exit !(m + 0 < 1) }'; then
     fail "raymapd (cpu) published no height map in $seconds s"
   fi
-  md raymapd "| $backend | $multiple | $((beams * columns)) | $rate | ${r[points_per_s]} | $seconds | $keeps | $published | $integrated | $(awk -v o="$overflow" -v n="$nopose" 'BEGIN { print o + n }') | $late | ${r[map_period_mean_ms]} | ${r[p99]} | ${r[latency_p50_ms]} / ${r[latency_p99_ms]} / ${r[latency_max_ms]} | ${r[heightmap_lock_hold_p99_ms]} | ${r[sync_copy_bytes_p99]} / ${r[heightmap_copy_bytes_p99]} |"
-  record raymapd "{\"backend\": \"$backend\", \"multiple\": $multiple, \"beams\": $beams, \"columns\": $columns, \"scan_rate_hz\": $rate, \"seconds\": $seconds, \"keeps_up\": $([ $keeps = yes ] && echo true || echo false), \"daemon_exit\": $daemon_rc, \"load\": $(tr -d '\n' <"$f")}"
+  local label=$backend
+  [ "$planning" = device ] && label="$backend, planned on the device"
+  md raymapd "| $label | $multiple | $((beams * columns)) | $rate | ${r[points_per_s]} | $seconds | $keeps | $published | $integrated | $(awk -v o="$overflow" -v n="$nopose" 'BEGIN { print o + n }') | $late | ${r[map_period_mean_ms]} | ${r[p99]} | ${r[latency_p50_ms]} / ${r[latency_p99_ms]} / ${r[latency_max_ms]} | ${r[heightmap_lock_hold_p99_ms]} | ${r[sync_copy_bytes_p99]} / ${r[heightmap_copy_bytes_p99]} |"
+  record raymapd "{\"backend\": \"$backend\", \"planning\": \"$planning\", \"multiple\": $multiple, \"beams\": $beams, \"columns\": $columns, \"scan_rate_hz\": $rate, \"seconds\": $seconds, \"keeps_up\": $([ $keeps = yes ] && echo true || echo false), \"daemon_exit\": $daemon_rc, \"load\": $(tr -d '\n' <"$f")}"
   echo "$keeps"
 }
 

@@ -5,8 +5,15 @@
 # from the specification). Executables run in GoogleTest shards side by side; the compute
 # sanitizer's runs (section "sanitizer") overlap them when both sections run.
 
-# The executables, and the shards each runs in.
-kit_tests=("test_unit_cuda 1" "test_cuda_device 2" "test_cuda_data 4" "test_heightmap 4" "test_unit_mapper 1")
+# The runs: a label, the executable, its shards, and an environment for it ("-": none). The device
+# suite runs three times: as it is, with every batch planned on the device (issue 51), and the
+# suites with a shared-memory variant with the host map mapped into the discrete GPU (the code
+# path of a Jetson, whose GPU shares the host's memory).
+kit_shared_memory_tests="*SharedMemory*:*DeviceMemoryMode*:DeviceBackend.Agrees*:*DeviceNdt.*:*DeviceDecay*:DeviceTsdf.*:*DeviceHeightmap*:DevicePlanning.RegionsOutside*"
+kit_tests=("test_unit_cuda test_unit_cuda 1 -" "test_cuda_device test_cuda_device 2 -"
+  "test_cuda_device+device_planning test_cuda_device 2 RAYMAP_TEST_DEVICE_PLANNING=device"
+  "test_cuda_device+mapped_host_memory test_cuda_device 1 RAYMAP_TEST_CUDA_MAPPED=1"
+  "test_cuda_data test_cuda_data 4 -" "test_heightmap test_heightmap 4 -" "test_unit_mapper test_unit_mapper 1 -")
 
 section_tests() {
   local sanitizing=0
@@ -15,23 +22,27 @@ section_tests() {
   fi
   md tests "## Tests" "" "| executable | result | tests | failed | skipped | seconds |" \
     "| --- | --- | ---: | ---: | ---: | ---: |"
-  local entry exe shards i pids=()
+  local entry label exe shards env i pids=()
   for entry in "${kit_tests[@]}"; do
-    read -r exe shards <<<"$entry"
+    read -r label exe shards env <<<"$entry"
+    local filter=()
+    [ "$label" = test_cuda_device+mapped_host_memory ] && filter=(--gtest_filter="$kit_shared_memory_tests")
+    [ "$env" = - ] && env=RAYMAP_KIT_TESTS=1
     for ((i = 0; i < shards; i++)); do
       (
         t0=$SECONDS
-        GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i timeout 180 "$bin/$exe" \
-          --gtest_output="json:$work/logs/$exe.$i.json" >"$work/logs/$exe.$i.log" 2>&1
-        echo "$? $((SECONDS - t0))" >"$work/$exe.$i.rc"
+        env "$env" GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i timeout 180 "$bin/$exe" \
+          "${filter[@]}" --gtest_output="json:$work/logs/$label.$i.json" \
+          >"$work/logs/$label.$i.log" 2>&1
+        echo "$? $((SECONDS - t0))" >"$work/$label.$i.rc"
       ) &
       pids+=($!)
     done
   done
   wait "${pids[@]}"
   for entry in "${kit_tests[@]}"; do
-    read -r exe shards <<<"$entry"
-    tests_record "$exe" "$shards"
+    read -r label exe shards env <<<"$entry"
+    tests_record "$label" "$shards"
   done
   local line
   if grep -qh '^\[device-agreement\]' "$work"/logs/test_cuda_data.*.log 2>/dev/null; then
