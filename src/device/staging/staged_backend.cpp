@@ -259,33 +259,41 @@ Expected<void, IntegrateError> StagedBackend::integrateDevicePlanned(
     const Clock::time_point t_plan = Clock::now();
     stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
     map_->beginEpoch();
-    std::size_t consumed = outcome->rays;
-    if (outcome->host_fallback) {
-      if (!device_planner_->discard(set)) {
-        return Unexpected(IntegrateError::kDeviceFailure);
-      }
-      auto planned = planner_.plan(rays.subspan(first), sets_[set].arrays);
-      if (!planned) {
-        return Unexpected(planned.error());
-      }
-      consumed = *planned;
-    }
     const unsigned this_set = set;
-    const std::size_t next = first + consumed;
-    if (next < rays.size()) {
-      if (!enqueueDevicePlan(rays, next, &set)) {
-        return Unexpected(IntegrateError::kDeviceFailure);
+    // The next batch's plan phase goes into the queue before this batch's resolve phase, so the
+    // device has work while the host places regions.
+    auto plan_next = [&](std::size_t next) {
+      if (next >= rays.size()) {
+        return true;
       }
       first = next;
       pending = true;
-    }
+      return enqueueDevicePlan(rays, next, &set);
+    };
     Expected<void, IntegrateError> submitted;
-    if (!outcome->host_fallback) {
+    if (outcome->host_fallback) {
+      if (!device_planner_->discard(this_set)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+      auto planned = planner_.plan(rays.subspan(first), sets_[this_set].arrays);
+      if (!planned) {
+        return Unexpected(planned.error());
+      }
+      // Submitted before the next plan phase: the next batch on this set rewrites its host ray
+      // array once that plan phase's read-back is in, and this batch's uploads read it.
+      if (!sets_[this_set].arrays.rays.empty()) {
+        submitted = submit(this_set);
+      }
+      if (submitted && !plan_next(first + *planned)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+    } else {
+      if (!plan_next(first + outcome->rays)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
       auto batch = device_planner_->resolve(this_set);
       submitted = batch ? submitDevicePlanned(this_set, *batch)
                         : Expected<void, IntegrateError>(Unexpected(batch.error()));
-    } else if (!sets_[this_set].arrays.rays.empty()) {
-      submitted = submit(this_set);
     }
     stats_.plan_seconds += secondsSince(t_plan);
     if (!submitted) {
