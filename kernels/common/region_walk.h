@@ -47,7 +47,7 @@ RAYMAP_FN rm_vec3i rm_region_box_lo(rm_vec3i region, rm_vec3i walk_start_voxel, 
                        region.z * n - walk_start_voxel.z);
 }
 
-/* Starts the walk of `ray` over regions of n voxels per edge. */
+/* Starts the walk of `ray` over regions of n voxels per edge: every member of *w is set. */
 RAYMAP_FN void rm_region_walk_init(rm_region_walk* w, rm_prepared_ray ray, rm_i32 n) {
   rm_vec3i end_global;
   float inv_n;
@@ -74,6 +74,13 @@ RAYMAP_FN void rm_region_walk_init(rm_region_walk* w, rm_prepared_ray ray, rm_i3
                     w->end_region.z - w->start_region.z));
   w->started = 0;
   w->done = 0;
+}
+
+/* rm_region_walk_init as a value (host C++ initialises members with it). */
+RAYMAP_FN rm_region_walk rm_region_walk_make(rm_prepared_ray ray, rm_i32 n) {
+  rm_region_walk w;
+  rm_region_walk_init(&w, ray, n);
+  return w;
 }
 
 /* Regions the walk visits, in the window or not: one per step of the region walk, and the

@@ -2,11 +2,11 @@
 // Process facts on Linux.
 #include "platform/process.hpp"
 
+#include <ctime>
 #include <fstream>
 
 #include <sched.h>
 #include <sys/resource.h>
-#include <time.h>
 #include <unistd.h>
 
 namespace raymap::platform {

@@ -14,11 +14,11 @@ namespace raymap {
 
 /// @brief The part of a ray inside one region.
 struct RaySpan {
-  Vec3i region;     ///< global region coordinate
-  float t0 = 0.0f;  ///< ray parameter where the ray enters the region (0 at the walk start)
-  float t1 = 1.0f;  ///< ray parameter where it leaves
-  rm_vec3i box_lo;  ///< the region's voxels, relative to the walk's start voxel (inclusive)
-  rm_vec3i box_hi;
+  Vec3i region;       ///< global region coordinate
+  float t0 = 0.0f;    ///< ray parameter where the ray enters the region (0 at the walk start)
+  float t1 = 1.0f;    ///< ray parameter where it leaves
+  rm_vec3i box_lo{};  ///< the region's voxels, relative to the walk's start voxel (inclusive)
+  rm_vec3i box_hi{};
   bool first = false;  ///< holds the walk's start voxel
   bool last = false;   ///< holds the walk's end voxel
 };
@@ -30,10 +30,10 @@ struct RaySpan {
 /// Value type; O(regions crossed); allocation-free and noexcept (real-time safe).
 class RayRegionWalk {
  public:
-  RayRegionWalk(const rm_prepared_ray& ray, std::int32_t region_voxels) noexcept {
-    rm_region_walk_init(&walk_, ray, region_voxels);
-    voxel_ray_ = rm_line_walk_ray_make(walk_.frame.start, walk_.frame.end, walk_.frame.end_voxel);
-  }
+  RayRegionWalk(const rm_prepared_ray& ray, std::int32_t region_voxels) noexcept
+      : walk_(rm_region_walk_make(ray, region_voxels)),
+        voxel_ray_(
+            rm_line_walk_ray_make(walk_.frame.start, walk_.frame.end, walk_.frame.end_voxel)) {}
 
   const rm_ray_walk_frame& frame() const noexcept { return walk_.frame; }
   /// @brief The voxel-level constants of the ray, shared by all its spans.

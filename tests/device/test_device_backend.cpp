@@ -113,15 +113,7 @@ TEST(DeviceBackend, AdversarialRaysTerminateAndAgree) {
   REQUIRE_DEVICE();
   // Endpoints on a lattice of quarter voxels (faces, edges, corners), axis-aligned rays from
   // corners, zero-length rays, and long rays far from the origin.
-  std::vector<Ray> rays;
-  std::mt19937_64 rng(4242);
-  std::uniform_int_distribution<int> lattice(-40, 40);
-  const double q = 0.025;
-  for (int i = 0; i < 20000; ++i) {
-    const Vec3d a{lattice(rng) * q, lattice(rng) * q, lattice(rng) * q};
-    const Vec3d b{lattice(rng) * q, lattice(rng) * q, lattice(rng) * q};
-    rays.push_back(makeRay(a, b));
-  }
+  std::vector<Ray> rays = test::latticeRays(4242, 20000, 0.025);
   for (int axis = 0; axis < 3; ++axis) {
     for (double sign : {-1.0, 1.0}) {
       Vec3d end{0.2, -0.3, 0.5};

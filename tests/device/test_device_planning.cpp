@@ -347,15 +347,7 @@ TEST(DevicePlanning, AdversarialRaysPlanAlike) {
   REQUIRE_DEVICE();
   // Endpoints on faces, edges and corners of voxels and regions, axis-aligned and zero-length
   // rays: where the walks decide ties, both planners must decide them the same way.
-  std::vector<Ray> rays;
-  std::mt19937_64 rng(4242);
-  std::uniform_int_distribution<int> lattice(-40, 40);
-  const double q = 0.025;
-  for (int i = 0; i < 20000; ++i) {
-    const Vec3d a{lattice(rng) * q, lattice(rng) * q, lattice(rng) * q};
-    const Vec3d b{lattice(rng) * 8 * q, lattice(rng) * 8 * q, lattice(rng) * q};
-    rays.push_back(makeRay(a, b));
-  }
+  std::vector<Ray> rays = latticeRays(4242, 20000, 0.025, 8);
   rays.push_back(makeRay({0.3, 0.3, 0.3}, {0.3, 0.3, 0.3}));
   rays.push_back(makeRay({0.8, 0.8, 0.8}, {0.8, 0.8, -2.4}));
   for (const bool reverse : {false, true}) {

@@ -225,6 +225,19 @@ std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan) {
   return rays;
 }
 
+std::vector<Ray> latticeRays(std::uint64_t seed, int count, double step, int stretch) {
+  std::vector<Ray> rays;
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> lattice(-40, 40);
+  for (int i = 0; i < count; ++i) {
+    const Vec3d a{lattice(rng) * step, lattice(rng) * step, lattice(rng) * step};
+    const Vec3d b{lattice(rng) * stretch * step, lattice(rng) * stretch * step,
+                  lattice(rng) * step};
+    rays.push_back(makeRay(a, b));
+  }
+  return rays;
+}
+
 namespace {
 
 /// The occupancy values of one region of `map`, or nullptr where the map has no such region (or no

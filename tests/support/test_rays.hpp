@@ -37,6 +37,10 @@ RayCounters integrate(VoxelMap& map, Backend& backend, std::span<const Ray> rays
 /// @brief `scans` scans of `rays_per_scan` random rays (0.2-12 m, flattened in z) from random
 /// origins within +-2 m; every 17th ray is a no-return ray. Deterministic for a seed.
 std::vector<Ray> randomScans(std::uint64_t seed, int scans, int rays_per_scan);
+/// @brief `count` rays whose ends lie on a lattice of `step` metres (voxel faces, edges and
+/// corners at 0.1 m with a step of a quarter voxel), within +-40 steps, the sample's x and y
+/// stretched by `stretch` (longer rays crossing region faces too): where walks decide ties.
+std::vector<Ray> latticeRays(std::uint64_t seed, int count, double step, int stretch = 1);
 
 /// @brief A drive down a long corridor (walls at y = +-3 m, floor at 0, ceiling at 2.5 m, a 1 m
 /// crate every 10 m): a scan every `step` metres from (x, 0, 1) for x in [0, length], 32

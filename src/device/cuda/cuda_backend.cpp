@@ -246,12 +246,7 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
       }
       set.plan_read = std::move(*event);
     }
-    try {
-      return planOnDevice(*sizes);
-    } catch (const std::bad_alloc&) {
-      return fail(ErrorCode::kCapacity,
-                  "planning on the device: no page-locked host memory for its arrays");
-    }
+    return planOnDevice(*sizes);
   }
 
   /// The device buffer a planning kernel's argument `id` names on set `set` (nullptr: none).

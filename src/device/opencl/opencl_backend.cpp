@@ -258,11 +258,7 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
         set.emitted_spans = std::move(*buffer);
       }
     }
-    try {
-      return planOnDevice(*sizes);
-    } catch (const std::bad_alloc&) {
-      return fail(ErrorCode::kCapacity, "planning on the device: no host memory for its arrays");
-    }
+    return planOnDevice(*sizes);
   }
 
   /// The buffer a planning kernel's argument `id` names on set `set`.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <new>
 #include <string>
 
 #include "kernels/common/map_mode.h"
@@ -133,9 +134,14 @@ Result<DevicePlanSizes> StagedBackend::devicePlanSizesFor(std::uint32_t group_si
                          spansByRegion(), group_size);
 }
 
-Expected<void, Error> StagedBackend::planOnDevice(const DevicePlanSizes& sizes) {
-  device_planner_.emplace(*map_, planner_, cache_ ? cache_->capacity() : 0u, sizes,
-                          static_cast<PlanDevice&>(*this), staging_memory_);
+Expected<void, Error> StagedBackend::planOnDevice(const DevicePlanSizes& sizes) noexcept {
+  try {
+    device_planner_.emplace(*map_, planner_, cache_ ? cache_->capacity() : 0u, sizes,
+                            static_cast<PlanDevice&>(*this), staging_memory_);
+  } catch (const std::bad_alloc&) {
+    return fail(ErrorCode::kCapacity,
+                "planning on the device: no host memory (page-locked on CUDA) for its arrays");
+  }
   if (!makeCurrent() || !device_planner_->initialise() || !finish()) {
     device_planner_.reset();
     return fail(ErrorCode::kCapacity, "planning on the device: clearing its region tables failed");

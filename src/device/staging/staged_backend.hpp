@@ -166,8 +166,8 @@ class StagedBackend : public Backend,
   Result<DevicePlanSizes> devicePlanSizesFor(std::uint32_t group_size) const;
   /// From now on, plan batches on the device with buffers of `sizes` (which the API layer has
   /// allocated, PlanDevice), and enqueue what its buffers need first. Call before the first
-  /// integrate(). Throws std::bad_alloc.
-  Expected<void, Error> planOnDevice(const DevicePlanSizes& sizes);
+  /// integrate(). kCapacity when the host arrays cannot be allocated.
+  Expected<void, Error> planOnDevice(const DevicePlanSizes& sizes) noexcept;
 
   // ---- what the API layer supplies; every call goes to the backend's one in-order queue ----
 
