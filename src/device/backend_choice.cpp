@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "src/device/staging/device_planner.hpp"
 #include "src/map/cpu_backend.hpp"
 #if defined(RAYMAP_HAVE_OPENCL)
 #include "src/device/opencl/opencl_backend.hpp"
