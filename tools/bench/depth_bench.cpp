@@ -281,15 +281,21 @@ int main(int argc, char** argv) {
   int repetitions = 7;
   backends::BackendChoice choice;
   choice.threads = 1;
+  constexpr const char* kUsage =
+      "usage: raymap-depth-bench [repetitions] [--backend cpu|opencl|cuda] "
+      "[--device-planning host|device]";
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
+    if (arg == "--help" || arg == "-h") {
+      std::printf("%s\n", kUsage);
+      return 0;
+    }
     if ((arg == "--backend" || arg == "--device-planning") && a + 1 < argc) {
       (arg == "--backend" ? choice.name : choice.device_planning) = argv[++a];
     } else if (!arg.empty() && arg[0] != '-') {
       repetitions = std::max(5, std::atoi(arg.c_str()));
     } else {
-      die("usage: raymap-depth-bench [repetitions] [--backend cpu|opencl|cuda] "
-          "[--device-planning host|device]");
+      die(kUsage);
     }
   }
   CameraIntrinsics camera;
