@@ -214,8 +214,8 @@ class DevicePlanner {
   /// finishPlan() without fallback). Call VoxelMap::beginEpoch() first, as for a host plan.
   Expected<PlannedBatch, IntegrateError> resolve(unsigned set) noexcept;
 
-  /// @brief Copies the resolved plan of set `set` into `out` (blocking): for tests and
-  /// `--check-plans`, which compare it with a host plan of the same rays.
+  /// @brief Copies the resolved plan of set `set` into `out` (blocking): for a PlanObserver,
+  /// which compares it with a host plan of the same rays (tests/device/test_device_planning.cpp).
   bool readBack(unsigned set, const PlannedBatch& batch, BatchArrays& out) noexcept;
 
   /// Batches the host planned instead (PlanOutcome::host_fallback), over the planner's lifetime.

@@ -53,8 +53,8 @@ std::uint32_t mapModeBits(const VoxelMap& map) noexcept;
 /// by the span kernels as well (NDT-TM's hit/miss counts count passes there).
 bool sampleLayer(LayerKind kind) noexcept;
 
-/// @brief Told of every batch a device backend plans, as the integration kernels get it (tests,
-/// and `raymap bench --check-plans`, compare device plans with host plans of the same rays).
+/// @brief Told of every batch a device backend plans, as the integration kernels get it: the
+/// tests compare device plans with host plans of the same rays through it.
 /// Observing a device plan reads it back from the device and waits: for checks, not for speed.
 class PlanObserver {
  public:
