@@ -39,8 +39,8 @@ struct BackendStats {
   std::uint64_t cache_hits = 0;                ///< a batch needed a region already on the device
   std::uint64_t cache_misses = 0;              ///< it had to be uploaded or created there
   std::uint64_t cache_evictions = 0;           ///< a region left the device to make room
-  /// Region moves that waited for the device: the staging ring was full, or an upload needed a
-  /// download still on its way (device caches; 0 in a steady state that fits the ring).
+  /// Region moves that waited for the device because the staging ring was full (device caches;
+  /// 0 in a steady state that fits the ring).
   std::uint64_t transfer_stalls = 0;
   std::uint64_t cache_slots = 0;    ///< regions the device cache holds
   bool planned_on_device = false;   ///< batches are planned on the device (DevicePlanner)

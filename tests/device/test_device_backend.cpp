@@ -3,6 +3,7 @@
 // adversarial rays, a device cache smaller than a batch's working set, a moving rolling window,
 // sync back to the host store and a saved map. Written once; linked into one executable per GPU
 // API (test_unit_opencl runs it on PoCL in CI; test_cuda_device on an NVIDIA GPU).
+#include <cstdio>
 #include <cstring>
 #include <random>
 #include <set>
@@ -197,6 +198,13 @@ TEST(DeviceBackend, RegionMovesThroughAStagingRingOfFourRegionsWaitButLoseNothin
     EXPECT_GT(stats[1].cache_evictions, 200u) << label;
     EXPECT_EQ(stats[1].cache_evictions, stats[0].cache_evictions) << label;
     EXPECT_GT(stats[1].transfer_stalls, stats[0].transfer_stalls) << label;
+    std::printf(
+        "[device-ring] %s %s: %llu evictions; waits: %llu with 64 MiB, %llu with four "
+        "regions\n",
+        deviceUnderTest().api, label.c_str(),
+        static_cast<unsigned long long>(stats[1].cache_evictions),
+        static_cast<unsigned long long>(stats[0].transfer_stalls),
+        static_cast<unsigned long long>(stats[1].transfer_stalls));
     const test::MapComparison rings = test::compareMaps(maps[0], maps[1]);
     EXPECT_GT(rings.compared, 10000u) << label;
     EXPECT_EQ(rings.exact_value, rings.compared) << label;

@@ -399,21 +399,26 @@ Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_sl
                                                          bool sample_layers,
                                                          bool drained) noexcept {
   const RegionStore& store = map_->store();
-  if (to_device && transfers_->downloadPending(host_slot)) {
-    // Evicted and wanted back before its download reached the host store: let it arrive. (An
-    // upload straight from the download's staging would need the API to read host memory when
-    // the copy runs, not when it is enqueued; OpenCL does not promise that.)
-    ++stats_.transfer_stalls;
-    if (!drain()) {
-      return Unexpected(IntegrateError::kDeviceFailure);
-    }
-  }
+  // Evicted and wanted back before its download reached the host store.
+  const bool returning = to_device && transfers_->downloadPending(host_slot);
   for (int l = 0; l < store.schema().size(); ++l) {
     if (!sample_layers && sampleLayer(store.schema().at(l).kind)) {
       continue;  // unchanged on the device since the host's copy (no sample in the region)
     }
     const std::size_t bytes = store.layerRegionBytes(l);
     std::byte* host = store.layerBytes(host_slot, l);
+    if (returning) {
+      // The layer goes back up from where its download lands: the in-order queue runs the
+      // download first, and the copy reads that memory when it runs.
+      if (std::byte* landing = transfers_->stagedDownload(host, bytes, submitted_ + 1)) {
+        if (!copyLayer(l, bytes * device_slot, landing, bytes, true)) {
+          return Unexpected(IntegrateError::kDeviceFailure);
+        }
+        stats_.bytes_to_device += bytes;
+        stats_.region_bytes_to_device += bytes;
+        continue;
+      }
+    }
     if (drained && !to_device) {
       // Nothing runs and nobody reads the host store before the next drain: straight there.
       if (!copyLayer(l, bytes * device_slot, host, bytes, false)) {

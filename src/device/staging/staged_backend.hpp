@@ -231,8 +231,8 @@ class StagedBackend : public Backend,
   /// Waits until the queue is empty and the downloads in staging are in the host store.
   bool drain() noexcept;
   /// Copies the region's layers, or (sample_layers false) all but sampleLayer() ones, through
-  /// the staging ring: nothing waits unless the ring is full or an upload needs a download still
-  /// on its way (transfer_stalls).
+  /// the staging ring: nothing waits unless the ring is full (transfer_stalls). A region wanted
+  /// back before its download arrived goes up from where that download lands.
   Expected<void, IntegrateError> copyRegion(std::uint32_t device_slot, std::uint32_t host_slot,
                                             bool to_device, bool sample_layers = true,
                                             bool drained = false) noexcept;

@@ -2,6 +2,7 @@
 // The staging ring of region moves.
 #include "src/device/staging/transfer_staging.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 #include "raymap/assert.hpp"
@@ -58,6 +59,20 @@ void TransferStaging::noteDownload(std::byte* staged, std::byte* host, std::size
   c.host = host;
   c.host_slot = host_slot;
   ++pending_[host_slot];
+}
+
+std::byte* TransferStaging::stagedDownload(const std::byte* host, std::size_t bytes,
+                                           std::uint64_t batch) noexcept {
+  for (std::size_t k = copy_count_; k-- > 0;) {
+    Copy& c = copies_[(first_copy_ + k) % copies_.size()];
+    if (c.host == host && c.bytes == bytes) {
+      // Held past its place in the ring: the copies behind it wait for it (space is freed oldest
+      // first), which only delays them.
+      c.batch = std::max(c.batch, batch);
+      return ring_.data() + c.offset;
+    }
+  }
+  return nullptr;
 }
 
 void TransferStaging::popOldest() noexcept {

@@ -48,6 +48,10 @@ class TransferStaging {
   void completeAll() noexcept;
   /// @brief A download into host store slot `host_slot` has not reached the host store yet.
   bool downloadPending(std::uint32_t host_slot) const noexcept { return pending_[host_slot] != 0; }
+  /// @brief Where the newest download of `bytes` into `host` lands in the ring, or nullptr: a
+  /// region wanted back before its download arrived is uploaded from there (the in-order queue
+  /// runs the download first). Its space is then held until batch `batch` retires too.
+  std::byte* stagedDownload(const std::byte* host, std::size_t bytes, std::uint64_t batch) noexcept;
   std::size_t capacity() const noexcept { return ring_.size(); }
 
  private:

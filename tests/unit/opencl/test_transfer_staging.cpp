@@ -69,5 +69,19 @@ TEST(TransferStaging, UploadsHoldTheirSpaceUntilTheirBatchRetires) {
   EXPECT_NE(ring.reserve(64, 8), nullptr);
 }
 
+TEST(TransferStaging, ARegionWantedBackUploadsFromItsDownloadAndHoldsItsSpace) {
+  TransferStaging ring(64, 1, std::pmr::get_default_resource());
+  std::array<std::byte, 16> host{};
+  std::byte* landing = ring.reserve(16, 1);
+  ring.noteDownload(landing, host.data(), 16, 0);
+  ASSERT_NE(ring.reserve(16, 2), nullptr);                          // another copy behind it
+  EXPECT_EQ(ring.stagedDownload(host.data() + 1, 16, 3), nullptr);  // not this layer
+  EXPECT_EQ(ring.stagedDownload(host.data(), 16, 3), landing);
+  ring.complete(2);  // the download is now wanted until batch 3: kept, and the copy behind too
+  EXPECT_TRUE(ring.downloadPending(0));
+  ring.complete(3);
+  EXPECT_FALSE(ring.downloadPending(0));
+}
+
 }  // namespace
 }  // namespace raymap::gpu
