@@ -3,6 +3,7 @@
 #include "src/device/staging/batch_plan.hpp"
 
 #include <algorithm>
+#include <optional>
 
 #include "raymap/assert.hpp"
 
@@ -45,6 +46,15 @@ void BatchPlanner::revalidate() noexcept {
       cache_->drop(slot);
     }
   }
+}
+
+Expected<std::uint32_t, StoreError> BatchPlanner::acquireHostRegion(Vec3i region) noexcept {
+  bool created = false;
+  auto host = map_->acquireRegionUncleared(region, &created);
+  if (host && created) {
+    host_uninitialised_[*host] = 1;
+  }
+  return host;
 }
 
 Expected<std::uint32_t, IntegrateError> BatchPlanner::sharedRegion(
@@ -114,6 +124,18 @@ Expected<std::uint32_t, IntegrateError> BatchPlanner::placeRegion(Vec3i region,
 
 namespace {
 
+/// The batch's error for a store error that ends it, or nullopt for one that only skips the
+/// region (outside a rolling window or the index's range).
+std::optional<IntegrateError> batchError(StoreError error) noexcept {
+  if (error == StoreError::kFull) {
+    return IntegrateError::kStoreFull;
+  }
+  if (error == StoreError::kTierFailed) {
+    return IntegrateError::kTierFailed;
+  }
+  return std::nullopt;
+}
+
 rm_span_record spanRecord(const RaySpan& span, std::uint32_t ray, std::uint32_t slot) noexcept {
   rm_span_record record;
   record.ray = ray;
@@ -172,21 +194,14 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
         out.spans.push_back(spanRecord(span, ray_index, *cached));
         continue;
       }
-      bool created = false;
-      auto host = map_->acquireRegionUncleared(span.region, &created);
+      auto host = acquireHostRegion(span.region);
       if (!host) {
-        if (host.error() == StoreError::kFull) {
-          return Unexpected(IntegrateError::kStoreFull);
-        }
-        if (host.error() == StoreError::kTierFailed) {
-          return Unexpected(IntegrateError::kTierFailed);
+        if (const auto error = batchError(host.error())) {
+          return Unexpected(*error);
         }
         ++stats_.spans_outside_window;  // outside a rolling window (or the index's range)
         batch_regions_.remember(DeviceRegionCache::kNoSlot);
         continue;
-      }
-      if (created) {
-        host_uninitialised_[*host] = 1;
       }
       auto slot = cache_ != nullptr ? placeRegion(span.region, *host, &full) : sharedRegion(*host);
       if (!slot) {
@@ -251,19 +266,10 @@ void BatchPlanner::beginDevicePlanned() noexcept {
 Expected<std::uint32_t, IntegrateError> BatchPlanner::placeDevicePlanned(
     Vec3i region, std::uint32_t spans, std::uint32_t samples) noexcept {
   RAYMAP_DEBUG_ASSERT(spans > 0);
-  bool created = false;
-  auto host = map_->acquireRegionUncleared(region, &created);
+  auto host = acquireHostRegion(region);
   if (!host) {
-    if (host.error() == StoreError::kFull) {
-      return Unexpected(IntegrateError::kStoreFull);
-    }
-    if (host.error() == StoreError::kTierFailed) {
-      return Unexpected(IntegrateError::kTierFailed);
-    }
-    return Unexpected(IntegrateError::kDeviceFailure);  // outside range or window: a precondition
-  }
-  if (created) {
-    host_uninitialised_[*host] = 1;
+    // Outside the range or the window cannot happen: a precondition (DevicePlanner checks).
+    return Unexpected(batchError(host.error()).value_or(IntegrateError::kDeviceFailure));
   }
   if (cache_ == nullptr) {
     auto slot = sharedRegion(*host);

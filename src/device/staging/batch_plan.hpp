@@ -175,6 +175,10 @@ class BatchPlanner {
   void countSpansOutside(std::uint64_t spans) noexcept { stats_.spans_outside_window += spans; }
 
  private:
+  /// The region's host store slot, created uncleared if new (then marked uninitialised: the
+  /// device clears its copy). On failure the store's reason: batchError() says whether it ends
+  /// the batch or only skips the region.
+  Expected<std::uint32_t, StoreError> acquireHostRegion(Vec3i region) noexcept;
   /// Shared mode: the region's host slot, cleared on the device if it is new.
   Expected<std::uint32_t, IntegrateError> sharedRegion(std::uint32_t host_slot) noexcept;
   /// Device slot for a region of the current batch; kNoSlot + *full when the cache is pinned full.

@@ -208,37 +208,31 @@ bool DevicePlanner::launch(unsigned set, PlanKernel kernel, const rm_plan_args& 
 }
 
 bool DevicePlanner::scan(unsigned set, PlanBuffer in, PlanBuffer out, std::uint32_t n) noexcept {
-  // Level l scans the previous level's tile sums in place into kScanSums<l>; the tile offsets are
-  // then added back from the top level down.
-  std::array<PlanBuffer, kScanLevels + 1> data{};
-  std::array<std::uint32_t, kScanLevels + 1> count{};
-  data[0] = in;
-  count[0] = n;
-  unsigned levels = 0;
-  rm_plan_args a{};
-  for (unsigned l = 0; l < kScanLevels; ++l) {
-    const auto sums = static_cast<PlanBuffer>(static_cast<unsigned>(PlanBuffer::kScanSums0) + l);
-    const std::uint32_t tiles = ceilDiv(std::max(count[l], 1u), sizes_.tile());
-    a.n = count[l];
-    if (!launch(set, PlanKernel::kScanTiles, a, tiles * sizes_.group_size,
-                {data[l], l == 0 ? out : data[l], sums})) {
-      return false;
-    }
-    levels = l + 1;
-    data[l + 1] = sums;
-    count[l + 1] = tiles;
-    if (tiles == 1u) {
-      break;
-    }
-  }
-  if (count[levels] > 1u) {
+  // Level l scans its input (the array, then the level below's tile sums, in place) and writes
+  // its tile sums into kScanSums<l>; the top level is one tile. The tile offsets are then added
+  // back from the top down.
+  const auto tiles = sizes_.scanLevels(n);
+  const auto levels =
+      static_cast<unsigned>(std::find(tiles.begin(), tiles.end(), 1u) - tiles.begin() + 1);
+  if (levels > kScanLevels) {
     return false;  // more levels than devicePlanSizes() allows for
   }
-  // The top level was one tile: scanned. Each level below adds the scanned sums above it.
+  auto sums = [](unsigned l) {
+    return static_cast<PlanBuffer>(static_cast<unsigned>(PlanBuffer::kScanSums0) + l);
+  };
+  auto input = [&](unsigned l) { return l == 0 ? in : sums(l - 1); };
+  auto output = [&](unsigned l) { return l == 0 ? out : sums(l - 1); };
+  rm_plan_args a{};
+  for (unsigned l = 0; l < levels; ++l) {
+    a.n = l == 0 ? n : tiles[l - 1];
+    if (!launch(set, PlanKernel::kScanTiles, a, tiles[l] * sizes_.group_size,
+                {input(l), output(l), sums(l)})) {
+      return false;
+    }
+  }
   for (unsigned l = levels - 1; l-- > 0;) {
-    a.n = count[l];
-    if (!launch(set, PlanKernel::kScanAdd, a, ceilDiv(a.n, sizes_.tile()) * sizes_.group_size,
-                {l == 0 ? out : data[l], data[l + 1]})) {
+    a.n = l == 0 ? n : tiles[l - 1];
+    if (!launch(set, PlanKernel::kScanAdd, a, tiles[l] * sizes_.group_size, {output(l), sums(l)})) {
       return false;
     }
   }

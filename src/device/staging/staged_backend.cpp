@@ -407,42 +407,31 @@ Expected<void, IntegrateError> StagedBackend::copyRegion(std::uint32_t device_sl
     }
     const std::size_t bytes = store.layerRegionBytes(l);
     std::byte* host = store.layerBytes(host_slot, l);
-    if (returning) {
-      // The layer goes back up from where its download lands: the in-order queue runs the
-      // download first, and the copy reads that memory when it runs.
-      if (std::byte* landing = transfers_->stagedDownload(host, bytes, submitted_ + 1)) {
-        if (!copyLayer(l, bytes * device_slot, landing, bytes, true)) {
+    // What the device copies from or into: where the layer's download lands, for a region
+    // wanted back (the in-order queue runs the download first, and the copy reads that memory
+    // when it runs); the host store itself for a download while the queue is drained (nothing
+    // runs and nobody reads the store before the next drain); else new space in the ring, which
+    // the device passes before the next batch submitted completes.
+    std::byte* staged =
+        returning ? transfers_->stagedDownload(host, bytes, submitted_ + 1) : nullptr;
+    const bool direct = drained && !to_device;
+    const bool fresh = staged == nullptr && !direct;
+    if (fresh) {
+      staged = transfers_->reserve(bytes, submitted_ + 1);
+      if (staged == nullptr) {
+        ++stats_.transfer_stalls;  // the ring is full: wait for the queue, then reuse all of it
+        if (!drain() || (staged = transfers_->reserve(bytes, submitted_ + 1)) == nullptr) {
           return Unexpected(IntegrateError::kDeviceFailure);
         }
-        stats_.bytes_to_device += bytes;
-        stats_.region_bytes_to_device += bytes;
-        continue;
+      }
+      if (to_device) {
+        std::memcpy(staged, host, bytes);
       }
     }
-    if (drained && !to_device) {
-      // Nothing runs and nobody reads the host store before the next drain: straight there.
-      if (!copyLayer(l, bytes * device_slot, host, bytes, false)) {
-        return Unexpected(IntegrateError::kDeviceFailure);
-      }
-      stats_.bytes_from_device += bytes;
-      stats_.region_bytes_from_device += bytes;
-      continue;
-    }
-    // The device passes this copy before the next batch submitted completes.
-    std::byte* staged = transfers_->reserve(bytes, submitted_ + 1);
-    if (staged == nullptr) {
-      ++stats_.transfer_stalls;  // the ring is full: wait for the queue, then reuse all of it
-      if (!drain() || (staged = transfers_->reserve(bytes, submitted_ + 1)) == nullptr) {
-        return Unexpected(IntegrateError::kDeviceFailure);
-      }
-    }
-    if (to_device) {
-      std::memcpy(staged, host, bytes);
-    }
-    if (!copyLayer(l, bytes * device_slot, staged, bytes, to_device)) {
+    if (!copyLayer(l, bytes * device_slot, direct ? host : staged, bytes, to_device)) {
       return Unexpected(IntegrateError::kDeviceFailure);
     }
-    if (!to_device) {
+    if (fresh && !to_device) {
       transfers_->noteDownload(staged, host, bytes, host_slot);
     }
     (to_device ? stats_.bytes_to_device : stats_.bytes_from_device) += bytes;
