@@ -37,7 +37,16 @@
 #define RM_PLAN_STATUS_SPANS 4u   /* span records of the planned rays */
 #define RM_PLAN_STATUS_GROUPS 5u  /* hit groups (voxels with samples) */
 #define RM_PLAN_STATUS_HITS 6u    /* samples */
-#define RM_PLAN_STATUS_WORDS 8u
+/* Rays of the plan the device's preparation (kernels/device/prepare.h) accepted and rejected, by
+ * reason; rays from the cut on are not counted. Zero for host-prepared rays. */
+#define RM_PLAN_STATUS_ACCEPTED 8u
+#define RM_PLAN_STATUS_INVALID 9u
+#define RM_PLAN_STATUS_TOO_SHORT 10u
+#define RM_PLAN_STATUS_OUT_OF_BOUNDS 11u
+#define RM_PLAN_STATUS_OUTSIDE_WINDOW 12u
+#define RM_PLAN_STATUS_CLIPPED 13u   /* accepted, clipped */
+#define RM_PLAN_STATUS_NO_RETURN 14u /* accepted, without a return */
+#define RM_PLAN_STATUS_WORDS 16u
 
 #define RM_PLAN_FAULT_KEY_RANGE 1u  /* a region too far from the batch's key origin */
 #define RM_PLAN_FAULT_TABLE_FULL 2u /* more distinct regions than the region table holds */
@@ -124,5 +133,12 @@ typedef struct rm_plan_args {
   X(gather_spans)          \
   X(clear_regions)         \
   X(clear_table)
+
+/* The ray preparation kernels (kernels/device/prepare_kernels.h): double precision, so OpenCL
+ * builds them as a program of their own (kernels/opencl/prepare.cl) where the device has
+ * cl_khr_fp64; gpu::PlanKernel numbers them after RM_PLAN_KERNELS. */
+#define RM_PREPARE_KERNELS(X) \
+  X(prepare)                  \
+  X(prepare_count)
 
 #endif /* RAYMAP_KERNELS_COMMON_PLAN_ABI_H */

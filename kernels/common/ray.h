@@ -17,6 +17,9 @@
  * piece starts in it. */
 #define RM_RAY_END_HIT 1u /* a hit (occupied evidence) and a voxel-mean sample */
 #define RM_RAY_REVERSE 4u /* walk from the sample back to the origin (spreads GPU contention) */
+/* A place kept for a ray the device's preparation rejected (kernels/device/prepare.h): it crosses
+ * no region, has no sample and is never walked. Host-prepared rays never carry it. */
+#define RM_RAY_SKIP 8u
 
 typedef struct rm_prepared_ray {
   rm_vec3i origin_voxel; /* global voxel holding the ray origin (sensor side) */

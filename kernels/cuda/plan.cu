@@ -5,6 +5,7 @@
 // a * b + c could move a region crossing and give another plan.
 #include "kernels/cuda/plan_launch.h"
 #include "kernels/device/plan_kernels.h"
+#include "kernels/device/prepare_kernels.h"
 
 namespace raymap::cuda {
 namespace {
@@ -12,10 +13,10 @@ namespace {
 using PlanKernelFn = void (*)(rm_plan_args, rm_u32*, rm_u32*, rm_u32*, rm_u32*, rm_u32*, rm_u32*,
                               rm_u32*, rm_u32*);
 
-// In the order of RM_PLAN_KERNELS, which gpu::PlanKernel follows.
+// In the order of RM_PLAN_KERNELS, then RM_PREPARE_KERNELS, which gpu::PlanKernel follows.
 constexpr PlanKernelFn kPlanKernels[] = {
 #define RM_PLAN_KERNEL_FN(name) &rm_plan_##name,
-    RM_PLAN_KERNELS(RM_PLAN_KERNEL_FN)
+    RM_PLAN_KERNELS(RM_PLAN_KERNEL_FN) RM_PREPARE_KERNELS(RM_PLAN_KERNEL_FN)
 #undef RM_PLAN_KERNEL_FN
 };
 constexpr unsigned kPlanKernelCount = sizeof(kPlanKernels) / sizeof(kPlanKernels[0]);

@@ -67,7 +67,9 @@ RM_DEVICE_FN void rm_plan_count_ray(rm_u32 r, rm_plan_args a, const RM_GLOBAL rm
   if (r > a.n) {
     return;
   }
-  if (r < a.n) {
+  if (r < a.n && (rays[r].flags & RM_RAY_SKIP) != 0u) {
+    crossed[r] = 0u; /* rejected by the device's preparation */
+  } else if (r < a.n) {
     rm_region_walk_init(&w, rays[r], a.region_voxels);
     crossed[r] = rm_region_walk_regions(&w);
     while (rm_region_walk_next(&w, &s)) {
@@ -135,6 +137,9 @@ RM_DEVICE_FN void rm_plan_emit_ray(rm_u32 r, rm_plan_args a, const RM_GLOBAL rm_
   }
   at = offsets[r];
   ray = rays[r];
+  if ((ray.flags & RM_RAY_SKIP) != 0u) {
+    return; /* rejected by the device's preparation: no spans, no sample */
+  }
   rm_region_walk_init(&w, ray, a.region_voxels);
   sample_flag = rm_region_walk_sample_flag(&w);
   while (rm_region_walk_next(&w, &s)) {

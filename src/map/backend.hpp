@@ -9,9 +9,14 @@
 
 #include "raymap/expected.hpp"
 
+#include "kernels/common/ray_prepare.h"
 #include "src/map/ray.hpp"
 
 namespace raymap {
+
+class RayPreparer;
+struct RayFilter;
+struct RayCounters;
 
 /// Why a batch could not be integrated (real-time path: a code, no message).
 enum class IntegrateError : std::uint8_t {
@@ -45,6 +50,8 @@ struct BackendStats {
   std::uint64_t cache_slots = 0;    ///< regions the device cache holds
   bool planned_on_device = false;   ///< batches are planned on the device (DevicePlanner)
   std::uint64_t plans_on_host = 0;  ///< planning on the device: batches the host planned instead
+  /// Rays prepared on the device (Backend::integrateRays; the rest, if any, on the host).
+  std::uint64_t rays_prepared_on_device = 0;
   double plan_seconds = 0;  ///< host: region walk, region moves, hit grouping (device planning:
                             ///< the batch's region placements and the resolve launches)
   double wait_seconds = 0;  ///< host waiting for the device to finish earlier batches
@@ -93,6 +100,28 @@ class Backend {
   virtual void runOnHostThreads(HostJob job, void* context) noexcept { job(context, 0, 1); }
   /// @brief Integrates one batch. @rt allocates: no; throws: no.
   virtual Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept = 0;
+  /// @brief Whether integrateRays() prepares rays under `filter` on the device (device backends
+  /// planning and preparing on the device, with double precision, for filters without
+  /// segmentation). The default: no; RayBatcher then prepares on the host.
+  virtual bool preparesOnDevice(const RayFilter& filter) const noexcept {
+    (void)filter;
+    return false;
+  }
+  /// @brief Integrates world-frame `rays` exactly as integrate() integrates what
+  /// `preparer.prepareWith(params, ...)` makes of them (one call is one scan with per-scan
+  /// semantics), with the preparation on the device; adds what happened to each ray to
+  /// `counters` as prepareWith() counts it. Returns the prepared rays integrated. Only where
+  /// preparesOnDevice(preparer.filter()); the default fails. @rt allocates: no; throws: no.
+  virtual Expected<std::size_t, IntegrateError> integrateRays(const RayPreparer& preparer,
+                                                              const rm_prepare_params& params,
+                                                              std::span<const Ray> rays,
+                                                              RayCounters& counters) noexcept {
+    (void)preparer;
+    (void)params;
+    (void)rays;
+    (void)counters;
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
   /// @brief Waits for the device and makes the host region store current (device backends
   /// download what changed; CPU: no-op). Call before reading the map (export, save, summarise);
   /// device counters of batches still in flight are only in stats() after it.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <new>
 #include <string>
 
@@ -23,6 +24,11 @@ RayBatcher::RayBatcher(const VoxelMap& map, Backend& backend, std::size_t batch_
   RAYMAP_EXPECTS(batch_rays > 0);
   if (!batch_.reserve(batch_rays)) {
     throw std::bad_alloc();  // as a std::vector of the batch would
+  }
+  // Rays as they came, for a backend that can prepare them on the device (pages made resident
+  // only when used).
+  if (backend.preparesOnDevice(RayFilter{}) && !raw_.reserve(batch_rays)) {
+    throw std::bad_alloc();
   }
   parts_.resize(std::max(backend.threads(), 1u));
 }
@@ -76,8 +82,9 @@ RayPreparer::Progress RayBatcher::prepareOnHostThreads(RayPreparer& preparer,
 }
 
 Expected<void, IntegrateError> RayBatcher::flush() noexcept {
+  auto raw = flushRaw();
   if (fill_ == 0) {
-    return {};
+    return raw;
   }
   const std::span<const PreparedRay> rays(batch_.data(), fill_);
   fill_ = 0;
@@ -85,20 +92,50 @@ Expected<void, IntegrateError> RayBatcher::flush() noexcept {
   auto ok = backend_->integrate(rays);
   if (!ok) {
     ++counters_.batches_failed;
-    return ok;
+    return raw ? ok : raw;
   }
   counters_.rays_integrated += rays.size();
+  return raw;
+}
+
+Expected<void, IntegrateError> RayBatcher::flushRaw() noexcept {
+  if (raw_fill_ == 0) {
+    return {};
+  }
+  const std::span<const Ray> rays(raw_.data(), raw_fill_);
+  raw_fill_ = 0;
+  return integrateOnDevice(*raw_preparer_, raw_params_, rays);
+}
+
+Expected<void, IntegrateError> RayBatcher::integrateOnDevice(RayPreparer& preparer,
+                                                             const rm_prepare_params& params,
+                                                             std::span<const Ray> rays) noexcept {
+  ++counters_.batches;
+  ++counters_.device_batches;
+  RayCounters counted;
+  auto integrated = backend_->integrateRays(preparer, params, rays, counted);
+  preparer.addCounters(counted);
+  if (!integrated) {
+    ++counters_.batches_failed;
+    return Unexpected(integrated.error());
+  }
+  counters_.rays_integrated += *integrated;
   return {};
 }
+
+namespace {
+
+void keepFirst(Expected<void, IntegrateError>& first_error, Expected<void, IntegrateError> ok) {
+  if (!ok && first_error) {
+    first_error = ok;
+  }
+}
+
+}  // namespace
 
 Expected<void, IntegrateError> RayBatcher::add(RayPreparer& preparer,
                                                std::span<const Ray> rays) noexcept {
   Expected<void, IntegrateError> first_error;
-  const auto keep_first = [&first_error](Expected<void, IntegrateError> ok) {
-    if (!ok && first_error) {
-      first_error = ok;
-    }
-  };
   std::size_t i = 0;
   while (i < rays.size()) {
     // A run of rays of one scan.
@@ -109,40 +146,102 @@ Expected<void, IntegrateError> RayBatcher::add(RayPreparer& preparer,
     if (!have_scan_ || rays[i].scan != scan_) {
       ++counters_.scans;
       if (per_scan_) {
-        keep_first(flush());  // the previous scan is complete
+        keepFirst(first_error, flush());  // the previous scan is complete
       }
       have_scan_ = true;
       scan_split_ = false;
+      scan_on_host_ = false;
       scan_ = rays[i].scan;
     }
-    while (i < run_end) {
-      const std::size_t room = capacity_ - fill_;
-      const std::size_t fits = std::min(run_end - i, room);  // one prepared ray each, unsegmented
-      const RayPreparer::Progress p =
-          parts_.size() > 1 && preparer.filter().segment_length_m <= 0.0 &&
-                  fits >= kMinRaysPerHostThread * parts_.size()
-              ? prepareOnHostThreads(preparer, rays.subspan(i, fits))
-              : preparer.prepare(rays.subspan(i, run_end - i),
-                                 std::span<PreparedRay>(batch_.data() + fill_, room));
-      fill_ += p.written;
-      i += p.consumed;
-      if (fill_ == capacity_ || (p.consumed == 0 && i < run_end)) {
-        // Full (or no room for the next ray's pieces): in it goes.
-        if (per_scan_ && i < run_end && !scan_split_) {
-          ++counters_.scans_split;
-          scan_split_ = true;
-        }
-        if (fill_ == 0) {
-          // Not one piece fits an empty batch (more pieces per ray than the batch holds): the
-          // preparer made no progress, so give up on the rest rather than spin.
-          i = run_end;
-          break;
-        }
-        keep_first(flush());
-      }
+    const std::span<const Ray> run = rays.subspan(i, run_end - i);
+    if (!scan_on_host_ && backend_->preparesOnDevice(preparer.filter())) {
+      addForDevice(preparer, run, first_error);
+    } else {
+      addPrepared(preparer, run, first_error);
     }
+    i = run_end;
   }
   return first_error;
+}
+
+void RayBatcher::addForDevice(RayPreparer& preparer, std::span<const Ray> run,
+                              Expected<void, IntegrateError>& first_error) noexcept {
+  if (fill_ > 0) {
+    keepFirst(first_error, flush());  // host-prepared rays go in first: ray order
+  }
+  // One batch, one preparation: rays of another sensor's filter, or a rolling window that moved
+  // since the batch's first ray, start a new batch (the host prepares each ray as it comes).
+  const rm_prepare_params params = preparer.params();
+  if (raw_fill_ > 0 &&
+      (raw_preparer_ != &preparer || std::memcmp(&raw_params_, &params, sizeof params) != 0)) {
+    keepFirst(first_error, flushRaw());
+  }
+  raw_preparer_ = &preparer;
+  raw_params_ = params;
+  while (!run.empty()) {
+    if (!per_scan_ && raw_fill_ == 0 && run.size() >= capacity_) {
+      // A whole batch from the caller's rays: no copy here.
+      keepFirst(first_error, integrateOnDevice(preparer, params, run.first(capacity_)));
+      run = run.subspan(capacity_);
+      continue;
+    }
+    const std::size_t room = capacity_ - raw_fill_;
+    if (room == 0 && per_scan_) {
+      // The scan outgrew the batch: on the host's way it is integrated in parts cut where the
+      // batch fills with prepared rays, which only preparing tells. So the host prepares it.
+      scan_on_host_ = true;
+      const std::span<const Ray> held(raw_.data(), raw_fill_);
+      raw_fill_ = 0;
+      addPrepared(preparer, held, first_error);  // the window cannot have moved: same params
+      addPrepared(preparer, run, first_error);
+      return;
+    }
+    if (room == 0) {
+      keepFirst(first_error, flushRaw());
+      continue;
+    }
+    const std::size_t n = std::min(room, run.size());
+    std::copy(run.begin(), run.begin() + static_cast<std::ptrdiff_t>(n), raw_.data() + raw_fill_);
+    raw_fill_ += n;
+    run = run.subspan(n);
+  }
+  if (!per_scan_ && raw_fill_ == capacity_) {
+    keepFirst(first_error, flushRaw());
+  }
+}
+
+void RayBatcher::addPrepared(RayPreparer& preparer, std::span<const Ray> run,
+                             Expected<void, IntegrateError>& first_error) noexcept {
+  if (raw_fill_ > 0) {
+    keepFirst(first_error, flushRaw());  // rays for the device go in first: ray order
+  }
+  std::size_t i = 0;
+  const std::size_t run_end = run.size();
+  while (i < run_end) {
+    const std::size_t room = capacity_ - fill_;
+    const std::size_t fits = std::min(run_end - i, room);  // one prepared ray each, unsegmented
+    const RayPreparer::Progress p =
+        parts_.size() > 1 && preparer.filter().segment_length_m <= 0.0 &&
+                fits >= kMinRaysPerHostThread * parts_.size()
+            ? prepareOnHostThreads(preparer, run.subspan(i, fits))
+            : preparer.prepare(run.subspan(i, run_end - i),
+                               std::span<PreparedRay>(batch_.data() + fill_, room));
+    fill_ += p.written;
+    i += p.consumed;
+    if (fill_ == capacity_ || (p.consumed == 0 && i < run_end)) {
+      // Full (or no room for the next ray's pieces): in it goes.
+      if (per_scan_ && i < run_end && !scan_split_) {
+        ++counters_.scans_split;
+        scan_split_ = true;
+      }
+      if (fill_ == 0) {
+        // Not one piece fits an empty batch (more pieces per ray than the batch holds): the
+        // preparer made no progress, so give up on the rest rather than spin.
+        return;
+      }
+      keepFirst(first_error, flush());
+    }
+  }
 }
 
 Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateError error,

@@ -29,6 +29,7 @@ struct BatcherCounters {
   std::uint64_t scans = 0;            ///< distinct scans (runs of one Ray::scan) seen
   std::uint64_t scans_split = 0;      ///< per-scan: scans larger than a batch, integrated in parts
   std::uint64_t parallel_prepares = 0;  ///< runs of rays prepared on the backend's host threads
+  std::uint64_t device_batches = 0;     ///< of batches: rays prepared on the device (integrateRays)
 };
 
 /// @brief Prepares rays (RayPreparer) into a fixed batch and hands full batches to a backend.
@@ -46,6 +47,16 @@ struct BatcherCounters {
 /// of rays is prepared on those threads, each a contiguous range, and the ranges are joined in
 /// order: the batch is the one a single thread prepares (not with segmented rays, whose piece
 /// counts are not known in advance: those are prepared on the calling thread).
+///
+/// With a backend that prepares rays on the device (Backend::preparesOnDevice), the batch holds
+/// the rays as they came (world frame) and the backend prepares them: the same maps and the same
+/// counters, which reach the preparer when the batch is integrated (flush(), a full batch, a scan's
+/// end). A scan that per-scan semantics would integrate in parts goes the host's way instead,
+/// so the parts are the ones the host makes. A rolling map whose window moves while rays wait in
+/// the batch is the exception: those rays go in after the move either way, but which of them
+/// went in before it depends on when batches fill, counted in prepared rays on the host and in
+/// rays as they came here. flush() before moving the window (raymapd moves it only with the
+/// batch empty) and the maps are the same.
 ///
 /// Thread-safety: one thread. @rt add(), flush(): allocate no memory and throw nothing (the batch
 /// is allocated by the constructor); they block only in the backend.
@@ -67,9 +78,10 @@ class RayBatcher {
   void endStream() noexcept {
     have_scan_ = false;
     scan_split_ = false;
+    scan_on_host_ = false;
   }
-  /// Prepared rays waiting in the batch.
-  std::size_t pending() const noexcept { return fill_; }
+  /// Rays waiting in the batch (prepared, or as they came for the device to prepare).
+  std::size_t pending() const noexcept { return fill_ + raw_fill_; }
   std::size_t capacity() const noexcept { return capacity_; }
   const BatcherCounters& counters() const noexcept { return counters_; }
   Backend& backend() noexcept { return *backend_; }
@@ -98,6 +110,27 @@ class RayBatcher {
   RayPreparer::Progress prepareOnHostThreads(RayPreparer& preparer,
                                              std::span<const Ray> in) noexcept;
   std::vector<PartResult> parts_;  // one per host thread of the backend
+
+  /// Prepares `rays` (one scan's) into the batch on the host, integrating full batches.
+  void addPrepared(RayPreparer& preparer, std::span<const Ray> rays,
+                   Expected<void, IntegrateError>& first_error) noexcept;
+  /// Adds `rays` (one scan's) for the device to prepare (Backend::integrateRays).
+  void addForDevice(RayPreparer& preparer, std::span<const Ray> rays,
+                    Expected<void, IntegrateError>& first_error) noexcept;
+  /// Integrates `rays` through Backend::integrateRays, prepared with `params`, counting into
+  /// `preparer`.
+  Expected<void, IntegrateError> integrateOnDevice(RayPreparer& preparer,
+                                                   const rm_prepare_params& params,
+                                                   std::span<const Ray> rays) noexcept;
+  /// Integrates the rays waiting for the device's preparation.
+  Expected<void, IntegrateError> flushRaw() noexcept;
+
+  // ---- preparation on the device ----
+  platform::PageArray<Ray> raw_;  // rays waiting for the device to prepare them
+  std::size_t raw_fill_ = 0;
+  RayPreparer* raw_preparer_ = nullptr;  // the preparer of the rays in raw_
+  rm_prepare_params raw_params_{};       // and its parameters when the first of them came
+  bool scan_on_host_ = false;            // per-scan: this scan outgrew the batch, host prepares
 };
 
 /// @brief The error a failed batch means for whoever integrates: a full store is kCapacity ("the

@@ -9,43 +9,6 @@
 #include "kernels/common/tsdf.h"
 
 namespace raymap {
-namespace {
-
-// Rays longer than this many voxels are rejected: the walk runs in float relative to its start
-// voxel, and 2^22 voxels (419 km at 0.1 m) keeps positions exact to better than 1e-3 voxel.
-constexpr double kMaxRayVoxels = 4194304.0;
-
-// Clips the segment a + t (b - a), t in [0, 1], to an axis-aligned box. Returns false when the
-// segment misses the box; otherwise [*t0, *t1] is the part inside.
-bool clipToBox(Vec3d a, Vec3d b, Vec3d lo, Vec3d hi, double* t0, double* t1) {
-  double enter = 0.0;
-  double exit = 1.0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double d = b[axis] - a[axis];
-    if (d == 0.0) {
-      if (a[axis] < lo[axis] || a[axis] > hi[axis]) {
-        return false;
-      }
-      continue;
-    }
-    double ta = (lo[axis] - a[axis]) / d;
-    double tb = (hi[axis] - a[axis]) / d;
-    if (ta > tb) {
-      std::swap(ta, tb);
-    }
-    enter = std::max(enter, ta);
-    exit = std::min(exit, tb);
-    if (enter > exit) {
-      return false;
-    }
-  }
-  *t0 = enter;
-  *t1 = exit;
-  return true;
-}
-
-}  // namespace
-
 Expected<void, Error> RayFilter::validate() const {
   if (!std::isfinite(min_range_m) || min_range_m < 0.0) {
     return fail(ErrorCode::kInvalidArgument, "min-range must be a distance >= 0 metres");
@@ -70,109 +33,45 @@ RayPreparer::RayPreparer(const VoxelMap& map, const RayFilter& filter) noexcept
       tsdf_(map.mode() == MapMode::kTsdf),
       truncation_m_(map.config().tsdf.truncationMetres(map.geometry().resolution)) {}
 
-bool RayPreparer::toKey(Vec3d p, rm_vec3i* voxel, rm_vec3f* local) const noexcept {
-  const double sx = p.x * inv_resolution_;
-  const double sy = p.y * inv_resolution_;
-  const double sz = p.z * inv_resolution_;
-  const double fx = std::floor(sx);
-  const double fy = std::floor(sy);
-  const double fz = std::floor(sz);
-  // VoxelMap::voxelInRange's test (same resolution) on the floors taken here: calling it floored
-  // every axis a second time (2.3 % of a 3DTK profile, beside 5.3 % for the rest of the
-  // preparation).
-  if (!map_->flooredVoxelInRange(fx) || !map_->flooredVoxelInRange(fy) ||
-      !map_->flooredVoxelInRange(fz)) {
-    return false;
+rm_prepare_params RayPreparer::params() const noexcept {
+  rm_prepare_params p{};
+  p.inv_resolution = inv_resolution_;
+  p.min_range_m = filter_.min_range_m;
+  p.max_range_m = filter_.max_range_m;
+  p.truncation_m = truncation_m_;
+  p.max_voxel = static_cast<double>(map_->maxVoxelCoord());
+  p.tsdf = tsdf_ ? 1u : 0u;
+  p.walk_flag = filter_.reverse ? RM_RAY_REVERSE : 0u;
+  if (map_->config().policy == StorePolicy::kRolling) {
+    // Clip half a voxel outside the window: a ray that leaves the window crosses its boundary
+    // voxels completely, so they must be cleared; the end voxel, which is left out, and any
+    // other voxel outside the window are skipped by the backend.
+    const auto [lo, hi] = map_->windowBounds();
+    const double margin = 0.5 * map_->geometry().resolution;
+    p.rolling = 1u;
+    p.window_lo = rm_vec3d{lo.x - margin, lo.y - margin, lo.z - margin};
+    p.window_hi = rm_vec3d{hi.x + margin, hi.y + margin, hi.z + margin};
   }
-  *voxel = rm_vec3i{static_cast<std::int32_t>(fx), static_cast<std::int32_t>(fy),
-                    static_cast<std::int32_t>(fz)};
-  *local = rm_vec3f{static_cast<float>(sx - fx), static_cast<float>(sy - fy),
-                    static_cast<float>(sz - fz)};
-  return true;
+  return p;
 }
 
-RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in, std::span<PreparedRay> out,
-                                           RayCounters& counters) const noexcept {
+RayPreparer::Progress RayPreparer::prepareWith(const rm_prepare_params& params,
+                                               std::span<const Ray> in, std::span<PreparedRay> out,
+                                               RayCounters& counters) const noexcept {
   Progress progress;
-  const bool rolling = map_->config().policy == StorePolicy::kRolling;
   for (const Ray& ray : in) {
-    Vec3d origin = ray.origin;
-    Vec3d sample = ray.sample;
-    if (!origin.isFinite() || !sample.isFinite()) {
+    rm_prepared_ends ends;
+    const rm_u32 outcome =
+        rm_prepare_ray(&params, rm_vec3d{ray.origin.x, ray.origin.y, ray.origin.z},
+                       rm_vec3d{ray.sample.x, ray.sample.y, ray.sample.z},
+                       (ray.flags & kRayNoReturn) != 0u ? 1 : 0, &ends);
+    if ((outcome & RM_PREPARE_REJECTED_MASK) != RM_PREPARE_ACCEPTED) {
       ++counters.rays_in;
-      ++counters.rays_invalid;
       ++progress.consumed;
+      countRejection(outcome, counters);
       continue;
     }
-    const double length = (sample - origin).norm();
-    if (length < filter_.min_range_m) {
-      ++counters.rays_in;
-      ++counters.rays_too_short;
-      ++progress.consumed;
-      continue;
-    }
-    const bool no_return = (ray.flags & kRayNoReturn) != 0u;
-    std::uint32_t end_flag = no_return ? 0u : RM_RAY_END_HIT;
-    bool clipped = false;
-    // TSDF maps: signed distance at the ray's end, metres (kernels/common/tsdf.h). Rays that
-    // update free space only keep RM_TSDF_FREE.
-    double end_sdf = static_cast<double>(RM_TSDF_FREE);
-    if (filter_.max_range_m > 0.0 && length > filter_.max_range_m) {
-      sample = origin + (sample - origin) * (filter_.max_range_m / length);
-      end_flag = 0u;
-      clipped = true;
-    }
-    if (tsdf_ && end_flag != 0u) {
-      // The walk goes on tau behind the sample, so the negative side of the surface is updated;
-      // the sample voxel gets no hit (a TSDF map has no occupancy).
-      if (length > 0.0) {
-        sample = sample + (sample - origin) * (truncation_m_ / length);
-        end_sdf = -truncation_m_;
-      } else {
-        end_sdf = 0.0;
-      }
-      end_flag = 0u;
-    }
-    if (rolling) {
-      auto [lo, hi] = map_->windowBounds();
-      // Clip half a voxel outside the window: a ray that leaves the window crosses its boundary
-      // voxels completely, so they must be cleared; the end voxel, which is left out, and any
-      // other voxel outside the window are skipped by the backend.
-      const double margin = 0.5 * map_->geometry().resolution;
-      lo = lo - Vec3d{margin, margin, margin};
-      hi = hi + Vec3d{margin, margin, margin};
-      double t0 = 0.0;
-      double t1 = 1.0;
-      if (!clipToBox(origin, sample, lo, hi, &t0, &t1)) {
-        ++counters.rays_in;
-        ++counters.rays_outside_window;
-        ++progress.consumed;
-        continue;
-      }
-      const Vec3d d = sample - origin;
-      if (t1 < 1.0) {
-        end_sdf += (1.0 - t1) * d.norm();
-        sample = origin + d * t1;
-        end_flag = 0u;
-        clipped = true;
-      }
-      if (t0 > 0.0) {
-        origin = origin + d * t0;
-        clipped = true;
-      }
-    }
-    const double kept = (sample - origin).norm();
-    rm_vec3i origin_voxel;
-    rm_vec3i sample_voxel;
-    rm_vec3f origin_local;
-    rm_vec3f sample_local;
-    if (kept * inv_resolution_ > kMaxRayVoxels || !toKey(origin, &origin_voxel, &origin_local) ||
-        !toKey(sample, &sample_voxel, &sample_local)) {
-      ++counters.rays_in;
-      ++counters.rays_out_of_bounds;
-      ++progress.consumed;
-      continue;
-    }
+    const double kept = ends.kept_m;
     std::uint32_t pieces = 1;
     if (filter_.segment_length_m > 0.0 && kept > filter_.segment_length_m) {
       pieces = static_cast<std::uint32_t>(std::min<double>(
@@ -183,35 +82,36 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in, std::span<Pr
     }
     ++counters.rays_in;
     ++counters.rays_accepted;
-    counters.rays_clipped += clipped ? 1u : 0u;
-    counters.rays_no_return += no_return ? 1u : 0u;
+    counters.rays_clipped += (outcome & RM_PREPARE_CLIPPED) != 0u ? 1u : 0u;
+    counters.rays_no_return += (outcome & RM_PREPARE_NO_RETURN) != 0u ? 1u : 0u;
     counters.pieces_out += pieces;
     ++progress.consumed;
-    const std::uint32_t walk_flag = filter_.reverse ? RM_RAY_REVERSE : 0u;
     if (pieces == 1) {
-      out[progress.written++] = PreparedRay{origin_voxel,
-                                            origin_local,
-                                            sample_voxel,
-                                            sample_local,
-                                            end_flag | walk_flag,
+      out[progress.written++] = PreparedRay{ends.origin_voxel,
+                                            ends.origin_local,
+                                            ends.sample_voxel,
+                                            ends.sample_local,
+                                            ends.end_flag | params.walk_flag,
                                             ray.intensity,
-                                            static_cast<float>(end_sdf)};
+                                            static_cast<float>(ends.end_sdf_m)};
       continue;
     }
-    const Vec3d d = sample - origin;
-    rm_vec3i a_voxel = origin_voxel;
-    rm_vec3f a_local = origin_local;
+    const rm_vec3d d = rm_vec3d_sub(ends.sample, ends.origin);
+    rm_vec3i a_voxel = ends.origin_voxel;
+    rm_vec3f a_local = ends.origin_local;
     for (std::uint32_t i = 1; i <= pieces; ++i) {
-      rm_vec3i b_voxel = sample_voxel;
-      rm_vec3f b_local = sample_local;
+      rm_vec3i b_voxel = ends.sample_voxel;
+      rm_vec3f b_local = ends.sample_local;
       if (i < pieces) {
         // In range: a point between two in-range points.
-        (void)toKey(origin + d * (static_cast<double>(i) / pieces), &b_voxel, &b_local);
+        (void)rm_prepare_key(
+            &params, rm_vec3d_add(ends.origin, rm_vec3d_scale(d, static_cast<double>(i) / pieces)),
+            &b_voxel, &b_local);
       }
       // Inner pieces leave their end voxel to the next piece, which starts there.
-      const std::uint32_t flags = (i == pieces ? end_flag : 0u) | walk_flag;
+      const std::uint32_t flags = (i == pieces ? ends.end_flag : 0u) | params.walk_flag;
       // A piece ends (1 - i / pieces) * kept before the whole ray's end.
-      const double piece_end_sdf = end_sdf + (1.0 - static_cast<double>(i) / pieces) * kept;
+      const double piece_end_sdf = ends.end_sdf_m + (1.0 - static_cast<double>(i) / pieces) * kept;
       out[progress.written++] = PreparedRay{a_voxel,
                                             a_local,
                                             b_voxel,
@@ -224,6 +124,25 @@ RayPreparer::Progress RayPreparer::prepare(std::span<const Ray> in, std::span<Pr
     }
   }
   return progress;
+}
+
+void countRejection(std::uint32_t outcome, RayCounters& counters) noexcept {
+  switch (outcome & RM_PREPARE_REJECTED_MASK) {
+    case RM_PREPARE_INVALID:
+      ++counters.rays_invalid;
+      break;
+    case RM_PREPARE_TOO_SHORT:
+      ++counters.rays_too_short;
+      break;
+    case RM_PREPARE_OUT_OF_BOUNDS:
+      ++counters.rays_out_of_bounds;
+      break;
+    case RM_PREPARE_OUTSIDE_WINDOW:
+      ++counters.rays_outside_window;
+      break;
+    default:
+      break;
+  }
 }
 
 }  // namespace raymap

@@ -9,10 +9,19 @@
 
 #include "raymap/error.hpp"
 
+#include "kernels/common/ray_prepare.h"
 #include "src/map/ray.hpp"
 #include "src/map/voxel_map.hpp"
 
 namespace raymap {
+
+// A batch of Rays goes to the device as rm_raw_ray (Backend::integrateRays) without conversion.
+static_assert(sizeof(Ray) == sizeof(rm_raw_ray) &&
+              offsetof(Ray, origin) == offsetof(rm_raw_ray, origin) &&
+              offsetof(Ray, sample) == offsetof(rm_raw_ray, sample) &&
+              offsetof(Ray, intensity) == offsetof(rm_raw_ray, intensity) &&
+              offsetof(Ray, flags) == offsetof(rm_raw_ray, flags));
+static_assert(kRayNoReturn == RM_RAW_RAY_NO_RETURN);
 
 /// @brief Per-source ray limits. Aggregate with defaults; check with validate().
 struct RayFilter {
@@ -55,6 +64,10 @@ struct RayCounters {
   }
 };
 
+/// @brief Adds the rejection an rm_prepare_ray outcome names (if any) to `counters`; rays_in and
+/// the accepted counts are the caller's.
+void countRejection(std::uint32_t outcome, RayCounters& counters) noexcept;
+
 /// @brief Turns Rays into PreparedRays for one map.
 /// A ray with a real return gets RM_RAY_END_HIT. A clipped or no-return ray does not: it clears the
 /// voxels before its end voxel, which it only partly crosses (OctoMap's insertRay does the same);
@@ -81,7 +94,13 @@ class RayPreparer {
   }
   /// @brief The same, counting into `counters` instead of the preparer's own.
   Progress prepare(std::span<const Ray> in, std::span<PreparedRay> out,
-                   RayCounters& counters) const noexcept;
+                   RayCounters& counters) const noexcept {
+    return prepareWith(params(), in, out, counters);
+  }
+  /// @brief The same with parameters taken from params() earlier (a rolling window as it was
+  /// when the rays came: RayBatcher's batches for the device).
+  Progress prepareWith(const rm_prepare_params& params, std::span<const Ray> in,
+                       std::span<PreparedRay> out, RayCounters& counters) const noexcept;
   /// @brief Adds counters of the const prepare() to the preparer's own.
   void addCounters(const RayCounters& counters) noexcept { counters_ += counters; }
 
@@ -89,9 +108,12 @@ class RayPreparer {
   void resetCounters() noexcept { counters_ = RayCounters{}; }
   const RayFilter& filter() const noexcept { return filter_; }
 
- private:
-  bool toKey(Vec3d p, rm_vec3i* voxel, rm_vec3f* local) const noexcept;
+  /// @brief What rm_prepare_ray (kernels/common/ray_prepare.h) needs for this map and filter now
+  /// (a rolling map's window as it is at the call): the host's preparation and the device's
+  /// (Backend::integrateRays) use the same.
+  rm_prepare_params params() const noexcept;
 
+ private:
   const VoxelMap* map_;
   RayFilter filter_;
   double inv_resolution_;

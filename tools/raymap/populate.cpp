@@ -59,6 +59,7 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   d.cache_misses -= before.cache_misses;
   d.cache_evictions -= before.cache_evictions;
   d.plans_on_host -= before.plans_on_host;
+  d.rays_prepared_on_device -= before.rays_prepared_on_device;
   d.transfer_stalls -= before.transfer_stalls;
   d.plan_seconds -= before.plan_seconds;
   d.wait_seconds -= before.wait_seconds;
@@ -293,6 +294,7 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
     const std::uint64_t lookups = b.cache_hits + b.cache_misses;
     j.add("planning", b.planned_on_device ? "device" : "host")
         .add("plans_on_host", b.plans_on_host)
+        .add("rays_prepared_on_device", b.rays_prepared_on_device)
         .add("rays_skipped", b.rays_skipped)
         .add("bytes_to_device", b.bytes_to_device)
         .add("bytes_from_device", b.bytes_from_device)

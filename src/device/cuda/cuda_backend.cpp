@@ -54,7 +54,8 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
       : StagedBackend(map, slots, /*wide_counters=*/true, options, cuda::pinnedHostMemory()),
         device_(std::move(device)),
         block_threads_(options.block_threads),
-        plan_on_device_(options.planning == gpu::Planning::kDevice) {}
+        plan_on_device_(options.planning == gpu::Planning::kDevice),
+        prepare_on_device_(options.prepare_on_device) {}
 
   ~CudaBackend() override {
     if (stream_ && cudaSetDevice(device_.index) == cudaSuccess) {
@@ -106,7 +107,8 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
            std::to_string(device_.compute_minor) + ", runtime " +
            cuda::versionText(device_.runtime_version) + ")" +
            (sharedMemory() ? ", shared memory" : "") +
-           (planning() == gpu::Planning::kDevice ? ", planned on the device" : "");
+           (planning() == gpu::Planning::kDevice ? ", planned on the device" : "") +
+           (preparesOnDevice(RayFilter{}) ? ", rays prepared on the device" : "");
   }
 
   // ---- cuda::BackendDevice ----
@@ -228,6 +230,7 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
     if (!sizes) {
       return Unexpected(sizes.error());
     }
+    sizes->prepare = prepare_on_device_;  // every CUDA device has double precision
     for (DeviceBatch& set : batches_) {
       for (std::size_t id = 0; id < gpu::kPlanBufferCount; ++id) {
         const std::size_t bytes = sizes->bytes(static_cast<PlanBuffer>(id));
@@ -441,6 +444,7 @@ class CudaBackend final : public gpu::StagedBackend, public cuda::BackendDevice 
   cuda::DeviceInfo device_;
   unsigned block_threads_;
   bool plan_on_device_;
+  bool prepare_on_device_;
   cuda::StreamHandle stream_;
   cuda::EventHandle idle_;
   std::vector<cuda::DeviceMemoryHandle> layers_;  // cache mode: one per schema layer

@@ -109,8 +109,9 @@ DeviceInfo describe(std::uint32_t platform_index, std::uint32_t device_index,
   info.global_mem_bytes = deviceValue<cl_ulong>(device, CL_DEVICE_GLOBAL_MEM_SIZE);
   info.max_alloc_bytes = deviceValue<cl_ulong>(device, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
   info.max_work_group_size = deviceValue<std::size_t>(device, CL_DEVICE_MAX_WORK_GROUP_SIZE);
-  info.int64_atomics =
-      hasExtension(deviceString(device, CL_DEVICE_EXTENSIONS), "cl_khr_int64_base_atomics");
+  const std::string extensions = deviceString(device, CL_DEVICE_EXTENSIONS);
+  info.int64_atomics = hasExtension(extensions, "cl_khr_int64_base_atomics");
+  info.fp64 = hasExtension(extensions, "cl_khr_fp64");
   info.unified_memory = deviceValue<cl_bool>(device, CL_DEVICE_HOST_UNIFIED_MEMORY) == CL_TRUE;
   return info;
 }

@@ -39,6 +39,7 @@ struct DeviceInfo {
   std::uint64_t max_alloc_bytes = 0;  ///< CL_DEVICE_MAX_MEM_ALLOC_SIZE
   std::size_t max_work_group_size = 0;
   bool int64_atomics = false;   ///< cl_khr_int64_base_atomics
+  bool fp64 = false;            ///< cl_khr_fp64: double precision (rays prepared on the device)
   bool unified_memory = false;  ///< CL_DEVICE_HOST_UNIFIED_MEMORY
 };
 

@@ -18,6 +18,7 @@ namespace kernels {
 extern const char* const kIntegrateOccupancySource;  // embedded at build time
 extern const char* const kIntegrateNdtSource;        // embedded at build time
 extern const char* const kPlanSource;                // embedded at build time
+extern const char* const kPrepareSource;             // embedded at build time
 }  // namespace kernels
 
 namespace {
@@ -159,7 +160,8 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     return ctx_.info.device_name + " (" + ctx_.info.platform_name + ")" +
            (sharedMemory() ? ", shared memory" : "") +
            (spansByRegion() ? ", span work per region" : "") +
-           (planning() == gpu::Planning::kDevice ? ", planned on the device" : "");
+           (planning() == gpu::Planning::kDevice ? ", planned on the device" : "") +
+           (preparesOnDevice(RayFilter{}) ? ", rays prepared on the device" : "");
   }
   std::string startupWarning() const override { return program_warning_; }
 
@@ -197,6 +199,31 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     return {};
   }
 
+  /// The ray preparation program (kernels/opencl/prepare.cl) and its kernels.
+  Expected<void, Error> buildPreparation(const OpenClBackendOptions& options, std::size_t group) {
+    auto program = opencl::buildProgram(
+        ctx_, kernels::kPrepareSource,
+        "-cl-std=CL1.2 -DRM_PLAN_GROUP=" + std::to_string(group) + "u" +
+            (options.extra_build_options.empty() ? "" : " " + options.extra_build_options),
+        options.program_cache);
+    if (!program) {
+      return Unexpected(program.error());
+    }
+    if (!program->warning.empty() && program_warning_.empty()) {
+      program_warning_ = program->warning;
+    }
+    prepare_program_ = std::move(program->program);
+    for (std::size_t k = gpu::kFirstPrepareKernel; k < gpu::kPlanKernelCount; ++k) {
+      auto kernel = opencl::createKernel(prepare_program_,
+                                         gpu::planKernelName(static_cast<gpu::PlanKernel>(k)));
+      if (!kernel) {
+        return Unexpected(kernel.error());
+      }
+      plan_kernels_[k] = std::move(*kernel);
+    }
+    return {};
+  }
+
   /// The planning program (kernels/opencl/plan.cl), its kernels and each set's buffers.
   Expected<void, Error> initialisePlanning(const OpenClBackendOptions& options) {
     // The planning kernels run in work-groups of a power of two from 64 to 256 work-items.
@@ -215,6 +242,9 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     if (!sizes) {
       return Unexpected(sizes.error());
     }
+    // Rays are prepared in double precision, as on the host: without cl_khr_fp64 (Intel's Gen12
+    // graphics) the host prepares them.
+    sizes->prepare = options.prepare_on_device && ctx_.info.fp64;
     auto program = opencl::buildProgram(
         ctx_, kernels::kPlanSource,
         "-cl-std=CL1.2 -DRM_PLAN_GROUP=" + std::to_string(group) + "u" +
@@ -227,13 +257,18 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
       program_warning_ = program->warning;
     }
     plan_program_ = std::move(program->program);
-    for (std::size_t k = 0; k < gpu::kPlanKernelCount; ++k) {
+    for (std::size_t k = 0; k < gpu::kFirstPrepareKernel; ++k) {
       auto kernel =
           opencl::createKernel(plan_program_, gpu::planKernelName(static_cast<gpu::PlanKernel>(k)));
       if (!kernel) {
         return Unexpected(kernel.error());
       }
       plan_kernels_[k] = std::move(*kernel);
+    }
+    if (sizes->prepare) {
+      if (auto built = buildPreparation(options, group); !built) {
+        return built;
+      }
     }
     plan_group_ = group;
     const gpu::BatchLimits& limits = this->limits();
@@ -534,8 +569,9 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
   opencl::ProgramHandle program_;
   opencl::KernelHandle span_kernel_;
   opencl::KernelHandle hit_kernel_;
-  opencl::KernelHandle tag_kernel_;     // occupancy maps with per-ray semantics only
-  opencl::ProgramHandle plan_program_;  // planning on the device only
+  opencl::KernelHandle tag_kernel_;        // occupancy maps with per-ray semantics only
+  opencl::ProgramHandle plan_program_;     // planning on the device only
+  opencl::ProgramHandle prepare_program_;  // rays prepared on the device only
   std::array<opencl::KernelHandle, gpu::kPlanKernelCount> plan_kernels_;
   std::size_t plan_group_ = 256;
   std::vector<opencl::BufferHandle> layers_;  // one per schema layer

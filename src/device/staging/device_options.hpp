@@ -45,6 +45,12 @@ struct DeviceBackendOptions {
   /// host, or on the device, where the host only places each batch's distinct regions
   /// (docs/architecture.md, "Planning on the device"). The maps are the same either way.
   gpu::Planning planning = gpu::Planning::kHost;
+  /// With planning on the device: prepare the rays there too (range limits, clipping, the exact
+  /// voxel keys and their counters; Backend::integrateRays), where the device has double
+  /// precision (OpenCL: cl_khr_fp64), the map is not NDT and the ray filter has no segmentation;
+  /// the host prepares otherwise. The maps and counters are the same either way. false: the host
+  /// always prepares (for measuring the two apart).
+  bool prepare_on_device = true;
   /// Host staging memory for region moves in and out of the device cache (page-locked on CUDA),
   /// bytes; 0: 64 MiB. Never less than four regions. A batch that moves more than it holds waits
   /// for the device (BackendStats::transfer_stalls).

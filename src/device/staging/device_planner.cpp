@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
 #include <iterator>
 #include <numeric>
 #include <string>
@@ -48,7 +49,7 @@ const char* planKernelName(PlanKernel kernel) noexcept {
   // RM_PLAN_KERNELS lists them in the order of PlanKernel.
   static constexpr const char* kNames[] = {
 #define RM_PLAN_KERNEL_NAME(name) "rm_plan_" #name,
-      RM_PLAN_KERNELS(RM_PLAN_KERNEL_NAME)
+      RM_PLAN_KERNELS(RM_PLAN_KERNEL_NAME) RM_PREPARE_KERNELS(RM_PLAN_KERNEL_NAME)
 #undef RM_PLAN_KERNEL_NAME
   };
   static_assert(std::size(kNames) == kPlanKernelCount, "PlanKernel and RM_PLAN_KERNELS differ");
@@ -123,6 +124,12 @@ std::size_t DevicePlanSizes::bytes(PlanBuffer buffer) const noexcept {
     case PlanBuffer::kSpanRanksAlt:
     case PlanBuffer::kSpanOrderAlt:
       return kWord * (by_region ? std::size_t{max_spans} : 1u);
+    case PlanBuffer::kRawRays:
+      return prepare ? sizeof(rm_raw_ray) * max_rays : 0u;
+    case PlanBuffer::kPrepareParams:
+      return prepare ? sizeof(rm_prepare_params) : 0u;
+    case PlanBuffer::kOutcomes:
+      return prepare ? kWord * max_rays : 0u;
   }
   return 0;
 }
@@ -173,6 +180,7 @@ DevicePlanner::DevicePlanner(VoxelMap& map, BatchPlanner& planner, std::uint32_t
     s.regions.resize(sizes.region_cap);
     s.resolution.resize(sizes.region_cap);
     s.runs.reserve(sizes.by_region ? sizes.region_cap : 0u);
+    s.raw.reserve(sizes.prepare ? sizes.max_rays : 0u);
   }
   order_.reserve(sizes.region_cap);
   read_ahead_ = std::min(read_ahead_, sizes.region_cap);
@@ -279,7 +287,52 @@ bool DevicePlanner::enqueuePlan(unsigned set, std::span<const PreparedRay> rays,
   st.rays = static_cast<std::uint32_t>(rays.size());
   st.regions_read = 0;
   st.key_origin = rm_region_of_voxel(rays.front().origin_voxel, map_->geometry().region_voxels);
+  st.prepared = false;
   staging.assign(rays.begin(), rays.end());  // reserved for max_rays: no allocation
+  bytes_to_device_ += staging.size() * sizeof(PreparedRay);
+  return device_->writePlanBuffer(set, PlanBuffer::kRays, 0, staging.data(),
+                                  staging.size() * sizeof(PreparedRay)) &&
+         enqueuePlanPhase(set);
+}
+
+bool DevicePlanner::enqueuePreparePlan(unsigned set, std::span<const Ray> rays,
+                                       const rm_prepare_params& params) noexcept {
+  RAYMAP_EXPECTS(sizes_.prepare && !rays.empty() && rays.size() <= sizes_.max_rays);
+  SetState& st = sets_[set];
+  st.rays = static_cast<std::uint32_t>(rays.size());
+  st.regions_read = 0;
+  st.prepared = true;
+  // The region keys of the plan are taken relative to the first ray's origin that has a voxel;
+  // any nearby region serves (a batch reaching further than the keys do is planned on the host).
+  st.key_origin = rm_vec3i_make(0, 0, 0);
+  for (const Ray& ray : rays) {
+    rm_vec3i voxel;
+    rm_vec3f local;
+    if (rm_prepare_key(&params, rm_vec3d{ray.origin.x, ray.origin.y, ray.origin.z}, &voxel,
+                       &local)) {
+      st.key_origin = rm_region_of_voxel(voxel, map_->geometry().region_voxels);
+      break;
+    }
+  }
+  st.params[0] = params;
+  // Ray and rm_raw_ray have one layout (src/map/ray_preparer.hpp): one copy, no conversion.
+  st.raw.resize(rays.size());  // reserved for max_rays: no allocation
+  std::memcpy(st.raw.data(), rays.data(), rays.size() * sizeof(rm_raw_ray));
+  rm_plan_args a = baseArgs(st);
+  a.n = st.rays;
+  bytes_to_device_ += rays.size() * sizeof(rm_raw_ray) + sizeof(rm_prepare_params);
+  return device_->writePlanBuffer(set, PlanBuffer::kRawRays, 0, st.raw.data(),
+                                  st.raw.size() * sizeof(rm_raw_ray)) &&
+         device_->writePlanBuffer(set, PlanBuffer::kPrepareParams, 0, st.params.data(),
+                                  sizeof(rm_prepare_params)) &&
+         launch(set, PlanKernel::kPrepare, a, st.rays,
+                {PlanBuffer::kRawRays, PlanBuffer::kPrepareParams, PlanBuffer::kRays,
+                 PlanBuffer::kOutcomes}) &&
+         enqueuePlanPhase(set);
+}
+
+bool DevicePlanner::enqueuePlanPhase(unsigned set) noexcept {
+  SetState& st = sets_[set];
   rm_plan_args a = baseArgs(st);
   const std::uint32_t n = st.rays;
   a.n = n;
@@ -288,8 +341,6 @@ bool DevicePlanner::enqueuePlan(unsigned set, std::span<const PreparedRay> rays,
   const std::uint32_t key_bits =
       bitsBelow(std::uint64_t{sizes_.table_entries} * sizes_.voxels_per_region);
   bool ok =
-      device_->writePlanBuffer(set, PlanBuffer::kRays, 0, staging.data(),
-                               staging.size() * sizeof(PreparedRay)) &&
       launch(set, PlanKernel::kBegin, a, 1, {PlanBuffer::kStatus}) &&
       launch(set, PlanKernel::kCount, a, n + 1u,
              {PlanBuffer::kRays, PlanBuffer::kCounts, PlanBuffer::kCrossed}) &&
@@ -302,6 +353,10 @@ bool DevicePlanner::enqueuePlan(unsigned set, std::span<const PreparedRay> rays,
            PlanBuffer::kTable, PlanBuffer::kHitKeys, PlanBuffer::kHitOrder, PlanBuffer::kStatus}) &&
       sort(set, n, key_bits, &keys, &order, PlanBuffer::kHitKeysAlt, PlanBuffer::kHitOrderAlt);
   a.n = n;
+  if (st.prepared) {
+    ok = ok &&
+         launch(set, PlanKernel::kPrepareCount, a, n, {PlanBuffer::kOutcomes, PlanBuffer::kStatus});
+  }
   ok =
       ok && launch(set, PlanKernel::kGroupHeads, a, n + 1u, {keys, PlanBuffer::kHeads}) &&
       scan(set, PlanBuffer::kHeads, PlanBuffer::kGroupIndex, n + 1u) &&
@@ -314,7 +369,6 @@ bool DevicePlanner::enqueuePlan(unsigned set, std::span<const PreparedRay> rays,
              {PlanBuffer::kOffsets, PlanBuffer::kGroupIndex, PlanBuffer::kStatus});
   // The status and, speculatively, as many region records as the last batches had.
   st.regions_read = read_ahead_;
-  bytes_to_device_ += staging.size() * sizeof(PreparedRay);
   bytes_from_device_ += RM_PLAN_STATUS_WORDS * sizeof(std::uint32_t) +
                         std::size_t{st.regions_read} * sizeof(rm_plan_region);
   return ok &&
@@ -335,7 +389,7 @@ Expected<PlanOutcome, IntegrateError> DevicePlanner::finishPlan(unsigned set) no
   const std::uint32_t regions = st.status[RM_PLAN_STATUS_REGIONS];
   auto fallback = [this]() -> PlanOutcome {
     ++fallbacks_;
-    return PlanOutcome{true, 0};
+    return PlanOutcome{true, 0, {}};
   };
   if (st.status[RM_PLAN_STATUS_FAULT] != 0u || rays == 0u || regions > sizes_.region_cap ||
       (cache_slots_ > 0 && regions > cache_slots_)) {
@@ -361,7 +415,20 @@ Expected<PlanOutcome, IntegrateError> DevicePlanner::finishPlan(unsigned set) no
       return fallback();  // not for a device plan: the host planner counts such spans
     }
   }
-  return PlanOutcome{false, rays};
+  PlanOutcome outcome{false, rays, {}};
+  if (st.prepared) {
+    RayCounters& c = outcome.prepared;
+    c.rays_in = rays;
+    c.rays_accepted = st.status[RM_PLAN_STATUS_ACCEPTED];
+    c.rays_invalid = st.status[RM_PLAN_STATUS_INVALID];
+    c.rays_too_short = st.status[RM_PLAN_STATUS_TOO_SHORT];
+    c.rays_out_of_bounds = st.status[RM_PLAN_STATUS_OUT_OF_BOUNDS];
+    c.rays_outside_window = st.status[RM_PLAN_STATUS_OUTSIDE_WINDOW];
+    c.rays_clipped = st.status[RM_PLAN_STATUS_CLIPPED];
+    c.rays_no_return = st.status[RM_PLAN_STATUS_NO_RETURN];
+    c.pieces_out = c.rays_accepted;  // no segmentation on the device
+  }
+  return outcome;
 }
 
 bool DevicePlanner::discard(unsigned set) noexcept {
@@ -442,6 +509,7 @@ Expected<PlannedBatch, IntegrateError> DevicePlanner::resolve(unsigned set) noex
   }
   PlannedBatch b;
   b.rays = std::min(st.status[RM_PLAN_STATUS_CUT_RAY], st.rays);
+  b.accepted = st.prepared ? st.status[RM_PLAN_STATUS_ACCEPTED] : b.rays;
   b.spans = spans;
   b.span_items = sizes_.by_region ? regions : spans;
   b.groups = st.status[RM_PLAN_STATUS_GROUPS];

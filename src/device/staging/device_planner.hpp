@@ -17,6 +17,7 @@
 #include "kernels/common/plan_abi.h"
 #include "src/device/staging/batch_plan.hpp"
 #include "src/map/backend.hpp"
+#include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
 
 namespace raymap::gpu {
@@ -52,8 +53,12 @@ enum class PlanKernel : std::uint8_t {
   kGatherSpans,
   kClearRegions,
   kClearTable,
+  kPrepare,  ///< RM_PREPARE_KERNELS from here: the ray preparation (double precision)
+  kPrepareCount,
 };
-inline constexpr std::size_t kPlanKernelCount = 18;
+inline constexpr std::size_t kPlanKernelCount = 20;
+/// The first ray preparation kernel: OpenCL builds those from a program of their own.
+inline constexpr std::size_t kFirstPrepareKernel = static_cast<std::size_t>(PlanKernel::kPrepare);
 /// @brief The kernel's entry point ("rm_plan_emit").
 const char* planKernelName(PlanKernel kernel) noexcept;
 
@@ -90,8 +95,11 @@ enum class PlanBuffer : std::uint8_t {
   kSpanOrder,
   kSpanRanksAlt,
   kSpanOrderAlt,
+  kRawRays,        ///< rm_raw_ray[max_rays], preparation on the device only
+  kPrepareParams,  ///< one rm_prepare_params, preparation on the device only
+  kOutcomes,       ///< u32[max_rays]: RM_PREPARE_* of each ray, preparation on the device only
 };
-inline constexpr std::size_t kPlanBufferCount = 30;
+inline constexpr std::size_t kPlanBufferCount = 33;
 /// Scan levels a planner may use (kScanSums0..3): tile sums of tile sums, down to one tile.
 inline constexpr unsigned kScanLevels = 4;
 
@@ -103,6 +111,7 @@ struct DevicePlanSizes {
   std::uint32_t region_cap = 0;              ///< region records read back at most
   std::uint32_t group_size = RM_PLAN_GROUP;  ///< work-items per work-group (RM_PLAN_GROUP)
   bool by_region = false;                    ///< span work per region: the grouping sort
+  bool prepare = false;                      ///< rays are prepared on the device (kPrepare)
   std::uint32_t voxels_per_region = 0;
 
   std::uint32_t tile() const noexcept { return group_size * RM_PLAN_ITEMS; }
@@ -162,11 +171,15 @@ struct PlanOutcome {
   bool host_fallback = false;
   std::size_t rays =
       0;  ///< rays the plan covers (the batch ends before the first that did not fit)
+  /// Rays prepared on the device (enqueuePreparePlan): what happened to the `rays` it covers,
+  /// as RayPreparer counts it. Zero otherwise and after a host fallback.
+  RayCounters prepared;
 };
 
 /// @brief Sizes of a resolved batch, for the integration launches.
 struct PlannedBatch {
-  std::size_t rays = 0;
+  std::size_t rays = 0;      ///< ray places the plan covers (rejected ones too, when prepared)
+  std::size_t accepted = 0;  ///< of them, rays it integrates
   std::size_t spans = 0;
   std::size_t span_items = 0;  ///< span records, or regions with span work per region
   std::size_t groups = 0;
@@ -204,6 +217,12 @@ class DevicePlanner {
   bool enqueuePlan(unsigned set, std::span<const PreparedRay> rays,
                    std::pmr::vector<PreparedRay>& staging) noexcept;
 
+  /// @brief Enqueues the preparation (kernels/device/prepare.h) and the plan phase of world-frame
+  /// `rays` (1 to max_rays) on set `set`, as RayPreparer prepares them with `params`. @pre
+  /// sizes().prepare. The rays are copied into the set's staging memory.
+  bool enqueuePreparePlan(unsigned set, std::span<const Ray> rays,
+                          const rm_prepare_params& params) noexcept;
+
   /// @brief Waits for set `set`'s plan phase and reads what the host needs.
   Expected<PlanOutcome, IntegrateError> finishPlan(unsigned set) noexcept;
 
@@ -231,13 +250,18 @@ class DevicePlanner {
         : status(RM_PLAN_STATUS_WORDS, 0u, memory),
           regions(memory),
           resolution(memory),
-          runs(memory) {}
+          runs(memory),
+          raw(memory),
+          params(1, rm_prepare_params{}, memory) {}
     std::pmr::vector<std::uint32_t> status;
     std::pmr::vector<rm_plan_region> regions;  // read back
     std::pmr::vector<rm_plan_resolution> resolution;
     std::pmr::vector<rm_span_run> runs;  // span work per region
-    std::uint32_t rays = 0;              // rays of the plan phase
-    std::uint32_t regions_read = 0;      // records the read-back covered
+    std::pmr::vector<rm_raw_ray> raw;    // preparation on the device: the rays uploaded
+    std::pmr::vector<rm_prepare_params> params;
+    bool prepared = false;           // the plan's rays were prepared on the device
+    std::uint32_t rays = 0;          // rays of the plan phase
+    std::uint32_t regions_read = 0;  // records the read-back covered
     rm_vec3i key_origin{};
   };
 
@@ -250,6 +274,8 @@ class DevicePlanner {
   bool sort(unsigned set, std::uint32_t n, std::uint32_t bits, PlanBuffer* keys, PlanBuffer* values,
             PlanBuffer keys_alt, PlanBuffer values_alt) noexcept;
   rm_plan_args baseArgs(const SetState& state) const noexcept;
+  /// Enqueues the plan phase of the set's rays (in the kRays buffer) and its read-back.
+  bool enqueuePlanPhase(unsigned set) noexcept;
 
   VoxelMap* map_;
   BatchPlanner* planner_;

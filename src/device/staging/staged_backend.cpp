@@ -138,6 +138,9 @@ Expected<void, Error> StagedBackend::planOnDevice(const DevicePlanSizes& sizes) 
   try {
     device_planner_.emplace(*map_, planner_, cache_ ? cache_->capacity() : 0u, sizes,
                             static_cast<PlanDevice&>(*this), staging_memory_);
+    if (sizes.prepare) {
+      host_prepared_.resize(limits_.max_rays);  // the host's preparation when it takes over
+    }
   } catch (const std::bad_alloc&) {
     return fail(ErrorCode::kCapacity,
                 "planning on the device: no host memory (page-locked on CUDA) for its arrays");
@@ -307,6 +310,132 @@ Expected<void, IntegrateError> StagedBackend::integrateDevicePlanned(
     }
   }
   return {};
+}
+
+bool StagedBackend::preparesOnDevice(const RayFilter& filter) const noexcept {
+  // NDT maps depend on where batches end (a batch's misses meet the Gaussians as they were at its
+  // start), and those ends are counted in prepared rays, which only the preparation knows: the
+  // host prepares for them, so the maps stay the host path's.
+  return device_planner_ && device_planner_->sizes().prepare && !ndt_ &&
+         filter.segment_length_m <= 0.0;
+}
+
+Expected<std::size_t, IntegrateError> StagedBackend::integrateRays(const RayPreparer& preparer,
+                                                                   const rm_prepare_params& params,
+                                                                   std::span<const Ray> rays,
+                                                                   RayCounters& counters) noexcept {
+  RAYMAP_EXPECTS(preparesOnDevice(preparer.filter()));
+  if (!makeCurrent()) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  params_.sequence = params_.per_scan != 0u ? map_->beginScan() : 0u;
+  planner_.revalidate();
+  // A scan of more rays than a device batch holds is cut into batches by its prepared rays on
+  // the host path, which the device cannot know before preparing: the host prepares it, so the
+  // parts (each with per-scan semantics) are the same.
+  auto integrated = params_.per_scan != 0u && rays.size() > limits_.max_rays
+                        ? integrateHostPrepared(preparer, params, rays, counters)
+                        : integrateDevicePrepared(preparer, params, rays, counters);
+  if (integrated) {
+    ++stats_.batches;
+  }
+  return integrated;
+}
+
+Expected<std::size_t, IntegrateError> StagedBackend::integrateHostPrepared(
+    const RayPreparer& preparer, const rm_prepare_params& params, std::span<const Ray> rays,
+    RayCounters& counters) noexcept {
+  std::size_t integrated = 0;
+  while (!rays.empty()) {
+    // No segmentation (preparesOnDevice()): a ray is one prepared ray at most, so each pass
+    // consumes rays until the scratch is full.
+    const RayPreparer::Progress p = preparer.prepareWith(params, rays, host_prepared_, counters);
+    rays = rays.subspan(p.consumed);
+    if (p.written > 0) {
+      // The planner copies the rays into the staging set's arrays: the scratch is free again.
+      if (auto ok =
+              integrateHostPlanned(std::span<const PreparedRay>(host_prepared_.data(), p.written));
+          !ok) {
+        return Unexpected(ok.error());
+      }
+      integrated += p.written;
+    }
+    if (p.consumed == 0) {
+      break;
+    }
+  }
+  return integrated;
+}
+
+Expected<std::size_t, IntegrateError> StagedBackend::integrateDevicePrepared(
+    const RayPreparer& preparer, const rm_prepare_params& params, std::span<const Ray> rays,
+    RayCounters& counters) noexcept {
+  // The pipeline of integrateDevicePlanned(), with each batch's preparation enqueued before its
+  // plan phase; its counters come back with the plan's status.
+  if (rays.empty()) {
+    return std::size_t{0};
+  }
+  std::size_t integrated = 0;
+  std::size_t first = 0;
+  unsigned set = 0;
+  auto enqueue = [&](std::size_t from) {
+    set = next_set_;
+    next_set_ = (next_set_ + 1) % kStagingSets;
+    first = from;
+    const std::size_t count = std::min(limits_.max_rays, rays.size() - from);
+    return device_planner_->enqueuePreparePlan(set, rays.subspan(from, count), params);
+  };
+  if (!enqueue(0)) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  for (bool pending = true; pending;) {
+    pending = false;
+    const Clock::time_point t_wait = Clock::now();
+    auto outcome = device_planner_->finishPlan(set);
+    if (!outcome) {
+      return Unexpected(outcome.error());
+    }
+    if (auto ok = retire(set); !ok) {
+      return Unexpected(ok.error());
+    }
+    const Clock::time_point t_plan = Clock::now();
+    stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
+    map_->beginEpoch();
+    const unsigned this_set = set;
+    if (outcome->host_fallback) {
+      // The host prepares and plans the rest of the call, exactly as on the host path (nothing of
+      // this batch was counted or integrated).
+      if (!device_planner_->discard(this_set)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+      stats_.plan_seconds += secondsSince(t_plan);
+      auto rest = integrateHostPrepared(preparer, params, rays.subspan(first), counters);
+      if (!rest) {
+        return rest;
+      }
+      return integrated + *rest;
+    }
+    counters += outcome->prepared;
+    stats_.rays_prepared_on_device += outcome->rays;
+    // The next batch's preparation and plan phase go into the queue before this batch's resolve
+    // phase, so the device has work while the host places regions.
+    const std::size_t next = first + outcome->rays;
+    if (next < rays.size()) {
+      pending = true;
+      if (!enqueue(next)) {
+        return Unexpected(IntegrateError::kDeviceFailure);
+      }
+    }
+    auto batch = device_planner_->resolve(this_set);
+    auto submitted = batch ? submitDevicePlanned(this_set, *batch)
+                           : Expected<void, IntegrateError>(Unexpected(batch.error()));
+    stats_.plan_seconds += secondsSince(t_plan);
+    if (!submitted) {
+      return Unexpected(submitted.error());
+    }
+    integrated += batch->accepted;
+  }
+  return integrated;
 }
 
 Expected<void, IntegrateError> StagedBackend::synchronise() noexcept {
@@ -500,6 +629,7 @@ Expected<void, IntegrateError> StagedBackend::submit(unsigned set) noexcept {
   }
   PlannedBatch batch;
   batch.rays = a.rays.size();
+  batch.accepted = batch.rays;
   batch.spans = a.spans.size();
   // The span kernel's work-items: one per span record, or one per region.
   batch.span_items = grouper_ ? a.span_runs.size() : a.spans.size();
@@ -564,7 +694,7 @@ Expected<void, IntegrateError> StagedBackend::launchBatch(unsigned set,
   sets_[set].in_flight = true;
   sets_[set].number = ++submitted_;
   stats_.bytes_from_device += counterBytes();
-  stats_.rays += batch.rays;
+  stats_.rays += batch.accepted;
   return {};
 }
 

@@ -11,6 +11,7 @@
 #include <memory_resource>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "kernels/common/batch.h"
 #include "kernels/common/ndt.h"
@@ -102,6 +103,13 @@ class StagedBackend : public Backend,
   StagedBackend& operator=(StagedBackend&&) = delete;
 
   Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept final;
+  /// Rays are prepared on the device when planning is (planOnDevice() with sizes.prepare) and
+  /// the filter has no segmentation.
+  bool preparesOnDevice(const RayFilter& filter) const noexcept final;
+  Expected<std::size_t, IntegrateError> integrateRays(const RayPreparer& preparer,
+                                                      const rm_prepare_params& params,
+                                                      std::span<const Ray> rays,
+                                                      RayCounters& counters) noexcept final;
   Expected<void, IntegrateError> synchronise() noexcept final;
   BackendStats stats() const noexcept final;
   unsigned threads() const noexcept final { return 1; }
@@ -224,6 +232,15 @@ class StagedBackend : public Backend,
   // ---- the batch loop ----
   Expected<void, IntegrateError> integrateHostPlanned(std::span<const PreparedRay> rays) noexcept;
   Expected<void, IntegrateError> integrateDevicePlanned(std::span<const PreparedRay> rays) noexcept;
+  /// integrateRays() with the preparation on the device, or (a fallback) on the host.
+  Expected<std::size_t, IntegrateError> integrateDevicePrepared(const RayPreparer& preparer,
+                                                                const rm_prepare_params& params,
+                                                                std::span<const Ray> rays,
+                                                                RayCounters& counters) noexcept;
+  Expected<std::size_t, IntegrateError> integrateHostPrepared(const RayPreparer& preparer,
+                                                              const rm_prepare_params& params,
+                                                              std::span<const Ray> rays,
+                                                              RayCounters& counters) noexcept;
   /// Enqueues the plan phase of the rays from `first` on (at most a batch) into the next set.
   bool enqueueDevicePlan(std::span<const PreparedRay> rays, std::size_t first,
                          unsigned* set) noexcept;
@@ -276,6 +293,7 @@ class StagedBackend : public Backend,
   std::uint32_t map_mode_ = 0;  // rm_map_mode_bits of the map (fixed for the backend's life)
   std::optional<RegionSpanGrouper> grouper_;     // span work per region (groupSpansByRegion())
   std::optional<DevicePlanner> device_planner_;  // planning on the device (planOnDevice())
+  std::vector<PreparedRay> host_prepared_;       // preparation on the device: the host's fallback
   std::pmr::memory_resource* staging_memory_;
   PlanObserver* plan_observer_ = nullptr;
   std::optional<BatchArrays> observed_;  // a device plan read back for the observer
