@@ -111,6 +111,12 @@ typedef struct rm_plan_args {
 /* Buffers a planning kernel takes (after its arguments): always this many, as generic words that
  * each kernel reads as its types, so the host binds every kernel the same way. */
 #define RM_PLAN_BUFFERS 8
+/* The parameter list of every planning entry point (kernels/device/plan_kernels.h,
+ * prepare_kernels.h; RM_GLOBAL comes from kernels/device/device.h). */
+#define RM_PLAN_PARAMS                                                                        \
+  rm_plan_args args, RM_GLOBAL rm_u32 *b0, RM_GLOBAL rm_u32 *b1, RM_GLOBAL rm_u32 *b2,        \
+      RM_GLOBAL rm_u32 *b3, RM_GLOBAL rm_u32 *b4, RM_GLOBAL rm_u32 *b5, RM_GLOBAL rm_u32 *b6, \
+      RM_GLOBAL rm_u32 *b7
 
 /* The planning kernels, in no particular order: X(name) for each; the entry point is
  * rm_plan_<name> (kernels/device/plan_kernels.h). */

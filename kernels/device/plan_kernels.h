@@ -12,11 +12,6 @@
 #include "plan.h"
 #include "scan.h"
 
-#define RM_PLAN_PARAMS                                                                        \
-  rm_plan_args args, RM_GLOBAL rm_u32 *b0, RM_GLOBAL rm_u32 *b1, RM_GLOBAL rm_u32 *b2,        \
-      RM_GLOBAL rm_u32 *b3, RM_GLOBAL rm_u32 *b4, RM_GLOBAL rm_u32 *b5, RM_GLOBAL rm_u32 *b6, \
-      RM_GLOBAL rm_u32 *b7
-
 /* b0 status */
 RM_GROUP_KERNEL(RM_PLAN_GROUP) void rm_plan_begin(RM_PLAN_PARAMS) {
   rm_plan_begin_status(rm_global_id(), b0);

@@ -8,13 +8,6 @@
 
 #include "prepare.h"
 
-#ifndef RM_PLAN_PARAMS
-#define RM_PLAN_PARAMS                                                                        \
-  rm_plan_args args, RM_GLOBAL rm_u32 *b0, RM_GLOBAL rm_u32 *b1, RM_GLOBAL rm_u32 *b2,        \
-      RM_GLOBAL rm_u32 *b3, RM_GLOBAL rm_u32 *b4, RM_GLOBAL rm_u32 *b5, RM_GLOBAL rm_u32 *b6, \
-      RM_GLOBAL rm_u32 *b7
-#endif
-
 /* b0 raw rays, b1 preparation parameters, b2 prepared rays, b3 outcomes; args.n rays */
 RM_GROUP_KERNEL(RM_PLAN_GROUP) void rm_plan_prepare(RM_PLAN_PARAMS) {
   rm_prepare_item(rm_global_id(), args.n, (const RM_GLOBAL rm_raw_ray*)b0,

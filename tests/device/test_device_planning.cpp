@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "src/device/staging/staged_backend.hpp"
+#include "tests/device/device_map_compare.hpp"
 #include "tests/device/device_under_test.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -94,28 +95,6 @@ std::string difference(const RecordedPlan& host, const RecordedPlan& device) {
   return {};
 }
 
-/// Regions whose layers differ in any byte between the maps, or that only one holds.
-std::uint64_t differingRegions(const VoxelMap& a, const VoxelMap& b) {
-  std::uint64_t differing = 0;
-  std::uint64_t seen = 0;
-  a.store().forEachRegion([&](std::uint32_t slot_a, Vec3i region) {
-    ++seen;
-    const std::uint32_t slot_b = b.store().find(region);
-    if (slot_b == RegionStore::kNoSlot) {
-      ++differing;
-      return;
-    }
-    for (int l = 0; l < a.store().schema().size(); ++l) {
-      if (!sameBytes(a.store().layerBytes(slot_a, l), b.store().layerBytes(slot_b, l),
-                     a.store().layerRegionBytes(l))) {
-        ++differing;
-        return;
-      }
-    }
-  });
-  return differing + (b.store().size() - std::min<std::uint64_t>(seen, b.store().size()));
-}
-
 gpu::StagedBackend& staged(Backend& backend) {
   auto* s = dynamic_cast<gpu::StagedBackend*>(&backend);
   EXPECT_NE(s, nullptr);
@@ -180,15 +159,10 @@ struct Pair {
     EXPECT_EQ(d.region_bytes_from_device, h.region_bytes_from_device) << label;
     EXPECT_EQ(d.plans_on_host, device_plans.plans.size() - on_device) << label;
     EXPECT_EQ(h.plans_on_host, 0u) << label;
-    // Bit for bit, every layer of every region: the same plans on the same kernels. Where voxels
-    // take float additions from several work-items (span work per span record: decay rates,
-    // TSDF, NDT misses) their order, and so their rounding, is the device's choice either way.
+    // Bit for bit, every layer of every region: the same plans on the same kernels.
     EXPECT_GT(host_map.store().size(), 0u) << label;
     EXPECT_EQ(host_map.store().size(), device_map.store().size()) << label;
-    const bool one_writer = host->deviceName().find("span work per region") != std::string::npos;
-    const bool commuting = host_map.mode() == MapMode::kOccupancy &&
-                           host_map.occupancyLayer() >= 0 && host_map.traversalLayer() < 0;
-    if (one_writer || commuting) {
+    if (mapsAgreeBitForBit(host_map, *host)) {
       EXPECT_EQ(differingRegions(host_map, device_map), 0u) << label;
     }
     return on_device;

@@ -17,6 +17,7 @@
 #include "src/device/staging/staged_backend.hpp"
 #include "src/map/ray_batcher.hpp"
 #include "src/map/ray_preparer.hpp"
+#include "tests/device/device_map_compare.hpp"
 #include "tests/device/device_under_test.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -24,26 +25,6 @@ namespace raymap::test {
 namespace {
 
 using test::makeRay;
-
-/// Regions whose layers differ in any byte between the maps, or that only one holds.
-std::uint64_t differingRegions(const VoxelMap& a, const VoxelMap& b) {
-  std::uint64_t differing = 0;
-  a.store().forEachRegion([&](std::uint32_t slot_a, Vec3i region) {
-    const std::uint32_t slot_b = b.store().find(region);
-    if (slot_b == RegionStore::kNoSlot) {
-      ++differing;
-      return;
-    }
-    for (int l = 0; l < a.store().schema().size(); ++l) {
-      if (std::memcmp(a.store().layerBytes(slot_a, l), b.store().layerBytes(slot_b, l),
-                      a.store().layerRegionBytes(l)) != 0) {
-        ++differing;
-        return;
-      }
-    }
-  });
-  return differing + (a.store().size() != b.store().size() ? 1u : 0u);
-}
 
 /// One map, its backend, batcher and preparer.
 struct Side {
@@ -110,13 +91,7 @@ struct Pair {
     EXPECT_EQ(device.backend->stats().rays, host.backend->stats().rays) << label;
     EXPECT_EQ(host.batcher->counters().device_batches, 0u) << label;
     EXPECT_GT(host.map.store().size(), 0u) << label;
-    // Bit for bit where each voxel has one writer (span work per region, PoCL) or its updates
-    // commute (plain occupancy); elsewhere the device orders float additions its own way.
-    const bool one_writer =
-        host.backend->deviceName().find("span work per region") != std::string::npos;
-    const bool commuting = host.map.mode() == MapMode::kOccupancy &&
-                           host.map.occupancyLayer() >= 0 && host.map.traversalLayer() < 0;
-    if (one_writer || commuting) {
+    if (mapsAgreeBitForBit(host.map, *host.backend)) {
       EXPECT_EQ(differingRegions(host.map, device.map), 0u) << label;
     }
     return device.batcher->counters().device_batches;

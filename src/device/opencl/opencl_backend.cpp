@@ -199,23 +199,28 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     return {};
   }
 
-  /// The ray preparation program (kernels/opencl/prepare.cl) and its kernels.
-  Expected<void, Error> buildPreparation(const OpenClBackendOptions& options, std::size_t group) {
-    auto program = opencl::buildProgram(
-        ctx_, kernels::kPrepareSource,
+  /// Builds a planning program (`source`: plan.cl, or prepare.cl for the ray preparation) for
+  /// work-groups of `group` into `program` and creates its kernels, planning kernels [first,
+  /// last).
+  Expected<void, Error> buildPlanningProgram(const OpenClBackendOptions& options,
+                                             const char* source, std::size_t group,
+                                             opencl::ProgramHandle& program, std::size_t first,
+                                             std::size_t last) {
+    auto built = opencl::buildProgram(
+        ctx_, source,
         "-cl-std=CL1.2 -DRM_PLAN_GROUP=" + std::to_string(group) + "u" +
             (options.extra_build_options.empty() ? "" : " " + options.extra_build_options),
         options.program_cache);
-    if (!program) {
-      return Unexpected(program.error());
+    if (!built) {
+      return Unexpected(built.error());
     }
-    if (!program->warning.empty() && program_warning_.empty()) {
-      program_warning_ = program->warning;
+    if (!built->warning.empty() && program_warning_.empty()) {
+      program_warning_ = built->warning;
     }
-    prepare_program_ = std::move(program->program);
-    for (std::size_t k = gpu::kFirstPrepareKernel; k < gpu::kPlanKernelCount; ++k) {
-      auto kernel = opencl::createKernel(prepare_program_,
-                                         gpu::planKernelName(static_cast<gpu::PlanKernel>(k)));
+    program = std::move(built->program);
+    for (std::size_t k = first; k < last; ++k) {
+      auto kernel =
+          opencl::createKernel(program, gpu::planKernelName(static_cast<gpu::PlanKernel>(k)));
       if (!kernel) {
         return Unexpected(kernel.error());
       }
@@ -245,28 +250,16 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
     // Rays are prepared in double precision, as on the host: without cl_khr_fp64 (Intel's Gen12
     // graphics) the host prepares them.
     sizes->prepare = options.prepare_on_device && ctx_.info.fp64;
-    auto program = opencl::buildProgram(
-        ctx_, kernels::kPlanSource,
-        "-cl-std=CL1.2 -DRM_PLAN_GROUP=" + std::to_string(group) + "u" +
-            (options.extra_build_options.empty() ? "" : " " + options.extra_build_options),
-        options.program_cache);
-    if (!program) {
-      return Unexpected(program.error());
-    }
-    if (!program->warning.empty() && program_warning_.empty()) {
-      program_warning_ = program->warning;
-    }
-    plan_program_ = std::move(program->program);
-    for (std::size_t k = 0; k < gpu::kFirstPrepareKernel; ++k) {
-      auto kernel =
-          opencl::createKernel(plan_program_, gpu::planKernelName(static_cast<gpu::PlanKernel>(k)));
-      if (!kernel) {
-        return Unexpected(kernel.error());
-      }
-      plan_kernels_[k] = std::move(*kernel);
+    if (auto built = buildPlanningProgram(options, kernels::kPlanSource, group, plan_program_, 0,
+                                          gpu::kFirstPrepareKernel);
+        !built) {
+      return built;
     }
     if (sizes->prepare) {
-      if (auto built = buildPreparation(options, group); !built) {
+      if (auto built =
+              buildPlanningProgram(options, kernels::kPrepareSource, group, prepare_program_,
+                                   gpu::kFirstPrepareKernel, gpu::kPlanKernelCount);
+          !built) {
         return built;
       }
     }

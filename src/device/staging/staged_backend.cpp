@@ -241,6 +241,23 @@ bool StagedBackend::enqueueDevicePlan(std::span<const PreparedRay> rays, std::si
   return device_planner_->enqueuePlan(*set, rays.subspan(first, count), sets_[*set].arrays.rays);
 }
 
+Expected<PlanOutcome, IntegrateError> StagedBackend::awaitPlan(unsigned set,
+                                                               Clock::time_point* t_plan) noexcept {
+  const Clock::time_point t_wait = Clock::now();
+  auto outcome = device_planner_->finishPlan(set);
+  if (!outcome) {
+    return outcome;
+  }
+  // The set's batch before last was enqueued before this plan phase: done, only counted here.
+  if (auto ok = retire(set); !ok) {
+    return Unexpected(ok.error());
+  }
+  *t_plan = Clock::now();
+  stats_.wait_seconds += std::chrono::duration<double>(*t_plan - t_wait).count();
+  map_->beginEpoch();
+  return outcome;
+}
+
 Expected<void, IntegrateError> StagedBackend::integrateDevicePlanned(
     std::span<const PreparedRay> rays) noexcept {
   // Queue order, batch k on set k % 2: ... plan(k), resolve+kernels(k - 1), plan(k + 1),
@@ -256,18 +273,11 @@ Expected<void, IntegrateError> StagedBackend::integrateDevicePlanned(
   }
   for (bool pending = true; pending;) {
     pending = false;
-    const Clock::time_point t_wait = Clock::now();
-    auto outcome = device_planner_->finishPlan(set);
+    Clock::time_point t_plan;
+    auto outcome = awaitPlan(set, &t_plan);
     if (!outcome) {
       return Unexpected(outcome.error());
     }
-    // The set's batch before last was enqueued before this plan phase: done, only counted here.
-    if (auto ok = retire(set); !ok) {
-      return ok;
-    }
-    const Clock::time_point t_plan = Clock::now();
-    stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
-    map_->beginEpoch();
     const unsigned this_set = set;
     // The next batch's plan phase goes into the queue before this batch's resolve phase, so the
     // device has work while the host places regions.
@@ -390,17 +400,11 @@ Expected<std::size_t, IntegrateError> StagedBackend::integrateDevicePrepared(
   }
   for (bool pending = true; pending;) {
     pending = false;
-    const Clock::time_point t_wait = Clock::now();
-    auto outcome = device_planner_->finishPlan(set);
+    Clock::time_point t_plan;
+    auto outcome = awaitPlan(set, &t_plan);
     if (!outcome) {
       return Unexpected(outcome.error());
     }
-    if (auto ok = retire(set); !ok) {
-      return Unexpected(ok.error());
-    }
-    const Clock::time_point t_plan = Clock::now();
-    stats_.wait_seconds += std::chrono::duration<double>(t_plan - t_wait).count();
-    map_->beginEpoch();
     const unsigned this_set = set;
     if (outcome->host_fallback) {
       // The host prepares and plans the rest of the call, exactly as on the host path (nothing of

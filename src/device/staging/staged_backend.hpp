@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <memory_resource>
@@ -232,6 +233,10 @@ class StagedBackend : public Backend,
   // ---- the batch loop ----
   Expected<void, IntegrateError> integrateHostPlanned(std::span<const PreparedRay> rays) noexcept;
   Expected<void, IntegrateError> integrateDevicePlanned(std::span<const PreparedRay> rays) noexcept;
+  /// Waits for set `set`'s plan phase, retires the set's batch before last and begins the map's
+  /// epoch for the batch; `t_plan`: when the wait ended.
+  Expected<PlanOutcome, IntegrateError> awaitPlan(
+      unsigned set, std::chrono::steady_clock::time_point* t_plan) noexcept;
   /// integrateRays() with the preparation on the device, or (a fallback) on the host.
   Expected<std::size_t, IntegrateError> integrateDevicePrepared(const RayPreparer& preparer,
                                                                 const rm_prepare_params& params,
