@@ -207,23 +207,25 @@ std::optional<Pose> Trajectory::poseAt(double time_s, std::size_t& segment_hint)
   return interpolate(Pose{a.position, a.orientation}, Pose{b.position, b.orientation}, f);
 }
 
+rm_pose toRmPose(const Pose& pose) noexcept {
+  const Eigen::Quaterniond& q = pose.orientation;
+  return rm_pose{rm_vec3d{pose.position.x(), pose.position.y(), pose.position.z()},
+                 rm_quat{q.w(), q.x(), q.y(), q.z()}};
+}
+
+Pose fromRmPose(const rm_pose& pose) noexcept {
+  const rm_quat& q = pose.orientation;
+  return Pose{Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z),
+              Eigen::Quaterniond(q.w, q.x, q.y, q.z)};
+}
+
 Pose compose(const Pose& a_b, const Pose& b_c) noexcept {
-  return Pose{a_b.transform(b_c.position), a_b.orientation * b_c.orientation};
+  return fromRmPose(rm_pose_compose(toRmPose(a_b), toRmPose(b_c)));
 }
 
 Pose interpolate(const Pose& a, const Pose& b, double f) noexcept {
-  if (f == 0.0) {
-    return a;  // exact, free of interpolation rounding
-  }
-  Pose pose;
-  pose.position = a.position + (b.position - a.position) * f;
-  // q and -q are the same rotation; flip b onto a's hemisphere so nlerp takes the short arc.
-  // (Not Eigen's slerp: nlerp is what the pose samples have always been interpolated with.)
-  const double sign = a.orientation.dot(b.orientation) < 0.0 ? -1.0 : 1.0;
-  pose.orientation.coeffs() =
-      (1.0 - f) * a.orientation.coeffs() + (f * sign) * b.orientation.coeffs();
-  pose.orientation.normalize();
-  return pose;
+  // Not Eigen's slerp: nlerp is what the pose samples have always been interpolated with.
+  return fromRmPose(rm_pose_interpolate(toRmPose(a), toRmPose(b), f));
 }
 
 Expected<void, Error> saveTrajectory(const Trajectory& trajectory, const std::string& path) {

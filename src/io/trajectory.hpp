@@ -11,6 +11,8 @@
 #include "raymap/error.hpp"
 #include <Eigen/Geometry>
 
+#include "kernels/common/pose.h"
+
 namespace raymap::io {
 
 /// @brief One trajectory line: time (s, the time base of the points), the body position in the
@@ -34,9 +36,13 @@ struct Pose {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();               ///< origin of b in a, metres
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< b to a, unit length
 
-  /// @brief Maps a point from the body frame into the world frame (metres).
+  /// @brief Maps a point from the body frame into the world frame (metres): rm_pose_apply
+  /// (kernels/common/pose.h), the one definition. Inline: deskewing calls it for every point.
   Eigen::Vector3d transform(const Eigen::Vector3d& p_body) const noexcept {
-    return position + orientation * p_body;
+    const rm_vec3d p =
+        rm_quat_rotate(rm_quat{orientation.w(), orientation.x(), orientation.y(), orientation.z()},
+                       rm_vec3d{p_body.x(), p_body.y(), p_body.z()});
+    return Eigen::Vector3d(position.x() + p.x, position.y() + p.y, position.z() + p.z);
   }
   /// @brief The same pose as an Eigen rigid transform (p_a = T * p_b).
   Eigen::Isometry3d toIsometry() const noexcept {
@@ -53,11 +59,17 @@ struct Pose {
 };
 
 /// @brief The pose of frame c in frame a from a_b (b in a) and b_c (c in b): p_a = a_b(b_c(p_c)).
+/// rm_pose_compose (kernels/common/pose.h), the one definition.
 Pose compose(const Pose& a_b, const Pose& b_c) noexcept;
 /// @brief The pose a fraction f in [0, 1] of the way from `a` to `b`: position linearly,
 /// orientation by normalised linear interpolation along the shorter arc (nlerp; close to slerp
-/// for the small steps between pose samples). f = 0 gives `a` exactly.
+/// for the small steps between pose samples). f = 0 gives `a` exactly. rm_pose_interpolate
+/// (kernels/common/pose.h), the one definition.
 Pose interpolate(const Pose& a, const Pose& b, double f) noexcept;
+
+/// @brief The pose as kernels/common/pose.h takes it, and back.
+rm_pose toRmPose(const Pose& pose) noexcept;
+Pose fromRmPose(const rm_pose& pose) noexcept;
 
 /// @brief Time-ordered poses of the sensor body, with interpolation in between: position
 /// linearly, orientation by normalised linear quaternion interpolation along the shorter arc
