@@ -11,6 +11,7 @@
 typedef int rm_i32;
 typedef uint rm_u32;
 #define RM_F32(x) ((float)(x))
+#define RM_F64(x) ((double)(x))
 #define RM_I32(x) ((rm_i32)(x))
 #define RM_U32(x) ((rm_u32)(x))
 #define RM_FLOORF(x) floor(x)
@@ -45,10 +46,12 @@ typedef uint32_t rm_u32;
 #if defined(__cplusplus)
 /* C++ (host and CUDA): named casts keep -Wold-style-cast quiet and make each conversion visible. */
 #define RM_F32(x) static_cast<float>(x)
+#define RM_F64(x) static_cast<double>(x)
 #define RM_I32(x) static_cast<rm_i32>(x)
 #define RM_U32(x) static_cast<rm_u32>(x)
 #else
 #define RM_F32(x) ((float)(x))
+#define RM_F64(x) ((double)(x))
 #define RM_I32(x) ((rm_i32)(x))
 #define RM_U32(x) ((rm_u32)(x))
 #endif

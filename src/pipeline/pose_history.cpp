@@ -2,6 +2,8 @@
 // PoseHistory: a ring of stamped poses with ordered-lookup hinting.
 #include "src/pipeline/pose_history.hpp"
 
+#include <algorithm>
+
 #include "raymap/assert.hpp"
 
 namespace raymap::pipeline {
@@ -90,6 +92,36 @@ PoseLookup PoseHistory::lookup(std::int64_t stamp_ns, std::int64_t hold_ns,
   const double f = static_cast<double>(stamp_ns - t0) / static_cast<double>(t1 - t0);
   *out = io::interpolate(poses_[at(k)], poses_[at(k + 1)], f);
   return PoseLookup::kOk;
+}
+
+std::size_t PoseHistory::floorOrdinal(std::int64_t stamp_ns) const noexcept {
+  std::size_t lo = 0;
+  std::size_t hi = size_;  // stamp(lo) <= stamp_ns < stamp(hi), with stamp(size_) = +infinity
+  if (stamps_[at(0)] > stamp_ns) {
+    return 0;
+  }
+  while (hi - lo > 1) {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    (stamps_[at(mid)] <= stamp_ns ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+std::size_t PoseHistory::copyCovering(std::int64_t from_ns, std::int64_t to_ns,
+                                      std::span<rm_pose_sample> out) const noexcept {
+  if (size_ == 0) {
+    return 0;
+  }
+  const std::size_t first = floorOrdinal(from_ns);
+  const std::size_t last = std::min(floorOrdinal(to_ns) + 1, size_ - 1);
+  const std::size_t count = last - first + 1;
+  if (count > out.size()) {
+    return 0;
+  }
+  for (std::size_t k = 0; k < count; ++k) {
+    out[k] = rm_pose_sample{stamps_[at(first + k)], 0, io::toRmPose(poses_[at(first + k)])};
+  }
+  return count;
 }
 
 }  // namespace raymap::pipeline

@@ -6,7 +6,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 
+#include "kernels/common/deskew.h"
 #include "src/io/trajectory.hpp"
 
 namespace raymap::pipeline {
@@ -34,6 +36,14 @@ class PoseHistory {
   /// bracketing poses (io::interpolate); up to `hold_ns` after the newest pose, the newest pose.
   PoseLookup lookup(std::int64_t stamp_ns, std::int64_t hold_ns, io::Pose* out) const noexcept;
 
+  /// @brief Copies the poses that cover [from_ns, to_ns] into `out`, in time order, for
+  /// rm_deskew_base_pose (kernels/common/deskew.h), which then gives what lookup() gives now for
+  /// any time in that range that lookup() finds: from the pose at or before from_ns (the oldest
+  /// if none) to the first after to_ns (the newest if none). @return the poses written; 0 when
+  /// the history is empty or they do not fit `out`.
+  std::size_t copyCovering(std::int64_t from_ns, std::int64_t to_ns,
+                           std::span<rm_pose_sample> out) const noexcept;
+
   std::size_t size() const noexcept { return size_; }
   std::int64_t newestStamp() const noexcept;
   std::int64_t oldestStamp() const noexcept;
@@ -47,6 +57,9 @@ class PoseHistory {
   std::size_t first_ = 0;  // ring index of the oldest pose
   std::size_t size_ = 0;
   mutable std::size_t hint_ = 0;  // ordinal of the last bracket found (lookups are mostly ordered)
+
+  /// The ordinal of the last pose at or before `stamp_ns` (0 when all are later).
+  std::size_t floorOrdinal(std::int64_t stamp_ns) const noexcept;
 };
 
 }  // namespace raymap::pipeline

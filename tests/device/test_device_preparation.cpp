@@ -27,9 +27,9 @@ namespace {
 using test::makeRay;
 
 /// One map, its backend, batcher and preparer.
-struct Side {
-  Side(const MapConfig& config, DeviceBackendOptions options, const RayFilter& filter,
-       std::size_t batch_rays)
+struct PreparationSide {
+  PreparationSide(const MapConfig& config, DeviceBackendOptions options, const RayFilter& filter,
+                  std::size_t batch_rays)
       : map(makeMap(config)), preparer(map, filter) {
     backend = createDeviceBackendAsGiven(map, options);
     if (backend) {
@@ -43,9 +43,9 @@ struct Side {
 };
 
 /// The host-prepared reference and the device-prepared side.
-struct Pair {
-  Pair(const MapConfig& config, const RayFilter& filter = {}, std::size_t batch_rays = 4096,
-       DeviceMemory memory = DeviceMemory::kCache)
+struct PreparationPair {
+  PreparationPair(const MapConfig& config, const RayFilter& filter = {},
+                  std::size_t batch_rays = 4096, DeviceMemory memory = DeviceMemory::kCache)
       : host(config, options(gpu::Planning::kHost, memory), filter, batch_rays),
         device(config, options(gpu::Planning::kDevice, memory), filter, batch_rays) {}
 
@@ -97,12 +97,12 @@ struct Pair {
     return device.batcher->counters().device_batches;
   }
 
-  Side host;
-  Side device;
+  PreparationSide host;
+  PreparationSide device;
 };
 
 /// Random scans with every kind of ray the preparation rejects or changes mixed in.
-std::vector<Ray> hostileRays(std::uint64_t seed, int scans) {
+std::vector<Ray> hostilePreparationRays(std::uint64_t seed, int scans) {
   std::vector<Ray> rays = randomScans(seed, scans, 3000);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
@@ -134,7 +134,7 @@ std::vector<Ray> hostileRays(std::uint64_t seed, int scans) {
 
 /// Whether the device under test prepares rays (double precision: every CUDA device, OpenCL
 /// devices with cl_khr_fp64 such as PoCL's).
-bool devicePrepares() {
+bool devicePreparesRays() {
   VoxelMap map = makeMap(smallConfig(Semantics::kPerRay));
   DeviceBackendOptions options;
   options.planning = gpu::Planning::kDevice;
@@ -144,11 +144,11 @@ bool devicePrepares() {
 
 #define REQUIRE_DEVICE_PREPARATION()                                         \
   REQUIRE_DEVICE();                                                          \
-  if (!devicePrepares()) {                                                   \
+  if (!devicePreparesRays()) {                                               \
     GTEST_SKIP() << "the device has no double precision: the host prepares"; \
   }
 
-RayFilter rangeFilter() {
+RayFilter preparationRangeFilter() {
   RayFilter f;
   f.min_range_m = 0.3;
   f.max_range_m = 7.0;
@@ -158,11 +158,11 @@ RayFilter rangeFilter() {
 TEST(DevicePreparation, HostileRaysAreCountedAndIntegratedAsTheHostDoes) {
   REQUIRE_DEVICE_PREPARATION();
   for (const bool reverse : {false, true}) {
-    RayFilter filter = rangeFilter();
+    RayFilter filter = preparationRangeFilter();
     filter.reverse = reverse;
-    Pair pair(smallConfig(Semantics::kPerRay), filter);
+    PreparationPair pair(smallConfig(Semantics::kPerRay), filter);
     ASSERT_TRUE(pair.ready());
-    pair.add(hostileRays(11, 6));
+    pair.add(hostilePreparationRays(11, 6));
     const std::string label = reverse ? "reverse" : "forward";
     EXPECT_GT(pair.expectSame(label), 0u) << label;
     const RayCounters& c = pair.device.preparer.counters();
@@ -196,10 +196,10 @@ TEST(DevicePreparation, EveryMapModeButNdtPreparesOnTheDeviceAlike) {
       {"ndt-om", ndt, false},
   };
   for (const Case& c : cases) {
-    Pair pair(c.config, rangeFilter());
+    PreparationPair pair(c.config, preparationRangeFilter());
     ASSERT_TRUE(pair.ready()) << c.name;
     ASSERT_GT(pair.host.map.store().capacity(), 0u) << c.name;
-    pair.add(hostileRays(21, 4));
+    pair.add(hostilePreparationRays(21, 4));
     const std::uint64_t device_batches = pair.expectSame(c.name);
     EXPECT_EQ(device_batches > 0u, c.on_device) << c.name;
   }
@@ -210,7 +210,7 @@ TEST(DevicePreparation, RaysOutsideAMovingRollingWindowAreRejectedAndClippedAlik
   MapConfig config = smallConfig(Semantics::kPerRay);
   config.policy = StorePolicy::kRolling;
   config.window_regions = {6, 6, 3};
-  Pair pair(config);
+  PreparationPair pair(config);
   ASSERT_TRUE(pair.ready());
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -241,10 +241,10 @@ TEST(DevicePreparation, AScanLargerThanThePerScanBatchIsPreparedOnTheHost) {
   // Per-scan batches of 2000 rays: the host integrates a 5000-ray scan in parts cut where its
   // prepared rays fill a batch, which only preparing tells, so that scan goes the host's way;
   // the scans that fit go to the device whole.
-  Pair pair(smallConfig(Semantics::kPerScan), rangeFilter(), 2000);
+  PreparationPair pair(smallConfig(Semantics::kPerScan), preparationRangeFilter(), 2000);
   ASSERT_TRUE(pair.ready());
   pair.add(randomScans(31, 1, 5000), 1200);
-  pair.add(hostileRays(32, 3) /* 3000-ray scans: also too large */, 900);
+  pair.add(hostilePreparationRays(32, 3) /* 3000-ray scans: also too large */, 900);
   pair.add(randomScans(33, 4, 1500), 1000);
   EXPECT_GT(pair.expectSame("per scan"), 0u);
   EXPECT_GT(pair.host.batcher->counters().scans_split, 0u);
@@ -256,22 +256,22 @@ TEST(DevicePreparation, ABatchTheDeviceCannotPlanIsPreparedAndPlannedOnTheHost) 
   // host prepares and plans the rest of that call, and counts every ray once.
   std::vector<Ray> rays = randomScans(41, 1, 2500);
   rays.push_back(makeRay({1500.0, -20.0, 3.0}, {1502.5, -19.0, 2.0}));
-  Pair pair(smallConfig(Semantics::kPerRay), rangeFilter());
+  PreparationPair pair(smallConfig(Semantics::kPerRay), preparationRangeFilter());
   ASSERT_TRUE(pair.ready());
   pair.add(rays, rays.size());
-  pair.add(hostileRays(42, 2));
+  pair.add(hostilePreparationRays(42, 2));
   EXPECT_GT(pair.expectSame("far ray"), 0u);
   EXPECT_GT(pair.device.backend->stats().plans_on_host, 0u);
 }
 
 TEST(DevicePreparation, SegmentedRaysArePreparedOnTheHost) {
   REQUIRE_DEVICE_PREPARATION();
-  RayFilter filter = rangeFilter();
+  RayFilter filter = preparationRangeFilter();
   filter.segment_length_m = 1.0;  // pieces per ray are known only after preparing
-  Pair pair(smallConfig(Semantics::kPerRay), filter);
+  PreparationPair pair(smallConfig(Semantics::kPerRay), filter);
   ASSERT_TRUE(pair.ready());
   EXPECT_FALSE(pair.device.backend->preparesOnDevice(filter));
-  pair.add(hostileRays(51, 2));
+  pair.add(hostilePreparationRays(51, 2));
   EXPECT_EQ(pair.expectSame("segmented"), 0u);
 }
 

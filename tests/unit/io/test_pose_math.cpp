@@ -17,22 +17,22 @@ namespace raymap {
 namespace {
 
 #if defined(__x86_64__) && defined(__SSE2__)
-constexpr bool kEigenOrdersAsPoseH = true;
+constexpr bool kPoseMathEigenOrder = true;
 #else
-constexpr bool kEigenOrdersAsPoseH = false;
+constexpr bool kPoseMathEigenOrder = false;
 #endif
 
-rm_quat toRm(const Eigen::Quaterniond& q) { return rm_quat{q.w(), q.x(), q.y(), q.z()}; }
+rm_quat poseMathToRm(const Eigen::Quaterniond& q) { return rm_quat{q.w(), q.x(), q.y(), q.z()}; }
 
-void expectSame(double expected, double actual, const char* what) {
-  if (kEigenOrdersAsPoseH) {
+void expectPoseMathSame(double expected, double actual, const char* what) {
+  if (kPoseMathEigenOrder) {
     EXPECT_EQ(expected, actual) << what;  // NOLINT: bit for bit on purpose
   } else {
     EXPECT_NEAR(expected, actual, 1e-15 * std::max(1.0, std::fabs(expected))) << what;
   }
 }
 
-Eigen::Quaterniond randomRotation(std::mt19937_64& rng) {
+Eigen::Quaterniond poseMathRotation(std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   return Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized();
 }
@@ -41,20 +41,20 @@ TEST(PoseMath, RotationProductAndApplicationAreEigensOnX86) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-80.0, 80.0);
   for (int i = 0; i < 20000; ++i) {
-    const Eigen::Quaterniond a = randomRotation(rng);
-    const Eigen::Quaterniond b = randomRotation(rng);
+    const Eigen::Quaterniond a = poseMathRotation(rng);
+    const Eigen::Quaterniond b = poseMathRotation(rng);
     const Eigen::Vector3d v(u(rng), u(rng), u(rng));
     const Eigen::Vector3d r = a * v;
-    const rm_vec3d rr = rm_quat_rotate(toRm(a), rm_vec3d{v.x(), v.y(), v.z()});
-    expectSame(r.x(), rr.x, "rotate x");
-    expectSame(r.y(), rr.y, "rotate y");
-    expectSame(r.z(), rr.z, "rotate z");
+    const rm_vec3d rr = rm_quat_rotate(poseMathToRm(a), rm_vec3d{v.x(), v.y(), v.z()});
+    expectPoseMathSame(r.x(), rr.x, "rotate x");
+    expectPoseMathSame(r.y(), rr.y, "rotate y");
+    expectPoseMathSame(r.z(), rr.z, "rotate z");
     const Eigen::Quaterniond ab = a * b;
-    const rm_quat qab = rm_quat_mul(toRm(a), toRm(b));
-    expectSame(ab.w(), qab.w, "product w");
-    expectSame(ab.x(), qab.x, "product x");
-    expectSame(ab.y(), qab.y, "product y");
-    expectSame(ab.z(), qab.z, "product z");
+    const rm_quat qab = rm_quat_mul(poseMathToRm(a), poseMathToRm(b));
+    expectPoseMathSame(ab.w(), qab.w, "product w");
+    expectPoseMathSame(ab.x(), qab.x, "product x");
+    expectPoseMathSame(ab.y(), qab.y, "product y");
+    expectPoseMathSame(ab.z(), qab.z, "product z");
     if (testing::Test::HasFailure()) {
       return;
     }
@@ -66,8 +66,8 @@ TEST(PoseMath, InterpolationIsTheNlerpEigenComputed) {
   std::uniform_real_distribution<double> u(-50.0, 50.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int i = 0; i < 20000; ++i) {
-    const io::Pose a{Eigen::Vector3d(u(rng), u(rng), u(rng)), randomRotation(rng)};
-    const io::Pose b{Eigen::Vector3d(u(rng), u(rng), u(rng)), randomRotation(rng)};
+    const io::Pose a{Eigen::Vector3d(u(rng), u(rng), u(rng)), poseMathRotation(rng)};
+    const io::Pose b{Eigen::Vector3d(u(rng), u(rng), u(rng)), poseMathRotation(rng)};
     const double f = i % 10 == 0 ? 0.0 : unit(rng);
     // What io::interpolate computed with Eigen before pose.h.
     io::Pose expected = a;
@@ -80,10 +80,11 @@ TEST(PoseMath, InterpolationIsTheNlerpEigenComputed) {
     }
     const io::Pose got = io::interpolate(a, b, f);
     for (int k = 0; k < 3; ++k) {
-      expectSame(expected.position[k], got.position[k], "position");
+      expectPoseMathSame(expected.position[k], got.position[k], "position");
     }
     for (int k = 0; k < 4; ++k) {
-      expectSame(expected.orientation.coeffs()[k], got.orientation.coeffs()[k], "orientation");
+      expectPoseMathSame(expected.orientation.coeffs()[k], got.orientation.coeffs()[k],
+                         "orientation");
     }
     if (testing::Test::HasFailure()) {
       return;
@@ -95,8 +96,8 @@ TEST(PoseMath, ComposeAndTransformAreEigensOnX86) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-30.0, 30.0);
   for (int i = 0; i < 20000; ++i) {
-    const io::Pose a{Eigen::Vector3d(u(rng), u(rng), u(rng)), randomRotation(rng)};
-    const io::Pose b{Eigen::Vector3d(u(rng), u(rng), u(rng)), randomRotation(rng)};
+    const io::Pose a{Eigen::Vector3d(u(rng), u(rng), u(rng)), poseMathRotation(rng)};
+    const io::Pose b{Eigen::Vector3d(u(rng), u(rng), u(rng)), poseMathRotation(rng)};
     const Eigen::Vector3d p(u(rng), u(rng), u(rng));
     const io::Pose c = io::compose(a, b);
     const Eigen::Vector3d expected_position = a.position + a.orientation * b.position;
@@ -104,12 +105,12 @@ TEST(PoseMath, ComposeAndTransformAreEigensOnX86) {
     const Eigen::Vector3d expected_point = a.position + a.orientation * p;
     const Eigen::Vector3d got_point = a.transform(p);
     for (int k = 0; k < 3; ++k) {
-      expectSame(expected_position[k], c.position[k], "compose position");
-      expectSame(expected_point[k], got_point[k], "transform");
+      expectPoseMathSame(expected_position[k], c.position[k], "compose position");
+      expectPoseMathSame(expected_point[k], got_point[k], "transform");
     }
     for (int k = 0; k < 4; ++k) {
-      expectSame(expected_orientation.coeffs()[k], c.orientation.coeffs()[k],
-                 "compose orientation");
+      expectPoseMathSame(expected_orientation.coeffs()[k], c.orientation.coeffs()[k],
+                         "compose orientation");
     }
     if (testing::Test::HasFailure()) {
       return;
