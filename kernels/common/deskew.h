@@ -75,8 +75,7 @@ RAYMAP_FN rm_pose rm_deskew_base_pose(const RAYMAP_GLOBAL rm_pose_sample* sample
   }
   t0 = samples[lo].time_ns;
   t1 = samples[hi].time_ns;
-  return rm_pose_interpolate(samples[lo].pose, samples[hi].pose,
-                             RM_F64(t - t0) / RM_F64(t1 - t0));
+  return rm_pose_interpolate(samples[lo].pose, samples[hi].pose, RM_F64(t - t0) / RM_F64(t1 - t0));
 }
 
 /* The world-frame ray of point `p` of segment `segment`: from the sensor's position at the
