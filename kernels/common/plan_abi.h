@@ -145,6 +145,7 @@ typedef struct rm_plan_args {
  * cl_khr_fp64; gpu::PlanKernel numbers them after RM_PLAN_KERNELS. */
 #define RM_PREPARE_KERNELS(X) \
   X(prepare)                  \
-  X(prepare_count)
+  X(prepare_count)            \
+  X(deskew)
 
 #endif /* RAYMAP_KERNELS_COMMON_PLAN_ABI_H */

@@ -12,6 +12,7 @@
 #ifndef RAYMAP_KERNELS_DEVICE_PREPARE_H
 #define RAYMAP_KERNELS_DEVICE_PREPARE_H
 
+#include "../common/deskew.h"
 #include "../common/plan_abi.h"
 #include "../common/ray.h"
 #include "../common/ray_prepare.h"
@@ -52,6 +53,27 @@ RM_DEVICE_FN void rm_prepare_item(rm_u32 r, rm_u32 n, const RM_GLOBAL rm_raw_ray
   }
   rays[r] = ray;
   outcomes[r] = outcome;
+}
+
+/* Work-item r < n: point r deskewed (kernels/common/deskew.h) into the world-frame ray in[r]
+ * that rm_prepare_item then prepares. */
+RM_DEVICE_FN void rm_deskew_item(rm_u32 r, rm_u32 n, const RM_GLOBAL rm_scan_point* points,
+                                 const RM_GLOBAL rm_pose_sample* samples,
+                                 const RM_GLOBAL rm_deskew_segment* segments,
+                                 RM_GLOBAL rm_raw_ray* rays) {
+  rm_scan_point p;
+  rm_raw_ray ray;
+  if (r >= n) {
+    return;
+  }
+  p = points[r];
+  rm_deskew_point(p, samples, segments[p.segment], &ray.origin, &ray.sample);
+  ray.time_s = RM_F64(p.time_ns) * 1e-9;
+  ray.intensity = p.intensity;
+  ray.flags = p.flags;
+  ray.scan_lo = 0u;
+  ray.scan_hi = 0u;
+  rays[r] = ray;
 }
 
 /* Status word of each counted outcome, in the order of rm_prepare_count_item's local sums. */

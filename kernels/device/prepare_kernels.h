@@ -20,4 +20,11 @@ RM_GROUP_KERNEL(RM_PLAN_GROUP) void rm_plan_prepare_count(RM_PLAN_PARAMS) {
   rm_prepare_count_item(rm_global_id(), args.n, b0, (RM_ATOMIC_GLOBAL rm_u32*)b1, sums);
 }
 
+/* b0 points, b1 pose samples, b2 segments, b3 raw rays; args.n points */
+RM_GROUP_KERNEL(RM_PLAN_GROUP) void rm_plan_deskew(RM_PLAN_PARAMS) {
+  rm_deskew_item(rm_global_id(), args.n, (const RM_GLOBAL rm_scan_point*)b0,
+                 (const RM_GLOBAL rm_pose_sample*)b1, (const RM_GLOBAL rm_deskew_segment*)b2,
+                 (RM_GLOBAL rm_raw_ray*)b3);
+}
+
 #endif /* RAYMAP_KERNELS_DEVICE_PREPARE_KERNELS_H */

@@ -9,7 +9,7 @@
 
 #include "raymap/expected.hpp"
 
-#include "kernels/common/ray_prepare.h"
+#include "kernels/common/deskew.h"
 #include "src/map/ray.hpp"
 
 namespace raymap {
@@ -17,6 +17,19 @@ namespace raymap {
 class RayPreparer;
 struct RayFilter;
 struct RayCounters;
+
+/// @brief What deskewing a batch of points (rm_scan_point) needs besides the points: the base
+/// pose samples and the segments of kernels/common/deskew.h, and the scan (Ray::scan) of each
+/// segment. Views; the caller owns the tables.
+struct DeskewTables {
+  std::span<const rm_pose_sample> poses;
+  std::span<const rm_deskew_segment> segments;
+  std::span<const std::uint64_t> segment_scans;
+};
+
+/// @brief The world-frame Ray of point `p` deskewed with `tables` (kernels/common/deskew.h): what
+/// a device makes of it, made on the host. @rt allocates: no.
+Ray deskewedRay(const rm_scan_point& p, const DeskewTables& tables) noexcept;
 
 /// Why a batch could not be integrated (real-time path: a code, no message).
 enum class IntegrateError : std::uint8_t {
@@ -106,6 +119,29 @@ class Backend {
   virtual bool preparesOnDevice(const RayFilter& filter) const noexcept {
     (void)filter;
     return false;
+  }
+  /// @brief Whether integratePoints() deskews `points` points with tables of these sizes on the
+  /// device (preparesOnDevice(), the tables within the device's limits, and per scan at most one
+  /// device batch). The default: no.
+  virtual bool deskewsOnDevice(const RayFilter& filter, const DeskewTables& tables,
+                               std::size_t points) const noexcept {
+    (void)filter;
+    (void)tables;
+    (void)points;
+    return false;
+  }
+  /// @brief integrateRays() of the rays deskewedRay() makes of `points`, with the deskewing on
+  /// the device too. Only where deskewsOnDevice(); the default fails.
+  virtual Expected<std::size_t, IntegrateError> integratePoints(
+      const RayPreparer& preparer, const rm_prepare_params& params,
+      std::span<const rm_scan_point> points, const DeskewTables& tables,
+      RayCounters& counters) noexcept {
+    (void)preparer;
+    (void)params;
+    (void)points;
+    (void)tables;
+    (void)counters;
+    return Unexpected(IntegrateError::kDeviceFailure);
   }
   /// @brief Integrates world-frame `rays` exactly as integrate() integrates what
   /// `preparer.prepareWith(params, ...)` makes of them (one call is one scan with per-scan

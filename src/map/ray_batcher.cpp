@@ -30,6 +30,9 @@ RayBatcher::RayBatcher(const VoxelMap& map, Backend& backend, std::size_t batch_
   if (backend.preparesOnDevice(RayFilter{}) && !raw_.reserve(batch_rays)) {
     throw std::bad_alloc();
   }
+  if (!deskewed_.reserve(batch_rays)) {  // pages made resident only by integratePoints()
+    throw std::bad_alloc();
+  }
   parts_.resize(std::max(backend.threads(), 1u));
 }
 
@@ -242,6 +245,79 @@ void RayBatcher::addPrepared(RayPreparer& preparer, std::span<const Ray> run,
       keepFirst(first_error, flush());
     }
   }
+}
+
+Ray deskewedRay(const rm_scan_point& p, const DeskewTables& tables) noexcept {
+  rm_vec3d origin;
+  rm_vec3d sample;
+  rm_deskew_point(p, tables.poses.data(), tables.segments[p.segment], &origin, &sample);
+  Ray ray;
+  ray.origin = Vec3d{origin.x, origin.y, origin.z};
+  ray.sample = Vec3d{sample.x, sample.y, sample.z};
+  ray.time_s = static_cast<double>(p.time_ns) * 1e-9;
+  ray.intensity = p.intensity;
+  ray.flags = p.flags;  // RM_RAW_RAY_NO_RETURN is kRayNoReturn
+  ray.scan = tables.segment_scans[p.segment];
+  return ray;
+}
+
+Expected<void, IntegrateError> RayBatcher::integratePoints(RayPreparer& preparer,
+                                                           std::span<const rm_scan_point> points,
+                                                           const DeskewTables& tables) noexcept {
+  Expected<void, IntegrateError> first_error;
+  std::size_t i = 0;
+  while (i < points.size()) {
+    // A run of points of one scan.
+    const std::uint64_t scan = tables.segment_scans[points[i].segment];
+    std::size_t run_end = i + 1;
+    while (run_end < points.size() && tables.segment_scans[points[run_end].segment] == scan) {
+      ++run_end;
+    }
+    std::span<const rm_scan_point> run = points.subspan(i, run_end - i);
+    i = run_end;
+    // Per scan, a scan larger than the batch is integrated in parts cut by prepared rays: the
+    // host's way, which add() takes.
+    const bool on_device = backend_->deskewsOnDevice(preparer.filter(), tables, run.size()) &&
+                           (!per_scan_ || run.size() <= capacity_);
+    if (!on_device) {
+      while (!run.empty()) {
+        const std::size_t n = std::min(run.size(), capacity_);
+        for (std::size_t k = 0; k < n; ++k) {
+          deskewed_[k] = deskewedRay(run[k], tables);
+        }
+        keepFirst(first_error, add(preparer, std::span<const Ray>(deskewed_.data(), n)));
+        run = run.subspan(n);
+      }
+      continue;
+    }
+    keepFirst(first_error, flush());  // what waits goes first: ray order
+    if (!have_scan_ || scan != scan_) {
+      ++counters_.scans;
+      have_scan_ = true;
+      scan_split_ = false;
+      scan_on_host_ = false;
+      scan_ = scan;
+    }
+    const rm_prepare_params params = preparer.params();
+    while (!run.empty()) {
+      const std::size_t n = std::min(run.size(), capacity_);
+      ++counters_.batches;
+      ++counters_.device_batches;
+      RayCounters counted;
+      auto integrated = backend_->integratePoints(preparer, params, run.first(n), tables, counted);
+      preparer.addCounters(counted);
+      if (integrated) {
+        counters_.rays_integrated += *integrated;
+        counters_.points_deskewed_on_device += n;
+      } else {
+        ++counters_.batches_failed;
+        keepFirst(first_error, Unexpected(integrated.error()));
+      }
+      run = run.subspan(n);
+    }
+  }
+  keepFirst(first_error, flush());
+  return first_error;
 }
 
 Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateError error,

@@ -29,7 +29,8 @@ struct BatcherCounters {
   std::uint64_t scans = 0;            ///< distinct scans (runs of one Ray::scan) seen
   std::uint64_t scans_split = 0;      ///< per-scan: scans larger than a batch, integrated in parts
   std::uint64_t parallel_prepares = 0;  ///< runs of rays prepared on the backend's host threads
-  std::uint64_t device_batches = 0;     ///< of batches: rays prepared on the device (integrateRays)
+  std::uint64_t device_batches = 0;     ///< of batches: rays prepared on the device
+  std::uint64_t points_deskewed_on_device = 0;  ///< integratePoints(): points the device deskewed
 };
 
 /// @brief Prepares rays (RayPreparer) into a fixed batch and hands full batches to a backend.
@@ -71,6 +72,13 @@ class RayBatcher {
   Expected<void, IntegrateError> add(RayPreparer& preparer, std::span<const Ray> rays) noexcept;
   /// @brief Integrates what the batch holds. Does not wait for a device (Backend::synchronise()).
   Expected<void, IntegrateError> flush() noexcept;
+  /// @brief add() of the rays deskewedRay() makes of `points` with `tables`, then flush(): with
+  /// a backend that deskews on the device (Backend::deskewsOnDevice) the points go to it as they
+  /// are, else the host deskews them here (kernels/common/deskew.h either way). The same maps and
+  /// counters as add() of the host's rays and flush().
+  Expected<void, IntegrateError> integratePoints(RayPreparer& preparer,
+                                                 std::span<const rm_scan_point> points,
+                                                 const DeskewTables& tables) noexcept;
 
   /// @brief Forgets the scan the last rays belonged to: the next rays start a new scan even when
   /// they carry the same Ray::scan (a stream read again from its start with the same batcher).
@@ -131,6 +139,7 @@ class RayBatcher {
   RayPreparer* raw_preparer_ = nullptr;  // the preparer of the rays in raw_
   rm_prepare_params raw_params_{};       // and its parameters when the first of them came
   bool scan_on_host_ = false;            // per-scan: this scan outgrew the batch, host prepares
+  platform::PageArray<Ray> deskewed_;    // integratePoints(): points the host deskews
 };
 
 /// @brief The error a failed batch means for whoever integrates: a full store is kCapacity ("the

@@ -292,5 +292,119 @@ TEST(DevicePreparation, TheOptionTurnsItOff) {
   EXPECT_NE(preparing->deviceName().find("rays prepared on the device"), std::string::npos);
 }
 
+/// Scans of points from a sensor moving and turning on a base, with per-point times, and the
+/// tables that deskew them: each scan a segment with its own copy of the samples covering it.
+struct PointScans {
+  std::vector<rm_scan_point> points;
+  std::vector<rm_pose_sample> poses;
+  std::vector<rm_deskew_segment> segments;
+  std::vector<std::uint64_t> scans;
+  DeskewTables tables() const { return DeskewTables{poses, segments, scans}; }
+};
+
+PointScans pointScans(std::uint64_t seed, int scans, int points_per_scan) {
+  constexpr std::int64_t kScanNs = 100'000'000;
+  constexpr std::int64_t kPoseNs = 10'000'000;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> range(0.2, 9.0);
+  std::uniform_int_distribution<std::int64_t> offset(0, kScanNs);
+  auto base = [](std::int64_t t) {
+    const double s = static_cast<double>(t) * 1e-9;
+    const double yaw = 0.4 * s;
+    return rm_pose{rm_vec3d{1.5 * s, 0.3 * s, 0.2 * std::sin(s)},
+                   rm_quat{std::cos(0.5 * yaw), 0.0, 0.0, std::sin(0.5 * yaw)}};
+  };
+  const rm_pose extrinsic{rm_vec3d{0.2, 0.0, 0.4},
+                          rm_quat{std::sqrt(0.5), 0.0, 0.0, std::sqrt(0.5)}};
+  PointScans out;
+  for (int s = 0; s < scans; ++s) {
+    const std::int64_t start = s * kScanNs;
+    rm_deskew_segment segment{extrinsic, static_cast<rm_u32>(out.poses.size()), 0};
+    for (std::int64_t t = start - kPoseNs; t <= start + kScanNs + kPoseNs; t += kPoseNs) {
+      out.poses.push_back(rm_pose_sample{t, 0, base(t)});
+      ++segment.poses;
+    }
+    out.segments.push_back(segment);
+    out.scans.push_back(100 + static_cast<std::uint64_t>(s));
+    for (int i = 0; i < points_per_scan; ++i) {
+      rm_vec3d d{u(rng), u(rng), 0.3 * u(rng)};
+      const double scale = range(rng) / rm_vec3d_norm(d);
+      rm_scan_point p{static_cast<float>(d.x * scale),
+                      static_cast<float>(d.y * scale),
+                      static_cast<float>(d.z * scale),
+                      1.0f,
+                      0u,
+                      static_cast<rm_u32>(s),
+                      start + offset(rng)};
+      if (i % 17 == 0) {
+        p.flags = RM_RAW_RAY_NO_RETURN;
+      }
+      if (i % 101 == 0) {
+        p.x = std::numeric_limits<float>::quiet_NaN();  // invalid
+      }
+      if (i % 103 == 0) {
+        p.x = 0.01f;  // shorter than min range
+        p.y = 0.0f;
+        p.z = 0.0f;
+      }
+      out.points.push_back(p);
+    }
+  }
+  return out;
+}
+
+/// The host's reference: the rays deskewedRay() makes of points [from, to), added and flushed
+/// (what RayBatcher::integratePoints() is defined to equal).
+void addDeskewedOnHost(PreparationSide& side, const PointScans& scans, std::size_t from = 0,
+                       std::size_t to = std::numeric_limits<std::size_t>::max()) {
+  std::vector<Ray> rays;
+  for (std::size_t i = from; i < std::min(to, scans.points.size()); ++i) {
+    rays.push_back(deskewedRay(scans.points[i], scans.tables()));
+  }
+  EXPECT_TRUE(side.batcher->add(side.preparer, rays));
+  EXPECT_TRUE(side.batcher->flush());
+}
+
+TEST(DeviceDeskewing, PointsDeskewedOnTheDeviceMapAndCountAsTheHostsRays) {
+  REQUIRE_DEVICE_PREPARATION();
+  for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
+    const std::string label = semantics == Semantics::kPerRay ? "per ray" : "per scan";
+    PreparationPair pair(smallConfig(semantics), preparationRangeFilter(), 4096);
+    ASSERT_TRUE(pair.ready()) << label;
+    const PointScans scans = pointScans(61, 5, 3000);
+    addDeskewedOnHost(pair.host, scans, 0, 7500);
+    addDeskewedOnHost(pair.host, scans, 7500);
+    // In calls of two and a half scans: runs of one scan each go to the device.
+    const std::span<const rm_scan_point> all(scans.points);
+    EXPECT_TRUE(pair.device.batcher->integratePoints(pair.device.preparer, all.first(7500),
+                                                     scans.tables()));
+    EXPECT_TRUE(pair.device.batcher->integratePoints(pair.device.preparer, all.subspan(7500),
+                                                     scans.tables()));
+    EXPECT_GT(pair.expectSame(label), 0u) << label;
+    EXPECT_EQ(pair.device.batcher->counters().points_deskewed_on_device, scans.points.size())
+        << label;
+    EXPECT_GT(pair.device.preparer.counters().rays_invalid, 0u) << label;
+    EXPECT_GT(pair.device.preparer.counters().rays_no_return, 0u) << label;
+  }
+}
+
+TEST(DeviceDeskewing, TablesBeyondTheDevicesLimitsAreDeskewedOnTheHostAlike) {
+  REQUIRE_DEVICE_PREPARATION();
+  PreparationPair pair(smallConfig(Semantics::kPerRay), preparationRangeFilter());
+  ASSERT_TRUE(pair.ready());
+  PointScans scans = pointScans(71, 2, 2000);
+  // More segments than a device batch takes: the same two scans' segments repeated.
+  while (scans.segments.size() <= gpu::kMaxSegments) {
+    scans.segments.push_back(scans.segments[0]);
+    scans.scans.push_back(scans.scans[0]);
+  }
+  addDeskewedOnHost(pair.host, scans);
+  EXPECT_TRUE(
+      pair.device.batcher->integratePoints(pair.device.preparer, scans.points, scans.tables()));
+  pair.expectSame("too many segments");
+  EXPECT_EQ(pair.device.batcher->counters().points_deskewed_on_device, 0u);
+}
+
 }  // namespace
 }  // namespace raymap::test

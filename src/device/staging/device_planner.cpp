@@ -130,6 +130,12 @@ std::size_t DevicePlanSizes::bytes(PlanBuffer buffer) const noexcept {
       return prepare ? sizeof(rm_prepare_params) : 0u;
     case PlanBuffer::kOutcomes:
       return prepare ? kWord * max_rays : 0u;
+    case PlanBuffer::kPoints:
+      return prepare ? sizeof(rm_scan_point) * max_rays : 0u;
+    case PlanBuffer::kPoseSamples:
+      return prepare ? sizeof(rm_pose_sample) * kMaxPoseSamples : 0u;
+    case PlanBuffer::kSegments:
+      return prepare ? sizeof(rm_deskew_segment) * kMaxSegments : 0u;
   }
   return 0;
 }
@@ -181,6 +187,9 @@ DevicePlanner::DevicePlanner(VoxelMap& map, BatchPlanner& planner, std::uint32_t
     s.resolution.resize(sizes.region_cap);
     s.runs.reserve(sizes.by_region ? sizes.region_cap : 0u);
     s.raw.reserve(sizes.prepare ? sizes.max_rays : 0u);
+    s.points.reserve(sizes.prepare ? sizes.max_rays : 0u);
+    s.samples.reserve(sizes.prepare ? kMaxPoseSamples : 0u);
+    s.segments.reserve(sizes.prepare ? kMaxSegments : 0u);
   }
   order_.reserve(sizes.region_cap);
   read_ahead_ = std::min(read_ahead_, sizes.region_cap);
@@ -314,16 +323,61 @@ bool DevicePlanner::enqueuePreparePlan(unsigned set, std::span<const Ray> rays,
       break;
     }
   }
-  st.params[0] = params;
   // Ray and rm_raw_ray have one layout (src/map/ray_preparer.hpp): one copy, no conversion.
   st.raw.resize(rays.size());  // reserved for max_rays: no allocation
   std::memcpy(st.raw.data(), rays.data(), rays.size() * sizeof(rm_raw_ray));
-  rm_plan_args a = baseArgs(st);
-  a.n = st.rays;
-  bytes_to_device_ += rays.size() * sizeof(rm_raw_ray) + sizeof(rm_prepare_params);
+  bytes_to_device_ += rays.size() * sizeof(rm_raw_ray);
   return device_->writePlanBuffer(set, PlanBuffer::kRawRays, 0, st.raw.data(),
                                   st.raw.size() * sizeof(rm_raw_ray)) &&
-         device_->writePlanBuffer(set, PlanBuffer::kPrepareParams, 0, st.params.data(),
+         enqueuePrepareAndPlan(set, params);
+}
+
+bool DevicePlanner::enqueueDeskewPlan(unsigned set, std::span<const rm_scan_point> points,
+                                      const DeskewTables& tables,
+                                      const rm_prepare_params& params) noexcept {
+  RAYMAP_EXPECTS(sizes_.prepare && !points.empty() && points.size() <= sizes_.max_rays &&
+                 !tables.segments.empty() && tables.segments.size() <= kMaxSegments &&
+                 !tables.poses.empty() && tables.poses.size() <= kMaxPoseSamples);
+  SetState& st = sets_[set];
+  st.rays = static_cast<std::uint32_t>(points.size());
+  st.regions_read = 0;
+  st.prepared = true;
+  // The region keys are taken relative to the base's first pose of the points' first segment:
+  // any region near the batch serves.
+  const rm_vec3d base =
+      tables.poses[tables.segments[points.front().segment].first_pose].pose.position;
+  rm_vec3i voxel;
+  rm_vec3f local;
+  st.key_origin = rm_prepare_key(&params, base, &voxel, &local)
+                      ? rm_region_of_voxel(voxel, map_->geometry().region_voxels)
+                      : rm_vec3i_make(0, 0, 0);
+  // Reserved for max_rays, kMaxPoseSamples and kMaxSegments: no allocation.
+  st.points.assign(points.begin(), points.end());
+  st.samples.assign(tables.poses.begin(), tables.poses.end());
+  st.segments.assign(tables.segments.begin(), tables.segments.end());
+  rm_plan_args a = baseArgs(st);
+  a.n = st.rays;
+  bytes_to_device_ +=
+      points.size_bytes() + tables.poses.size_bytes() + tables.segments.size_bytes();
+  return device_->writePlanBuffer(set, PlanBuffer::kPoints, 0, st.points.data(),
+                                  points.size_bytes()) &&
+         device_->writePlanBuffer(set, PlanBuffer::kPoseSamples, 0, st.samples.data(),
+                                  tables.poses.size_bytes()) &&
+         device_->writePlanBuffer(set, PlanBuffer::kSegments, 0, st.segments.data(),
+                                  tables.segments.size_bytes()) &&
+         launch(set, PlanKernel::kDeskew, a, st.rays,
+                {PlanBuffer::kPoints, PlanBuffer::kPoseSamples, PlanBuffer::kSegments,
+                 PlanBuffer::kRawRays}) &&
+         enqueuePrepareAndPlan(set, params);
+}
+
+bool DevicePlanner::enqueuePrepareAndPlan(unsigned set, const rm_prepare_params& params) noexcept {
+  SetState& st = sets_[set];
+  st.params[0] = params;
+  rm_plan_args a = baseArgs(st);
+  a.n = st.rays;
+  bytes_to_device_ += sizeof(rm_prepare_params);
+  return device_->writePlanBuffer(set, PlanBuffer::kPrepareParams, 0, st.params.data(),
                                   sizeof(rm_prepare_params)) &&
          launch(set, PlanKernel::kPrepare, a, st.rays,
                 {PlanBuffer::kRawRays, PlanBuffer::kPrepareParams, PlanBuffer::kRays,

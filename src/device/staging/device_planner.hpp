@@ -55,8 +55,9 @@ enum class PlanKernel : std::uint8_t {
   kClearTable,
   kPrepare,  ///< RM_PREPARE_KERNELS from here: the ray preparation (double precision)
   kPrepareCount,
+  kDeskew,
 };
-inline constexpr std::size_t kPlanKernelCount = 20;
+inline constexpr std::size_t kPlanKernelCount = 21;
 /// The first ray preparation kernel: OpenCL builds those from a program of their own.
 inline constexpr std::size_t kFirstPrepareKernel = static_cast<std::size_t>(PlanKernel::kPrepare);
 /// @brief The kernel's entry point ("rm_plan_emit").
@@ -98,8 +99,15 @@ enum class PlanBuffer : std::uint8_t {
   kRawRays,        ///< rm_raw_ray[max_rays], preparation on the device only
   kPrepareParams,  ///< one rm_prepare_params, preparation on the device only
   kOutcomes,       ///< u32[max_rays]: RM_PREPARE_* of each ray, preparation on the device only
+  kPoints,         ///< rm_scan_point[max_rays], preparation on the device only
+  kPoseSamples,    ///< rm_pose_sample[kMaxPoseSamples], preparation on the device only
+  kSegments,       ///< rm_deskew_segment[kMaxSegments], preparation on the device only
 };
-inline constexpr std::size_t kPlanBufferCount = 33;
+inline constexpr std::size_t kPlanBufferCount = 36;
+/// Pose samples and segments a batch of points deskewed on the device may carry; a batch with
+/// more is deskewed on the host.
+inline constexpr std::size_t kMaxPoseSamples = 4096;
+inline constexpr std::size_t kMaxSegments = 1024;
 /// Scan levels a planner may use (kScanSums0..3): tile sums of tile sums, down to one tile.
 inline constexpr unsigned kScanLevels = 4;
 
@@ -223,6 +231,12 @@ class DevicePlanner {
   bool enqueuePreparePlan(unsigned set, std::span<const Ray> rays,
                           const rm_prepare_params& params) noexcept;
 
+  /// @brief Enqueues the deskewing (kernels/common/deskew.h) of sensor-frame `points` (1 to
+  /// max_rays) with `tables`, then their preparation and plan phase as enqueuePreparePlan().
+  /// @pre sizes().prepare; the tables within kMaxPoseSamples and kMaxSegments.
+  bool enqueueDeskewPlan(unsigned set, std::span<const rm_scan_point> points,
+                         const DeskewTables& tables, const rm_prepare_params& params) noexcept;
+
   /// @brief Waits for set `set`'s plan phase and reads what the host needs.
   Expected<PlanOutcome, IntegrateError> finishPlan(unsigned set) noexcept;
 
@@ -252,13 +266,19 @@ class DevicePlanner {
           resolution(memory),
           runs(memory),
           raw(memory),
-          params(1, rm_prepare_params{}, memory) {}
+          params(1, rm_prepare_params{}, memory),
+          points(memory),
+          samples(memory),
+          segments(memory) {}
     std::pmr::vector<std::uint32_t> status;
     std::pmr::vector<rm_plan_region> regions;  // read back
     std::pmr::vector<rm_plan_resolution> resolution;
     std::pmr::vector<rm_span_run> runs;  // span work per region
     std::pmr::vector<rm_raw_ray> raw;    // preparation on the device: the rays uploaded
     std::pmr::vector<rm_prepare_params> params;
+    std::pmr::vector<rm_scan_point> points;  // deskewing on the device: what was uploaded
+    std::pmr::vector<rm_pose_sample> samples;
+    std::pmr::vector<rm_deskew_segment> segments;
     bool prepared = false;           // the plan's rays were prepared on the device
     std::uint32_t rays = 0;          // rays of the plan phase
     std::uint32_t regions_read = 0;  // records the read-back covered
@@ -274,6 +294,8 @@ class DevicePlanner {
   bool sort(unsigned set, std::uint32_t n, std::uint32_t bits, PlanBuffer* keys, PlanBuffer* values,
             PlanBuffer keys_alt, PlanBuffer values_alt) noexcept;
   rm_plan_args baseArgs(const SetState& state) const noexcept;
+  /// Enqueues the preparation of the set's rays in kRawRays, then enqueuePlanPhase().
+  bool enqueuePrepareAndPlan(unsigned set, const rm_prepare_params& params) noexcept;
   /// Enqueues the plan phase of the set's rays (in the kRays buffer) and its read-back.
   bool enqueuePlanPhase(unsigned set) noexcept;
 

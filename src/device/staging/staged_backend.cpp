@@ -139,7 +139,9 @@ Expected<void, Error> StagedBackend::planOnDevice(const DevicePlanSizes& sizes) 
     device_planner_.emplace(*map_, planner_, cache_ ? cache_->capacity() : 0u, sizes,
                             static_cast<PlanDevice&>(*this), staging_memory_);
     if (sizes.prepare) {
-      host_prepared_.resize(limits_.max_rays);  // the host's preparation when it takes over
+      // The host's deskewing and preparation when it takes over.
+      host_prepared_.resize(limits_.max_rays);
+      host_rays_.resize(limits_.max_rays);
     }
   } catch (const std::bad_alloc&) {
     return fail(ErrorCode::kCapacity,
@@ -380,9 +382,71 @@ Expected<std::size_t, IntegrateError> StagedBackend::integrateHostPrepared(
 Expected<std::size_t, IntegrateError> StagedBackend::integrateDevicePrepared(
     const RayPreparer& preparer, const rm_prepare_params& params, std::span<const Ray> rays,
     RayCounters& counters) noexcept {
+  return integrateOnDevice(
+      rays.size(), counters,
+      [&](unsigned set, std::size_t from, std::size_t count) {
+        return device_planner_->enqueuePreparePlan(set, rays.subspan(from, count), params);
+      },
+      [&](std::size_t first) {
+        return integrateHostPrepared(preparer, params, rays.subspan(first), counters);
+      });
+}
+
+bool StagedBackend::deskewsOnDevice(const RayFilter& filter, const DeskewTables& tables,
+                                    std::size_t points) const noexcept {
+  // Per scan, a call is one scan: more points than a device batch would be cut by prepared rays.
+  return preparesOnDevice(filter) && !tables.segments.empty() &&
+         tables.segments.size() <= kMaxSegments && !tables.poses.empty() &&
+         tables.poses.size() <= kMaxPoseSamples &&
+         (params_.per_scan == 0u || points <= limits_.max_rays);
+}
+
+Expected<std::size_t, IntegrateError> StagedBackend::integratePoints(
+    const RayPreparer& preparer, const rm_prepare_params& params,
+    std::span<const rm_scan_point> points, const DeskewTables& tables,
+    RayCounters& counters) noexcept {
+  RAYMAP_EXPECTS(deskewsOnDevice(preparer.filter(), tables, points.size()));
+  if (!makeCurrent()) {
+    return Unexpected(IntegrateError::kDeviceFailure);
+  }
+  params_.sequence = params_.per_scan != 0u ? map_->beginScan() : 0u;
+  planner_.revalidate();
+  auto integrated = integrateOnDevice(
+      points.size(), counters,
+      [&](unsigned set, std::size_t from, std::size_t count) {
+        return device_planner_->enqueueDeskewPlan(set, points.subspan(from, count), tables, params);
+      },
+      [&](std::size_t first) -> Expected<std::size_t, IntegrateError> {
+        // Deskewed on the host as the device would, a device batch at a time (per scan the call
+        // is at most one: deskewsOnDevice()), then prepared and planned on the host.
+        std::size_t done = 0;
+        for (std::size_t from = first; from < points.size(); from += host_rays_.size()) {
+          const std::size_t count = std::min(host_rays_.size(), points.size() - from);
+          for (std::size_t i = 0; i < count; ++i) {
+            host_rays_[i] = deskewedRay(points[from + i], tables);
+          }
+          auto part = integrateHostPrepared(
+              preparer, params, std::span<const Ray>(host_rays_.data(), count), counters);
+          if (!part) {
+            return part;
+          }
+          done += *part;
+        }
+        return done;
+      });
+  if (integrated) {
+    ++stats_.batches;
+  }
+  return integrated;
+}
+
+template <class Enqueue, class HostRest>
+Expected<std::size_t, IntegrateError> StagedBackend::integrateOnDevice(
+    std::size_t total, RayCounters& counters, Enqueue&& enqueue_batch,
+    HostRest&& host_rest) noexcept {
   // The pipeline of integrateDevicePlanned(), with each batch's preparation enqueued before its
   // plan phase; its counters come back with the plan's status.
-  if (rays.empty()) {
+  if (total == 0) {
     return std::size_t{0};
   }
   std::size_t integrated = 0;
@@ -392,8 +456,7 @@ Expected<std::size_t, IntegrateError> StagedBackend::integrateDevicePrepared(
     set = next_set_;
     next_set_ = (next_set_ + 1) % kStagingSets;
     first = from;
-    const std::size_t count = std::min(limits_.max_rays, rays.size() - from);
-    return device_planner_->enqueuePreparePlan(set, rays.subspan(from, count), params);
+    return enqueue_batch(set, from, std::min(limits_.max_rays, total - from));
   };
   if (!enqueue(0)) {
     return Unexpected(IntegrateError::kDeviceFailure);
@@ -413,7 +476,7 @@ Expected<std::size_t, IntegrateError> StagedBackend::integrateDevicePrepared(
         return Unexpected(IntegrateError::kDeviceFailure);
       }
       stats_.plan_seconds += secondsSince(t_plan);
-      auto rest = integrateHostPrepared(preparer, params, rays.subspan(first), counters);
+      auto rest = host_rest(first);
       if (!rest) {
         return rest;
       }
@@ -424,7 +487,7 @@ Expected<std::size_t, IntegrateError> StagedBackend::integrateDevicePrepared(
     // The next batch's preparation and plan phase go into the queue before this batch's resolve
     // phase, so the device has work while the host places regions.
     const std::size_t next = first + outcome->rays;
-    if (next < rays.size()) {
+    if (next < total) {
       pending = true;
       if (!enqueue(next)) {
         return Unexpected(IntegrateError::kDeviceFailure);

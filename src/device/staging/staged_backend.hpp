@@ -111,6 +111,15 @@ class StagedBackend : public Backend,
                                                       const rm_prepare_params& params,
                                                       std::span<const Ray> rays,
                                                       RayCounters& counters) noexcept final;
+  /// Points are deskewed on the device where rays are prepared there and the tables fit its
+  /// limits (kMaxSegments, kMaxPoseSamples); per scan, a call of at most one device batch.
+  bool deskewsOnDevice(const RayFilter& filter, const DeskewTables& tables,
+                       std::size_t points) const noexcept final;
+  Expected<std::size_t, IntegrateError> integratePoints(const RayPreparer& preparer,
+                                                        const rm_prepare_params& params,
+                                                        std::span<const rm_scan_point> points,
+                                                        const DeskewTables& tables,
+                                                        RayCounters& counters) noexcept final;
   Expected<void, IntegrateError> synchronise() noexcept final;
   BackendStats stats() const noexcept final;
   unsigned threads() const noexcept final { return 1; }
@@ -242,6 +251,13 @@ class StagedBackend : public Backend,
                                                                 const rm_prepare_params& params,
                                                                 std::span<const Ray> rays,
                                                                 RayCounters& counters) noexcept;
+  /// The device-planned pipeline over `total` rays or points: `enqueue_batch(set, from, count)`
+  /// enqueues a batch's deskewing, preparation and plan phase; `host_rest(first)` integrates the
+  /// rest on the host when the device cannot plan a batch.
+  template <class Enqueue, class HostRest>
+  Expected<std::size_t, IntegrateError> integrateOnDevice(std::size_t total, RayCounters& counters,
+                                                          Enqueue&& enqueue_batch,
+                                                          HostRest&& host_rest) noexcept;
   Expected<std::size_t, IntegrateError> integrateHostPrepared(const RayPreparer& preparer,
                                                               const rm_prepare_params& params,
                                                               std::span<const Ray> rays,
@@ -299,6 +315,7 @@ class StagedBackend : public Backend,
   std::optional<RegionSpanGrouper> grouper_;     // span work per region (groupSpansByRegion())
   std::optional<DevicePlanner> device_planner_;  // planning on the device (planOnDevice())
   std::vector<PreparedRay> host_prepared_;       // preparation on the device: the host's fallback
+  std::vector<Ray> host_rays_;                   // and its deskewing
   std::pmr::memory_resource* staging_memory_;
   PlanObserver* plan_observer_ = nullptr;
   std::optional<BatchArrays> observed_;  // a device plan read back for the observer
