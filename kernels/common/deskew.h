@@ -22,6 +22,10 @@ typedef long rm_i64;
 typedef int64_t rm_i64;
 #endif
 
+/* Pose samples and segments one batch of points may carry. */
+#define RM_DESKEW_MAX_POSE_SAMPLES 4096u
+#define RM_DESKEW_MAX_SEGMENTS 1024u
+
 /* One point of a scan: sensor frame, with its absolute time. */
 typedef struct rm_scan_point {
   float x; /* sensor frame, metres */

@@ -65,6 +65,8 @@ struct BackendStats {
   std::uint64_t plans_on_host = 0;  ///< planning on the device: batches the host planned instead
   /// Rays prepared on the device (Backend::integrateRays; the rest, if any, on the host).
   std::uint64_t rays_prepared_on_device = 0;
+  /// Of them, points the device deskewed first (Backend::integratePoints).
+  std::uint64_t points_deskewed_on_device = 0;
   double plan_seconds = 0;  ///< host: region walk, region moves, hit grouping (device planning:
                             ///< the batch's region placements and the resolve launches)
   double wait_seconds = 0;  ///< host waiting for the device to finish earlier batches

@@ -53,6 +53,16 @@ Integrator::Integrator(VoxelMap& map, Backend& backend, platform::PiMutex& map_m
     preparers_.emplace_back(map_, sensor.filter);
   }
   rays_.resize(batcher_.capacity());
+  for (const SensorSettings& sensor : sensors_) {
+    sensor_on_device_.push_back(backend.preparesOnDevice(sensor.filter));
+  }
+  if (std::find(sensor_on_device_.begin(), sensor_on_device_.end(), true) !=
+      sensor_on_device_.end()) {
+    points_.resize(batcher_.capacity());
+    pose_samples_.resize(RM_DESKEW_MAX_POSE_SAMPLES);
+    segments_.reserve(RM_DESKEW_MAX_SEGMENTS);
+    segment_scans_.reserve(RM_DESKEW_MAX_SEGMENTS);
+  }
   completed_.resize(std::size_t{mailbox_.capacity()} + 1);
   completed_sensor_.resize(completed_.size());
 }
@@ -75,7 +85,80 @@ void Integrator::drainPoses() noexcept {
   }
 }
 
+bool Integrator::beginSegment() noexcept {
+  if (segments_.size() == RM_DESKEW_MAX_SEGMENTS) {
+    return false;
+  }
+  const std::size_t poses =
+      history_.copyCovering(scan_start_ns_, scan_end_ns_,
+                            std::span<rm_pose_sample>(pose_samples_).subspan(pose_samples_used_));
+  if (poses == 0) {
+    return false;
+  }
+  segments_.push_back(rm_deskew_segment{io::toRmPose(sensors_[scan_->sensor].extrinsic),
+                                        static_cast<rm_u32>(pose_samples_used_),
+                                        static_cast<rm_u32>(poses)});
+  segment_scans_.push_back(scan_->sequence);
+  pose_samples_used_ += poses;
+  return true;
+}
+
+bool Integrator::convertScanToPoints(std::uint64_t max_visits) noexcept {
+  const std::span<const dds::ScanPoint> points = scan_->points();
+  const SensorSettings& sensor = sensors_[scan_->sensor];
+  const auto capacity = static_cast<std::uint32_t>(points_.size());
+  const auto segment = static_cast<rm_u32>(segments_.size() - 1);
+  // The times PointDeskewer would find a pose for with the history as it is now (the scan's
+  // were covered when it was taken; a small history may have let the oldest go since).
+  const std::int64_t oldest = history_.oldestStamp();
+  const std::int64_t latest = history_.newestStamp() + settings_.pose_hold_ns;
+  std::uint32_t index = 0;
+  while (batch_size_ < capacity && max_visits > 0 && order_.next(&index)) {
+    --max_visits;
+    const dds::ScanPoint& p = points[index];
+    if ((p.flags & dds::kPointNoReturn) != 0u) {
+      stats_.points_no_return.add();  // no direction: nothing to clear along
+      continue;
+    }
+    if (!usableTime(p.time_s, sensor.max_time_offset_s)) {
+      continue;  // counted (points_bad_time) when the scan was taken
+    }
+    const std::int64_t t = pointTimeNs(scan_->header.stamp_ns, p.time_s);
+    if (t < oldest || t > latest) {
+      continue;  // unreachable, as for PointDeskewer
+    }
+    points_[batch_size_++] =
+        rm_scan_point{p.x,
+                      p.y,
+                      p.z,
+                      p.intensity,
+                      (p.flags & dds::kPointFreeOnly) != 0u ? RM_RAW_RAY_NO_RETURN : 0u,
+                      segment,
+                      t};
+  }
+  return order_.done();
+}
+
 bool Integrator::convertScan(std::uint64_t max_visits) noexcept {
+  // Each conversion step looks its poses up afresh: a pose that came since the last step counts
+  // from here on, for the host's deskewing as for the device's (which gets the poses of each
+  // step in a segment of its own).
+  deskewer_.reset();
+  if (batch_size_ == 0) {
+    points_mode_ = sensor_on_device_[batch_sensor_];
+    pose_samples_used_ = 0;
+    segments_.clear();
+    segment_scans_.clear();
+  }
+  if (points_mode_) {
+    if (beginSegment()) {
+      return convertScanToPoints(max_visits);
+    }
+    if (batch_size_ > 0) {
+      return false;  // the batch's tables are full: it goes in first
+    }
+    points_mode_ = false;  // more poses than a batch's table holds: rays, deskewed here
+  }
   const std::span<const dds::ScanPoint> points = scan_->points();
   const SensorSettings& sensor = sensors_[scan_->sensor];
   const auto capacity = static_cast<std::uint32_t>(rays_.size());
@@ -126,7 +209,11 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   const std::uint64_t rejected_before = preparer.counters().rejected();
   const BatcherCounters batcher_before = batcher_.counters();
   const std::int64_t batch_started = settings_.clock_ns();
-  std::span<const Ray> in(rays_.data(), batch_size_);
+  const DeskewTables tables{
+      std::span<const rm_pose_sample>(pose_samples_.data(), pose_samples_used_), segments_,
+      segment_scans_};
+  const std::size_t total = batch_size_;
+  std::size_t done = 0;
   std::unique_lock<platform::PiMutex> lock(map_mutex_, std::defer_lock);
   do {
     lock.lock();
@@ -134,18 +221,22 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
     std::int64_t now = hold_started;
     // Slices until the hold budget is spent (one slice at least; the whole scan per-scan).
     do {
-      std::size_t slice = in.size();
+      std::size_t slice = total - done;
       if (!per_scan_) {
         const double fit = static_cast<double>(settings_.max_lock_hold_ns) / ns_per_ray_;
         slice = std::min(slice, static_cast<std::size_t>(std::clamp(fit, 256.0, 1048576.0)));
       }
-      const std::span<const Ray> part = in.first(slice);
-      in = in.subspan(slice);
       const std::int64_t slice_started = now;
       // The slice goes in whole before the lock is given up: what the batch keeps is flushed.
       // Failures are counted by the batcher (integrate_errors below).
-      (void)batcher_.add(preparer, part);
-      (void)batcher_.flush();
+      if (points_mode_) {
+        (void)batcher_.integratePoints(
+            preparer, std::span<const rm_scan_point>(points_.data() + done, slice), tables);
+      } else {
+        (void)batcher_.add(preparer, std::span<const Ray>(rays_.data() + done, slice));
+        (void)batcher_.flush();
+      }
+      done += slice;
       now = settings_.clock_ns();
       if (slice > 0) {
         const double measured =
@@ -154,12 +245,12 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
         // must not inflate the latency bound's predictions.
         ns_per_ray_ = 0.75 * ns_per_ray_ + 0.25 * std::clamp(measured, 1.0, 4.0 * ns_per_ray_);
       }
-    } while (!in.empty() && now - hold_started < settings_.max_lock_hold_ns);
+    } while (done < total && now - hold_started < settings_.max_lock_hold_ns);
     stats_.map_lock_hold_us.record(static_cast<std::uint64_t>((now - hold_started) / 1000));
-    if (!in.empty()) {
+    if (done < total) {
       lock.unlock();  // a waiting publisher gets the map here (the PI mutex hands it over)
     }
-  } while (!in.empty());
+  } while (done < total);
   // Still locked: the last slice's hold.
   if (scan_stamp_pending_ != 0) {
     stats_.newest_scan_stamp_ns.store(scan_stamp_pending_, std::memory_order_relaxed);

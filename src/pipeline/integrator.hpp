@@ -139,6 +139,21 @@ class Integrator {
 
   // The batch: rays of possibly several scans, all from one sensor (range limits differ).
   std::vector<Ray> rays_;
+  // Or, where the backend deskews on the device (Backend::preparesOnDevice for the sensor's
+  // filter), the batch's points as they came with the tables that deskew them
+  // (kernels/common/deskew.h): a segment per conversion step, with the poses as they were then.
+  bool points_mode_ = false;                  // this batch holds points_, not rays_
+  std::vector<bool> sensor_on_device_;        // per sensor: its batches are points
+  std::vector<rm_scan_point> points_;         // sized as rays_ where some sensor's are points
+  std::vector<rm_pose_sample> pose_samples_;  // RM_DESKEW_MAX_POSE_SAMPLES
+  std::size_t pose_samples_used_ = 0;
+  std::vector<rm_deskew_segment> segments_;  // reserved for RM_DESKEW_MAX_SEGMENTS
+  std::vector<std::uint64_t> segment_scans_;
+  /// Starts a segment for the current scan's points converted next; false when the batch's
+  /// tables are full.
+  bool beginSegment() noexcept;
+  /// Converts the current scan's points into points_ (see convertScan()).
+  bool convertScanToPoints(std::uint64_t max_visits) noexcept;
   RayBatcher batcher_;  // prepares and integrates the batch (the one batching loop)
   std::uint32_t batch_size_ = 0;
   std::uint32_t batch_sensor_ = 0;

@@ -60,6 +60,7 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   d.cache_evictions -= before.cache_evictions;
   d.plans_on_host -= before.plans_on_host;
   d.rays_prepared_on_device -= before.rays_prepared_on_device;
+  d.points_deskewed_on_device -= before.points_deskewed_on_device;
   d.transfer_stalls -= before.transfer_stalls;
   d.plan_seconds -= before.plan_seconds;
   d.wait_seconds -= before.wait_seconds;

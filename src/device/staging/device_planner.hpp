@@ -106,8 +106,8 @@ enum class PlanBuffer : std::uint8_t {
 inline constexpr std::size_t kPlanBufferCount = 36;
 /// Pose samples and segments a batch of points deskewed on the device may carry; a batch with
 /// more is deskewed on the host.
-inline constexpr std::size_t kMaxPoseSamples = 4096;
-inline constexpr std::size_t kMaxSegments = 1024;
+inline constexpr std::size_t kMaxPoseSamples = RM_DESKEW_MAX_POSE_SAMPLES;
+inline constexpr std::size_t kMaxSegments = RM_DESKEW_MAX_SEGMENTS;
 /// Scan levels a planner may use (kScanSums0..3): tile sums of tile sums, down to one tile.
 inline constexpr unsigned kScanLevels = 4;
 

@@ -411,6 +411,7 @@ Expected<std::size_t, IntegrateError> StagedBackend::integratePoints(
   }
   params_.sequence = params_.per_scan != 0u ? map_->beginScan() : 0u;
   planner_.revalidate();
+  const std::uint64_t prepared_before = stats_.rays_prepared_on_device;
   auto integrated = integrateOnDevice(
       points.size(), counters,
       [&](unsigned set, std::size_t from, std::size_t count) {
@@ -434,6 +435,7 @@ Expected<std::size_t, IntegrateError> StagedBackend::integratePoints(
         }
         return done;
       });
+  stats_.points_deskewed_on_device += stats_.rays_prepared_on_device - prepared_before;
   if (integrated) {
     ++stats_.batches;
   }
