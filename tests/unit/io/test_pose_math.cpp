@@ -26,7 +26,7 @@ rm_quat poseMathToRm(const Eigen::Quaterniond& q) { return rm_quat{q.w(), q.x(),
 
 void expectPoseMathSame(double expected, double actual, const char* what) {
   if (kPoseMathEigenOrder) {
-    EXPECT_EQ(expected, actual) << what;  // NOLINT: bit for bit on purpose
+    EXPECT_EQ(expected, actual) << what;  // bit for bit, on purpose
   } else {
     EXPECT_NEAR(expected, actual, 1e-15 * std::max(1.0, std::fabs(expected))) << what;
   }
