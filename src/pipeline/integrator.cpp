@@ -103,15 +103,11 @@ bool Integrator::beginSegment() noexcept {
   return true;
 }
 
-bool Integrator::convertScanToPoints(std::uint64_t max_visits) noexcept {
+template <class Convert>
+bool Integrator::visitScan(std::uint32_t capacity, std::uint64_t max_visits,
+                           Convert&& convert) noexcept {
   const std::span<const dds::ScanPoint> points = scan_->points();
   const SensorSettings& sensor = sensors_[scan_->sensor];
-  const auto capacity = static_cast<std::uint32_t>(points_.size());
-  const auto segment = static_cast<rm_u32>(segments_.size() - 1);
-  // The times PointDeskewer would find a pose for with the history as it is now (the scan's
-  // were covered when it was taken; a small history may have let the oldest go since).
-  const std::int64_t oldest = history_.oldestStamp();
-  const std::int64_t latest = history_.newestStamp() + settings_.pose_hold_ns;
   std::uint32_t index = 0;
   while (batch_size_ < capacity && max_visits > 0 && order_.next(&index)) {
     --max_visits;
@@ -123,20 +119,29 @@ bool Integrator::convertScanToPoints(std::uint64_t max_visits) noexcept {
     if (!usableTime(p.time_s, sensor.max_time_offset_s)) {
       continue;  // counted (points_bad_time) when the scan was taken
     }
-    const std::int64_t t = pointTimeNs(scan_->header.stamp_ns, p.time_s);
-    if (t < oldest || t > latest) {
-      continue;  // unreachable, as for PointDeskewer
-    }
-    points_[batch_size_++] =
-        rm_scan_point{p.x,
-                      p.y,
-                      p.z,
-                      p.intensity,
-                      (p.flags & dds::kPointFreeOnly) != 0u ? RM_RAW_RAY_NO_RETURN : 0u,
-                      segment,
-                      t};
+    batch_size_ += convert(p) ? 1u : 0u;
   }
   return order_.done();
+}
+
+bool Integrator::convertScanToPoints(std::uint64_t max_visits) noexcept {
+  const auto segment = static_cast<rm_u32>(segments_.size() - 1);
+  // The times PointDeskewer would find a pose for with the history as it is now (the scan's
+  // were covered when it was taken; a small history may have let the oldest go since).
+  const std::int64_t oldest = history_.oldestStamp();
+  const std::int64_t latest = history_.newestStamp() + settings_.pose_hold_ns;
+  const std::int64_t stamp = scan_->header.stamp_ns;
+  return visitScan(
+      static_cast<std::uint32_t>(points_.size()), max_visits, [&](const dds::ScanPoint& p) {
+        const std::int64_t t = pointTimeNs(stamp, p.time_s);
+        if (t < oldest || t > latest) {
+          return false;  // unreachable, as for PointDeskewer
+        }
+        const std::uint32_t flags =
+            (p.flags & dds::kPointFreeOnly) != 0u ? RM_RAW_RAY_NO_RETURN : 0u;
+        points_[batch_size_] = rm_scan_point{p.x, p.y, p.z, p.intensity, flags, segment, t};
+        return true;
+      });
 }
 
 bool Integrator::convertScan(std::uint64_t max_visits) noexcept {
@@ -159,27 +164,13 @@ bool Integrator::convertScan(std::uint64_t max_visits) noexcept {
     }
     points_mode_ = false;  // more poses than a batch's table holds: rays, deskewed here
   }
-  const std::span<const dds::ScanPoint> points = scan_->points();
   const SensorSettings& sensor = sensors_[scan_->sensor];
-  const auto capacity = static_cast<std::uint32_t>(rays_.size());
-  std::uint32_t index = 0;
-  while (batch_size_ < capacity && max_visits > 0 && order_.next(&index)) {
-    --max_visits;
-    const dds::ScanPoint& p = points[index];
-    if ((p.flags & dds::kPointNoReturn) != 0u) {
-      stats_.points_no_return.add();  // no direction: nothing to clear along
-      continue;
-    }
-    if (!usableTime(p.time_s, sensor.max_time_offset_s)) {
-      continue;  // counted (points_bad_time) when the scan was taken
-    }
-    if (!deskewer_.toRay(p, scan_->header.stamp_ns, history_, settings_.pose_hold_ns,
-                         sensor.extrinsic, scan_->sequence, rays_[batch_size_])) {
-      continue;  // unreachable: the scan's first and last times were checked
-    }
-    ++batch_size_;
-  }
-  return order_.done();
+  return visitScan(
+      static_cast<std::uint32_t>(rays_.size()), max_visits, [&](const dds::ScanPoint& p) {
+        // false is unreachable: the scan's first and last times were checked
+        return deskewer_.toRay(p, scan_->header.stamp_ns, history_, settings_.pose_hold_ns,
+                               sensor.extrinsic, scan_->sequence, rays_[batch_size_]);
+      });
 }
 
 std::int64_t Integrator::batchDue(std::int64_t now_ns) const noexcept {

@@ -152,6 +152,10 @@ class Integrator {
   /// Starts a segment for the current scan's points converted next; false when the batch's
   /// tables are full.
   bool beginSegment() noexcept;
+  /// Visits the current scan's points (convertScan()'s rules) and adds those `convert(point)`
+  /// takes to the batch, up to `capacity`.
+  template <class Convert>
+  bool visitScan(std::uint32_t capacity, std::uint64_t max_visits, Convert&& convert) noexcept;
   /// Converts the current scan's points into points_ (see convertScan()).
   bool convertScanToPoints(std::uint64_t max_visits) noexcept;
   RayBatcher batcher_;  // prepares and integrates the batch (the one batching loop)

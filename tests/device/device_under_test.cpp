@@ -3,6 +3,9 @@
 
 #include <cstdlib>
 
+#include "src/map/ray_preparer.hpp"
+#include "tests/support/test_rays.hpp"
+
 namespace raymap::test {
 
 std::unique_ptr<Backend> createDeviceBackend(VoxelMap& map, const DeviceBackendOptions& options) {
@@ -20,6 +23,14 @@ std::unique_ptr<Backend> createDeviceBackendAsGiven(VoxelMap& map,
   auto backend = deviceUnderTest().create(map, options);
   EXPECT_TRUE(backend) << deviceUnderTest().api << ": " << (backend ? "" : backend.error().message);
   return backend ? std::move(*backend) : nullptr;
+}
+
+bool devicePreparesRays() {
+  VoxelMap map = makeMap(smallConfig(Semantics::kPerRay));
+  DeviceBackendOptions options;
+  options.planning = gpu::Planning::kDevice;
+  auto backend = createDeviceBackendAsGiven(map, options);
+  return backend && backend->preparesOnDevice(RayFilter{});
 }
 
 }  // namespace raymap::test

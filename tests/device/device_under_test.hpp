@@ -42,8 +42,18 @@ std::unique_ptr<Backend> createDeviceBackend(VoxelMap& map,
 /// @brief createDeviceBackend() with the options exactly as given (planning included).
 std::unique_ptr<Backend> createDeviceBackendAsGiven(VoxelMap& map,
                                                     const DeviceBackendOptions& options);
+/// @brief Whether the device, planning on the device, prepares and deskews rays there (double
+/// precision: every CUDA device, OpenCL devices with cl_khr_fp64 such as PoCL's).
+bool devicePreparesRays();
 
 }  // namespace raymap::test
+
+/// Skips the test where the device under test cannot prepare rays (devicePreparesRays()).
+#define REQUIRE_DEVICE_PREPARATION()                                         \
+  REQUIRE_DEVICE();                                                          \
+  if (!::raymap::test::devicePreparesRays()) {                               \
+    GTEST_SKIP() << "the device has no double precision: the host prepares"; \
+  }
 
 /// Skips the test, with the reason, when the machine cannot run the device under test.
 #define REQUIRE_DEVICE()                                                                       \

@@ -22,6 +22,7 @@
 #include "src/pipeline/scan_mailbox.hpp"
 #include "tests/device/device_map_compare.hpp"
 #include "tests/device/device_under_test.hpp"
+#include "tests/support/integrator_feed.hpp"
 #include "tests/support/test_rays.hpp"
 
 namespace raymap::test {
@@ -74,35 +75,12 @@ struct IntegratorRig {
     c.semantics = semantics;
     return c;
   }
-  void pushPose(std::int64_t stamp_ns) {
-    pipeline::PoseUpdate u;
-    u.stamp_ns = stamp_ns;
-    u.pose = basePoseAt(stamp_ns);
-    u.kind = pipeline::PoseUpdate::kBaseInWorld;
-    ASSERT_TRUE(poses.push(u));
-  }
+  void pushPose(std::int64_t stamp_ns) { pushBasePose(poses, stamp_ns, basePoseAt(stamp_ns)); }
   void pushExtrinsic(const io::Pose& sensor_in_base) {
-    pipeline::PoseUpdate u;
-    u.pose = sensor_in_base;
-    u.sensor = 0;
-    u.kind = pipeline::PoseUpdate::kSensorExtrinsic;
-    ASSERT_TRUE(poses.push(u));
+    pushSensorExtrinsic(poses, 0, sensor_in_base);
   }
   void publishScan(std::int64_t stamp_ns, const std::vector<dds::ScanPoint>& points) {
-    pipeline::ScanSlot* slot = mailbox.acquire();
-    ASSERT_NE(slot, nullptr);
-    slot->header = dds::CloudHeader{};
-    slot->header.stamp_ns = stamp_ns;
-    slot->header.points = static_cast<std::uint32_t>(points.size());
-    slot->header.width = slot->header.points;
-    slot->header.height = 1;
-    slot->header.has_time = true;
-    slot->sensor = 0;
-    slot->arrival_ns = kIntegratorNow;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      slot->buffer[i] = points[i];
-    }
-    mailbox.publish(slot);
+    test::publishScan(mailbox, stamp_ns, points, 0, kIntegratorNow);
   }
 
   VoxelMap map;
@@ -142,19 +120,8 @@ std::vector<dds::ScanPoint> sweep(std::mt19937_64& rng, int count) {
   return points;
 }
 
-bool devicePreparesForIntegrator() {
-  VoxelMap map = makeMap(smallConfig(Semantics::kPerRay));
-  DeviceBackendOptions options;
-  options.planning = gpu::Planning::kDevice;
-  auto backend = createDeviceBackendAsGiven(map, options);
-  return backend && backend->preparesOnDevice(RayFilter{});
-}
-
 TEST(DeviceIntegrator, PointsDeskewedOnTheDeviceGiveTheHostsMapAndCounts) {
-  REQUIRE_DEVICE();
-  if (!devicePreparesForIntegrator()) {
-    GTEST_SKIP() << "the device has no double precision: the host deskews";
-  }
+  REQUIRE_DEVICE_PREPARATION();
   for (const Semantics semantics : {Semantics::kPerRay, Semantics::kPerScan}) {
     const char* label = semantics == Semantics::kPerRay ? "per ray" : "per scan";
     IntegratorRig host(gpu::Planning::kHost, semantics);

@@ -132,22 +132,6 @@ std::vector<Ray> hostilePreparationRays(std::uint64_t seed, int scans) {
   return rays;
 }
 
-/// Whether the device under test prepares rays (double precision: every CUDA device, OpenCL
-/// devices with cl_khr_fp64 such as PoCL's).
-bool devicePreparesRays() {
-  VoxelMap map = makeMap(smallConfig(Semantics::kPerRay));
-  DeviceBackendOptions options;
-  options.planning = gpu::Planning::kDevice;
-  auto backend = createDeviceBackendAsGiven(map, options);
-  return backend && backend->preparesOnDevice(RayFilter{});
-}
-
-#define REQUIRE_DEVICE_PREPARATION()                                         \
-  REQUIRE_DEVICE();                                                          \
-  if (!devicePreparesRays()) {                                               \
-    GTEST_SKIP() << "the device has no double precision: the host prepares"; \
-  }
-
 RayFilter preparationRangeFilter() {
   RayFilter f;
   f.min_range_m = 0.3;

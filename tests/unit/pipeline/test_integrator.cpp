@@ -20,6 +20,7 @@
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_update.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
+#include "tests/support/integrator_feed.hpp"
 #include "tests/support/nanoseconds.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -136,37 +137,15 @@ struct Rig {
   }
 
   void pushPose(std::int64_t stamp_ns, const io::Pose& base_in_world) {
-    PoseUpdate u;
-    u.stamp_ns = stamp_ns;
-    u.pose = base_in_world;
-    u.kind = PoseUpdate::kBaseInWorld;
-    ASSERT_TRUE(poses.push(u));
+    test::pushBasePose(poses, stamp_ns, base_in_world);
   }
   void pushExtrinsic(std::uint32_t sensor, const io::Pose& sensor_in_base) {
-    PoseUpdate u;
-    u.pose = sensor_in_base;
-    u.sensor = sensor;
-    u.kind = PoseUpdate::kSensorExtrinsic;
-    ASSERT_TRUE(poses.push(u));
+    test::pushSensorExtrinsic(poses, sensor, sensor_in_base);
   }
   /// Publishes a scan as the ingest thread does.
   void publishScan(std::int64_t stamp_ns, const std::vector<dds::ScanPoint>& points,
                    std::uint32_t sensor = 0, std::int64_t arrival_ns = kNow) {
-    ScanSlot* slot = mailbox.acquire();
-    ASSERT_NE(slot, nullptr);
-    ASSERT_LE(points.size(), slot->buffer.size());
-    slot->header = dds::CloudHeader{};
-    slot->header.stamp_ns = stamp_ns;
-    slot->header.points = static_cast<std::uint32_t>(points.size());
-    slot->header.width = slot->header.points;
-    slot->header.height = 1;
-    slot->header.has_time = true;
-    slot->sensor = sensor;
-    slot->arrival_ns = arrival_ns;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      slot->buffer[i] = points[i];
-    }
-    mailbox.publish(slot);
+    test::publishScan(mailbox, stamp_ns, points, sensor, arrival_ns);
   }
   VoxelState stateAt(Vec3d p_world) const { return map.state(map.voxelOf(p_world)); }
   std::vector<std::int64_t> drainArrivals() {
