@@ -49,6 +49,10 @@ struct MapperCounters {
   std::uint64_t points_no_pose = 0;      ///< points left out: the pose function had no pose
   std::uint64_t batches = 0;             ///< backend calls
   std::uint64_t rays_pending = 0;        ///< prepared rays waiting in the batch (see flush())
+  /// Device backends planning on the device: rays the device prepared (range limits, keys),
+  /// and of them points it deskewed first (integrate() with a pose table). 0 on the CPU.
+  std::uint64_t rays_prepared_on_device = 0;
+  std::uint64_t points_deskewed_on_device = 0;
 };
 
 /// @brief Voxel counts over the stored map.
@@ -103,6 +107,17 @@ class Mapper {
   /// time (deskewing a spinning lidar's sweep): `sensor_pose_at` is asked once per distinct time.
   Expected<void, Error> integrate(std::span<const SensorPoint> scan,
                                   const SensorPoseFunction& sensor_pose_at);
+  /// @brief Integrates one scan of sensor-frame points with the sensor's pose at each point's
+  /// time interpolated from `sensor_poses` (times increasing: position linearly, orientation by
+  /// normalised linear interpolation along the shorter arc; a point at or after the last sample
+  /// takes it). Points before the first sample or after the last are counted (points_no_pose)
+  /// and left out. With a device backend planning on the device, the points, their times and the
+  /// table go to the device and are deskewed there; the map is the same either way. The scan goes
+  /// in before this returns (as flush() without the wait). @return kInvalidArgument naming the
+  /// sample when the times are not finite and increasing or the table is empty; else as
+  /// integrate(). Nothing is integrated on an error.
+  Expected<void, Error> integrate(std::span<const SensorPoint> scan,
+                                  std::span<const TimedPose> sensor_poses);
   /// @brief Integrates the rays waiting in the batch and waits for the backend (a device's map
   /// is copied back to the host), so that queries see every ray given so far.
   Expected<void, Error> flush();

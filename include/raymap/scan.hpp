@@ -34,4 +34,11 @@ struct SensorPoint {
 /// per distinct point time, in the order of the points, on the thread that calls integrate().
 using SensorPoseFunction = std::function<std::optional<Eigen::Isometry3d>(double time_s)>;
 
+/// @brief A sample of the sensor's pose in the world frame (p_world = sensor_to_world * p_sensor)
+/// at a time (seconds, the time base of the points). Plain value type.
+struct TimedPose {
+  double time_s = 0.0;
+  Eigen::Isometry3d sensor_to_world = Eigen::Isometry3d::Identity();
+};
+
 }  // namespace raymap

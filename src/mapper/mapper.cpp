@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "src/device/backend_choice.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/io/map_file.hpp"
+#include "src/io/trajectory.hpp"
 #include "src/map/ray_batcher.hpp"
 #include "src/mapper/mapper_conversions.hpp"
 
@@ -37,6 +39,8 @@ struct Mapper::State {
   std::size_t chunk_fill = 0;
   std::uint64_t next_scan = 0;
   std::uint64_t points_no_pose = 0;
+  std::vector<rm_scan_point> table_points;  // integrateWithTable(): grow to the largest scan
+  std::vector<rm_pose_sample> table_poses;
   std::unique_ptr<heightmap::HeightmapGenerator> generator;  // made on the first heightmap()
   heightmap::HeightmapPlan plan;
   heightmap::HeightMap grid;
@@ -108,6 +112,58 @@ struct Mapper::State {
       }
     }
     return endScan();
+  }
+  /// One scan deskewed from a table of sensor poses (Mapper::integrate's contract).
+  Expected<void, Error> integrateWithTable(std::span<const SensorPoint> scan,
+                                           std::span<const TimedPose> sensor_poses) {
+    if (sensor_poses.empty()) {
+      return fail(ErrorCode::kInvalidArgument, "sensor_poses: at least one pose is needed");
+    }
+    table_poses.clear();
+    for (std::size_t i = 0; i < sensor_poses.size(); ++i) {
+      const TimedPose& p = sensor_poses[i];
+      const double ns = p.time_s * 1e9;
+      if (!std::isfinite(ns) || std::fabs(ns) > 9.0e18 ||
+          (i > 0 && !(p.time_s > sensor_poses[i - 1].time_s))) {
+        return fail(ErrorCode::kInvalidArgument,
+                    "sensor_poses[" + std::to_string(i) +
+                        "]: times must be finite seconds and increase from one sample to the next");
+      }
+      const std::int64_t t = std::llround(ns);
+      if (i > 0 && t <= table_poses.back().time_ns) {
+        return fail(ErrorCode::kInvalidArgument,
+                    "sensor_poses[" + std::to_string(i) +
+                        "]: less than a nanosecond after the sample before it");
+      }
+      const io::Pose pose = io::Pose::fromIsometry(p.sensor_to_world);
+      table_poses.push_back(rm_pose_sample{t, 0, io::toRmPose(pose)});
+    }
+    const std::int64_t first = table_poses.front().time_ns;
+    const std::int64_t last = table_poses.back().time_ns;
+    table_points.clear();
+    for (const SensorPoint& p : scan) {
+      const double ns = p.time_s * 1e9;
+      const std::int64_t t = std::isfinite(ns) && std::fabs(ns) <= 9.0e18 ? std::llround(ns) : -1;
+      if (!std::isfinite(ns) || std::fabs(ns) > 9.0e18 || t < first || t > last) {
+        ++points_no_pose;
+        continue;
+      }
+      table_points.push_back(rm_scan_point{static_cast<float>(p.position.x()),
+                                           static_cast<float>(p.position.y()),
+                                           static_cast<float>(p.position.z()), p.intensity,
+                                           p.no_return ? RM_RAW_RAY_NO_RETURN : 0u, 0u, t});
+    }
+    // The sensor's pose is the table's: no extrinsic.
+    const rm_deskew_segment segment{rm_pose{rm_vec3d{0.0, 0.0, 0.0}, rm_quat{1.0, 0.0, 0.0, 0.0}},
+                                    0u, static_cast<rm_u32>(table_poses.size())};
+    const std::uint64_t scan_number = next_scan;
+    const DeskewTables tables{table_poses, std::span<const rm_deskew_segment>(&segment, 1),
+                              std::span<const std::uint64_t>(&scan_number, 1)};
+    ++next_scan;
+    if (auto ok = batcher->integratePoints(preparer, table_points, tables); !ok) {
+      return Unexpected(integrateError(ok.error()));
+    }
+    return {};
   }
   Expected<void, Error> synchronise() noexcept {
     if (auto ok = batcher->flush(); !ok) {
@@ -193,6 +249,11 @@ Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
 Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
                                         const SensorPoseFunction& sensor_pose_at) {
   return state_->integratePoints(scan, sensor_pose_at);
+}
+
+Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
+                                        std::span<const TimedPose> sensor_poses) {
+  return state_->integrateWithTable(scan, sensor_poses);
 }
 
 Expected<void, Error> Mapper::flush() { return state_->synchronise(); }
@@ -301,6 +362,9 @@ MapperCounters Mapper::counters() const noexcept {
   c.points_no_pose = s.points_no_pose;
   c.batches = s.batcher->counters().batches;
   c.rays_pending = s.batcher->pending();
+  const BackendStats backend = s.backend.backend->stats();
+  c.rays_prepared_on_device = backend.rays_prepared_on_device;
+  c.points_deskewed_on_device = backend.points_deskewed_on_device;
   return c;
 }
 

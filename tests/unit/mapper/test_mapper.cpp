@@ -14,6 +14,8 @@
 
 #include "src/core/eigen_conversions.hpp"
 #include "src/io/map_file.hpp"
+#include "src/io/trajectory.hpp"
+#include "src/map/backend.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -406,6 +408,160 @@ TEST(Mapper, DeviceBackendsGiveTheCpuMap) {
       }
     }
   }
+  if (compared == 0) {
+    GTEST_SKIP() << "no device backend can run here";
+  }
+}
+
+/// A sweep of points with times over 0.1 s from a sensor moving and turning, and the table of
+/// its poses (every 10 ms, 50 ms beyond the sweep on each side). Some points fall outside it.
+struct TableScan {
+  std::vector<SensorPoint> points;
+  std::vector<TimedPose> poses;
+};
+
+TableScan tableScan(int scan, int count) {
+  TableScan out;
+  const double start = 0.1 * scan;
+  for (int k = -2; k <= 14; ++k) {
+    const double t = start + 0.01 * k;
+    TimedPose p;
+    p.time_s = t;
+    p.sensor_to_world.translation() = Eigen::Vector3d(1.2 * t, 0.3 * t, 0.4);
+    p.sensor_to_world.linear() = Eigen::AngleAxisd(0.7 * t, Eigen::Vector3d::UnitZ()).matrix();
+    out.poses.push_back(p);
+  }
+  for (int i = 0; i < count; ++i) {
+    const double a = 6.283185307179586 * i / count;
+    const double r = 1.0 + 4.0 * ((i * 7919) % 1000) / 1000.0;
+    SensorPoint p;
+    p.position = Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0.3 * std::sin(5.0 * a));
+    p.time_s = start + 0.2 * i / count - 0.04;  // the first and last tenth: no pose
+    p.intensity = 1.0f;
+    p.no_return = i % 23 == 0;
+    out.points.push_back(p);
+  }
+  return out;
+}
+
+/// The rays the table gives, as a device would deskew them (kernels/common/deskew.h).
+std::vector<WorldRay> tableRays(const TableScan& scan, std::uint64_t* no_pose) {
+  std::vector<rm_pose_sample> samples;
+  for (const TimedPose& p : scan.poses) {
+    samples.push_back(rm_pose_sample{std::llround(p.time_s * 1e9), 0,
+                                     io::toRmPose(io::Pose::fromIsometry(p.sensor_to_world))});
+  }
+  const rm_deskew_segment segment{rm_pose{rm_vec3d{0.0, 0.0, 0.0}, rm_quat{1.0, 0.0, 0.0, 0.0}}, 0u,
+                                  static_cast<rm_u32>(samples.size())};
+  const std::uint64_t scan_number = 0;
+  const DeskewTables tables{samples, std::span<const rm_deskew_segment>(&segment, 1),
+                            std::span<const std::uint64_t>(&scan_number, 1)};
+  std::vector<WorldRay> rays;
+  for (const SensorPoint& p : scan.points) {
+    const std::int64_t t = std::llround(p.time_s * 1e9);
+    if (t < samples.front().time_ns || t > samples.back().time_ns) {
+      ++*no_pose;
+      continue;
+    }
+    const Ray r = deskewedRay(
+        rm_scan_point{static_cast<float>(p.position.x()), static_cast<float>(p.position.y()),
+                      static_cast<float>(p.position.z()), p.intensity,
+                      p.no_return ? RM_RAW_RAY_NO_RETURN : 0u, 0u, t},
+        tables);
+    WorldRay w;
+    w.origin = toEigen(r.origin);
+    w.end = toEigen(r.sample);
+    w.intensity = r.intensity;
+    w.no_return = p.no_return;
+    rays.push_back(w);
+  }
+  return rays;
+}
+
+TEST(Mapper, APoseTableDeskewsEachPointAtItsTime) {
+  auto table = Mapper::create(smallMapper(Semantics::kPerRay));
+  auto rays = Mapper::create(smallMapper(Semantics::kPerRay));
+  ASSERT_TRUE(table && rays);
+  std::uint64_t no_pose = 0;
+  for (int s = 0; s < 4; ++s) {
+    const TableScan scan = tableScan(s, 3000);
+    ASSERT_TRUE(table->integrate(std::span<const SensorPoint>(scan.points),
+                                 std::span<const TimedPose>(scan.poses)));
+    const std::vector<WorldRay> world = tableRays(scan, &no_pose);
+    ASSERT_TRUE(rays->integrate(std::span<const WorldRay>(world)));
+  }
+  ASSERT_TRUE(table->flush());
+  ASSERT_TRUE(rays->flush());
+  EXPECT_GT(no_pose, 100u);
+  EXPECT_EQ(table->counters().points_no_pose, no_pose);
+  EXPECT_EQ(table->counters().rays_in, rays->counters().rays_in);
+  EXPECT_EQ(table->counters().rays_integrated, rays->counters().rays_integrated);
+  test::TempDir dir;
+  const VoxelMap a = savedMap(*table, dir);
+  const VoxelMap b = savedMap(*rays, dir);
+  const test::MapComparison c = test::compareMaps(a, b);
+  EXPECT_GT(c.compared, 1000u);
+  EXPECT_EQ(c.exact_value, c.compared);
+}
+
+TEST(Mapper, ABadPoseTableIsAnErrorNamingTheSample) {
+  auto mapper = Mapper::create(smallMapper(Semantics::kPerRay));
+  ASSERT_TRUE(mapper);
+  const TableScan scan = tableScan(0, 100);
+  auto empty =
+      mapper->integrate(std::span<const SensorPoint>(scan.points), std::span<const TimedPose>());
+  ASSERT_FALSE(empty);
+  EXPECT_EQ(empty.error().code, ErrorCode::kInvalidArgument);
+  std::vector<TimedPose> backwards = scan.poses;
+  backwards[3].time_s = backwards[1].time_s;
+  auto bad = mapper->integrate(std::span<const SensorPoint>(scan.points),
+                               std::span<const TimedPose>(backwards));
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("sensor_poses[3]"), std::string::npos) << bad.error().message;
+  backwards[3].time_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(mapper->integrate(std::span<const SensorPoint>(scan.points),
+                                 std::span<const TimedPose>(backwards)));
+  EXPECT_EQ(mapper->counters().rays_in, 0u);  // nothing went in
+}
+
+TEST(Mapper, APoseTableOnADeviceGivesTheCpuMap) {
+  auto cpu = Mapper::create(smallMapper(Semantics::kPerRay));
+  ASSERT_TRUE(cpu);
+  std::vector<TableScan> scans;
+  for (int s = 0; s < 3; ++s) {
+    scans.push_back(tableScan(s, 4000));
+    ASSERT_TRUE(cpu->integrate(std::span<const SensorPoint>(scans.back().points),
+                               std::span<const TimedPose>(scans.back().poses)));
+  }
+  ASSERT_TRUE(cpu->flush());
+  int compared = 0;
+  for (const auto& [device, planning] :
+       {std::pair{"opencl", "host"}, std::pair{"opencl", "device"}, std::pair{"cuda", "device"}}) {
+    MapperConfig config = smallMapper(Semantics::kPerRay);
+    config.backend.name = device;
+    config.backend.device_planning = planning;
+    config.rays.walk = RayOptions::Walk::kForward;  // the CPU's walk: the same voxels
+    auto mapper = Mapper::create(config);
+    if (!mapper) {
+      std::printf("%s: not run here (%s)\n", device, mapper.error().message.c_str());
+      continue;
+    }
+    ++compared;
+    for (const TableScan& scan : scans) {
+      ASSERT_TRUE(mapper->integrate(std::span<const SensorPoint>(scan.points),
+                                    std::span<const TimedPose>(scan.poses)));
+    }
+    ASSERT_TRUE(mapper->flush());
+    EXPECT_EQ(mapper->counters().points_no_pose, cpu->counters().points_no_pose) << device;
+    EXPECT_EQ(mapper->counters().rays_integrated, cpu->counters().rays_integrated) << device;
+    EXPECT_EQ(mapper->counts().voxels_occupied, cpu->counts().voxels_occupied) << device;
+    EXPECT_EQ(mapper->counts().voxels_free, cpu->counts().voxels_free) << device;
+    // Planned on the device, the points are deskewed there (every CUDA device and PoCL have
+    // double precision).
+    EXPECT_EQ(mapper->counters().points_deskewed_on_device > 0, std::string(planning) == "device")
+        << device << " planning " << planning;
+  }
+  EXPECT_EQ(cpu->counters().points_deskewed_on_device, 0u);
   if (compared == 0) {
     GTEST_SKIP() << "no device backend can run here";
   }
