@@ -183,7 +183,7 @@ RAYMAP_FN int rm_prepare_clip(rm_vec3d a, rm_vec3d b, rm_vec3d lo, rm_vec3d hi, 
 RAYMAP_FN rm_u32 rm_prepare_ray(const rm_prepare_params* params, rm_vec3d origin, rm_vec3d sample,
                                 int no_return, rm_prepared_ends* out) {
   double length;
-  double end_sdf = RM_TSDF_FREE;
+  double end_sdf = RM_F64(RM_TSDF_FREE);
   rm_u32 end_flag = no_return ? 0u : RM_RAY_END_HIT;
   rm_u32 outcome = no_return ? RM_PREPARE_NO_RETURN : 0u;
   if (!rm_vec3d_finite(origin) || !rm_vec3d_finite(sample)) {
