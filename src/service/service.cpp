@@ -11,7 +11,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <limits>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -968,7 +970,36 @@ Expected<void, Error> Service::saveMapIfConfigured() {
   if (path.empty()) {
     return {};
   }
-  return io::saveMap(*impl_->map, path);
+  auto saved = io::saveMap(*impl_->map, path);
+  if (saved) {
+    return saved;
+  }
+  // The run's map is not lost because its folder went away or filled up: it goes where the
+  // service keeps state (systemd's StateDirectory=), else the temporary folder, and the error
+  // says where.
+  std::vector<std::filesystem::path> folders;
+  if (const char* state = std::getenv("STATE_DIRECTORY"); state != nullptr && *state != '\0') {
+    const std::string first(state, std::strcspn(state, ":"));
+    folders.emplace_back(first);
+  }
+  std::error_code ec;
+  const std::filesystem::path temp = std::filesystem::temp_directory_path(ec);
+  if (!ec) {
+    folders.push_back(temp);
+  }
+  const std::string name = "raymapd-rescued-" + std::to_string(::getpid()) + "-" +
+                           std::filesystem::path(path).filename().string();
+  std::string tried;
+  for (const std::filesystem::path& folder : folders) {
+    const std::string rescue = (folder / name).string();
+    auto copy = io::saveMap(*impl_->map, rescue);
+    if (copy) {
+      return fail(saved.error().code,
+                  saved.error().message + "; the map was saved to " + rescue + " instead");
+    }
+    tried += "; saving it to " + rescue + " failed too: " + copy.error().message;
+  }
+  return fail(saved.error().code, saved.error().message + tried);
 }
 
 }  // namespace raymap::service

@@ -118,6 +118,14 @@ Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::M
       dir = ".";
     }
     std::error_code ec;
+    const std::filesystem::file_status target = std::filesystem::status(save, ec);
+    if (!ec && std::filesystem::exists(target) && !std::filesystem::is_regular_file(target)) {
+      return fail(
+          ErrorCode::kIo,
+          config.path + ": map.save_on_exit: " + save + " is " +
+              (std::filesystem::is_directory(target) ? "a directory" : "not a regular file") +
+              ": name the map file to write (the map would be lost at shutdown)");
+    }
     if (!std::filesystem::is_directory(dir, ec)) {
       return fail(ErrorCode::kIo, config.path + ": map.save_on_exit: the folder " + dir.string() +
                                       " does not exist (the map would be lost at shutdown)");

@@ -3,6 +3,7 @@
 // meets turns the diagnostics to the documented level with the documented reason, and a stale
 // map is withheld rather than republished.
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 
 #include "tests/service/daemon_process.hpp"
 #include "tests/service/service_fixture.hpp"
+#include "tests/support/cli_runner.hpp"
 
 namespace raymap::test {
 namespace {
@@ -211,6 +213,9 @@ TEST(RaymapdHealth, ImpossibleConfigurationsAreRefusedAtCheckAndAtStartWithTheKe
       {"queues: {scan_slots: 256}\nsensors:\n  - max_points: 16777216\n",
        "queues.scan_slots x sensors[].max_points"},
       {"map: {save_on_exit: " + dir.file("missing/last.rmap") + "}\n", "map.save_on_exit"},
+      // An existing folder: the save at shutdown would fail and lose the run's map.
+      {"map: {save_on_exit: " + dir.path().string() + "}\n",
+       "map.save_on_exit: " + dir.path().string() + " is a directory"},
   };
   for (const Case& c : cases) {
     const std::string path = dir.file("bad.yaml");
@@ -221,6 +226,39 @@ TEST(RaymapdHealth, ImpossibleConfigurationsAreRefusedAtCheckAndAtStartWithTheKe
       EXPECT_NE(text.find(c.key), std::string::npos) << flag << ": " << text;
     }
   }
+}
+
+TEST(RaymapdHealth, AMapItCannotSaveWhereConfiguredGoesToItsStateFolderAndTheLogSaysWhere) {
+  const std::uint32_t domain = uniqueDomain();
+  TempDir dir;
+  const std::filesystem::path folder = dir.path() / "maps";
+  const std::filesystem::path state = dir.path() / "state";
+  std::filesystem::create_directories(folder);
+  std::filesystem::create_directories(state);
+  std::string config = serviceConfig(domain);
+  const std::string map_line = "map: {resolution: 0.1, window: [6, 6, 3]}";
+  config.replace(config.find(map_line), map_line.size(),
+                 "map: {resolution: 0.1, window: [6, 6, 3], save_on_exit: " +
+                     (folder / "last.rmap").string() + "}");
+  const std::string config_path = dir.file("raymapd.yaml");
+  std::ofstream(config_path) << config;
+  FakeNotifySocket notify;
+  DaemonProcess process(RAYMAPD_PATH, {"--config", config_path},
+                        {"NOTIFY_SOCKET=" + notify.path(), "STATE_DIRECTORY=" + state.string()},
+                        dir.file("raymapd.log"));
+  ASSERT_TRUE(notify.waitFor("READY=1", kStartWait).has_value())
+      << readFile(dir.file("raymapd.log"));
+  std::filesystem::remove_all(folder);  // the folder goes away while the service runs
+  const auto stopped = process.stop(SIGTERM, kStopWait);
+  ASSERT_TRUE(stopped.has_value());
+  const std::string log = readFile(dir.file("raymapd.log"));
+  EXPECT_NE(stopped->first, 0) << "the configured save failed: not a clean exit\n" << log;
+  const std::filesystem::path rescued =
+      state / ("raymapd-rescued-" + std::to_string(process.pid()) + "-last.rmap");
+  EXPECT_NE(log.find("the map was saved to " + rescued.string() + " instead"), std::string::npos)
+      << log;
+  EXPECT_TRUE(std::filesystem::is_regular_file(rescued));
+  EXPECT_GT(std::filesystem::file_size(rescued), 0u);
 }
 
 }  // namespace
