@@ -10,6 +10,8 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
@@ -216,6 +218,7 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
     return;
   }
   std::set<std::string> topics;
+  std::set<std::string> names;
   if (node.size() > kMaxSensors) {
     ctx.fail(node, "sensors", "at most " + std::to_string(kMaxSensors) + " sensors");
     return;
@@ -231,6 +234,8 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
                                                               : SensorKind::kDepth;
     const bool depth = s.kind == SensorKind::kDepth;
     s.name = text(f, "name", (depth ? "depth" : "lidar") + std::to_string(i));
+    f.check(names.insert(s.name).second, "name",
+            "two sensors with one name (their diagnostics would share one status)");
     s.topic = topic(f, "topic", depth ? "rt/camera/depth/image_rect_raw" : s.topic);
     f.check(topics.insert(s.topic).second, "topic", "two sensors on one topic");
     if (depth) {
@@ -407,6 +412,40 @@ void readRealtime(Context& ctx, const YAML::Node& node, RealtimeConfig& rt) {
   readThread(ctx, f.get("publisher"), f.path("publisher"), rt.publisher);
 }
 
+/// "key: why" when an output topic is one the service reads (its own maps would come back to it
+/// as input, or another node's input would get maps), else "".
+std::string outputOnAnInput(const DaemonConfig& config) {
+  std::vector<std::pair<std::string, std::string>> inputs;  // (topic, key)
+  for (std::size_t i = 0; i < config.sensors.size(); ++i) {
+    const SensorConfig& s = config.sensors[i];
+    inputs.emplace_back(s.topic, config::item("sensors", i) + ".topic");
+    if (!s.camera_info_topic.empty()) {
+      inputs.emplace_back(s.camera_info_topic, config::item("sensors", i) + ".camera_info_topic");
+    }
+  }
+  if (config.pose.source == PoseConfig::Source::kOdometry) {
+    inputs.emplace_back(config.pose.odometry_topic, "pose.topic");
+  } else {
+    inputs.emplace_back("rt/tf", "pose.source: tf");
+  }
+  inputs.emplace_back("rt/tf_static", "the static transforms");
+  const std::pair<const std::string*, const char*> outputs[] = {
+      {&config.dds.grid_map_topic, "dds.grid_map_topic"},
+      {&config.dds.diagnostics_topic, "dds.diagnostics_topic"},
+      {&config.dds.voxels_topic, "dds.voxels_topic"},
+      {&config.dds.costmap_topic, "dds.costmap_topic"},
+  };
+  for (const auto& [topic, key] : outputs) {
+    for (const auto& [input, input_key] : inputs) {
+      if (!topic->empty() && *topic == input) {
+        return std::string(key) + ": " + *topic + " is an input too (" + input_key +
+               "): the service would publish onto what it reads";
+      }
+    }
+  }
+  return {};
+}
+
 Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   Context ctx(name);
   DaemonConfig config;
@@ -435,6 +474,9 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
     return Unexpected(ctx.error());
   }
   // Checks across sections.
+  if (auto clash = outputOnAnInput(config); !clash.empty()) {
+    return fail(ErrorCode::kInvalidArgument, name + ": " + clash);
+  }
   if (auto valid = config.map.validate(); !valid) {
     return fail(ErrorCode::kInvalidArgument, name + ": map: " + valid.error().message);
   }

@@ -213,6 +213,11 @@ TEST(RaymapdHealth, ImpossibleConfigurationsAreRefusedAtCheckAndAtStartWithTheKe
       {"queues: {scan_slots: 256}\nsensors:\n  - max_points: 16777216\n",
        "queues.scan_slots x sensors[].max_points"},
       {"map: {save_on_exit: " + dir.file("missing/last.rmap") + "}\n", "map.save_on_exit"},
+      // An output on an input topic (issue 52, L1), two sensors with one name (L2).
+      {"dds: {grid_map_topic: rt/points}\n", "dds.grid_map_topic: rt/points is an input too"},
+      {"dds: {costmap_topic: rt/odom}\n", "dds.costmap_topic: rt/odom is an input too"},
+      {"sensors:\n  - {name: front, topic: rt/points}\n  - {name: front, topic: rt/points2}\n",
+       "sensors[1].name"},
       // An existing folder: the save at shutdown would fail and lose the run's map.
       {"map: {save_on_exit: " + dir.path().string() + "}\n",
        "map.save_on_exit: " + dir.path().string() + " is a directory"},
