@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,6 +25,16 @@ namespace {
 
 /// Rays converted from the caller's scan per RayBatcher::add() call (the conversion buffer).
 constexpr std::size_t kChunkRays = 4096;
+
+/// A time in seconds as whole nanoseconds (the deskewing tables' clock); nullopt when it is not
+/// finite or beyond the +-292 years an int64 holds.
+std::optional<std::int64_t> nanoseconds(double seconds) noexcept {
+  const double ns = seconds * 1e9;
+  if (!std::isfinite(ns) || std::fabs(ns) > 9.0e18) {
+    return std::nullopt;
+  }
+  return std::llround(ns);
+}
 
 }  // namespace
 
@@ -73,7 +84,6 @@ struct Mapper::State {
     chunk[chunk_fill++] = ray;
     return chunk_fill == chunk.size() ? drainChunk() : Expected<void, Error>{};
   }
-  /// Ends a scan: its last rays go to the batcher, and the scan gets its number.
   /// Ends a scan: its last rays go to the batcher (which counts the scan), and the next scan
   /// gets its own number.
   Expected<void, Error> endScan() noexcept {
@@ -122,14 +132,13 @@ struct Mapper::State {
     table_poses.clear();
     for (std::size_t i = 0; i < sensor_poses.size(); ++i) {
       const TimedPose& p = sensor_poses[i];
-      const double ns = p.time_s * 1e9;
-      if (!std::isfinite(ns) || std::fabs(ns) > 9.0e18 ||
-          (i > 0 && !(p.time_s > sensor_poses[i - 1].time_s))) {
+      const std::optional<std::int64_t> ns = nanoseconds(p.time_s);
+      if (!ns || (i > 0 && !(p.time_s > sensor_poses[i - 1].time_s))) {
         return fail(ErrorCode::kInvalidArgument,
                     "sensor_poses[" + std::to_string(i) +
                         "]: times must be finite seconds and increase from one sample to the next");
       }
-      const std::int64_t t = std::llround(ns);
+      const std::int64_t t = *ns;
       if (i > 0 && t <= table_poses.back().time_ns) {
         return fail(ErrorCode::kInvalidArgument,
                     "sensor_poses[" + std::to_string(i) +
@@ -142,16 +151,15 @@ struct Mapper::State {
     const std::int64_t last = table_poses.back().time_ns;
     table_points.clear();
     for (const SensorPoint& p : scan) {
-      const double ns = p.time_s * 1e9;
-      const std::int64_t t = std::isfinite(ns) && std::fabs(ns) <= 9.0e18 ? std::llround(ns) : -1;
-      if (!std::isfinite(ns) || std::fabs(ns) > 9.0e18 || t < first || t > last) {
+      const std::optional<std::int64_t> t = nanoseconds(p.time_s);
+      if (!t || *t < first || *t > last) {
         ++points_no_pose;
         continue;
       }
       table_points.push_back(rm_scan_point{static_cast<float>(p.position.x()),
                                            static_cast<float>(p.position.y()),
                                            static_cast<float>(p.position.z()), p.intensity,
-                                           p.no_return ? RM_RAW_RAY_NO_RETURN : 0u, 0u, t});
+                                           p.no_return ? RM_RAW_RAY_NO_RETURN : 0u, 0u, *t});
     }
     // The sensor's pose is the table's: no extrinsic.
     const rm_deskew_segment segment{rm_pose{rm_vec3d{0.0, 0.0, 0.0}, rm_quat{1.0, 0.0, 0.0, 0.0}},
