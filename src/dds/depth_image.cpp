@@ -96,6 +96,7 @@ struct Counts {
   std::uint32_t points = 0;
   std::uint32_t free_only = 0;
   std::uint32_t invalid = 0;
+  std::uint32_t too_near = 0;  ///< of invalid: something nearer than min range, no point given
 };
 
 struct Image {
@@ -121,7 +122,9 @@ Counts decodeEveryPixel(const Image& image, const PixelRayTable& rays, const Lim
         writeReturn(out[n++], toMetres<kMillimetres>(depth), ray);
       } else {
         ++counts.invalid;
-        if (limits.free_invalid && !isNear(depth)) {
+        if (isNear(depth)) {
+          ++counts.too_near;
+        } else if (limits.free_invalid) {
           writeFree(out[n++], ray, limits.max_range);
           ++counts.free_only;
         }
@@ -168,6 +171,7 @@ Counts decodeBlocks(const Image& image, const PixelRayTable& rays, const Limits&
         writeReturn(out[n++], toMetres<kMillimetres>(best), rays.ray(best_u, best_v));
       } else {
         ++counts.invalid;
+        counts.too_near += occluded ? 1u : 0u;
         if (limits.free_invalid && !occluded) {
           const std::uint32_t centre_u = u0 + (u1 - u0 - 1) / 2;
           const std::uint32_t centre_v = v0 + (v1 - v0 - 1) / 2;
@@ -358,6 +362,7 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
   header.points = counts.points;
   header.free_only = counts.free_only;
   header.invalid = counts.invalid;
+  header.too_near = counts.too_near;
   return header;
 }
 

@@ -44,7 +44,10 @@ struct DepthImageHeader {
   std::uint32_t points = 0;     ///< points written to `out` (returns and free-only)
   std::uint32_t free_only = 0;  ///< of those, kPointFreeOnly (invalid_as_free)
   std::uint32_t invalid = 0;    ///< blocks with no valid depth (free-only or left out)
-  bool millimetres = false;     ///< 16UC1 (else 32FC1)
+  /// Of invalid: blocks left out because a depth in them is nearer than min_range_m (or REP
+  /// 117's -inf). All of an image's blocks here means min_range_m is beyond what the camera sees.
+  std::uint32_t too_near = 0;
+  bool millimetres = false;  ///< 16UC1 (else 32FC1)
 };
 
 /// Why an image was rejected. Every malformed input gives one of these; nothing is read out of

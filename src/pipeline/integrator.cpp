@@ -197,7 +197,7 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
     return;
   }
   RayPreparer& preparer = preparers_[batch_sensor_];
-  const std::uint64_t rejected_before = preparer.counters().rejected();
+  const RayCounters rays_before = preparer.counters();
   const BatcherCounters batcher_before = batcher_.counters();
   const std::int64_t batch_started = settings_.clock_ns();
   const DeskewTables tables{
@@ -257,15 +257,25 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   const BatcherCounters& batcher_now = batcher_.counters();
   stats_.batches.add(batcher_now.batches - batcher_before.batches);
   stats_.integrate_errors.add(batcher_now.batches_failed - batcher_before.batches_failed);
-  stats_.rays_integrated.add(batcher_now.rays_integrated - batcher_before.rays_integrated);
-  stats_.rays_rejected.add(preparer.counters().rejected() - rejected_before);
-  stats_.scans_integrated.add(completed_count_);
-  for (std::uint32_t i = 0; i < completed_count_; ++i) {
-    if (completed_sensor_[i] < stats_.sensors.size()) {
-      stats_.sensors[completed_sensor_[i]].scans_integrated.add();
+  const std::uint64_t rays_in = batcher_now.rays_integrated - batcher_before.rays_integrated;
+  stats_.rays_integrated.add(rays_in);
+  countRejections(rays_before, preparer.counters());
+  // Scans that put nothing in the map (every ray rejected: a min range beyond every return, a
+  // wrong extrinsic) are not integrated: counted apart, and the map goes stale (health). A scan
+  // larger than a batch went in over several: their rays count for the batch that finishes it.
+  rays_since_scan_end_ += rays_in;
+  if (completed_count_ == 0) {
+    // none finished: decided with the batch that finishes them
+  } else if (rays_since_scan_end_ == 0) {
+    stats_.scans_empty.add(completed_count_);
+  } else {
+    rays_since_scan_end_ = 0;
+    stats_.scans_integrated.add(completed_count_);
+    for (std::uint32_t i = 0; i < completed_count_; ++i) {
+      if (completed_sensor_[i] < stats_.sensors.size()) {
+        stats_.sensors[completed_sensor_[i]].scans_integrated.add();
+      }
     }
-  }
-  if (completed_count_ > 0) {
     stats_.last_scan_integrated_ns.store(settings_.clock_ns(), std::memory_order_relaxed);
   }
   completed_count_ = 0;
@@ -273,6 +283,14 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   scan_stamp_pending_ = 0;
   batch_due_ns_ = kNever;
   (void)now_ns;
+}
+
+void Integrator::countRejections(const RayCounters& before, const RayCounters& now) noexcept {
+  stats_.rays_rejected.add(now.rejected() - before.rejected());
+  stats_.rays_invalid.add(now.rays_invalid - before.rays_invalid);
+  stats_.rays_too_short.add(now.rays_too_short - before.rays_too_short);
+  stats_.rays_out_of_bounds.add(now.rays_out_of_bounds - before.rays_out_of_bounds);
+  stats_.rays_outside_window.add(now.rays_outside_window - before.rays_outside_window);
 }
 
 std::int64_t Integrator::step(std::int64_t now_ns) noexcept {

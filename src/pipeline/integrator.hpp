@@ -103,6 +103,8 @@ class Integrator {
   /// `max_visits` points have been visited. @return true when the scan is finished.
   bool convertScan(std::uint64_t max_visits) noexcept;
   void integrateBatch(std::int64_t now_ns) noexcept;
+  /// Adds the preparer's rejections between two readings to the pipeline's counters.
+  void countRejections(const RayCounters& before, const RayCounters& now) noexcept;
   /// How many more points can be converted (and, with the batch, integrated) before `deadline`
   /// at the measured cost; UINT64_MAX for kNoDeadline.
   std::uint64_t visitsBefore(std::int64_t deadline) const noexcept;
@@ -165,6 +167,9 @@ class Integrator {
   std::vector<std::int64_t> completed_;          // arrivals of scans whose last ray is in the batch
   std::vector<std::uint32_t> completed_sensor_;  // and their sensors (per-sensor counters)
   std::uint32_t completed_count_ = 0;
+  /// Rays integrated since the last batch that finished a scan (decides whether the scans it
+  /// finishes put anything in the map).
+  std::uint64_t rays_since_scan_end_ = 0;
   std::int64_t scan_stamp_pending_ = 0;    // newest header stamp among the completed scans
   std::int64_t batch_due_ns_ = INT64_MAX;  // earliest deadline of the completed scans in the batch
   double ns_per_ray_ = 1000.0;             // measured (moving average): sizes the slices

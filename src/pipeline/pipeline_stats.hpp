@@ -69,6 +69,9 @@ struct PipelineStats {
   std::uint32_t wrong_frame_sensor = 0;
   std::atomic<bool> wrong_frame_seen{false};
   Counter points_received;  ///< points in accepted clouds
+  /// Depth blocks that gave no point because something in them is nearer than the sensor's
+  /// min range (within the accepted images; the health rule counts them as offered rays).
+  Counter points_too_near;
   Counter poses_received;   ///< odometry messages / TF transforms used
   Counter poses_malformed;  ///< rejected by the decoder
   Counter poses_dropped;    ///< pose queue full (the integrator is far behind)
@@ -81,7 +84,11 @@ struct PipelineStats {
   std::atomic<std::uint32_t> tf_static_edges{0};
   std::atomic<std::uint32_t> extrinsics_from_tf{0};
   // ---- integrator thread ----
-  Counter scans_integrated;  ///< scans whose every ray went into the map
+  /// Scans handed to the map in a batch that put at least one ray in it.
+  Counter scans_integrated;
+  /// Scans handed to the map in batches that put no ray in it (every ray rejected, or none to
+  /// begin with): they keep nothing fresh, so they do not count as integrated for staleness.
+  Counter scans_empty;
   Counter scans_no_pose;     ///< dropped: no pose covered the scan in time
   Counter points_no_return;  ///< non-finite points (no direction: counted, not integrated)
   /// Points whose per-point time is not finite or further than sensors[].max_time_offset_s from
@@ -99,13 +106,18 @@ struct PipelineStats {
   /// The ray budget: every scan is subsampled by this factor (1 = whole) while the points
   /// arriving over the last second need more than the backend integrates.
   std::atomic<std::int32_t> subsample_stride{1};
-  /// Monotonic time the last scan went into the map (0: none yet); the staleness rule.
+  /// Monotonic time the last scan put a ray into the map (0: none yet); the staleness rule.
   std::atomic<std::int64_t> last_scan_integrated_ns{0};
-  Counter rays_integrated;     ///< rays handed to the backend
-  Counter rays_rejected;       ///< invalid, too short, out of bounds or outside the window
-  Counter batches;             ///< backend calls
-  Counter integrate_errors;    ///< backend calls that failed
-  Counter poses_out_of_order;  ///< pose stamps not after the previous one (ignored)
+  Counter rays_integrated;  ///< rays handed to the backend
+  Counter rays_rejected;    ///< invalid, too short, out of bounds or outside the window
+  /// Of rays_rejected, by reason (the ray preparer's counters).
+  Counter rays_invalid;         ///< NaN or infinite coordinates
+  Counter rays_too_short;       ///< shorter than the sensor's min range
+  Counter rays_out_of_bounds;   ///< beyond the map's key range or longer than the longest ray
+  Counter rays_outside_window;  ///< entirely outside the rolling window
+  Counter batches;              ///< backend calls
+  Counter integrate_errors;     ///< backend calls that failed
+  Counter poses_out_of_order;   ///< pose stamps not after the previous one (ignored)
   // ---- publisher thread ----
   Counter maps_published;
   Counter costmaps_published;  ///< nav_msgs/OccupancyGrid written (dds.costmap_topic)

@@ -147,6 +147,7 @@ DecodedScan SensorDecoder::decodeDepth(std::span<const std::byte> cdr,
   result.header.width = decoded->points;  // an unorganised cloud of the blocks' points
   result.header.height = 1;
   result.header.points = decoded->points;
+  result.too_near = decoded->too_near;
   result.header.no_return = 0;  // free-only points have a direction and are integrated
   result.header.has_time = false;
   result.header.has_intensity = false;

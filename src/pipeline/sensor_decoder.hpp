@@ -61,6 +61,10 @@ struct DecodedScan {
   dds::CloudHeader header{};  ///< valid when accepted (and frame_id when kWrongFrame)
   dds::CloudError cloud_error = dds::CloudError::kTruncated;            ///< point clouds
   dds::DepthImageError image_error = dds::DepthImageError::kTruncated;  ///< depth images
+  /// Depth images: blocks (pixels at downsample 1) that gave no point because something in them
+  /// is nearer than the sensor's min range. Counted, so that a min range beyond what the camera
+  /// sees is reported instead of giving empty scans silently.
+  std::uint32_t too_near = 0;
 };
 
 /// @brief Decodes one sensor's messages. Thread-safety: one thread (raymapd's ingest thread).

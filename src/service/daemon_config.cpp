@@ -373,9 +373,16 @@ bool isPlainName(const std::string& name) {
 
 void readHealth(Context& ctx, const YAML::Node& node, HealthConfig& health) {
   Fields f(ctx, node, "health");
-  f.knownKeys({"stale_after_s", "hardware_id"});
+  f.knownKeys({"stale_after_s", "startup_grace_s", "min_integrated_fraction", "hardware_id"});
   health.stale_after_s = f.positive("stale_after_s", health.stale_after_s);
   f.check(health.stale_after_s <= 3600.0, "stale_after_s", "must be at most 3600 s");
+  health.startup_grace_s = f.number("startup_grace_s", health.startup_grace_s);
+  f.check(health.startup_grace_s >= 0.0 && health.startup_grace_s <= 3600.0, "startup_grace_s",
+          "must be 0 to 3600 s");
+  health.min_integrated_fraction =
+      f.number("min_integrated_fraction", health.min_integrated_fraction);
+  f.check(health.min_integrated_fraction >= 0.0 && health.min_integrated_fraction <= 1.0,
+          "min_integrated_fraction", "must be 0 to 1");
   health.hardware_id = text(f, "hardware_id", "");
   f.check(
       health.hardware_id.empty() || isPlainName(health.hardware_id), "hardware_id",

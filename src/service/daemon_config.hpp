@@ -151,6 +151,13 @@ struct HealthConfig {
   /// status is ERROR and no GridMap is published (a planner must not take the last one for the
   /// present). The systemd watchdog keeps being pinged: a restart cannot make the input come.
   double stale_after_s = 1.0;
+  /// Seconds after start during which no cloud at all is "waiting for the first cloud" (WARN)
+  /// rather than the staleness ERROR: systemd starts the service before the sensor drivers.
+  double startup_grace_s = 10.0;
+  /// The share of the rays offered (after decoding; points without a return are not offered)
+  /// that must go into the map over a diagnostics window: below it WARN, none of them ERROR.
+  /// Rays are rejected by range (min_range), the map's bounds, max_ray_length or the window.
+  double min_integrated_fraction = 0.5;
   /// diagnostic_msgs hardware_id; empty: "<host name>/<name>", so that two services on one
   /// domain are told apart.
   std::string hardware_id;

@@ -78,6 +78,12 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   t.rejected = stats_.rays_rejected.get();
   t.no_return = stats_.points_no_return.get();
   t.bad_time = stats_.points_bad_time.get();
+  t.scans_empty = stats_.scans_empty.get();
+  t.invalid = stats_.rays_invalid.get();
+  t.too_short = stats_.rays_too_short.get();
+  t.out_of_bounds = stats_.rays_out_of_bounds.get();
+  t.outside_window = stats_.rays_outside_window.get();
+  t.too_near = stats_.points_too_near.get();
   t.scans_shed = stats_.scans_shed.get();
   t.scans_cut_short = stats_.scans_cut_short.get();
   t.points_shed = stats_.points_shed.get();
@@ -241,6 +247,35 @@ void DiagnosticsReporter::describeDrops() noexcept {
   reason(c.poses_dropped, b.poses_dropped, "poses dropped (pose queue full)");
 }
 
+std::uint8_t DiagnosticsReporter::describeIntegration(char* out, std::size_t size) const noexcept {
+  const Totals& c = ring_[head_].totals;
+  const Totals& b = base_->totals;
+  out[0] = '\0';
+  const std::uint64_t integrated = c.rays - b.rays;
+  const std::uint64_t lost = (c.rejected - b.rejected) + (c.too_near - b.too_near);
+  const std::uint64_t offered = integrated + lost;
+  if (offered == 0 || static_cast<double>(integrated) >=
+                          settings_.min_integrated_fraction * static_cast<double>(offered)) {
+    return dds::kDiagnosticOk;
+  }
+  const double dt = static_cast<double>(ring_[head_].ns - base_->ns) * 1e-9;
+  appendf(out, size, "integrating %" PRIu64 " of %" PRIu64 " rays (%.0f %%) in %.1f s:", integrated,
+          offered, 100.0 * static_cast<double>(integrated) / static_cast<double>(offered), dt);
+  const char* sep = " ";
+  const auto reason = [&](std::uint64_t now, std::uint64_t before, const char* what) {
+    if (now > before) {
+      appendf(out, size, "%s%" PRIu64 " %s", sep, now - before, what);
+      sep = ", ";
+    }
+  };
+  reason(c.too_short, b.too_short, "shorter than the sensor's min_range");
+  reason(c.too_near, b.too_near, "depth blocks nearer than the sensor's min_range");
+  reason(c.out_of_bounds, b.out_of_bounds, "beyond the map's bounds or max_ray_length");
+  reason(c.outside_window, b.outside_window, "outside the rolling window");
+  reason(c.invalid, b.invalid, "with coordinates that are not finite");
+  return integrated == 0 ? dds::kDiagnosticError : dds::kDiagnosticWarn;
+}
+
 void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   const Sample& now = ring_[head_];
   const Totals& c = now.totals;
@@ -250,6 +285,11 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   const std::int64_t since = now.ns - (last != 0 ? last : started_ns_);
   seconds_since_scan_ = static_cast<double>(since) * 1e-9;
   stale_ = since > static_cast<std::int64_t>(std::llround(settings_.stale_after_s * 1e9));
+  // Before the first cloud a service started ahead of its sensors (as systemd starts it) is
+  // waiting, not failing, for startup_grace_s.
+  waiting_first_ = stale_ && last == 0 && c.clouds == 0 &&
+                   now.ns - started_ns_ <=
+                       static_cast<std::int64_t>(std::llround(settings_.startup_grace_s * 1e9));
   const bool failing = c.integrate_errors > b.integrate_errors;
   backend_failing_ = failing;
   describeDrops();
@@ -262,7 +302,13 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
     appendf(m, size, "%u other publisher%s of %s on this domain (another raymapd?)",
             other_publishers_, other_publishers_ == 1 ? "" : "s", settings_.grid_map_topic.c_str());
   }
-  if (stale_) {
+  if (waiting_first_) {
+    appendf(m, size,
+            "%swaiting for the first %s, %.1f s since start (ERROR after %.0f s: "
+            "health.startup_grace_s)",
+            m[0] == '\0' ? "" : "; ", has_depth_ ? "point cloud or depth image" : "point cloud",
+            seconds_since_scan_, settings_.startup_grace_s);
+  } else if (stale_) {
     appendf(m, size, "%sno scan integrated %s %.1f s", m[0] == '\0' ? "" : "; ",
             last != 0 ? "for" : "since start,", seconds_since_scan_);
     // Whether input still arrives is decided by time, not by the window's counts: a window
@@ -284,19 +330,30 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
     appendf(m, size, "%s%" PRIu64 " backend failures", m[0] == '\0' ? "" : "; ",
             c.integrate_errors - b.integrate_errors);
   }
-  const bool error = other_publishers_ > 0 || stale_ || failing;
+  char integration[320];
+  const std::uint8_t integration_level = describeIntegration(integration, sizeof(integration));
+  if (integration_level != dds::kDiagnosticOk) {
+    appendf(m, size, "%s%s", m[0] == '\0' ? "" : "; ", integration);
+  }
+  const bool error = other_publishers_ > 0 || (stale_ && !waiting_first_) || failing ||
+                     integration_level == dds::kDiagnosticError;
+  const bool warn = dropping || waiting_first_ || integration_level != dds::kDiagnosticOk;
   if (dropping) {
     appendf(m, size, "%sdropping input: %s", m[0] == '\0' ? "" : "; ", drop_reasons_);
   }
-  pipeline_level_ = error      ? dds::kDiagnosticError
-                    : dropping ? dds::kDiagnosticWarn
-                               : dds::kDiagnosticOk;
+  pipeline_level_ = error  ? dds::kDiagnosticError
+                    : warn ? dds::kDiagnosticWarn
+                           : dds::kDiagnosticOk;
   if (m[0] == '\0') {
     appendf(m, size, "ok");
   }
 
   heightmap_message_[0] = '\0';
-  if (stale_) {
+  if (waiting_first_) {
+    heightmap_level_ = dds::kDiagnosticWarn;
+    appendf(heightmap_message_, sizeof(heightmap_message_), "no map yet: waiting for the first %s",
+            has_depth_ ? "cloud or image" : "cloud");
+  } else if (stale_) {
     heightmap_level_ = dds::kDiagnosticError;
     appendf(heightmap_message_, sizeof(heightmap_message_),
             "withheld: the map is stale (no scan integrated for %.1f s)", seconds_since_scan_);
@@ -375,6 +432,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
                     dds::toString(static_cast<dds::CameraInfoError>(i)));
       message_.addValue(s, key, "%" PRIu64, c.camera_info_rejected_by[i]);
     }
+    message_.addValue(s, "points_too_near", "%" PRIu64, c.too_near);
   }
   message_.addValue(s, "scans_integrated", "%" PRIu64, c.scans);
   message_.addValue(s, "scan_rate_hz", "%.2f", rate(c.scans, p.scans));
@@ -383,6 +441,20 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "rays_integrated", "%" PRIu64, c.rays);
   message_.addValue(s, "ray_rate_per_s", "%.0f", rate(c.rays, p.rays));
   message_.addValue(s, "rays_rejected", "%" PRIu64, c.rejected);
+  message_.addValue(s, "rays_rejected_too_short", "%" PRIu64, c.too_short);
+  message_.addValue(s, "rays_rejected_out_of_bounds", "%" PRIu64, c.out_of_bounds);
+  message_.addValue(s, "rays_rejected_outside_window", "%" PRIu64, c.outside_window);
+  message_.addValue(s, "rays_rejected_invalid", "%" PRIu64, c.invalid);
+  {
+    // Over the window; 1 when nothing was offered (nothing lost).
+    const std::uint64_t integrated = c.rays - p.rays;
+    const std::uint64_t offered =
+        integrated + (c.rejected - p.rejected) + (c.too_near - p.too_near);
+    message_.addValue(
+        s, "rays_integrated_fraction", "%.3f",
+        offered == 0 ? 1.0 : static_cast<double>(integrated) / static_cast<double>(offered));
+  }
+  message_.addValue(s, "scans_empty", "%" PRIu64, c.scans_empty);
   message_.addValue(s, "points_no_return", "%" PRIu64, c.no_return);
   message_.addValue(s, "points_bad_time", "%" PRIu64, c.bad_time);
   message_.addValue(s, "scans_shed", "%" PRIu64, c.scans_shed);

@@ -26,7 +26,13 @@ struct ReporterSettings {
   std::string device;
   double publish_rate_hz = 5.0;
   double report_rate_hz = 1.0;
-  double stale_after_s = 1.0;              ///< no scan integrated for this long: ERROR
+  double stale_after_s = 1.0;  ///< no scan integrated for this long: ERROR
+  /// Before the first cloud: WARN "waiting for the first cloud" this long after start, then the
+  /// staleness ERROR (health.startup_grace_s).
+  double startup_grace_s = 10.0;
+  /// Rays integrated over rays offered within the window below this: WARN; none of them: ERROR
+  /// (health.min_integrated_fraction).
+  double min_integrated_fraction = 0.5;
   std::string grid_map_topic;              ///< named when another publisher of it is found
   std::vector<std::string> sensor_frames;  ///< sensors[].frame ("" = any), for the reasons
   /// One per configured sensor (same order): a status "<name>: sensor <sensor.name>" each.
@@ -45,10 +51,12 @@ struct ReporterSettings {
 ///
 /// Levels (docs/raymapd.md, Diagnostics):
 /// - pipeline ERROR: no scan integrated for stale_after_s while running (also before the first
-///   one, once stale_after_s has passed since start), another publisher of the height-map topic
-///   on the domain, or backend failures; WARN: any input dropped within the window (wrong frame,
-///   malformed, too large, no pose, overflow, points with bad times); the message names the
-///   reasons.
+///   one, once stale_after_s has passed since start and a cloud came or startup_grace_s passed),
+///   no ray of those offered within the window integrated, another publisher of the height-map
+///   topic on the domain, or backend failures; WARN: waiting for the first cloud (within
+///   startup_grace_s), fewer than min_integrated_fraction of the offered rays integrated, any
+///   input dropped within the window (wrong frame, malformed, too large, no pose, overflow, points
+///   with bad times); the message names the reasons with their counts.
 /// - height map ERROR while maps are withheld (stale), WARN for late or failed cycles.
 /// - real time WARN when requested settings were refused.
 /// Thread-safety: one thread (diagnostics). Reads the counters other threads write.
@@ -88,6 +96,8 @@ class DiagnosticsReporter {
     std::uint64_t clouds = 0, malformed = 0, too_large = 0, wrong_frame = 0, overflow = 0;
     std::uint64_t overflow_undecoded = 0;  // of overflow, dropped before decoding
     std::uint64_t scans = 0, no_pose = 0, rays = 0, rejected = 0, no_return = 0, bad_time = 0;
+    std::uint64_t scans_empty = 0, invalid = 0, too_short = 0, out_of_bounds = 0;
+    std::uint64_t outside_window = 0, too_near = 0;
     std::uint64_t scans_shed = 0, scans_cut_short = 0, points_shed = 0;
     std::uint64_t maps = 0, withheld = 0, late = 0, hm_errors = 0, integrate_errors = 0;
     std::uint64_t poses = 0, poses_malformed = 0, poses_dropped = 0;
@@ -114,6 +124,10 @@ class DiagnosticsReporter {
   /// Writes every input dropped within the window, with its count, to drop_reasons_
   /// ("; "-separated; empty when nothing was dropped: that is what "dropping" means).
   void describeDrops() noexcept;
+  /// Writes to `out` how many of the rays offered within the window were integrated and why the
+  /// others were not. @return the level that says: OK, WARN below min_integrated_fraction,
+  /// ERROR for none.
+  std::uint8_t describeIntegration(char* out, std::size_t size) const noexcept;
   /// Adds the status of sensor `i` (its counters over the window) to message_.
   void addSensorStatus(std::size_t i, double dt) noexcept;
 
@@ -135,10 +149,11 @@ class DiagnosticsReporter {
   std::uint32_t other_publishers_ = 0;
   double seconds_since_scan_ = 0.0;
   bool stale_ = false;
+  bool waiting_first_ = false;  // no cloud yet, within startup_grace_s
   bool backend_failing_ = false;
   std::uint8_t pipeline_level_ = 0;
   std::uint8_t heightmap_level_ = 0;
-  char pipeline_message_[512] = {};
+  char pipeline_message_[768] = {};
   char drop_reasons_[448] = {};
   char heightmap_message_[128] = {};
   char status_line_[256] = {};

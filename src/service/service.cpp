@@ -425,6 +425,8 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   reporting.publish_rate_hz = config.heightmap.rate_hz;
   reporting.report_rate_hz = config.dds.diagnostics_rate_hz;
   reporting.stale_after_s = config.health.stale_after_s;
+  reporting.startup_grace_s = config.health.startup_grace_s;
+  reporting.min_integrated_fraction = config.health.min_integrated_fraction;
   reporting.grid_map_topic = config.dds.grid_map_topic;
   for (const SensorConfig& sensor : config.sensors) {
     reporting.sensor_frames.push_back(sensor.frame);
@@ -592,6 +594,7 @@ void Service::Impl::decodeCloud(std::uint32_t sensor, std::span<const std::byte>
   slot->sensor = sensor;
   slot->arrival_ns = arrival_ns;
   stats.points_received.add(slot->header.points);
+  stats.points_too_near.add(decoded.too_near);
   counters.accepted.add();
   mailbox->publish(slot);
   integrator_wakeup.notify();

@@ -22,14 +22,17 @@ namespace {
 
 constexpr const char* kCamera = "body_front";
 
-std::string depthConfig(std::uint32_t domain) {
+std::string depthConfig(std::uint32_t domain,
+                        const std::string& ranges = "min_range: 0.1, max_range: 2.0") {
   // The optical frame is learned from the images and resolved through /tf_static.
   return "map: {resolution: 0.1, window: [6, 6, 3]}\n"
          "backend: {name: cpu, threads: 2}\n"
          "pose: {source: odometry, topic: rt/odom, world_frame: odom, base_frame: base_link}\n"
          "sensors:\n"
          "  - {name: body_front, kind: depth, topic: rt/body_front/depth/image_rect_raw,\n"
-         "     min_range: 0.1, max_range: 2.0, downsample: 4}\n"
+         "     " +
+         ranges +
+         ", downsample: 4}\n"
          "heightmap: {rate_hz: 5, size: 8, base_height: 0.55}\n"
          "dds: {domain: " +
          std::to_string(domain) + "}\n";
@@ -168,6 +171,31 @@ TEST(RaymapdDepth, RefusedImagesAreCountedByReasonAndTheCameraWarns) {
   EXPECT_EQ(rig.value("raymapd: pipeline/images_malformed_camera_info_mismatch"), 1.0);
   EXPECT_EQ(rig.value("raymapd: pipeline/images_without_camera_info"), without);
   EXPECT_GT(rig.value(s + "scans_integrated"), 3.0);  // the good frames still went in
+}
+
+TEST(RaymapdDepth, AMinRangeBeyondEveryDepthIsAnErrorCountingTheBlocksNotASilentEmptyMap) {
+  // Issue 52, H1: every depth nearer than min_range gave empty scans, counted nowhere, while the
+  // service reported OK.
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(depthConfig(domain, "min_range: 30, max_range: 40"), false);
+  DepthRig rig(domain);
+  ASSERT_TRUE(rig.waitForService(kStartWaitS)) << daemon.log();
+  std::vector<driver::ReceivedGridMap> maps;
+  rig.play(3.0, maps);
+  const auto says = [&](const char* what) {
+    const auto& values = rig.ros.diagnostics->values();
+    const auto it = values.find("raymapd: pipeline/message");
+    return it != values.end() && it->second.find(what) != std::string::npos;
+  };
+  EXPECT_TRUE(rig.ros.settleUntil(
+      kStartWaitS, [&] { return says("depth blocks nearer than the sensor's min_range"); }, &maps))
+      << rig.ros.diagnostics->values().at("raymapd: pipeline/message");
+  EXPECT_EQ(rig.value("raymapd: pipeline/level"), 2.0);
+  EXPECT_TRUE(says("integrating 0 of"));
+  EXPECT_GT(rig.value("raymapd: pipeline/points_too_near"), 0.0);
+  EXPECT_EQ(rig.value("raymapd: pipeline/scans_integrated"), 0.0);
+  EXPECT_GT(rig.value("raymapd: pipeline/scans_empty"), 0.0);
+  EXPECT_TRUE(maps.empty()) << "a map of nothing is withheld";
 }
 
 }  // namespace

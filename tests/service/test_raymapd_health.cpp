@@ -103,9 +103,65 @@ TEST(RaymapdHealth, APointWithACorruptTimeCostsThatPointAndIsAWarning) {
   expectCleanStop(s.daemon);
 }
 
+TEST(RaymapdHealth, ReturnsAllNearerThanMinRangeAreAnErrorWithCountsAndNoMapIsPublished) {
+  // Issue 52, H1: with every return outside min_range the service reported OK on every status
+  // and published GridMaps of nothing at 5 Hz while scans_integrated counted up.
+  std::string config = serviceConfig(uniqueDomain());
+  config.replace(config.find("min_range: 0.3, max_range: 20"), 29, "min_range: 40, max_range: 60");
+  Started s(config);
+  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", kStartWait).has_value()) << s.daemon.log();
+  ASSERT_TRUE(s.ros.waitForService(kStartWaitS));
+  std::vector<driver::ReceivedGridMap> maps;
+  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 3.0, maps);
+
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "2") << pipelineValue(s.ros, "message");
+  const std::string message = pipelineValue(s.ros, "message");
+  EXPECT_NE(message.find("integrating 0 of"), std::string::npos) << message;
+  EXPECT_NE(message.find("shorter than the sensor's min_range"), std::string::npos) << message;
+  EXPECT_EQ(s.ros.diagnostics->number("raymapd: pipeline/scans_integrated").value_or(-1), 0.0);
+  EXPECT_GT(s.ros.diagnostics->number("raymapd: pipeline/scans_empty").value_or(0), 0.0);
+  EXPECT_GT(s.ros.diagnostics->number("raymapd: pipeline/rays_rejected_too_short").value_or(0),
+            0.0);
+  EXPECT_EQ(s.ros.diagnostics->number("raymapd: pipeline/rays_integrated_fraction").value_or(-1),
+            0.0);
+  EXPECT_EQ(s.ros.diagnostics->values().at("raymapd: height map/level"), "2");
+  EXPECT_TRUE(maps.empty()) << "a map of nothing is withheld, not published as all unknown";
+  EXPECT_NE(s.daemon.log().find("shorter than the sensor's min_range"), std::string::npos)
+      << s.daemon.log();
+  expectCleanStop(s.daemon);
+}
+
+TEST(RaymapdHealth, AServiceStartedBeforeItsLidarWaitsWithAWarningThenErrsAfterTheGrace) {
+  // Issue 52, L15: started before its lidar (as systemd starts it), the first status said ERROR.
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(serviceConfig(domain, "health: {startup_grace_s: 4}\n"), false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+  RosSide ros(domain, 70000);
+  const auto level = [&] { return pipelineValue(ros, "level"); };
+  ASSERT_TRUE(ros.settleUntil(kStartWaitS, [&] { return !level().empty(); }));
+  // The first reports come within the grace (a report a second from start; a machine so slow
+  // that the first report arrives after 4 s would skip this part, not fail it).
+  if (ros.diagnostics->number("raymapd: pipeline/seconds_since_last_scan").value_or(99) < 3.5) {
+    EXPECT_EQ(level(), "1") << pipelineValue(ros, "message");
+    EXPECT_NE(pipelineValue(ros, "message").find("waiting for the first point cloud"),
+              std::string::npos)
+        << pipelineValue(ros, "message");
+    EXPECT_EQ(ros.diagnostics->values().at("raymapd: height map/level"), "1");
+  }
+  EXPECT_TRUE(ros.settleUntil(kStartWaitS, [&] { return level() == "2"; }))
+      << pipelineValue(ros, "message");
+  EXPECT_NE(pipelineValue(ros, "message").find("no point cloud arrives at all"), std::string::npos)
+      << pipelineValue(ros, "message");
+  EXPECT_EQ(daemon.log().find("ERROR: no scan integrated since start, 1."), std::string::npos)
+      << "no ERROR within the grace:\n"
+      << daemon.log();
+  expectCleanStop(daemon);
+}
+
 TEST(RaymapdHealth, NoInputAtAllIsAnErrorAndNoMapIsPublishedButTheWatchdogIsFed) {
   const std::uint32_t domain = uniqueDomain();
-  RunningDaemon daemon(serviceConfig(domain), /*watchdog=*/true);
+  RunningDaemon daemon(serviceConfig(domain, "health: {startup_grace_s: 0}\n"),
+                       /*watchdog=*/true);
   ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
   RosSide ros(domain, 70000);
   std::vector<driver::ReceivedGridMap> maps;

@@ -29,16 +29,14 @@ constexpr double kFeedbackTimeout_s = 2.0;
 
 /// The counters of raymapd's "raymapd: pipeline" status that account for every received cloud.
 /// (Depth images count as clouds; those above a sensor's max_rate_hz or before its CameraInfo
-/// are accounted too, and so are scans the latency bound shed whole.)
-constexpr const char* kProcessedKeys[] = {"raymapd: pipeline/scans_integrated",
-                                          "raymapd: pipeline/scans_dropped_no_pose",
-                                          "raymapd: pipeline/clouds_dropped_overflow",
-                                          "raymapd: pipeline/clouds_malformed",
-                                          "raymapd: pipeline/clouds_too_large",
-                                          "raymapd: pipeline/clouds_wrong_frame",
-                                          "raymapd: pipeline/clouds_rate_limited",
-                                          "raymapd: pipeline/images_without_camera_info",
-                                          "raymapd: pipeline/scans_shed"};
+/// are accounted too, and so are scans the latency bound shed whole and scans that put no ray
+/// into the map.)
+constexpr const char* kProcessedKeys[] = {
+    "raymapd: pipeline/scans_integrated",           "raymapd: pipeline/scans_empty",
+    "raymapd: pipeline/scans_dropped_no_pose",      "raymapd: pipeline/clouds_dropped_overflow",
+    "raymapd: pipeline/clouds_malformed",           "raymapd: pipeline/clouds_too_large",
+    "raymapd: pipeline/clouds_wrong_frame",         "raymapd: pipeline/clouds_rate_limited",
+    "raymapd: pipeline/images_without_camera_info", "raymapd: pipeline/scans_shed"};
 
 std::optional<double> processedClouds(const driver::DiagnosticsListener& diagnostics) {
   double sum = 0.0;

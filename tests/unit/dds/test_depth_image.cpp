@@ -302,6 +302,7 @@ TEST(DecodeDepthImage, MinRangeIsAlongTheRayAndLeavesNearPixelsOutOfTheBlockMini
   ASSERT_TRUE(every.has_value());
   ASSERT_EQ(every->points, 3U);
   EXPECT_EQ(every->invalid, 1U);
+  EXPECT_EQ(every->too_near, 1U);  // counted: health reports a min range beyond the scene
   EXPECT_EQ(out[0].z, 0.8f);
   EXPECT_EQ(out[1].z, 2.0f);
   EXPECT_EQ(out[2].z, 3.0f);
@@ -407,6 +408,7 @@ TEST(DecodeDepthImage, ABlockOccludedByTheRobotIsNeverFree) {
   ASSERT_TRUE(blocks.has_value());
   EXPECT_EQ(blocks->points, 0U);
   EXPECT_EQ(blocks->invalid, 2U);
+  EXPECT_EQ(blocks->too_near, 2U);
   // The same, pixel by pixel: only the pixels without a depth are free.
   options.downsample = 1;
   std::vector<ScanPoint> all(18);
@@ -414,6 +416,7 @@ TEST(DecodeDepthImage, ABlockOccludedByTheRobotIsNeverFree) {
   ASSERT_TRUE(pixels.has_value());
   EXPECT_EQ(pixels->free_only, 16U);
   EXPECT_EQ(pixels->points, 16U);
+  EXPECT_EQ(pixels->too_near, 2U);
 }
 
 TEST(DecodeDepthImage, BigEndianPixelsAndMessagesReadTheSame) {

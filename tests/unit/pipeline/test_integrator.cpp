@@ -494,7 +494,7 @@ TEST(Integrator, AScanWhoseDeadlineHasPassedIsShedWhole) {
   EXPECT_TRUE(rig->drainArrivals().empty());
 }
 
-TEST(Integrator, AnEmptyScanWithTimeLeftIsIntegratedNotShed) {
+TEST(Integrator, AnEmptyScanWithTimeLeftIsCountedEmptyNotShedAndKeepsNothingFresh) {
   auto rig = std::make_unique<Rig>();
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
   rig->stats.next_publish_ns.store(kNow + 100 * kMs);
@@ -502,9 +502,29 @@ TEST(Integrator, AnEmptyScanWithTimeLeftIsIntegratedNotShed) {
 
   rig->integrator.step(kNow);
 
-  EXPECT_EQ(rig->stats.scans_integrated.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_empty.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 0u);
+  EXPECT_EQ(rig->stats.last_scan_integrated_ns.load(), 0) << "nothing went into the map";
   EXPECT_EQ(rig->stats.scans_shed.get(), 0u);
   EXPECT_EQ(rig->stats.scans_cut_short.get(), 0u);
+}
+
+TEST(Integrator, AScanWhoseEveryRayIsShorterThanMinRangeIsEmptyAndCountedPerReason) {
+  std::vector<SensorSettings> sensors = {sensorAt()};
+  sensors[0].filter.min_range_m = 5.0;  // beyond the wall at 3 m
+  auto rig = std::make_unique<Rig>(defaultSettings(), sensors);
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(kStamp, std::vector<dds::ScanPoint>(100, scanPoint(kWall)));
+
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+
+  EXPECT_EQ(rig->stats.rays_integrated.get(), 0u);
+  EXPECT_EQ(rig->stats.rays_rejected.get(), 100u);
+  EXPECT_EQ(rig->stats.rays_too_short.get(), 100u);
+  EXPECT_EQ(rig->stats.scans_empty.get(), 1u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 0u);
+  EXPECT_EQ(rig->stats.last_scan_integrated_ns.load(), 0) << "the map is not fresher for it";
 }
 
 TEST(Integrator, EarlierScansInTheBatchGoInBeforeTheirDeadline) {

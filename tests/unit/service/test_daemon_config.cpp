@@ -414,6 +414,8 @@ TEST(DaemonConfig, HealthAndLoadDefaults) {
   const DaemonConfig& c = result.value();
   EXPECT_EQ(c.name, "raymapd");
   EXPECT_EQ(c.health.stale_after_s, 1.0);
+  EXPECT_EQ(c.health.startup_grace_s, 10.0);
+  EXPECT_EQ(c.health.min_integrated_fraction, 0.5);
   EXPECT_TRUE(c.health.hardware_id.empty()) << "host name + name at start-up";
   EXPECT_EQ(c.sensors[0].max_time_offset_s, 1.0);
   EXPECT_EQ(c.queues.max_lock_hold_s, 0.005);
@@ -427,7 +429,8 @@ TEST(DaemonConfig, HealthAndLoadDefaults) {
 TEST(DaemonConfig, HealthAndLoadValuesAreRead) {
   auto result = parseDaemonConfig(
       "name: front-mapper\n"
-      "health: {stale_after_s: 2.5, hardware_id: robot7/front}\n"
+      "health: {stale_after_s: 2.5, hardware_id: robot7/front, startup_grace_s: 30,\n"
+      "         min_integrated_fraction: 0.2}\n"
       "sensors:\n  - max_time_offset_s: 0.2\n"
       "queues: {max_lock_hold_s: 0.002, max_latency_s: 0.4, shed: drop, max_subsample: 4,\n"
       "         shed_when: always}\n"
@@ -439,6 +442,8 @@ TEST(DaemonConfig, HealthAndLoadValuesAreRead) {
   EXPECT_EQ(c.name, "front-mapper");
   EXPECT_EQ(c.health.stale_after_s, 2.5);
   EXPECT_EQ(c.health.hardware_id, "robot7/front");
+  EXPECT_EQ(c.health.startup_grace_s, 30.0);
+  EXPECT_EQ(c.health.min_integrated_fraction, 0.2);
   EXPECT_EQ(c.sensors[0].max_time_offset_s, 0.2);
   EXPECT_EQ(c.queues.max_lock_hold_s, 0.002);
   EXPECT_EQ(c.queues.max_latency_s, 0.4);
@@ -466,6 +471,9 @@ TEST(DaemonConfig, HealthAndLoadErrorsAreNamed) {
   expectError("health: {stale_after_s: 0}\n", "health.stale_after_s", "");
   expectError("health: {hardware_id: 'a b'}\n", "health.hardware_id", "letters, digits");
   expectError("health: {grace: 1}\n", "health.grace", "");
+  expectError("health: {startup_grace_s: -1}\n", "health.startup_grace_s", "0 to 3600");
+  expectError("health: {min_integrated_fraction: 1.5}\n", "health.min_integrated_fraction",
+              "must be 0 to 1");
   expectError("sensors:\n  - max_time_offset_s: 120\n", "sensors[0].max_time_offset_s",
               "at most 60");
   expectError("queues: {shed: sometimes}\n", "queues.shed", "");

@@ -22,13 +22,16 @@ constexpr std::int64_t kStart = 1000 * kMs;
 
 /// The pipeline around a reporter, with the clock in the test's hands.
 struct Rig {
-  explicit Rig(double report_rate_hz = 1.0) : mailbox(5, 16), poses(16) {
+  /// `startup_grace_s` 0: the staleness rule from start (the tests of other rules).
+  explicit Rig(double report_rate_hz = 1.0, double startup_grace_s = 0.0)
+      : mailbox(5, 16), poses(16) {
     ReporterSettings s;
     s.name = "raymapd";
     s.hardware_id = "host/raymapd";
     s.backend = "cpu";
     s.report_rate_hz = report_rate_hz;
     s.stale_after_s = 1.0;
+    s.startup_grace_s = startup_grace_s;
     s.grid_map_topic = "rt/height_map";
     s.sensor_frames = {"lidar_typo"};
     reporter = std::make_unique<DiagnosticsReporter>(stats, mailbox, poses, s, kStart);
@@ -70,6 +73,98 @@ TEST(DiagnosticsReporter, NoScanSinceStartIsAnErrorOnceTheStaleTimeHasPassed) {
   EXPECT_NE(rig.message().find("no point cloud arrives at all"), std::string::npos)
       << rig.message();
   EXPECT_EQ(rig.reporter->heightmapLevel(), dds::kDiagnosticError) << "maps are withheld";
+}
+
+TEST(DiagnosticsReporter, BeforeTheFirstCloudTheServiceWaitsWithAWarningUntilTheGraceEnds) {
+  Rig rig(1.0, /*startup_grace_s=*/3.0);
+  rig.report(1500);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn) << rig.message();
+  EXPECT_NE(rig.message().find("waiting for the first point cloud, 1.5 s since start"),
+            std::string::npos)
+      << rig.message();
+  EXPECT_EQ(rig.reporter->heightmapLevel(), dds::kDiagnosticWarn);
+  rig.report(3500);  // the grace is over: the staleness rule
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_NE(rig.message().find("no point cloud arrives at all"), std::string::npos)
+      << rig.message();
+  EXPECT_EQ(rig.reporter->heightmapLevel(), dds::kDiagnosticError);
+}
+
+TEST(DiagnosticsReporter, CloudsThatComeWithinTheGraceButAreNotIntegratedAreAnErrorAtOnce) {
+  Rig rig(1.0, /*startup_grace_s=*/10.0);
+  rig.stats.clouds_received.add(15);
+  rig.stats.last_cloud_received_ns.store(kStart + 1400 * kMs);
+  rig.report(1500);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_NE(rig.message().find("no scan integrated since start"), std::string::npos)
+      << rig.message();
+}
+
+/// Scans every 100 ms up to `ms`, each offering `integrated` + `short_rays` rays of which
+/// `short_rays` are shorter than min range.
+void flowRays(Rig& rig, int from_ms, int to_ms, std::uint64_t integrated,
+              std::uint64_t short_rays) {
+  for (int ms = from_ms; ms <= to_ms; ms += 100) {
+    rig.stats.clouds_received.add();
+    rig.stats.last_cloud_received_ns.store(kStart + ms * kMs);
+    rig.stats.rays_integrated.add(integrated);
+    rig.stats.rays_rejected.add(short_rays);
+    rig.stats.rays_too_short.add(short_rays);
+    if (integrated > 0) {
+      rig.stats.scans_integrated.add();
+      rig.stats.last_scan_integrated_ns.store(kStart + ms * kMs);
+    } else {
+      rig.stats.scans_empty.add();
+    }
+  }
+}
+
+TEST(DiagnosticsReporter, ScansWhoseEveryRayIsRejectedAreAnErrorNamingTheReasonAndCounts) {
+  Rig rig;
+  flowRays(rig, 0, 1000, 1000, 0);
+  rig.report(1000);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  EXPECT_EQ(rig.value("rays_integrated_fraction"), "1.000");
+  flowRays(rig, 1100, 2000, 0, 1000);
+  rig.report(2000);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_NE(rig.message().find("integrating 0 of 10000 rays (0 %) in 1.0 s: 10000 shorter than "
+                               "the sensor's min_range"),
+            std::string::npos)
+      << rig.message();
+  EXPECT_EQ(rig.value("rays_integrated_fraction"), "0.000");
+  EXPECT_EQ(rig.value("rays_rejected_too_short"), "10000");
+  EXPECT_EQ(rig.value("scans_empty"), "10");
+}
+
+TEST(DiagnosticsReporter, ASmallFractionOfRaysIntegratedIsAWarningAndEnoughIsOk) {
+  Rig rig;
+  rig.report(0);  // the window's first base
+  flowRays(rig, 0, 1000, 300, 700);
+  rig.report(1000);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn) << rig.message();
+  EXPECT_NE(rig.message().find("integrating 3300 of 11000 rays (30 %) in 1.0 s: 7700 shorter"),
+            std::string::npos)
+      << rig.message();
+  flowRays(rig, 1100, 2000, 700, 300);
+  rig.report(2000);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+}
+
+TEST(DiagnosticsReporter, DepthBlocksNearerThanMinRangeCountAsRaysNotIntegrated) {
+  Rig rig;
+  rig.report(0);  // the window's first base
+  for (int ms = 0; ms <= 1000; ms += 100) {
+    rig.stats.clouds_received.add();
+    rig.stats.last_cloud_received_ns.store(kStart + ms * kMs);
+    rig.stats.points_too_near.add(4800);
+    rig.stats.scans_empty.add();
+  }
+  rig.report(1000);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_NE(rig.message().find("52800 depth blocks nearer than the sensor's min_range"),
+            std::string::npos)
+      << rig.message();
 }
 
 TEST(DiagnosticsReporter, InputThatStopsTurnsThePipelineToErrorAfterTheStaleTime) {
