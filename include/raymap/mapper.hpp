@@ -43,7 +43,8 @@ struct MapperCounters {
   std::uint64_t rays_integrated = 0;     ///< rays that went into the map (clipped ones included)
   std::uint64_t rays_invalid = 0;        ///< NaN or infinite coordinates (rejected)
   std::uint64_t rays_too_short = 0;      ///< shorter than RayOptions::min_range (rejected)
-  std::uint64_t rays_out_of_bounds = 0;  ///< beyond the map's key range (rejected)
+  std::uint64_t rays_out_of_bounds = 0;  ///< beyond the map's key range or max_ray_length
+                                         ///< (rejected), or outside a rolling window
   std::uint64_t rays_clipped = 0;        ///< shortened to RayOptions::max_range (integrated)
   std::uint64_t rays_no_return = 0;      ///< free-space-only rays (integrated)
   std::uint64_t points_no_pose = 0;      ///< points left out: the pose function had no pose

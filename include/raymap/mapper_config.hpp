@@ -36,6 +36,10 @@ struct MapOptions {
 struct RayOptions {
   double min_range = 0.0;  ///< metres; shorter rays are dropped (returns from the robot itself)
   double max_range = 0.0;  ///< metres; 0 = none; longer rays clear free space to it, no hit
+  /// Metres; 0 = none. Longer rays are outlier returns: rejected (counted in
+  /// MapperCounters::rays_out_of_bounds), never clipped, so one ghost return kilometres away
+  /// cannot grow the map by thousands of regions.
+  double max_ray_length = 1000.0;
   double segment_length = 0.0;  ///< metres; 0 = off, else long rays are cut into pieces
   /// Walk each ray from its sample back to the origin (spreads contention on a GPU; the same
   /// voxels either way). Unset (the default) means: forward on the CPU, reverse on a device.

@@ -62,6 +62,7 @@ typedef struct rm_prepare_params {
   double inv_resolution; /* voxels per metre */
   double min_range_m;    /* shorter rays are rejected */
   double max_range_m;    /* 0: none; longer rays are clipped to it */
+  double max_length_m;   /* 0: none; longer rays are outliers, rejected before any clipping */
   double truncation_m;   /* TSDF maps: how far a ray goes on behind its sample */
   double max_voxel;      /* a floored voxel coordinate v is in range when -max < v < max */
   rm_vec3d window_lo;    /* rolling maps: the window grown by half a voxel, metres */
@@ -192,6 +193,9 @@ RAYMAP_FN rm_u32 rm_prepare_ray(const rm_prepare_params* params, rm_vec3d origin
   length = rm_vec3d_norm(rm_vec3d_sub(sample, origin));
   if (length < params->min_range_m) {
     return RM_PREPARE_TOO_SHORT;
+  }
+  if (params->max_length_m > 0.0 && length > params->max_length_m) {
+    return RM_PREPARE_OUT_OF_BOUNDS; /* an outlier return (tens of km): not a measurement */
   }
   if (params->max_range_m > 0.0 && length > params->max_range_m) {
     sample = rm_vec3d_add(

@@ -16,6 +16,13 @@ Expected<void, Error> RayFilter::validate() const {
   if (!std::isfinite(max_range_m) || max_range_m < 0.0) {
     return fail(ErrorCode::kInvalidArgument, "max-range must be a distance >= 0 metres (0 = none)");
   }
+  if (!std::isfinite(max_length_m) || max_length_m < 0.0) {
+    return fail(ErrorCode::kInvalidArgument,
+                "max-ray-length must be a distance >= 0 metres (0 = none)");
+  }
+  if (max_length_m > 0.0 && max_length_m <= min_range_m) {
+    return fail(ErrorCode::kInvalidArgument, "max-ray-length must be larger than min-range");
+  }
   if (max_range_m > 0.0 && max_range_m <= min_range_m) {
     return fail(ErrorCode::kInvalidArgument, "max-range must be larger than min-range");
   }
@@ -38,6 +45,7 @@ rm_prepare_params RayPreparer::params() const noexcept {
   p.inv_resolution = inv_resolution_;
   p.min_range_m = filter_.min_range_m;
   p.max_range_m = filter_.max_range_m;
+  p.max_length_m = filter_.max_length_m;
   p.truncation_m = truncation_m_;
   p.max_voxel = static_cast<double>(map_->maxVoxelCoord());
   p.tsdf = tsdf_ ? 1u : 0u;

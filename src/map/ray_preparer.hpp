@@ -27,8 +27,14 @@ static_assert(kRayNoReturn == RM_RAW_RAY_NO_RETURN);
 struct RayFilter {
   static constexpr std::uint32_t kMaxPiecesPerRay = 1024;
 
-  double min_range_m = 0.0;       ///< rays shorter than this are dropped (returns from the robot)
-  double max_range_m = 0.0;       ///< 0 = none; longer rays are clipped: free up to here, no hit
+  double min_range_m = 0.0;  ///< rays shorter than this are dropped (returns from the robot)
+  /// The longest ray a sensor can measure, metres: raymap's default for max_length_m.
+  static constexpr double kDefaultMaxLength = 1000.0;
+
+  double max_range_m = 0.0;  ///< 0 = none; longer rays are clipped: free up to here, no hit
+  /// 0 = none; longer rays are outlier returns (a lidar's 35 km ghost), rejected as out of
+  /// bounds and counted, before max_range_m would clip them into a long free-space ray.
+  double max_length_m = kDefaultMaxLength;
   double segment_length_m = 0.0;  ///< 0 = off; longer rays are cut into equal pieces
   bool reverse = false;           ///< walk each ray from the sample back to the origin
 
@@ -40,7 +46,7 @@ struct RayCounters {
   std::uint64_t rays_in = 0;              ///< offered to prepare()
   std::uint64_t rays_invalid = 0;         ///< NaN or infinite coordinates (rejected)
   std::uint64_t rays_too_short = 0;       ///< shorter than min range (rejected)
-  std::uint64_t rays_out_of_bounds = 0;   ///< beyond the map's key range or too long (rejected)
+  std::uint64_t rays_out_of_bounds = 0;   ///< beyond the map's key range or max length (rejected)
   std::uint64_t rays_outside_window = 0;  ///< entirely outside a rolling window (rejected)
   std::uint64_t rays_clipped = 0;         ///< shortened to max range or the window (integrated)
   std::uint64_t rays_no_return = 0;       ///< flagged no-return (integrated, free only)

@@ -74,6 +74,7 @@ Result<RayFilter> toRayFilter(const RayOptions& options, bool device) {
   RayFilter filter;
   filter.min_range_m = options.min_range;
   filter.max_range_m = options.max_range;
+  filter.max_length_m = options.max_ray_length;
   filter.segment_length_m = options.segment_length;
   // Device backends walk from the sample back to the sensor unless told otherwise: rays of a scan
   // all start near the sensor, and forward walks make the device's threads collide there.

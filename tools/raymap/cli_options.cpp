@@ -247,6 +247,10 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--max-range", f.max_range,
                "Clip longer rays (free space only, no hit), metres; 0 = none")
       ->capture_default_str();
+  c.add_option("--max-ray-length", f.max_ray_length,
+               "Reject longer rays as outlier returns (counted as out of bounds), metres; "
+               "0 = none")
+      ->capture_default_str();
   c.add_option("--hit", f.hit, "Hit probability (default 0.9)");
   c.add_option("--miss", f.miss, "Miss probability (default 0.45)");
   c.add_option("--clamp-min", f.clamp_min,
@@ -501,6 +505,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   }
   o.filter.min_range_m = f.min_range;
   o.filter.max_range_m = f.max_range;
+  o.filter.max_length_m = f.max_ray_length;
   o.filter.segment_length_m = f.segment_length;
   // Device backends walk from the sample back to the sensor unless told otherwise: rays of a scan
   // all start near the sensor, and forward walks make the device's threads collide there.

@@ -23,6 +23,7 @@ struct MappingFlags {
   int region_voxels = MapGeometry::kDefaultRegionVoxels;
   double min_range = 0.0;
   double max_range = 0.0;
+  double max_ray_length = 1000.0;
   std::optional<double> hit;
   std::optional<double> miss;
   std::optional<double> clamp_min;

@@ -40,7 +40,7 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
               withCommas(r.rays.rays_in).c_str(), withCommas(r.rays.rays_accepted).c_str(),
               withCommas(r.rays.rejected()).c_str());
   if (r.rays.rejected() > 0) {
-    std::printf(" (invalid %s, too short %s, out of bounds %s)",
+    std::printf(" (invalid %s, too short %s, out of bounds or longer than --max-ray-length %s)",
                 withCommas(r.rays.rays_invalid).c_str(), withCommas(r.rays.rays_too_short).c_str(),
                 withCommas(r.rays.rays_out_of_bounds).c_str());
   }

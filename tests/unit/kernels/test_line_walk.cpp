@@ -114,6 +114,7 @@ class LineWalk : public ::testing::Test {
   PreparedRay prepare(Vec3d origin, Vec3d sample, bool reverse = false) {
     RayFilter filter;
     filter.reverse = reverse;
+    filter.max_length_m = 0.0;  // the walk of any length the key range allows
     RayPreparer preparer(map_, filter);
     const Ray ray = test::makeRay(origin, sample);
     PreparedRay out{};
