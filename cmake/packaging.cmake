@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # The Debian package: `cpack -G DEB` in a Release build directory gives raymap_<version>_<arch>.deb
-# with raymap, raymapd, the systemd unit, /etc/raymapd/{raymapd.yaml,cyclonedds.xml} (conffiles),
+# with raymap, raymapd, raymap-load (and its scenes in /usr/share/raymap/scenes), the systemd unit, /etc/raymapd/{raymapd.yaml,cyclonedds.xml} (conffiles),
 # /usr/share/raymap/cyclonedds-realtime-receive.xml, the static libraries, include/raymap and the
 # CMake package, installed under /usr. Depends: is computed from the executables' shared libraries (dpkg-shlibdeps, from dpkg-dev), plus adduser
 # for the raymapd system user that postinst creates. docs/packaging.md.

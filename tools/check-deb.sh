@@ -35,7 +35,8 @@ contents=$(dpkg-deb -c "$deb")
 for path in ./usr/bin/raymap ./usr/bin/raymapd ./usr/lib/systemd/system/raymapd.service \
   ./etc/raymapd/raymapd.yaml ./etc/raymapd/cyclonedds.xml ./usr/include/raymap/mapper.hpp \
   ./usr/include/raymap/version.hpp ./usr/lib/cmake/raymap/raymapConfig.cmake \
-  ./usr/share/raymap/cyclonedds-realtime-receive.xml; do
+  ./usr/share/raymap/cyclonedds-realtime-receive.xml ./usr/bin/raymap-load \
+  ./usr/share/raymap/scenes/yard.yaml; do
   grep -q " $path\$" <<<"$contents" || { echo "check-deb: the package lacks $path" >&2; exit 1; }
 done
 
@@ -55,6 +56,7 @@ in_root apt-get install -y -qq --no-install-recommends /tmp/raymap.deb >"$build/
   { tail -30 "$build/deb-install.log" >&2; exit 1; }
 in_root raymap --version
 in_root raymapd --check-config /etc/raymapd/raymapd.yaml
+in_root raymap-load --help >/dev/null
 grep -q '^ExecStart=/usr/bin/raymapd --config /etc/raymapd/raymapd.yaml' \
   "$root/usr/lib/systemd/system/raymapd.service" ||
   { echo "check-deb: the installed unit does not start /usr/bin/raymapd" >&2; exit 1; }

@@ -17,10 +17,12 @@
 #include "platform/clock.hpp"
 #include "platform/rt.hpp"
 #include "src/sim/scene_file.hpp"
+#include "tools/dds_driver/default_scene.hpp"
 #include "tools/dds_driver/depth_playback.hpp"
 #include "tools/dds_driver/lidar_playback.hpp"
 #include "tools/dds_driver/ros_endpoints.hpp"
 #include "tools/dds_driver/simulated_lidar.hpp"
+#include "tools/raymap/dds_cli.hpp"
 
 namespace {
 
@@ -38,7 +40,7 @@ double quantile(std::vector<double> v, double q) {
 int main(int argc, char** argv) {
   using namespace raymap;
   CLI::App app{"raymap-load: publish a simulated lidar to raymapd and measure its GridMaps"};
-  std::string scene_path = "config/scenes/yard.yaml";
+  std::string scene_path;  // default: yard.yaml, installed or in the source tree
   int beams = 128;
   int columns = 1024;
   double scan_rate = 10.0;
@@ -46,7 +48,7 @@ int main(int argc, char** argv) {
   double warmup = 2.0;
   bool moving = false;
   int distinct = 4;
-  std::uint32_t domain = 0;
+  int domain = -1;  // -1: $ROS_DOMAIN_ID, else 0
   std::string points_topic = "rt/points";
   std::string odom_topic = "rt/odom";
   std::string grid_topic = "rt/height_map";
@@ -56,7 +58,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> sensors;
   double depth_rate = 0.0;
   int subscriber_priority = 0;
-  app.add_option("--scene", scene_path, "scene file (its lidar and path are the defaults)");
+  app.add_option("--scene", scene_path,
+                 "scene file (its lidar and path are the defaults; default: the installed "
+                 "share/raymap/scenes/yard.yaml)");
   app.add_option("--beams", beams, "lidar beams (128: an Ouster OS-1-128)");
   app.add_option("--columns", columns, "lidar columns per revolution");
   app.add_option("--scan-rate", scan_rate, "scans per second");
@@ -64,7 +68,8 @@ int main(int argc, char** argv) {
   app.add_option("--warmup", warmup, "seconds published before measuring");
   app.add_flag("--moving", moving, "follow the scene's path (default: stay at its start)");
   app.add_option("--distinct", distinct, "static: distinct scans cycled (noise differs)");
-  app.add_option("--domain", domain, "DDS domain");
+  app.add_option("--domain", domain, "DDS domain (default: $ROS_DOMAIN_ID, else 0)")
+      ->check(CLI::Range(0, cli::kMaxDomainId));
   app.add_option("--points-topic", points_topic);
   app.add_option("--odom-topic", odom_topic);
   app.add_option("--grid-topic", grid_topic);
@@ -89,6 +94,19 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 99));
   CLI11_PARSE(app, argc, argv);
 
+  const auto domain_id = cli::domainFromOptionOrEnvironment(domain);
+  if (!domain_id) {
+    std::fprintf(stderr, "raymap-load: %s\n", domain_id.error().message.c_str());
+    return 2;
+  }
+  if (scene_path.empty()) {
+    auto found = driver::findDefaultScene("yard.yaml", RAYMAP_SOURCE_SCENES_DIR);
+    if (!found) {
+      std::fprintf(stderr, "raymap-load: %s\n", found.error().message.c_str());
+      return 2;
+    }
+    scene_path = std::move(found).value();
+  }
   auto scene_file = sim::loadSceneFile(scene_path);
   if (!scene_file) {
     std::fprintf(stderr, "raymap-load: %s\n", scene_file.error().message.c_str());
@@ -115,7 +133,7 @@ int main(int argc, char** argv) {
   }
   driver::SimulatedLidar lidar(scene_file.value().scene, simulation);
 
-  auto participant = dds::Participant::create(domain);
+  auto participant = dds::Participant::create(domain_id.value());
   if (!participant) {
     std::fprintf(stderr, "raymap-load: %s\n", participant.error().message.c_str());
     return 1;
