@@ -453,10 +453,32 @@ std::string outputOnAnInput(const DaemonConfig& config) {
   return {};
 }
 
+/// Records the line of every key under `node` (a mapping or sequence at `path`).
+void recordKeyLines(const YAML::Node& node, const std::string& path,
+                    std::map<std::string, int>& lines) {
+  if (node.IsMap()) {
+    for (const auto& entry : node) {
+      if (!entry.first.IsScalar()) {
+        continue;
+      }
+      const std::string key = config::child(path, entry.first.Scalar());
+      lines.emplace(key, entry.first.Mark().line + 1);
+      recordKeyLines(entry.second, key, lines);
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      const std::string key = config::item(path, i);
+      lines.emplace(key, node[i].Mark().line + 1);
+      recordKeyLines(node[i], key, lines);
+    }
+  }
+}
+
 Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   Context ctx(name);
   DaemonConfig config;
   config.path = name;
+  recordKeyLines(root, "", config.key_lines);
   Fields top(ctx, root, "");
   top.knownKeys({"name", "map", "backend", "pose", "sensors", "heightmap", "costmap", "dds",
                  "queues", "realtime", "health"});
@@ -482,7 +504,8 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   }
   // Checks across sections.
   if (auto clash = outputOnAnInput(config); !clash.empty()) {
-    return fail(ErrorCode::kInvalidArgument, name + ": " + clash);
+    return fail(ErrorCode::kInvalidArgument,
+                config.where(clash.substr(0, clash.find(':'))) + clash.substr(clash.find(':')));
   }
   if (auto valid = config.map.validate(); !valid) {
     return fail(ErrorCode::kInvalidArgument, name + ": map: " + valid.error().message);
@@ -495,7 +518,7 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   if (config.heightmap.size_m > std::min(window_x, window_y) - extent) {
     return fail(
         ErrorCode::kInvalidArgument,
-        name + ": heightmap.size: " + formatNumber(config.heightmap.size_m) +
+        config.where("heightmap.size") + ": " + formatNumber(config.heightmap.size_m) +
             " m does not fit the rolling window (map.window x, y = " + formatNumber(window_x) +
             " x " + formatNumber(window_y) + " m; the map must be at least one region (" +
             formatNumber(extent) + " m) smaller)");
@@ -509,19 +532,26 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   if (config.queues.max_latency_s > 0.0 &&
       config.queues.max_latency_s < period + config.heightmap.publish_lead_s) {
     return fail(ErrorCode::kInvalidArgument,
-                name + ": queues.max_latency_s: " + formatNumber(config.queues.max_latency_s) +
+                config.where("queues.max_latency_s") + ": " +
+                    formatNumber(config.queues.max_latency_s) +
                     " s is shorter than one publish period plus the lead (" +
                     formatNumber(period + config.heightmap.publish_lead_s) +
                     " s): most scans could never be published in time (0 turns the bound off)");
   }
   if (!config.save_map_on_exit.empty() && config.save_map_on_exit.back() == '/') {
     return fail(ErrorCode::kInvalidArgument,
-                name + ": map.save_on_exit: must be a file name, not a directory");
+                config.where("map.save_on_exit") + ": must be a file name, not a directory");
   }
   return config;
 }
 
 }  // namespace
+
+std::string DaemonConfig::where(const std::string& key) const {
+  const auto it = key_lines.find(key);
+  return it == key_lines.end() ? path + ": " + key
+                               : path + ": line " + std::to_string(it->second) + ": " + key;
+}
 
 std::size_t depthRayTablePixels(const SensorConfig& sensor) noexcept {
   if (sensor.kind != SensorKind::kDepth) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -180,6 +181,13 @@ struct DaemonConfig {
   QueueConfig queues;
   RealtimeConfig realtime;
   std::string save_map_on_exit;  ///< map file written (atomically) at shutdown; empty: none
+  /// The line (1-based) of every key the file has, by key path ("map.save_on_exit",
+  /// "sensors[0].min_range"): checks that involve several keys name a line too.
+  std::map<std::string, int> key_lines;
+
+  /// @brief "FILE: line N: KEY" (or "FILE: KEY" for a key the file does not have): the start of
+  /// an error about `key` found after parsing.
+  std::string where(const std::string& key) const;
 };
 
 /// @brief Pixels a depth camera's ray table is sized for at start-up: every pixel of an image

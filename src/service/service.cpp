@@ -279,7 +279,12 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   // DDS.
   auto participant = dds::Participant::create(config.dds.domain);
   if (!participant) {
-    return fail(participant.error().code, file + ": dds.domain: " + participant.error().message);
+    // Cyclone reads its configuration when the participant is created: a bad one fails here.
+    const std::string& uri = config.dds.cyclonedds_uri;
+    return fail(participant.error().code,
+                uri.empty() ? config.where("dds.domain") + ": " + participant.error().message
+                            : config.where("dds.cyclonedds_uri") + " (" + uri +
+                                  ") or dds.domain: " + participant.error().message);
   }
   impl->participant.emplace(std::move(participant).value());
   const dds::Participant& pp = *impl->participant;

@@ -3,7 +3,9 @@
 #include "src/service/startup_checks.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include <unistd.h>
@@ -94,6 +96,42 @@ std::vector<PoolEstimate> estimatePools(const DaemonConfig& config) {
   return pools;
 }
 
+namespace {
+
+/// dds.cyclonedds_uri: Cyclone's list of configuration sources, separated by commas: inline XML
+/// (starting with '<') or files (file://PATH, or a bare path). Every file must be readable: a
+/// missing one would otherwise surface as a failed participant at start.
+Expected<void, Error> checkCycloneUri(const DaemonConfig& config) {
+  const std::string& uri = config.dds.cyclonedds_uri;
+  std::size_t begin = 0;
+  while (begin <= uri.size() && !uri.empty()) {
+    std::size_t end = uri.find(',', begin);
+    // A comma inside inline XML is not a separator: the element runs to its closing '>'.
+    std::string item = uri.substr(begin, end == std::string::npos ? end : end - begin);
+    const std::size_t first = item.find_first_not_of(" \t\n");
+    item = first == std::string::npos ? std::string() : item.substr(first);
+    if (!item.empty() && item.front() == '<') {
+      const std::size_t closing = uri.find('>', begin);
+      end = closing == std::string::npos ? std::string::npos : uri.find(',', closing);
+    } else if (!item.empty()) {
+      const std::string file = item.rfind("file://", 0) == 0 ? item.substr(7) : item;
+      std::FILE* f = std::fopen(file.c_str(), "rb");
+      if (f == nullptr) {
+        return fail(ErrorCode::kIo, config.where("dds.cyclonedds_uri") + ": cannot read " + file +
+                                        ": " + std::strerror(errno));
+      }
+      std::fclose(f);
+    }
+    if (end == std::string::npos) {
+      break;
+    }
+    begin = end + 1;
+  }
+  return {};
+}
+
+}  // namespace
+
 Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::MemoryLimit& limit) {
   const std::vector<PoolEstimate> pools = estimatePools(config);
   double total = 0.0;
@@ -104,12 +142,15 @@ Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::M
   if (total + kHeadroomBytes > available) {
     const PoolEstimate& largest = pools.front();
     return fail(ErrorCode::kCapacity,
-                config.path + ": " + largest.key + ": needs " + formatBytes(largest.bytes) +
-                    " for the " + largest.what + "; with the other pools raymapd would take " +
+                config.where(largest.key) + ": needs " + formatBytes(largest.bytes) + " for the " +
+                    largest.what + "; with the other pools raymapd would take " +
                     formatBytes(total) + " (+ " + formatBytes(kHeadroomBytes) +
                     " for threads and DDS), more than the " + formatBytes(available) +
                     " this machine leaves it (" + limit.source +
                     "): make it smaller, or free memory");
+  }
+  if (auto uri = checkCycloneUri(config); !uri) {
+    return uri;
   }
   const std::string& save = config.save_map_on_exit;
   if (!save.empty()) {
@@ -122,16 +163,18 @@ Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::M
     if (!ec && std::filesystem::exists(target) && !std::filesystem::is_regular_file(target)) {
       return fail(
           ErrorCode::kIo,
-          config.path + ": map.save_on_exit: " + save + " is " +
+          config.where("map.save_on_exit") + ": " + save + " is " +
               (std::filesystem::is_directory(target) ? "a directory" : "not a regular file") +
               ": name the map file to write (the map would be lost at shutdown)");
     }
     if (!std::filesystem::is_directory(dir, ec)) {
-      return fail(ErrorCode::kIo, config.path + ": map.save_on_exit: the folder " + dir.string() +
+      return fail(ErrorCode::kIo, config.where("map.save_on_exit") + ": the folder " +
+                                      dir.string() +
                                       " does not exist (the map would be lost at shutdown)");
     }
     if (::access(dir.c_str(), W_OK | X_OK) != 0) {
-      return fail(ErrorCode::kIo, config.path + ": map.save_on_exit: the folder " + dir.string() +
+      return fail(ErrorCode::kIo, config.where("map.save_on_exit") + ": the folder " +
+                                      dir.string() +
                                       " is not writable by this user (the map would be lost "
                                       "at shutdown)");
     }

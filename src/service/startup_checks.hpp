@@ -28,8 +28,10 @@ struct PoolEstimate {
 std::vector<PoolEstimate> estimatePools(const DaemonConfig& config);
 
 /// @brief Fails (kCapacity) when the pools add up to more than `limit` allows, naming the largest
-/// pool's key, its bytes, the total and the limit's source; fails (kIo) when map.save_on_exit's
-/// folder does not exist or is not writable. Start-up only (allocates, reads the file system).
+/// pool's key, its bytes, the total and the limit's source; fails (kIo) when a file
+/// dds.cyclonedds_uri names cannot be read, or map.save_on_exit's folder does not exist or is not
+/// writable. Errors name the file, the key's line and the key. Start-up only (allocates, reads the
+/// file system).
 Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::MemoryLimit& limit);
 
 /// @brief A byte count for people: "25.8 GB", "393 KB".

@@ -265,13 +265,21 @@ TEST(RaymapdHealth, ImpossibleConfigurationsAreRefusedAtCheckAndAtStartWithTheKe
     std::string key;
   };
   const std::vector<Case> cases = {
-      {"map: {window: [256, 256, 256]}\n", "map.window"},
+      // Errors found across keys name the line too (issue 52, L3).
+      {"name: a\nmap: {window: [256, 256, 256]}\n", "bad.yaml: line 2: map.window"},
       {"queues: {scan_slots: 256}\nsensors:\n  - max_points: 16777216\n",
        "queues.scan_slots x sensors[].max_points"},
-      {"map: {save_on_exit: " + dir.file("missing/last.rmap") + "}\n", "map.save_on_exit"},
+      {"map:\n  resolution: 0.1\n  save_on_exit: " + dir.file("missing/last.rmap") + "\n",
+       "line 3: map.save_on_exit"},
+      {"heightmap:\n  rate_hz: 5\n  size: 40\n", "line 3: heightmap.size: 40 m does not fit"},
       // An output on an input topic (issue 52, L1), two sensors with one name (L2).
-      {"dds: {grid_map_topic: rt/points}\n", "dds.grid_map_topic: rt/points is an input too"},
+      {"dds: {grid_map_topic: rt/points}\n",
+       "line 1: dds.grid_map_topic: rt/points is an input too"},
       {"dds: {costmap_topic: rt/odom}\n", "dds.costmap_topic: rt/odom is an input too"},
+      // A Cyclone configuration that cannot be read (L4: it passed --check-config and the start
+      // error blamed dds.domain).
+      {"dds:\n  cyclonedds_uri: file:///nonexistent/cyclone.xml\n",
+       "line 2: dds.cyclonedds_uri: cannot read /nonexistent/cyclone.xml: No such file"},
       {"sensors:\n  - {name: front, topic: rt/points}\n  - {name: front, topic: rt/points2}\n",
        "sensors[1].name"},
       // An existing folder: the save at shutdown would fail and lose the run's map.

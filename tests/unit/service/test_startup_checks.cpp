@@ -54,7 +54,7 @@ TEST(StartupChecks, AWindowThatCannotFitIsRefusedNamingItsKeyAndBytes) {
   ASSERT_FALSE(result);
   const std::string& m = result.error().message;
   EXPECT_EQ(result.error().code, ErrorCode::kCapacity);
-  EXPECT_NE(m.find("robot.yaml: map.window"), std::string::npos) << m;
+  EXPECT_NE(m.find("robot.yaml: line 1: map.window"), std::string::npos) << m;
   EXPECT_NE(m.find("25.8 GB"), std::string::npos) << m;
   EXPECT_NE(m.find("MemAvailable"), std::string::npos) << m;
   // [256, 256, 256] overflows 32-bit region counts: still refused, with its size.
