@@ -2,6 +2,8 @@
 // The RAII entity owners over Cyclone's C API and the QoS that ROS 2 peers match.
 #include "src/dds/entities.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <string>
 
 #include <dds/ddsi/ddsi_serdata.h>
@@ -220,6 +222,35 @@ std::uint32_t RawReader::matchedWriters() const noexcept {
     return 0;
   }
   return status.current_count;
+}
+
+void RawReader::describeMatchedWriters(char* out, std::size_t size) const noexcept {
+  if (size == 0) {
+    return;
+  }
+  out[0] = '\0';
+  dds_instance_handle_t handles[8];
+  const dds_return_t n = dds_get_matched_publications(reader_, handles, 8);
+  std::size_t used = 0;
+  for (dds_return_t i = 0; i < n && i < 8 && used + 1 < size; ++i) {
+    dds_builtintopic_endpoint_t* writer = dds_get_matched_publication_data(reader_, handles[i]);
+    if (writer == nullptr) {
+      continue;  // it left meanwhile
+    }
+    char guid[25] = {};
+    for (int b = 0; b < 12; ++b) {  // the GUID prefix: host, process, participant
+      std::snprintf(guid + 2 * b, 3, "%02x", writer->participant_key.v[b]);
+    }
+    char* name = nullptr;
+    const bool named = writer->qos != nullptr && dds_qget_entity_name(writer->qos, &name) &&
+                       name != nullptr && name[0] != '\0';
+    const int wrote =
+        std::snprintf(out + used, size - used, "%sparticipant %s%s%s%s", used == 0 ? "" : ", ",
+                      guid, named ? " (" : "", named ? name : "", named ? ")" : "");
+    used = wrote > 0 ? std::min(size - 1, used + static_cast<std::size_t>(wrote)) : used;
+    dds_free(name);
+    dds_builtintopic_free_endpoint(writer);
+  }
 }
 
 // ---- Writer ----

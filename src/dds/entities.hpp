@@ -155,6 +155,13 @@ class RawReader {
   /// @brief Writers currently matched (dds_get_subscription_matched_status).
   std::uint32_t matchedWriters() const noexcept;
 
+  /// @brief Names the matched writers into `out` (NUL-terminated, truncated to `size`):
+  /// "participant 0f1a2b3c4d5e6f7081928374 (its entity name, when it has one)", ", "-separated,
+  /// at most 8. For telling an operator where a second publisher of an input comes from.
+  /// @rt allocates: yes (Cyclone copies the discovery data): call it only when
+  /// matchedWriters() has found something wrong, never in steady state.
+  void describeMatchedWriters(char* out, std::size_t size) const noexcept;
+
  private:
   RawReader(dds_entity_t topic, dds_entity_t reader) noexcept : topic_(topic), reader_(reader) {}
   dds_entity_t topic_ = 0;

@@ -132,8 +132,10 @@ const DiagnosticsReporter::Sample& DiagnosticsReporter::windowBase() const noexc
 }
 
 void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& realtime,
-                                 std::uint32_t other_map_publishers) noexcept {
+                                 std::uint32_t other_map_publishers,
+                                 const InputPublishers* inputs) noexcept {
   realtime_ = &realtime;
+  inputs_ = inputs;
   head_ = filled_ == 0 ? 0 : (head_ + 1) % ring_.size();
   filled_ = std::min(filled_ + 1, ring_.size());
   Sample& s = ring_[head_];
@@ -276,6 +278,41 @@ std::uint8_t DiagnosticsReporter::describeIntegration(char* out, std::size_t siz
   return integrated == 0 ? dds::kDiagnosticError : dds::kDiagnosticWarn;
 }
 
+bool DiagnosticsReporter::describePublishers(char* out, std::size_t size,
+                                             bool* extra_sensor) const noexcept {
+  out[0] = '\0';
+  *extra_sensor = false;
+  if (inputs_ == nullptr) {
+    return false;
+  }
+  const char* sep = "";
+  for (std::size_t i = 0; i < settings_.sensors.size() && i < pipeline::kMaxSensors; ++i) {
+    if (inputs_->clouds[i] > 1) {
+      appendf(out, size,
+              "%s%u publishers of %s (sensors[%zu].topic): each one's %s go into the map", sep,
+              inputs_->clouds[i], settings_.sensors[i].topic.c_str(), i,
+              settings_.sensors[i].camera_info_topic.empty() ? "clouds" : "images");
+      sep = "; ";
+      *extra_sensor = true;
+    }
+    if (inputs_->camera_info[i] > 1) {
+      appendf(out, size, "%s%u publishers of %s (sensors[%zu].camera_info_topic)", sep,
+              inputs_->camera_info[i], settings_.sensors[i].camera_info_topic.c_str(), i);
+      sep = "; ";
+      *extra_sensor = true;
+    }
+  }
+  const bool two_poses = inputs_->odometry > 1;
+  if (two_poses) {
+    appendf(out, size, "%s%u publishers of %s (pose.topic): two pose sources for one robot", sep,
+            inputs_->odometry, inputs_->odometry_topic.c_str());
+  }
+  if (out[0] != '\0' && inputs_->who != nullptr && inputs_->who[0] != '\0') {
+    appendf(out, size, " [%s]", inputs_->who);
+  }
+  return two_poses;
+}
+
 void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   const Sample& now = ring_[head_];
   const Totals& c = now.totals;
@@ -335,9 +372,16 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   if (integration_level != dds::kDiagnosticOk) {
     appendf(m, size, "%s%s", m[0] == '\0' ? "" : "; ", integration);
   }
+  char publishers[384];
+  bool extra_sensor = false;
+  const bool two_poses = describePublishers(publishers, sizeof(publishers), &extra_sensor);
+  if (publishers[0] != '\0') {
+    appendf(m, size, "%s%s", m[0] == '\0' ? "" : "; ", publishers);
+  }
   const bool error = other_publishers_ > 0 || (stale_ && !waiting_first_) || failing ||
-                     integration_level == dds::kDiagnosticError;
-  const bool warn = dropping || waiting_first_ || integration_level != dds::kDiagnosticOk;
+                     integration_level == dds::kDiagnosticError || two_poses;
+  const bool warn =
+      dropping || waiting_first_ || integration_level != dds::kDiagnosticOk || extra_sensor;
   if (dropping) {
     appendf(m, size, "%sdropping input: %s", m[0] == '\0' ? "" : "; ", drop_reasons_);
   }
@@ -479,6 +523,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "poses_malformed", "%" PRIu64, c.poses_malformed);
   message_.addValue(s, "poses_dropped", "%" PRIu64, c.poses_dropped);
   message_.addValue(s, "other_map_publishers", "%u", other_publishers_);
+  message_.addValue(s, "pose_publishers", "%u", inputs_ != nullptr ? inputs_->odometry : 0u);
   message_.addValue(s, "rate_window_s", "%.2f", dt);
 
   // Height map: rate, timing, latency (percentiles over the same window).
@@ -560,7 +605,11 @@ void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {
   const bool whole_window = ring_[head_].ns - started_ns_ >= window_ns_;
   char text[160];
   std::uint8_t level = dds::kDiagnosticOk;
-  if (c.rejected > b.rejected) {
+  if (inputs_ != nullptr && inputs_->clouds[i] > 1) {
+    level = dds::kDiagnosticWarn;
+    std::snprintf(text, sizeof(text), "%u publishers of %s (see pipeline)", inputs_->clouds[i],
+                  sensor.topic.c_str());
+  } else if (c.rejected > b.rejected) {
     level = dds::kDiagnosticWarn;
     std::snprintf(text, sizeof(text), "%" PRIu64 " of %" PRIu64 " %s rejected (see pipeline)",
                   c.rejected - b.rejected, c.received - b.received,
@@ -584,6 +633,7 @@ void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {
   message_.addValue(s, "scans_integrated", "%" PRIu64, c.scans);
   message_.addValue(s, "scan_rate_hz", "%.2f", rate(c.scans, b.scans));
   message_.addValue(s, "rejected", "%" PRIu64, c.rejected);
+  message_.addValue(s, "publishers", "%u", inputs_ != nullptr ? inputs_->clouds[i] : 0u);
   message_.addValue(s, "rate_limited", "%" PRIu64, c.rate_limited);
   message_.addValue(s, "max_rate_hz", "%g", sensor.max_rate_hz);
   if (depth) {

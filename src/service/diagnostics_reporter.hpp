@@ -45,6 +45,19 @@ struct ReporterSettings {
   std::vector<Sensor> sensors;
 };
 
+/// @brief Writers of the service's inputs found by discovery (matched publications), read by the
+/// diagnostics thread each report. One writer per input is expected; a second publisher of a
+/// sensor's topic puts its clouds into the map, a second odometry publisher interleaves two
+/// robots' poses.
+struct InputPublishers {
+  std::array<std::uint32_t, pipeline::kMaxSensors> clouds{};       ///< of sensors[i].topic
+  std::array<std::uint32_t, pipeline::kMaxSensors> camera_info{};  ///< of camera_info_topic
+  std::uint32_t odometry = 0;  ///< of pose.topic (pose.source odometry; 0 with TF)
+  std::string odometry_topic;  ///< set once at start-up
+  /// Who the writers of inputs with more than one are ("" while each has at most one).
+  const char* who = "";
+};
+
 /// @brief The diagnostics thread's state: a ring of snapshots (rates, drops and percentiles are
 /// differences over a window of at least one second, whatever the report rate) and the
 /// preallocated message.
@@ -74,8 +87,9 @@ class DiagnosticsReporter {
 
   /// @brief Takes a snapshot at `now_ns` (monotonic) and decides the levels and messages.
   /// @param other_map_publishers writers of the height-map topic in other participants
+  /// @param inputs writers of the inputs (nullptr: not known; each counted as one)
   void update(std::int64_t now_ns, const RealtimeReport& realtime,
-              std::uint32_t other_map_publishers) noexcept;
+              std::uint32_t other_map_publishers, const InputPublishers* inputs = nullptr) noexcept;
   /// @brief The DiagnosticArray of the last update(), stamped `stamp_ns` (wall clock).
   const void* message(std::int64_t stamp_ns) noexcept;
   /// @brief One line for `systemctl status` (STATUS=).
@@ -121,6 +135,9 @@ class DiagnosticsReporter {
   /// The newest sample at least one window older than the current one (else the oldest).
   const Sample& windowBase() const noexcept;
   void decide(std::uint32_t other_map_publishers) noexcept;
+  /// Appends the inputs with more than one publisher to `out`. @return whether a pose source
+  /// has more than one (ERROR) and, in `extra_sensor`, whether a sensor's topic has (WARN).
+  bool describePublishers(char* out, std::size_t size, bool* extra_sensor) const noexcept;
   /// Writes every input dropped within the window, with its count, to drop_reasons_
   /// ("; "-separated; empty when nothing was dropped: that is what "dropping" means).
   void describeDrops() noexcept;
@@ -146,6 +163,7 @@ class DiagnosticsReporter {
   std::size_t filled_ = 0;
   const Sample* base_ = nullptr;  // windowBase() of the last update
   const RealtimeReport* realtime_ = nullptr;
+  const InputPublishers* inputs_ = nullptr;
   std::uint32_t other_publishers_ = 0;
   double seconds_since_scan_ = 0.0;
   bool stale_ = false;
@@ -153,7 +171,7 @@ class DiagnosticsReporter {
   bool backend_failing_ = false;
   std::uint8_t pipeline_level_ = 0;
   std::uint8_t heightmap_level_ = 0;
-  char pipeline_message_[768] = {};
+  char pipeline_message_[1024] = {};
   char drop_reasons_[448] = {};
   char heightmap_message_[128] = {};
   char status_line_[256] = {};

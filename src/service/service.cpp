@@ -152,7 +152,15 @@ struct Service::Impl {
   /// pinging the watchdog, so that systemd restarts the service.
   std::atomic<bool> backend_failing{false};
 
+  /// Writers of the inputs, counted each report (diagnostics thread); `who` names them while an
+  /// input has more than one (described again only when the counts change).
+  InputPublishers input_publishers;
+  char input_publishers_who[512] = {};
+
   void applyThreadSettings(const char* name, const ThreadConfig& t);
+  /// Counts the writers of every input (discovery's matched publications). @rt allocates only
+  /// while an input has more than one writer and the counts have just changed.
+  void countInputPublishers() noexcept;
   void ingestLoop();
   void integratorLoop();
   void publisherLoop();
@@ -415,6 +423,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     }
     impl->map_publisher_watch.emplace(std::move(watch).value());
   }
+  impl->input_publishers.odometry_topic = config.pose.odometry_topic;
   ReporterSettings reporting;
   reporting.name = config.name;
   reporting.hardware_id = config.health.hardware_id;
@@ -880,6 +889,57 @@ void Service::Impl::publisherLoop() {
   }
 }
 
+void Service::Impl::countInputPublishers() noexcept {
+  InputPublishers& p = input_publishers;
+  bool changed = false;
+  bool extra = false;
+  const auto count = [&](std::uint32_t& slot, const dds::RawReader& reader) {
+    const std::uint32_t n = reader.matchedWriters();
+    changed = changed || n != slot;
+    extra = extra || n > 1;
+    slot = n;
+  };
+  for (std::size_t i = 0; i < cloud_readers.size() && i < p.clouds.size(); ++i) {
+    count(p.clouds[i], cloud_readers[i]);
+    if (camera_info_readers[i]) {
+      count(p.camera_info[i], *camera_info_readers[i]);
+    }
+  }
+  if (odometry_reader) {
+    count(p.odometry, *odometry_reader);
+  }
+  if (!extra) {
+    input_publishers_who[0] = '\0';
+  } else if (changed) {
+    // Who they are, input by input (Cyclone allocates the discovery data it copies out).
+    char* out = input_publishers_who;
+    const std::size_t size = sizeof(input_publishers_who);
+    out[0] = '\0';
+    const auto describe = [&](std::uint32_t n, const dds::RawReader& reader, const char* topic) {
+      const std::size_t used = std::strlen(out);
+      if (n <= 1 || used + 1 >= size) {
+        return;
+      }
+      const int wrote =
+          std::snprintf(out + used, size - used, "%s%s: ", used == 0 ? "" : "; ", topic);
+      const std::size_t at =
+          std::min(size - 1, used + static_cast<std::size_t>(std::max(wrote, 0)));
+      reader.describeMatchedWriters(out + at, size - at);
+    };
+    for (std::size_t i = 0; i < cloud_readers.size() && i < p.clouds.size(); ++i) {
+      describe(p.clouds[i], cloud_readers[i], config.sensors[i].topic.c_str());
+      if (camera_info_readers[i]) {
+        describe(p.camera_info[i], *camera_info_readers[i],
+                 config.sensors[i].camera_info_topic.c_str());
+      }
+    }
+    if (odometry_reader) {
+      describe(p.odometry, *odometry_reader, config.pose.odometry_topic.c_str());
+    }
+  }
+  p.who = input_publishers_who;
+}
+
 void Service::Impl::diagnosticsLoop() {
   platform::nameCurrentThread("raymap-diag");
   const std::int64_t period = seconds(1.0 / config.dds.diagnostics_rate_hz);
@@ -892,7 +952,8 @@ void Service::Impl::diagnosticsLoop() {
     }
     platform::RealtimeScope steady;
     const std::int64_t now = platform::monotonicNowNs();
-    reporter->update(now, realtime, map_publisher_watch->matchedWriters());
+    countInputPublishers();
+    reporter->update(now, realtime, map_publisher_watch->matchedWriters(), &input_publishers);
     backend_failing.store(reporter->backendFailing(), std::memory_order_relaxed);
     const void* sample = reporter->message(platform::realtimeNowNs());
     {

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include "src/dds/entities.hpp"
 #include "tests/service/daemon_process.hpp"
 #include "tests/service/service_fixture.hpp"
 #include "tests/support/cli_runner.hpp"
@@ -30,13 +31,16 @@ std::string pipelineValue(const RosSide& ros, const std::string& key) {
 /// raymapd started and discovered, with the test's DDS side.
 struct Started {
   explicit Started(const std::string& config)
-      : daemon(config, false), ros(domainOf(config), 70000) {}
+      : daemon(config, false), ros(domainOf(config), 70000) {
+    daemon_config = config;
+  }
   static std::uint32_t domainOf(const std::string& config) {
     const std::size_t at = config.find("domain: ") + 8;
     return static_cast<std::uint32_t>(std::stoul(config.substr(at)));
   }
   RunningDaemon daemon;
   RosSide ros;
+  std::string daemon_config;
 };
 
 TEST(RaymapdHealth, CloudsInAFrameNoSensorIsConfiguredForAreAnErrorNamingBothFrames) {
@@ -128,6 +132,48 @@ TEST(RaymapdHealth, ReturnsAllNearerThanMinRangeAreAnErrorWithCountsAndNoMapIsPu
   EXPECT_TRUE(maps.empty()) << "a map of nothing is withheld, not published as all unknown";
   EXPECT_NE(s.daemon.log().find("shorter than the sensor's min_range"), std::string::npos)
       << s.daemon.log();
+  expectCleanStop(s.daemon);
+}
+
+TEST(RaymapdHealth, ASecondPublisherOfTheCloudsAndTheOdometryIsReportedUntilItLeaves) {
+  // Issue 52, M1 and M2: a second publisher's clouds went into the map and a second odometry
+  // publisher's poses interleaved with the robot's while every status said OK.
+  Started s(serviceConfig(uniqueDomain()));
+  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", kStartWait).has_value()) << s.daemon.log();
+  ASSERT_TRUE(s.ros.waitForService(kStartWaitS));
+  auto created = dds::Participant::create(Started::domainOf(s.daemon_config));
+  ASSERT_TRUE(created);
+  std::optional<dds::Participant> intruder_participant(std::move(created).value());
+  auto intruder =
+      driver::DriverPublisher::create(*intruder_participant, "rt/points", "rt/odom", 1024);
+  ASSERT_TRUE(intruder);
+  const auto message = [&] { return pipelineValue(s.ros, "message"); };
+  std::vector<driver::ReceivedGridMap> maps;
+  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 2.0, maps);
+  EXPECT_TRUE(s.ros.settleUntil(
+      kStartWaitS, [&] { return message().find("2 publishers of rt/odom") != std::string::npos; },
+      &maps))
+      << message();
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "2") << message();
+  EXPECT_NE(message().find("2 publishers of rt/odom (pose.topic): two pose sources for one robot"),
+            std::string::npos)
+      << message();
+  EXPECT_NE(message().find("2 publishers of rt/points (sensors[0].topic)"), std::string::npos)
+      << message();
+  EXPECT_NE(message().find("rt/odom: participant "), std::string::npos)
+      << "the writers are named by their participants: " << message();
+  EXPECT_EQ(pipelineValue(s.ros, "pose_publishers"), "2");
+  EXPECT_EQ(s.ros.diagnostics->values().at("raymapd: sensor lidar/publishers"), "2");
+  EXPECT_NE(s.daemon.log().find("2 publishers of rt/odom"), std::string::npos) << s.daemon.log();
+
+  // It leaves: the report says so (its writers are gone from discovery at once).
+  intruder.value().reset();
+  intruder_participant.reset();
+  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 1.0, maps);
+  EXPECT_TRUE(s.ros.settleUntil(
+      kStartWaitS, [&] { return message().find("publishers of") == std::string::npos; }, &maps))
+      << message();
+  EXPECT_EQ(pipelineValue(s.ros, "pose_publishers"), "1");
   expectCleanStop(s.daemon);
 }
 
