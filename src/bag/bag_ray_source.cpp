@@ -185,6 +185,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
                                                    stats_);
     extrinsics_.assign(cloud_topics_.size(), options_.extrinsic);
     decoded_.resize(kFirstPointCapacity);
+    report_.read_warnings = bag.openWarnings();
     info_.path = bag.path();
     info_.format = bag.storage();
     info_.has_scan = true;
@@ -298,7 +299,8 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     }
     if (!got.value()) {
       bag_done_ = true;
-      report_.truncated_warning = bag_->pass().warning;
+      report_.damage = bag_->pass().damage;
+      report_.truncated = bag_->pass().truncated;
       return {};
     }
     ++report_.messages;
@@ -464,7 +466,9 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
 
 Result<std::unique_ptr<BagRaySource>> openBagRaySource(const std::string& path,
                                                        const BagRaysOptions& options) {
-  auto bag = openBag(path);
+  BagReadOptions read;
+  read.skip_damaged = options.skip_damaged;
+  auto bag = openBag(path, read);
   if (!bag) {
     return Unexpected(bag.error());
   }

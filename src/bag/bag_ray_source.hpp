@@ -48,6 +48,8 @@ struct BagRaysOptions {
   std::int64_t pose_wait_ns = 200000000;  ///< bag time a scan waits for its poses
   std::uint32_t pose_history = 4096;      ///< poses kept for interpolation
   std::uint32_t max_points = 1u << 24;    ///< larger clouds are skipped (counted)
+  /// Read what a damaged or cut-off bag holds instead of failing (BagReadOptions).
+  bool skip_damaged = false;
 };
 
 /// @brief What the reading did with the bag's messages.
@@ -73,7 +75,11 @@ struct BagRaysReport {
   std::uint32_t extrinsics_from_tf = 0;
   /// The first skipped messages, each naming its topic, index and reason.
   std::vector<std::string> skips;
-  std::string truncated_warning;  ///< the bag's file was cut off (read up to its last message)
+  /// Problems of the bag's files that lost nothing (a damaged summary: read in order).
+  std::vector<std::string> read_warnings;
+  /// skip_damaged: what was skipped as damaged or cut off (BagPass::damage).
+  std::vector<std::string> damage;
+  bool truncated = false;  ///< skip_damaged: a file was cut off (read up to its last message)
 };
 
 /// @brief A RaySource over a bag (rays in recording order, one scan per cloud).

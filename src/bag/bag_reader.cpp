@@ -31,11 +31,12 @@ bool startsWithMcapMagic(const std::string& path) {
                     [](char a, std::byte b) { return static_cast<std::byte>(a) == b; });
 }
 
-Result<std::unique_ptr<BagReader>> openFile(const std::string& path) {
+Result<std::unique_ptr<BagReader>> openFile(const std::string& path,
+                                            const BagReadOptions& options) {
   if (endsWith(path, ".db3")) {
     return openSqliteBag(path);
   }
-  return openMcap(path);
+  return openMcap(path, options);
 }
 
 /// The files of a split bag, read one after the other as one bag; topics merged by name.
@@ -70,6 +71,15 @@ class MultiFileBag final : public BagReader {
 
   const BagPass& pass() const noexcept override { return pass_; }
 
+  std::vector<std::string> openWarnings() const override {
+    std::vector<std::string> all;
+    for (const auto& file : files_) {
+      const std::vector<std::string> some = file->openWarnings();
+      all.insert(all.end(), some.begin(), some.end());
+    }
+    return all;
+  }
+
   Expected<void, Error> rewind() override {
     current_ = 0;
     index_ = 0;
@@ -90,10 +100,9 @@ class MultiFileBag final : public BagReader {
         pass_.messages = index_;
         return true;
       }
-      if (files_[current_]->pass().truncated) {
-        pass_.truncated = true;
-        pass_.warning = files_[current_]->pass().warning;
-      }
+      const BagPass& done = files_[current_]->pass();
+      pass_.truncated = pass_.truncated || done.truncated;
+      pass_.damage.insert(pass_.damage.end(), done.damage.begin(), done.damage.end());
       if (++current_ < files_.size()) {
         if (auto ok = files_[current_]->rewind(); !ok) {
           return Unexpected(ok.error());
@@ -113,7 +122,8 @@ class MultiFileBag final : public BagReader {
   BagPass pass_;
 };
 
-Result<std::unique_ptr<BagReader>> openDirectory(const std::string& dir) {
+Result<std::unique_ptr<BagReader>> openDirectory(const std::string& dir,
+                                                 const BagReadOptions& options) {
   const std::string metadata = (fs::path(dir) / "metadata.yaml").string();
   std::vector<std::string> files;
   try {
@@ -138,7 +148,7 @@ Result<std::unique_ptr<BagReader>> openDirectory(const std::string& dir) {
     if (!fs::exists(f)) {
       return fail(ErrorCode::kIo, metadata + ": relative_file_paths: '" + f + "' does not exist");
     }
-    auto r = openFile(f);
+    auto r = openFile(f, options);
     if (!r) {
       return Unexpected(r.error());
     }
@@ -160,18 +170,18 @@ bool isBag(const std::string& path) {
   return endsWith(path, ".mcap") || endsWith(path, ".db3") || startsWithMcapMagic(path);
 }
 
-Result<std::unique_ptr<BagReader>> openBag(const std::string& path) {
+Result<std::unique_ptr<BagReader>> openBag(const std::string& path, const BagReadOptions& options) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
     if (!fs::exists(fs::path(path) / "metadata.yaml", ec)) {
       return fail(ErrorCode::kFormat, path + ": a directory without metadata.yaml is not a bag");
     }
-    return openDirectory(path);
+    return openDirectory(path, options);
   }
   if (!fs::exists(path, ec)) {
     return fail(ErrorCode::kIo, path + ": no such file or directory");
   }
-  return openFile(path);
+  return openFile(path, options);
 }
 
 Result<BagPass> BagReader::forEach(const Visitor& visit) {

@@ -37,10 +37,22 @@ struct BagMessage {
 struct BagPass {
   std::uint64_t messages = 0;  ///< messages handed to the callback
   bool stopped = false;        ///< the callback asked to stop
-  /// The file ends inside a record (a recording cut off by a crash or a full disk): everything
-  /// up to the last complete message was read. `warning` says where.
+  /// The file ends inside a record (a recording cut off by a crash or a full disk). Only with
+  /// BagReadOptions::skip_damaged: otherwise that is an error (kTruncated).
   bool truncated = false;
-  std::string warning;
+  /// Only with BagReadOptions::skip_damaged: what was skipped as damaged or cut off, one line
+  /// each naming the file, the offset, what was wrong and what was left unread.
+  std::vector<std::string> damage;
+};
+
+/// @brief How to read a bag.
+struct BagReadOptions {
+  /// Damage (a chunk failing its checks, a record whose length runs past the data or over the
+  /// chunks the file indexes, a file cut off) is an error naming the file, the offset and the
+  /// reason, unless this is set: then what can be read is read, resuming at the next chunk the
+  /// summary indexes, and BagPass::damage says what was skipped. Partial input is never passed
+  /// off as whole.
+  bool skip_damaged = false;
 };
 
 /// @brief Counts a bag states about itself (an MCAP summary's Statistics record), so that a
@@ -79,6 +91,9 @@ class BagReader {
   /// @brief The bag's own statistics when it has them (an indexed MCAP file whose summary CRC
   /// checks), else nothing: then only reading every message counts them.
   virtual std::optional<BagStatistics> statistics() const { return std::nullopt; }
+  /// @brief Problems found when opening that lose nothing but should be known (an MCAP file
+  /// whose end or summary is damaged, read by a linear scan instead), each naming the file.
+  virtual std::vector<std::string> openWarnings() const { return {}; }
 
   /// @brief rewind(), then every message to `visit`, in order, until it returns false.
   Result<BagPass> forEach(const Visitor& visit);
@@ -90,10 +105,12 @@ bool isBag(const std::string& path);
 
 /// @brief Opens a rosbag2 directory (its metadata.yaml lists the files, read in turn), an .mcap
 /// file or a .db3 file, and reads its topics.
-Result<std::unique_ptr<BagReader>> openBag(const std::string& path);
+Result<std::unique_ptr<BagReader>> openBag(const std::string& path,
+                                           const BagReadOptions& options = {});
 
 /// @brief Opens one MCAP file (any profile; rosbag2 writes "ros2").
-Result<std::unique_ptr<BagReader>> openMcap(const std::string& path);
+Result<std::unique_ptr<BagReader>> openMcap(const std::string& path,
+                                            const BagReadOptions& options = {});
 
 /// @brief Opens one rosbag2 SQLite file (tables `topics` and `messages`), read-only.
 Result<std::unique_ptr<BagReader>> openSqliteBag(const std::string& path);

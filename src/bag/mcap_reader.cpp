@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The MCAP reader: one sequential pass over the data section per forEach(), chunks decompressed
 // (zstd, lz4) into one reused buffer and checked against their CRC; the summary section, when
-// the file has one, only to know the topics up front.
+// the file has one, to know the topics up front and where the data and its chunks are, so that
+// a damaged record in a complete file is reported as damage (and, when asked, skipped to the next
+// indexed chunk), never as a file cut off.
 #include <algorithm>
 #include <cinttypes>
 #include <cstdio>
@@ -12,11 +14,11 @@
 #include <vector>
 
 #include <lz4frame.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include "src/bag/bag_reader.hpp"
 #include "src/bag/mcap_records.hpp"
+#include "src/bag/mcap_summary.hpp"
 #include "src/io/byte_reader.hpp"
 
 namespace raymap::bag {
@@ -28,11 +30,6 @@ using mcap::Op;
 /// A chunk may not claim more than this uncompressed: a corrupt size must not exhaust memory.
 constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;
 
-std::uint32_t crc32Update(std::uint32_t crc, std::span<const std::byte> bytes) noexcept {
-  return static_cast<std::uint32_t>(
-      ::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size()));
-}
-
 std::string offsetText(std::uint64_t offset) {
   char text[48];
   std::snprintf(text, sizeof(text), "offset %" PRIu64, offset);
@@ -41,7 +38,8 @@ std::string offsetText(std::uint64_t offset) {
 
 class McapBagReader final : public BagReader {
  public:
-  explicit McapBagReader(std::string path) : path_(std::move(path)) {}
+  McapBagReader(std::string path, const BagReadOptions& options)
+      : path_(std::move(path)), options_(options) {}
 
   const std::string& path() const noexcept override { return path_; }
   const char* storage() const noexcept override { return "mcap"; }
@@ -71,15 +69,35 @@ class McapBagReader final : public BagReader {
     return stats;
   }
 
+  std::vector<std::string> openWarnings() const override { return open_warnings_; }
+
   /// Checks the magic and the header, then learns the topics from the summary section (or, in a
   /// file without one, from a pass over the data).
   Expected<void, Error> open() {
     if (auto first = rewind(); !first) {
       return first;
     }
-    if (readSummary()) {
+    end_ = mcap::readFileEnd(path_, reader_->fileBytes());
+    if (end_.state == mcap::FileEnd::State::kSummary && !readSummary()) {
+      end_.state = mcap::FileEnd::State::kDamaged;
+      end_.problem = "its summary section (offset " + std::to_string(end_.summary_start) +
+                     ") holds a malformed record";
+      end_.chunks.clear();
+    }
+    if (end_.state == mcap::FileEnd::State::kDamaged) {
+      // Nothing is lost yet: the data section says everything. A file cut off inside it fails
+      // (or is reported) when the scan reaches the cut.
+      open_warnings_.push_back(path_ + ": " + end_.problem +
+                               "; its summary is not used and its records are read in order");
+      schemas_.clear();
+      channel_topic_.clear();
+      topics_.clear();
+      statistics_.reset();
+    }
+    if (end_.state == mcap::FileEnd::State::kSummary && !topics_.empty()) {
       return rewind();
     }
+    // No summary, or one without channels: the topics are learnt from a pass over the data.
     BagMessage unused;
     for (;;) {
       auto more = next(unused);
@@ -99,6 +117,9 @@ class McapBagReader final : public BagReader {
     pending_ = {};
     in_chunk_.reset();
     done_ = false;
+    next_chunk_ = 0;
+    skipped_bytes_ = false;
+    pass_finished_ = false;
     return startPass();
   }
 
@@ -109,64 +130,206 @@ class McapBagReader final : public BagReader {
         if (!got || got.value()) {
           return got;
         }
-        continue;  // the chunk is done
+        continue;  // the chunk is done (or skipped)
       }
       finishRecord();
-      const std::uint64_t offset = reader_->position();
-      auto prefix = reader_->ensure(mcap::kRecordPrefixBytes);
-      if (!prefix) {
-        return Unexpected(prefix.error());
-      }
-      if (prefix.value().size() < mcap::kRecordPrefixBytes) {
-        markTruncated(offset, prefix.value().empty() ? "where the next record would begin"
-                                                     : "inside a record's opcode and length");
-        break;
-      }
-      Cursor head(prefix.value());
-      const auto op = static_cast<Op>(head.u8());
-      const std::uint64_t length = head.u64();
-      const std::uint64_t file_left =
-          reader_->fileBytes() - std::min(reader_->fileBytes(), offset + mcap::kRecordPrefixBytes);
-      if (length > file_left) {
-        markTruncated(offset, "inside a record that declares " + std::to_string(length) + " bytes");
-        break;
-      }
-      auto record = reader_->ensure(mcap::kRecordPrefixBytes + static_cast<std::size_t>(length));
-      if (!record) {
-        return Unexpected(record.error());
-      }
-      if (record.value().size() < mcap::kRecordPrefixBytes + length) {
-        markTruncated(offset, "inside a record");
-        break;
-      }
-      pending_ = record.value().first(mcap::kRecordPrefixBytes + length);
-      const std::span<const std::byte> content = pending_.subspan(mcap::kRecordPrefixBytes);
-      if (op == Op::kDataEnd) {
-        Cursor c(content);
-        const std::uint32_t stored = c.u32();
-        if (stored != 0 && stored != data_crc_) {
-          return fail(ErrorCode::kCorrupt, path_ + ": the data section's CRC does not match (" +
-                                               offsetText(offset) + "): the file is corrupt");
-        }
-        done_ = true;
-      } else if (op == Op::kFooter) {
-        done_ = true;  // a file without a DataEnd record
-      } else if (op == Op::kChunk) {
-        if (auto ok = chunk(content, offset); !ok) {
-          return Unexpected(ok.error());
-        }
-      } else {
-        auto got = handle(op, content, offset, out);
-        if (!got || got.value()) {
-          return got;
-        }
+      auto got = nextRecord(out);
+      if (!got || got.value()) {
+        return got;
       }
     }
-    pass_.messages = message_index_;
+    finishPass();
     return false;
   }
 
  private:
+  /// Reads the record at the reader's position. @return true when it was a message, now in
+  /// `out`.
+  Result<bool> nextRecord(BagMessage& out) {
+    const std::uint64_t offset = reader_->position();
+    if (end_.data_end != 0 && offset >= end_.data_end) {
+      done_ = true;  // the summary or the footer: the data section is over
+      return false;
+    }
+    auto prefix = reader_->ensure(mcap::kRecordPrefixBytes);
+    if (!prefix) {
+      return Unexpected(prefix.error());
+    }
+    if (prefix.value().size() < mcap::kRecordPrefixBytes) {
+      return cutOff(offset, prefix.value().empty() ? "where the next record would begin"
+                                                   : "inside a record's opcode and length");
+    }
+    Cursor head(prefix.value());
+    const auto op = static_cast<Op>(head.u8());
+    const std::uint64_t length = head.u64();
+    auto placed = checkPlace(op, length, offset);
+    if (!placed || !placed.value()) {
+      return placed;  // the error, or false: the pass moved on
+    }
+    auto record = reader_->ensure(mcap::kRecordPrefixBytes + static_cast<std::size_t>(length));
+    if (!record) {
+      return Unexpected(record.error());
+    }
+    if (record.value().size() < mcap::kRecordPrefixBytes + length) {
+      return cutOff(offset, "inside a record");
+    }
+    pending_ = record.value().first(mcap::kRecordPrefixBytes + length);
+    const std::span<const std::byte> content = pending_.subspan(mcap::kRecordPrefixBytes);
+    if (op == Op::kDataEnd) {
+      Cursor c(content);
+      const std::uint32_t stored = c.u32();
+      // Bytes skipped as damaged are not in the running CRC: a mismatch then says nothing new.
+      if (stored != 0 && stored != data_crc_ && !skipped_bytes_) {
+        const std::string what = "the data section's CRC does not match (" + offsetText(offset) +
+                                 "): a record outside the chunks was changed";
+        if (!options_.skip_damaged) {
+          return fail(ErrorCode::kCorrupt, path_ + ": " + what + ": the file is corrupt");
+        }
+        pass_.damage.push_back(path_ + ": " + what + " (every chunk passed its checks)");
+      }
+      done_ = true;
+    } else if (op == Op::kFooter) {
+      done_ = true;  // a file without a DataEnd record
+    } else if (op == Op::kChunk) {
+      if (auto ok = chunk(content, offset); !ok) {
+        if (ok.error().code == ErrorCode::kUnsupported) {
+          return Unexpected(ok.error());  // not damage: every chunk would fail alike
+        }
+        // The chunk's length was checked above: the next record starts right after it.
+        if (auto skipped = damaged(offset, withoutPath(ok.error()), offset + pending_.size());
+            !skipped) {
+          return Unexpected(skipped.error());
+        }
+      }
+    } else {
+      return handle(op, content, offset, out);
+    }
+    return false;
+  }
+
+  /// An error's message without the leading "PATH: " (damaged() adds it again).
+  std::string withoutPath(const Error& error) const {
+    const std::string prefix = path_ + ": ";
+    return error.message.rfind(prefix, 0) == 0 ? error.message.substr(prefix.size())
+                                               : error.message;
+  }
+
+  /// Checks that the record at `offset` fits the file: inside the data section of a complete
+  /// file (a record running past it is damage, not a cut), over no chunk the summary indexes,
+  /// and, for a chunk, where and as long as its index says. @return false when the pass moved
+  /// on (damage skipped, or the file cut off and read up to there).
+  Result<bool> checkPlace(Op op, std::uint64_t length, std::uint64_t offset) {
+    const std::uint64_t begin = offset + mcap::kRecordPrefixBytes;
+    const std::uint64_t bound = end_.data_end != 0 ? end_.data_end : reader_->fileBytes();
+    const std::string record = "the record at " + offsetText(offset) + " (opcode " +
+                               std::to_string(static_cast<unsigned>(op)) + ")";
+    if (length > bound - std::min(bound, begin)) {
+      if (end_.data_end == 0) {
+        return cutOff(offset, "inside a record that declares " + std::to_string(length) + " bytes");
+      }
+      return damagedHere(offset, record + " declares " + std::to_string(length) +
+                                     " bytes, past the end of the data section at " +
+                                     offsetText(end_.data_end) +
+                                     ": its length is corrupt (the file itself is complete)");
+    }
+    const std::vector<mcap::IndexedChunk>& chunks = end_.chunks;
+    while (next_chunk_ < chunks.size() && chunks[next_chunk_].offset < offset) {
+      ++next_chunk_;  // passed by a skip
+    }
+    if (next_chunk_ == chunks.size()) {
+      if (op != Op::kChunk || chunks.empty()) {
+        return true;
+      }
+      return damagedHere(offset, record + " is a chunk the summary's chunk index does not list");
+    }
+    const mcap::IndexedChunk& indexed = chunks[next_chunk_];
+    const std::uint64_t whole = mcap::kRecordPrefixBytes + length;
+    if (op == Op::kChunk && indexed.offset == offset && indexed.length == whole) {
+      ++next_chunk_;
+      return true;
+    }
+    if (op != Op::kChunk && indexed.offset >= offset + whole) {
+      return true;
+    }
+    return damagedHere(offset, record + " declares " + std::to_string(length) +
+                                   " bytes, but the summary's chunk index has a chunk of " +
+                                   std::to_string(indexed.length) + " bytes at " +
+                                   offsetText(indexed.offset) + ": its length is corrupt");
+  }
+
+  /// Damage at the record at `offset` whose own length cannot be trusted: resumes at the next
+  /// indexed chunk. @return false (moved on) or the error.
+  Result<bool> damagedHere(std::uint64_t offset, const std::string& what) {
+    if (auto ok = damaged(offset, what, 0); !ok) {
+      return Unexpected(ok.error());
+    }
+    return false;
+  }
+
+  /// Damage at the record at `offset` (the reader's position): an error naming the file and
+  /// what is wrong, or, with skip_damaged, a note and a jump to `resume_at` (0: the next chunk
+  /// the summary indexes after `offset`; none: the end of the pass).
+  Expected<void, Error> damaged(std::uint64_t offset, const std::string& what,
+                                std::uint64_t resume_at) {
+    if (!options_.skip_damaged) {
+      return fail(ErrorCode::kCorrupt, path_ + ": " + what);
+    }
+    if (resume_at == 0) {
+      for (const mcap::IndexedChunk& c : end_.chunks) {
+        if (c.offset > offset) {
+          resume_at = c.offset;
+          break;
+        }
+      }
+    }
+    pending_ = {};
+    in_chunk_.reset();
+    skipped_bytes_ = true;
+    const std::uint64_t end = end_.data_end != 0 ? end_.data_end : reader_->fileBytes();
+    if (resume_at == 0 || resume_at > end) {
+      pass_.damage.push_back(path_ + ": " + what + "; skipped the rest of the data, " +
+                             std::to_string(end - std::min(end, offset)) + " bytes from " +
+                             offsetText(offset));
+      done_ = true;
+      return {};
+    }
+    pass_.damage.push_back(path_ + ": " + what + "; skipped " + std::to_string(resume_at - offset) +
+                           " bytes from " + offsetText(offset) + " to " + offsetText(resume_at));
+    auto skipped = reader_->skip(resume_at - reader_->position());
+    if (!skipped) {
+      return Unexpected(skipped.error());
+    }
+    return {};
+  }
+
+  /// The file ends at `offset`, `where`: an error, or with skip_damaged the end of the pass.
+  Result<bool> cutOff(std::uint64_t offset, const std::string& where) {
+    const std::string what = "the file is cut off (truncated): it ends " + where + " at " +
+                             offsetText(offset) + ", after " + std::to_string(message_index_) +
+                             " messages";
+    if (!options_.skip_damaged) {
+      return fail(ErrorCode::kTruncated, path_ + ": " + what);
+    }
+    pass_.truncated = true;
+    pass_.damage.push_back(path_ + ": " + what + "; the rest is missing");
+    done_ = true;
+    return false;
+  }
+
+  /// Once per pass, after its last message: what a skip cost, when the summary counted it.
+  void finishPass() {
+    pass_.messages = message_index_;
+    if (pass_finished_) {
+      return;
+    }
+    pass_finished_ = true;
+    if (!pass_.damage.empty() && statistics_ && statistics_->messages > message_index_) {
+      pass_.damage.push_back(path_ + ": " + std::to_string(message_index_) + " of the " +
+                             std::to_string(statistics_->messages) +
+                             " messages its summary counts were read");
+    }
+  }
+
   Expected<void, Error> startPass() {
     auto reader = io::ByteReader::open(path_);
     if (!reader) {
@@ -192,21 +355,15 @@ class McapBagReader final : public BagReader {
         static_cast<Op>(start[mcap::kMagic.size()]) != Op::kHeader) {
       return fail(ErrorCode::kFormat, path_ + ": the MCAP magic is not followed by a header");
     }
-    data_crc_ = crc32Update(0, start.first(mcap::kMagic.size()));
+    data_crc_ = mcap::crc32(0, start.first(mcap::kMagic.size()));
     reader_->consume(mcap::kMagic.size());
     return {};
-  }
-
-  void markTruncated(std::uint64_t offset, const std::string& where) {
-    pass_.truncated = true;
-    pass_.warning = path_ + ": the file is truncated (it ends at " + offsetText(offset) + ", " +
-                    where + "); read the " + std::to_string(message_index_) + " messages before it";
   }
 
   /// Marks the record last read as used (its bytes go into the data section's CRC).
   void finishRecord() noexcept {
     if (!pending_.empty()) {
-      data_crc_ = crc32Update(data_crc_, pending_);
+      data_crc_ = mcap::crc32(data_crc_, pending_);
       reader_->consume(pending_.size());
       pending_ = {};
     }
@@ -356,7 +513,7 @@ class McapBagReader final : public BagReader {
       }
       records = chunk_bytes_;
     }
-    if (uncompressed_crc != 0 && crc32Update(0, records) != uncompressed_crc) {
+    if (uncompressed_crc != 0 && mcap::crc32(0, records) != uncompressed_crc) {
       return fail(ErrorCode::kCorrupt,
                   path_ + ": " + where + " fails its CRC check: the file is corrupt");
     }
@@ -373,8 +530,14 @@ class McapBagReader final : public BagReader {
       const std::span<const std::byte> record = inner.bytes64();
       if (!inner.ok()) {
         in_chunk_.reset();
-        return fail(ErrorCode::kCorrupt, path_ + ": the chunk at " + offsetText(chunk_offset_) +
-                                             " holds a record cut short: the file is corrupt");
+        if (auto skipped = damaged(chunk_offset_,
+                                   "the chunk at " + offsetText(chunk_offset_) +
+                                       " holds a record cut short: the file is corrupt",
+                                   chunk_offset_ + pending_.size());
+            !skipped) {
+          return Unexpected(skipped.error());
+        }
+        return false;
       }
       auto got = handle(op, record, chunk_offset_, out);
       if (!got || got.value()) {
@@ -439,46 +602,10 @@ class McapBagReader final : public BagReader {
                                              "'; this raymap reads zstd, lz4 and uncompressed");
   }
 
-  /// The topics from the summary section (schemas and channels). @return false when the file
-  /// has no usable summary: then a pass over the data finds them.
+  /// The topics (schemas and channels) and statistics from the summary section that
+  /// readFileEnd() checked. @return false when a record in it is malformed.
   bool readSummary() {
-    std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path_.c_str(), "rb"),
-                                                         &std::fclose);
-    const std::uint64_t size = reader_->fileBytes();
-    const std::uint64_t tail = mcap::kFooterRecordBytes + mcap::kMagic.size();
-    if (!file || size < mcap::kMagic.size() + tail) {
-      return false;
-    }
-    std::vector<std::byte> footer(tail);
-    if (std::fseek(file.get(), static_cast<long>(size - tail), SEEK_SET) != 0 ||
-        std::fread(footer.data(), 1, footer.size(), file.get()) != footer.size() ||
-        static_cast<Op>(footer[0]) != Op::kFooter ||
-        !std::equal(mcap::kMagic.begin(), mcap::kMagic.end(), footer.end() - 8)) {
-      return false;
-    }
-    Cursor f(std::span<const std::byte>(footer).subspan(1));
-    if (f.u64() != mcap::kFooterContentBytes) {
-      return false;
-    }
-    const std::uint64_t summary_start = f.u64();
-    (void)f.u64();  // summary offset start
-    const std::uint32_t summary_crc = f.u32();
-    const std::uint64_t footer_at = size - tail;
-    if (summary_start == 0 || summary_start >= footer_at) {
-      return false;
-    }
-    std::vector<std::byte> summary(static_cast<std::size_t>(footer_at - summary_start));
-    if (std::fseek(file.get(), static_cast<long>(summary_start), SEEK_SET) != 0 ||
-        std::fread(summary.data(), 1, summary.size(), file.get()) != summary.size()) {
-      return false;
-    }
-    // The CRC covers the summary (and summary offset) sections and the footer up to the CRC.
-    if (summary_crc != 0 &&
-        crc32Update(crc32Update(0, summary), std::span<const std::byte>(footer).first(
-                                                 mcap::kFooterRecordBytes - 4)) != summary_crc) {
-      return false;
-    }
-    Cursor records(summary);
+    Cursor records(end_.summary);
     BagMessage unused;
     while (records.left() > 0) {
       const auto op = static_cast<Op>(records.u8());
@@ -487,14 +614,14 @@ class McapBagReader final : public BagReader {
         return false;
       }
       if (op == Op::kSchema || op == Op::kChannel) {
-        if (auto ok = handle(op, record, summary_start, unused); !ok) {
+        if (auto ok = handle(op, record, end_.summary_start, unused); !ok) {
           return false;
         }
       } else if (op == Op::kStatistics) {
         readStatistics(record);
       }
     }
-    return !topics_.empty();
+    return true;
   }
 
   /// The summary's Statistics record: message count, time span, messages per channel.
@@ -534,6 +661,9 @@ class McapBagReader final : public BagReader {
   };
 
   std::string path_;
+  BagReadOptions options_;
+  mcap::FileEnd end_;                       // the footer and summary, as checked at open
+  std::vector<std::string> open_warnings_;  // a damaged end or summary (read in order instead)
   std::optional<io::ByteReader> reader_;
   std::map<std::uint16_t, Schema> schemas_;
   std::map<std::uint16_t, std::uint32_t> channel_topic_;  // channel id -> index in topics_
@@ -548,14 +678,18 @@ class McapBagReader final : public BagReader {
   std::optional<Cursor> in_chunk_;      // the open chunk's records
   std::uint64_t chunk_offset_ = 0;
   bool done_ = false;
+  std::size_t next_chunk_ = 0;  // the first chunk of end_.chunks not yet reached
+  bool skipped_bytes_ = false;  // damage skipped: the data section's CRC cannot match
+  bool pass_finished_ = false;
   std::optional<BagStatistics> statistics_;                    // from the summary, if any
   std::map<std::uint16_t, std::uint64_t> statistics_pending_;  // its messages per channel
 };
 
 }  // namespace
 
-Result<std::unique_ptr<BagReader>> openMcap(const std::string& path) {
-  auto reader = std::make_unique<McapBagReader>(path);
+Result<std::unique_ptr<BagReader>> openMcap(const std::string& path,
+                                            const BagReadOptions& options) {
+  auto reader = std::make_unique<McapBagReader>(path, options);
   if (auto ok = reader->open(); !ok) {
     return Unexpected(ok.error());
   }

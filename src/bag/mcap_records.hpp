@@ -12,12 +12,20 @@
 #include <string_view>
 #include <vector>
 
+#include <zlib.h>
+
 namespace raymap::bag::mcap {
 
 /// Begins and ends every MCAP file: 0x89 "MCAP" '0' (major version) "\r\n".
 inline constexpr std::array<std::byte, 8> kMagic{std::byte{0x89}, std::byte{'M'}, std::byte{'C'},
                                                  std::byte{'A'},  std::byte{'P'}, std::byte{'0'},
                                                  std::byte{'\r'}, std::byte{'\n'}};
+
+/// @brief The CRC-32 MCAP uses (zlib's), continued from `crc` over `bytes`.
+inline std::uint32_t crc32(std::uint32_t crc, std::span<const std::byte> bytes) noexcept {
+  return static_cast<std::uint32_t>(
+      ::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size()));
+}
 
 /// Every record: opcode (uint8) and content length (uint64), then the content.
 inline constexpr std::size_t kRecordPrefixBytes = 9;

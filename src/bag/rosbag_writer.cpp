@@ -13,7 +13,6 @@
 
 #include <lz4frame.h>
 #include <unistd.h>
-#include <zlib.h>
 #include <zstd.h>
 
 #include "platform/errno_text.hpp"
@@ -28,11 +27,6 @@ using mcap::Builder;
 using mcap::Op;
 
 constexpr int kZstdLevel = 1;  // fast enough to keep up with a lidar on one core
-
-std::uint32_t crcOf(std::uint32_t crc, std::span<const std::byte> bytes) noexcept {
-  return static_cast<std::uint32_t>(
-      ::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size()));
-}
 
 struct Topic {
   std::string name;
@@ -167,7 +161,7 @@ class McapRosbagWriter final : public RosbagWriter {
     s.u64(mcap::kFooterContentBytes);
     s.u64(summary_start);
     s.u64(0);  // no summary offset section
-    s.u32(crcOf(0, s.bytes()));
+    s.u32(mcap::crc32(0, s.bytes()));
     s.raw(mcap::kMagic);
     if (auto ok = append(s.bytes(), false); !ok) {
       return ok;
@@ -204,7 +198,7 @@ class McapRosbagWriter final : public RosbagWriter {
       return fail(ErrorCode::kIo, file_path_ + ": cannot write: " + platform::errnoText(errno));
     }
     if (data) {
-      data_crc_ = crcOf(data_crc_, bytes);
+      data_crc_ = mcap::crc32(data_crc_, bytes);
     }
     offset_ += bytes.size();
     return {};
@@ -310,7 +304,7 @@ class McapRosbagWriter final : public RosbagWriter {
     b.u64(chunk_start_);
     b.u64(chunk_end_);
     b.u64(records.size());
-    b.u32(crcOf(0, records));
+    b.u32(mcap::crc32(0, records));
     b.string(compressionName());
     b.u64(stored.size());
     b.raw(stored);

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Damaged and hostile bags: truncated files, flipped bytes, unknown compression, a topic of the
-// wrong type, a message that does not decode. Each gives a clear error or a counted skip naming
-// the file, topic or message, never a crash or a wrong map; random damage is fuzzed through the
-// reader in process.
+// Damaged and hostile bags (cut-off and corrupt files: test_bag_integrity.cpp): flipped bytes,
+// unknown compression, a topic of the wrong type, a message that does not decode. Each gives a
+// clear error or a counted skip naming the file, topic or message, never a crash or a wrong map;
+// random damage is fuzzed through the reader in process.
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -33,22 +33,6 @@ std::string driveFile(const TempDir& dir, const std::string& name,
   all.push_back("--file-only");
   writeBag(drive.spec, file, all);
   return file;
-}
-
-TEST(BagDamage, ATruncatedMcapIsMappedUpToItsLastWholeMessageWithAWarning) {
-  REQUIRE_NODE_HARNESS();
-  TempDir dir;
-  const std::string file = driveFile(dir, "whole", {"--chunk-size", "0"});
-  const std::string bytes = bytesOf(file);
-  const std::string cut = dir.file("cut.mcap");
-  writeAll(cut, bytes.substr(0, bytes.size() * 6 / 10));
-  const RunResult r = runRaymap({"populate", cut, "-o", dir.file("cut.rmap"), "-q"});
-  EXPECT_EQ(r.exit_code, 0) << describe(r);
-  EXPECT_NE(r.err.find("truncated"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find(cut), std::string::npos) << r.err;
-  const RunResult info = runRaymap({"info", cut});
-  EXPECT_EQ(info.exit_code, 0) << describe(info);
-  EXPECT_NE(info.err.find("truncated"), std::string::npos) << info.err;
 }
 
 TEST(BagDamage, AFlippedByteInAChunkFailsItsCrcAndLeavesNoMap) {

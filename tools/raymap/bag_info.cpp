@@ -26,7 +26,10 @@ struct TopicCount {
 }  // namespace
 
 int runBagInfo(const std::string& path, bool json, bool full) {
-  auto bag = bag::openBag(path);
+  // A description reads what a damaged bag holds and says what is damaged (stderr).
+  bag::BagReadOptions options;
+  options.skip_damaged = true;
+  auto bag = bag::openBag(path, options);
   if (!bag) {
     printError("info", bag.error().message);
     return kExitFailure;
@@ -111,8 +114,11 @@ int runBagInfo(const std::string& path, bool json, bool full) {
                   topics[i].serialization_format.c_str());
     }
   }
-  if (read.truncated) {
-    std::fprintf(stderr, "raymap info: warning: %s\n", read.warning.c_str());
+  for (const std::string& warning : reader.openWarnings()) {
+    std::fprintf(stderr, "raymap info: warning: %s\n", warning.c_str());
+  }
+  for (const std::string& damage : read.damage) {
+    std::fprintf(stderr, "raymap info: warning: %s\n", damage.c_str());
   }
   return 0;
 }

@@ -239,6 +239,9 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--time-field", f.time_field,
                "Bags: the per-point time field (auto, a field name, or none)")
       ->capture_default_str();
+  c.add_flag("--skip-damaged", f.skip_damaged,
+             "Bags: map what a damaged or cut-off bag holds (skipping to its next indexed chunk) "
+             "instead of failing, and say what was skipped");
   c.add_option("--resolution", f.resolution, "Voxel edge, metres")->capture_default_str();
   c.add_option("--region-voxels", f.region_voxels, "Voxels per region edge (4 to 128)")
       ->capture_default_str();
@@ -444,6 +447,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.bag.depth.max_range_m = static_cast<float>(f.max_range);
   o.bag.depth.invalid_as_free = f.invalid_as_free;
   o.bag.max_rate_hz = f.max_rate_hz;
+  o.bag.skip_damaged = f.skip_damaged;
   if (f.max_rate_hz != 0.0 && f.max_rate_hz < 0.01) {
     return fail(ErrorCode::kInvalidArgument, "--max-rate: must be 0 (all) or at least 0.01 Hz");
   }
@@ -455,12 +459,12 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   }
   if (!is_bag && (!f.topics.empty() || !f.pose_topic.empty() || f.pose_source != "auto" ||
                   f.time_field != "auto" || !f.camera_info_topics.empty() || f.downsample != 1 ||
-                  f.invalid_as_free || f.max_rate_hz != 0.0)) {
+                  f.invalid_as_free || f.max_rate_hz != 0.0 || f.skip_damaged)) {
     return fail(ErrorCode::kInvalidArgument,
                 input +
                     " is not a bag: --topic, --pose-topic, --pose-source, --time-field, "
-                    "--camera-info-topic, --downsample, --invalid-as-free and --max-rate apply to "
-                    "bags only");
+                    "--camera-info-topic, --downsample, --invalid-as-free, --max-rate and "
+                    "--skip-damaged apply to bags only");
   }
   o.map.geometry.resolution = f.resolution;
   o.map.geometry.region_voxels = f.region_voxels;

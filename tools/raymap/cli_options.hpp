@@ -72,6 +72,7 @@ struct MappingFlags {
   std::vector<std::string> camera_info_topics;  ///< --camera-info-topic, per Image topic
   std::uint32_t downsample = 1;                 ///< --downsample
   bool invalid_as_free = false;                 ///< --invalid-as-free
+  bool skip_damaged = false;                    ///< --skip-damaged
   double max_rate_hz = 0.0;                     ///< --max-rate
 };
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "platform/memory.hpp"
+#include "src/bag/bag_reader.hpp"
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
 #include "tools/raymap/cli_options.hpp"
@@ -207,7 +208,8 @@ int runPopulate(const PopulateFlags& f) {
   }
   auto report = populateFromFile(*map, *options);
   if (!report) {
-    printError(command, report.error().message);
+    printError(command,
+               report.error().message + bagDamageHint(bag::isBag(f.input), report.error()));
     if (!pool_note.empty()) {
       std::fprintf(stderr, "raymap populate: the pool was limited: %s\n", pool_note.c_str());
     }
@@ -221,8 +223,11 @@ int runPopulate(const PopulateFlags& f) {
   }
   if (report->bag) {
     const bag::BagRaysReport& b = *report->bag;
-    if (!b.truncated_warning.empty()) {
-      std::fprintf(stderr, "raymap populate: warning: %s\n", b.truncated_warning.c_str());
+    for (const std::string& warning : b.read_warnings) {
+      std::fprintf(stderr, "raymap populate: warning: %s\n", warning.c_str());
+    }
+    for (const std::string& damage : b.damage) {
+      std::fprintf(stderr, "raymap populate: warning: --skip-damaged: %s\n", damage.c_str());
     }
     for (const std::string& skip : b.skips) {
       std::fprintf(stderr, "raymap populate: warning: %s\n", skip.c_str());
@@ -281,6 +286,13 @@ int runPopulate(const PopulateFlags& f) {
 
 void printError(const std::string& command, const std::string& message) {
   std::fprintf(stderr, "raymap %s: error: %s\n", command.c_str(), message.c_str());
+}
+
+std::string bagDamageHint(bool reads_bags, const Error& error) {
+  if ((error.code != ErrorCode::kCorrupt && error.code != ErrorCode::kTruncated) || !reads_bags) {
+    return {};
+  }
+  return " (--skip-damaged reads what the bag holds and says what was skipped)";
 }
 
 std::string withCommas(std::uint64_t value) {

@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap replay`: recorded data published over DDS as the sensors and localisation of a live
 // robot would (docs/cli.md).
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <utility>
 
+#include "src/bag/bag_reader.hpp"
 #include "src/dds/topic_types.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
@@ -38,6 +40,7 @@ struct ReplayFlags {
   double wait = 10.0;
   std::string diagnostics_topic = "/diagnostics";
   unsigned max_ahead = 2;
+  bool skip_damaged = false;
   std::string stats_json;
   bool quiet = false;
 };
@@ -92,6 +95,7 @@ Result<ReplayOptions> toOptions(const ReplayFlags& f) {
   o.pose_period_s = 1.0 / f.pose_rate;
   o.wait_s = f.wait;
   o.max_ahead = f.max_ahead;
+  o.skip_damaged = f.skip_damaged;
   o.progress = !f.quiet;
   return o;
 }
@@ -111,12 +115,7 @@ std::string statsJson(const ReplayStats& s) {
       .add("wall_seconds", s.wall_seconds)
       .add("max_late_ms", s.max_late_ms)
       .add("stamp_zero_ns", s.stamp_zero_ns);
-  std::string warnings = "[";
-  for (std::size_t i = 0; i < s.warnings.size(); ++i) {
-    warnings += i == 0 ? "" : ", ";
-    warnings += jsonQuote(s.warnings[i]);
-  }
-  json.raw("warnings", warnings + "]");
+  json.raw("warnings", jsonList(s.warnings));
   return json.str();
 }
 
@@ -150,7 +149,9 @@ int runReplay(const ReplayFlags& flags) {
   }
   auto stats = session.value()->run();
   if (!stats) {
-    printError("replay", stats.error().message);
+    const bool reads_bags = std::any_of(flags.inputs.begin(), flags.inputs.end(),
+                                        [](const std::string& in) { return bag::isBag(in); });
+    printError("replay", stats.error().message + bagDamageHint(reads_bags, stats.error()));
     return kExitFailure;
   }
   for (const std::string& warning : stats.value().warnings) {
@@ -226,6 +227,9 @@ void addReplayCommand(CLI::App& app, int* exit_code) {
                 "--rate max: clouds published but not yet processed by raymapd")
       ->check(CLI::Range(1u, 64u))
       ->capture_default_str();
+  c->add_flag("--skip-damaged", f->skip_damaged,
+              "Bags: play what a damaged or cut-off bag holds (skipping to its next indexed "
+              "chunk) instead of failing, and say what was skipped");
   c->add_option("--stats-json", f->stats_json, "Write what was published as JSON ('-' = stdout)");
   c->add_flag("-q,--quiet", f->quiet, "No progress line");
   c->callback([f, exit_code] { *exit_code = runReplay(*f); });

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 
+#include "raymap/error.hpp"
 #include <CLI/CLI.hpp>
 
 namespace raymap::cli {
@@ -41,5 +42,9 @@ void printError(const std::string& command, const std::string& message);
 
 /// @brief 1234567 -> "1,234,567".
 std::string withCommas(std::uint64_t value);
+
+/// @brief For an error that is damage (a corrupt record, a file cut off) in a command reading
+/// bags: " (--skip-damaged ...)", the way to read what they hold; else empty.
+std::string bagDamageHint(bool reads_bags, const Error& error);
 
 }  // namespace raymap::cli

@@ -107,4 +107,12 @@ std::string JsonObject::str() const {
   return "{" + body_ + (empty_ ? "}" : "\n}");
 }
 
+std::string jsonList(const std::vector<std::string>& items) {
+  std::string list = "[";
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    list += (i == 0 ? "" : ", ") + jsonQuote(items[i]);
+  }
+  return list + "]";
+}
+
 }  // namespace raymap::cli

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace raymap::cli {
 
@@ -45,5 +46,7 @@ class JsonObject {
 
 /// @brief Quotes and escapes a string for JSON.
 std::string jsonQuote(std::string_view text);
+/// @brief A JSON array of the strings, quoted: ["a", "b"].
+std::string jsonList(const std::vector<std::string>& items);
 
 }  // namespace raymap::cli

@@ -317,13 +317,8 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
   }
   if (r.bag) {
     const bag::BagRaysReport& b = *r.bag;
-    std::string topics = "[";
-    for (const std::string& t : b.cloud_topics) {
-      topics += (topics.size() > 1 ? ", " : "") + jsonQuote(t);
-    }
-    topics += "]";
     JsonObject bj;
-    bj.raw("cloud_topics", topics)
+    bj.raw("cloud_topics", jsonList(b.cloud_topics))
         .add("pose_source", b.pose_source)
         .add("messages", b.messages)
         .add("clouds", b.clouds)
@@ -342,7 +337,8 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
         .add("tf_ignored", b.tf_ignored)
         .add("tf_unresolved", b.tf_unresolved)
         .add("extrinsics_from_tf", b.extrinsics_from_tf)
-        .add("truncated", !b.truncated_warning.empty());
+        .add("truncated", b.truncated)
+        .raw("damage", jsonList(b.damage));
     j.raw("bag", bj.str());
   }
   if (!r.fallback_warning.empty()) {

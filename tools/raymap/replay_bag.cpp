@@ -32,11 +32,16 @@ int qosValue(std::string_view yaml, std::string_view key) {
 }  // namespace
 
 Result<void> ReplaySession::playBag(const std::string& path) {
-  auto opened = bag::openBag(path);
+  bag::BagReadOptions read;
+  read.skip_damaged = options_.skip_damaged;
+  auto opened = bag::openBag(path, read);
   if (!opened) {
     return Unexpected(std::move(opened).error());
   }
   bag::BagReader& reader = *opened.value();
+  for (const std::string& warning : reader.openWarnings()) {
+    stats_.warnings.push_back(warning);
+  }
   // Every topic's writer exists before the first message, so discovery is done when data
   // starts. rmw's QoS enums: reliability 1 = reliable, 2 = best effort; durability 1 =
   // transient local. A bag without profiles plays reliable and volatile (ros2 bag play's
@@ -125,7 +130,9 @@ Result<void> ReplaySession::playBag(const std::string& path) {
   }
   if (reader.pass().truncated) {
     ++stats_.truncated_logs;
-    stats_.warnings.push_back(reader.pass().warning);
+  }
+  for (const std::string& damage : reader.pass().damage) {
+    stats_.warnings.push_back("--skip-damaged: " + damage);
   }
   pass_offset_s_ = played_until_s + kGapBetweenInputs_s;
   return {};

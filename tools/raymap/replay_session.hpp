@@ -51,6 +51,7 @@ struct ReplayOptions {
   double wait_s = 10.0;  ///< wait this long for a subscriber of the first published topic
   std::string diagnostics_topic = "rt/diagnostics";  ///< --rate max: raymapd's progress
   std::uint32_t max_ahead = 2;  ///< --rate max: scans published but not yet processed
+  bool skip_damaged = false;    ///< bags: play what a damaged bag holds (BagReadOptions)
   bool progress = true;
 };
 
