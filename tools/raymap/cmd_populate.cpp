@@ -32,6 +32,13 @@ struct PopulateFlags {
   bool quiet = false;
 };
 
+/// Why rays were rejected, by reason: "invalid 0, too short 12, out of bounds 0".
+std::string rejectionsText(const RayCounters& rays) {
+  return "invalid " + withCommas(rays.rays_invalid) + ", too short " +
+         withCommas(rays.rays_too_short) + ", out of bounds or longer than --max-ray-length " +
+         withCommas(rays.rays_out_of_bounds);
+}
+
 void printSummary(const PopulateReport& r, const PopulateOptions& o) {
   const double rate = r.integrate_seconds > 0
                           ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
@@ -41,9 +48,7 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
               withCommas(r.rays.rays_in).c_str(), withCommas(r.rays.rays_accepted).c_str(),
               withCommas(r.rays.rejected()).c_str());
   if (r.rays.rejected() > 0) {
-    std::printf(" (invalid %s, too short %s, out of bounds or longer than --max-ray-length %s)",
-                withCommas(r.rays.rays_invalid).c_str(), withCommas(r.rays.rays_too_short).c_str(),
-                withCommas(r.rays.rays_out_of_bounds).c_str());
+    std::printf(" (%s)", rejectionsText(r.rays).c_str());
   }
   std::printf("\n               %s clipped to max range, %s without return, %s scans\n",
               withCommas(r.rays.rays_clipped).c_str(), withCommas(r.rays.rays_no_return).c_str(),
@@ -239,6 +244,16 @@ int runPopulate(const PopulateFlags& f) {
                               b.pose_source + ": " + std::to_string(b.poses) + ")");
       return kExitFailure;
     }
+  }
+  if (report->rays.rays_accepted == 0) {
+    // An empty map from a whole input is a failure, never a result: say why each ray went.
+    char ranges[96];
+    std::snprintf(ranges, sizeof(ranges), "--min-range %g m, --max-range %g m",
+                  options->filter.min_range_m, options->filter.max_range_m);
+    printError(command, "no ray of " + options->input + " was integrated: " +
+                            withCommas(report->rays.rays_in) + " in, all rejected (" +
+                            rejectionsText(report->rays) + "; " + ranges + "): nothing written");
+    return kExitFailure;
   }
   if (!output.empty()) {
     if (auto ok = io::saveMap(*map, output_temp); !ok) {
