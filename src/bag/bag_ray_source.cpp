@@ -4,6 +4,7 @@
 #include "src/bag/bag_ray_source.hpp"
 
 #include <deque>
+#include <set>
 #include <utility>
 
 #include "src/dds/point_cloud.hpp"
@@ -184,6 +185,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
                                                    std::vector<std::string>(cloud_topics_.size()),
                                                    stats_);
     extrinsics_.assign(cloud_topics_.size(), options_.extrinsic);
+    extrinsic_from_tf_.assign(cloud_topics_.size(), false);
     decoded_.resize(kFirstPointCapacity);
     report_.read_warnings = bag.openWarnings();
     info_.path = bag.path();
@@ -267,6 +269,9 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
         const pipeline::PoseLookup end =
             history_.lookup(head.times.end_ns, options_.pose_hold_ns, &unused);
         if (start == pipeline::PoseLookup::kOk && end == pipeline::PoseLookup::kOk) {
+          if (auto placed = checkExtrinsic(head); !placed) {
+            return Unexpected(placed.error());
+          }
           current_.emplace(std::move(waiting_.front()));
           waiting_.pop_front();
           point_ = 0;
@@ -290,6 +295,28 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
         return Unexpected(ok.error());
       }
     }
+  }
+
+  /// A cloud about to be mapped needs its sensor's place on the base: from /tf_static, the
+  /// base frame itself, or --sensor-offset. Without one the sensor would silently sit at the
+  /// base's origin.
+  Expected<void, Error> checkExtrinsic(const Scan& scan) const {
+    const char* frame = router_->sensorFrame(scan.sensor);
+    if (options_.extrinsic_given || extrinsic_from_tf_[scan.sensor] ||
+        options_.base_frame == frame) {
+      return {};
+    }
+    std::string frames;
+    for (const std::string& f : static_frames_) {
+      frames += (frames.empty() ? "" : ", ") + f;
+    }
+    return fail(ErrorCode::kInvalidArgument,
+                bag_->path() + ": the clouds on '" +
+                    bag_->topics()[cloud_topics_[scan.sensor]].name + "' are in frame '" + frame +
+                    "', and /tf_static has no chain from the base frame '" + options_.base_frame +
+                    "' to it (its frames: " + (frames.empty() ? "none" : frames) +
+                    "): give the sensor's position on the base with --sensor-offset X,Y,Z "
+                    "(0,0,0 if it is at the base's origin), or --base-frame");
   }
 
   Expected<void, Error> readMessage() {
@@ -396,6 +423,12 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       skip("message", "not a valid tf2_msgs/msg/TFMessage (or more than 64 transforms)");
       return;
     }
+    if (is_static) {
+      for (const dds::StampedTransform& t : std::span(transforms).first(count.value())) {
+        static_frames_.insert(t.parent);
+        static_frames_.insert(t.child);
+      }
+    }
     router_->onTransforms(std::span(transforms).first(count.value()), is_static, *this);
   }
 
@@ -404,6 +437,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     if (update.kind == pipeline::PoseUpdate::kSensorExtrinsic) {
       if (update.sensor < extrinsics_.size()) {
         extrinsics_[update.sensor] = update.pose;
+        extrinsic_from_tf_[update.sensor] = true;
         deskewer_.reset();
       }
       return true;
@@ -448,7 +482,9 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   pipeline::PipelineStats stats_;                  // the TF router's counters
   std::unique_ptr<pipeline::TfRouter> router_;
   pipeline::PoseHistory history_;
-  std::vector<io::Pose> extrinsics_;  // per sensor: in base_frame
+  std::vector<io::Pose> extrinsics_;     // per sensor: in base_frame
+  std::vector<bool> extrinsic_from_tf_;  // per sensor: /tf_static gave its extrinsic
+  std::set<std::string> static_frames_;  // every frame /tf_static named (for the error)
   pipeline::PointDeskewer deskewer_;
   std::vector<dds::ScanPoint> decoded_;  // the decoder's output (grows to the largest cloud)
   std::deque<Scan> waiting_;             // decoded clouds waiting for their poses, oldest first

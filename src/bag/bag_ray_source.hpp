@@ -42,6 +42,10 @@ struct BagRaysOptions {
   std::string base_frame = "base_link";  ///< the robot's body (pose.base_frame)
   /// Sensor in base_frame when /tf_static has no chain from base_frame to the cloud's frame.
   io::Pose extrinsic;
+  /// `extrinsic` was given (--sensor-offset): without it, a cloud in a frame other than
+  /// base_frame that /tf_static does not connect to it is an error, never mapped as if the
+  /// sensor sat at the base's origin.
+  bool extrinsic_given = false;
   std::string time_field = "auto";        ///< per-point time: auto, a field name, or none
   float max_time_offset_s = 1.0f;         ///< points further from the stamp are left out, counted
   std::int64_t pose_hold_ns = 20000000;   ///< newest pose used this far beyond it

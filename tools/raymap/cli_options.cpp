@@ -204,8 +204,8 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--trajectory", f.trajectory,
                "Point clouds: sensor trajectory, lines 'time x y z [qw qx qy qz]'");
   c.add_option("--sensor-offset", f.sensor_offset,
-               "Sensor position in the trajectory's body frame, metres: x,y,z")
-      ->capture_default_str();
+               "Sensor position in the trajectory's body frame, metres: x,y,z (default 0,0,0); "
+               "bags: the sensor in --base-frame when /tf_static has no chain to its frame");
   c.add_option("--scan-period", f.scan_period,
                "Without a 'scan' property: seconds per scan (<= 0: one scan)")
       ->capture_default_str();
@@ -428,7 +428,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
   o.input = input;
   o.source.trajectory_path = f.trajectory;
   o.source.scan_period_s = f.scan_period;
-  auto offset = parseVector(f.sensor_offset, "--sensor-offset");
+  auto offset = parseVector(f.sensor_offset.empty() ? "0,0,0" : f.sensor_offset, "--sensor-offset");
   if (!offset) {
     return Unexpected(offset.error());
   }
@@ -452,6 +452,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
     return fail(ErrorCode::kInvalidArgument, "--max-rate: must be 0 (all) or at least 0.01 Hz");
   }
   o.bag.extrinsic.position = toEigen(*offset);
+  o.bag.extrinsic_given = !f.sensor_offset.empty();
   const bool is_bag = bag::isBag(input);
   if (is_bag && !f.trajectory.empty()) {
     return fail(ErrorCode::kInvalidArgument,

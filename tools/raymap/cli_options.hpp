@@ -17,7 +17,7 @@ namespace raymap::cli {
 /// @brief Options as typed by the user, before conversion (probabilities, sizes, vectors).
 struct MappingFlags {
   std::string trajectory;
-  std::string sensor_offset = "0,0,0";
+  std::string sensor_offset;  ///< "" when not given: 0,0,0 (bags: only with a TF chain)
   double scan_period = io::RaySourceOptions::kDefaultScanPeriod;
   double resolution = MapGeometry::kDefaultResolution;
   int region_voxels = MapGeometry::kDefaultRegionVoxels;

@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What populate and replay take from a bag, and what they refuse (issue 52): a cloud frame with
+// no way onto the base, a bag without clouds, DDS topic names, the pose source auto picks, a bag
+// with nothing to publish.
+#include <cmath>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "tests/rosbag/bag_fixture.hpp"
+#include "tests/service/service_fixture.hpp"
+#include "tests/support/bag_spec.hpp"
+
+namespace raymap::test {
+namespace {
+
+constexpr std::int64_t kInputsT0 = 1700000000000000000;
+
+/// How a small bag is made: five 64-point clouds on `cloud_topic` in `cloud_frame`, poses at
+/// 10 Hz from Odometry on /odom (`odometry_messages` of them) and/or TF odom -> base_link on /tf.
+struct SmallBag {
+  std::string cloud_topic = "/points";
+  std::string cloud_frame = "lidar";
+  bool tf_static = true;  ///< base_link -> lidar on /tf_static
+  bool odometry_channel = true;
+  bool odometry_messages = true;
+  bool tf = false;
+};
+
+std::string writeSmallBag(const TempDir& dir, const std::string& name, const SmallBag& how) {
+  const std::string spec = dir.file(name + ".jsonl");
+  {
+    BagSpecWriter w(spec);
+    if (how.tf_static) {
+      w.channel("/tf_static", "tf2_msgs/msg/TFMessage");
+      w.tf("/tf_static", kInputsT0,
+           {{kInputsT0, "base_link", how.cloud_frame, io::Pose{{0.1, 0.0, 0.5}}}});
+    }
+    if (how.odometry_channel) {
+      w.channel("/odom", "nav_msgs/msg/Odometry");
+    }
+    if (how.tf) {
+      w.channel("/tf", "tf2_msgs/msg/TFMessage");
+    }
+    if (!how.cloud_topic.empty()) {
+      w.channel(how.cloud_topic, "sensor_msgs/msg/PointCloud2");
+    }
+    std::vector<dds::ScanPoint> points(64);
+    const std::vector<std::uint16_t> rings(64, 0);
+    for (int k = 0; k <= 5; ++k) {
+      const std::int64_t t = kInputsT0 + k * 100000000LL;
+      const io::Pose base{{0.1 * k, 0.0, 0.0}};
+      if (how.odometry_messages) {
+        w.odometry("/odom", t, t, "odom", "base_link", base);
+      }
+      if (how.tf) {
+        w.tf("/tf", t, {{t, "odom", "base_link", base}});
+      }
+      if (k == 5 || how.cloud_topic.empty()) {
+        continue;
+      }
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const double a = 0.1 * static_cast<double>(i);
+        points[i] = {static_cast<float>(5.0 * std::cos(a)),
+                     static_cast<float>(5.0 * std::sin(a)),
+                     -0.5f,
+                     0.001f * static_cast<float>(i),
+                     1.0f,
+                     0u};
+      }
+      w.ousterCloud(how.cloud_topic, t + 100000001, t, how.cloud_frame, points, rings);
+    }
+  }
+  const std::string bag = dir.file(name + ".mcap");
+  writeBag(spec, bag, {"--file-only"});
+  return bag;
+}
+
+TEST(BagInputs, ACloudFrameWithNoChainToTheBaseIsAnErrorNamingTheFrames) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  SmallBag how;
+  how.tf_static = false;
+  const std::string bag = writeSmallBag(dir, "no_static", how);
+  const std::string map = dir.file("m.rmap");
+  const RunResult r = runRaymap({"populate", bag, "-o", map, "-q"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, bag));
+  EXPECT_TRUE(contains(r.err, "frame 'lidar'"));
+  EXPECT_TRUE(contains(r.err, "'base_link'"));
+  EXPECT_TRUE(contains(r.err, "--sensor-offset"));
+  EXPECT_FALSE(std::filesystem::exists(map));
+  // Said explicitly, the sensor's place is taken as given.
+  const RunResult given = runRaymap({"populate", bag, "--sensor-offset", "0,0,0", "-o", map, "-q"});
+  EXPECT_EQ(given.exit_code, 0) << describe(given);
+  // A cloud in the base frame itself needs no chain.
+  how.cloud_frame = "base_link";
+  const RunResult base =
+      runRaymap({"populate", writeSmallBag(dir, "in_base", how), "-o", map, "-q"});
+  EXPECT_EQ(base.exit_code, 0) << describe(base);
+}
+
+}  // namespace
+}  // namespace raymap::test
