@@ -73,6 +73,20 @@ void writeBag(const std::string& spec, const std::string& out,
   ASSERT_EQ(r.exit_code, 0) << describe(r);
 }
 
+std::vector<dds::ScanPoint> ringCloud(std::size_t n) {
+  std::vector<dds::ScanPoint> points(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double a = 0.1 * static_cast<double>(i);
+    points[i] = {static_cast<float>(5.0 * std::cos(a)),
+                 static_cast<float>(5.0 * std::sin(a)),
+                 -0.5f,
+                 0.001f * static_cast<float>(i),
+                 1.0f,
+                 0u};
+  }
+  return points;
+}
+
 PlyTestFile float64RayCloud() {
   PlyTestFile ply;
   std::vector<PlyTestProperty> properties;

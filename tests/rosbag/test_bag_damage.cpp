@@ -3,7 +3,6 @@
 // unknown compression, a topic of the wrong type, a message that does not decode. Each gives a
 // clear error or a counted skip naming the file, topic or message, never a crash or a wrong map;
 // random damage is fuzzed through the reader in process.
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -120,20 +119,11 @@ std::string smallSpec(const TempDir& dir) {
   w.channel("/points", "sensor_msgs/msg/PointCloud2");
   const std::int64_t t0 = 1700000000000000000;
   w.tf("/tf_static", t0, {{t0, "base_link", "lidar", io::Pose{{0.1, 0.0, 0.5}}}});
-  std::vector<dds::ScanPoint> points(64);
+  const std::vector<dds::ScanPoint> points = ringCloud(64);
   std::vector<std::uint16_t> rings(64, 0);
   for (int k = 0; k < 5; ++k) {
     const std::int64_t t = t0 + k * 100000000LL;
     w.odometry("/odom", t, t, "odom", "base_link", io::Pose{{0.1 * k, 0.0, 0.0}});
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const double a = 0.1 * static_cast<double>(i);
-      points[i] = {static_cast<float>(5.0 * std::cos(a)),
-                   static_cast<float>(5.0 * std::sin(a)),
-                   -0.5f,
-                   0.001f * static_cast<float>(i),
-                   1.0f,
-                   0u};
-    }
     w.ousterCloud("/points", t + 100000001, t, "lidar", points, rings);
   }
   const std::int64_t end = t0 + 500000000;

@@ -2,7 +2,6 @@
 // What populate and replay take from a bag, and what they refuse (issue 52): a cloud frame with
 // no way onto the base, a bag without clouds, DDS topic names, the pose source auto picks, a bag
 // with nothing to publish.
-#include <cmath>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -45,7 +44,7 @@ std::string writeSmallBag(const TempDir& dir, const std::string& name, const Sma
     if (!how.cloud_topic.empty()) {
       w.channel(how.cloud_topic, "sensor_msgs/msg/PointCloud2");
     }
-    std::vector<dds::ScanPoint> points(64);
+    const std::vector<dds::ScanPoint> points = ringCloud(64);
     const std::vector<std::uint16_t> rings(64, 0);
     for (int k = 0; k <= 5; ++k) {
       const std::int64_t t = kInputsT0 + k * 100000000LL;
@@ -58,15 +57,6 @@ std::string writeSmallBag(const TempDir& dir, const std::string& name, const Sma
       }
       if (k == 5 || how.cloud_topic.empty()) {
         continue;
-      }
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        const double a = 0.1 * static_cast<double>(i);
-        points[i] = {static_cast<float>(5.0 * std::cos(a)),
-                     static_cast<float>(5.0 * std::sin(a)),
-                     -0.5f,
-                     0.001f * static_cast<float>(i),
-                     1.0f,
-                     0u};
       }
       w.ousterCloud(how.cloud_topic, t + 100000001, t, how.cloud_frame, points, rings);
     }
