@@ -9,6 +9,7 @@
 
 #include "src/dds/point_cloud.hpp"
 #include "src/dds/pose.hpp"
+#include "src/dds/topic_types.hpp"
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_history.hpp"
@@ -36,10 +37,27 @@ std::string topicsOfType(const std::vector<BagTopic>& topics, const std::string&
   return list.empty() ? "none" : list;
 }
 
+/// Every topic of the bag with its type: "/odom (nav_msgs/msg/Odometry), ...".
+std::string topicsWithTypes(const std::vector<BagTopic>& topics) {
+  std::string list;
+  for (const BagTopic& t : topics) {
+    list += (list.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
+  }
+  return list.empty() ? "none" : list;
+}
+
+/// The index of the topic `name` names: the bag's topic of that name, else, for a DDS name
+/// (rt/points, as raymapd's configuration and replay take them), its ROS topic (/points); -1.
+int findBagTopic(const BagReader& bag, const std::string& name) {
+  const int at = findTopic(bag.topics(), name);
+  const std::string ros = dds::rosTopicName(name);
+  return at >= 0 || ros.empty() ? at : findTopic(bag.topics(), ros);
+}
+
 /// The index of the topic named `name`, checked to be of `type`.
 Result<std::uint32_t> topicOfType(const BagReader& bag, const std::string& name,
                                   const std::string& type, const char* option) {
-  const int at = findTopic(bag.topics(), name);
+  const int at = findBagTopic(bag, name);
   if (at < 0) {
     return fail(ErrorCode::kInvalidArgument,
                 std::string(option) + ": " + bag.path() + " has no topic '" + name + "' (its " +
@@ -72,7 +90,9 @@ Result<std::uint32_t> onlyTopicOfType(const BagReader& bag, const std::string& t
     }
   }
   if (found < 0) {
-    return fail(ErrorCode::kInvalidArgument, bag.path() + " has no " + type + " topic");
+    return fail(ErrorCode::kInvalidArgument,
+                bag.path() + " has no " + type +
+                    " topic (its topics: " + topicsWithTypes(bag.topics()) + ")");
   }
   return topicOfType(bag, bag.topics()[static_cast<std::size_t>(found)].name, type, option);
 }
@@ -86,8 +106,15 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     const BagReader& bag = *bag_;
     if (options_.cloud_topics.empty()) {
       bool has_clouds = false;
+      bool has_images = false;
       for (const BagTopic& t : bag.topics()) {
         has_clouds = has_clouds || t.type == kPointCloud2;
+        has_images = has_images || t.type == kImage;
+      }
+      if (!has_clouds && !has_images) {
+        return fail(ErrorCode::kInvalidArgument,
+                    bag.path() + " has nothing to map: no " + kPointCloud2 + " and no " + kImage +
+                        " topic (its topics: " + topicsWithTypes(bag.topics()) + ")");
       }
       auto t = onlyTopicOfType(bag, has_clouds ? kPointCloud2 : kImage, "--topic");
       if (!t) {
@@ -96,7 +123,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       cloud_topics_.push_back(t.value());
     }
     for (const std::string& name : options_.cloud_topics) {
-      const int at = findTopic(bag.topics(), name);
+      const int at = findBagTopic(bag, name);
       const bool image = at >= 0 && bag.topics()[static_cast<std::size_t>(at)].type == kImage;
       auto t = topicOfType(bag, name, image ? kImage : kPointCloud2, "--topic");
       if (!t) {

@@ -90,5 +90,30 @@ TEST(BagInputs, ACloudFrameWithNoChainToTheBaseIsAnErrorNamingTheFrames) {
   EXPECT_EQ(base.exit_code, 0) << describe(base);
 }
 
+TEST(BagInputs, ABagWithoutCloudsOrImagesSaysSoAndListsItsTopicsWithTypes) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  SmallBag how;
+  how.cloud_topic = "";
+  const std::string bag = writeSmallBag(dir, "no_clouds", how);
+  const RunResult r = runRaymap({"populate", bag, "-o", dir.file("m.rmap"), "-q"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "no sensor_msgs/msg/PointCloud2 and no sensor_msgs/msg/Image topic"));
+  EXPECT_TRUE(contains(r.err, "/odom (nav_msgs/msg/Odometry)"));
+  EXPECT_TRUE(contains(r.err, "/tf_static (tf2_msgs/msg/TFMessage)"));
+}
+
+TEST(BagInputs, PopulateTakesDdsTopicNamesAsRaymapdAndReplayDo) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const std::string bag = writeSmallBag(dir, "names", SmallBag{});
+  const std::string map = dir.file("m.rmap");
+  const RunResult r = runRaymap({"populate", bag, "--topic", "rt/points", "--pose-topic", "rt/odom",
+                                 "-o", map, "--stats-json", "-", "-q"});
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.out, "\"/points\""));
+  EXPECT_TRUE(std::filesystem::exists(map));
+}
+
 }  // namespace
 }  // namespace raymap::test
