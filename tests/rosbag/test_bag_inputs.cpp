@@ -115,5 +115,34 @@ TEST(BagInputs, PopulateTakesDdsTopicNamesAsRaymapdAndReplayDo) {
   EXPECT_TRUE(std::filesystem::exists(map));
 }
 
+TEST(BagInputs, ReplayOfABagWithNothingToPublishFailsNamingItsTopics) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const std::string spec = dir.file("poses.jsonl");
+  {
+    BagSpecWriter w(spec);
+    w.channel("/pose", "geometry_msgs/msg/PoseStamped");
+    w.message("/pose", kInputsT0,
+              "{\"header\":{\"stamp\":{\"sec\":1700000000,\"nanosec\":0},\"frame_id\":\"map\"},"
+              "\"pose\":{\"position\":{\"x\":0,\"y\":0,\"z\":0},\"orientation\":{\"x\":0,"
+              "\"y\":0,\"z\":0,\"w\":1}}}");
+  }
+  const std::string unknown = dir.file("poses.mcap");
+  writeBag(spec, unknown, {"--file-only"});
+  SmallBag how;
+  how.cloud_topic = "";
+  how.tf_static = false;
+  how.odometry_messages = false;
+  const std::string empty = writeSmallBag(dir, "silent", how);
+  const std::string domain = std::to_string(uniqueDomain());
+  for (const auto& [bag, why] : {std::pair{unknown, "/pose (geometry_msgs/msg/PoseStamped)"},
+                                 std::pair{empty, "hold no message"}}) {
+    const RunResult r = runRaymap({"replay", bag, "--domain", domain, "--wait", "0", "-q"});
+    EXPECT_EQ(r.exit_code, 1) << describe(r);
+    EXPECT_TRUE(contains(r.err, bag + ": nothing to play"));
+    EXPECT_TRUE(contains(r.err, why));
+  }
+}
+
 }  // namespace
 }  // namespace raymap::test

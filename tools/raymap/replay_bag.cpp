@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // ReplaySession::playBag: a rosbag2 recording published as `ros2 bag play` would, without ROS:
 // each topic on its DDS name with the QoS it was recorded with, at the recorded spacing.
+#include <algorithm>
 #include <string_view>
 
 #include "src/bag/bag_reader.hpp"
@@ -27,6 +28,23 @@ int qosValue(std::string_view yaml, std::string_view key) {
     digits = true;
   }
   return digits ? value : -1;
+}
+
+/// Why nothing of `reader` can be played: each topic with its type and what stops it.
+std::string unplayableTopics(const bag::BagReader& reader) {
+  std::string list;
+  for (const bag::BagTopic& topic : reader.topics()) {
+    const bool cdr = topic.serialization_format.empty() || topic.serialization_format == "cdr";
+    list += (list.empty() ? "" : ", ") + topic.name + " (" + topic.type +
+            (cdr ? "" : " in " + topic.serialization_format) + ")";
+  }
+  std::string known;
+  for (const dds::KnownTopicType& type : dds::knownTopicTypes()) {
+    known += (known.empty() ? "" : ", ") + std::string(type.ros_name);
+  }
+  return reader.path() + ": nothing to play: none of its topics has a type raymap publishes (" +
+         (list.empty() ? "it has no topic" : "its topics: " + list) + "; raymap publishes " +
+         known + " in cdr)";
 }
 
 }  // namespace
@@ -80,6 +98,10 @@ Result<void> ReplaySession::playBag(const std::string& path) {
     writers.push_back(writer);
     clouds.push_back(cloud);
   }
+  // A replay that can send nothing is a failure, never a quiet success.
+  if (std::none_of(writers.begin(), writers.end(), [](const dds::CdrWriter* w) { return w; })) {
+    return fail(ErrorCode::kInvalidArgument, unplayableTopics(reader));
+  }
   if (first_cloud_writer != nullptr &&
       !waitForSubscriber([first_cloud_writer] { return first_cloud_writer->matchedReaders(); },
                          first_cloud_topic)) {
@@ -91,6 +113,7 @@ Result<void> ReplaySession::playBag(const std::string& path) {
   std::optional<std::int64_t> first_ns;
   double played_until_s = pass_offset_s_;
   std::vector<bool> warned(writers.size(), false);
+  std::uint64_t playable = 0;  // messages on topics that have a writer
   bag::BagMessage message;
   for (;;) {
     auto next = reader.next(message);
@@ -100,6 +123,7 @@ Result<void> ReplaySession::playBag(const std::string& path) {
     if (!next.value()) {
       break;
     }
+    playable += message.topic < writers.size() && writers[message.topic] != nullptr ? 1u : 0u;
     if (!first_ns) {
       first_ns = message.log_time_ns;
     }
@@ -127,6 +151,10 @@ Result<void> ReplaySession::playBag(const std::string& path) {
                                 " or could not be sent: skipped (and any more like it)");
     }
     reportProgress(reader.progress(), path);
+  }
+  if (playable == 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                path + ": nothing to play: its topics of types raymap publishes hold no message");
   }
   if (reader.pass().truncated) {
     ++stats_.truncated_logs;
