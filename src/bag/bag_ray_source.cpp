@@ -4,6 +4,7 @@
 #include "src/bag/bag_ray_source.hpp"
 
 #include <deque>
+#include <optional>
 #include <set>
 #include <utility>
 
@@ -168,23 +169,11 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     using Source = BagRaysOptions::PoseSource;
     Source source = options_.pose_source;
     if (source == Source::kAuto) {
-      int odometry_topics = 0;
-      for (const BagTopic& t : bag.topics()) {
-        odometry_topics += t.type == kOdometry ? 1 : 0;
+      auto chosen = autoPoseSource();
+      if (!chosen) {
+        return Unexpected(chosen.error());
       }
-      const bool has_tf = findTopic(bag.topics(), "/tf") >= 0;
-      if (!options_.pose_topic.empty() || odometry_topics == 1) {
-        source = Source::kOdometry;
-      } else if (has_tf) {
-        source = Source::kTf;
-      } else {
-        return fail(ErrorCode::kInvalidArgument,
-                    bag.path() + ": no pose source: " +
-                        (odometry_topics == 0
-                             ? std::string("no nav_msgs/msg/Odometry topic and no /tf")
-                             : "several Odometry topics (" + topicsOfType(bag.topics(), kOdometry) +
-                                   "): choose with --pose-topic"));
-      }
+      source = chosen.value();
     }
     if (source == Source::kOdometry) {
       auto t = options_.pose_topic.empty()
@@ -220,6 +209,72 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     info_.has_scan = true;
     info_.time_property = field == "none" ? "" : "per-point time (" + field + ")";
     return bag_->rewind();
+  }
+
+  /// --pose-source auto: Odometry when --pose-topic names one or the bag has exactly one, else
+  /// TF when it has /tf. With one Odometry topic and /tf, the one that has messages: a topic
+  /// recorded but never published must not win over 275 transforms. The choice is said in
+  /// report_.pose_note.
+  Result<BagRaysOptions::PoseSource> autoPoseSource() {
+    using Source = BagRaysOptions::PoseSource;
+    const BagReader& bag = *bag_;
+    int odometry = -1;
+    int odometry_topics = 0;
+    for (std::size_t i = 0; i < bag.topics().size(); ++i) {
+      if (bag.topics()[i].type == kOdometry) {
+        odometry = static_cast<int>(i);
+        ++odometry_topics;
+      }
+    }
+    const int tf = findTopic(bag.topics(), "/tf");
+    if (!options_.pose_topic.empty() || (odometry_topics == 1 && tf < 0)) {
+      return Source::kOdometry;
+    }
+    if (odometry_topics == 1) {
+      auto counts = messagesPerTopic();
+      if (!counts) {
+        return Unexpected(counts.error());
+      }
+      const std::uint64_t odometry_n = counts.value()[static_cast<std::size_t>(odometry)];
+      const std::uint64_t tf_n = counts.value()[static_cast<std::size_t>(tf)];
+      const std::string& name = bag.topics()[static_cast<std::size_t>(odometry)].name;
+      if (odometry_n == 0 && tf_n > 0) {
+        report_.pose_note = "--pose-source auto: poses from /tf (" + std::to_string(tf_n) +
+                            " messages): the Odometry topic " + name + " has no message";
+        return Source::kTf;
+      }
+      report_.pose_note = "--pose-source auto: poses from the Odometry topic " + name + " (" +
+                          std::to_string(odometry_n) + " messages), not /tf (" +
+                          std::to_string(tf_n) + "); --pose-source tf takes /tf";
+      return Source::kOdometry;
+    }
+    if (tf >= 0) {
+      return Source::kTf;
+    }
+    return fail(ErrorCode::kInvalidArgument,
+                bag.path() + ": no pose source: " +
+                    (odometry_topics == 0
+                         ? std::string("no nav_msgs/msg/Odometry topic and no /tf")
+                         : "several Odometry topics (" + topicsOfType(bag.topics(), kOdometry) +
+                               "): choose with --pose-topic"));
+  }
+
+  /// Messages per topic: from the bag's own statistics, else counted by a pass over it.
+  Result<std::vector<std::uint64_t>> messagesPerTopic() {
+    if (const std::optional<BagStatistics> stated = bag_->statistics()) {
+      return stated->topic_messages;
+    }
+    std::vector<std::uint64_t> counts(bag_->topics().size(), 0);
+    auto pass = bag_->forEach([&](const BagMessage& m) {
+      if (m.topic < counts.size()) {
+        ++counts[m.topic];
+      }
+      return true;
+    });
+    if (!pass) {
+      return Unexpected(pass.error());
+    }
+    return counts;
   }
 
   Result<std::size_t> read(std::span<Ray> out) override {

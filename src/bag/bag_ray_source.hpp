@@ -34,8 +34,9 @@ struct BagRaysOptions {
   dds::DepthDecodeOptions depth;
   /// Messages of a sensor faster than this (by header stamp) are skipped and counted; 0 = all.
   double max_rate_hz = 0.0;
-  /// kAuto: the Odometry topic when the bag has exactly one (or `pose_topic` is given), else
-  /// TF when the bag has /tf.
+  /// kAuto: the Odometry topic when `pose_topic` is given or the bag has exactly one, else TF
+  /// when the bag has /tf; with one Odometry topic and /tf, the one that has messages
+  /// (Odometry when both have).
   PoseSource pose_source = PoseSource::kAuto;
   std::string pose_topic;                ///< nav_msgs/msg/Odometry topic (pose.topic)
   std::string world_frame = "odom";      ///< TF poses: the chain's top (pose.world_frame)
@@ -59,6 +60,7 @@ struct BagRaysOptions {
 /// @brief What the reading did with the bag's messages.
 struct BagRaysReport {
   std::string pose_source;  ///< "odometry TOPIC" or "tf WORLD -> BASE"
+  std::string pose_note;    ///< --pose-source auto with Odometry and /tf: which, and why
   std::vector<std::string> cloud_topics;
   std::uint64_t messages = 0;               ///< messages read (all topics)
   std::uint64_t clouds = 0;                 ///< PointCloud2 or Image messages on the chosen topics

@@ -144,5 +144,23 @@ TEST(BagInputs, ReplayOfABagWithNothingToPublishFailsNamingItsTopics) {
   }
 }
 
+TEST(BagInputs, AutoPoseSourceTakesTfOverAnOdometryTopicWithoutMessagesAndSaysSo) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  SmallBag how;
+  how.odometry_messages = false;  // the topic was recorded, nothing was ever published on it
+  how.tf = true;
+  const std::string indexed = writeSmallBag(dir, "tf", how);
+  const std::string sqlite = dir.file("tf_sqlite");  // no statistics: counted by reading
+  writeBag(dir.file("tf.jsonl"), sqlite, {"--storage", "sqlite3"});
+  for (const std::string& bag : {indexed, sqlite}) {
+    const RunResult r = runRaymap({"populate", bag, "--stats-json", "-"});
+    EXPECT_EQ(r.exit_code, 0) << describe(r);
+    EXPECT_TRUE(contains(r.err, "--pose-source auto: poses from /tf (6 messages)"));
+    EXPECT_TRUE(contains(r.err, "/odom has no message"));
+    EXPECT_EQ(jsonValue(r.out, "pose_source"), "tf odom -> base_link") << r.out;
+  }
+}
+
 }  // namespace
 }  // namespace raymap::test

@@ -228,6 +228,9 @@ int runPopulate(const PopulateFlags& f) {
   }
   if (report->bag) {
     const bag::BagRaysReport& b = *report->bag;
+    if (!b.pose_note.empty() && !f.quiet) {
+      std::fprintf(stderr, "raymap populate: note: %s\n", b.pose_note.c_str());
+    }
     for (const std::string& warning : b.read_warnings) {
       std::fprintf(stderr, "raymap populate: warning: %s\n", warning.c_str());
     }
