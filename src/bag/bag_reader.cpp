@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <string_view>
 
 #include <yaml-cpp/yaml.h>
 
@@ -21,18 +22,43 @@ bool endsWith(const std::string& s, const char* suffix) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-bool startsWithMcapMagic(const std::string& path) {
+/// True when the file at `path` starts with `magic`.
+template <std::size_t N>
+bool startsWith(const std::string& path, const std::array<std::byte, N>& magic) {
   std::ifstream in(path, std::ios::binary);
-  std::array<char, 8> head{};
+  std::array<char, N> head{};
   if (!in.read(head.data(), head.size())) {
     return false;
   }
-  return std::equal(head.begin(), head.end(), mcap::kMagic.begin(),
+  return std::equal(head.begin(), head.end(), magic.begin(),
                     [](char a, std::byte b) { return static_cast<std::byte>(a) == b; });
+}
+
+/// A zstd frame's magic number (RFC 8878), little-endian 0xFD2FB528.
+constexpr std::array<std::byte, 4> kZstdMagic{std::byte{0x28}, std::byte{0xB5}, std::byte{0x2F},
+                                              std::byte{0xFD}};
+
+/// rosbag2's file compression (compression_mode: file) names its files BAG.mcap.zstd.
+bool isCompressedBagName(const std::string& path) {
+  return endsWith(path, ".mcap.zstd") || endsWith(path, ".mcap.zst") ||
+         endsWith(path, ".db3.zstd") || endsWith(path, ".db3.zst");
+}
+
+/// A file of a bag: .mcap or .db3, or one of those compressed whole (refused when opened).
+bool isBagFileName(const std::string& path) {
+  return endsWith(path, ".mcap") || endsWith(path, ".db3") || isCompressedBagName(path);
 }
 
 Result<std::unique_ptr<BagReader>> openFile(const std::string& path,
                                             const BagReadOptions& options) {
+  if (startsWith(path, kZstdMagic)) {
+    // Streaming it would still leave the summary at the end out of reach; zstd -d is quick.
+    return fail(ErrorCode::kUnsupported,
+                path +
+                    ": compressed as a whole with zstd (rosbag2's compression_mode: file): "
+                    "decompress it first with `zstd -d " +
+                    path + "` (then give the decompressed file, or its directory)");
+  }
   if (endsWith(path, ".db3")) {
     return openSqliteBag(path);
   }
@@ -122,6 +148,24 @@ class MultiFileBag final : public BagReader {
   BagPass pass_;
 };
 
+/// The files of the bag `dir`, in order: one reader, or one over all of them.
+Result<std::unique_ptr<BagReader>> openFiles(const std::string& dir,
+                                             const std::vector<std::string>& files,
+                                             const BagReadOptions& options) {
+  std::vector<std::unique_ptr<BagReader>> readers;
+  for (const std::string& f : files) {
+    auto r = openFile(f, options);
+    if (!r) {
+      return Unexpected(r.error());
+    }
+    readers.push_back(std::move(r).value());
+  }
+  if (readers.size() == 1) {
+    return std::move(readers.front());
+  }
+  return std::unique_ptr<BagReader>(std::make_unique<MultiFileBag>(dir, std::move(readers)));
+}
+
 Result<std::unique_ptr<BagReader>> openDirectory(const std::string& dir,
                                                  const BagReadOptions& options) {
   const std::string metadata = (fs::path(dir) / "metadata.yaml").string();
@@ -143,21 +187,76 @@ Result<std::unique_ptr<BagReader>> openDirectory(const std::string& dir,
     return fail(ErrorCode::kFormat,
                 metadata + ": rosbag2_bagfile_information.relative_file_paths: empty");
   }
-  std::vector<std::unique_ptr<BagReader>> readers;
   for (const std::string& f : files) {
     if (!fs::exists(f)) {
       return fail(ErrorCode::kIo, metadata + ": relative_file_paths: '" + f + "' does not exist");
     }
-    auto r = openFile(f, options);
-    if (!r) {
-      return Unexpected(r.error());
+  }
+  return openFiles(dir, files, options);
+}
+
+/// Orders "bag_2.mcap" before "bag_10.mcap": runs of digits compare as numbers.
+bool naturalLess(std::string_view a, std::string_view b) {
+  const auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  // The run of digits at the start of `s`, taken off it, without leading zeros.
+  const auto number = [&](std::string_view& s) {
+    std::size_t n = 0;
+    while (n < s.size() && digit(s[n])) {
+      ++n;
     }
-    readers.push_back(std::move(r).value());
+    std::string_view run = s.substr(0, n);
+    s.remove_prefix(n);
+    while (!run.empty() && run.front() == '0') {
+      run.remove_prefix(1);
+    }
+    return run;
+  };
+  while (!a.empty() && !b.empty()) {
+    if (digit(a.front()) && digit(b.front())) {
+      const std::string_view x = number(a);
+      const std::string_view y = number(b);
+      if (x.size() != y.size() || x != y) {
+        return x.size() != y.size() ? x.size() < y.size() : x < y;
+      }
+      continue;
+    }
+    if (a.front() != b.front()) {
+      return a.front() < b.front();
+    }
+    a.remove_prefix(1);
+    b.remove_prefix(1);
   }
-  if (readers.size() == 1) {
-    return std::move(readers.front());
+  return a.size() < b.size();
+}
+
+/// The bag files directly in `dir`, in rosbag2's split order (bag_0, bag_1, ..., bag_10).
+std::vector<std::string> bagFilesIn(const std::string& dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file(ec) && isBagFileName(name)) {
+      files.push_back(name);
+    }
   }
-  return std::unique_ptr<BagReader>(std::make_unique<MultiFileBag>(dir, std::move(readers)));
+  std::sort(files.begin(), files.end(), naturalLess);
+  for (std::string& f : files) {
+    f = (fs::path(dir) / f).string();
+  }
+  return files;
+}
+
+/// A directory without metadata.yaml (what `ros2 bag reindex` repairs): its .mcap or .db3
+/// files, read in order; MCAP and SQLite files describe their own topics.
+Result<std::unique_ptr<BagReader>> openFilesIn(const std::string& dir,
+                                               const BagReadOptions& options) {
+  const std::vector<std::string> files = bagFilesIn(dir);
+  if (files.empty()) {
+    return fail(ErrorCode::kFormat, dir +
+                                        ": a directory without metadata.yaml and without .mcap "
+                                        "or .db3 files is not a bag");
+  }
+  return openFiles(dir, files, options);
 }
 
 }  // namespace
@@ -165,16 +264,16 @@ Result<std::unique_ptr<BagReader>> openDirectory(const std::string& dir,
 bool isBag(const std::string& path) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
-    return fs::exists(fs::path(path) / "metadata.yaml", ec);
+    return fs::exists(fs::path(path) / "metadata.yaml", ec) || !bagFilesIn(path).empty();
   }
-  return endsWith(path, ".mcap") || endsWith(path, ".db3") || startsWithMcapMagic(path);
+  return isBagFileName(path) || startsWith(path, mcap::kMagic);
 }
 
 Result<std::unique_ptr<BagReader>> openBag(const std::string& path, const BagReadOptions& options) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
     if (!fs::exists(fs::path(path) / "metadata.yaml", ec)) {
-      return fail(ErrorCode::kFormat, path + ": a directory without metadata.yaml is not a bag");
+      return openFilesIn(path, options);
     }
     return openDirectory(path, options);
   }

@@ -99,12 +99,14 @@ class BagReader {
   Result<BagPass> forEach(const Visitor& visit);
 };
 
-/// @brief True when `path` names a bag: a directory holding metadata.yaml, or a file ending in
-/// .mcap or .db3 (or starting with the MCAP magic).
+/// @brief True when `path` names a bag: a directory holding metadata.yaml or .mcap / .db3 files,
+/// or a file ending in .mcap or .db3 (or starting with the MCAP magic), or in .mcap.zstd /
+/// .db3.zstd (rosbag2's whole-file compression: refused by openBag, saying how to decompress).
 bool isBag(const std::string& path);
 
-/// @brief Opens a rosbag2 directory (its metadata.yaml lists the files, read in turn), an .mcap
-/// file or a .db3 file, and reads its topics.
+/// @brief Opens a rosbag2 directory (its metadata.yaml lists the files, read in turn; without
+/// one, its .mcap or .db3 files in name order, bag_2 before bag_10), an .mcap file or a .db3
+/// file, and reads its topics.
 Result<std::unique_ptr<BagReader>> openBag(const std::string& path,
                                            const BagReadOptions& options = {});
 
