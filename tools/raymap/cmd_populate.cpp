@@ -32,7 +32,8 @@ struct PopulateFlags {
   bool quiet = false;
 };
 
-/// Why rays were rejected, by reason: "invalid 0, too short 12, out of bounds 0".
+/// Why rays were rejected, by reason: "invalid 0, too short 12, out of bounds or longer than
+/// --max-ray-length 0".
 std::string rejectionsText(const RayCounters& rays) {
   return "invalid " + withCommas(rays.rays_invalid) + ", too short " +
          withCommas(rays.rays_too_short) + ", out of bounds or longer than --max-ray-length " +
