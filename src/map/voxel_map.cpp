@@ -550,6 +550,16 @@ std::uint32_t VoxelMap::setWindowCentre(Vec3d p) noexcept {
   return recycled;
 }
 
+std::uint32_t VoxelMap::clearWindow() noexcept {
+  if (config_.policy != StorePolicy::kRolling) {
+    return 0;
+  }
+  const std::uint32_t released = store_.size();
+  store_.clear();
+  regions_recycled_ += released;
+  return released;
+}
+
 std::pair<Vec3d, Vec3d> VoxelMap::windowBounds() const noexcept {
   const double e = config_.geometry.regionExtent();
   const Vec3i hi = windowMaxRegion() + Vec3i{1, 1, 1};

@@ -235,6 +235,12 @@ class VoxelMap {
   /// @brief Registers the one hook told before regions leave the pool (nullptr: none).
   void setEvictionHook(RegionEvictionHook* hook) noexcept { eviction_hook_ = hook; }
 
+  /// @brief Rolling policy: releases every region, keeping the window where it is (the robot's
+  /// pose jumped: what was mapped before is in another frame). Regions are recycled as when the
+  /// window moves, so device backends see the same events. @return the regions released.
+  /// @rt allocates: no (the store's free list has room for every slot).
+  std::uint32_t clearWindow() noexcept;
+
   // ---- rolling window ----
   /// @brief Moves the window so that it is centred (to the nearest region) on p_world; regions
   /// that leave it are recycled (their voxels become unobserved when reused). Global maps: no-op.

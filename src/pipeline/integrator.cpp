@@ -77,12 +77,48 @@ void Integrator::drainPoses() noexcept {
       }
       continue;
     }
+    (void)startsOver(update);
     if (history_.push(update.stamp_ns, update.pose)) {
       latest_.store(update.stamp_ns, toVec3(update.pose.position));
     } else {
       stats_.poses_out_of_order.add();
     }
   }
+}
+
+bool Integrator::startsOver(const PoseUpdate& update) noexcept {
+  const io::Pose* newest = history_.newestPose();
+  if (newest == nullptr) {
+    return false;
+  }
+  const std::int64_t back = history_.newestStamp() - update.stamp_ns;
+  const double jump = (update.pose.position - newest->position).norm();
+  const bool reset = back > settings_.time_reset_ns;
+  const bool jumped = !reset && settings_.max_pose_jump_m > 0.0 &&
+                      update.stamp_ns > history_.newestStamp() && jump > settings_.max_pose_jump_m;
+  if (!reset && !jumped) {
+    return false;
+  }
+  if (reset) {
+    stats_.pose_time_resets.add();
+    stats_.last_time_reset_ms.store(back / 1000000, std::memory_order_relaxed);
+  } else {
+    stats_.pose_jumps.add();
+    stats_.last_pose_jump_mm.store(std::llround(jump * 1000.0), std::memory_order_relaxed);
+  }
+  // Scans already converted were deskewed with the poses before: they go in as they are. What
+  // is left of a scan being converted finds no pose across the break and is left out.
+  if (jumped && settings_.clear_on_jump) {
+    if (batch_size_ > 0 || completed_count_ > 0) {
+      integrateBatch(settings_.clock_ns());
+    }
+    std::lock_guard<platform::PiMutex> lock(map_mutex_);
+    map_.clearWindow();
+    stats_.window_clears.add();
+  }
+  history_.clear();
+  deskewer_.reset();
+  return true;
 }
 
 bool Integrator::beginSegment() noexcept {

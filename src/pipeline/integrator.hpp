@@ -44,6 +44,15 @@ struct IntegratorSettings {
   /// always, not only while the integrator is saturated (queues.shed_when). The deadline itself
   /// holds either way.
   bool shed_always = false;
+  /// A pose stamped this much before the newest is a clock that went back (a bag played in a
+  /// loop, simulation time reset), not a late pose: the pose history and the deskewing start
+  /// over from it (pose.time_reset_s). Later-than-this late poses are ignored as out of order.
+  std::int64_t time_reset_ns = 1000000000;
+  /// A pose further than this (metres) from the one before is a jump (relocalisation, an
+  /// odometry reset): counted, the pose history starts over from it, and with clear_on_jump the
+  /// rolling window is emptied (pose.max_jump_m, pose.on_jump). 0 = off.
+  double max_pose_jump_m = 0.0;
+  bool clear_on_jump = false;
   /// The clock (monotonic ns) the integrator reads; tests give it one whose time they control.
   std::int64_t (*clock_ns)() noexcept = &platform::monotonicNowNs;
 };
@@ -99,6 +108,9 @@ class Integrator {
  private:
   std::int64_t step_(std::int64_t now_ns) noexcept;  // step() without the load accounting
   void drainPoses() noexcept;
+  /// A base pose that went back in time or jumped: the history starts over (and with
+  /// clear_on_jump the window is emptied). @return whether `update` began a new history.
+  bool startsOver(const PoseUpdate& update) noexcept;
   /// Converts points of the current scan into the batch until it is done, the batch is full or
   /// `max_visits` points have been visited. @return true when the scan is finished.
   bool convertScan(std::uint64_t max_visits) noexcept;

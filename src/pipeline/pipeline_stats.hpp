@@ -118,6 +118,16 @@ struct PipelineStats {
   Counter batches;              ///< backend calls
   Counter integrate_errors;     ///< backend calls that failed
   Counter poses_out_of_order;   ///< pose stamps not after the previous one (ignored)
+  /// Pose stamps more than pose.time_reset_s before the newest: the clock went back (a looped
+  /// bag, a simulation reset); the pose history started over.
+  Counter pose_time_resets;
+  /// Poses further than pose.max_jump_m from the one before (relocalisation, odometry reset):
+  /// the history started over; window_clears of them also emptied the rolling window.
+  Counter pose_jumps;
+  Counter window_clears;
+  /// How far the last jump went (millimetres) and how far back the last reset went (ms).
+  std::atomic<std::int64_t> last_pose_jump_mm{0};
+  std::atomic<std::int64_t> last_time_reset_ms{0};
   // ---- publisher thread ----
   Counter maps_published;
   Counter costmaps_published;  ///< nav_msgs/OccupancyGrid written (dds.costmap_topic)

@@ -44,7 +44,19 @@ class PoseHistory {
   std::size_t copyCovering(std::int64_t from_ns, std::int64_t to_ns,
                            std::span<rm_pose_sample> out) const noexcept;
 
+  /// @brief Forgets every pose (time went backwards, or the pose jumped): lookups find none until
+  /// the next push(). @rt allocates: no.
+  void clear() noexcept {
+    first_ = 0;
+    size_ = 0;
+    hint_ = 0;
+  }
+
   std::size_t size() const noexcept { return size_; }
+  /// @brief The newest pose (nullptr when empty).
+  const io::Pose* newestPose() const noexcept {
+    return size_ == 0 ? nullptr : &poses_[at(size_ - 1)];
+  }
   std::int64_t newestStamp() const noexcept;
   std::int64_t oldestStamp() const noexcept;
 

@@ -171,7 +171,8 @@ void readBackend(Context& ctx, const YAML::Node& node, BackendChoice& backend) {
 
 void readPose(Context& ctx, const YAML::Node& node, PoseConfig& pose) {
   Fields f(ctx, node, "pose");
-  f.knownKeys({"source", "topic", "world_frame", "base_frame", "history", "max_wait_s", "hold_s"});
+  f.knownKeys({"source", "topic", "world_frame", "base_frame", "history", "max_wait_s", "hold_s",
+               "time_reset_s", "max_jump_m", "on_jump"});
   pose.source = choiceOr(f, "source", {"odometry", "tf"}, 0) == 0 ? PoseConfig::Source::kOdometry
                                                                   : PoseConfig::Source::kTf;
   pose.odometry_topic = topic(f, "topic", pose.odometry_topic);
@@ -184,6 +185,9 @@ void readPose(Context& ctx, const YAML::Node& node, PoseConfig& pose) {
   pose.history = f.integer<std::uint32_t>("history", pose.history, 16u, 1u << 20);
   pose.max_wait_s = f.positive("max_wait_s", pose.max_wait_s, true);
   pose.hold_s = f.positive("hold_s", pose.hold_s, true);
+  pose.time_reset_s = f.positive("time_reset_s", pose.time_reset_s);
+  pose.max_jump_m = f.positive("max_jump_m", pose.max_jump_m, true);
+  pose.clear_on_jump = choiceOr(f, "on_jump", {"keep", "clear"}, 0) == 1;
 }
 
 io::Pose readExtrinsic(Context& ctx, const YAML::Node& node, const std::string& path) {

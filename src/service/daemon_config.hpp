@@ -74,6 +74,15 @@ struct PoseConfig {
   std::uint32_t history = 4096;            ///< poses kept for deskewing (ring)
   double max_wait_s = 0.2;  ///< a scan waits this long for poses to cover it, then is dropped
   double hold_s = 0.02;     ///< beyond the newest pose, up to this long, the newest is used
+  /// A pose stamped this long before the newest means the clock went back (a bag played in a
+  /// loop, a simulation reset): the pose history and the deskewing start over (counted, WARN).
+  double time_reset_s = 1.0;
+  /// A pose this far (metres) from the one before is a jump (relocalisation, an odometry reset):
+  /// counted and reported (WARN), the pose history starts over; 0 = off.
+  double max_jump_m = 5.0;
+  /// What a jump does to the map: keep it, or clear the rolling window (what was mapped is in
+  /// the frame before the jump).
+  bool clear_on_jump = false;
 };
 
 /// @brief The published height map.

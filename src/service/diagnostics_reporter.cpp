@@ -52,8 +52,8 @@ DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
       heightmap_name_(settings_.name + ": height map"),
       realtime_name_(settings_.name + ": real time"),
       started_ns_(started_ns),
-      // Up to 80 values a status: the pipeline's has 64 with a depth camera configured.
-      message_(3 + static_cast<int>(settings_.sensors.size()), 80),
+      // Up to 96 values a status: the pipeline's has 75 with a depth camera configured.
+      message_(3 + static_cast<int>(settings_.sensors.size()), 96),
       has_depth_(std::any_of(settings_.sensors.begin(), settings_.sensors.end(),
                              [](const ReporterSettings::Sensor& sensor) {
                                return !sensor.camera_info_topic.empty();
@@ -84,6 +84,9 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   t.out_of_bounds = stats_.rays_out_of_bounds.get();
   t.outside_window = stats_.rays_outside_window.get();
   t.too_near = stats_.points_too_near.get();
+  t.time_resets = stats_.pose_time_resets.get();
+  t.pose_jumps = stats_.pose_jumps.get();
+  t.window_clears = stats_.window_clears.get();
   t.scans_shed = stats_.scans_shed.get();
   t.scans_cut_short = stats_.scans_cut_short.get();
   t.points_shed = stats_.points_shed.get();
@@ -247,6 +250,27 @@ void DiagnosticsReporter::describeDrops() noexcept {
          "scans cut short at their deadline (queues.max_latency_s)");
   reason(c.points_shed, b.points_shed, "points shed by subsampling (latency bound)");
   reason(c.poses_dropped, b.poses_dropped, "poses dropped (pose queue full)");
+  if (c.time_resets > b.time_resets) {
+    appendf(out, size,
+            "%sthe pose clock went back %.1f s (%" PRIu64
+            "x: a bag played in a loop, a simulation reset?): the pose history started over",
+            sep,
+            static_cast<double>(stats_.last_time_reset_ms.load(std::memory_order_relaxed)) * 1e-3,
+            c.time_resets - b.time_resets);
+    sep = "; ";
+  }
+  if (c.pose_jumps > b.pose_jumps) {
+    appendf(out, size,
+            "%sthe pose jumped %.2f m (%" PRIu64
+            "x, more than pose.max_jump_m: relocalisation, an odometry reset?): the pose history "
+            "started over%s",
+            sep,
+            static_cast<double>(stats_.last_pose_jump_mm.load(std::memory_order_relaxed)) * 1e-3,
+            c.pose_jumps - b.pose_jumps,
+            c.window_clears > b.window_clears ? ", the rolling window was cleared"
+                                              : ", the map was kept");
+    sep = "; ";
+  }
 }
 
 std::uint8_t DiagnosticsReporter::describeIntegration(char* out, std::size_t size) const noexcept {
@@ -522,6 +546,9 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "poses_received", "%" PRIu64, c.poses);
   message_.addValue(s, "poses_malformed", "%" PRIu64, c.poses_malformed);
   message_.addValue(s, "poses_dropped", "%" PRIu64, c.poses_dropped);
+  message_.addValue(s, "pose_time_resets", "%" PRIu64, c.time_resets);
+  message_.addValue(s, "pose_jumps", "%" PRIu64, c.pose_jumps);
+  message_.addValue(s, "window_clears", "%" PRIu64, c.window_clears);
   message_.addValue(s, "other_map_publishers", "%u", other_publishers_);
   message_.addValue(s, "pose_publishers", "%u", inputs_ != nullptr ? inputs_->odometry : 0u);
   message_.addValue(s, "rate_window_s", "%.2f", dt);

@@ -112,6 +112,7 @@ class DiagnosticsReporter {
     std::uint64_t scans = 0, no_pose = 0, rays = 0, rejected = 0, no_return = 0, bad_time = 0;
     std::uint64_t scans_empty = 0, invalid = 0, too_short = 0, out_of_bounds = 0;
     std::uint64_t outside_window = 0, too_near = 0;
+    std::uint64_t time_resets = 0, pose_jumps = 0, window_clears = 0;
     std::uint64_t scans_shed = 0, scans_cut_short = 0, points_shed = 0;
     std::uint64_t maps = 0, withheld = 0, late = 0, hm_errors = 0, integrate_errors = 0;
     std::uint64_t poses = 0, poses_malformed = 0, poses_dropped = 0;
@@ -172,7 +173,7 @@ class DiagnosticsReporter {
   std::uint8_t pipeline_level_ = 0;
   std::uint8_t heightmap_level_ = 0;
   char pipeline_message_[1024] = {};
-  char drop_reasons_[448] = {};
+  char drop_reasons_[768] = {};
   char heightmap_message_[128] = {};
   char status_line_[256] = {};
 };

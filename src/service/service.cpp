@@ -250,6 +250,9 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   settings.batch_deadline_ns = seconds(config.queues.batch_deadline_s);
   settings.pose_wait_ns = seconds(config.pose.max_wait_s);
   settings.pose_hold_ns = seconds(config.pose.hold_s);
+  settings.time_reset_ns = seconds(config.pose.time_reset_s);
+  settings.max_pose_jump_m = config.pose.max_jump_m;
+  settings.clear_on_jump = config.pose.clear_on_jump;
   settings.pose_history = config.pose.history;
   settings.max_lock_hold_ns = seconds(config.queues.max_lock_hold_s);
   settings.max_latency_ns = seconds(config.queues.max_latency_s);

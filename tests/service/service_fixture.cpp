@@ -144,10 +144,11 @@ bool RosSide::waitForService(double timeout_s) {
 }
 
 void RosSide::play(const driver::SimulatedLidar& lidar, driver::PlaybackOptions options,
-                   double seconds, std::vector<driver::ReceivedGridMap>& maps) {
+                   double seconds, std::vector<driver::ReceivedGridMap>& maps,
+                   std::int64_t stamp_offset_ns) {
   driver::LidarPlayback playback(lidar, *publisher, options);
   const std::int64_t t0 = platform::monotonicNowNs();
-  playback.start(t0, platform::realtimeNowNs());
+  playback.start(t0, platform::realtimeNowNs() + stamp_offset_ns);
   const std::int64_t end = t0 + static_cast<std::int64_t>(seconds * 1e9);
   for (std::int64_t now = t0; now < end; now = platform::monotonicNowNs()) {
     const std::int64_t due = playback.publishDue(now);

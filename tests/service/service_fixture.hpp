@@ -108,9 +108,11 @@ struct RosSide {
   /// @brief Waits until raymapd's cloud and pose readers and its height-map writer are matched
   /// (discovery), up to `timeout_s`.
   bool waitForService(double timeout_s);
-  /// @brief Plays `lidar` for `seconds`, collecting GridMaps and diagnostics meanwhile.
+  /// @brief Plays `lidar` for `seconds`, collecting GridMaps and diagnostics meanwhile; the
+  /// recording's stamps start `stamp_offset_ns` from the wall clock now (negative: in the past,
+  /// as a bag played again).
   void play(const driver::SimulatedLidar& lidar, driver::PlaybackOptions options, double seconds,
-            std::vector<driver::ReceivedGridMap>& maps);
+            std::vector<driver::ReceivedGridMap>& maps, std::int64_t stamp_offset_ns = 0);
   /// @brief Polls diagnostics for `seconds` (reports come at 1 Hz).
   void settle(double seconds, std::vector<driver::ReceivedGridMap>* maps = nullptr);
   /// @brief Polls like settle() until `done` returns true, at most `max_seconds`: for what

@@ -527,6 +527,70 @@ TEST(Integrator, AScanWhoseEveryRayIsShorterThanMinRangeIsEmptyAndCountedPerReas
   EXPECT_EQ(rig->stats.last_scan_integrated_ns.load(), 0) << "the map is not fresher for it";
 }
 
+TEST(Integrator, APoseClockThatGoesBackStartsTheHistoryOverInsteadOfStarvingEveryScan) {
+  // A bag played in a loop: its stamps go back 10 s at every lap. The poses after the jump used
+  // to be ignored as out of order, and every scan of the new lap dropped for want of a pose.
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(kStamp, {scanPoint(kWall)});
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+  ASSERT_EQ(rig->stats.scans_integrated.get(), 1u);
+
+  const std::int64_t lap = kStamp - 10 * 1000 * kMs;
+  rig->pushPose(lap, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(lap, {scanPoint(kWall)});
+  rig->integrator.step(kNow + 10 * kMs);
+  rig->integrator.flush(kNow + 10 * kMs);
+
+  EXPECT_EQ(rig->stats.pose_time_resets.get(), 1u);
+  EXPECT_EQ(rig->stats.last_time_reset_ms.load(), 10000);
+  EXPECT_EQ(rig->stats.poses_out_of_order.get(), 0u);
+  EXPECT_EQ(rig->stats.scans_no_pose.get(), 0u);
+  EXPECT_EQ(rig->stats.scans_integrated.get(), 2u);
+}
+
+TEST(Integrator, ALatePoseIsIgnoredNotAReset) {
+  auto rig = std::make_unique<Rig>();
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->pushPose(kStamp - 50 * kMs, makePose({0.0, 0.0, 0.0}));  // best effort, delivered late
+  rig->integrator.step(kNow);
+  EXPECT_EQ(rig->stats.poses_out_of_order.get(), 1u);
+  EXPECT_EQ(rig->stats.pose_time_resets.get(), 0u);
+}
+
+/// A rig that integrates one wall point, then receives a pose `jump_m` along x 100 ms later.
+std::unique_ptr<Rig> rigAfterAJump(double jump_m, bool clear) {
+  IntegratorSettings settings = defaultSettings();
+  settings.max_pose_jump_m = 1.0;
+  settings.clear_on_jump = clear;
+  auto rig = std::make_unique<Rig>(settings);
+  rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
+  rig->publishScan(kStamp, {scanPoint(kWall)});
+  rig->integrator.step(kNow);
+  rig->integrator.flush(kNow);
+  rig->pushPose(kStamp + 100 * kMs, makePose({jump_m, 0.0, 0.0}));
+  rig->integrator.step(kNow + 10 * kMs);
+  return rig;
+}
+
+TEST(Integrator, APoseJumpIsCountedAndKeepsOrClearsTheWindowAsConfigured) {
+  const auto kept = rigAfterAJump(2.5, false);
+  EXPECT_EQ(kept->stats.pose_jumps.get(), 1u);
+  EXPECT_EQ(kept->stats.last_pose_jump_mm.load(), 2500);
+  EXPECT_EQ(kept->stats.window_clears.get(), 0u);
+  EXPECT_EQ(kept->stateAt(kWall), VoxelState::kOccupied);
+
+  const auto cleared = rigAfterAJump(2.5, true);
+  EXPECT_EQ(cleared->stats.pose_jumps.get(), 1u);
+  EXPECT_EQ(cleared->stats.window_clears.get(), 1u);
+  EXPECT_EQ(cleared->stateAt(kWall), VoxelState::kUnobserved);
+
+  const auto walked = rigAfterAJump(0.5, true);  // 5 m/s: within max_pose_jump_m
+  EXPECT_EQ(walked->stats.pose_jumps.get(), 0u);
+  EXPECT_EQ(walked->stateAt(kWall), VoxelState::kOccupied);
+}
+
 TEST(Integrator, EarlierScansInTheBatchGoInBeforeTheirDeadline) {
   // Scan A (100 rays) must be in the map 2 ms from now; scan B (3,000 rays) has until the map
   // after. B's rays must not hold A's back: A goes in by its deadline, B whole after.

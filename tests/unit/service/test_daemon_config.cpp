@@ -453,6 +453,21 @@ TEST(DaemonConfig, HealthAndLoadValuesAreRead) {
   EXPECT_EQ(c.heightmap.publish_lead_max_s, 0.05);
 }
 
+TEST(DaemonConfig, PoseResetsAndJumpsHaveDefaultsAndAreRead) {
+  auto defaults = parseDaemonConfig("{}\n", kName);
+  ASSERT_TRUE(defaults) << defaults.error().message;
+  EXPECT_EQ(defaults->pose.time_reset_s, 1.0);
+  EXPECT_EQ(defaults->pose.max_jump_m, 5.0);
+  EXPECT_FALSE(defaults->pose.clear_on_jump);
+  auto set = parseDaemonConfig("pose: {time_reset_s: 3, max_jump_m: 0, on_jump: clear}\n", kName);
+  ASSERT_TRUE(set) << set.error().message;
+  EXPECT_EQ(set->pose.time_reset_s, 3.0);
+  EXPECT_EQ(set->pose.max_jump_m, 0.0);
+  EXPECT_TRUE(set->pose.clear_on_jump);
+  expectError("pose: {on_jump: forget}\n", "pose.on_jump", "");
+  expectError("pose: {time_reset_s: 0}\n", "pose.time_reset_s", "");
+}
+
 TEST(DaemonConfig, TheLatencyBoundFollowsThePublishRate) {
   // Off.
   auto off = parseDaemonConfig("queues: {max_latency_s: 0}\n", kName);
