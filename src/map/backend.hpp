@@ -48,6 +48,8 @@ struct BackendStats {
   std::uint64_t voxels_visited = 0;   ///< voxel visits (updates plus skipped per-scan repeats)
   std::uint64_t updates_dropped = 0;  ///< updates given up under contention (always 0 on the CPU)
   std::uint64_t spans_outside_window = 0;  ///< ray pieces skipped: region outside a rolling window
+  /// Batches cut in two because their regions did not fit a tiered map's pool at once (CPU).
+  std::uint64_t batches_split = 0;
   // ---- device backends (0 on the CPU) ----
   std::uint64_t rays_skipped = 0;       ///< rays crossing more regions than the device cache holds
   std::uint64_t bytes_to_device = 0;    ///< batch arrays and region uploads

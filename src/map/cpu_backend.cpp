@@ -76,27 +76,23 @@ class CpuBackend final : public Backend {
   }
 
   Expected<void, IntegrateError> integrate(std::span<const PreparedRay> rays) noexcept override {
-    ctx_.sequence = ctx_.per_scan ? map_.beginScan() : 0u;
-    if (scan_bits_) {
-      scan_bits_->beginBatch(ctx_.sequence);
+    Expected<void, IntegrateError> result = integrateWhole(rays);
+    if (result || result.error() != IntegrateError::kStoreFull || !map_.tiered() ||
+        !detail::splitsAtAnyRay(ctx_) || !parallel_) {
+      return result;  // (the serial path unpins the pool as it goes: see cpu_serial.cpp)
     }
-    map_.beginEpoch();  // a tiered map keeps this batch's regions in the pool
-    for (detail::RegionSlotCache& cache : caches_) {
-      cache.reset();  // regions may have been recycled since the last batch
+    // A tiered map whose pool cannot hold the batch's regions at once: the parallel path fails
+    // before it changes anything, so the batch goes in by halves, down to single rays, which the
+    // serial path takes region by region. Any budget that holds one region works.
+    ++stats_.batches_split;
+    if (rays.size() == 1) {
+      return integrateSerially(rays);
     }
-    Expected<void, IntegrateError> result =
-        parallel_ ? parallel_->integrate(ctx_, rays, caches_, worker_stats_)
-                  : detail::integrateSerial(ctx_, rays, caches_[0], worker_stats_[0]);
-    for (detail::WorkerStats& w : worker_stats_) {
-      stats_.voxels_visited += w.voxels_visited;
-      stats_.spans_outside_window += w.spans_outside_window;
-      w = detail::WorkerStats{};
+    const std::size_t half = rays.size() / 2;
+    if (auto first = integrate(rays.first(half)); !first) {
+      return first;
     }
-    if (result) {
-      ++stats_.batches;
-      stats_.rays += rays.size();
-    }
-    return result;
+    return integrate(rays.subspan(half));
   }
 
   Expected<void, IntegrateError> synchronise() noexcept override { return {}; }
@@ -114,6 +110,35 @@ class CpuBackend final : public Backend {
   }
 
  private:
+  Expected<void, IntegrateError> integrateSerially(std::span<const PreparedRay> rays) noexcept {
+    return integrateWhole(rays, /*serially=*/true);
+  }
+  /// One batch as it is (the parallel path when there are threads, unless `serially`).
+  Expected<void, IntegrateError> integrateWhole(std::span<const PreparedRay> rays,
+                                                bool serially = false) noexcept {
+    ctx_.sequence = ctx_.per_scan ? map_.beginScan() : 0u;
+    if (scan_bits_) {
+      scan_bits_->beginBatch(ctx_.sequence);
+    }
+    map_.beginEpoch();  // a tiered map keeps this batch's regions in the pool
+    for (detail::RegionSlotCache& cache : caches_) {
+      cache.reset();  // regions may have been recycled since the last batch
+    }
+    Expected<void, IntegrateError> result =
+        parallel_ && !serially ? parallel_->integrate(ctx_, rays, caches_, worker_stats_)
+                               : detail::integrateSerial(ctx_, rays, caches_[0], worker_stats_[0]);
+    for (detail::WorkerStats& w : worker_stats_) {
+      stats_.voxels_visited += w.voxels_visited;
+      stats_.spans_outside_window += w.spans_outside_window;
+      w = detail::WorkerStats{};
+    }
+    if (result) {
+      ++stats_.batches;
+      stats_.rays += rays.size();
+    }
+    return result;
+  }
+
   VoxelMap& map_;
   detail::IntegrationContext ctx_;
   std::optional<detail::ParallelIntegrator> parallel_;

@@ -6,12 +6,19 @@ namespace raymap::detail {
 namespace {
 
 /// Slot of a region, created on demand (cached). kNoSlot: outside a rolling window.
-Expected<std::uint32_t, IntegrateError> acquire(VoxelMap& map, RegionSlotCache& cache,
-                                                Vec3i region) noexcept {
+Expected<std::uint32_t, IntegrateError> acquire(const IntegrationContext& ctx, VoxelMap& map,
+                                                RegionSlotCache& cache, Vec3i region) noexcept {
   if (const std::uint32_t* cached = cache.find(RegionStore::packCoord(region))) {
     return *cached;
   }
   auto slot = map.acquireRegion(region);
+  if (!slot && slot.error() == StoreError::kFull && map.tiered() && splitsAtAnyRay(ctx)) {
+    // The batch's regions outgrew the pool: those of the rays done so far may go to the cold
+    // tiers (a new epoch unpins them), so that any budget that holds one region works.
+    cache.reset();
+    map.beginEpoch();
+    slot = map.acquireRegion(region);
+  }
   if (!slot) {
     if (slot.error() == StoreError::kFull) {
       return Unexpected(IntegrateError::kStoreFull);  // not cached: a later call may succeed
@@ -38,7 +45,7 @@ Expected<void, IntegrateError> forEachSampleHit(const IntegrationContext& ctx,
       continue;
     }
     const auto [region, index] = sampleCellOf(ray, ctx.region_voxels);
-    auto slot = acquire(*ctx.map, cache, region);
+    auto slot = acquire(ctx, *ctx.map, cache, region);
     if (!slot) {
       return Unexpected(slot.error());
     }
@@ -68,7 +75,7 @@ Expected<void, IntegrateError> integrateRays(const IntegrationContext& ctx,
     const bool sample_is_start = walk.frame().sample_is_start != 0;
     RaySpan span;
     while (walk.next(&span)) {
-      auto slot = acquire(map, cache, span.region);
+      auto slot = acquire(ctx, map, cache, span.region);
       if (!slot) {
         return Unexpected(slot.error());
       }
@@ -81,7 +88,7 @@ Expected<void, IntegrateError> integrateRays(const IntegrationContext& ctx,
     }
     if ((ray.flags & RM_RAY_END_HIT) != 0u && !ctx.ndt) {
       const auto [region, index] = walk.sampleCell();
-      auto slot = acquire(map, cache, region);
+      auto slot = acquire(ctx, map, cache, region);
       if (!slot) {
         return Unexpected(slot.error());
       }

@@ -330,6 +330,7 @@ struct IntegrationContext {
   VoxelMap* map = nullptr;
   std::int32_t region_voxels = 32;
   rm_occupancy_params params{};
+
   bool per_scan = false;
   std::uint32_t sequence = 0;  ///< scan sequence of this batch (per-scan semantics)
   /// Per-scan semantics: the batch's once-per-scan bits (ScanBits::beginBatch called with
@@ -341,6 +342,12 @@ struct IntegrationContext {
   float resolution = 0.1f;       ///< voxel edge, metres (decay rate: path lengths in metres)
   rm_tsdf_params tsdf_params{};  ///< TSDF maps
 };
+
+/// @brief Whether a batch of `ctx` may be cut between any two rays without changing the map:
+/// per ray, no NDT (an NDT batch's hits follow all its misses; a per-scan batch is one scan).
+inline bool splitsAtAnyRay(const IntegrationContext& ctx) noexcept {
+  return !ctx.per_scan && !ctx.ndt;
+}
 
 /// @brief Pointers to the layers of the region in `slot` (and, per scan, to its bits: call from
 /// the thread that owns the region in this batch).

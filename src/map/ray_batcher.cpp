@@ -329,10 +329,13 @@ Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateErr
                      (failure ? failure->message : std::string("unknown reason"))};
   }
   if (error == IntegrateError::kStoreFull && map.tiered()) {
-    return Error{ErrorCode::kCapacity, "one batch touches more regions than the pool's " +
-                                           std::to_string(map.store().capacity()) +
-                                           " hold at once; raise " + std::string(raise) +
-                                           " or make batches smaller (--batch-rays)"};
+    // Per-ray batches on the CPU split themselves to fit; a per-scan batch is one scan and an
+    // NDT batch's hits follow all its misses, and device backends plan whole batches.
+    return Error{ErrorCode::kCapacity,
+                 "one batch touches more regions than the pool's " +
+                     std::to_string(map.store().capacity()) +
+                     " hold at once (per-scan, NDT and device batches are not split); raise " +
+                     std::string(raise) + " or make batches smaller (--batch-rays)"};
   }
   if (error == IntegrateError::kStoreFull) {
     char gib[32];

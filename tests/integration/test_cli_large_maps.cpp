@@ -86,6 +86,33 @@ TEST(CliLargeMaps, PopulateThroughAnEighthOfTheMemoryWritesTheSameMapAndSaysWher
   EXPECT_TRUE(fs::is_empty(spill)) << "the spill file has no name and is gone with raymap";
 }
 
+TEST(CliLargeMaps, AnEighthOfTheMemoryWorksWithTheDefaultBatchOnOneThreadAndOnTwo) {
+  // Issue 52, M8: with the default batch (32,768 rays, more regions than the pool holds) this
+  // aborted: "one batch touches more regions than the pool's N hold at once".
+  const Drive drive;
+  const std::string whole = drive.dir.file("whole.rmap");
+  ASSERT_EQ(
+      runRaymap({"populate", drive.ply, "-o", whole, "--region-voxels", "16", "--quiet"}).exit_code,
+      0);
+  const RunResult info = runRaymap({"info", whole, "--json"});
+  const auto regions = static_cast<std::uint64_t>(number(parsed(info.out), "regions"));
+  const std::uint64_t pool_bytes = regions / 8 * 16 * 16 * 16 * 12;
+  for (const char* threads : {"1", "2"}) {
+    const std::string unlimited = drive.dir.file(std::string("whole-") + threads + ".rmap");
+    ASSERT_EQ(runRaymap({"populate", drive.ply, "-o", unlimited, "--region-voxels", "16",
+                         "--threads", threads, "--quiet"})
+                  .exit_code,
+              0);
+    const std::string small = drive.dir.file(std::string("small-") + threads + ".rmap");
+    const RunResult r = runRaymap({"populate", drive.ply, "-o", small, "--region-voxels", "16",
+                                   "--threads", threads, "--max-memory", std::to_string(pool_bytes),
+                                   "--compressed-memory", "64KiB"});
+    ASSERT_EQ(r.exit_code, 0) << threads << " threads\n" << describe(r);
+    EXPECT_EQ(readFile(small), readFile(unlimited)) << threads << " threads";
+    EXPECT_TRUE(contains(r.out, "batches split to fit the pool")) << r.out;
+  }
+}
+
 TEST(CliLargeMaps, InfoExportAndHeightmapReadAMapLargerThanTheirMemory) {
   const Drive drive;
   const std::string map = drive.dir.file("drive.rmap");

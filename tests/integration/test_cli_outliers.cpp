@@ -60,13 +60,14 @@ TEST(CliOutliers, AnOutlierIsNotFatalThroughASmallMemoryBudget) {
                  "256KiB", "--region-voxels", "16", "--quiet"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_GT(regionsOf(out), 0);
-  // Without the rule (what every populate did before it): the one ray ends the run.
+  // Without the rule the ray goes in (the batches split themselves to fit the pool: issue 52,
+  // M8; before, this run ended there), and it costs the map thousands of regions.
   const std::string unlimited = clouds.dir.file("unlimited.rmap");
-  const RunResult before = runRaymap({"populate", clouds.ghost, "-o", unlimited, "--max-memory",
-                                      "8MiB", "--compressed-memory", "256KiB", "--region-voxels",
-                                      "16", "--max-ray-length", "0", "--quiet"});
-  EXPECT_NE(before.exit_code, 0) << describe(before);
-  EXPECT_FALSE(std::filesystem::exists(unlimited));
+  const RunResult without = runRaymap({"populate", clouds.ghost, "-o", unlimited, "--max-memory",
+                                       "8MiB", "--compressed-memory", "256KiB", "--region-voxels",
+                                       "16", "--max-ray-length", "0", "--quiet"});
+  ASSERT_EQ(without.exit_code, 0) << describe(without);
+  EXPECT_GT(regionsOf(unlimited), 10 * regionsOf(out));
 }
 
 TEST(CliOutliers, MaxRayLengthIsCheckedAgainstMinRange) {

@@ -93,13 +93,13 @@ std::string tierSummaryLine(const TierReport& r) {
   char text[512];
   std::snprintf(text, sizeof text,
                 "pool %s of %s regions; compressed %s (%s, ratio %.1f), spilled %s (file %s); %s "
-                "evictions, %s restores, %s waits (%.2f s)",
+                "evictions, %s restores, %s waits (%.2f s); %s batches split to fit the pool",
                 withCommas(r.hot_regions).c_str(), withCommas(r.pool_regions).c_str(),
                 withCommas(s.regions_compressed + s.regions_staged).c_str(),
                 mib(s.compressed_bytes).c_str(), s.compressionRatio(),
                 withCommas(s.regions_spilled).c_str(), mib(s.spill_file_bytes).c_str(),
                 withCommas(s.evictions).c_str(), withCommas(s.restores).c_str(),
-                withCommas(s.waits).c_str(), s.wait_seconds);
+                withCommas(s.waits).c_str(), s.wait_seconds, withCommas(r.batches_split).c_str());
   return text;
 }
 
@@ -120,6 +120,7 @@ std::string tierJson(const TierReport& r) {
       .add("regions_hot", std::uint64_t{r.hot_regions})
       .add("regions_compressed", s.regions_compressed + s.regions_staged)
       .add("regions_spilled", s.regions_spilled)
+      .add("batches_split", r.batches_split)
       .add("compressed_bytes", s.compressed_bytes)
       .add("compressed_peak_bytes", s.compressed_peak_bytes)
       .add("compression_ratio", s.compressionRatio())

@@ -45,6 +45,9 @@ struct TierReport {
   std::uint32_t pool_regions = 0;  ///< the pool's capacity
   std::uint32_t hot_regions = 0;   ///< regions in the pool
   RegionTierStats stats;
+  /// Batches the backend cut in two because their regions did not fit the pool at once
+  /// (BackendStats::batches_split; populate fills it in).
+  std::uint64_t batches_split = 0;
 };
 /// @brief The report of a tiered map; nullopt without tiers.
 std::optional<TierReport> tierReport(const VoxelMap& map);

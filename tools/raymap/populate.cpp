@@ -172,6 +172,9 @@ Result<PopulateReport> integrateStream(
     return Unexpected(ok.error());
   }
   report.tiers = tierReport(map);
+  if (report.tiers) {
+    report.tiers->batches_split = report.backend.batches_split;
+  }
   report.total_seconds = secondsSince(start);
   report.peak_rss_bytes = platform::peakResidentBytes();
   return report;
