@@ -144,6 +144,41 @@ TEST(BagInputs, ReplayOfABagWithNothingToPublishFailsNamingItsTopics) {
   }
 }
 
+TEST(BagInputs, ReplayLeavesARecordedServicesDiagnosticsOutUnlessAsked) {
+  // Issue 52, L12: a recording's /diagnostics, replayed beside the live raymapd, carried the
+  // recorded service's statuses under the live one's hardware_id (OK and ERROR alternating).
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const std::string spec = dir.file("diag.jsonl");
+  {
+    BagSpecWriter w(spec);
+    w.channel("/odom", "nav_msgs/msg/Odometry");
+    w.channel("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray");
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t t = kInputsT0 + k * 100000000LL;
+      w.odometry("/odom", t, t, "odom", "base_link", io::Pose{});
+      w.message("/diagnostics", t + 1,
+                "{\"header\":{\"stamp\":{\"sec\":1700000000,\"nanosec\":0},\"frame_id\":\"\"},"
+                "\"status\":[{\"level\":2,\"name\":\"raymapd: pipeline\",\"message\":\"stale\","
+                "\"hardware_id\":\"robot/raymapd\",\"values\":[]}]}");
+    }
+  }
+  const std::string bag = dir.file("diag.mcap");
+  writeBag(spec, bag, {"--file-only"});
+  const std::string domain = std::to_string(uniqueDomain());
+  const RunResult left_out = runRaymap({"replay", bag, "--domain", domain, "--wait", "0", "--rate",
+                                        "10", "-q", "--stats-json", "-"});
+  EXPECT_EQ(left_out.exit_code, 0) << describe(left_out);
+  EXPECT_TRUE(contains(left_out.err,
+                       "topic /diagnostics (diagnostic_msgs/msg/DiagnosticArray) "
+                       "is not replayed"));
+  EXPECT_TRUE(contains(left_out.out, "\"log_messages\": 3"));
+  const RunResult all = runRaymap({"replay", bag, "--domain", domain, "--wait", "0", "--rate", "10",
+                                   "-q", "--include-outputs", "--stats-json", "-"});
+  EXPECT_EQ(all.exit_code, 0) << describe(all);
+  EXPECT_TRUE(contains(all.out, "\"log_messages\": 6"));
+}
+
 TEST(BagInputs, AutoPoseSourceTakesTfOverAnOdometryTopicWithoutMessagesAndSaysSo) {
   REQUIRE_NODE_HARNESS();
   TempDir dir;

@@ -41,6 +41,7 @@ struct ReplayFlags {
   std::string diagnostics_topic = "/diagnostics";
   unsigned max_ahead = 2;
   bool skip_damaged = false;
+  bool include_outputs = false;
   std::string stats_json;
   bool quiet = false;
 };
@@ -96,6 +97,7 @@ Result<ReplayOptions> toOptions(const ReplayFlags& f) {
   o.wait_s = f.wait;
   o.max_ahead = f.max_ahead;
   o.skip_damaged = f.skip_damaged;
+  o.include_outputs = f.include_outputs;
   o.progress = !f.quiet;
   return o;
 }
@@ -230,6 +232,9 @@ void addReplayCommand(CLI::App& app, int* exit_code) {
   c->add_flag("--skip-damaged", f->skip_damaged,
               "Bags: play what a damaged or cut-off bag holds (skipping to its next indexed "
               "chunk) instead of failing, and say what was skipped");
+  c->add_flag("--include-outputs", f->include_outputs,
+              "Logs and bags: also publish their diagnostic_msgs and grid_map_msgs topics (a "
+              "mapping service's outputs; left out by default, beside a live service)");
   c->add_option("--stats-json", f->stats_json, "Write what was published as JSON ('-' = stdout)");
   c->add_flag("-q,--quiet", f->quiet, "No progress line");
   c->callback([f, exit_code] { *exit_code = runReplay(*f); });

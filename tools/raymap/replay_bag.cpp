@@ -69,6 +69,11 @@ Result<void> ReplaySession::playBag(const std::string& path) {
   dds::CdrWriter* first_cloud_writer = nullptr;
   std::string first_cloud_topic;
   for (const bag::BagTopic& topic : reader.topics()) {
+    if (leavesOutServiceOutput(path, topic.name, topic.type)) {
+      writers.push_back(nullptr);
+      clouds.push_back(false);
+      continue;
+    }
     const dds::KnownTopicType* known = dds::findTopicType(topic.type);
     const bool cdr = topic.serialization_format.empty() || topic.serialization_format == "cdr";
     dds::CdrWriter* writer = nullptr;

@@ -19,6 +19,19 @@ bool isPointCloud(const std::string& type) {
 
 }  // namespace
 
+bool ReplaySession::leavesOutServiceOutput(const std::string& path, const std::string& topic,
+                                           const std::string& type) {
+  const bool output = type.find("DiagnosticArray") != std::string::npos ||
+                      type.find("grid_map_msgs") != std::string::npos;
+  if (!output || options_.include_outputs) {
+    return false;
+  }
+  stats_.warnings.push_back(path + ": topic " + topic + " (" + type +
+                            ") is not replayed: it is what a mapping service publishes, and "
+                            "would stand beside the live one's (--include-outputs replays it)");
+  return true;
+}
+
 Result<dds::CdrWriter*> ReplaySession::logWriter(const std::string& topic, const std::string& type,
                                                  bool reliable, bool transient_local) {
   if (auto found = log_writers_.find(topic); found != log_writers_.end()) {
@@ -71,6 +84,11 @@ Result<void> ReplaySession::playLog(const std::string& path) {
   dds::CdrWriter* first_cloud_writer = nullptr;
   std::string first_cloud_topic;
   for (const record::LogTopic& topic : summary.value().topics) {
+    if (leavesOutServiceOutput(path, topic.name, topic.type)) {
+      writers[topic.id] = nullptr;
+      clouds[topic.id] = false;
+      continue;
+    }
     auto writer =
         logWriter(topic.name, topic.type, topic.reliability == record::LogReliability::kReliable,
                   topic.durability == record::LogDurability::kTransientLocal);

@@ -52,6 +52,10 @@ struct ReplayOptions {
   std::string diagnostics_topic = "rt/diagnostics";  ///< --rate max: raymapd's progress
   std::uint32_t max_ahead = 2;  ///< --rate max: scans published but not yet processed
   bool skip_damaged = false;    ///< bags: play what a damaged bag holds (BagReadOptions)
+  /// Logs and bags: also publish what a mapping service publishes (diagnostic_msgs and
+  /// grid_map_msgs topics). Off: a recording's /diagnostics would carry the recorded service's
+  /// statuses beside the live one's (and --rate max would pace on them).
+  bool include_outputs = false;
   bool progress = true;
 };
 
@@ -95,6 +99,10 @@ class ReplaySession {
   /// clock; --rate max waits for room first for clouds) and counts it.
   Sent sendRecorded(dds::CdrWriter& writer, bool cloud, double t, std::span<const std::byte> cdr,
                     double& played_until_s);
+  /// Whether a topic of `type` is a mapping service's output that is not replayed (without
+  /// include_outputs); says so in the warnings, naming `path` and `topic`.
+  bool leavesOutServiceOutput(const std::string& path, const std::string& topic,
+                              const std::string& type);
   Result<dds::CdrWriter*> logWriter(const std::string& topic, const std::string& type,
                                     bool reliable, bool transient_local);
   /// Waits (once per session, up to --wait) for a subscriber: data sent before discovery

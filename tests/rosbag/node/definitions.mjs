@@ -103,6 +103,23 @@ const kMsgText = new Map([
     ].join("\n"),
   ],
   ["tf2_msgs/TFMessage", "geometry_msgs/TransformStamped[] transforms\n"],
+  ["diagnostic_msgs/KeyValue", "string key\nstring value\n"],
+  [
+    "diagnostic_msgs/DiagnosticStatus",
+    [
+      "byte OK=0",
+      "byte WARN=1",
+      "byte ERROR=2",
+      "byte STALE=3",
+      "byte level",
+      "string name",
+      "string message",
+      "string hardware_id",
+      "KeyValue[] values",
+      "",
+    ].join("\n"),
+  ],
+  ["diagnostic_msgs/DiagnosticArray", "std_msgs/Header header\nDiagnosticStatus[] status\n"],
 ]);
 
 /** The top-level types a spec may declare, by their ROS 2 name. */
@@ -113,6 +130,7 @@ export const kSupportedTypes = Object.freeze([
   "nav_msgs/msg/Odometry",
   "tf2_msgs/msg/TFMessage",
   "geometry_msgs/msg/PoseStamped",
+  "diagnostic_msgs/msg/DiagnosticArray",
 ]);
 
 const kPrimitives = new Set([
