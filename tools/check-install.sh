@@ -62,6 +62,15 @@ for semantics in ray scan; do
   echo "per-$semantics: the example and raymap populate agree"
 done
 
+# Bad arguments are refused, not taken as defaults (issue 52, L14).
+for bad in "--semantics bogus" "--save" "--resolution ten"; do
+  # shellcheck disable=SC2086
+  if "$work/build-map_ray_cloud/map_ray_cloud" "$work/room.ply" $bad >/dev/null 2>&1; then
+    echo "check-install: map_ray_cloud accepted '$bad'" >&2
+    exit 1
+  fi
+done
+
 echo "== heightmap_from_scans"
 "$work/build-heightmap_from_scans/heightmap_from_scans" "$work/heightmap.csv" | tee "$work/hm.txt"
 step=$(grep -oE 'elevation at \(3.55, 0.05\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')

@@ -40,14 +40,29 @@ int main(int argc, char** argv) {
   }
   raymap::MapperConfig config;  // the defaults of `raymap populate`
   std::string save_path;
-  for (int i = 2; i + 1 < argc; i += 2) {
+  for (int i = 2; i < argc; i += 2) {
     const std::string option = argv[i];
+    if (i + 1 == argc) {  // an option without its value is a mistake, not a default
+      std::fprintf(stderr, "map_ray_cloud: %s needs a value\n", option.c_str());
+      return 2;
+    }
     const std::string value = argv[i + 1];
     if (option == "--semantics") {
+      if (value != "ray" && value != "scan") {
+        std::fprintf(stderr, "map_ray_cloud: --semantics must be ray or scan (got '%s')\n",
+                     value.c_str());
+        return 2;
+      }
       config.map.semantics =
           value == "scan" ? raymap::Semantics::kPerScan : raymap::Semantics::kPerRay;
     } else if (option == "--resolution") {
-      config.map.resolution = std::strtod(value.c_str(), nullptr);
+      char* end = nullptr;
+      config.map.resolution = std::strtod(value.c_str(), &end);
+      if (end == value.c_str() || *end != '\0') {
+        std::fprintf(stderr, "map_ray_cloud: --resolution must be a number of metres (got '%s')\n",
+                     value.c_str());
+        return 2;
+      }
     } else if (option == "--save") {
       save_path = value;
     } else {
