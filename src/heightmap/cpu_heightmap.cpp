@@ -28,6 +28,14 @@ class CpuHeightmapGenerator final : public HeightmapGenerator {
  public:
   const char* name() const noexcept override { return "cpu"; }
 
+  void reserveHostScratch(const VoxelMap& map, std::size_t regions) override {
+    const auto n = static_cast<std::size_t>(map.geometry().region_voxels);
+    const auto words = static_cast<std::size_t>(rm_hm_mask_words(static_cast<rm_i32>(n)));
+    masks_.reserve(std::max<std::size_t>(regions, 1) * n * n * words);
+    occupied_.reserve(n * n);
+    observed_.reserve(n * n);
+  }
+
   Expected<void, Error> generate(const VoxelMap& map, const HeightmapPlan& plan,
                                  HeightMap& out) override {
     prepareOutput(plan, out);

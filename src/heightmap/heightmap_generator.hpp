@@ -43,6 +43,13 @@ class HeightmapGenerator {
   virtual std::uint64_t mapBytesCopied() const noexcept { return 0; }
   /// @brief True when generate() reads the map's host store (which must then be current).
   virtual bool readsHostStore() const noexcept { return true; }
+  /// @brief Reserves what generate() needs for plans over up to `regions` regions of `map`
+  /// (start-up: a real-time caller's cycles then allocate nothing on the host as the box meets
+  /// more regions). Default: nothing to reserve.
+  virtual void reserveHostScratch(const VoxelMap& map, std::size_t regions) {
+    (void)map;
+    (void)regions;
+  }
 };
 
 /// @brief The CPU generator: one thread (a 200 x 200 planar map takes a few milliseconds).

@@ -40,6 +40,23 @@ std::pair<Vec3d, Vec3d> mapBounds(const VoxelMap& map) {
 
 }  // namespace
 
+std::size_t maxPlanRegions(const VoxelMap& map, double size_m) noexcept {
+  const double res = map.geometry().resolution;
+  const double n = map.geometry().region_voxels;
+  // planHeightmap(): the grid is size/res cells (rounded), the box z from centre - half - 1 to
+  // centre + half voxels; a span of v voxels touches at most ceil(v / n) + 1 regions.
+  const double cells = std::ceil(size_m / res) + 1.0;
+  const double z_voxels = 2.0 * std::ceil(0.5 * size_m / res) + 2.0;
+  const double xy = std::ceil(cells / n) + 1.0;
+  const double z = std::ceil(z_voxels / n) + 1.0;
+  return static_cast<std::size_t>(xy * xy * z);
+}
+
+void reservePlan(HeightmapPlan& plan, std::size_t regions) {
+  plan.region_table.reserve(regions);
+  plan.region_slots.reserve(regions);
+}
+
 Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions& o,
                                     HeightmapPlan& plan) {
   const double res = map.geometry().resolution;

@@ -50,6 +50,14 @@ struct HeightmapPlan {
   HeightMap grid;  ///< geometry only (layers empty)
 };
 
+/// @brief The most regions a box of `size_m` (the map's height map size, metres) can lie over
+/// in `map`, wherever it is centred: what a caller that must not allocate per cycle reserves.
+std::size_t maxPlanRegions(const VoxelMap& map, double size_m) noexcept;
+
+/// @brief Reserves `plan`'s tables for `regions` regions (start-up; planHeightmap() then
+/// allocates nothing for boxes over at most that many).
+void reservePlan(HeightmapPlan& plan, std::size_t regions);
+
 /// @brief Checks a request against a map and plans it. Errors name the option and the reason: a
 /// map without an occupancy layer, a centre outside the map (global maps: outside the stored
 /// regions; rolling maps: outside the window), a size above the rolling window or

@@ -5,6 +5,10 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdlib>
+
+#include <execinfo.h>
+#include <unistd.h>
 
 #include "platform/allocation_scope.hpp"
 
@@ -23,6 +27,25 @@ std::uint64_t realtimeAllocations() noexcept {
 bool allocationCountingAvailable() noexcept { return false; }
 void noteAllocation() noexcept {}
 #else
+/// RAYMAP_ALLOC_TRACE=1: a backtrace on stderr for each real-time allocation (symbolise the
+/// addresses with addr2line -f -C -e THE_TEST_EXECUTABLE), to find where one comes from.
+void traceRealtimeAllocation() noexcept {
+  static const bool enabled = [] {
+    const char* trace = std::getenv("RAYMAP_ALLOC_TRACE");
+    return trace != nullptr && trace[0] == '1';
+  }();
+  thread_local bool tracing = false;  // backtrace() may allocate once, on its first call
+  if (!enabled || tracing) {
+    return;
+  }
+  tracing = true;
+  void* frames[32];
+  const int n = backtrace(frames, 32);
+  static const char kHeader[] = "real-time allocation:\n";
+  (void)!write(2, kHeader, sizeof(kHeader) - 1);
+  backtrace_symbols_fd(frames, n, 2);
+  tracing = false;
+}
 bool allocationCountingAvailable() noexcept { return true; }
 void noteAllocation() noexcept {
   if (t_scopes > 0) {
@@ -30,6 +53,7 @@ void noteAllocation() noexcept {
   }
   if (platform::inRealtimeScope()) {
     g_realtime_allocations.fetch_add(1, std::memory_order_relaxed);
+    traceRealtimeAllocation();
   }
 }
 #endif
