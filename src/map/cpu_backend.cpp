@@ -116,6 +116,7 @@ class CpuBackend final : public Backend {
   /// One batch as it is (the parallel path when there are threads, unless `serially`).
   Expected<void, IntegrateError> integrateWhole(std::span<const PreparedRay> rays,
                                                 bool serially = false) noexcept {
+    const VoxelMap::IntegrationScope integrating(map_);
     ctx_.sequence = ctx_.per_scan ? map_.beginScan() : 0u;
     if (scan_bits_) {
       scan_bits_->beginBatch(ctx_.sequence);

@@ -3,6 +3,7 @@
 // (global or rolling window).
 #pragma once
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -197,6 +198,35 @@ class VoxelMap {
   /// Pool slots, region coordinates and layer pointers from store() stay valid only until the
   /// next call that may bring a region in (acquire, a query, residentSlot()), unless pinned.
   bool tiered() const noexcept { return tiers_ != nullptr; }
+
+  /// @brief Marks a batch integrating into this map for the scope's life (backends, around each
+  /// integrate call). A query of a tiered map brings regions into the pool and may evict those
+  /// of a batch in flight: residentSlot() (every query, export, save and height-map plan) refuses
+  /// to run meanwhile with a contract violation naming the rule, where it would otherwise corrupt
+  /// the batch unseen. Tiered maps are for one thread at a time. Thread-safety: any thread.
+  /// @rt allocates: no.
+  class IntegrationScope {
+   public:
+    explicit IntegrationScope(const VoxelMap& map) noexcept : count_(map.integrating_.get()) {
+      if (count_ != nullptr) {
+        count_->fetch_add(1, std::memory_order_acq_rel);
+      }
+    }
+    ~IntegrationScope() {
+      if (count_ != nullptr) {
+        count_->fetch_sub(1, std::memory_order_acq_rel);
+      }
+    }
+    IntegrationScope(const IntegrationScope&) = delete;
+    IntegrationScope& operator=(const IntegrationScope&) = delete;
+
+   private:
+    std::atomic<int>* count_;
+  };
+  /// @brief Whether a batch is integrating (an IntegrationScope is alive).
+  bool integrating() const noexcept {
+    return integrating_ != nullptr && integrating_->load(std::memory_order_acquire) > 0;
+  }
   /// @brief Regions of the map in every tier (store().size() counts the pool only).
   std::uint64_t regionCount() const;
   /// @brief Every region's coordinate, in every tier, in coordinate order (z, y, x): what exports
@@ -330,6 +360,8 @@ class VoxelMap {
   std::vector<std::pair<std::string, std::string>> info_;
   // Cold tiers (global maps with MapConfig::tiers.enabled; empty vectors otherwise).
   std::unique_ptr<RegionTiers> tiers_;
+  // Batches integrating now (IntegrationScope); on the heap so that the map stays movable.
+  std::unique_ptr<std::atomic<int>> integrating_ = std::make_unique<std::atomic<int>>(0);
   RegionEvictionHook* eviction_hook_ = nullptr;
   mutable std::uint64_t epoch_ = 2;
   std::uint64_t kept_epochs_ = 1;                  // epochs whose regions stay in the pool

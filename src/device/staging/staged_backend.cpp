@@ -192,6 +192,7 @@ std::size_t StagedBackend::scratchWords() const noexcept {
 
 Expected<void, IntegrateError> StagedBackend::integrate(
     std::span<const PreparedRay> rays) noexcept {
+  const VoxelMap::IntegrationScope integrating(*map_);
   if (!makeCurrent()) {
     return Unexpected(IntegrateError::kDeviceFailure);
   }
@@ -337,6 +338,7 @@ Expected<std::size_t, IntegrateError> StagedBackend::integrateRays(const RayPrep
                                                                    std::span<const Ray> rays,
                                                                    RayCounters& counters) noexcept {
   RAYMAP_EXPECTS(preparesOnDevice(preparer.filter()));
+  const VoxelMap::IntegrationScope integrating(*map_);
   if (!makeCurrent()) {
     return Unexpected(IntegrateError::kDeviceFailure);
   }
@@ -406,6 +408,7 @@ Expected<std::size_t, IntegrateError> StagedBackend::integratePoints(
     std::span<const rm_scan_point> points, const DeskewTables& tables,
     RayCounters& counters) noexcept {
   RAYMAP_EXPECTS(deskewsOnDevice(preparer.filter(), tables, points.size()));
+  const VoxelMap::IntegrationScope integrating(*map_);
   if (!makeCurrent()) {
     return Unexpected(IntegrateError::kDeviceFailure);
   }

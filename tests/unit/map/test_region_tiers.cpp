@@ -81,6 +81,26 @@ TEST(RegionTiers, AMapThatFitsItsPoolNeverEvicts) {
   EXPECT_EQ(map.regionCount(), map.store().size());
 }
 
+TEST(RegionTiersDeathTest, AQueryWhileABatchIntegratesIsRefusedNotARace) {
+  // Issue 52: queries of a tiered map bring regions into the pool and could evict those of a
+  // batch in flight; they ran unchecked beside integration.
+  test::TempDir dir;
+  MapConfig config = test::smallConfig(Semantics::kPerRay, 16);
+  config.tiers.enabled = true;
+  config.tiers.spill_dir = dir.path().string();
+  VoxelMap map = test::makeMap(config);
+  auto backend = test::cpuBackend(map, 1);
+  test::integrateEachScan(map, *backend, test::corridorDrive(5.0, 0.5));
+  const Vec3i voxel = map.voxelOf({1.0, 0.0, 0.0});
+  (void)map.state(voxel);  // no batch in flight: fine
+  EXPECT_DEATH(
+      {
+        const VoxelMap::IntegrationScope integrating(map);
+        (void)map.state(voxel);
+      },
+      "a tiered map was queried while a batch integrates into it");
+}
+
 TEST(RegionTiers, ARollingMapHasNoTiers) {
   MapConfig config = test::smallConfig(Semantics::kPerRay, 16);
   config.policy = StorePolicy::kRolling;
