@@ -38,6 +38,13 @@ struct Started {
     const std::size_t at = config.find("domain: ") + 8;
     return static_cast<std::uint32_t>(std::stoul(config.substr(at)));
   }
+  /// Waits for READY=1 and discovery, then plays the still yard lidar (16 x 512) for `seconds`.
+  void startAndPlay(double seconds, std::vector<driver::ReceivedGridMap>& maps) {
+    ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+    ASSERT_TRUE(ros.waitForService(kStartWaitS));
+    ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, seconds, maps);
+  }
+
   RunningDaemon daemon;
   RosSide ros;
   std::string daemon_config;
@@ -47,10 +54,8 @@ TEST(RaymapdHealth, CloudsInAFrameNoSensorIsConfiguredForAreAnErrorNamingBothFra
   std::string config = serviceConfig(uniqueDomain());
   config.replace(config.find("frame: lidar"), 12, "frame: lidar_typo");
   Started s(config);
-  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", kStartWait).has_value()) << s.daemon.log();
-  ASSERT_TRUE(s.ros.waitForService(kStartWaitS));
   std::vector<driver::ReceivedGridMap> maps;
-  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 3.0, maps);
+  s.startAndPlay(3.0, maps);
 
   EXPECT_EQ(pipelineValue(s.ros, "level"), "2") << pipelineValue(s.ros, "message");
   const std::string message = pipelineValue(s.ros, "message");
@@ -113,10 +118,8 @@ TEST(RaymapdHealth, ReturnsAllNearerThanMinRangeAreAnErrorWithCountsAndNoMapIsPu
   std::string config = serviceConfig(uniqueDomain());
   config.replace(config.find("min_range: 0.3, max_range: 20"), 29, "min_range: 40, max_range: 60");
   Started s(config);
-  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", kStartWait).has_value()) << s.daemon.log();
-  ASSERT_TRUE(s.ros.waitForService(kStartWaitS));
   std::vector<driver::ReceivedGridMap> maps;
-  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 3.0, maps);
+  s.startAndPlay(3.0, maps);
 
   EXPECT_EQ(pipelineValue(s.ros, "level"), "2") << pipelineValue(s.ros, "message");
   const std::string message = pipelineValue(s.ros, "message");
@@ -182,10 +185,8 @@ TEST(RaymapdHealth, APoseClockThatGoesBackStartsOverWithAWarningAndTheMapsKeepCo
   // The poses after the jump used to be ignored as out of order: every scan of the next lap was
   // dropped for want of a pose, the map went stale and no map was published.
   Started s(serviceConfig(uniqueDomain()));
-  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", kStartWait).has_value()) << s.daemon.log();
-  ASSERT_TRUE(s.ros.waitForService(kStartWaitS));
   std::vector<driver::ReceivedGridMap> maps;
-  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 2.0, maps);
+  s.startAndPlay(2.0, maps);
   const auto number = [&](const char* key) {
     return s.ros.diagnostics->number(std::string("raymapd: pipeline/") + key).value_or(-1.0);
   };
@@ -252,10 +253,8 @@ TEST(RaymapdHealth, NoInputAtAllIsAnErrorAndNoMapIsPublishedButTheWatchdogIsFed)
 
 TEST(RaymapdHealth, InputThatStopsTurnsToErrorAndTheMapsStop) {
   Started s(serviceConfig(uniqueDomain()));
-  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", kStartWait).has_value()) << s.daemon.log();
-  ASSERT_TRUE(s.ros.waitForService(kStartWaitS));
   std::vector<driver::ReceivedGridMap> maps;
-  s.ros.play(yardLidar(16, 512, false), driver::PlaybackOptions{}, 2.0, maps);
+  s.startAndPlay(2.0, maps);
   {
     // OK while the input flows; on a busy machine the latency bound may shed a scan or two, a
     // true WARN that is not what this test is about.

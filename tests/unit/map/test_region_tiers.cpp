@@ -14,6 +14,14 @@
 namespace raymap {
 namespace {
 
+/// test::smallConfig per ray with 16-voxel regions, tiered, spilling into `dir`.
+MapConfig tieredSmallConfig(const test::TempDir& dir) {
+  MapConfig config = test::smallConfig(Semantics::kPerRay, 16);
+  config.tiers.enabled = true;
+  config.tiers.spill_dir = dir.path().string();
+  return config;
+}
+
 /// Every layer of every region of `a`, compared with the same region of `b` (brought back from
 /// b's cold tiers as needed). Returns the regions compared.
 std::uint64_t expectSameRegions(const VoxelMap& a, const VoxelMap& b) {
@@ -69,10 +77,7 @@ TEST(RegionTiers, RegionsComeBackBitForBitFromEveryTierWhileTheCompressorRuns) {
 
 TEST(RegionTiers, AMapThatFitsItsPoolNeverEvicts) {
   test::TempDir dir;
-  MapConfig config = test::smallConfig(Semantics::kPerRay, 16);
-  config.tiers.enabled = true;
-  config.tiers.spill_dir = dir.path().string();
-  VoxelMap map = test::makeMap(config);
+  VoxelMap map = test::makeMap(tieredSmallConfig(dir));
   auto backend = test::cpuBackend(map, 1);
   test::integrateEachScan(map, *backend, test::corridorDrive(20.0, 0.5));
   const RegionTierStats s = *map.tierStats();
@@ -85,10 +90,7 @@ TEST(RegionTiersDeathTest, AQueryWhileABatchIntegratesIsRefusedNotARace) {
   // Issue 52: queries of a tiered map bring regions into the pool and could evict those of a
   // batch in flight; they ran unchecked beside integration.
   test::TempDir dir;
-  MapConfig config = test::smallConfig(Semantics::kPerRay, 16);
-  config.tiers.enabled = true;
-  config.tiers.spill_dir = dir.path().string();
-  VoxelMap map = test::makeMap(config);
+  VoxelMap map = test::makeMap(tieredSmallConfig(dir));
   auto backend = test::cpuBackend(map, 1);
   test::integrateEachScan(map, *backend, test::corridorDrive(5.0, 0.5));
   const Vec3i voxel = map.voxelOf({1.0, 0.0, 0.0});
