@@ -238,9 +238,11 @@ void RayBatcher::addPrepared(RayPreparer& preparer, std::span<const Ray> run,
         scan_split_ = true;
       }
       if (fill_ == 0) {
-        // Not one piece fits an empty batch (more pieces per ray than the batch holds): the
-        // preparer made no progress, so give up on the rest rather than spin.
-        return;
+        // This ray has more pieces than an empty batch holds: it is left out and counted, and
+        // the rays after it go on (they used to be dropped with it, uncounted).
+        ++counters_.rays_too_many_pieces;
+        ++i;
+        continue;
       }
       keepFirst(first_error, flush());
     }

@@ -31,6 +31,10 @@ struct BatcherCounters {
   std::uint64_t parallel_prepares = 0;  ///< runs of rays prepared on the backend's host threads
   std::uint64_t device_batches = 0;     ///< of batches: rays prepared on the device
   std::uint64_t points_deskewed_on_device = 0;  ///< integratePoints(): points the device deskewed
+  /// Rays left out because their pieces (RayFilter::segment_length_m) do not fit even an empty
+  /// batch (a batch smaller than RayFilter::kMaxPiecesPerRay): each is skipped and counted, the
+  /// rays after it still go in.
+  std::uint64_t rays_too_many_pieces = 0;
 };
 
 /// @brief Prepares rays (RayPreparer) into a fixed batch and hands full batches to a backend.

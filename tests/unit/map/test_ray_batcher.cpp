@@ -143,6 +143,26 @@ TEST(RayBatcher, SegmentedRaysArePreparedOnTheCallingThread) {
   EXPECT_EQ(cmp.exact_value, cmp.compared);
 }
 
+TEST(RayBatcher, ARayWithMorePiecesThanABatchIsCountedAndTheRestStillGoIn) {
+  // Issue 52: one ray whose pieces did not fit an empty batch ended the run, uncounted.
+  VoxelMap map = test::makeMap(test::smallConfig(Semantics::kPerRay));
+  auto backend = test::cpuBackend(map, 1);
+  RayFilter filter;
+  filter.segment_length_m = 0.1;  // a 2 m ray: 20 pieces
+  RayPreparer preparer(map, filter);
+  RayBatcher batcher(map, *backend, 8);
+  std::vector<Ray> rays(4);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    rays[i].origin = Vec3d{0.05, 0.05 + 0.3 * static_cast<double>(i), 0.05};
+    rays[i].sample = rays[i].origin + Vec3d{i == 1 ? 2.0 : 0.5, 0.0, 0.0};  // 20 or 5 pieces
+  }
+  ASSERT_TRUE(batcher.add(preparer, rays).has_value());
+  ASSERT_TRUE(batcher.flush().has_value());
+  EXPECT_EQ(batcher.counters().rays_too_many_pieces, 1u);
+  EXPECT_EQ(batcher.counters().rays_integrated, 15u) << "the three others, 5 pieces each";
+  EXPECT_EQ(map.state(map.voxelOf(rays[3].sample)), VoxelState::kOccupied);
+}
+
 TEST(RayBatcher, AStreamReadAgainWithTheSameBatcherStartsANewScan) {
   // A one-scan input integrated twice with one batcher (raymap bench --steady-state keeps it, as
   // a service does): its rays carry the same Ray::scan both times, yet the second pass is a scan
