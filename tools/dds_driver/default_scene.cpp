@@ -1,30 +1,38 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// findDefaultScene: the installed scenes first, then the source tree's.
+// findDefaultScene: $RAYMAP_SCENE_DIR, the installed scenes, the source tree's, the working
+// folder's config/scenes, in that order.
 #include "tools/dds_driver/default_scene.hpp"
 
+#include <cstdlib>
 #include <filesystem>
 #include <system_error>
+#include <vector>
 
 namespace raymap::driver {
 
 Result<std::string> findDefaultScene(const std::string& name,
                                      const std::string& source_scenes_dir) {
   namespace fs = std::filesystem;
+  std::vector<fs::path> places;
+  if (const char* dir = std::getenv("RAYMAP_SCENE_DIR"); dir != nullptr && dir[0] != '\0') {
+    places.push_back(fs::path(dir) / name);  // the device kit carries its scenes there
+  }
   std::error_code error;
   const fs::path program = fs::read_symlink("/proc/self/exe", error);
-  const fs::path installed =
-      error ? fs::path() : program.parent_path().parent_path() / "share/raymap/scenes" / name;
-  if (!installed.empty() && fs::is_regular_file(installed, error)) {
-    return installed.string();
+  if (!error) {
+    places.push_back(program.parent_path().parent_path() / "share/raymap/scenes" / name);
   }
-  const fs::path source = fs::path(source_scenes_dir) / name;
-  if (fs::is_regular_file(source, error)) {
-    return source.string();
+  places.push_back(fs::path(source_scenes_dir) / name);
+  places.push_back(fs::path("config/scenes") / name);  // a checkout or kit as working folder
+  std::string tried;
+  for (const fs::path& place : places) {
+    if (fs::is_regular_file(place, error)) {
+      return place.string();
+    }
+    tried += (tried.empty() ? "" : ", ") + place.string();
   }
-  return fail(ErrorCode::kIo, "no scene " + name + " installed (" +
-                                  (installed.empty() ? std::string("?") : installed.string()) +
-                                  ") nor in the source tree (" + source.string() +
-                                  "); name one with --scene");
+  return fail(ErrorCode::kIo, "no scene " + name + " found (looked at " + tried +
+                                  "); name one with --scene or set RAYMAP_SCENE_DIR");
 }
 
 }  // namespace raymap::driver
