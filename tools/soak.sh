@@ -10,7 +10,10 @@
 # Environment: SOAK_OUT (output folder, default soak-results/<UTC time>), SOAK_BEAMS (lidar beams,
 # default 128: an OS-1-128 at 1024 columns and 10 Hz, 1.31 M points/s), SOAK_CONFIG (raymapd
 # configuration, default config/cpu.yaml), SOAK_DOMAIN (DDS domain, default 43), SOAK_COLOAD=1
-# (a second process keeps one core busy for the whole soak, as other software on a robot does).
+# (a second process keeps one core busy for the whole soak, as other software on a robot does),
+# SOAK_INTRUDER=1 (from the first minute, a second robot joins for 20 s every 2 minutes:
+# raymap-load publishing its own clouds and odometry on the same topics; the monitor checks that
+# every report in between says so: two pose sources, ERROR, and nothing of it once it left).
 # Needs python3 with matplotlib for the plot (apt-get install python3-matplotlib); without it the
 # CSV and the summary are still written.
 set -euo pipefail
@@ -34,6 +37,7 @@ work=$(mktemp -d)
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null || true; done
+  pkill -TERM -f "raymap-load --domain $domain " 2>/dev/null || true
   wait 2>/dev/null || true
   rm -rf "$work"
 }
@@ -58,6 +62,23 @@ pids+=($!)
 "$build/tools/raymap" replay "$work/drive.ply" --loop --domain "$domain" 2> "$out/replay.log" &
 pids+=($!)
 
+intruder=()
+if [ "${SOAK_INTRUDER:-0}" = 1 ]; then
+  : > "$out/intruder.log"
+  (
+    sleep 60
+    while :; do
+      echo "join $(date +%s.%N)" >> "$out/intruder.log"
+      "$build/tools/raymap-load" --domain "$domain" --beams 16 --columns 512 --warmup 0 \
+        --duration 20 > /dev/null 2>> "$out/intruder-errors.log" || true
+      echo "leave $(date +%s.%N)" >> "$out/intruder.log"
+      sleep 100
+    done
+  ) &
+  pids+=($!)
+  intruder=(--intruder-log "$out/intruder.log")
+fi
+
 echo "soak: $minutes min, ${beams}-beam lidar at 10 Hz into raymapd ($config); results in $out"
 # Debian's python3 has python3-matplotlib; another python3 first on the PATH may not.
 python=${SOAK_PYTHON:-python3}
@@ -66,4 +87,5 @@ if ! "$python" -c 'import matplotlib' 2>/dev/null && [ -x /usr/bin/python3 ]; th
 fi
 "$python" tools/soak_monitor.py --pid "$raymapd" --maps "$out/maps.jsonl" \
   --diagnostics "$out/diagnostics.jsonl" --seconds "$(awk "BEGIN {print int($minutes * 60)}")" \
+  "${intruder[@]}" \
   --out "$out" --label "${beams}x1024 lidar at 10 Hz, $(basename "$config"), $(git rev-parse --short HEAD)"

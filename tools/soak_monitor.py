@@ -19,7 +19,11 @@ import time
 COLUMNS = [
     "elapsed_s", "rss_mib", "maps", "period_mean_ms", "period_max_ms", "latency_p50_ms",
     "latency_p99_ms", "clouds_received", "scans_integrated", "clouds_dropped", "rays_integrated",
+    "pose_publishers", "pipeline_level", "intruder",
 ]
+# A second robot's arrival or departure shows in the next report or two (discovery, then a report
+# a second): rows this close to a change are not judged.
+SETTLE_S = 3.0
 PIPELINE = "raymapd: pipeline"
 HEIGHT_MAP = "raymapd: height map"
 
@@ -103,6 +107,44 @@ def plot(rows, path, label):
     return True
 
 
+def intruder_intervals(path):
+    """(join, leave) wall-clock intervals of the second robot (leave None while it is there)."""
+    intervals = []
+    if not path or not os.path.exists(path):
+        return intervals
+    with open(path, encoding="ascii") as f:
+        for line in f:
+            word, _, stamp = line.strip().partition(" ")
+            if word == "join":
+                intervals.append([float(stamp), None])
+            elif word == "leave" and intervals:
+                intervals[-1][1] = float(stamp)
+    return intervals
+
+
+def intruder_state(intervals, now):
+    """1 while the second robot publishes, 0 when not, None within SETTLE_S of a change."""
+    for join, leave in intervals:
+        for change in (join, leave):
+            if change is not None and abs(now - change) < SETTLE_S:
+                return None
+        if join <= now and (leave is None or now < leave):
+            return 1
+    return 0
+
+
+def health_mismatches(rows):
+    """Rows whose report does not say what happened: two pose sources present but not reported
+    as two with an ERROR, or reported as two when there was one."""
+    bad = 0
+    for r in rows:
+        if r["intruder"] == 1 and not (r["pose_publishers"] >= 2 and r["pipeline_level"] == 2):
+            bad += 1
+        elif r["intruder"] == 0 and r["pose_publishers"] >= 2:
+            bad += 1
+    return bad
+
+
 def summarise(rows, warmup_s):
     steady = [r for r in rows if r["elapsed_s"] >= warmup_s and r["rss_mib"] is not None]
     rss = [r["rss_mib"] for r in steady]
@@ -135,6 +177,8 @@ def summarise(rows, warmup_s):
         "clouds_received": last.get("clouds_received"),
         "scans_integrated": last.get("scans_integrated"),
         "clouds_dropped": last.get("clouds_dropped"),
+        "intruder_rows": sum(1 for r in rows if r["intruder"] == 1),
+        "health_mismatches": health_mismatches(rows),
     }
 
 
@@ -149,6 +193,8 @@ def main():
                         help="seconds excluded from the RSS figures (default: 2 min, or 10 %% "
                              "of runs shorter than 20 min)")
     parser.add_argument("--label", default="", help="title of the plot")
+    parser.add_argument("--intruder-log", default="",
+                        help="join/leave times of a second robot (tools/soak.sh SOAK_INTRUDER=1)")
     args = parser.parse_args()
     warmup = args.warmup if args.warmup is not None else min(120.0, 0.1 * args.seconds)
 
@@ -174,6 +220,7 @@ def main():
                 previous_arrival = arrival
             for report in diagnostics.read_new():
                 for status in report.get("statuses", []):
+                    latest[f"{status.get('name')}/level"] = status.get("level")
                     for key, value in status.get("values", {}).items():
                         latest[f"{status.get('name')}/{key}"] = value
             dropped = sum(number(latest, f"{PIPELINE}/{k}") for k in (
@@ -191,6 +238,9 @@ def main():
                 "scans_integrated": number(latest, f"{PIPELINE}/scans_integrated"),
                 "clouds_dropped": dropped,
                 "rays_integrated": number(latest, f"{PIPELINE}/rays_integrated"),
+                "pose_publishers": number(latest, f"{PIPELINE}/pose_publishers"),
+                "pipeline_level": number(latest, f"{PIPELINE}/level"),
+                "intruder": intruder_state(intruder_intervals(args.intruder_log), time.time()),
             }
             if row["rss_mib"] is None:
                 print("soak: raymapd is gone", file=sys.stderr)
