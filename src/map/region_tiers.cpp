@@ -374,6 +374,42 @@ Expected<void, Error> RegionTiers::spillColdest(std::unique_lock<std::mutex>& lo
   std::vector<std::byte>().swap(e.packed);
   e.state = State::kSpilled;
   e.spill = *record;
+  return compactSpillLocked();
+}
+
+Expected<void, Error> RegionTiers::compactSpillLocked() {
+  const std::uint64_t garbage = spill_.garbageBytes();
+  if (garbage == 0 || garbage < config_.spill_compact_bytes || 2 * garbage < spill_.sizeBytes()) {
+    return {};
+  }
+  auto fresh = SpillFile::create(config_.spill_dir);
+  if (!fresh) {
+    return {};  // no room for a second file now: the old one still serves
+  }
+  std::vector<std::byte> packed;
+  std::vector<std::pair<Entry*, SpillRecord>> moved;
+  for (auto& [key, e] : entries_) {
+    if (e.state != State::kSpilled) {
+      continue;
+    }
+    if (auto ok = spill_.read(e.spill, key, static_cast<std::uint32_t>(region_bytes_), packed);
+        !ok) {
+      failure_ = ok.error();
+      return Unexpected(ok.error());
+    }
+    auto record = fresh->append(key, static_cast<std::uint32_t>(region_bytes_), packed);
+    if (!record) {
+      return {};  // the new file is dropped: every record stays where it was
+    }
+    moved.emplace_back(&e, *record);
+  }
+  for (auto& [entry, record] : moved) {
+    entry->spill = record;
+  }
+  const std::uint64_t before = spill_.sizeBytes();
+  spill_ = std::move(fresh).value();
+  ++stats_.spill_compactions;
+  stats_.spill_bytes_reclaimed += before - spill_.sizeBytes();
   return {};
 }
 

@@ -43,6 +43,10 @@ struct RegionTierConfig {
   /// Regions copied out of the pool and waiting for the compressor: the most eviction gets ahead
   /// of compression before the map waits (memory: this many regions, uncompressed).
   std::uint32_t staging_regions = 32;
+  /// The spill file is rewritten with only its live records once its garbage (records of
+  /// regions read back for good) reaches this many bytes and half the file (0: at any garbage
+  /// over half; the tests).
+  std::uint64_t spill_compact_bytes = std::uint64_t{64} << 20;
 };
 
 /// @brief What the tiers hold and what moving regions through them cost. Value type; counters
@@ -63,12 +67,14 @@ struct RegionTierStats {
   std::uint64_t spill_bytes_written = 0;
   std::uint64_t spill_reads = 0;
   std::uint64_t spill_bytes_read = 0;
-  std::uint64_t spill_file_bytes = 0;     ///< the spill file's size now
-  std::uint64_t spill_garbage_bytes = 0;  ///< of which no longer needed (read back)
-  std::uint64_t waits = 0;                ///< evictions that waited for the compressor
-  double wait_seconds = 0;                ///< time the map's thread waited for it
-  double compress_seconds = 0;            ///< background thread: compressing and spilling
-  double restore_seconds = 0;             ///< map's thread: decompressing and reading back
+  std::uint64_t spill_file_bytes = 0;       ///< the spill file's size now
+  std::uint64_t spill_garbage_bytes = 0;    ///< of which no longer needed (read back)
+  std::uint64_t spill_compactions = 0;      ///< rewrites of the file with its live records only
+  std::uint64_t spill_bytes_reclaimed = 0;  ///< file bytes the compactions gave back
+  std::uint64_t waits = 0;                  ///< evictions that waited for the compressor
+  double wait_seconds = 0;                  ///< time the map's thread waited for it
+  double compress_seconds = 0;              ///< background thread: compressing and spilling
+  double restore_seconds = 0;               ///< map's thread: decompressing and reading back
 
   double compressionRatio() const noexcept {
     return packed_bytes == 0
@@ -158,6 +164,10 @@ class RegionTiers {
   void compressJob(const Job& job, ZSTD_CCtx_s* context, std::vector<std::byte>& planes,
                    std::vector<std::byte>& packed, std::unique_lock<std::mutex>& lock);
   Expected<void, Error> spillColdest(std::unique_lock<std::mutex>& lock);
+  /// Rewrites the spill file with the live records only, when its garbage has passed
+  /// spill_compact_bytes and half the file (mutex_ held). A new file that cannot be made or
+  /// written leaves the old one in use: compaction saves space, it is never needed.
+  Expected<void, Error> compactSpillLocked();
   void eraseLocked(std::unordered_map<std::uint64_t, Entry>::iterator it);
   Expected<void, Error> decodeInto(std::span<const std::byte> packed, RegionStore& store,
                                    std::uint32_t slot, std::uint64_t key);

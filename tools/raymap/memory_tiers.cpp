@@ -134,6 +134,8 @@ std::string tierJson(const TierReport& r) {
       .add("spill_bytes_read", s.spill_bytes_read)
       .add("spill_file_bytes", s.spill_file_bytes)
       .add("spill_garbage_bytes", s.spill_garbage_bytes)
+      .add("spill_compactions", s.spill_compactions)
+      .add("spill_bytes_reclaimed", s.spill_bytes_reclaimed)
       .add("waits", s.waits)
       .add("wait_seconds", s.wait_seconds)
       .add("compress_seconds", s.compress_seconds)

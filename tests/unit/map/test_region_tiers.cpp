@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "src/map/spill_file.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -73,6 +74,32 @@ TEST(RegionTiers, RegionsComeBackBitForBitFromEveryTierWhileTheCompressorRuns) {
     EXPECT_GT(s.restores, 0u);
     EXPECT_EQ(s.regions_staged, 0u) << "drained";
   }
+}
+
+TEST(RegionTiers, TheSpillFileIsCompactedAndItsRegionsComeBackBitForBit) {
+  // Issue 52: the spill file only grew; regions read back for good left their records behind.
+  // The drive twice over: the second pass brings the spilled regions back to change them.
+  test::TempDir dir;
+  std::vector<Ray> rays = test::corridorDrive(40.0, 0.5);
+  rays.insert(rays.end(), rays.begin(), rays.end());
+  const MapConfig config = test::smallConfig(Semantics::kPerRay, 16);
+  VoxelMap whole = test::makeMap(config);
+  auto whole_backend = test::cpuBackend(whole, 1);
+  test::integrateEachScan(whole, *whole_backend, rays);
+
+  MapConfig tiered = test::withTiers(config, 32, 16u << 10, dir.path().string());
+  tiered.tiers.spill_compact_bytes = 0;  // at any garbage over half the file
+  VoxelMap map = test::makeMap(tiered);
+  auto backend = test::cpuBackend(map, 1);
+  test::integrateEachScan(map, *backend, rays);
+  ASSERT_FALSE(map.tierFailure().has_value()) << map.tierFailure()->message;
+  ASSERT_TRUE(map.drainTiers().has_value());
+  const RegionTierStats s = *map.tierStats();
+  EXPECT_GT(s.spill_compactions, 0u);
+  EXPECT_GT(s.spill_bytes_reclaimed, 0u);
+  EXPECT_LE(2 * s.spill_garbage_bytes, s.spill_file_bytes + 2 * (SpillFile::kHeaderBytes + 65536))
+      << "garbage stays under about half the file";
+  EXPECT_EQ(expectSameRegions(whole, map), whole.regionCount());
 }
 
 TEST(RegionTiers, AMapThatFitsItsPoolNeverEvicts) {
