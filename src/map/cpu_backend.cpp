@@ -86,7 +86,7 @@ class CpuBackend final : public Backend {
     // serial path takes region by region. Any budget that holds one region works.
     ++stats_.batches_split;
     if (rays.size() == 1) {
-      return integrateSerially(rays);
+      return integrateWhole(rays, /*serially=*/true);
     }
     const std::size_t half = rays.size() / 2;
     if (auto first = integrate(rays.first(half)); !first) {
@@ -110,9 +110,6 @@ class CpuBackend final : public Backend {
   }
 
  private:
-  Expected<void, IntegrateError> integrateSerially(std::span<const PreparedRay> rays) noexcept {
-    return integrateWhole(rays, /*serially=*/true);
-  }
   /// One batch as it is (the parallel path when there are threads, unless `serially`).
   Expected<void, IntegrateError> integrateWhole(std::span<const PreparedRay> rays,
                                                 bool serially = false) noexcept {

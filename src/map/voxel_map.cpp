@@ -318,8 +318,7 @@ Expected<std::uint32_t, StoreError> VoxelMap::residentSlot(Vec3i region) const n
   if (!tiers_) {
     return slot;
   }
-  // A query beside a batch in flight would move the batch's regions under it (large-maps.md).
-  RAYMAP_EXPECTS(!integrating() && "a tiered map was queried while a batch integrates into it");
+  refuseBesideIntegration();
   if (slot != RegionStore::kNoSlot) {
     slot_epoch_[slot] = epoch_;
     return slot;
@@ -552,6 +551,13 @@ std::uint32_t VoxelMap::setWindowCentre(Vec3d p) noexcept {
   return recycled;
 }
 
+void VoxelMap::refuseBesideIntegration() const noexcept {
+  // A query of a tiered map beside a batch in flight would move the batch's regions under it
+  // (large-maps.md). Without tiers a query moves nothing.
+  RAYMAP_EXPECTS((!tiers_ || !integrating()) &&
+                 "a tiered map was queried while a batch integrates into it");
+}
+
 std::uint32_t VoxelMap::clearWindow() noexcept {
   if (config_.policy != StorePolicy::kRolling) {
     return 0;
@@ -586,9 +592,7 @@ std::optional<std::pair<std::uint32_t, std::uint32_t>> VoxelMap::locate(
   const std::int32_t n = config_.geometry.region_voxels;
   const rm_vec3i region = rm_region_of_voxel(toKernel(voxel), n);
   std::uint32_t slot = store_.find(fromKernel(region));
-  // A query beside a batch in flight would move the batch's regions under it (large-maps.md).
-  RAYMAP_EXPECTS((!tiers_ || !integrating()) &&
-                 "a tiered map was queried while a batch integrates into it");
+  refuseBesideIntegration();
   if (slot == RegionStore::kNoSlot && tiers_) {
     // A point query holds nothing: a new epoch lets the regions earlier queries brought in go.
     beginEpoch();

@@ -360,6 +360,8 @@ class VoxelMap {
   std::vector<std::pair<std::string, std::string>> info_;
   // Cold tiers (global maps with MapConfig::tiers.enabled; empty vectors otherwise).
   std::unique_ptr<RegionTiers> tiers_;
+  /// Stops the program when a tiered map is queried while a batch integrates (IntegrationScope).
+  void refuseBesideIntegration() const noexcept;
   // Batches integrating now (IntegrationScope); on the heap so that the map stays movable.
   std::unique_ptr<std::atomic<int>> integrating_ = std::make_unique<std::atomic<int>>(0);
   RegionEvictionHook* eviction_hook_ = nullptr;

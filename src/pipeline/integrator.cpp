@@ -296,29 +296,34 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
   const std::uint64_t rays_in = batcher_now.rays_integrated - batcher_before.rays_integrated;
   stats_.rays_integrated.add(rays_in);
   countRejections(rays_before, preparer.counters());
-  // Scans that put nothing in the map (every ray rejected: a min range beyond every return, a
-  // wrong extrinsic) are not integrated: counted apart, and the map goes stale (health). A scan
-  // larger than a batch went in over several: their rays count for the batch that finishes it.
-  rays_since_scan_end_ += rays_in;
-  if (completed_count_ == 0) {
-    // none finished: decided with the batch that finishes them
-  } else if (rays_since_scan_end_ == 0) {
-    stats_.scans_empty.add(completed_count_);
-  } else {
-    rays_since_scan_end_ = 0;
-    stats_.scans_integrated.add(completed_count_);
-    for (std::uint32_t i = 0; i < completed_count_; ++i) {
-      if (completed_sensor_[i] < stats_.sensors.size()) {
-        stats_.sensors[completed_sensor_[i]].scans_integrated.add();
-      }
-    }
-    stats_.last_scan_integrated_ns.store(settings_.clock_ns(), std::memory_order_relaxed);
-  }
+  countCompletedScans(rays_in);
   completed_count_ = 0;
   batch_size_ = 0;
   scan_stamp_pending_ = 0;
   batch_due_ns_ = kNever;
   (void)now_ns;
+}
+
+void Integrator::countCompletedScans(std::uint64_t rays_in) noexcept {
+  // Scans that put nothing in the map (every ray rejected: a min range beyond every return, a
+  // wrong extrinsic) are not integrated: counted apart, and the map goes stale (health). A scan
+  // larger than a batch went in over several: their rays count for the batch that finishes it.
+  rays_since_scan_end_ += rays_in;
+  if (completed_count_ == 0) {
+    return;
+  }
+  if (rays_since_scan_end_ == 0) {
+    stats_.scans_empty.add(completed_count_);
+    return;
+  }
+  rays_since_scan_end_ = 0;
+  stats_.scans_integrated.add(completed_count_);
+  for (std::uint32_t i = 0; i < completed_count_; ++i) {
+    if (completed_sensor_[i] < stats_.sensors.size()) {
+      stats_.sensors[completed_sensor_[i]].scans_integrated.add();
+    }
+  }
+  stats_.last_scan_integrated_ns.store(settings_.clock_ns(), std::memory_order_relaxed);
 }
 
 void Integrator::countRejections(const RayCounters& before, const RayCounters& now) noexcept {

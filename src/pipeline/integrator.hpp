@@ -115,6 +115,9 @@ class Integrator {
   /// `max_visits` points have been visited. @return true when the scan is finished.
   bool convertScan(std::uint64_t max_visits) noexcept;
   void integrateBatch(std::int64_t now_ns) noexcept;
+  /// Counts the scans the batch finished as integrated (with `rays_in` and the rays of their
+  /// earlier batches) or empty (none), and stamps the staleness rule's time.
+  void countCompletedScans(std::uint64_t rays_in) noexcept;
   /// Adds the preparer's rejections between two readings to the pipeline's counters.
   void countRejections(const RayCounters& before, const RayCounters& now) noexcept;
   /// How many more points can be converted (and, with the batch, integrated) before `deadline`

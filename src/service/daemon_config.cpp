@@ -449,7 +449,7 @@ std::string outputOnAnInput(const DaemonConfig& config) {
   for (const auto& [topic, key] : outputs) {
     for (const auto& [input, input_key] : inputs) {
       if (!topic->empty() && *topic == input) {
-        return std::string(key) + ": " + *topic + " is an input too (" + input_key +
+        return config.where(key) + ": " + *topic + " is an input too (" + input_key +
                "): the service would publish onto what it reads";
       }
     }
@@ -508,8 +508,7 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
   }
   // Checks across sections.
   if (auto clash = outputOnAnInput(config); !clash.empty()) {
-    return fail(ErrorCode::kInvalidArgument,
-                config.where(clash.substr(0, clash.find(':'))) + clash.substr(clash.find(':')));
+    return fail(ErrorCode::kInvalidArgument, clash);
   }
   if (auto valid = config.map.validate(); !valid) {
     return fail(ErrorCode::kInvalidArgument, name + ": map: " + valid.error().message);

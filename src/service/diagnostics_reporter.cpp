@@ -273,13 +273,18 @@ void DiagnosticsReporter::describeDrops() noexcept {
   }
 }
 
+DiagnosticsReporter::RaysInWindow DiagnosticsReporter::raysInWindow() const noexcept {
+  const Totals& c = ring_[head_].totals;
+  const Totals& b = base_->totals;
+  const std::uint64_t integrated = c.rays - b.rays;
+  return {integrated, integrated + (c.rejected - b.rejected) + (c.too_near - b.too_near)};
+}
+
 std::uint8_t DiagnosticsReporter::describeIntegration(char* out, std::size_t size) const noexcept {
   const Totals& c = ring_[head_].totals;
   const Totals& b = base_->totals;
   out[0] = '\0';
-  const std::uint64_t integrated = c.rays - b.rays;
-  const std::uint64_t lost = (c.rejected - b.rejected) + (c.too_near - b.too_near);
-  const std::uint64_t offered = integrated + lost;
+  const auto [integrated, offered] = raysInWindow();
   if (offered == 0 || static_cast<double>(integrated) >=
                           settings_.min_integrated_fraction * static_cast<double>(offered)) {
     return dds::kDiagnosticOk;
@@ -515,9 +520,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "rays_rejected_invalid", "%" PRIu64, c.invalid);
   {
     // Over the window; 1 when nothing was offered (nothing lost).
-    const std::uint64_t integrated = c.rays - p.rays;
-    const std::uint64_t offered =
-        integrated + (c.rejected - p.rejected) + (c.too_near - p.too_near);
+    const auto [integrated, offered] = raysInWindow();
     message_.addValue(
         s, "rays_integrated_fraction", "%.3f",
         offered == 0 ? 1.0 : static_cast<double>(integrated) / static_cast<double>(offered));

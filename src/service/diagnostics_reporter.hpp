@@ -142,6 +142,13 @@ class DiagnosticsReporter {
   /// Writes every input dropped within the window, with its count, to drop_reasons_
   /// ("; "-separated; empty when nothing was dropped: that is what "dropping" means).
   void describeDrops() noexcept;
+  /// Rays integrated within the window, and rays offered: those plus the rejected ones and the
+  /// depth blocks nearer than min range (points without a return are not offered).
+  struct RaysInWindow {
+    std::uint64_t integrated = 0;
+    std::uint64_t offered = 0;
+  };
+  RaysInWindow raysInWindow() const noexcept;
   /// Writes to `out` how many of the rays offered within the window were integrated and why the
   /// others were not. @return the level that says: OK, WARN below min_integrated_fraction,
   /// ERROR for none.
