@@ -4,6 +4,7 @@
 // from the data. And `raymap record --format mcap` read back by Foxglove's MCAP reader, every
 // message of every type raymapd and raymap replay send decoded and re-serialized to the same
 // bytes by Foxglove's ROS 2 serializer.
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -86,6 +87,50 @@ TEST(BagReplay, ABagPlayedIntoRaymapdGivesTrueHeightsFromItsTfChainAndStaticExtr
   EXPECT_GT(static_cast<double>(heights.within) / heights.surfaces, 0.9)
       << heights.within << " of " << heights.surfaces
       << " surface cells within a voxel of the truth";
+}
+
+// Found by the soak (tools/soak.sh SOAK_BAG=1): replay also made its simulated driver's idle
+// writers for a bag, and on the bag's own /odom they were a second pose source to raymapd (ERROR:
+// "two pose sources for one robot") for the whole replay.
+TEST(BagReplay, ABagWithOdometryIsTheOnlyPublisherOfItsTopics) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const int scans = 10;
+  const Drive drive = makeDrive(dir, DrivePoses::kOdometry, scans);
+  const std::string bag = dir.file("drive_bag");
+  writeBag(drive.spec, bag, {});
+  const std::uint32_t domain = uniqueDomain();
+  std::string config = serviceConfig(domain, "", 32);
+  const std::size_t at = config.find("topic: rt/points, frame: lidar,");
+  ASSERT_NE(at, std::string::npos);
+  config.replace(at, 31, "topic: /ouster/points,");
+  Daemon daemon(dir, config);
+  Watcher watcher(domain);
+  watcher.collect(kStartWaitS, [&] { return watcher.grid_maps->matchedWriters() > 0; });
+  ASSERT_GT(watcher.grid_maps->matchedWriters(), 0u) << daemon.log();
+  auto replay = startRaymap({"replay", bag, "--domain", std::to_string(domain), "--loop", "-q"},
+                            dir.file("replay.log"));
+  // Reports while the bag plays (in a loop, so that several come): one writer of each input.
+  double most_pose_publishers = 0.0;
+  double most_cloud_publishers = 0.0;
+  int reports = 0;
+  double last_stamp = -1.0;
+  watcher.collect(60.0, [&] {
+    const double integrated = diagnostic(watcher, "raymapd: pipeline/scans_integrated");
+    if (integrated > 0 && integrated != last_stamp) {
+      last_stamp = integrated;
+      ++reports;
+      most_pose_publishers =
+          std::max(most_pose_publishers, diagnostic(watcher, "raymapd: pipeline/pose_publishers"));
+      most_cloud_publishers =
+          std::max(most_cloud_publishers, diagnostic(watcher, "raymapd: sensor lidar/publishers"));
+    }
+    return reports >= 4;
+  });
+  ASSERT_TRUE(replay->stop(SIGINT, std::chrono::milliseconds(5000)).has_value());
+  ASSERT_GE(reports, 4) << daemon.log();
+  EXPECT_EQ(most_pose_publishers, 1.0) << daemon.log();
+  EXPECT_EQ(most_cloud_publishers, 1.0) << daemon.log();
 }
 
 TEST(BagRecord, ALiveRunRecordedAsMcapIsReadAndReserializedByFoxglovesLibraries) {

@@ -63,9 +63,12 @@ Result<std::unique_ptr<ReplaySession>> ReplaySession::create(const ReplayOptions
     return Unexpected(std::move(participant).error());
   }
   s->participant_.emplace(std::move(participant).value());
+  // The simulated driver's writers only for ray files: bags and logs get a writer per recorded
+  // topic. An idle driver writer on the bag's own cloud or odometry topic is a second publisher
+  // to raymapd (two pose sources: ERROR).
   bool any_ray_file = false;
   for (const std::string& input : options.inputs) {
-    any_ray_file = any_ray_file || !record::isRecordLogInput(input);
+    any_ray_file = any_ray_file || (!record::isRecordLogInput(input) && !bag::isBag(input));
   }
   if (any_ray_file) {
     auto driver = driver::DriverPublisher::create(*s->participant_, options.cloud_topic,
