@@ -3,6 +3,8 @@
 // allocations made there (and only there) and prove there are none.
 #pragma once
 
+#include <cstdint>
+
 namespace raymap::platform {
 
 /// @brief While one exists on a thread, the thread is in its real-time steady state: raymap's code
@@ -37,5 +39,18 @@ class ForeignScope {
 /// @brief True inside a RealtimeScope and not inside a ForeignScope nested in it (for the
 /// allocation-counting test's malloc hook). @rt wait-free; allocates: no.
 bool inRealtimeScope() noexcept;
+
+/// @brief Reads the process's count of allocations made inside RealtimeScopes so far.
+using RealtimeAllocationCounter = std::uint64_t (*)() noexcept;
+
+/// @brief A build whose malloc counts real-time allocations (the tests' allocation counter,
+/// linked into raymapd_counted for tools/soak.sh) registers its reader here at start-up, and the
+/// service reports the count in its diagnostics; production builds register none.
+/// Thread-safety: any thread (an atomic pointer). @rt wait-free; allocates: no.
+void registerRealtimeAllocationCounter(RealtimeAllocationCounter counter) noexcept;
+
+/// @brief The registered reader, or nullptr when this build does not count.
+/// @rt wait-free; allocates: no.
+RealtimeAllocationCounter realtimeAllocationCounter() noexcept;
 
 }  // namespace raymap::platform

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "platform/allocation_scope.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/service/log.hpp"
 #include "src/service/service.hpp"
@@ -531,6 +532,10 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "scans_shed", "%" PRIu64, c.scans_shed);
   message_.addValue(s, "scans_cut_short", "%" PRIu64, c.scans_cut_short);
   message_.addValue(s, "points_shed", "%" PRIu64, c.points_shed);
+  if (const platform::RealtimeAllocationCounter counter = platform::realtimeAllocationCounter()) {
+    // Only in raymapd_counted (tools/soak.sh): heap allocations the real-time loops made.
+    message_.addValue(s, "realtime_allocations", "%" PRIu64, counter());
+  }
   message_.addValue(s, "integrator_load_percent", "%d",
                     stats_.integrator_load_percent.load(std::memory_order_relaxed));
   message_.addValue(s, "subsample_stride", "%d",

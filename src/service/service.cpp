@@ -914,7 +914,9 @@ void Service::Impl::countInputPublishers() noexcept {
   if (!extra) {
     input_publishers_who[0] = '\0';
   } else if (changed) {
-    // Who they are, input by input (Cyclone allocates the discovery data it copies out).
+    // Who they are, input by input. Cyclone allocates the discovery data it copies out: its
+    // allocation, once per change of the writers, never in a steady state.
+    platform::ForeignScope dds;
     char* out = input_publishers_who;
     const std::size_t size = sizeof(input_publishers_who);
     out[0] = '\0';

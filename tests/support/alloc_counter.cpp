@@ -47,6 +47,15 @@ void traceRealtimeAllocation() noexcept {
   tracing = false;
 }
 bool allocationCountingAvailable() noexcept { return true; }
+
+namespace {
+// Tells the service (platform::realtimeAllocationCounter) that this executable counts, so that
+// raymapd_counted reports realtime_allocations in its diagnostics for tools/soak.sh.
+[[maybe_unused]] const bool g_registered = [] {
+  platform::registerRealtimeAllocationCounter(&realtimeAllocations);
+  return true;
+}();
+}  // namespace
 void noteAllocation() noexcept {
   if (t_scopes > 0) {
     ++t_allocations;

@@ -10,11 +10,11 @@ namespace raymap::test {
 /// @brief False in sanitizer builds, where the sanitizer owns malloc and nothing is counted.
 bool allocationCountingAvailable() noexcept;
 
-/// @brief Counts malloc/calloc/realloc/memalign calls of this thread while alive.
 /// @brief Allocations made so far, on any thread, inside a platform::RealtimeScope (and not in a
 /// ForeignScope): the steady-state loops of the service, which must make none.
 std::uint64_t realtimeAllocations() noexcept;
 
+/// @brief Counts malloc/calloc/realloc/memalign calls of this thread while alive.
 class AllocationScope {
  public:
   AllocationScope() noexcept;
