@@ -4,9 +4,12 @@
 
 Each second it reads raymapd's resident set size from /proc, the GridMaps that arrived at an
 independent subscriber (the JSON lines of `raymap echo /height_map --json`) and raymapd's latest
-diagnostics (`raymap echo /diagnostics --json`), and appends a row to soak.csv. At the end it
-writes summary.json (RSS spread after warm-up, publish rate at the start and the end, drops,
-latency) and, when matplotlib is installed, soak.png. Standard library only, apart from the plot.
+diagnostics (`raymap echo /diagnostics --json`), and appends a row to soak.csv. After --seconds it
+creates the --sampled file (tools/soak.sh then stops the inputs), waits for --inputs-stopped,
+reads raymapd's last reports, and writes summary.json (RSS spread after warm-up, publish rate at
+the start and the end, drops, latency, and the checks: every cloud accounted for, no real-time
+allocation after warm-up, RSS flat, reports true to what happened) and, when matplotlib is
+installed, soak.png. Exit status 1 when a check fails. Standard library only, apart from the plot.
 """
 import argparse
 import csv
@@ -19,8 +22,18 @@ import time
 COLUMNS = [
     "elapsed_s", "rss_mib", "maps", "period_mean_ms", "period_max_ms", "latency_p50_ms",
     "latency_p99_ms", "clouds_received", "scans_integrated", "clouds_dropped", "rays_integrated",
-    "pose_publishers", "pipeline_level", "intruder",
+    "pose_publishers", "pipeline_level", "intruder", "realtime_allocations", "pose_time_resets",
+    "pipeline_message",
 ]
+# Every cloud raymapd takes ends in exactly one of these (docs/raymapd.md, Diagnostics).
+OUTCOMES = (
+    "scans_integrated", "scans_empty", "scans_dropped_no_pose", "scans_shed",
+    "clouds_dropped_overflow", "clouds_malformed", "clouds_too_large", "clouds_wrong_frame",
+    "clouds_rate_limited",
+)
+# RSS may move this much after warm-up and still count as flat (allocator noise, page cache).
+RSS_FLAT_MIB = 2.0
+RSS_FLAT_FRACTION = 0.02
 # A second robot's arrival or departure shows in the next report or two (discovery, then a report
 # a second): rows this close to a change are not judged.
 SETTLE_S = 3.0
@@ -133,6 +146,23 @@ def intruder_state(intervals, now):
     return 0
 
 
+def time_reset_mismatches(rows):
+    """Rows without a second robot whose report does not say what happened to time: more than
+    one reset in a second (a lap lasts longer), or a reset not named as the reason of a WARN."""
+    bad = 0
+    previous = None
+    for r in rows:
+        resets = r["pose_time_resets"]
+        if previous is not None and resets == resets and previous == previous:
+            step = resets - previous
+            if r["intruder"] == 0 and step > 0 and (
+                    step > 1 or r["pipeline_level"] < 1
+                    or "went back" not in (r["pipeline_message"] or "")):
+                bad += 1
+        previous = resets
+    return bad
+
+
 def health_mismatches(rows):
     """Rows whose report does not say what happened: two pose sources present but not reported
     as two with an ERROR, or reported as two when there was one."""
@@ -182,6 +212,110 @@ def summarise(rows, warmup_s):
     }
 
 
+def drain(args, diagnostics, latest):
+    """After sampling: has the inputs stopped, then reads raymapd's reports until its counters
+    stop moving (every queued scan taken), at most 30 s. Returns the last values."""
+    if not args.sampled:
+        return latest
+    with open(args.sampled, "w", encoding="ascii"):
+        pass
+    deadline = time.monotonic() + 90.0  # a second robot's visit under way lasts up to 20 s
+    while args.inputs_stopped and not os.path.exists(args.inputs_stopped):
+        if time.monotonic() > deadline:
+            print("soak: the inputs did not stop", file=sys.stderr)
+            break
+        time.sleep(0.5)
+    still = 0
+    previous = None
+    deadline = time.monotonic() + 30.0
+    while still < 3 and time.monotonic() < deadline:
+        time.sleep(1.0)
+        for report in diagnostics.read_new():
+            for status in report.get("statuses", []):
+                for key, value in status.get("values", {}).items():
+                    latest[f"{status.get('name')}/{key}"] = value
+        now = tuple(v if v == v else -1.0 for v in (
+            number(latest, f"{PIPELINE}/{k}") for k in ("clouds_received",) + OUTCOMES))
+        still = still + 1 if now == previous else 0
+        previous = now
+    return latest
+
+
+def read_json(path):
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def intruder_clouds(intruder_log):
+    """Clouds the second robot published, from its raymap-load reports (intruder-N.json)."""
+    if not intruder_log:
+        return 0
+    folder = os.path.dirname(intruder_log)
+    total = 0
+    for name in sorted(os.listdir(folder)):
+        if name.startswith("intruder-") and name.endswith(".json"):
+            report = read_json(os.path.join(folder, name)) or {}
+            total += int(report.get("scans_published_total", 0))
+    return total
+
+
+def checks(rows, final, summary, replay, intruder_log, bag):
+    """Pass/fail of what the soak must show, each with what was measured."""
+    out = {}
+    received = number(final, f"{PIPELINE}/clouds_received")
+    outcomes = {k: number(final, f"{PIPELINE}/{k}") for k in OUTCOMES}
+    outcomes = {k: (0 if v != v else int(v)) for k, v in outcomes.items()}
+    if received == received:
+        accounted = sum(outcomes.values())
+        out["every_cloud_received_has_an_outcome"] = {
+            "passed": int(received) == accounted,
+            "detail": f"{int(received)} received, {accounted} integrated, empty or counted as "
+                      f"dropped ({', '.join(f'{k} {v}' for k, v in outcomes.items() if v)})"}
+    if replay is not None and received == received:
+        published = int(replay.get("clouds", 0)) + intruder_clouds(intruder_log)
+        out["every_cloud_published_was_received"] = {
+            "passed": published == int(received),
+            "detail": f"{published} published (replay {replay.get('clouds')}, second robot "
+                      f"{published - int(replay.get('clouds', 0))}), {int(received)} received"}
+    allocations = [r["realtime_allocations"] for r in rows
+                   if r["elapsed_s"] >= summary["warmup_s"] and r["realtime_allocations"] ==
+                   r["realtime_allocations"]]
+    last_allocations = number(final, f"{PIPELINE}/realtime_allocations")
+    if allocations and last_allocations == last_allocations:
+        made = int(last_allocations - allocations[0])
+        out["no_realtime_allocation_after_warmup"] = {
+            "passed": made == 0,
+            "detail": f"{made} heap allocations in the real-time loops after warm-up "
+                      f"({int(last_allocations)} in all)"}
+    else:
+        out["no_realtime_allocation_after_warmup"] = {
+            "passed": None, "detail": "not counted: run build/tests/raymapd_counted"}
+    if summary["rss_mib_first_steady"] is not None:
+        growth = summary["rss_mib_last"] - summary["rss_mib_first_steady"]
+        allowed = max(RSS_FLAT_MIB, RSS_FLAT_FRACTION * summary["rss_mib_first_steady"])
+        out["rss_flat_after_warmup"] = {
+            "passed": growth <= allowed,
+            "detail": f"{growth:+.2f} MiB from {summary['rss_mib_first_steady']} MiB "
+                      f"(allowed {allowed:.2f})"}
+    out["reports_true_to_the_second_robot"] = {
+        "passed": summary["health_mismatches"] == 0,
+        "detail": f"{summary['health_mismatches']} mismatches in {summary['intruder_rows']} "
+                  f"rows with it"}
+    if bag:
+        resets = number(final, f"{PIPELINE}/pose_time_resets")
+        passes = int(replay.get("passes", 0)) if replay else 0
+        mismatches = time_reset_mismatches(rows)
+        out["time_going_back_reset_and_reported"] = {
+            "passed": resets == resets and resets >= passes and mismatches == 0,
+            "detail": f"{int(resets) if resets == resets else 'no'} pose-history resets for "
+                      f"{passes} laps done (at least one each), {mismatches} reports not "
+                      f"naming a reset"}
+    return out
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pid", type=int, required=True, help="raymapd's process id")
@@ -195,6 +329,14 @@ def main():
     parser.add_argument("--label", default="", help="title of the plot")
     parser.add_argument("--intruder-log", default="",
                         help="join/leave times of a second robot (tools/soak.sh SOAK_INTRUDER=1)")
+    parser.add_argument("--replay-stats", default="",
+                        help="raymap replay's --stats-json, for the count of clouds published")
+    parser.add_argument("--sampled", default="",
+                        help="file to create when sampling is done (the inputs are then stopped)")
+    parser.add_argument("--inputs-stopped", default="",
+                        help="file that appears once every input has stopped")
+    parser.add_argument("--bag", action="store_true",
+                        help="the replay loops a bag: time goes back every lap")
     args = parser.parse_args()
     warmup = args.warmup if args.warmup is not None else min(120.0, 0.1 * args.seconds)
 
@@ -221,6 +363,7 @@ def main():
             for report in diagnostics.read_new():
                 for status in report.get("statuses", []):
                     latest[f"{status.get('name')}/level"] = status.get("level")
+                    latest[f"{status.get('name')}/message"] = status.get("message", "")
                     for key, value in status.get("values", {}).items():
                         latest[f"{status.get('name')}/{key}"] = value
             dropped = sum(number(latest, f"{PIPELINE}/{k}") for k in (
@@ -241,6 +384,9 @@ def main():
                 "pose_publishers": number(latest, f"{PIPELINE}/pose_publishers"),
                 "pipeline_level": number(latest, f"{PIPELINE}/level"),
                 "intruder": intruder_state(intruder_intervals(args.intruder_log), time.time()),
+                "realtime_allocations": number(latest, f"{PIPELINE}/realtime_allocations"),
+                "pose_time_resets": number(latest, f"{PIPELINE}/pose_time_resets"),
+                "pipeline_message": latest.get(f"{PIPELINE}/message", ""),
             }
             if row["rss_mib"] is None:
                 print("soak: raymapd is gone", file=sys.stderr)
@@ -252,14 +398,20 @@ def main():
                 print(f"soak: {len(rows) // 60} min: RSS {row['rss_mib']:.1f} MiB, "
                       f"{row['maps']} maps/s, latency p99 {row['latency_p99_ms']:.0f} ms, "
                       f"{row['clouds_dropped']:.0f} dropped", flush=True)
+    final = drain(args, diagnostics, latest)
     summary = summarise(rows, warmup)
+    summary["checks"] = checks(rows, final, summary, read_json(args.replay_stats)
+                               if args.replay_stats else None, args.intruder_log, args.bag)
     summary["label"] = args.label
     summary["plot"] = plot(rows, os.path.join(args.out, "soak.png"), args.label)
     with open(os.path.join(args.out, "summary.json"), "w", encoding="ascii") as f:
         json.dump(summary, f, indent=2)
         f.write("\n")
     print(json.dumps(summary, indent=2))
-    return 0 if rows else 1
+    failed = [name for name, c in summary["checks"].items() if c["passed"] is False]
+    for name in failed:
+        print(f"soak: FAILED {name}: {summary['checks'][name]['detail']}", file=sys.stderr)
+    return 0 if rows and not failed else 1
 
 
 if __name__ == "__main__":
