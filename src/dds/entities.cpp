@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include <dds/ddsi/ddsi_serdata.h>
@@ -68,27 +69,55 @@ Result<void> createTopic(const Participant& participant, const char* topic_name,
 
 // ---- Participant ----
 
-Result<Participant> Participant::create(std::uint32_t domain_id) {
+Result<Participant> Participant::create(std::uint32_t domain_id, const DomainSettings& settings) {
   if (domain_id >= DDS_DOMAIN_DEFAULT) {
     return fail(ErrorCode::kInvalidArgument, "dds: domain id out of range");
   }
+  dds_entity_t domain = 0;
+  if (settings.receive_buffer_bytes > 0) {
+    // Cyclone reads a list of configuration sources in order, a later one overriding an
+    // earlier one: ours first, then whatever CYCLONEDDS_URI names.
+    std::string config =
+        "<CycloneDDS><Domain Id=\"any\"><Internal><SocketReceiveBufferSize min=\"" +
+        std::to_string(settings.receive_buffer_bytes) + "B\"/></Internal></Domain></CycloneDDS>";
+    if (const char* uri = std::getenv("CYCLONEDDS_URI"); uri != nullptr && uri[0] != '\0') {
+      config += ",";
+      config += uri;
+    }
+    domain = dds_create_domain(domain_id, config.c_str());
+    if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) {
+      domain = 0;  // this process already has the domain, configured when it was created
+    } else if (domain < 0) {
+      const std::string what =
+          "dds_create_domain (check CYCLONEDDS_URI, and that the kernel allows a receive buffer "
+          "of " +
+          std::to_string(settings.receive_buffer_bytes) + " bytes: net.core.rmem_max)";
+      return fail(ErrorCode::kIo, describe(what.c_str(), nullptr, domain));
+    }
+  }
   const dds_entity_t handle = dds_create_participant(domain_id, nullptr, nullptr);
   if (handle < 0) {
+    deleteEntity(domain);
     return fail(ErrorCode::kIo,
                 describe("dds_create_participant (check CYCLONEDDS_URI)", nullptr, handle));
   }
-  return Participant(handle);
+  return Participant(handle, domain);
 }
 
 Participant& Participant::operator=(Participant&& other) noexcept {
   if (this != &other) {
     deleteEntity(handle_);
+    deleteEntity(domain_);
     handle_ = std::exchange(other.handle_, 0);
+    domain_ = std::exchange(other.domain_, 0);
   }
   return *this;
 }
 
-Participant::~Participant() { deleteEntity(handle_); }
+Participant::~Participant() {
+  deleteEntity(handle_);
+  deleteEntity(domain_);
+}
 
 // ---- RawReader ----
 

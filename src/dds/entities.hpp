@@ -23,13 +23,25 @@ namespace raymap::dds {
 /// participant must be destroyed before it (their handles are then already deleted; their
 /// destructors tolerate that).
 /// Thread-safety: handle() from any thread; creation and destruction from one thread.
+/// @brief What a process asks of its DDS domain beyond CYCLONEDDS_URI.
+struct DomainSettings {
+  /// Minimum receive buffer of the domain's sockets (bytes; 0: leave it to CYCLONEDDS_URI or
+  /// Cyclone's default, which asks for 1 MiB and takes what the kernel gives). Put before the
+  /// configuration CYCLONEDDS_URI names, so a size the user's file sets wins. The kernel must
+  /// allow it (net.core.rmem_max), or the domain cannot be created.
+  std::uint64_t receive_buffer_bytes = 0;
+};
+
 class Participant {
  public:
-  /// @brief Creates a participant on `domain_id` (0..232 like ROS_DOMAIN_ID). Start-up only
-  /// (allocates, starts Cyclone's threads, may take tens of milliseconds).
-  static Result<Participant> create(std::uint32_t domain_id);
+  /// @brief Creates a participant on `domain_id` (0..232 like ROS_DOMAIN_ID), creating the
+  /// domain with `settings` merged into CYCLONEDDS_URI's configuration when they ask for
+  /// anything and the process has no participant on that domain yet. Start-up only (allocates,
+  /// starts Cyclone's threads, may take tens of milliseconds).
+  static Result<Participant> create(std::uint32_t domain_id, const DomainSettings& settings = {});
 
-  Participant(Participant&& other) noexcept : handle_(std::exchange(other.handle_, 0)) {}
+  Participant(Participant&& other) noexcept
+      : handle_(std::exchange(other.handle_, 0)), domain_(std::exchange(other.domain_, 0)) {}
   Participant& operator=(Participant&& other) noexcept;
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
@@ -38,8 +50,10 @@ class Participant {
   dds_entity_t handle() const noexcept { return handle_; }
 
  private:
-  explicit Participant(dds_entity_t handle) noexcept : handle_(handle) {}
+  Participant(dds_entity_t handle, dds_entity_t domain) noexcept
+      : handle_(handle), domain_(domain) {}
   dds_entity_t handle_ = 0;
+  dds_entity_t domain_ = 0;  // the domain this participant created (deleted after it), or 0
 };
 
 /// Reliability QoS. Subscribe to sensor data best effort (matches best-effort and reliable

@@ -31,7 +31,10 @@ inline constexpr std::size_t kMaxSensors = 16;
 
 /// @brief What happened to one sensor's messages (ingest thread, except scans_integrated).
 struct SensorCounters {
-  Counter received;          ///< clouds or depth images taken from DDS
+  Counter received;  ///< clouds or depth images taken from DDS
+  /// Clouds or images missing before those taken, by the gaps in their stamps (StampGaps): lost
+  /// on the way (a socket buffer, the network) or never sent.
+  Counter missing;
   Counter accepted;          ///< decoded and handed to the integrator
   Counter rate_limited;      ///< dropped: faster than sensors[].max_rate_hz
   Counter rejected;          ///< malformed, too large, wrong frame, or no CameraInfo yet
@@ -46,6 +49,9 @@ struct SensorCounters {
 struct PipelineStats {
   // ---- ingest thread ----
   Counter clouds_received;  ///< PointCloud2 and depth Image messages taken from DDS
+  /// Datagrams the kernel dropped on raymapd's sockets because their receive buffer was full
+  /// (platform::UdpDrops; set by the diagnostics thread once a report).
+  Counter socket_drops;
   /// Monotonic time the last of them was taken (0: none yet). Health compares it with
   /// last_scan_integrated_ns: input that stopped and input that is not integrated read the
   /// same in counts over a window that still holds the last clouds.

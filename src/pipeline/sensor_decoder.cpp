@@ -69,18 +69,25 @@ bool SensorDecoder::rateAllows(bool any, std::int64_t last_ns,
   return true;
 }
 
-bool SensorDecoder::overRateOnArrival(std::span<const std::byte> cdr) noexcept {
-  if (settings_.max_rate_hz <= 0.0) {
-    return false;
-  }
-  // PointCloud2 and Image alike begin with std_msgs/Header, whose stamp comes first.
+std::optional<std::int64_t> headerStampNs(std::span<const std::byte> cdr) noexcept {
   dds::CdrReader reader(cdr);
   std::int32_t sec = 0;
   std::uint32_t nanosec = 0;
   if (!reader.readI32(sec) || !reader.readU32(nanosec)) {
+    return std::nullopt;
+  }
+  return dds::nanosecondsOf(sec, nanosec);
+}
+
+bool SensorDecoder::overRateOnArrival(std::span<const std::byte> cdr) noexcept {
+  if (settings_.max_rate_hz <= 0.0) {
     return false;
   }
-  const std::int64_t stamp_ns = dds::nanosecondsOf(sec, nanosec);
+  const std::optional<std::int64_t> stamp = headerStampNs(cdr);
+  if (!stamp) {
+    return false;
+  }
+  const std::int64_t stamp_ns = *stamp;
   if (!rateAllows(arrived_any_, last_arrival_ns_, stamp_ns)) {
     return true;
   }

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -66,6 +67,11 @@ struct DecodedScan {
   /// sees is reported instead of giving empty scans silently.
   std::uint32_t too_near = 0;
 };
+
+/// @brief The header stamp (ns since the epoch) of a PointCloud2 or Image, read from the CDR
+/// without decoding the rest (both begin with std_msgs/Header, whose stamp comes first);
+/// nullopt when the message is too short. @rt allocates: no.
+std::optional<std::int64_t> headerStampNs(std::span<const std::byte> cdr) noexcept;
 
 /// @brief Decodes one sensor's messages. Thread-safety: one thread (raymapd's ingest thread).
 /// @rt decode(): allocates no, blocks no. onCameraInfo(): allocates only for a camera larger

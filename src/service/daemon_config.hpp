@@ -108,6 +108,10 @@ struct DdsConfig {
   std::uint32_t domain = 0;  ///< = ROS_DOMAIN_ID of the ROS 2 side
   /// Cyclone DDS configuration (a file:// URI or XML); empty: the CYCLONEDDS_URI environment.
   std::string cyclonedds_uri;
+  /// Receive buffer of the DDS sockets (MiB); 0: sized for the sensors' clouds, within the
+  /// kernel's net.core.rmem_max (service::planReceiveBuffer). A size set in the Cyclone
+  /// configuration wins over both.
+  std::uint32_t receive_buffer_mb = 0;
   std::string grid_map_topic = "rt/height_map";
   std::string diagnostics_topic = "rt/diagnostics";
   double diagnostics_rate_hz = 1.0;

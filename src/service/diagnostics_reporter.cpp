@@ -70,6 +70,7 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   t.clouds = stats_.clouds_received.get();
   t.malformed = stats_.clouds_malformed.get();
   t.too_large = stats_.clouds_too_large.get();
+  t.socket_drops = stats_.socket_drops.get();
   t.wrong_frame = stats_.clouds_unknown_frame.get();
   t.overflow = mailbox_.droppedOldest();
   t.overflow_undecoded = mailbox_.droppedUndecoded();
@@ -119,6 +120,8 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
     out.camera_info = in.camera_info.get();
     out.camera_info_bad = in.camera_info_bad.get();
     out.scans = in.scans_integrated.get();
+    out.missing = in.missing.get();
+    t.missing += out.missing;
   }
   return t;
 }
@@ -164,7 +167,7 @@ void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& real
                 " dropped, latency p99 %.0f ms; %s",
                 settings_.backend.c_str(), levelName(pipeline_level_), map_rate, s.totals.scans,
                 s.totals.overflow + s.totals.no_pose + s.totals.malformed + s.totals.too_large +
-                    s.totals.wrong_frame,
+                    s.totals.wrong_frame + s.totals.missing,
                 s.latency.quantileUs(0.99) / 1000.0, realtime.summary.c_str());
 }
 
@@ -241,6 +244,11 @@ void DiagnosticsReporter::describeDrops() noexcept {
       sep = "; ";
     }
   }
+  reason(c.missing, b.missing,
+         "clouds missing by the gaps in their stamps (lost on the way or never sent)");
+  reason(c.socket_drops, b.socket_drops,
+         "datagrams dropped by raymapd's full socket receive buffers (clouds lost in fragments: "
+         "dds.receive_buffer_mb, net.core.rmem_max)");
   reason(c.too_large, b.too_large, "clouds larger than max_points");
   reason(c.no_pose, b.no_pose, "scans without a pose in time");
   reason(c.overflow, b.overflow, "scans dropped, oldest first (input faster than the integrator)");
@@ -466,6 +474,11 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
                     settings_.device.empty() ? "host CPU" : settings_.device.c_str());
   message_.addValue(s, "clouds_received", "%" PRIu64, c.clouds);
   message_.addValue(s, "cloud_rate_hz", "%.2f", rate(c.clouds, p.clouds));
+  message_.addValue(s, "clouds_missing", "%" PRIu64, c.missing);
+  message_.addValue(s, "socket_datagrams_dropped", "%" PRIu64, c.socket_drops);
+  message_.addValue(s, "socket_receive_buffer_bytes", "%" PRIu64, settings_.receive_buffer_bytes);
+  message_.addValue(s, "socket_receive_buffer_wanted_bytes", "%" PRIu64,
+                    settings_.receive_buffer_wanted_bytes);
   message_.addValue(s, "clouds_dropped_overflow", "%" PRIu64, c.overflow);
   message_.addValue(s, "clouds_dropped_before_decode", "%" PRIu64, c.overflow_undecoded);
   message_.addValue(s, "clouds_malformed", "%" PRIu64, c.malformed);
@@ -649,6 +662,12 @@ void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {
     std::snprintf(text, sizeof(text), "%" PRIu64 " of %" PRIu64 " %s rejected (see pipeline)",
                   c.rejected - b.rejected, c.received - b.received,
                   depth ? "depth images" : "clouds");
+  } else if (c.missing > b.missing) {
+    level = dds::kDiagnosticWarn;
+    std::snprintf(text, sizeof(text),
+                  "%" PRIu64 " %s missing by the gaps in their stamps, %" PRIu64 " received",
+                  c.missing - b.missing, depth ? "depth images" : "clouds",
+                  c.received - b.received);
   } else if (whole_window && c.received == b.received) {
     level = dds::kDiagnosticWarn;
     std::snprintf(text, sizeof(text), "no %s on %s %s", depth ? "depth image" : "point cloud",
@@ -668,6 +687,7 @@ void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {
   message_.addValue(s, "scans_integrated", "%" PRIu64, c.scans);
   message_.addValue(s, "scan_rate_hz", "%.2f", rate(c.scans, b.scans));
   message_.addValue(s, "rejected", "%" PRIu64, c.rejected);
+  message_.addValue(s, "missing", "%" PRIu64, c.missing);
   message_.addValue(s, "publishers", "%u", inputs_ != nullptr ? inputs_->clouds[i] : 0u);
   message_.addValue(s, "rate_limited", "%" PRIu64, c.rate_limited);
   message_.addValue(s, "max_rate_hz", "%g", sensor.max_rate_hz);

@@ -35,6 +35,10 @@ struct ReporterSettings {
   double min_integrated_fraction = 0.5;
   std::string grid_map_topic;              ///< named when another publisher of it is found
   std::vector<std::string> sensor_frames;  ///< sensors[].frame ("" = any), for the reasons
+  /// The DDS sockets' receive buffer asked for (bytes; 0: left to Cyclone) and what the sensors'
+  /// clouds want (service::planReceiveBuffer), reported as values.
+  std::uint64_t receive_buffer_bytes = 0;
+  std::uint64_t receive_buffer_wanted_bytes = 0;
   /// One per configured sensor (same order): a status "<name>: sensor <sensor.name>" each.
   struct Sensor {
     std::string name;
@@ -68,8 +72,9 @@ struct InputPublishers {
 ///   no ray of those offered within the window integrated, another publisher of the height-map
 ///   topic on the domain, or backend failures; WARN: waiting for the first cloud (within
 ///   startup_grace_s), fewer than min_integrated_fraction of the offered rays integrated, any
-///   input dropped within the window (wrong frame, malformed, too large, no pose, overflow, points
-///   with bad times); the message names the reasons with their counts.
+///   input dropped within the window (missing by the gaps in their stamps, datagrams dropped by
+///   a full socket buffer, wrong frame, malformed, too large, no pose, overflow, points with bad
+///   times); the message names the reasons with their counts.
 /// - height map ERROR while maps are withheld (stale), WARN for late or failed cycles.
 /// - real time WARN when requested settings were refused.
 /// Thread-safety: one thread (diagnostics). Reads the counters other threads write.
@@ -108,7 +113,8 @@ class DiagnosticsReporter {
  private:
   struct Totals {
     std::uint64_t clouds = 0, malformed = 0, too_large = 0, wrong_frame = 0, overflow = 0;
-    std::uint64_t overflow_undecoded = 0;  // of overflow, dropped before decoding
+    std::uint64_t overflow_undecoded = 0;         // of overflow, dropped before decoding
+    std::uint64_t missing = 0, socket_drops = 0;  // lost before they were taken
     std::uint64_t scans = 0, no_pose = 0, rays = 0, rejected = 0, no_return = 0, bad_time = 0;
     std::uint64_t scans_empty = 0, invalid = 0, too_short = 0, out_of_bounds = 0;
     std::uint64_t outside_window = 0, too_near = 0;
@@ -122,6 +128,7 @@ class DiagnosticsReporter {
     struct PerSensor {
       std::uint64_t received = 0, accepted = 0, rate_limited = 0, rejected = 0;
       std::uint64_t no_camera_info = 0, camera_info = 0, camera_info_bad = 0, scans = 0;
+      std::uint64_t missing = 0;
     };
     std::array<PerSensor, pipeline::kMaxSensors> sensor{};
   };

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "platform/notify.hpp"
 #include "platform/pi_mutex.hpp"
 #include "platform/rt.hpp"
+#include "platform/socket_buffers.hpp"
 #include "platform/wakeup.hpp"
 #include "src/dds/diagnostics_message.hpp"
 #include "src/dds/entities.hpp"
@@ -41,9 +43,11 @@
 #include "src/pipeline/pending_scans.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
+#include "src/pipeline/stamp_gaps.hpp"
 #include "src/pipeline/tf_router.hpp"
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/log.hpp"
+#include "src/service/startup_checks.hpp"
 
 namespace raymap::service {
 
@@ -132,6 +136,10 @@ struct Service::Impl {
 
   // Ingest-thread state: each sensor's decoder (depth cameras: with their pixel rays).
   std::vector<pipeline::SensorDecoder> decoders;
+  /// Per sensor: gaps in the stamps of what arrives (ingest thread).
+  std::array<pipeline::StampGaps, pipeline::kMaxSensors> stamp_gaps{};
+  /// This process's UDP sockets, found once every reader exists (diagnostics thread).
+  std::optional<platform::UdpDrops> udp_drops;
   // TF and the sensors' frames to base poses and extrinsics (ingest thread), into `poses`.
   std::unique_ptr<pipeline::TfRouter> tf_router;
   struct QueueSink final : pipeline::PoseSink {
@@ -287,8 +295,17 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   impl->grid_map_message = std::make_unique<dds::GridMapMessage>(
       plan.grid.cells_x, plan.grid.cells_y, plan.grid.has_normals);
 
-  // DDS.
-  auto participant = dds::Participant::create(config.dds.domain);
+  // DDS: the sockets' receive buffer sized for the clouds (a Cyclone file that sets one wins).
+  auto receive_buffer = planReceiveBuffer(config, platform::socketReceiveBufferCap());
+  if (!receive_buffer) {
+    return Unexpected(std::move(receive_buffer).error());
+  }
+  if (!receive_buffer->warning.empty()) {
+    logLine(LogLevel::kWarning, "%s", receive_buffer->warning.c_str());
+  }
+  dds::DomainSettings domain_settings;
+  domain_settings.receive_buffer_bytes = receive_buffer->bytes;
+  auto participant = dds::Participant::create(config.dds.domain, domain_settings);
   if (!participant) {
     // Cyclone reads its configuration when the participant is created: a bad one fails here.
     const std::string& uri = config.dds.cyclonedds_uri;
@@ -445,6 +462,8 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   reporting.startup_grace_s = config.health.startup_grace_s;
   reporting.min_integrated_fraction = config.health.min_integrated_fraction;
   reporting.grid_map_topic = config.dds.grid_map_topic;
+  reporting.receive_buffer_bytes = receive_buffer->bytes;
+  reporting.receive_buffer_wanted_bytes = receive_buffer->wanted;
   for (const SensorConfig& sensor : config.sensors) {
     reporting.sensor_frames.push_back(sensor.frame);
     reporting.sensors.push_back(
@@ -514,6 +533,12 @@ void Service::Impl::applyThreadSettings(const char* name, const ThreadConfig& t)
 void Service::Impl::receiveCloud(std::uint32_t sensor, dds::HeldSample& sample) {
   stats.clouds_received.add();
   stats.sensors[sensor].received.add();
+  if (const std::optional<std::int64_t> stamp = pipeline::headerStampNs(sample.bytes())) {
+    // Best-effort readers are told of no loss: the gaps in the stamps say what went missing.
+    if (const std::uint32_t missing = stamp_gaps[sensor].observe(*stamp); missing > 0) {
+      stats.sensors[sensor].missing.add(missing);
+    }
+  }
   const std::int64_t arrival_ns = platform::monotonicNowNs();
   stats.last_cloud_received_ns.store(arrival_ns, std::memory_order_relaxed);
   if (decoders[sensor].overRateOnArrival(sample.bytes())) {
@@ -958,6 +983,7 @@ void Service::Impl::diagnosticsLoop() {
     platform::RealtimeScope steady;
     const std::int64_t now = platform::monotonicNowNs();
     countInputPublishers();
+    stats.socket_drops.set(udp_drops->total());
     reporter->update(now, realtime, map_publisher_watch->matchedWriters(), &input_publishers);
     backend_failing.store(reporter->backendFailing(), std::memory_order_relaxed);
     const void* sample = reporter->message(platform::realtimeNowNs());
@@ -986,6 +1012,8 @@ void Service::start() {
           lock.limit_bytes == std::numeric_limits<std::uint64_t>::max() ? "unlimited" : "finite");
     }
   }
+  // Every socket exists now (the participant, its readers and writers).
+  s.udp_drops.emplace(platform::UdpDrops::ofThisProcess());
   s.threads.emplace_back([&s] { s.ingestLoop(); });
   s.threads.emplace_back([&s] { s.integratorLoop(); });
   s.threads.emplace_back([&s] { s.publisherLoop(); });

@@ -10,6 +10,7 @@
 
 #include <unistd.h>
 
+#include "platform/socket_buffers.hpp"
 #include "src/dds/point_cloud.hpp"
 #include "src/map/ray.hpp"
 #include "src/pipeline/pose_update.hpp"
@@ -132,6 +133,51 @@ Expected<void, Error> checkCycloneUri(const DaemonConfig& config) {
 
 }  // namespace
 
+Expected<ReceiveBufferPlan, Error> planReceiveBuffer(const DaemonConfig& config,
+                                                     std::uint64_t rmem_max) {
+  constexpr std::uint64_t kMiB = std::uint64_t{1} << 20;
+  ReceiveBufferPlan plan;
+  plan.cap = rmem_max;
+  const std::string sysctl_hint =
+      " (sysctl -w net.core.rmem_max=N, and a file in /etc/sysctl.d/ "
+      "to keep it; docs/raymapd.md, DDS transport)";
+  if (config.dds.receive_buffer_mb > 0) {
+    plan.wanted = std::uint64_t{config.dds.receive_buffer_mb} * kMiB;
+    if (rmem_max > 0 && plan.wanted > rmem_max) {
+      return fail(ErrorCode::kCapacity,
+                  config.where("dds.receive_buffer_mb") + ": " +
+                      formatBytes(static_cast<double>(plan.wanted)) +
+                      " is more than the kernel allows a socket (net.core.rmem_max " +
+                      formatBytes(static_cast<double>(rmem_max)) + "): raise it to " +
+                      std::to_string(plan.wanted) + sysctl_hint + ", or ask for less");
+    }
+  } else {
+    // A scan of every sensor at once: the burst of datagrams the receive thread drains.
+    std::uint64_t burst = 0;
+    for (const SensorConfig& sensor : config.sensors) {
+      burst += std::uint64_t{sensor.max_points} * (sensor.kind == SensorKind::kDepth ? 4u : 32u);
+    }
+    plan.wanted = std::max<std::uint64_t>(4 * kMiB, burst);
+  }
+  if (rmem_max == 0) {
+    plan.warning =
+        "socket receive buffer: cannot read net.core.rmem_max: left to Cyclone DDS "
+        "(1 MiB if the kernel allows it); the sensors' clouds want " +
+        formatBytes(static_cast<double>(plan.wanted));
+    return plan;
+  }
+  plan.bytes = std::min(plan.wanted, rmem_max);
+  if (plan.bytes < plan.wanted) {
+    plan.warning = "socket receive buffer: the sensors' clouds want " +
+                   formatBytes(static_cast<double>(plan.wanted)) +
+                   " at once, but the kernel allows " + formatBytes(static_cast<double>(rmem_max)) +
+                   " (net.core.rmem_max): bursts of clouds may be lost (counted as clouds_missing "
+                   "and socket_datagrams_dropped). Raise it to " +
+                   std::to_string(plan.wanted) + sysctl_hint;
+  }
+  return plan;
+}
+
 Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::MemoryLimit& limit) {
   const std::vector<PoolEstimate> pools = estimatePools(config);
   double total = 0.0;
@@ -151,6 +197,9 @@ Expected<void, Error> checkStartup(const DaemonConfig& config, const platform::M
   }
   if (auto uri = checkCycloneUri(config); !uri) {
     return uri;
+  }
+  if (auto buffer = planReceiveBuffer(config, platform::socketReceiveBufferCap()); !buffer) {
+    return Unexpected(std::move(buffer).error());
   }
   const std::string& save = config.save_map_on_exit;
   if (!save.empty()) {
