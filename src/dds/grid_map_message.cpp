@@ -17,7 +17,7 @@ namespace raymap::dds {
 namespace {
 
 constexpr std::size_t kBaseLayers = 4;
-constexpr std::size_t kLayers = kBaseLayers + 3;  // at most: with the normal layers
+constexpr std::size_t kLayers = kGridLayerCount;  // at most: every layer
 
 /// idlc declares strings as char*; the message only reads them.
 char* mutableText(const char* text) noexcept {
@@ -27,12 +27,50 @@ char* mutableText(const char* text) noexcept {
 
 }  // namespace
 
+const char* gridLayerName(GridLayer layer) noexcept {
+  const auto i = static_cast<std::size_t>(layer);
+  return i < kBaseLayers ? GridMapMessage::kLayerNames[i]
+                         : GridMapMessage::kNormalLayerNames[i - kBaseLayers];
+}
+
+std::optional<GridLayer> gridLayerNamed(std::string_view name) noexcept {
+  for (std::size_t i = 0; i < kGridLayerCount; ++i) {
+    const auto layer = static_cast<GridLayer>(i);
+    if (name == gridLayerName(layer)) {
+      return layer;
+    }
+  }
+  return std::nullopt;
+}
+
+GridLayerSet GridLayerSet::all(bool with_normals) noexcept {
+  GridLayerSet set;
+  for (std::size_t i = 0; i < (with_normals ? kGridLayerCount : kBaseLayers); ++i) {
+    set.add(static_cast<GridLayer>(i));
+  }
+  return set;
+}
+
+bool GridLayerSet::hasNormals() const noexcept {
+  return has(GridLayer::kNormalX) || has(GridLayer::kNormalY) || has(GridLayer::kNormalZ);
+}
+
+std::size_t GridLayerSet::count() const noexcept {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < kGridLayerCount; ++i) {
+    n += has(static_cast<GridLayer>(i)) ? 1u : 0u;
+  }
+  return n;
+}
+
 /// Design: one heap block per message, so that moving a GridMapMessage moves a pointer and the
 /// addresses inside `msg` stay valid. Only fill() writes it; Writer::write() reads it.
 struct GridMapMessage::Impl {
   int cells_x = 0;
   int cells_y = 0;
   std::size_t layer_count = kBaseLayers;
+  GridLayerSet chosen;
+  GridLayer layer_of[kLayers] = {};  // what each of the message's layers is
   grid_map_msgs_msg_dds__GridMap_ msg{};
   char frame_id[64] = {};
   char* layer_names[kLayers] = {};
@@ -43,12 +81,21 @@ struct GridMapMessage::Impl {
 };
 
 GridMapMessage::GridMapMessage(int cells_x, int cells_y, bool with_normals)
+    : GridMapMessage(cells_x, cells_y, GridLayerSet::all(with_normals)) {}
+
+GridMapMessage::GridMapMessage(int cells_x, int cells_y, GridLayerSet layers)
     : impl_(std::make_unique<Impl>()) {
-  RAYMAP_EXPECTS(cells_x > 0 && cells_y > 0);
+  RAYMAP_EXPECTS(cells_x > 0 && cells_y > 0 && !layers.empty());
   Impl& m = *impl_;
   m.cells_x = cells_x;
   m.cells_y = cells_y;
-  m.layer_count = with_normals ? kLayers : kBaseLayers;
+  m.chosen = layers;
+  m.layer_count = 0;
+  for (std::size_t i = 0; i < kGridLayerCount; ++i) {
+    if (layers.has(static_cast<GridLayer>(i))) {
+      m.layer_of[m.layer_count++] = static_cast<GridLayer>(i);
+    }
+  }
   const auto size_x = static_cast<std::uint32_t>(cells_x);
   const auto size_y = static_cast<std::uint32_t>(cells_y);
   const std::size_t cells = std::size_t{size_x} * size_y;
@@ -56,8 +103,7 @@ GridMapMessage::GridMapMessage(int cells_x, int cells_y, bool with_normals)
   m.msg.header.frame_id = m.frame_id;
   m.msg.info.pose.orientation.w = 1.0;
   for (std::size_t i = 0; i < m.layer_count; ++i) {
-    m.layer_names[i] =
-        mutableText(i < kBaseLayers ? kLayerNames[i] : kNormalLayerNames[i - kBaseLayers]);
+    m.layer_names[i] = mutableText(gridLayerName(m.layer_of[i]));
     m.data[i].assign(cells, 0.0F);
     auto& dims = m.dims[i];
     dims[0].label = mutableText("column_index");
@@ -77,13 +123,13 @@ GridMapMessage::GridMapMessage(int cells_x, int cells_y, bool with_normals)
     array.data._maximum = static_cast<std::uint32_t>(cells);
     array.data._release = false;
   }
-  m.basic_layers[0] = m.layer_names[0];
+  m.basic_layers[0] = mutableText(gridLayerName(GridLayer::kElevation));
   m.msg.layers._buffer = m.layer_names;
   m.msg.layers._length = static_cast<std::uint32_t>(m.layer_count);
   m.msg.layers._maximum = static_cast<std::uint32_t>(m.layer_count);
   m.msg.layers._release = false;
   m.msg.basic_layers._buffer = m.basic_layers;
-  m.msg.basic_layers._length = 1;
+  m.msg.basic_layers._length = layers.has(GridLayer::kElevation) ? 1 : 0;
   m.msg.basic_layers._maximum = 1;
   m.msg.basic_layers._release = false;
   m.msg.data._buffer = m.arrays;
@@ -119,20 +165,42 @@ void GridMapMessage::fill(const heightmap::HeightMap& map, std::int64_t stamp_ns
   m.msg.info.pose.position.z = 0.0;
 
   // layers: HeightMap is column-major with (0, 0) at +x/+y, as grid_map
-  std::memcpy(m.data[0].data(), map.elevation.data(), cells * sizeof(float));
-  std::memcpy(m.data[1].data(), map.clearance.data(), cells * sizeof(float));
-  float* kind = m.data[2].data();
-  float* observed = m.data[3].data();
-  for (std::size_t i = 0; i < cells; ++i) {
-    kind[i] = static_cast<float>(map.kind[i]);
-    observed[i] = static_cast<float>(map.observed_count[i]);
-  }
-  if (m.layer_count > kBaseLayers) {
+  if (m.chosen.hasNormals()) {
     RAYMAP_EXPECTS(map.has_normals && map.normal_x.size() == cells &&
                    map.normal_y.size() == cells && map.normal_z.size() == cells);
-    std::memcpy(m.data[4].data(), map.normal_x.data(), cells * sizeof(float));
-    std::memcpy(m.data[5].data(), map.normal_y.data(), cells * sizeof(float));
-    std::memcpy(m.data[6].data(), map.normal_z.data(), cells * sizeof(float));
+  }
+  const auto copy = [cells](float* out, const std::vector<float>& in) {
+    std::memcpy(out, in.data(), cells * sizeof(float));
+  };
+  for (std::size_t l = 0; l < m.layer_count; ++l) {
+    float* out = m.data[l].data();
+    switch (m.layer_of[l]) {
+      case GridLayer::kElevation:
+        copy(out, map.elevation);
+        break;
+      case GridLayer::kClearance:
+        copy(out, map.clearance);
+        break;
+      case GridLayer::kKind:
+        for (std::size_t i = 0; i < cells; ++i) {
+          out[i] = static_cast<float>(map.kind[i]);
+        }
+        break;
+      case GridLayer::kObservedCount:
+        for (std::size_t i = 0; i < cells; ++i) {
+          out[i] = static_cast<float>(map.observed_count[i]);
+        }
+        break;
+      case GridLayer::kNormalX:
+        copy(out, map.normal_x);
+        break;
+      case GridLayer::kNormalY:
+        copy(out, map.normal_y);
+        break;
+      case GridLayer::kNormalZ:
+        copy(out, map.normal_z);
+        break;
+    }
   }
 }
 
@@ -142,6 +210,7 @@ const dds_topic_descriptor_t* GridMapMessage::descriptor() noexcept { return gri
 
 int GridMapMessage::cellsX() const noexcept { return impl_->cells_x; }
 int GridMapMessage::cellsY() const noexcept { return impl_->cells_y; }
-bool GridMapMessage::withNormals() const noexcept { return impl_->layer_count > kBaseLayers; }
+bool GridMapMessage::withNormals() const noexcept { return impl_->chosen.hasNormals(); }
+GridLayerSet GridMapMessage::layers() const noexcept { return impl_->chosen; }
 
 }  // namespace raymap::dds

@@ -3,14 +3,56 @@
 // allocating.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string_view>
 
 #include <dds/dds.h>
 
 #include "src/heightmap/height_map.hpp"
 
 namespace raymap::dds {
+
+/// @brief A layer a GridMap can carry; the message keeps this order whatever the choice.
+enum class GridLayer : std::uint8_t {
+  kElevation,
+  kClearance,
+  kKind,
+  kObservedCount,
+  kNormalX,
+  kNormalY,
+  kNormalZ,
+};
+inline constexpr std::size_t kGridLayerCount = 7;
+
+/// @brief The layer's name in the message ("elevation", ..., "normal_z").
+const char* gridLayerName(GridLayer layer) noexcept;
+/// @brief The layer of that name, or nullopt.
+std::optional<GridLayer> gridLayerNamed(std::string_view name) noexcept;
+/// @brief Whether the layer is a surface normal (only maps with an NDT layer have them).
+constexpr bool isNormalLayer(GridLayer layer) noexcept { return layer >= GridLayer::kNormalX; }
+
+/// @brief A choice of layers (heightmap.layers). Value type.
+class GridLayerSet {
+ public:
+  /// @brief The four base layers, and the normals when `with_normals`.
+  static GridLayerSet all(bool with_normals) noexcept;
+  GridLayerSet& add(GridLayer layer) noexcept {
+    bits_ = static_cast<std::uint8_t>(bits_ | (1u << static_cast<unsigned>(layer)));
+    return *this;
+  }
+  bool has(GridLayer layer) const noexcept {
+    return (bits_ >> static_cast<unsigned>(layer) & 1u) != 0;
+  }
+  bool empty() const noexcept { return bits_ == 0; }
+  bool hasNormals() const noexcept;
+  std::size_t count() const noexcept;
+
+ private:
+  std::uint8_t bits_ = 0;
+};
 
 /// @brief The GridMap message of one fixed grid (cells_x by cells_y) with the float32 layers
 /// {elevation, clearance, kind, observed_count} (kind and observed_count converted to float), and
@@ -37,6 +79,10 @@ class GridMapMessage {
   /// `with_normals` (HeightMap::has_normals of the maps it will carry). Start-up only (allocates).
   /// @pre cells_x > 0, cells_y > 0
   GridMapMessage(int cells_x, int cells_y, bool with_normals = false);
+  /// @brief The same with a choice of layers (in GridLayer order; basic_layers is {"elevation"}
+  /// when it is chosen, else empty). Each layer costs cells_x * cells_y * 4 bytes on the wire.
+  /// @pre cells_x > 0, cells_y > 0, !layers.empty()
+  GridMapMessage(int cells_x, int cells_y, GridLayerSet layers);
   GridMapMessage(GridMapMessage&&) noexcept;
   GridMapMessage& operator=(GridMapMessage&&) noexcept;
   GridMapMessage(const GridMapMessage&) = delete;
@@ -45,7 +91,7 @@ class GridMapMessage {
 
   /// @brief Copies the map's layers, geometry, stamp and frame (truncated to 63 characters).
   /// @pre map.cells_x and map.cells_y equal the preallocated size and its layers are sized; with
-  /// normals, map.has_normals (a message without normals ignores the map's normals)
+  /// normal layers chosen, map.has_normals (a message without them ignores the map's normals)
   /// @rt allocates: no; blocks: no.
   void fill(const heightmap::HeightMap& map, std::int64_t stamp_ns, const char* frame_id) noexcept;
 
@@ -57,6 +103,7 @@ class GridMapMessage {
   int cellsX() const noexcept;
   int cellsY() const noexcept;
   bool withNormals() const noexcept;
+  GridLayerSet layers() const noexcept;
 
  private:
   struct Impl;

@@ -17,6 +17,7 @@
 
 #include "src/config/yaml_reader.hpp"
 #include "src/core/eigen_conversions.hpp"
+#include "src/dds/grid_map_message.hpp"
 #include "src/dds/topic_types.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
 
@@ -283,7 +284,31 @@ void readSensors(Context& ctx, const YAML::Node& node, std::vector<SensorConfig>
 void readHeightmap(Context& ctx, const YAML::Node& node, HeightmapConfig& hm) {
   Fields f(ctx, node, "heightmap");
   f.knownKeys({"rate_hz", "size", "mode", "min_clearance", "floor_depth", "ceiling_height",
-               "virtual_surfaces", "base_height", "publish_lead_s", "publish_lead_max_s"});
+               "virtual_surfaces", "base_height", "publish_lead_s", "publish_lead_max_s",
+               "layers"});
+  if (f.has("layers")) {
+    const YAML::Node layers = f.get("layers");
+    if (!layers.IsSequence() || layers.size() == 0) {
+      ctx.fail(layers, f.path("layers"),
+               "expected a list of GridMap layers, e.g. [elevation, clearance] (leave it out "
+               "for all)");
+    } else {
+      for (std::size_t i = 0; i < layers.size(); ++i) {
+        const std::string where = config::item(f.path("layers"), i);
+        const std::string name = layers[i].IsScalar() ? layers[i].Scalar() : std::string();
+        if (!dds::gridLayerNamed(name)) {
+          ctx.fail(layers[i], where,
+                   "unknown layer '" + name +
+                       "' (elevation, clearance, kind, observed_count, normal_x, normal_y, "
+                       "normal_z)");
+        } else if (std::find(hm.layers.begin(), hm.layers.end(), name) != hm.layers.end()) {
+          ctx.fail(layers[i], where, "layer '" + name + "' listed twice");
+        } else {
+          hm.layers.push_back(name);
+        }
+      }
+    }
+  }
   hm.rate_hz = f.positive("rate_hz", hm.rate_hz);
   f.check(hm.rate_hz <= 100.0, "rate_hz", "must be at most 100");
   hm.size_m = f.positive("size", hm.size_m);
@@ -526,6 +551,15 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
             " m does not fit the rolling window (map.window x, y = " + formatNumber(window_x) +
             " x " + formatNumber(window_y) + " m; the map must be at least one region (" +
             formatNumber(extent) + " m) smaller)");
+  }
+  for (const std::string& layer : config.heightmap.layers) {
+    const std::optional<dds::GridLayer> known = dds::gridLayerNamed(layer);
+    if (known && dds::isNormalLayer(*known) && !isNdt(config.map.mode)) {
+      return fail(ErrorCode::kInvalidArgument,
+                  config.where("heightmap.layers") + ": " + layer +
+                      " needs a map with surface normals (map.mode ndt-om or ndt-tm; it is " +
+                      toString(config.map.mode) + ")");
+    }
   }
   const double period = 1.0 / config.heightmap.rate_hz;
   if (config.queues.max_latency_s < 0.0) {

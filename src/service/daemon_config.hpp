@@ -101,6 +101,10 @@ struct HeightmapConfig {
   /// waiting for the map included, times 1.5, plus 2 ms) up to publish_lead_max_s.
   double publish_lead_s = 0.015;
   double publish_lead_max_s = 0.1;
+  /// The GridMap's layers by name (dds::gridLayerName), in any order; empty: every layer the map
+  /// has (elevation, clearance, kind, observed_count, and normal_x/y/z for NDT maps). Each costs
+  /// cells x 4 bytes a message.
+  std::vector<std::string> layers;
 };
 
 /// @brief DDS: domain, Cyclone configuration, output topics.

@@ -20,6 +20,8 @@
 
 #include <unistd.h>
 
+#include "raymap/assert.hpp"
+
 #include "platform/allocation_scope.hpp"
 #include "platform/clock.hpp"
 #include "platform/errno_text.hpp"
@@ -292,8 +294,16 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   impl->cycle = std::make_unique<pipeline::HeightmapCycle>(
       m, *impl->backend.backend, impl->map_mutex, *impl->generator, options,
       config.heightmap.base_height_m, impl->latest, *impl->arrivals, impl->stats);
-  impl->grid_map_message = std::make_unique<dds::GridMapMessage>(
-      plan.grid.cells_x, plan.grid.cells_y, plan.grid.has_normals);
+  dds::GridLayerSet layers = dds::GridLayerSet::all(plan.grid.has_normals);
+  if (!config.heightmap.layers.empty()) {
+    layers = dds::GridLayerSet{};
+    for (const std::string& name : config.heightmap.layers) {
+      layers.add(*dds::gridLayerNamed(name));  // names checked when the file was read
+    }
+    RAYMAP_EXPECTS(!layers.hasNormals() || plan.grid.has_normals);  // checked with the file
+  }
+  impl->grid_map_message =
+      std::make_unique<dds::GridMapMessage>(plan.grid.cells_x, plan.grid.cells_y, layers);
 
   // DDS: the sockets' receive buffer sized for the clouds (a Cyclone file that sets one wins).
   auto receive_buffer = planReceiveBuffer(config, platform::socketReceiveBufferCap());

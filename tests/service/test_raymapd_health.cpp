@@ -218,6 +218,28 @@ TEST(RaymapdHealth, CloudsLostInItsSocketAreCountedAndNamed) {
   expectCleanStop(s.daemon);
 }
 
+TEST(RaymapdOutputs, TheGridMapCarriesTheLayersChosen) {
+  // Issue 53: a planner that reads two layers need not receive four (each is 14,400 cells x 4
+  // bytes here; 160 KB at the default 20 m and 0.1 m).
+  std::string config = serviceConfig(uniqueDomain());
+  const std::string from = "heightmap: {rate_hz: 5, size: 12, base_height: 1.2}";
+  const std::size_t at = config.find(from);
+  ASSERT_NE(at, std::string::npos);
+  config.replace(at, from.size(),
+                 "heightmap: {rate_hz: 5, size: 12, base_height: 1.2, layers: [clearance, "
+                 "elevation]}");
+  Started s(config);
+  std::vector<driver::ReceivedGridMap> maps;
+  s.startAndPlay(1.5, maps);
+  s.ros.settleUntil(kStartWaitS, [&] { return !maps.empty(); }, &maps);
+  ASSERT_FALSE(maps.empty()) << s.daemon.log();
+  EXPECT_EQ(maps.back().layers, (std::vector<std::string>{"elevation", "clearance"}));
+  EXPECT_EQ(maps.back().basic_layers, (std::vector<std::string>{"elevation"}));
+  ASSERT_EQ(maps.back().data.size(), 2U);
+  EXPECT_EQ(maps.back().data[0].size(), 120U * 120U);
+  expectCleanStop(s.daemon);
+}
+
 TEST(RaymapdHealth, APoseClockThatGoesBackStartsOverWithAWarningAndTheMapsKeepComing) {
   // Issue 52: a bag played in a loop (ros2 bag play --loop) sends stamps 60 s back at every lap.
   // The poses after the jump used to be ignored as out of order: every scan of the next lap was

@@ -184,6 +184,40 @@ TEST(DecodeGridMap, AMessageWithNormalsCarriesTheNormalLayers) {
   EXPECT_EQ(decoded->layers[6], "normal_z");
 }
 
+TEST(DecodeGridMap, AChoiceOfLayersCarriesOnlyThoseInTheirOrder) {
+  // heightmap.layers: a planner that reads two layers receives two (issue 53).
+  heightmap::HeightMap map = makeDecodeMap();
+  GridMapMessage message(map.cells_x, map.cells_y,
+                         GridLayerSet{}.add(GridLayer::kKind).add(GridLayer::kElevation));
+  EXPECT_FALSE(message.withNormals());
+  message.fill(map, 1, "odom");
+  auto bytes =
+      test::cyclonesBytes("rt/decode_test_grid_map_layers", gridMapType(), {message.sample()});
+  ASSERT_FALSE(bytes.empty());
+  const auto decoded = decodeGridMap(bytes.front());
+  ASSERT_TRUE(decoded.has_value()) << toString(decoded.error());
+  ASSERT_EQ(decoded->layers, (std::vector<std::string>{"elevation", "kind"}));
+  EXPECT_EQ(decoded->basic_layers, (std::vector<std::string>{"elevation"}));
+  ASSERT_EQ(decoded->data.size(), 2U);
+  for (std::size_t i = 0; i < map.cellCount(); ++i) {
+    EXPECT_TRUE(sameBits(decoded->data[0].data[i], map.elevation[i])) << i;
+    EXPECT_EQ(decoded->data[1].data[i], static_cast<float>(map.kind[i])) << i;
+  }
+
+  // Without elevation there is no basic layer; the message is smaller by the layers left out.
+  GridMapMessage clearance_only(map.cells_x, map.cells_y,
+                                GridLayerSet{}.add(GridLayer::kClearance));
+  clearance_only.fill(map, 1, "odom");
+  auto small = test::cyclonesBytes("rt/decode_test_grid_map_clearance", gridMapType(),
+                                   {clearance_only.sample()});
+  ASSERT_FALSE(small.empty());
+  const auto one = decodeGridMap(small.front());
+  ASSERT_TRUE(one.has_value());
+  EXPECT_EQ(one->layers, (std::vector<std::string>{"clearance"}));
+  EXPECT_TRUE(one->basic_layers.empty());
+  EXPECT_GE(bytes.front().size() - small.front().size(), map.cellCount() * 4);
+}
+
 TEST(DecodeGridMap, ReadsBothByteOrders) {
   for (const bool little_endian : {true, false}) {
     HandMap hand;

@@ -94,6 +94,22 @@ TEST(DaemonConfig, EmptySectionsGiveTheDefaults) {
   EXPECT_EQ(result->backend.name, "cpu");
 }
 
+TEST(DaemonConfig, HeightmapLayersAreNamedOnceEach) {
+  auto chosen = parseDaemonConfig("heightmap: {layers: [clearance, elevation]}\n", kName);
+  ASSERT_TRUE(chosen) << chosen.error().message;
+  EXPECT_EQ(chosen->heightmap.layers, (std::vector<std::string>{"clearance", "elevation"}));
+  auto all = parseDaemonConfig("heightmap: {}\n", kName);
+  ASSERT_TRUE(all);
+  EXPECT_TRUE(all->heightmap.layers.empty()) << "left out: every layer the map has";
+  expectError("heightmap: {layers: [elevation, height]}\n", "heightmap.layers[1]",
+              "unknown layer 'height'");
+  expectError("heightmap: {layers: [kind, kind]}\n", "heightmap.layers[1]", "listed twice");
+  expectError("heightmap: {layers: []}\n", "heightmap.layers", "expected a list");
+  expectError("heightmap: {layers: elevation}\n", "heightmap.layers", "expected a list");
+  expectError("heightmap: {layers: [elevation, normal_z]}\n", "heightmap.layers",
+              "normal_z needs a map with surface normals");
+}
+
 TEST(DaemonConfig, CpuProfileParses) {
   auto result = loadDaemonConfig((configDir() / "cpu.yaml").string());
 
