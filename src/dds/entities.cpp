@@ -165,6 +165,7 @@ HeldSample& HeldSample::operator=(HeldSample&& other) noexcept {
     ref_base_ = std::exchange(other.ref_base_, nullptr);
     bytes_ = std::exchange(other.bytes_, {});
     source_timestamp_ns_ = other.source_timestamp_ns_;
+    writer_handle_ = other.writer_handle_;
   }
   return *this;
 }
@@ -221,6 +222,7 @@ int RawReader::takeHeld(HeldSampleFn fn, void* context, int max_samples) noexcep
       held.bytes_ = std::span<const std::byte>(static_cast<const std::byte*>(ref.iov_base),
                                                static_cast<std::size_t>(ref.iov_len));
       held.source_timestamp_ns_ = infos[i].source_timestamp;
+      held.writer_handle_ = infos[i].publication_handle;
       fn(context, held);
       ++delivered;
     }

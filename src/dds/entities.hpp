@@ -93,6 +93,8 @@ class HeldSample {
   std::span<const std::byte> bytes() const noexcept { return bytes_; }
   /// @brief The writer's source timestamp (DDS time, nanoseconds).
   std::int64_t sourceTimestampNs() const noexcept { return source_timestamp_ns_; }
+  /// @brief Which writer sent it (its instance handle in this participant; nonzero).
+  std::uint64_t writerHandle() const noexcept { return writer_handle_; }
   bool empty() const noexcept { return sample_ == nullptr; }
   /// @brief Gives the buffer back to Cyclone now.
   void reset() noexcept;
@@ -104,6 +106,7 @@ class HeldSample {
   void* ref_base_ = nullptr;               // and its iovec's base, as Cyclone wants it back
   std::span<const std::byte> bytes_;
   std::int64_t source_timestamp_ns_ = 0;
+  std::uint64_t writer_handle_ = 0;
 };
 
 /// @brief Called once per sample by RawReader::takeHeld; may move the sample out to keep it.

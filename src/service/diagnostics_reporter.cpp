@@ -342,8 +342,8 @@ bool DiagnosticsReporter::describePublishers(char* out, std::size_t size,
   }
   const bool two_poses = inputs_->odometry > 1;
   if (two_poses) {
-    appendf(out, size, "%s%u publishers of %s (pose.topic): two pose sources for one robot", sep,
-            inputs_->odometry, inputs_->odometry_topic.c_str());
+    appendf(out, size, "%s%u publishers of %s (%s): two pose sources for one robot", sep,
+            inputs_->odometry, inputs_->odometry_topic.c_str(), inputs_->pose_key.c_str());
   }
   if (out[0] != '\0' && inputs_->who != nullptr && inputs_->who[0] != '\0') {
     appendf(out, size, " [%s]", inputs_->who);

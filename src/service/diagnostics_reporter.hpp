@@ -56,8 +56,11 @@ struct ReporterSettings {
 struct InputPublishers {
   std::array<std::uint32_t, pipeline::kMaxSensors> clouds{};       ///< of sensors[i].topic
   std::array<std::uint32_t, pipeline::kMaxSensors> camera_info{};  ///< of camera_info_topic
-  std::uint32_t odometry = 0;  ///< of pose.topic (pose.source odometry; 0 with TF)
-  std::string odometry_topic;  ///< set once at start-up
+  /// Of pose.topic (pose.source odometry), or of base_frame's transform on rt/tf seen within
+  /// the last second (pose.source tf: /tf itself has many writers by design).
+  std::uint32_t odometry = 0;
+  std::string odometry_topic;           ///< what `odometry` counts the writers of (start-up)
+  std::string pose_key = "pose.topic";  ///< the configuration key naming it
   /// Who the writers of inputs with more than one are ("" while each has at most one).
   const char* who = "";
 };

@@ -18,9 +18,8 @@
 #include <thread>
 #include <vector>
 
-#include <unistd.h>
-
 #include "raymap/assert.hpp"
+#include <unistd.h>
 
 #include "platform/allocation_scope.hpp"
 #include "platform/clock.hpp"
@@ -40,6 +39,7 @@
 #include "src/dds/topic_types.hpp"
 #include "src/heightmap/costmap.hpp"
 #include "src/io/map_file.hpp"
+#include "src/pipeline/frame_writers.hpp"
 #include "src/pipeline/heightmap_cycle.hpp"
 #include "src/pipeline/integrator.hpp"
 #include "src/pipeline/pending_scans.hpp"
@@ -138,6 +138,8 @@ struct Service::Impl {
 
   // Ingest-thread state: each sensor's decoder (depth cameras: with their pixel rays).
   std::vector<pipeline::SensorDecoder> decoders;
+  /// Writers of the base frame's transform on rt/tf (pose.source tf; ingest thread writes).
+  pipeline::FrameWriters base_writers;
   /// Per sensor: gaps in the stamps of what arrives (ingest thread).
   std::array<pipeline::StampGaps, pipeline::kMaxSensors> stamp_gaps{};
   /// This process's UDP sockets, found once every reader exists (diagnostics thread).
@@ -183,7 +185,7 @@ struct Service::Impl {
   static void onScanReleased(void* context) noexcept;
   void onCameraInfo(std::uint32_t sensor, std::span<const std::byte> cdr);
   void onOdometry(std::span<const std::byte> cdr);
-  void onTf(std::span<const std::byte> cdr, bool is_static);
+  void onTf(std::span<const std::byte> cdr, bool is_static, std::uint64_t writer);
   void publishVoxels(std::int64_t stamp_ns);
 };
 
@@ -453,7 +455,13 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     }
     impl->map_publisher_watch.emplace(std::move(watch).value());
   }
-  impl->input_publishers.odometry_topic = config.pose.odometry_topic;
+  if (config.pose.source == PoseConfig::Source::kTf) {
+    impl->input_publishers.odometry_topic =
+        "the transform to " + config.pose.base_frame + " on rt/tf";
+    impl->input_publishers.pose_key = "pose.base_frame";
+  } else {
+    impl->input_publishers.odometry_topic = config.pose.odometry_topic;
+  }
   ReporterSettings reporting;
   reporting.name = config.name;
   reporting.hardware_id = config.health.hardware_id;
@@ -675,12 +683,21 @@ void Service::Impl::onOdometry(std::span<const std::byte> cdr) {
   integrator_wakeup.notify();
 }
 
-void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static) {
+void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static, std::uint64_t writer) {
   std::array<dds::StampedTransform, kTfPerMessage> transforms;
   auto count = dds::decodeTfMessage(cdr, transforms);
   if (!count) {
     stats.poses_malformed.add();
     return;
+  }
+  if (!is_static) {
+    // /tf has many writers by design; two of the robot's base are two pose sources.
+    for (std::size_t i = 0; i < count.value(); ++i) {
+      if (config.pose.base_frame == transforms[i].child) {
+        base_writers.seen(writer, platform::monotonicNowNs());
+        break;
+      }
+    }
   }
   tf_router->onTransforms(std::span(transforms).first(count.value()), is_static, pose_sink);
   integrator_wakeup.notify();
@@ -722,14 +739,15 @@ void Service::Impl::ingestLoop() {
         odometry_reader->takeEach(
             [&](std::span<const std::byte> cdr, std::int64_t) { onOdometry(cdr); }, 256);
       } else if (token == kTfToken) {
-        tf_reader->takeEach([&](std::span<const std::byte> cdr, std::int64_t) { onTf(cdr, false); },
-                            256);
+        tf_reader->takeEachHeld(
+            [&](dds::HeldSample& sample) { onTf(sample.bytes(), false, sample.writerHandle()); },
+            256);
       } else if (token == kTfStaticToken) {
         platform::ForeignScope dds;
         tf_static_reader->takeEach(
             [&](std::span<const std::byte> cdr, std::int64_t) {
               platform::RealtimeScope ours;
-              onTf(cdr, true);
+              onTf(cdr, true, 0);
             },
             256);
       }
@@ -945,6 +963,12 @@ void Service::Impl::countInputPublishers() noexcept {
   }
   if (odometry_reader) {
     count(p.odometry, *odometry_reader);
+  } else if (tf_reader) {
+    // By frame: the writers of base_frame's transform within the last second.
+    const std::uint32_t n = base_writers.writers(platform::monotonicNowNs(), seconds(1.0));
+    changed = changed || n != p.odometry;
+    extra = extra || n > 1;
+    p.odometry = n;
   }
   if (!extra) {
     input_publishers_who[0] = '\0';
@@ -975,6 +999,8 @@ void Service::Impl::countInputPublishers() noexcept {
     }
     if (odometry_reader) {
       describe(p.odometry, *odometry_reader, config.pose.odometry_topic.c_str());
+    } else if (tf_reader) {
+      describe(p.odometry, *tf_reader, "rt/tf");  // every writer of /tf: the two are among them
     }
   }
   p.who = input_publishers_who;

@@ -2,9 +2,11 @@
 // raymapd's health rules end to end (separate processes on loopback DDS): every fault a robot
 // meets turns the diagnostics to the documented level with the documented reason, and a stale
 // map is withheld rather than republished.
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -12,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include "platform/clock.hpp"
 #include "src/dds/entities.hpp"
 #include "tests/service/daemon_process.hpp"
 #include "tests/service/service_fixture.hpp"
@@ -181,6 +184,58 @@ TEST(RaymapdHealth, ASecondPublisherOfTheCloudsAndTheOdometryIsReportedUntilItLe
   expectCleanStop(s.daemon);
 }
 
+TEST(RaymapdHealth, ASecondWriterOfTheBaseTransformOnTfIsTwoPoseSources) {
+  // Issue 52: two pose sources for one frame are an ERROR. With the pose from /tf, which has
+  // many writers by design, they show only per frame: a second node broadcasting odom ->
+  // base_link (a second localisation, a simulator left running).
+  std::string config = serviceConfig(uniqueDomain());
+  config.replace(config.find("source: odometry"), 16, "source: tf");
+  Started s(config);
+  ASSERT_TRUE(s.daemon.notify.waitFor("READY=1", kStartWait).has_value()) << s.daemon.log();
+  ASSERT_TRUE(s.ros.waitForService(kStartWaitS));
+  driver::PlaybackOptions options;
+  options.pose_as_tf = true;
+  std::vector<driver::ReceivedGridMap> maps;
+  s.ros.play(yardLidar(16, 512, false), options, 1.5, maps);
+  EXPECT_EQ(pipelineValue(s.ros, "pose_publishers"), "1") << pipelineValue(s.ros, "message");
+
+  auto created = dds::Participant::create(Started::domainOf(s.daemon_config));
+  ASSERT_TRUE(created);
+  std::optional<dds::Participant> other_participant(std::move(created).value());
+  auto other =
+      driver::DriverPublisher::create(*other_participant, "rt/other_points", "rt/other_odom", 16);
+  ASSERT_TRUE(other);
+  std::atomic<bool> broadcasting{true};
+  std::thread second_localisation([&] {
+    io::Pose elsewhere;
+    elsewhere.position = Eigen::Vector3d(3.0, 2.0, 0.0);
+    while (broadcasting.load()) {
+      other.value()->publishTf(platform::realtimeNowNs(), elsewhere, "odom", "base_link");
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  const auto message = [&] { return pipelineValue(s.ros, "message"); };
+  s.ros.play(yardLidar(16, 512, false), options, 2.0, maps);
+  EXPECT_TRUE(s.ros.settleUntil(
+      kStartWaitS, [&] { return pipelineValue(s.ros, "pose_publishers") == "2"; }, &maps))
+      << message();
+  EXPECT_EQ(pipelineValue(s.ros, "level"), "2") << message();
+  EXPECT_NE(message().find("2 publishers of the transform to base_link on rt/tf "
+                           "(pose.base_frame): two pose sources for one robot"),
+            std::string::npos)
+      << message();
+  broadcasting = false;
+  second_localisation.join();
+
+  // It stopped: within a second of its last transform the count is one again.
+  s.ros.play(yardLidar(16, 512, false), options, 2.0, maps);
+  EXPECT_TRUE(s.ros.settleUntil(
+      kStartWaitS, [&] { return pipelineValue(s.ros, "pose_publishers") == "1"; }, &maps))
+      << message();
+  other.value().reset();
+  expectCleanStop(s.daemon);
+}
+
 TEST(RaymapdHealth, CloudsLostInItsSocketAreCountedAndNamed) {
   // Issue 53: a best-effort reader is told of no loss, and clouds whose fragments overflowed
   // raymapd's socket buffer vanished without a trace (the diagnostics blamed shedding). raymapd
@@ -231,7 +286,8 @@ TEST(RaymapdOutputs, TheGridMapCarriesTheLayersChosen) {
   Started s(config);
   std::vector<driver::ReceivedGridMap> maps;
   s.startAndPlay(1.5, maps);
-  s.ros.settleUntil(kStartWaitS, [&] { return !maps.empty(); }, &maps);
+  s.ros.settleUntil(
+      kStartWaitS, [&] { return !maps.empty(); }, &maps);
   ASSERT_FALSE(maps.empty()) << s.daemon.log();
   EXPECT_EQ(maps.back().layers, (std::vector<std::string>{"elevation", "clearance"}));
   EXPECT_EQ(maps.back().basic_layers, (std::vector<std::string>{"elevation"}));
