@@ -117,7 +117,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
                     bag.path() + " has nothing to map: no " + kPointCloud2 + " and no " + kImage +
                         " topic (its topics: " + topicsWithTypes(bag.topics()) + ")");
       }
-      auto t = onlyTopicOfType(bag, has_clouds ? kPointCloud2 : kImage, "--topic");
+      auto t = onlyTopicOfType(bag, has_clouds ? kPointCloud2 : kImage, "bag.topic");
       if (!t) {
         return Unexpected(t.error());
       }
@@ -126,7 +126,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     for (const std::string& name : options_.cloud_topics) {
       const int at = findBagTopic(bag, name);
       const bool image = at >= 0 && bag.topics()[static_cast<std::size_t>(at)].type == kImage;
-      auto t = topicOfType(bag, name, image ? kImage : kPointCloud2, "--topic");
+      auto t = topicOfType(bag, name, image ? kImage : kPointCloud2, "bag.topic");
       if (!t) {
         return Unexpected(t.error());
       }
@@ -148,7 +148,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
                                      ? options_.camera_info_topics[images]
                                      : pipeline::cameraInfoTopicFor(topic.name);
         ++images;
-        auto info = topicOfType(bag, name, kCameraInfo, "--camera-info-topic");
+        auto info = topicOfType(bag, name, kCameraInfo, "bag.camera_info_topic");
         if (!info) {
           return Unexpected(info.error());
         }
@@ -159,12 +159,12 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     }
     if (images < options_.camera_info_topics.size()) {
       return fail(ErrorCode::kInvalidArgument,
-                  "--camera-info-topic: " + std::to_string(options_.camera_info_topics.size()) +
+                  "bag.camera_info_topic: " + std::to_string(options_.camera_info_topics.size()) +
                       " given for " + std::to_string(images) + " depth image topic(s)");
     }
     if (options_.depth.invalid_as_free && images > 0 && !(options_.depth.max_range_m > 0.0f)) {
       return fail(ErrorCode::kInvalidArgument,
-                  "--invalid-as-free needs --max-range (the length of the free rays)");
+                  "bag.invalid_as_free needs bag.max_range (the length of the free rays)");
     }
     using Source = BagRaysOptions::PoseSource;
     Source source = options_.pose_source;
@@ -177,15 +177,15 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     }
     if (source == Source::kOdometry) {
       auto t = options_.pose_topic.empty()
-                   ? onlyTopicOfType(bag, kOdometry, "--pose-topic")
-                   : topicOfType(bag, options_.pose_topic, kOdometry, "--pose-topic");
+                   ? onlyTopicOfType(bag, kOdometry, "bag.pose_topic")
+                   : topicOfType(bag, options_.pose_topic, kOdometry, "bag.pose_topic");
       if (!t) {
         return Unexpected(t.error());
       }
       odometry_topic_ = static_cast<int>(t.value());
       report_.pose_source = "odometry " + bag.topics()[t.value()].name;
     } else {
-      auto t = topicOfType(bag, "/tf", kTfMessage, "--pose-source tf");
+      auto t = topicOfType(bag, "/tf", kTfMessage, "bag.pose_source: tf");
       if (!t) {
         return Unexpected(t.error());
       }
@@ -211,7 +211,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     return bag_->rewind();
   }
 
-  /// --pose-source auto: Odometry when --pose-topic names one or the bag has exactly one, else
+  /// bag.pose_source: auto: Odometry when bag.pose_topic names one or the bag has exactly one, else
   /// TF when it has /tf. With one Odometry topic and /tf, the one that has messages: a topic
   /// recorded but never published must not win over 275 transforms. The choice is said in
   /// report_.pose_note.
@@ -239,13 +239,13 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       const std::uint64_t tf_n = counts.value()[static_cast<std::size_t>(tf)];
       const std::string& name = bag.topics()[static_cast<std::size_t>(odometry)].name;
       if (odometry_n == 0 && tf_n > 0) {
-        report_.pose_note = "--pose-source auto: poses from /tf (" + std::to_string(tf_n) +
+        report_.pose_note = "bag.pose_source: auto: poses from /tf (" + std::to_string(tf_n) +
                             " messages): the Odometry topic " + name + " has no message";
         return Source::kTf;
       }
-      report_.pose_note = "--pose-source auto: poses from the Odometry topic " + name + " (" +
+      report_.pose_note = "bag.pose_source: auto: poses from the Odometry topic " + name + " (" +
                           std::to_string(odometry_n) + " messages), not /tf (" +
-                          std::to_string(tf_n) + "); --pose-source tf takes /tf";
+                          std::to_string(tf_n) + "); bag.pose_source: tf takes /tf";
       return Source::kOdometry;
     }
     if (tf >= 0) {
@@ -256,7 +256,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
                     (odometry_topics == 0
                          ? std::string("no nav_msgs/msg/Odometry topic and no /tf")
                          : "several Odometry topics (" + topicsOfType(bag.topics(), kOdometry) +
-                               "): choose with --pose-topic"));
+                               "): choose with bag.pose_topic"));
   }
 
   /// Messages per topic: from the bag's own statistics, else counted by a pass over it.
@@ -380,7 +380,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   }
 
   /// A cloud about to be mapped needs its sensor's place on the base: from /tf_static, the
-  /// base frame itself, or --sensor-offset. Without one the sensor would silently sit at the
+  /// base frame itself, or bag.sensor_offset. Without one the sensor would silently sit at the
   /// base's origin.
   Expected<void, Error> checkExtrinsic(const Scan& scan) const {
     const char* frame = router_->sensorFrame(scan.sensor);
@@ -397,8 +397,8 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
                     bag_->topics()[cloud_topics_[scan.sensor]].name + "' are in frame '" + frame +
                     "', and /tf_static has no chain from the base frame '" + options_.base_frame +
                     "' to it (its frames: " + (frames.empty() ? "none" : frames) +
-                    "): give the sensor's position on the base with --sensor-offset X,Y,Z "
-                    "(0,0,0 if it is at the base's origin), or --base-frame");
+                    "): give the sensor's position on the base with bag.sensor_offset (X,Y,Z "
+                    "metres; 0,0,0 if it is at the base's origin), or bag.base_frame");
   }
 
   Expected<void, Error> readMessage() {

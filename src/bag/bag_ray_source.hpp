@@ -43,7 +43,7 @@ struct BagRaysOptions {
   std::string base_frame = "base_link";  ///< the robot's body (pose.base_frame)
   /// Sensor in base_frame when /tf_static has no chain from base_frame to the cloud's frame.
   io::Pose extrinsic;
-  /// `extrinsic` was given (--sensor-offset): without it, a cloud in a frame other than
+  /// `extrinsic` was given (bag.sensor_offset): without it, a cloud in a frame other than
   /// base_frame that /tf_static does not connect to it is an error, never mapped as if the
   /// sensor sat at the base's origin.
   bool extrinsic_given = false;
@@ -60,7 +60,7 @@ struct BagRaysOptions {
 /// @brief What the reading did with the bag's messages.
 struct BagRaysReport {
   std::string pose_source;  ///< "odometry TOPIC" or "tf WORLD -> BASE"
-  std::string pose_note;    ///< --pose-source auto with Odometry and /tf: which, and why
+  std::string pose_note;    ///< bag.pose_source: auto, with Odometry and /tf: which, and why
   std::vector<std::string> cloud_topics;
   std::uint64_t messages = 0;               ///< messages read (all topics)
   std::uint64_t clouds = 0;                 ///< PointCloud2 or Image messages on the chosen topics

@@ -40,25 +40,27 @@ void setDeviceOptions(const BackendChoice& choice, DeviceBackendOptions* options
 Result<std::unique_ptr<Backend>> named(Result<std::unique_ptr<Backend>> backend,
                                        const std::string& name) {
   if (!backend) {
-    return fail(backend.error().code, "--backend " + name + ": " + backend.error().message);
+    return fail(backend.error().code, "backend.name: " + name + ": " + backend.error().message);
   }
   return backend;
 }
 #endif
 
-/// Why --backend NAME cannot work in this build (the API was not found at configure time).
+/// Why backend.name: NAME cannot work in this build (the API was not found at configure time).
 [[maybe_unused]] Unexpected<Error> notBuilt(const std::string& name) {
   if (name == "opencl") {
-    return fail(ErrorCode::kUnsupported,
-                "--backend opencl: this build has no OpenCL backend (install ocl-icd-opencl-dev "
-                "and opencl-headers, then build again)");
+    return fail(
+        ErrorCode::kUnsupported,
+        "backend.name: opencl: this build has no OpenCL backend (install ocl-icd-opencl-dev "
+        "and opencl-headers, then build again)");
   }
   if (name == "cuda") {
-    return fail(ErrorCode::kUnsupported,
-                "--backend cuda: this build has no CUDA backend (it is built whenever CMake finds "
-                "nvcc; install the CUDA toolkit, then configure again)");
+    return fail(
+        ErrorCode::kUnsupported,
+        "backend.name: cuda: this build has no CUDA backend (it is built whenever CMake finds "
+        "nvcc; install the CUDA toolkit, then configure again)");
   }
-  return fail(ErrorCode::kInvalidArgument, "--backend: unknown backend '" + name + "'");
+  return fail(ErrorCode::kInvalidArgument, "backend.name: unknown backend '" + name + "'");
 }
 
 Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice& choice) {
@@ -88,7 +90,7 @@ Result<std::unique_ptr<Backend>> createDevice(VoxelMap& map, const BackendChoice
   return notBuilt(choice.name);
 }
 
-/// The device height-map generator of --backend NAME.
+/// The device height-map generator of backend.name: NAME.
 Result<std::unique_ptr<heightmap::HeightmapGenerator>> createDeviceHeightmap(
     const BackendChoice& choice) {
   if (choice.name == "opencl") {
@@ -98,7 +100,7 @@ Result<std::unique_ptr<heightmap::HeightmapGenerator>> createDeviceHeightmap(
     options.device.device = choice.opencl_device;
     auto generator = createOpenClHeightmapGenerator(options);
     if (!generator) {
-      return fail(generator.error().code, "--backend opencl: " + generator.error().message);
+      return fail(generator.error().code, "backend.name: opencl: " + generator.error().message);
     }
     return generator;
 #else
@@ -111,7 +113,7 @@ Result<std::unique_ptr<heightmap::HeightmapGenerator>> createDeviceHeightmap(
     options.device = choice.cuda_device;
     auto generator = createCudaHeightmapGenerator(options);
     if (!generator) {
-      return fail(generator.error().code, "--backend cuda: " + generator.error().message);
+      return fail(generator.error().code, "backend.name: cuda: " + generator.error().message);
     }
     return generator;
 #else
@@ -155,8 +157,9 @@ Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice)
     return created;
   }
   if (!choice.fallback_cpu) {
-    return Unexpected(Error{device.error().code,
-                            device.error().message + " (--fallback cpu maps on the CPU instead)"});
+    return Unexpected(
+        Error{device.error().code,
+              device.error().message + " (backend.fallback: cpu maps on the CPU instead)"});
   }
   auto cpu = createCpu(map, choice);
   if (!cpu) {
@@ -183,8 +186,9 @@ Result<CreatedHeightmapGenerator> createHeightmapGenerator(const BackendChoice& 
     return created;
   }
   if (!choice.fallback_cpu) {
-    return Unexpected(Error{device.error().code,
-                            device.error().message + " (--fallback cpu generates on the CPU)"});
+    return Unexpected(
+        Error{device.error().code,
+              device.error().message + " (backend.fallback: cpu generates on the CPU)"});
   }
   created.generator = heightmap::makeCpuHeightmapGenerator();
   created.fallback_warning = device.error().message + "; falling back to the CPU";
@@ -210,7 +214,7 @@ Result<CreatedHeightmapGenerator> createHeightmapGenerator(Backend& backend) {
   }
 #endif
   if (!device) {
-    return fail(device.error().code, "--backend " + name + ": " + device.error().message);
+    return fail(device.error().code, "backend.name: " + name + ": " + device.error().message);
   }
   created.generator = std::move(*device);
   return created;

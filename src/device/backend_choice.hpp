@@ -38,7 +38,7 @@ struct CreatedBackend {
 };
 
 /// @brief Creates the chosen backend for `map`. Errors say what failed and what to do (install
-/// a driver, pick another device, --fallback cpu).
+/// a driver, pick another device, backend.fallback: cpu), naming options by configuration key.
 Result<CreatedBackend> createBackend(VoxelMap& map, const BackendChoice& choice);
 
 /// @brief A created height-map generator, and the warning to show when the fallback was taken.

@@ -65,30 +65,32 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
                 "the map has no occupancy layer: a height map needs occupied and free voxels");
   }
   if (!std::isfinite(o.centre.x) || !std::isfinite(o.centre.y) || !std::isfinite(o.centre.z)) {
-    return fail(ErrorCode::kInvalidArgument, "--center: must be three finite numbers (metres)");
+    return fail(ErrorCode::kInvalidArgument,
+                "heightmap.centre: must be three finite numbers (metres)");
   }
   if (!(o.size >= res) || !std::isfinite(o.size)) {
-    return fail(ErrorCode::kInvalidArgument, "--size " + metres(o.size) +
+    return fail(ErrorCode::kInvalidArgument, "heightmap.size: " + metres(o.size) +
                                                  ": must be a finite size of at least the map "
                                                  "resolution (" +
                                                  metres(res) + " m)");
   }
   if (!(o.min_clearance >= 0.0) || !std::isfinite(o.min_clearance)) {
     return fail(ErrorCode::kInvalidArgument,
-                "--min-clearance " + metres(o.min_clearance) + ": must be >= 0 metres");
+                "heightmap.min_clearance: " + metres(o.min_clearance) + ": must be >= 0 metres");
   }
   const double floor_depth = o.floor_depth.value_or(0.5 * o.size);
   const double ceiling_height = o.ceiling_height.value_or(0.5 * o.size);
   if (!(floor_depth >= 0.0) || !std::isfinite(floor_depth)) {
-    return fail(ErrorCode::kInvalidArgument, "--floor " + metres(floor_depth) + ": must be >= 0");
+    return fail(ErrorCode::kInvalidArgument,
+                "heightmap.floor_depth: " + metres(floor_depth) + ": must be >= 0");
   }
   if (!(ceiling_height >= 0.0) || !std::isfinite(ceiling_height)) {
     return fail(ErrorCode::kInvalidArgument,
-                "--ceiling " + metres(ceiling_height) + ": must be >= 0");
+                "heightmap.ceiling_height: " + metres(ceiling_height) + ": must be >= 0");
   }
   const long cells_long = std::lround(o.size / res);
   if (cells_long > kMaxCellsPerSide) {
-    return fail(ErrorCode::kInvalidArgument, "--size " + metres(o.size) + ": " +
+    return fail(ErrorCode::kInvalidArgument, "heightmap.size: " + metres(o.size) + ": " +
                                                  std::to_string(cells_long) +
                                                  " cells per side at " + metres(res) +
                                                  " m; at most " + std::to_string(kMaxCellsPerSide));
@@ -97,7 +99,7 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
     const auto [lo, hi] = map.windowBounds();
     const double window = std::min(hi.x - lo.x, hi.y - lo.y);
     if (o.size > window + 1e-9) {
-      return fail(ErrorCode::kInvalidArgument, "--size " + metres(o.size) +
+      return fail(ErrorCode::kInvalidArgument, "heightmap.size: " + metres(o.size) +
                                                    ": larger than the rolling window (" +
                                                    metres(window) + " m)");
     }
@@ -106,7 +108,7 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   for (int a = 0; a < 3; ++a) {
     if (!(o.centre[a] >= lo[a] && o.centre[a] < hi[a])) {
       return fail(ErrorCode::kInvalidArgument,
-                  "--center " + metres(o.centre.x) + "," + metres(o.centre.y) + "," +
+                  "heightmap.centre: " + metres(o.centre.x) + "," + metres(o.centre.y) + "," +
                       metres(o.centre.z) + ": outside the map (x " + metres(lo.x) + ".." +
                       metres(hi.x) + ", y " + metres(lo.y) + ".." + metres(hi.y) + ", z " +
                       metres(lo.z) + ".." + metres(hi.z) + " m)");
@@ -180,9 +182,10 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
         if (!resident) {
           if (resident.error() == StoreError::kFull) {
             return fail(ErrorCode::kCapacity,
-                        "--size " + metres(o.size) + ": the box covers more regions than the " +
+                        "heightmap.size: " + metres(o.size) +
+                            ": the box covers more regions than the " +
                             std::to_string(map.store().capacity()) +
-                            " the map's memory budget holds at once (--max-memory)");
+                            " the map's memory budget holds at once (map.max_memory)");
           }
           return Unexpected(map.tierError(resident.error()));
         }

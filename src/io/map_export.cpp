@@ -177,8 +177,8 @@ Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std:
   if (mode == ExportMode::kDecay) {
     if (map.traversalLayer() < 0 || map.meanLayer() < 0) {
       return fail(ErrorCode::kUnsupported,
-                  "the map has no traversal layer: decay rates need a map built with --mode "
-                  "decay or --decay-rate");
+                  "the map has no traversal layer: decay rates need a map built with map.mode: "
+                  "decay or map.decay_rate: true");
     }
     if (!std::isfinite(options.decay_threshold) || options.decay_threshold < 0.0) {
       return fail(ErrorCode::kInvalidArgument,

@@ -139,8 +139,8 @@ Expected<void, Error> checkMap(const VoxelMap& map, const NdtExportOptions& opti
   }
   if (map.ndtLayer() < 0 || map.occupancyLayer() < 0) {
     return fail(ErrorCode::kUnsupported, std::string("the map is an ") + toString(map.mode()) +
-                                             " map without NDT Gaussians (populate it with "
-                                             "--mode ndt-om or ndt-tm)");
+                                             " map without NDT Gaussians (build it with "
+                                             "map.mode: ndt-om or ndt-tm)");
   }
   if (options.colour == NdtColour::kIntensity && map.intensityLayer() < 0) {
     return fail(ErrorCode::kUnsupported, "colour by intensity needs an ndt-tm map (this one is " +
@@ -248,10 +248,11 @@ const char* toString(NdtColour colour) noexcept {
 
 Expected<void, Error> NdtExportOptions::validate() const {
   if (!std::isfinite(sigmas) || !(sigmas > 0.0) || sigmas > kMaxSigmas) {
-    return fail(ErrorCode::kInvalidArgument, "--sigmas must be in (0, 100]");
+    return fail(ErrorCode::kInvalidArgument, "export.sigmas must be in (0, 100]");
   }
   if (min_axis_m && (!std::isfinite(*min_axis_m) || *min_axis_m < 0.0)) {
-    return fail(ErrorCode::kInvalidArgument, "--min-axis must be a non-negative length in metres");
+    return fail(ErrorCode::kInvalidArgument,
+                "export.min_axis must be a non-negative length in metres");
   }
   return {};
 }
@@ -283,7 +284,7 @@ Result<std::uint64_t> exportNdtEllipsoids(const VoxelMap& map, const NdtExportOp
   if (vertex_count > static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max())) {
     return fail(ErrorCode::kCapacity, std::to_string(gaussians.size()) +
                                           " ellipsoids are too many for one PLY mesh (int "
-                                          "vertex indices); use --mode ndt-points");
+                                          "vertex indices); use export.mode: ndt-points");
   }
   const std::vector<Rgb8> rgb = colours(gaussians, options.colour);
   auto writer = AtomicFileWriter::open(path);

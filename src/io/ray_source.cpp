@@ -229,8 +229,8 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
   if (info.ray_cloud && !options.trajectory_path.empty()) {
     return fail(ErrorCode::kInvalidArgument,
                 path + " is a ray cloud: its vertices hold the vector to the sensor (" +
-                    vector_names + "), so --trajectory " + options.trajectory_path +
-                    " would not be used; leave --trajectory out (it is for point clouds)");
+                    vector_names + "), so the trajectory " + options.trajectory_path +
+                    " would not be used: leave source.trajectory out (it is for point clouds)");
   }
   std::optional<Trajectory> trajectory;
   if (!info.ray_cloud) {
@@ -238,7 +238,7 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
       return fail(ErrorCode::kInvalidArgument,
                   path +
                       " has no per-point sensor vector (nx ny nz); give a trajectory with "
-                      "--trajectory");
+                      "source.trajectory");
     }
     if (!property[kTime]) {
       return fail(ErrorCode::kFormat,

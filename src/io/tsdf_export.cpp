@@ -19,10 +19,10 @@ Expected<void, Error> checkTsdfExport(const VoxelMap& map, double min_weight) {
   if (map.tsdfLayer() < 0) {
     return fail(ErrorCode::kUnsupported, "the map has no TSDF layer (it is a " +
                                              mapModeName(map.config()) +
-                                             " map; build one with populate --mode tsdf)");
+                                             " map; build one with map.mode: tsdf)");
   }
   if (!std::isfinite(min_weight) || min_weight < 0.0) {
-    return fail(ErrorCode::kInvalidArgument, "min-weight must be a finite weight >= 0");
+    return fail(ErrorCode::kInvalidArgument, "export.min_weight must be a finite weight >= 0");
   }
   return {};
 }
@@ -98,7 +98,7 @@ Result<TsdfMeshCounts> exportTsdfMesh(const VoxelMap& map, const std::string& pa
   if (mesh.vertices.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) {
     return fail(ErrorCode::kCapacity, std::to_string(mesh.vertices.size()) +
                                           " vertices are too many for one PLY mesh (int vertex "
-                                          "indices); export the points with --mode tsdf");
+                                          "indices); export the points with export.mode: tsdf");
   }
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {

@@ -32,7 +32,8 @@ Expected<void, Error> OccupancyParams::validate() const {
   }
   if (!(clamp_min < threshold) || !(threshold <= clamp_max)) {
     return fail(ErrorCode::kInvalidArgument,
-                "occupancy probabilities must satisfy clamp-min < threshold <= clamp-max (got " +
+                "occupancy probabilities must satisfy map.clamp_min < map.occupied_threshold <= "
+                "map.clamp_max (got " +
                     number(probability(clamp_min)) + " / " + number(probability(threshold)) +
                     " / " + number(probability(clamp_max)) + ")");
   }
@@ -152,7 +153,7 @@ Expected<void, Error> MapGeometry::validate() const {
                 "resolution must be between 0.001 and 100 metres (got " + number(resolution) + ")");
   }
   if (region_voxels < kMinRegionVoxels || region_voxels > kMaxRegionVoxels) {
-    return fail(ErrorCode::kInvalidArgument, "region-voxels must be between " +
+    return fail(ErrorCode::kInvalidArgument, "map.region_voxels must be between " +
                                                  std::to_string(kMinRegionVoxels) + " and " +
                                                  std::to_string(kMaxRegionVoxels) + " (got " +
                                                  std::to_string(region_voxels) + ")");

@@ -337,7 +337,7 @@ Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateErr
                  "one batch touches more regions than the pool's " +
                      std::to_string(map.store().capacity()) +
                      " hold at once (per-scan, NDT and device batches are not split); raise " +
-                     std::string(raise) + " or make batches smaller (--batch-rays)"};
+                     std::string(raise) + " or make batches smaller (queues.batch_rays)"};
   }
   if (error == IntegrateError::kStoreFull) {
     char gib[32];
@@ -351,7 +351,7 @@ Error integrateFailure(const VoxelMap& map, const Backend& backend, IntegrateErr
   if (error == IntegrateError::kOutOfMemory) {
     return Error{ErrorCode::kCapacity, std::string("integration failed on the ") + backend.name() +
                                            " backend: " + toString(error) +
-                                           "; make batches smaller (--batch-rays)"};
+                                           "; make batches smaller (queues.batch_rays)"};
   }
   return Error{ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
                                    " backend: " + toString(error)};

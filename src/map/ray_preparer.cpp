@@ -11,24 +11,26 @@
 namespace raymap {
 Expected<void, Error> RayFilter::validate() const {
   if (!std::isfinite(min_range_m) || min_range_m < 0.0) {
-    return fail(ErrorCode::kInvalidArgument, "min-range must be a distance >= 0 metres");
+    return fail(ErrorCode::kInvalidArgument, "rays.min_range must be a distance >= 0 metres");
   }
   if (!std::isfinite(max_range_m) || max_range_m < 0.0) {
-    return fail(ErrorCode::kInvalidArgument, "max-range must be a distance >= 0 metres (0 = none)");
+    return fail(ErrorCode::kInvalidArgument,
+                "rays.max_range must be a distance >= 0 metres (0 = none)");
   }
   if (!std::isfinite(max_length_m) || max_length_m < 0.0) {
     return fail(ErrorCode::kInvalidArgument,
-                "max-ray-length must be a distance >= 0 metres (0 = none)");
+                "rays.max_ray_length must be a distance >= 0 metres (0 = none)");
   }
   if (max_length_m > 0.0 && max_length_m <= min_range_m) {
-    return fail(ErrorCode::kInvalidArgument, "max-ray-length must be larger than min-range");
+    return fail(ErrorCode::kInvalidArgument,
+                "rays.max_ray_length must be larger than rays.min_range");
   }
   if (max_range_m > 0.0 && max_range_m <= min_range_m) {
-    return fail(ErrorCode::kInvalidArgument, "max-range must be larger than min-range");
+    return fail(ErrorCode::kInvalidArgument, "rays.max_range must be larger than rays.min_range");
   }
   if (!std::isfinite(segment_length_m) || segment_length_m < 0.0) {
     return fail(ErrorCode::kInvalidArgument,
-                "segment-length must be a distance >= 0 metres (0 = off)");
+                "rays.segment_length must be a distance >= 0 metres (0 = off)");
   }
   return {};
 }

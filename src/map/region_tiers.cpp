@@ -361,7 +361,7 @@ Expected<void, Error> RegionTiers::spillColdest(std::unique_lock<std::mutex>& lo
   if (!spill_.isOpen()) {
     return fail(ErrorCode::kCapacity,
                 "the compressed tier is full (" + mib(config_.compressed_bytes) +
-                    ", --compressed-memory) and there is no spill folder (--spill-dir)");
+                    ", map.compressed_memory) and there is no spill folder (map.spill_dir)");
   }
   auto record = spill_.append(key, static_cast<std::uint32_t>(region_bytes_), e.packed);
   if (!record) {

@@ -56,7 +56,7 @@ Result<SpillFile> SpillFile::create(const std::string& folder) {
     const int error = errno;
     return fail(ErrorCode::kIo, "cannot create a spill file in " + folder + ": " +
                                     platform::errnoText(error) +
-                                    " (--spill-dir names a writable folder for regions that fit "
+                                    " (map.spill_dir names a writable folder for regions that fit "
                                     "neither memory budget)");
   }
   file.fd_ = fd;

@@ -146,7 +146,7 @@ Expected<void, Error> MapConfig::validate() const {
                     std::to_string(capacity) + " regions; a map with cold tiers needs at least " +
                     std::to_string(kMinTieredRegions) +
                     " in its pool (a region and its neighbours are read together): raise the "
-                    "memory budget (--max-memory), or turn the tiers off (--no-tiers)");
+                    "memory budget (map.max_memory), or turn the tiers off (map.tiers: false)");
   }
   if (capacity > std::numeric_limits<std::uint32_t>::max() / 4u) {
     return fail(ErrorCode::kInvalidArgument,
@@ -520,7 +520,7 @@ Error VoxelMap::tierError(StoreError error) const {
   if (error == StoreError::kFull) {
     return Error{ErrorCode::kCapacity,
                  "every one of the pool's " + std::to_string(store_.capacity()) +
-                     " regions is in use at once; raise the memory budget (--max-memory)"};
+                     " regions is in use at once; raise the memory budget (map.max_memory)"};
   }
   return Error{ErrorCode::kCapacity, toString(error)};
 }

@@ -81,7 +81,7 @@ Result<RayFilter> toRayFilter(const RayOptions& options, bool device) {
   filter.reverse = options.walk == RayOptions::Walk::kReverse ||
                    (options.walk == RayOptions::Walk::kAuto && device);
   if (auto ok = filter.validate(); !ok) {
-    return Unexpected(Error{ok.error().code, "ray options: " + ok.error().message});
+    return Unexpected(ok.error());  // it names the field: "rays.min_range must be ..."
   }
   return filter;
 }

@@ -87,7 +87,8 @@ HeightmapOptions request(Vec3d centre, double size) {
   return o;
 }
 
-/// Planning fails with `code` and a message holding every phrase.
+/// Planning fails with `code` and a message holding every phrase, which names options by their
+/// configuration keys (heightmap.size), never by the command line's flags (--size).
 ::testing::AssertionResult rejects(const VoxelMap& map, const HeightmapOptions& o, ErrorCode code,
                                    std::initializer_list<std::string_view> phrases) {
   HeightmapPlan plan;
@@ -104,6 +105,9 @@ HeightmapOptions request(Vec3d centre, double size) {
     if (e.message.find(phrase) == std::string::npos) {
       return ::testing::AssertionFailure() << "'" << phrase << "' not in: " << e.message;
     }
+  }
+  if (e.message.find("--") != std::string::npos) {
+    return ::testing::AssertionFailure() << "a command-line flag in: " << e.message;
   }
   return ::testing::AssertionSuccess() << e.message;
 }
@@ -152,7 +156,7 @@ TEST(HeightmapPlanErrors, CentreOutsideTheStoredRegionsOfAGlobalMap) {
                              Vec3d{0.0, 0.0, kExtent}, Vec3d{500.0, 0.0, 0.0}}) {
     SCOPED_TRACE(::testing::Message() << centre.x << ", " << centre.y << ", " << centre.z);
     EXPECT_TRUE(rejects(*map, request(centre, 2.0), ErrorCode::kInvalidArgument,
-                        {"--center", "outside the map"}));
+                        {"heightmap.centre: ", "outside the map"}));
   }
 }
 
@@ -160,7 +164,7 @@ TEST(HeightmapPlanErrors, AnEmptyGlobalMapHasNoInside) {
   auto map = makeMap(smallGlobalConfig());
   ASSERT_NE(map, nullptr);
   EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, 2.0), ErrorCode::kInvalidArgument,
-                      {"--center", "outside the map"}));
+                      {"heightmap.centre: ", "outside the map"}));
 }
 
 TEST(HeightmapPlanErrors, CentreOutsideTheRollingWindow) {
@@ -173,13 +177,13 @@ TEST(HeightmapPlanErrors, CentreOutsideTheRollingWindow) {
   EXPECT_TRUE(plans(*map, request({0.0, 0.0, 0.0}, 4.0)));
   EXPECT_TRUE(plans(*map, request({lo.x, lo.y, lo.z}, 4.0)));
   EXPECT_TRUE(rejects(*map, request({hi.x, 0.0, 0.0}, 4.0), ErrorCode::kInvalidArgument,
-                      {"--center", "outside the map"}));
+                      {"heightmap.centre: ", "outside the map"}));
   EXPECT_TRUE(rejects(*map, request({0.0, 0.0, hi.z + 1.0}, 4.0), ErrorCode::kInvalidArgument,
-                      {"--center", "outside the map"}));
+                      {"heightmap.centre: ", "outside the map"}));
   // The window follows the robot: the origin is left behind.
   map->setWindowCentre({40.0, 0.0, 0.0});
   EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, 4.0), ErrorCode::kInvalidArgument,
-                      {"--center", "outside the map"}));
+                      {"heightmap.centre: ", "outside the map"}));
   EXPECT_TRUE(plans(*map, request({40.0, 0.0, 0.0}, 4.0)));
 }
 
@@ -189,7 +193,7 @@ TEST(HeightmapPlanErrors, SizeLargerThanTheRollingWindow) {
   const double window = 4 * kExtent;  // 12.8 m on x and y
   EXPECT_TRUE(plans(*map, request({0.0, 0.0, 0.0}, window)));
   EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, window + 0.1), ErrorCode::kInvalidArgument,
-                      {"--size", "larger than the rolling window"}));
+                      {"heightmap.size: ", "larger than the rolling window"}));
 }
 
 TEST(HeightmapPlanErrors, SizeBelowTheResolution) {
@@ -199,7 +203,7 @@ TEST(HeightmapPlanErrors, SizeBelowTheResolution) {
   for (const double size : {0.5 * kPlanRes, 0.0, -1.0, kNaN, kInf, -kInf}) {
     SCOPED_TRACE(size);
     EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, size), ErrorCode::kInvalidArgument,
-                        {"--size", "finite size of at least the map resolution"}));
+                        {"heightmap.size: ", "finite size of at least the map resolution"}));
   }
 }
 
@@ -208,7 +212,7 @@ TEST(HeightmapPlanErrors, SizeAboveTheCellLimit) {
   ASSERT_NE(map, nullptr);
   const double size = (kMaxCellsPerSide + 1) * kPlanRes;
   EXPECT_TRUE(rejects(*map, request({0.0, 0.0, 0.0}, size), ErrorCode::kInvalidArgument,
-                      {"--size", std::to_string(kMaxCellsPerSide + 1) + " cells per side",
+                      {"heightmap.size: ", std::to_string(kMaxCellsPerSide + 1) + " cells per side",
                        "at most " + std::to_string(kMaxCellsPerSide)}));
 }
 
@@ -235,8 +239,8 @@ TEST(HeightmapPlanErrors, CentreMustBeFinite) {
   for (const Vec3d centre :
        {Vec3d{kNaN, 0.0, 0.0}, Vec3d{0.0, kInf, 0.0}, Vec3d{0.0, 0.0, -kInf}}) {
     SCOPED_TRACE(::testing::Message() << centre.x << ", " << centre.y << ", " << centre.z);
-    EXPECT_TRUE(
-        rejects(*map, request(centre, 2.0), ErrorCode::kInvalidArgument, {"--center", "finite"}));
+    EXPECT_TRUE(rejects(*map, request(centre, 2.0), ErrorCode::kInvalidArgument,
+                        {"heightmap.centre: ", "finite"}));
   }
 }
 
@@ -252,13 +256,16 @@ TEST(HeightmapPlanErrors, NegativeClearanceFloorOrCeiling) {
     SCOPED_TRACE(bad);
     HeightmapOptions o = request({0.0, 0.0, 0.0}, 2.0);
     o.min_clearance = bad;
-    EXPECT_TRUE(rejects(*map, o, ErrorCode::kInvalidArgument, {"--min-clearance", "must be >= 0"}));
+    EXPECT_TRUE(rejects(*map, o, ErrorCode::kInvalidArgument,
+                        {"heightmap.min_clearance: ", "must be >= 0"}));
     o = request({0.0, 0.0, 0.0}, 2.0);
     o.floor_depth = bad;
-    EXPECT_TRUE(rejects(*map, o, ErrorCode::kInvalidArgument, {"--floor", "must be >= 0"}));
+    EXPECT_TRUE(
+        rejects(*map, o, ErrorCode::kInvalidArgument, {"heightmap.floor_depth: ", "must be >= 0"}));
     o = request({0.0, 0.0, 0.0}, 2.0);
     o.ceiling_height = bad;
-    EXPECT_TRUE(rejects(*map, o, ErrorCode::kInvalidArgument, {"--ceiling", "must be >= 0"}));
+    EXPECT_TRUE(rejects(*map, o, ErrorCode::kInvalidArgument,
+                        {"heightmap.ceiling_height: ", "must be >= 0"}));
   }
 }
 

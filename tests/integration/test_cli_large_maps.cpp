@@ -159,6 +159,7 @@ TEST(CliLargeMaps, AnUnusableSpillFolderFailsBeforeAnyWorkAndLeavesNoOutput) {
                                      kMapping));
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_TRUE(contains(r.err, "cannot create a spill file in " + drive.dir.file("missing")));
+  EXPECT_TRUE(contains(r.err, "(--spill-dir names a writable folder")) << r.err;
   EXPECT_FALSE(fs::exists(out));
   // --no-tiers keeps the old fixed-memory behaviour: a full pool is an error naming the budget.
   const RunResult fixed = runRaymap(

@@ -76,7 +76,7 @@ TEST(CliOutliers, MaxRayLengthIsCheckedAgainstMinRange) {
   const RunResult r =
       runRaymap({"populate", clouds.clean, "-o", out, "--min-range", "5", "--max-ray-length", "2"});
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_TRUE(contains(r.err, "max-ray-length must be larger than min-range")) << describe(r);
+  EXPECT_TRUE(contains(r.err, "--max-ray-length must be larger than --min-range")) << describe(r);
   EXPECT_FALSE(std::filesystem::exists(out));
 }
 

@@ -78,7 +78,10 @@ TEST(BagInputs, ACloudFrameWithNoChainToTheBaseIsAnErrorNamingTheFrames) {
   EXPECT_TRUE(contains(r.err, bag));
   EXPECT_TRUE(contains(r.err, "frame 'lidar'"));
   EXPECT_TRUE(contains(r.err, "'base_link'"));
-  EXPECT_TRUE(contains(r.err, "--sensor-offset"));
+  EXPECT_TRUE(contains(r.err,
+                       "the base with --sensor-offset (X,Y,Z metres; 0,0,0 if it is at "
+                       "the base's origin), or --base-frame"))
+      << r.err;
   EXPECT_FALSE(std::filesystem::exists(map));
   // Said explicitly, the sensor's place is taken as given.
   const RunResult given = runRaymap({"populate", bag, "--sensor-offset", "0,0,0", "-o", map, "-q"});
@@ -191,7 +194,10 @@ TEST(BagInputs, AutoPoseSourceTakesTfOverAnOdometryTopicWithoutMessagesAndSaysSo
   for (const std::string& bag : {indexed, sqlite}) {
     const RunResult r = runRaymap({"populate", bag, "--stats-json", "-"});
     EXPECT_EQ(r.exit_code, 0) << describe(r);
-    EXPECT_TRUE(contains(r.err, "--pose-source auto: poses from /tf (6 messages)"));
+    EXPECT_TRUE(contains(r.err,
+                         "raymap populate: note: --pose-source auto: poses from /tf (6 "
+                         "messages)"))
+        << r.err;
     EXPECT_TRUE(contains(r.err, "/odom has no message"));
     EXPECT_EQ(jsonValue(r.out, "pose_source"), "tf odom -> base_link") << r.out;
   }

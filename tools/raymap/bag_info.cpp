@@ -14,6 +14,7 @@
 #include "src/bag/bag_reader.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/option_names.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -115,10 +116,10 @@ int runBagInfo(const std::string& path, bool json, bool full) {
     }
   }
   for (const std::string& warning : reader.openWarnings()) {
-    std::fprintf(stderr, "raymap info: warning: %s\n", warning.c_str());
+    std::fprintf(stderr, "raymap info: warning: %s\n", withCliFlags(warning).c_str());
   }
   for (const std::string& damage : read.damage) {
-    std::fprintf(stderr, "raymap info: warning: %s\n", damage.c_str());
+    std::fprintf(stderr, "raymap info: warning: %s\n", withCliFlags(damage).c_str());
   }
   return 0;
 }

@@ -13,6 +13,7 @@
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/option_names.hpp"
 #include "tools/raymap/populate.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
@@ -85,7 +86,7 @@ int runBench(const BenchFlags& f) {
   }
   if (const std::string warning = inputWarning(base->map.mode, (*source)->info());
       !warning.empty()) {
-    std::fprintf(stderr, "bench: warning: %s\n", warning.c_str());
+    std::fprintf(stderr, "bench: warning: %s\n", withCliFlags(warning).c_str());
   }
   // NDT, TSDF and decay-rate-only maps integrate per ray only: the default list shrinks to
   // "ray"; an explicit "scan" is an error rather than a silently skipped run.
@@ -200,7 +201,7 @@ int runBench(const BenchFlags& f) {
       runs += (runs.size() > 1 ? ",\n" : "\n") + run;
       for (const std::string* warning : {&median.fallback_warning, &median.startup_warning}) {
         if (!warning->empty()) {
-          std::fprintf(stderr, "bench: warning: %s\n", warning->c_str());
+          std::fprintf(stderr, "bench: warning: %s\n", withCliFlags(*warning).c_str());
         }
       }
       std::fprintf(stderr,

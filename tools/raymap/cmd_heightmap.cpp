@@ -20,6 +20,7 @@
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/memory_tiers.hpp"
+#include "tools/raymap/option_names.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
@@ -137,7 +138,8 @@ int runHeightmap(const HeightmapFlags& f) {
     return kExitFailure;
   }
   if (!created->fallback_warning.empty()) {
-    std::fprintf(stderr, "raymap heightmap: warning: %s\n", created->fallback_warning.c_str());
+    std::fprintf(stderr, "raymap heightmap: warning: %s\n",
+                 withCliFlags(created->fallback_warning).c_str());
   }
   heightmap::HeightmapGenerator& generator = *created->generator;
 

@@ -17,6 +17,7 @@
 #include "src/io/map_file.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
+#include "tools/raymap/option_names.hpp"
 #include "tools/raymap/populate.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
@@ -224,22 +225,23 @@ int runPopulate(const PopulateFlags& f) {
   for (const std::string* warning :
        {&report->fallback_warning, &report->startup_warning, &report->input_warning}) {
     if (!warning->empty()) {
-      std::fprintf(stderr, "raymap populate: warning: %s\n", warning->c_str());
+      std::fprintf(stderr, "raymap populate: warning: %s\n", withCliFlags(*warning).c_str());
     }
   }
   if (report->bag) {
     const bag::BagRaysReport& b = *report->bag;
     if (!b.pose_note.empty() && !f.quiet) {
-      std::fprintf(stderr, "raymap populate: note: %s\n", b.pose_note.c_str());
+      std::fprintf(stderr, "raymap populate: note: %s\n", withCliFlags(b.pose_note).c_str());
     }
     for (const std::string& warning : b.read_warnings) {
-      std::fprintf(stderr, "raymap populate: warning: %s\n", warning.c_str());
+      std::fprintf(stderr, "raymap populate: warning: %s\n", withCliFlags(warning).c_str());
     }
     for (const std::string& damage : b.damage) {
-      std::fprintf(stderr, "raymap populate: warning: --skip-damaged: %s\n", damage.c_str());
+      std::fprintf(stderr, "raymap populate: warning: --skip-damaged: %s\n",
+                   withCliFlags(damage).c_str());
     }
     for (const std::string& skip : b.skips) {
-      std::fprintf(stderr, "raymap populate: warning: %s\n", skip.c_str());
+      std::fprintf(stderr, "raymap populate: warning: %s\n", withCliFlags(skip).c_str());
     }
     if (b.scans_integrated == 0) {
       printError(command, "no cloud of " + options->input +
@@ -304,7 +306,7 @@ int runPopulate(const PopulateFlags& f) {
 }  // namespace
 
 void printError(const std::string& command, const std::string& message) {
-  std::fprintf(stderr, "raymap %s: error: %s\n", command.c_str(), message.c_str());
+  std::fprintf(stderr, "raymap %s: error: %s\n", command.c_str(), withCliFlags(message).c_str());
 }
 
 std::string bagDamageHint(bool reads_bags, const Error& error) {

@@ -13,6 +13,7 @@
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/option_names.hpp"
 #include "tools/raymap/replay_session.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
@@ -157,7 +158,7 @@ int runReplay(const ReplayFlags& flags) {
     return kExitFailure;
   }
   for (const std::string& warning : stats.value().warnings) {
-    std::fprintf(stderr, "raymap replay: warning: %s\n", warning.c_str());
+    std::fprintf(stderr, "raymap replay: warning: %s\n", withCliFlags(warning).c_str());
   }
   if (!flags.stats_json.empty()) {
     const std::string json = statsJson(stats.value());

@@ -9,6 +9,7 @@
 
 #if RAYMAP_HAVE_CUDA
 #include "src/device/cuda/cuda_devices.hpp"
+#include "tools/raymap/option_names.hpp"
 #endif
 
 namespace raymap::cli {
@@ -77,7 +78,7 @@ DeviceListing listCudaDevices() {
 #if RAYMAP_HAVE_CUDA
   auto devices = cuda::listDevices();
   if (!devices) {
-    listing.error = devices.error().message;
+    listing.error = withCliFlags(devices.error().message);
     return listing;
   }
   listing.available = !devices->empty();

@@ -10,6 +10,7 @@
 
 #if RAYMAP_HAVE_OPENCL
 #include "src/device/opencl/cl_runtime.hpp"
+#include "tools/raymap/option_names.hpp"
 #endif
 
 namespace raymap::cli {
@@ -108,7 +109,7 @@ DeviceListing listOpenClDevices() {
 #if RAYMAP_HAVE_OPENCL
   auto devices = opencl::listDevices();
   if (!devices) {
-    listing.error = devices.error().message;
+    listing.error = withCliFlags(devices.error().message);
     return listing;
   }
   // The same rule as the backend's default selection, so what is shown is what will run.

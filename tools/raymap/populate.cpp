@@ -9,6 +9,7 @@
 #include "src/map/ray_batcher.hpp"
 #include "src/record/record_log.hpp"
 #include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/option_names.hpp"
 #include "tools/raymap/progress.hpp"
 
 namespace raymap::cli {
@@ -345,13 +346,13 @@ std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
     j.raw("bag", bj.str());
   }
   if (!r.fallback_warning.empty()) {
-    j.add("fallback", r.fallback_warning);
+    j.add("fallback", withCliFlags(r.fallback_warning));
   }
   if (!r.startup_warning.empty()) {
-    j.add("backend_warning", r.startup_warning);
+    j.add("backend_warning", withCliFlags(r.startup_warning));
   }
   if (!r.input_warning.empty()) {
-    j.add("input_warning", r.input_warning);
+    j.add("input_warning", withCliFlags(r.input_warning));
   }
   j.add("peak_rss_bytes", r.peak_rss_bytes);
   return j.str();

@@ -506,7 +506,7 @@ Result<std::unique_ptr<Backend>> createCudaBackend(VoxelMap& map,
   } catch (const std::bad_alloc&) {
     return fail(ErrorCode::kCapacity,
                 "CUDA batch staging: cannot allocate page-locked host memory for batches of " +
-                    std::to_string(options.batch_rays) + " rays; lower --batch-rays");
+                    std::to_string(options.batch_rays) + " rays; lower queues.batch_rays");
   }
   if (auto ok = backend->initialise(); !ok) {
     return Unexpected(ok.error());

@@ -108,7 +108,7 @@ Result<DeviceInfo> selectDevice(const std::vector<DeviceInfo>& devices, int inde
   for (const DeviceInfo& d : devices) {
     known += (known.empty() ? "" : ", ") + std::to_string(d.index) + " (" + d.name + ")";
   }
-  return fail(ErrorCode::kInvalidArgument, "--cuda-device " + std::to_string(wanted) +
+  return fail(ErrorCode::kInvalidArgument, "backend.cuda_device: " + std::to_string(wanted) +
                                                ": no such CUDA device; this machine has " +
                                                (known.empty() ? std::string("none") : known));
 }

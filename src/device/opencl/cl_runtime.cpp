@@ -16,7 +16,7 @@ namespace {
 
 constexpr const char* kNoPlatformMessage =
     "no OpenCL platform found: install an OpenCL driver (pocl-opencl-icd for the CPU, "
-    "intel-opencl-icd for Intel graphics) or pick --backend cpu";
+    "intel-opencl-icd for Intel graphics) or pick backend.name: cpu";
 
 std::string trimmed(std::string text) {
   // Drivers pad names with spaces (Intel) and count the terminating NUL in the size.
@@ -347,7 +347,7 @@ Result<std::vector<DeviceInfo>> listDevices() {
     return fail(ErrorCode::kUnsupported,
                 std::to_string(platform_count) +
                     " OpenCL platform(s) found but no device: check that the driver sees the "
-                    "hardware, or pick --backend cpu");
+                    "hardware, or pick backend.name: cpu");
   }
   return devices;
 }

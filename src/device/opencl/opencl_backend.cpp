@@ -82,7 +82,7 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
       } catch (const std::bad_alloc&) {
         return fail(ErrorCode::kCapacity,
                     "OpenCL backend: no host memory to group span records "
-                    "by region (--batch-rays smaller)");
+                    "by region (queues.batch_rays smaller)");
       }
     }
     // The program is built for the map's mode (kernels/common/map_mode.h): kernels without the
@@ -241,7 +241,7 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
                   "planning on the device needs work-groups of 64 work-items; " +
                       ctx_.info.device_name + " allows " +
                       std::to_string(ctx_.info.max_work_group_size) +
-                      " (use --device-planning host)");
+                      " (use backend.device_planning: host)");
     }
     auto sizes = devicePlanSizesFor(static_cast<std::uint32_t>(group));
     if (!sizes) {

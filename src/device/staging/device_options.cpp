@@ -54,7 +54,7 @@ Result<std::uint32_t> deviceCacheSlots(const VoxelMap& map, const DeviceMemoryLi
     if (!device.unified_memory || !device.can_map_host_memory) {
       return fail(ErrorCode::kUnsupported, "shared device memory: " + device.device_name +
                                                " does not share memory with the host; use the "
-                                               "region cache (--gpu-memory cache)");
+                                               "region cache (backend.gpu_memory: cache)");
     }
     return std::uint32_t{0};
   }
@@ -78,7 +78,7 @@ Result<std::uint32_t> deviceCacheSlots(const VoxelMap& map, const DeviceMemoryLi
     return fail(ErrorCode::kInvalidArgument,
                 std::string("the ") + api + " region cache of " + std::to_string(budget) +
                     " bytes cannot hold one region of " + std::to_string(region_bytes) +
-                    " bytes; raise --gpu-cache");
+                    " bytes; raise backend.gpu_cache_mb");
   }
   return static_cast<std::uint32_t>(slots);
 }

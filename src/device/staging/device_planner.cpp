@@ -153,9 +153,10 @@ Result<DevicePlanSizes> devicePlanSizes(const VoxelMap& map, const BatchLimits& 
   // Hit keys are (table entry, voxel) in 31 bits, so a sort can tell them from NONE.
   const std::uint64_t entry_limit = (std::uint64_t{1} << 31) / s.voxels_per_region;
   if (entry_limit < 1024) {
-    return fail(ErrorCode::kUnsupported,
-                "planning on the device: regions of " + std::to_string(s.voxels_per_region) +
-                    " voxels are too large for its 32-bit hit keys; use --device-planning host");
+    return fail(
+        ErrorCode::kUnsupported,
+        "planning on the device: regions of " + std::to_string(s.voxels_per_region) +
+            " voxels are too large for its 32-bit hit keys; use backend.device_planning: host");
   }
   // A batch has at most one distinct region per span record, and a cache batch no more than
   // the slots (one more is how the host learns of a batch that does not fit).
@@ -168,7 +169,7 @@ Result<DevicePlanSizes> devicePlanSizes(const VoxelMap& map, const BatchLimits& 
   if (s.scanLevels(s.longestScan())[kScanLevels - 1] > 1u) {
     return fail(ErrorCode::kUnsupported,
                 "planning on the device: batches of " + std::to_string(s.max_spans) +
-                    " span records need more scan levels than it has; lower --batch-rays");
+                    " span records need more scan levels than it has; lower queues.batch_rays");
   }
   return s;
 }

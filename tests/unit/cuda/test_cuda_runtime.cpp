@@ -50,7 +50,8 @@ TEST(CudaDevices, SelectingAMissingOrdinalNamesItAndWhatExists) {
   EXPECT_EQ(by_default->name, "first");
   auto missing = cuda::selectDevice(devices, 7);
   ASSERT_FALSE(missing);
-  EXPECT_TRUE(contains(missing.error().message, "--cuda-device 7")) << missing.error().message;
+  EXPECT_TRUE(contains(missing.error().message, "backend.cuda_device: 7"))
+      << missing.error().message;
   EXPECT_TRUE(contains(missing.error().message, "1 (second)")) << missing.error().message;
 }
 
@@ -96,7 +97,8 @@ TEST(CudaBackend, UnknownDeviceOrdinalIsAClearError) {
   options.device = 97;
   auto backend = createCudaBackend(map, options);
   ASSERT_FALSE(backend);
-  EXPECT_TRUE(contains(backend.error().message, "--cuda-device 97")) << backend.error().message;
+  EXPECT_TRUE(contains(backend.error().message, "backend.cuda_device: 97"))
+      << backend.error().message;
 }
 
 }  // namespace

@@ -373,7 +373,7 @@ TEST(RaySource, PointCloudWithoutTrajectoryAsksForOne) {
   EXPECT_EQ(source.error().message,
             path +
                 " has no per-point sensor vector (nx ny nz); give a trajectory with "
-                "--trajectory");
+                "source.trajectory");
 }
 
 TEST(RaySource, RayCloudWithATrajectoryIsAnErrorNamingBothFiles) {
@@ -390,9 +390,9 @@ TEST(RaySource, RayCloudWithATrajectoryIsAnErrorNamingBothFiles) {
   EXPECT_EQ(source.error().message,
             path +
                 " is a ray cloud: its vertices hold the vector to the sensor (nx ny nz), so "
-                "--trajectory " +
+                "the trajectory " +
                 options.trajectory_path +
-                " would not be used; leave --trajectory out (it is for point clouds)");
+                " would not be used: leave source.trajectory out (it is for point clouds)");
 }
 
 TEST(RaySource, PointCloudWithoutTimeCannotUseATrajectory) {

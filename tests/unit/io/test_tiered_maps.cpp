@@ -251,8 +251,10 @@ TEST(TieredMapFile, HeightMapsOfAColdPartOfTheMapMatchTheWholeMap) {
   heightmap::HeightmapPlan plan;
   auto refused = heightmap::planHeightmap(*loaded, huge, plan);
   ASSERT_FALSE(refused.has_value());
-  EXPECT_NE(refused.error().message.find("--max-memory"), std::string::npos)
+  // The library names the option by its configuration key; raymap shows it as --max-memory.
+  EXPECT_NE(refused.error().message.find("(map.max_memory)"), std::string::npos)
       << refused.error().message;
+  EXPECT_EQ(refused.error().message.find("--"), std::string::npos) << refused.error().message;
 }
 
 // ---- failures ----
@@ -272,6 +274,12 @@ TEST(TieredMapFailure, APoolTooSmallForTheTiersIsRefused) {
       test::withTiers(corridorConfig(Semantics::kPerRay), 4, 1u << 20, dir.path().string()));
   ASSERT_FALSE(map.has_value());
   EXPECT_NE(map.error().message.find("at least 16"), std::string::npos) << map.error().message;
+  // What to change, by configuration key (raymapd's and the library's words), not by flag.
+  EXPECT_NE(map.error().message.find("raise the memory budget (map.max_memory), or turn the tiers "
+                                     "off (map.tiers: false)"),
+            std::string::npos)
+      << map.error().message;
+  EXPECT_EQ(map.error().message.find("--"), std::string::npos) << map.error().message;
 }
 
 TEST(TieredMapFailure, WithoutASpillFolderAFullCompressedTierIsAnError) {
@@ -282,8 +290,9 @@ TEST(TieredMapFailure, WithoutASpillFolderAFullCompressedTierIsAnError) {
   ASSERT_FALSE(status.has_value());
   EXPECT_EQ(status.error(), IntegrateError::kTierFailed);
   ASSERT_TRUE(map.tierFailure().has_value());
-  EXPECT_NE(map.tierFailure()->message.find("--spill-dir"), std::string::npos)
+  EXPECT_NE(map.tierFailure()->message.find("(map.spill_dir)"), std::string::npos)
       << map.tierFailure()->message;
+  EXPECT_EQ(map.tierFailure()->message.find("--"), std::string::npos) << map.tierFailure()->message;
 }
 
 /// Sets RLIMIT_FSIZE (a full disk for every file this process writes) for its lifetime; SIGXFSZ

@@ -223,12 +223,13 @@ TEST(RayFilterValidation, NamesTheOption) {
   RayFilter f;
   f.min_range_m = -1.0;
   ASSERT_FALSE(f.validate());
-  EXPECT_NE(f.validate().error().message.find("min-range"), std::string::npos);
+  // By configuration key (MapperConfig::rays.min_range); raymap shows it as --min-range.
+  EXPECT_NE(f.validate().error().message.find("rays.min_range"), std::string::npos);
   f = RayFilter();
   f.min_range_m = 5.0;
   f.max_range_m = 2.0;
   ASSERT_FALSE(f.validate());
-  EXPECT_NE(f.validate().error().message.find("max-range"), std::string::npos);
+  EXPECT_EQ(f.validate().error().message, "rays.max_range must be larger than rays.min_range");
 }
 
 }  // namespace

@@ -66,7 +66,7 @@ TEST(VoxelMapConfig, BadValuesAreNamed) {
   config.geometry.region_voxels = 300;
   bad = VoxelMap::create(config);
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("region-voxels"), std::string::npos);
+  EXPECT_NE(bad.error().message.find("map.region_voxels"), std::string::npos);
   config = MapConfig();
   config.memory_budget_bytes = 1000;
   bad = VoxelMap::create(config);

@@ -2,9 +2,11 @@
 // raymap::Mapper (the public API): it integrates exactly what the library's own path does, takes
 // sensor-frame points with one pose or a pose per time, answers queries, makes height maps,
 // saves and loads, reports errors as values and allocates nothing per scan.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -13,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "src/core/eigen_conversions.hpp"
+#include "src/device/backend_choice.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/backend.hpp"
@@ -237,6 +240,41 @@ TEST(Mapper, BadOptionsAreErrorsThatNameTheOption) {
   ASSERT_FALSE(bad_backend);
   EXPECT_NE(bad_backend.error().message.find("quantum"), std::string::npos)
       << bad_backend.error().message;
+}
+
+// A library user never typed raymap's flags: errors name the option by its configuration key
+// (backend.name, backend.fallback: cpu; raymap shows --backend, --fallback cpu).
+TEST(Mapper, ErrorsNameConfigurationKeysNotCommandLineFlags) {
+  MapperConfig config;
+  config.backend.name = "quantum";
+  auto unknown = Mapper::create(config);
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.error().message,
+            "backend.name: unknown backend 'quantum' (backend.fallback: cpu maps on the CPU "
+            "instead)");
+
+  // A device backend this build lacks (every build but one with both OpenCL and CUDA).
+  const std::vector<std::string> built = backends::availableBackends();
+  for (const std::string missing : {"cuda", "opencl"}) {
+    if (std::find(built.begin(), built.end(), missing) != built.end()) {
+      continue;
+    }
+    config.backend.name = missing;
+    auto made = Mapper::create(config);
+    ASSERT_FALSE(made);
+    const std::string& message = made.error().message;
+    EXPECT_EQ(message.rfind("backend.name: " + missing + ": this build has no ", 0), 0u) << message;
+    EXPECT_NE(message.find("(backend.fallback: cpu maps on the CPU instead)"), std::string::npos)
+        << message;
+    EXPECT_EQ(message.find("--"), std::string::npos) << message;
+  }
+
+  config = MapperConfig{};
+  config.rays.min_range = 5.0;
+  config.rays.max_range = 2.0;
+  auto ranges = Mapper::create(config);
+  ASSERT_FALSE(ranges);
+  EXPECT_EQ(ranges.error().message, "rays.max_range must be larger than rays.min_range");
 }
 
 TEST(Mapper, InvalidRaysAreCountedNotFatal) {
