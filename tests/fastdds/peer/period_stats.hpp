@@ -1,0 +1,24 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The period of a stream of messages from their arrival times: median, 99th percentile, maximum.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace raymap::fastdds_peer {
+
+/// @brief Periods between consecutive arrivals, milliseconds (all 0 with fewer than two).
+struct PeriodStats {
+  double p50_ms = 0.0;
+  double p99_ms = 0.0;
+  double max_ms = 0.0;
+};
+
+/// @brief The q-quantile (0..1) of `values` by nearest rank; 0 when empty.
+double quantile(std::vector<double> values, double q);
+
+/// @brief PeriodStats of `arrivals_ns` (monotonic nanoseconds, in arrival order).
+PeriodStats periodStats(std::span<const std::int64_t> arrivals_ns);
+
+}  // namespace raymap::fastdds_peer

@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `raymap-fastdds-peer subscribe`: a planner's and a monitor's subscriptions to raymapd's
+// GridMaps, costmap and diagnostics, as Fast DDS nodes make them.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "tests/fastdds/peer/json_writer.hpp"
+#include "tests/fastdds/peer/loopback_participant.hpp"
+
+namespace raymap::fastdds_peer {
+
+struct SubscribeOptions {
+  double seconds = 10.0;
+  /// End early once this many GridMaps, costmaps and diagnostic arrays each have arrived
+  /// (0: run the whole time).
+  std::int64_t until = 0;
+  std::string grid_topic = "rt/height_map";
+  std::string costmap_topic = "rt/costmap";
+  std::string diagnostics_topic = "rt/diagnostics";
+};
+
+/// @brief Subscribes (reliable, volatile, keep last 10: ROS's default profile) to the three
+/// topics, stamps each message's arrival (steady clock, in Fast DDS's listener) and decodes it,
+/// until `seconds` have passed, `until` is met, or SIGINT/SIGTERM.
+/// @param[out] result maps received, their period p50/p99/max from the arrival times, the first
+/// map's delay after the subscriber started, costmaps and diagnostics received, the last
+/// pipeline level, and summaries of the last GridMap, costmap and diagnostic values
+/// @return false when an endpoint could not be created (result says why)
+bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& options,
+                  JsonObject& result);
+
+}  // namespace raymap::fastdds_peer
