@@ -76,6 +76,10 @@ int main(int argc, char** argv) {
   publish_command->add_option("--odometry-rate", publish.odometry_rate_hz, "odometry per second")
       ->check(CLI::PositiveNumber);
   publish_command->add_option("--speed", publish.speed_mps, "the robot's speed along x, m/s");
+  publish_command->add_flag(
+      "--clouds-after-tf-static", publish.clouds_after_tf_static,
+      "start the lidar once the readers of /tf_static have acknowledged the transform (as on a "
+      "robot whose /tf_static was latched before the lidar driver started)");
   publish_command->add_option("--beams", publish.lidar.beams)->check(CLI::Range(1, 1024));
   publish_command->add_option("--columns", publish.lidar.columns)->check(CLI::Range(1, 8192));
   publish_command->add_option("--points-topic", publish.points_topic);
@@ -87,7 +91,8 @@ int main(int argc, char** argv) {
   subscribe_command->add_option("--seconds", subscribe.seconds, "how long to subscribe");
   subscribe_command->add_option(
       "--until", subscribe.until,
-      "end once this many GridMaps, costmaps and diagnostic arrays each arrived (0: never)");
+      "end once this many GridMaps, costmaps and diagnostic arrays (after the first GridMap) "
+      "each arrived (0: never)");
   subscribe_command->add_option("--grid-topic", subscribe.grid_topic);
   subscribe_command->add_option("--costmap-topic", subscribe.costmap_topic);
   subscribe_command->add_option("--diagnostics-topic", subscribe.diagnostics_topic);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -97,6 +98,14 @@ void publishOdometry(dds::DataWriter& writer, const PublishOptions& options, Vec
   writer.write(&odometry);
 }
 
+/// True once at least one reader matched the writer and every matched reader acknowledged
+/// everything it wrote.
+bool acknowledged(dds::DataWriter& writer) {
+  return matchedReaders(&writer) > 0 &&
+         writer.wait_for_acknowledgments(eprosima::fastrtps::Duration_t(0, 0)) ==
+             eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+}
+
 std::chrono::nanoseconds periodOf(double rate_hz) {
   return std::chrono::nanoseconds(std::llround(1e9 / rate_hz));
 }
@@ -145,14 +154,20 @@ bool runPublish(LoopbackParticipant& participant, const PublishOptions& options,
   Clock::time_point scan_start = timeline.start();  // published once its revolution is over
   const Clock::time_point end =
       timeline.start() + std::chrono::nanoseconds(std::llround(options.seconds * 1e9));
+  std::optional<Clock::time_point> tf_static_acknowledged;
   for (Clock::time_point now = Clock::now(); now < end && !stopRequested(); now = Clock::now()) {
+    if (!tf_static_acknowledged && acknowledged(*writers.tf_static)) {
+      tf_static_acknowledged = now;
+    }
     if (now >= next_odometry) {
       publishOdometry(*writers.odometry, options, timeline.base(next_odometry),
                       timeline.unixNs(next_odometry));
       ++odometry;
       next_odometry = nextDue(next_odometry, odometry_period, now);
     }
-    if (now >= scan_start + scan_period) {
+    if (options.clouds_after_tf_static && !tf_static_acknowledged) {
+      scan_start = now;  // the lidar has not started yet
+    } else if (now >= scan_start + scan_period) {
       const Vec3 base = timeline.base(scan_start);
       const Vec3 origin{base.x + kLidarInBase.x, base.y + kLidarInBase.y, base.z + kLidarInBase.z};
       sweep(lidar, origin, Vec3{options.speed_mps, 0.0, 0.0}, points);
@@ -169,6 +184,11 @@ bool runPublish(LoopbackParticipant& participant, const PublishOptions& options,
       .integer("points_per_cloud", static_cast<std::int64_t>(points.size()))
       .integer("odometry_published", odometry)
       .integer("tf_static_published", 1)
+      .number("tf_static_acknowledged_after_ms",
+              tf_static_acknowledged ? std::chrono::duration<double, std::milli>(
+                                           *tf_static_acknowledged - timeline.start())
+                                           .count()
+                                     : std::nan(""))
       .integer("cloud_readers", matchedReaders(writers.cloud))
       .integer("odometry_readers", matchedReaders(writers.odometry))
       .integer("tf_static_readers", matchedReaders(writers.tf_static));

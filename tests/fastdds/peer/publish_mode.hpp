@@ -17,6 +17,9 @@ struct PublishOptions {
   double odometry_rate_hz = 50.0;
   double speed_mps = 0.0;  ///< the robot drives along +x at this speed (0: it stands still)
   RoomLidar lidar;         ///< its scan_period_s is 1 / scan_rate_hz
+  /// Hold the clouds until a reader of /tf_static has acknowledged the transform, as on a robot
+  /// whose robot_state_publisher latched it before the lidar driver started.
+  bool clouds_after_tf_static = false;
   std::string points_topic = "rt/points";
   std::string odom_topic = "rt/odom";
   std::string tf_static_topic = "rt/tf_static";
@@ -34,7 +37,8 @@ inline constexpr Vec3 kLidarInBase{0.1, 0.0, 0.3};
 /// odometry world -> base (reliable, keep last 10) at odometry_rate_hz and a PointCloud2 in the
 /// lidar's frame (best effort, keep last 5) at scan_rate_hz, stamped with the wall clock, each
 /// scan when its revolution has ended; until `seconds` have passed or SIGINT/SIGTERM.
-/// @param[out] result what was published and how many readers matched
+/// @param[out] result what was published, how many readers matched, and when /tf_static was
+/// first acknowledged by every matched reader (at least one), after the start
 /// @return false when an endpoint could not be created (result says which)
 bool runPublish(LoopbackParticipant& participant, const PublishOptions& options,
                 JsonObject& result);

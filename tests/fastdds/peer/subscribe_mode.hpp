@@ -13,8 +13,8 @@ namespace raymap::fastdds_peer {
 
 struct SubscribeOptions {
   double seconds = 10.0;
-  /// End early once this many GridMaps, costmaps and diagnostic arrays each have arrived
-  /// (0: run the whole time).
+  /// End early once this many GridMaps, costmaps and diagnostic arrays each have arrived, the
+  /// diagnostic arrays counted from the first GridMap on (0: run the whole time).
   std::int64_t until = 0;
   std::string grid_topic = "rt/height_map";
   std::string costmap_topic = "rt/costmap";
