@@ -93,6 +93,8 @@ int main(int argc, char** argv) {
       "--until", subscribe.until,
       "end once this many GridMaps, costmaps and diagnostic arrays (after the first GridMap) "
       "each arrived (0: never)");
+  subscribe_command->add_flag("--from-match", subscribe.from_match,
+                              "count --seconds from when raymapd's GridMap writer matched");
   subscribe_command->add_option("--grid-topic", subscribe.grid_topic);
   subscribe_command->add_option("--costmap-topic", subscribe.costmap_topic);
   subscribe_command->add_option("--diagnostics-topic", subscribe.diagnostics_topic);

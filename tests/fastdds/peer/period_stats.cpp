@@ -32,4 +32,18 @@ PeriodStats periodStats(std::span<const std::int64_t> arrivals_ns) {
   return stats;
 }
 
+double longestGapMs(std::span<const std::int64_t> arrivals_ns, std::int64_t from_ns,
+                    std::int64_t to_ns) {
+  std::int64_t longest = 0;
+  std::int64_t previous = from_ns;
+  for (const std::int64_t t : arrivals_ns) {
+    if (t >= from_ns && t <= to_ns) {
+      longest = std::max(longest, t - previous);
+      previous = t;
+    }
+  }
+  longest = std::max(longest, to_ns - previous);
+  return static_cast<double>(longest) * 1e-6;
+}
+
 }  // namespace raymap::fastdds_peer

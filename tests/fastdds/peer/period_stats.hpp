@@ -21,4 +21,10 @@ double quantile(std::vector<double> values, double q);
 /// @brief PeriodStats of `arrivals_ns` (monotonic nanoseconds, in arrival order).
 PeriodStats periodStats(std::span<const std::int64_t> arrivals_ns);
 
+/// @brief The longest time without an arrival within [from_ns, to_ns], milliseconds: the gaps
+/// between arrivals, and from `from_ns` to the first and from the last to `to_ns` (what a
+/// subscriber waited; the whole window when nothing arrived).
+double longestGapMs(std::span<const std::int64_t> arrivals_ns, std::int64_t from_ns,
+                    std::int64_t to_ns);
+
 }  // namespace raymap::fastdds_peer

@@ -3,6 +3,7 @@
 // main thread waits and then reports.
 #include "tests/fastdds/peer/subscribe_mode.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -43,13 +44,23 @@ std::int64_t steadyNs() {
       .count();
 }
 
-/// Takes every sample of type `Message` when data is available and hands it to `on_message`.
+/// Takes every sample of type `Message` when data is available and hands it to `on_message`;
+/// notes when the reader first matched a writer.
 template <typename Message, typename OnMessage>
 class TakingListener : public dds::DataReaderListener {
   using ReturnCode_t = eprosima::fastrtps::types::ReturnCode_t;
 
  public:
   explicit TakingListener(OnMessage on_message) : on_message_(std::move(on_message)) {}
+  /// @brief Steady-clock nanoseconds of the first match, 0 before it.
+  std::int64_t matchedNs() const noexcept { return matched_ns_.load(); }
+  void on_subscription_matched(dds::DataReader* /*reader*/,
+                               const dds::SubscriptionMatchedStatus& status) override {
+    std::int64_t none = 0;
+    if (status.current_count > 0) {
+      matched_ns_.compare_exchange_strong(none, steadyNs());
+    }
+  }
   void on_data_available(dds::DataReader* reader) override {
     const std::int64_t arrival_ns = steadyNs();      // before decoding
     const std::lock_guard<std::mutex> lock(mutex_);  // in case two receive threads call
@@ -63,12 +74,13 @@ class TakingListener : public dds::DataReaderListener {
 
  private:
   OnMessage on_message_;
+  std::atomic<std::int64_t> matched_ns_{0};
   std::mutex mutex_;
   Message message_;
 };
 
 template <typename Message, typename OnMessage>
-std::unique_ptr<dds::DataReaderListener> takingListener(OnMessage on_message) {
+std::unique_ptr<TakingListener<Message, OnMessage>> takingListener(OnMessage on_message) {
   return std::make_unique<TakingListener<Message, OnMessage>>(std::move(on_message));
 }
 
@@ -93,17 +105,26 @@ bool enough(Received& received, std::int64_t until) {
          received.diagnostics_after_first_map >= until;
 }
 
-void report(Received& received, std::int64_t start_ns, JsonObject& result) {
+/// Milliseconds from `from_ns` to `to_ns`, NaN when either has not happened (0).
+double afterMs(std::int64_t from_ns, std::int64_t to_ns) {
+  return from_ns == 0 || to_ns == 0 ? std::nan("") : static_cast<double>(to_ns - from_ns) * 1e-6;
+}
+
+/// `window_*`: what was measured (from the start or the match to the end).
+void report(Received& received, std::int64_t start_ns, std::int64_t matched_ns,
+            std::int64_t window_start_ns, std::int64_t window_end_ns, JsonObject& result) {
   const std::lock_guard<std::mutex> lock(received.mutex);
   const std::vector<std::int64_t>& arrivals = received.map_arrivals_ns;
   const PeriodStats period = periodStats(arrivals);
-  result.integer("maps", static_cast<std::int64_t>(arrivals.size()))
+  const std::int64_t first_ns = arrivals.empty() ? 0 : arrivals.front();
+  result.number("grid_map_writer_matched_after_ms", afterMs(start_ns, matched_ns))
+      .integer("maps", static_cast<std::int64_t>(arrivals.size()))
       .number("map_period_p50_ms", period.p50_ms)
       .number("map_period_p99_ms", period.p99_ms)
       .number("map_period_max_ms", period.max_ms)
-      .number("first_map_after_ms", arrivals.empty()
-                                        ? std::nan("")
-                                        : static_cast<double>(arrivals.front() - start_ns) * 1e-6)
+      .number("map_gap_max_ms", longestGapMs(arrivals, window_start_ns, window_end_ns))
+      .number("first_map_after_ms", afterMs(start_ns, first_ns))
+      .number("first_map_after_match_ms", afterMs(matched_ns, first_ns))
       .integer("costmaps", received.costmaps)
       .integer("diagnostics", received.diagnostics)
       .integer("diagnostics_after_first_map", received.diagnostics_after_first_map);
@@ -169,16 +190,24 @@ bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& opti
     result.text("error", "Fast DDS refused a reader");
     return false;
   }
-  const Clock::time_point end =
-      Clock::now() + std::chrono::nanoseconds(std::llround(options.seconds * 1e9));
+  const auto run = std::chrono::nanoseconds(std::llround(options.seconds * 1e9));
+  Clock::time_point end = Clock::now() + run;
+  bool window_from_match = options.from_match;
   while (Clock::now() < end && !stopRequested() && !enough(received, options.until)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (window_from_match && maps->matchedNs() != 0) {
+      end = Clock::time_point(std::chrono::nanoseconds(maps->matchedNs())) + run;
+      window_from_match = false;
+    }
   }
   const std::int64_t writers[3] = {matchedWriters(map_reader), matchedWriters(costmap_reader),
                                    matchedWriters(diagnostics_reader)};
   delete_readers();
-  result.number("seconds", static_cast<double>(steadyNs() - start_ns) * 1e-9);
-  report(received, start_ns, result);
+  const std::int64_t end_ns = steadyNs();
+  result.number("seconds", static_cast<double>(end_ns - start_ns) * 1e-9);
+  const std::int64_t window_start_ns =
+      options.from_match && maps->matchedNs() != 0 ? maps->matchedNs() : start_ns;
+  report(received, start_ns, maps->matchedNs(), window_start_ns, end_ns, result);
   result.object("writers", JsonObject()
                                .integer("grid_map", writers[0])
                                .integer("costmap", writers[1])

@@ -16,6 +16,9 @@ struct SubscribeOptions {
   /// End early once this many GridMaps, costmaps and diagnostic arrays each have arrived, the
   /// diagnostic arrays counted from the first GridMap on (0: run the whole time).
   std::int64_t until = 0;
+  /// Count `seconds` from when the GridMap reader first matched raymapd's writer (discovery
+  /// left out of a measurement), not from the start.
+  bool from_match = false;
   std::string grid_topic = "rt/height_map";
   std::string costmap_topic = "rt/costmap";
   std::string diagnostics_topic = "rt/diagnostics";
@@ -24,8 +27,10 @@ struct SubscribeOptions {
 /// @brief Subscribes (reliable, volatile, keep last 10: ROS's default profile) to the three
 /// topics, stamps each message's arrival (steady clock, in Fast DDS's listener) and decodes it,
 /// until `seconds` have passed, `until` is met, or SIGINT/SIGTERM.
-/// @param[out] result maps received, their period p50/p99/max from the arrival times, the first
-/// map's delay after the subscriber started, costmaps and diagnostics received, the last
+/// @param[out] result when the GridMap writer matched, maps received, their period p50/p99/max
+/// from the arrival times, the longest time without a map in the window measured, the first
+/// map's delay after the subscriber started and after the match, costmaps and diagnostics
+/// received, the last
 /// pipeline level, and summaries of the last GridMap, costmap and diagnostic values
 /// @return false when an endpoint could not be created (result says why)
 bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& options,
