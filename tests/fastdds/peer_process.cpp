@@ -3,11 +3,11 @@
 #include "tests/fastdds/peer_process.hpp"
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
 
-#include <signal.h>
 #include <unistd.h>
 
 #include "tests/support/cli_runner.hpp"

@@ -79,7 +79,7 @@ dds::Topic* LoopbackParticipant::topic(const std::string& name, dds::TopicDataTy
   dds::TypeSupport support(type);
   support->auto_fill_type_object(false);
   support->auto_fill_type_information(false);
-  const std::string type_name = support.get_type_name();
+  const std::string& type_name = support.get_type_name();
   // Registering a type twice under one name is accepted (the same TypeSupport).
   if (participant_->find_type(type_name).empty() &&
       support.register_type(participant_) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {

@@ -33,7 +33,8 @@ void logToStandardError() {
 }
 
 std::uint32_t domainFromEnvironment() {
-  const char* text = std::getenv("ROS_DOMAIN_ID");
+  const char* text =
+      std::getenv("ROS_DOMAIN_ID");  // NOLINT(concurrency-mt-unsafe): start-up, one thread
   return text == nullptr ? 0U : static_cast<std::uint32_t>(std::strtoul(text, nullptr, 10));
 }
 

@@ -17,7 +17,10 @@ double toPlane(double o, double d, double at) {
     return kNoHit;
   }
   const double s = (at - o) / d;
-  return s > 0.0 ? s : kNoHit;
+  if (s <= 0.0) {
+    return kNoHit;  // behind
+  }
+  return s;
 }
 
 /// Distance to the first surface of the room along the unit direction `d` from `o`.

@@ -3,9 +3,7 @@
 #include "tests/fastdds/peer/stop_signal.hpp"
 
 #include <atomic>
-#include <csignal>
-
-#include <signal.h>
+#include <csignal>  // and POSIX's sigaction, which glibc declares there too
 
 namespace raymap::fastdds_peer {
 namespace {
