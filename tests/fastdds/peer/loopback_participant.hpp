@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A Fast DDS domain participant configured as rmw_fastrtps configures one, but whose traffic
+// stays on loopback and which finds Cyclone DDS there without multicast.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TopicDataType.hpp>
+
+namespace raymap::fastdds_peer {
+
+/// @brief How many participant indices the initial peers cover: Cyclone's on
+/// config/cyclonedds-loopback.xml go up to MaxAutoParticipantIndex 32, Fast DDS's own count from
+/// 0 in the first free port pair.
+inline constexpr std::uint32_t kParticipantIndices = 33;
+
+/// @brief Owns one DomainParticipant with one Publisher and one Subscriber; deletes everything it
+/// contains when destroyed.
+///
+/// Transport: one UDPv4 transport whitelisted to 127.0.0.1, the built-in transports (UDPv4 on
+/// every interface, shared memory) off; send and receive buffers `buffer_bytes` (0: the OS
+/// default, as rmw_fastrtps leaves them). Discovery: unicast only: metatraffic and user traffic
+/// on 127.0.0.1 at the RTPS well-known ports of the participant's index, no multicast locator,
+/// and initial peers 127.0.0.1 at the metatraffic ports of indices 0 to kParticipantIndices - 1
+/// (where Cyclone's participants listen). Writer and reader histories of discovery may grow (as
+/// rmw_fastrtps sets them). Thread-safety: one thread creates entities; Fast DDS's own threads
+/// call listeners.
+class LoopbackParticipant {
+ public:
+  /// @return nullptr with `error` set when Fast DDS refuses the participant.
+  static std::unique_ptr<LoopbackParticipant> create(std::uint32_t domain,
+                                                     std::uint32_t buffer_bytes,
+                                                     std::string& error);
+  ~LoopbackParticipant();
+  LoopbackParticipant(const LoopbackParticipant&) = delete;
+  LoopbackParticipant& operator=(const LoopbackParticipant&) = delete;
+
+  /// @brief The topic `name` of the type `type` (taking ownership), registered under its own
+  /// name (the IDL's, e.g. sensor_msgs::msg::dds_::PointCloud2_) without TypeObject or type
+  /// information, as rmw_fastrtps registers ROS types. @return nullptr when refused.
+  eprosima::fastdds::dds::Topic* topic(const std::string& name,
+                                       eprosima::fastdds::dds::TopicDataType* type);
+  eprosima::fastdds::dds::Publisher& publisher() noexcept { return *publisher_; }
+  eprosima::fastdds::dds::Subscriber& subscriber() noexcept { return *subscriber_; }
+
+ private:
+  LoopbackParticipant() = default;
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+};
+
+}  // namespace raymap::fastdds_peer

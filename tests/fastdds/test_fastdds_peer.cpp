@@ -1,0 +1,212 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymapd against an independent Fast DDS 2.9 peer (raymap-fastdds-peer, configured as
+// rmw_fastrtps configures Fast DDS), as separate processes on loopback: Fast DDS's lidar,
+// odometry and /tf_static go into the map; Fast DDS's subscriber decodes the GridMaps, costmaps
+// and diagnostics. Behaviour only: counts and decoded fields, never rates or periods.
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "platform/clock.hpp"
+#include "src/dds/entities.hpp"
+#include "tests/fastdds/peer_process.hpp"
+#include "tests/service/service_fixture.hpp"
+#include "tools/dds_driver/lidar_playback.hpp"
+#include "tools/dds_driver/ros_endpoints.hpp"
+
+namespace raymap::test {
+namespace {
+
+using std::chrono::seconds;
+
+/// How long a peer may run: it ends as soon as what the test waits for has happened.
+constexpr seconds kPeerRun{90};
+
+#define RAYMAP_SKIP_WITHOUT_FASTDDS_PEER()                                            \
+  if (!fastDdsPeerBuilt()) {                                                          \
+    GTEST_SKIP() << "raymap-fastdds-peer is not built (libfastrtps-dev, fastddsgen)"; \
+  }
+
+/// The tests' raymapd configuration (one lidar on rt/points in frame lidar, odometry on rt/odom,
+/// a 12 m GridMap at 5 Hz) with the Nav2 costmap on rt/costmap.
+std::string fastDdsConfig(std::uint32_t domain) {
+  std::string config = serviceConfig(domain);
+  const std::string voxels = "voxels_topic: rt/raymap/occupied_voxels}";
+  const std::size_t at = config.find(voxels);
+  EXPECT_NE(at, std::string::npos);
+  if (at != std::string::npos) {
+    config.replace(at, voxels.size(),
+                   "voxels_topic: rt/raymap/occupied_voxels, costmap_topic: rt/costmap}");
+  }
+  return config;
+}
+
+std::vector<std::string> subscribeArgs() {
+  return {"--seconds", std::to_string(kPeerRun.count()), "--until", "3"};
+}
+
+/// The GridMap's layout as raymapd sends it (docs/raymapd.md, What it publishes), decoded by
+/// Fast DDS's generated code.
+void expectRaymapdsGridMap(const JsonValue& result) {
+  ASSERT_NE(result.find("last_map"), nullptr);
+  EXPECT_EQ(result.find("last_map")->find("frame_id")->text, "odom");
+  EXPECT_NEAR(numberAt(result, {"last_map", "resolution"}).value_or(0.0), 0.1, 1e-9);
+  EXPECT_NEAR(numberAt(result, {"last_map", "length_x"}).value_or(0.0), 12.0, 1e-9);
+  EXPECT_NEAR(numberAt(result, {"last_map", "length_y"}).value_or(0.0), 12.0, 1e-9);
+  EXPECT_EQ(textsAt(result, {"last_map", "layers"}),
+            (std::vector<std::string>{"elevation", "clearance", "kind", "observed_count"}));
+  EXPECT_EQ(textsAt(result, {"last_map", "basic_layers"}), std::vector<std::string>{"elevation"});
+  EXPECT_EQ(textsAt(result, {"last_map", "dim_labels"}),
+            (std::vector<std::string>{"column_index", "row_index"}));
+  EXPECT_EQ(textsAt(result, {"last_map", "dim_sizes"}), (std::vector<std::string>{"120", "120"}));
+  EXPECT_EQ(textsAt(result, {"last_map", "dim_strides"}),
+            (std::vector<std::string>{"14400", "120"}));
+  EXPECT_EQ(textsAt(result, {"last_map", "layer_sizes"}),
+            (std::vector<std::string>{"14400", "14400", "14400", "14400"}));
+  EXPECT_GT(numberAt(result, {"last_map", "surface_cells"}).value_or(0.0), 0.0);
+}
+
+/// The costmap as raymapd sends it: the GridMap's window, every cell a valid cost.
+void expectRaymapdsCostmap(const JsonValue& result) {
+  ASSERT_NE(result.find("last_costmap"), nullptr);
+  EXPECT_EQ(result.find("last_costmap")->find("frame_id")->text, "odom");
+  EXPECT_EQ(numberAt(result, {"last_costmap", "width"}), 120.0);
+  EXPECT_EQ(numberAt(result, {"last_costmap", "height"}), 120.0);
+  EXPECT_NEAR(numberAt(result, {"last_costmap", "resolution"}).value_or(0.0), 0.1, 1e-6);
+  EXPECT_EQ(numberAt(result, {"last_costmap", "cells"}), 14400.0);
+  EXPECT_EQ(numberAt(result, {"last_costmap", "invalid"}), 0.0);
+  EXPECT_GT(numberAt(result, {"last_costmap", "free"}).value_or(0.0) +
+                numberAt(result, {"last_costmap", "costed"}).value_or(0.0),
+            0.0)
+      << "no traversable cell";
+}
+
+/// A Fast DDS subscriber's report: maps, costmaps and diagnostics all arrived and decoded.
+void expectMapsCostmapsAndDiagnostics(const JsonValue& result, const std::string& logs) {
+  EXPECT_GT(numberAt(result, {"maps"}).value_or(0.0), 0.0) << logs;
+  EXPECT_GT(numberAt(result, {"costmaps"}).value_or(0.0), 0.0) << logs;
+  EXPECT_GT(numberAt(result, {"diagnostics"}).value_or(0.0), 0.0) << logs;
+  EXPECT_EQ(numberAt(result, {"writers", "grid_map"}), 1.0);
+  const double level = numberAt(result, {"pipeline_level"}).value_or(-1.0);
+  EXPECT_GE(level, 0.0);  // OK, WARN or ERROR: decoded, whichever raymapd reported
+  EXPECT_LE(level, 2.0);
+  EXPECT_GT(numberAt(result, {"last_diagnostics", "maps_published"}).value_or(0.0), 0.0);
+  EXPECT_GT(numberAt(result, {"last_diagnostics", "costmaps_published"}).value_or(0.0), 0.0);
+  expectRaymapdsGridMap(result);
+  expectRaymapdsCostmap(result);
+}
+
+TEST(FastDdsPeer, RaymapdIntegratesAFastDdsLidarWithItsOdometryAndTfStatic) {
+  RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(fastDdsConfig(domain), false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+  // The test's own Cyclone subscriber reads what raymapd says of the input.
+  auto participant = dds::Participant::create(domain);
+  ASSERT_TRUE(participant.has_value());
+  auto diagnostics = driver::DiagnosticsListener::create(participant.value(), "rt/diagnostics");
+  ASSERT_TRUE(diagnostics.has_value());
+
+  PeerProcess peer(domain, "publish", {"--seconds", std::to_string(kPeerRun.count())});
+  const auto number = [&](const std::string& key) {
+    return diagnostics.value()->number("raymapd: " + key);
+  };
+  // Scans go in from the start; the latched transform too, though not necessarily first: Fast
+  // DDS resends it to a reader that missed it at the match on its next heartbeat (every 3 s).
+  const std::int64_t end = platform::monotonicNowNs() + 60'000'000'000;
+  bool integrated = false;
+  while (!integrated && peer.running() && platform::monotonicNowNs() < end) {
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 50'000'000);
+    diagnostics.value()->poll();
+    integrated = number("pipeline/scans_integrated").value_or(0.0) >= 10.0 &&
+                 number("pipeline/tf_static_edges").value_or(0.0) >= 1.0;
+  }
+  const std::optional<int> status = peer.finish(seconds(0));
+  ASSERT_TRUE(integrated) << "raymapd:\n" << daemon.log() << "\npeer:\n" << peer.log();
+
+  // Every cloud decoded, from one lidar, placed by one pose source and the latched extrinsic.
+  EXPECT_EQ(number("pipeline/clouds_malformed"), 0.0);
+  EXPECT_EQ(number("pipeline/clouds_wrong_frame"), 0.0);
+  EXPECT_EQ(number("pipeline/pose_publishers"), 1.0);
+  EXPECT_GT(number("pipeline/poses_received").value_or(0.0), 0.0);
+  EXPECT_GE(number("pipeline/tf_static_edges").value_or(0.0), 1.0) << "/tf_static not received";
+  EXPECT_EQ(number("sensor lidar/publishers"), 1.0);
+
+  ASSERT_EQ(status, 0) << peer.log();
+  const std::optional<JsonValue> result = peer.result();
+  ASSERT_TRUE(result.has_value()) << peer.log();
+  EXPECT_GE(numberAt(*result, {"clouds_published"}).value_or(0.0), 10.0);
+  EXPECT_GT(numberAt(*result, {"points_per_cloud"}).value_or(0.0), 0.0);
+  EXPECT_EQ(numberAt(*result, {"tf_static_published"}), 1.0);
+  EXPECT_TRUE(numberAt(*result, {"tf_static_acknowledged_after_ms"}).has_value())
+      << "raymapd never acknowledged /tf_static";
+  EXPECT_GE(numberAt(*result, {"cloud_readers"}).value_or(0.0), 1.0);
+  EXPECT_GE(numberAt(*result, {"odometry_readers"}).value_or(0.0), 1.0);
+  EXPECT_GE(numberAt(*result, {"tf_static_readers"}).value_or(0.0), 1.0);
+  expectCleanStop(daemon);
+}
+
+TEST(FastDdsPeer, AFastDdsSubscriberDecodesRaymapdsGridMapsCostmapsAndDiagnostics) {
+  RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(fastDdsConfig(domain), false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+  PeerProcess peer(domain, "subscribe", subscribeArgs());
+
+  // The input: the tests' Cyclone lidar driver in the yard, until the peer has had enough.
+  RosSide ros(domain, 70000);
+  ASSERT_TRUE(ros.waitForService(kStartWaitS)) << daemon.log();
+  const driver::SimulatedLidar lidar = yardLidar(16, 512, /*moving=*/false);
+  driver::LidarPlayback playback(lidar, *ros.publisher, driver::PlaybackOptions{});
+  const std::int64_t t0 = platform::monotonicNowNs();
+  playback.start(t0, platform::realtimeNowNs());
+  const std::int64_t end = t0 + std::chrono::nanoseconds(kPeerRun).count();
+  for (std::int64_t now = t0; peer.running() && now < end; now = platform::monotonicNowNs()) {
+    const std::int64_t due = playback.publishDue(now);
+    platform::sleepUntilMonotonicNs(std::min(due, now + 20'000'000));
+  }
+  const std::optional<int> status = peer.finish(seconds(0));
+  ASSERT_EQ(status, 0) << peer.log();
+  const std::optional<JsonValue> result = peer.result();
+  ASSERT_TRUE(result.has_value()) << peer.log();
+  expectMapsCostmapsAndDiagnostics(*result, "raymapd:\n" + daemon.log() + "\npeer:\n" + peer.log());
+  expectCleanStop(daemon);
+}
+
+TEST(FastDdsPeer, FastDdsAtBothEndsMapsTheRoomsFloor) {
+  RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
+  const std::uint32_t domain = uniqueDomain();
+  RunningDaemon daemon(fastDdsConfig(domain), false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+  PeerProcess subscriber(domain, "subscribe", subscribeArgs());
+  // The lidar starts once raymapd has the latched transform, as on a robot whose
+  // robot_state_publisher ran first: then no scan goes in with the configured extrinsic
+  // (identity), and the floor is where the transform puts it.
+  PeerProcess publisher(
+      domain, "publish",
+      {"--seconds", std::to_string(kPeerRun.count()), "--clouds-after-tf-static"});
+
+  const std::optional<int> status = subscriber.finish(kPeerRun + seconds(30));
+  EXPECT_EQ(publisher.finish(seconds(0)), 0) << publisher.log();
+  ASSERT_EQ(status, 0) << subscriber.log();
+  const std::optional<JsonValue> result = subscriber.result();
+  ASSERT_TRUE(result.has_value()) << subscriber.log();
+  const std::string logs = "raymapd:\n" + daemon.log() + "\nsubscriber:\n" + subscriber.log() +
+                           "\npublisher:\n" + publisher.log();
+  expectMapsCostmapsAndDiagnostics(*result, logs);
+  EXPECT_EQ(numberAt(*result, {"last_diagnostics", "pose_publishers"}), 1.0);
+  EXPECT_EQ(numberAt(*result, {"last_diagnostics", "clouds_malformed"}), 0.0);
+  // The robot stands at the room's centre on a floor at z = 0 (the peer's simulated room).
+  EXPECT_NEAR(numberAt(*result, {"last_map", "centre_x"}).value_or(99.0), 0.0, 0.1);
+  EXPECT_NEAR(numberAt(*result, {"last_map", "centre_y"}).value_or(99.0), 0.0, 0.1);
+  EXPECT_GT(numberAt(*result, {"last_map", "surface_cells"}).value_or(0.0), 100.0);
+  EXPECT_NEAR(numberAt(*result, {"last_map", "surface_elevation_median"}).value_or(99.0), 0.0, 0.15)
+      << logs;
+  expectCleanStop(daemon);
+}
+
+}  // namespace
+}  // namespace raymap::test
