@@ -949,11 +949,13 @@ void Service::Impl::countInputPublishers() noexcept {
   InputPublishers& p = input_publishers;
   bool changed = false;
   bool extra = false;
-  const auto count = [&](std::uint32_t& slot, const dds::RawReader& reader) {
-    const std::uint32_t n = reader.matchedWriters();
+  const auto note = [&](std::uint32_t& slot, std::uint32_t n) {
     changed = changed || n != slot;
     extra = extra || n > 1;
     slot = n;
+  };
+  const auto count = [&](std::uint32_t& slot, const dds::RawReader& reader) {
+    note(slot, reader.matchedWriters());
   };
   for (std::size_t i = 0; i < cloud_readers.size() && i < p.clouds.size(); ++i) {
     count(p.clouds[i], cloud_readers[i]);
@@ -965,10 +967,7 @@ void Service::Impl::countInputPublishers() noexcept {
     count(p.odometry, *odometry_reader);
   } else if (tf_reader) {
     // By frame: the writers of base_frame's transform within the last second.
-    const std::uint32_t n = base_writers.writers(platform::monotonicNowNs(), seconds(1.0));
-    changed = changed || n != p.odometry;
-    extra = extra || n > 1;
-    p.odometry = n;
+    note(p.odometry, base_writers.writers(platform::monotonicNowNs(), seconds(1.0)));
   }
   if (!extra) {
     input_publishers_who[0] = '\0';
