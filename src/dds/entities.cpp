@@ -65,6 +65,31 @@ Result<void> createTopic(const Participant& participant, const char* topic_name,
   return {};
 }
 
+/// Cyclone XML for `settings` ("" when they ask for nothing).
+std::string domainConfiguration(const DomainSettings& settings) {
+  std::string internal;
+  if (settings.receive_buffer_bytes > 0) {
+    internal +=
+        "<SocketReceiveBufferSize min=\"" + std::to_string(settings.receive_buffer_bytes) + "B\"/>";
+  }
+  if (settings.send_burst_bytes > 0) {
+    // MaxInitTransmit is a percentage of the receive buffer Cyclone presumes its readers have
+    // (a Cyclone reader's own, announced; for any other, this process's: ours is large, sized
+    // for clouds). 0 makes the first burst the repair burst: MaxRexmit, or two thirds of a
+    // Cyclone reader's announced buffer when that is less.
+    const std::string burst = std::to_string(settings.send_burst_bytes) + "B";
+    internal += "<BurstSize><MaxRexmit>" + burst +
+                "</MaxRexmit><MaxInitTransmit>0</MaxInitTransmit></BurstSize>"
+                "<MaxQueuedRexmitBytes>4MiB</MaxQueuedRexmitBytes>"
+                "<HeartbeatInterval min=\"2ms\" minsched=\"5ms\">10ms</HeartbeatInterval>";
+  }
+  if (internal.empty()) {
+    return {};
+  }
+  return "<CycloneDDS><Domain Id=\"any\"><Internal>" + internal +
+         "</Internal></Domain></CycloneDDS>";
+}
+
 }  // namespace
 
 // ---- Participant ----
@@ -74,12 +99,10 @@ Result<Participant> Participant::create(std::uint32_t domain_id, const DomainSet
     return fail(ErrorCode::kInvalidArgument, "dds: domain id out of range");
   }
   dds_entity_t domain = 0;
-  if (settings.receive_buffer_bytes > 0) {
+  if (const std::string ours = domainConfiguration(settings); !ours.empty()) {
     // Cyclone reads a list of configuration sources in order, a later one overriding an
     // earlier one: ours first, then whatever CYCLONEDDS_URI names.
-    std::string config =
-        "<CycloneDDS><Domain Id=\"any\"><Internal><SocketReceiveBufferSize min=\"" +
-        std::to_string(settings.receive_buffer_bytes) + "B\"/></Internal></Domain></CycloneDDS>";
+    std::string config = ours;
     if (const char* uri = std::getenv("CYCLONEDDS_URI"); uri != nullptr && uri[0] != '\0') {
       config += ",";
       config += uri;
@@ -88,10 +111,12 @@ Result<Participant> Participant::create(std::uint32_t domain_id, const DomainSet
     if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) {
       domain = 0;  // this process already has the domain, configured when it was created
     } else if (domain < 0) {
-      const std::string what =
-          "dds_create_domain (check CYCLONEDDS_URI, and that the kernel allows a receive buffer "
-          "of " +
-          std::to_string(settings.receive_buffer_bytes) + " bytes: net.core.rmem_max)";
+      std::string what = "dds_create_domain (check CYCLONEDDS_URI";
+      if (settings.receive_buffer_bytes > 0) {
+        what += ", and that the kernel allows a receive buffer of " +
+                std::to_string(settings.receive_buffer_bytes) + " bytes: net.core.rmem_max";
+      }
+      what += ")";
       return fail(ErrorCode::kIo, describe(what.c_str(), nullptr, domain));
     }
   }

@@ -17,21 +17,35 @@
 
 namespace raymap::dds {
 
-/// @brief Owns a domain participant (dds_delete on destruction deletes every entity created
-/// under it). Configuration comes from CYCLONEDDS_URI as usual: the service sets that variable
-/// from its YAML before it creates the participant. Readers, writers and waitsets created from a
-/// participant must be destroyed before it (their handles are then already deleted; their
-/// destructors tolerate that).
-/// Thread-safety: handle() from any thread; creation and destruction from one thread.
-/// @brief What a process asks of its DDS domain beyond CYCLONEDDS_URI.
+/// @brief What a process asks of its DDS domain beyond CYCLONEDDS_URI. Settings of the
+/// configuration CYCLONEDDS_URI names win over these.
 struct DomainSettings {
   /// Minimum receive buffer of the domain's sockets (bytes; 0: leave it to CYCLONEDDS_URI or
   /// Cyclone's default, which asks for 1 MiB and takes what the kernel gives). Put before the
   /// configuration CYCLONEDDS_URI names, so a size the user's file sets wins. The kernel must
   /// allow it (net.core.rmem_max), or the domain cannot be created.
   std::uint64_t receive_buffer_bytes = 0;
+  /// Largest burst of one reliable sample's data sent to its readers at once (bytes; 0: leave
+  /// it to Cyclone, which sends a sample whole and repairs in bursts of up to 1 MiB). A sample
+  /// larger than this (a GridMap: 0.2-1 MB) goes out as a first burst of this size, the rest as
+  /// the readers ask for it, each request answered with at most this much: so a reader whose
+  /// socket buffer is the OS default (208 KiB on Linux, as rmw_fastrtps and a plain Cyclone file
+  /// leave it) is never sent more than it can hold. The kernel charges a socket buffer for the
+  /// memory a datagram occupies, up to twice its size (a 64 KB datagram on loopback: 128 KiB),
+  /// so keep it at most a third of the smallest reader buffer. With it, writers send
+  /// heartbeats every 10 ms (at least 2 ms apart) while a
+  /// sample is unacknowledged, so that the requests come promptly (Fast DDS readers do not
+  /// answer the fragment heartbeats that follow a burst), and the retransmit queue holds 4 MiB
+  /// (a map for several readers; Cyclone's default, 512 kB, is less than one map).
+  std::uint64_t send_burst_bytes = 0;
 };
 
+/// @brief Owns a domain participant (dds_delete on destruction deletes every entity created
+/// under it). Configuration comes from CYCLONEDDS_URI as usual: the service sets that variable
+/// from its YAML before it creates the participant. Readers, writers and waitsets created from a
+/// participant must be destroyed before it (their handles are then already deleted; their
+/// destructors tolerate that).
+/// Thread-safety: handle() from any thread; creation and destruction from one thread.
 class Participant {
  public:
   /// @brief Creates a participant on `domain_id` (0..232 like ROS_DOMAIN_ID), creating the

@@ -7,7 +7,9 @@
 # Each rate runs under three policies of the same binary: "bounded" (the shipped defaults: the
 # map lock given up every 5 ms, the adaptive publish lead, the latency bound while the integrator
 # is saturated), "always" (the same with queues.shed_when: always) and "unbounded" (the behaviour
-# before them: max_lock_hold_s 1, publish_lead_max_s = publish_lead_s, max_latency_s 0).
+# before them: max_lock_hold_s 1, publish_lead_max_s = publish_lead_s, max_latency_s 0). A fourth,
+# "unpaced" (not in the default list), is "bounded" with dds.send_burst_kb: 0: each map written
+# whole, as before issue 53.
 # Prints one JSON object per run (raymap-load's output plus rate and policy, with the CPU seconds of
 # each raymapd thread: thread_cpu_s) to stdout.
 #   tools/bench/run-overload-benchmarks.sh [BUILD_DIR] [SECONDS]
@@ -38,6 +40,8 @@ for rate in ${RATES:-10 20 50 100 200}; do
     extra=()
     if [ "$policy" = always ]; then
       extra=(-e "s/^  shed_when: [a-z]*/  shed_when: always/")
+    elif [ "$policy" = unpaced ]; then
+      extra=(-e "s/^  send_burst_kb: [0-9]*/  send_burst_kb: 0/")
     elif [ "$policy" = unbounded ]; then
       extra=(-e "s/^  max_lock_hold_s: [0-9.]*/  max_lock_hold_s: 1/"
         -e "s/^  publish_lead_max_s: [0-9.]*/  publish_lead_max_s: 0.015/"

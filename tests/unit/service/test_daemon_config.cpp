@@ -326,6 +326,17 @@ TEST(DaemonConfig, ValuesOutOfRangeAreNamed) {
   expectError("map:\n  resolution: .nan\n", "map.resolution", "finite");
 }
 
+TEST(DaemonConfig, MapsGoOutInBurstsOfSendBurstKb) {
+  auto defaults = parseDaemonConfig("{}\n", kName);
+  ASSERT_TRUE(defaults) << defaults.error().message;
+  EXPECT_EQ(defaults->dds.send_burst_kb, 64u);  // one 64 KB datagram: within a stock buffer
+  auto off = parseDaemonConfig("dds: {send_burst_kb: 0}\n", kName);
+  ASSERT_TRUE(off) << off.error().message;
+  EXPECT_EQ(off->dds.send_burst_kb, 0u);
+  expectError("dds: {send_burst_kb: 4}\n", "dds.send_burst_kb", "at least 8");
+  expectError("dds: {send_burst_kb: -1}\n", "dds.send_burst_kb", "");
+}
+
 TEST(DaemonConfig, HeightMapMustFitTheWindow) {
   // Default window: 8 x 8 regions of 3.2 m = 25.6 m; the map must be a region smaller.
   expectError("heightmap:\n  size: 25\n", "heightmap.size", "does not fit the rolling window");
