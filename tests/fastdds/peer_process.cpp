@@ -17,12 +17,19 @@ namespace raymap::test {
 bool fastDdsPeerBuilt() { return ::access(RAYMAP_FASTDDS_PEER_PATH, X_OK) == 0; }
 
 PeerProcess::PeerProcess(std::uint32_t domain, const std::string& mode,
-                         const std::vector<std::string>& args) {
-  std::vector<std::string> all = {"--domain", std::to_string(domain), "--output",
-                                  dir_.file("result.json"), mode};
+                         const std::vector<std::string>& args,
+                         const std::vector<std::string>& options,
+                         const std::vector<std::string>& launcher) {
+  std::vector<std::string> all = launcher;
+  all.insert(all.end(), {RAYMAP_FASTDDS_PEER_PATH, "--domain", std::to_string(domain), "--output",
+                         dir_.file("result.json")});
+  all.insert(all.end(), options.begin(), options.end());
+  all.push_back(mode);
   all.insert(all.end(), args.begin(), args.end());
-  process_ = std::make_unique<DaemonProcess>(RAYMAP_FASTDDS_PEER_PATH, all,
-                                             std::vector<std::string>{}, dir_.file("peer.log"));
+  const std::string binary = all.front();
+  all.erase(all.begin());
+  process_ = std::make_unique<DaemonProcess>(binary, all, std::vector<std::string>{},
+                                             dir_.file("peer.log"));
 }
 
 std::optional<int> PeerProcess::finish(std::chrono::milliseconds timeout) {

@@ -20,8 +20,11 @@ bool fastDdsPeerBuilt();
 /// @brief One running raymap-fastdds-peer (killed when destroyed, if still running).
 class PeerProcess {
  public:
-  /// @brief Starts `raymap-fastdds-peer --domain DOMAIN --output FILE MODE args...`.
-  PeerProcess(std::uint32_t domain, const std::string& mode, const std::vector<std::string>& args);
+  /// @brief Starts `raymap-fastdds-peer --domain DOMAIN --output FILE options... MODE args...`,
+  /// through `launcher` when one is given (e.g. `ip netns exec NAME`).
+  PeerProcess(std::uint32_t domain, const std::string& mode, const std::vector<std::string>& args,
+              const std::vector<std::string>& options = {},
+              const std::vector<std::string>& launcher = {});
   bool running() { return process_->running(); }
   /// @brief Waits up to `timeout` for the peer to end by itself; then, or with `stop`, sends
   /// SIGTERM (it ends its run early and still reports). @return its exit status; nullopt when

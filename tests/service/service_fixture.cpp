@@ -84,7 +84,9 @@ std::string serviceConfig(std::uint32_t domain, const std::string& extra,
   return text + extra;
 }
 
-RunningDaemon::RunningDaemon(const std::string& config_text, bool watchdog) {
+RunningDaemon::RunningDaemon(const std::string& config_text, bool watchdog,
+                             const std::vector<std::string>& launcher,
+                             const std::vector<std::string>& environment) {
   const std::string config = dir.file("raymapd.yaml");
   std::ofstream(config) << config_text;
   std::vector<std::string> env = {"NOTIFY_SOCKET=" + notify.path()};
@@ -92,8 +94,12 @@ RunningDaemon::RunningDaemon(const std::string& config_text, bool watchdog) {
     // WatchdogSec=1s: systemd restarts a service that has not pinged for 1 s.
     env.push_back("WATCHDOG_USEC=1000000");
   }
-  process = std::make_unique<DaemonProcess>(
-      RAYMAPD_PATH, std::vector<std::string>{"--config", config}, env, dir.file("raymapd.log"));
+  env.insert(env.end(), environment.begin(), environment.end());
+  std::vector<std::string> command = launcher;
+  command.insert(command.end(), {RAYMAPD_PATH, "--config", config});
+  const std::string binary = command.front();
+  command.erase(command.begin());
+  process = std::make_unique<DaemonProcess>(binary, command, env, dir.file("raymapd.log"));
 }
 
 std::string RunningDaemon::log() const { return readFile(dir.file("raymapd.log")); }

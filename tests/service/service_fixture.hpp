@@ -83,9 +83,12 @@ double publishPeriodMs(const std::vector<driver::ReceivedGridMap>& maps, std::si
 driver::SimulatedLidar yardLidar(int beams, int columns, bool moving);
 
 /// @brief raymapd started on `config_text` (written to a temporary folder) with a fake systemd
-/// notify socket; `watchdog` sets WATCHDOG_USEC to 1 s.
+/// notify socket; `watchdog` sets WATCHDOG_USEC to 1 s. `launcher` runs it (e.g. `ip netns exec
+/// NAME`: raymapd is then its argument), `environment` adds NAME=value variables.
 struct RunningDaemon {
-  RunningDaemon(const std::string& config_text, bool watchdog);
+  RunningDaemon(const std::string& config_text, bool watchdog,
+                const std::vector<std::string>& launcher = {},
+                const std::vector<std::string>& environment = {});
   std::string log() const;
 
   TempDir dir;

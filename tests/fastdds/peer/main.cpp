@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // raymap-fastdds-peer: raymapd's ROS 2 neighbours as Fast DDS 2.9 nodes would be (rmw_fastrtps's
-// configuration, the stock socket buffers), on loopback only: `publish` is a lidar driver with
+// configuration, the stock socket buffers), on loopback (or, with --discovery stock, in a
+// network namespace with multicast): `publish` is a lidar driver with
 // odometry and /tf_static, `subscribe` a planner taking GridMaps and costmaps and a monitor
 // taking diagnostics. Prints one JSON object of what it did (tests/fastdds, docs/fastdds-peer.md).
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -14,7 +16,7 @@
 #include <fastdds/dds/log/StdoutErrConsumer.hpp>
 
 #include "tests/fastdds/peer/json_writer.hpp"
-#include "tests/fastdds/peer/loopback_participant.hpp"
+#include "tests/fastdds/peer/peer_participant.hpp"
 #include "tests/fastdds/peer/publish_mode.hpp"
 #include "tests/fastdds/peer/stop_signal.hpp"
 #include "tests/fastdds/peer/subscribe_mode.hpp"
@@ -55,8 +57,7 @@ bool emit(const JsonObject& result, const std::string& path) {
 
 int main(int argc, char** argv) {
   using namespace raymap::fastdds_peer;
-  CLI::App app{
-      "raymap-fastdds-peer: raymapd's ROS 2 neighbours as Fast DDS 2.9 nodes, on loopback"};
+  CLI::App app{"raymap-fastdds-peer: raymapd's ROS 2 neighbours as Fast DDS 2.9 nodes"};
   app.require_subcommand(1);
   std::uint32_t domain = domainFromEnvironment();
   std::uint32_t buffer_bytes = 0;
@@ -67,6 +68,14 @@ int main(int argc, char** argv) {
                  "UDP send and receive buffer sizes (0: the OS default, as rmw_fastrtps leaves "
                  "them; for comparison runs)");
   app.add_option("--output", output, "also write the JSON to this file");
+  Discovery discovery = Discovery::kLoopback;
+  app.add_option("--discovery", discovery,
+                 "loopback: unicast on 127.0.0.1 only (default); stock: Fast DDS's own transports "
+                 "and multicast discovery, only inside a network namespace of the test's own")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, Discovery>{{"loopback", Discovery::kLoopback},
+                                           {"stock", Discovery::kStock}},
+          CLI::ignore_case));
 
   PublishOptions publish;
   CLI::App* publish_command =
@@ -94,6 +103,8 @@ int main(int argc, char** argv) {
       "--until", subscribe.until,
       "end once this many GridMaps, costmaps and diagnostic arrays (after the first GridMap) "
       "each arrived (0: never)");
+  subscribe_command->add_option("--min-maps", subscribe.min_maps,
+                                "with --until: end only once this many GridMaps arrived too");
   subscribe_command->add_flag("--from-match", subscribe.from_match,
                               "count --seconds from when raymapd's GridMap writer matched");
   subscribe_command->add_option("--grid-topic", subscribe.grid_topic);
@@ -104,7 +115,7 @@ int main(int argc, char** argv) {
   logToStandardError();
   installStopHandlers();
   std::string error;
-  auto participant = LoopbackParticipant::create(domain, buffer_bytes, error);
+  auto participant = PeerParticipant::create(domain, discovery, buffer_bytes, error);
   if (!participant) {
     std::fprintf(stderr, "raymap-fastdds-peer: %s\n", error.c_str());
     return 1;
@@ -113,7 +124,8 @@ int main(int argc, char** argv) {
   const bool publishing = publish_command->parsed();
   result.text("mode", publishing ? "publish" : "subscribe")
       .integer("domain", domain)
-      .integer("buffer_bytes", buffer_bytes);
+      .integer("buffer_bytes", buffer_bytes)
+      .text("discovery", discovery == Discovery::kLoopback ? "loopback" : "stock");
   const bool ran = publishing ? runPublish(*participant, publish, result)
                               : runSubscribe(*participant, subscribe, result);
   participant.reset();

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// LoopbackParticipant: the participant's transport and discovery QoS, and topic registration.
-#include "tests/fastdds/peer/loopback_participant.hpp"
+// PeerParticipant: the participant's transport and discovery QoS, and topic registration.
+#include "tests/fastdds/peer/peer_participant.hpp"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
@@ -40,7 +40,22 @@ dds::DomainParticipantQos loopbackQos(std::uint32_t buffer_bytes) {
   builtin.metatrafficUnicastLocatorList.push_back(loopback());
   builtin.initialPeersList.push_back(loopback());
   qos.wire_protocol().default_unicast_locator_list.push_back(loopback());
+  return qos;
+}
+
+dds::DomainParticipantQos stockQos(std::uint32_t buffer_bytes) {
+  dds::DomainParticipantQos qos = dds::PARTICIPANT_QOS_DEFAULT;
+  qos.name("raymap-fastdds-peer");
+  qos.transport().send_socket_buffer_size = buffer_bytes;
+  qos.transport().listen_socket_buffer_size = buffer_bytes;
+  return qos;
+}
+
+dds::DomainParticipantQos participantQos(Discovery discovery, std::uint32_t buffer_bytes) {
+  dds::DomainParticipantQos qos =
+      discovery == Discovery::kLoopback ? loopbackQos(buffer_bytes) : stockQos(buffer_bytes);
   // As rmw_fastrtps: discovery messages larger than the preallocated 5000 bytes.
+  auto& builtin = qos.wire_protocol().builtin;
   builtin.readerHistoryMemoryPolicy = rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   builtin.writerHistoryMemoryPolicy = rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   return qos;
@@ -48,13 +63,13 @@ dds::DomainParticipantQos loopbackQos(std::uint32_t buffer_bytes) {
 
 }  // namespace
 
-std::unique_ptr<LoopbackParticipant> LoopbackParticipant::create(std::uint32_t domain,
-                                                                 std::uint32_t buffer_bytes,
-                                                                 std::string& error) {
-  std::unique_ptr<LoopbackParticipant> self(new LoopbackParticipant());
+std::unique_ptr<PeerParticipant> PeerParticipant::create(std::uint32_t domain, Discovery discovery,
+                                                         std::uint32_t buffer_bytes,
+                                                         std::string& error) {
+  std::unique_ptr<PeerParticipant> self(new PeerParticipant());
   auto* factory = dds::DomainParticipantFactory::get_instance();
-  self->participant_ =
-      factory->create_participant(static_cast<dds::DomainId_t>(domain), loopbackQos(buffer_bytes));
+  self->participant_ = factory->create_participant(static_cast<dds::DomainId_t>(domain),
+                                                   participantQos(discovery, buffer_bytes));
   if (self->participant_ == nullptr) {
     error = "Fast DDS refused the participant on domain " + std::to_string(domain);
     return nullptr;
@@ -68,14 +83,14 @@ std::unique_ptr<LoopbackParticipant> LoopbackParticipant::create(std::uint32_t d
   return self;
 }
 
-LoopbackParticipant::~LoopbackParticipant() {
+PeerParticipant::~PeerParticipant() {
   if (participant_ != nullptr) {
     participant_->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
   }
 }
 
-dds::Topic* LoopbackParticipant::topic(const std::string& name, dds::TopicDataType* type) {
+dds::Topic* PeerParticipant::topic(const std::string& name, dds::TopicDataType* type) {
   dds::TypeSupport support(type);
   support->auto_fill_type_object(false);
   support->auto_fill_type_information(false);

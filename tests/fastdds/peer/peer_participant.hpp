@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// A Fast DDS domain participant configured as rmw_fastrtps configures one, but whose traffic
-// stays on loopback and which finds Cyclone DDS there without multicast.
+// A Fast DDS domain participant configured as rmw_fastrtps configures one: either whose traffic
+// stays on loopback and which finds Cyclone DDS there without multicast, or with Fast DDS's
+// stock transports and multicast discovery (for a network namespace the test makes).
 #pragma once
 
 #include <cstdint>
@@ -20,26 +21,35 @@ namespace raymap::fastdds_peer {
 /// 0 in the first free port pair.
 inline constexpr std::uint32_t kParticipantIndices = 33;
 
+/// How the participant finds others and which transports it uses.
+enum class Discovery : std::uint8_t {
+  /// One UDPv4 transport whitelisted to 127.0.0.1, the built-in transports (UDPv4 on every
+  /// interface, shared memory) off. Unicast only: metatraffic and user traffic on 127.0.0.1 at
+  /// the RTPS well-known ports of the participant's index, no multicast locator, and initial
+  /// peers 127.0.0.1 at the metatraffic ports of indices 0 to kParticipantIndices - 1 (where
+  /// Cyclone's participants listen).
+  kLoopback,
+  /// Fast DDS's defaults, as a stock ROS 2 node has them: the built-in transports (UDPv4 on
+  /// every interface, shared memory) and SPDP over multicast (239.255.0.1). Only for a network
+  /// namespace of the caller's own, whose interfaces are all the test's.
+  kStock,
+};
+
 /// @brief Owns one DomainParticipant with one Publisher and one Subscriber; deletes everything it
 /// contains when destroyed.
 ///
-/// Transport: one UDPv4 transport whitelisted to 127.0.0.1, the built-in transports (UDPv4 on
-/// every interface, shared memory) off; send and receive buffers `buffer_bytes` (0: the OS
-/// default, as rmw_fastrtps leaves them). Discovery: unicast only: metatraffic and user traffic
-/// on 127.0.0.1 at the RTPS well-known ports of the participant's index, no multicast locator,
-/// and initial peers 127.0.0.1 at the metatraffic ports of indices 0 to kParticipantIndices - 1
-/// (where Cyclone's participants listen). Writer and reader histories of discovery may grow (as
+/// Transport and discovery: `discovery`; send and receive buffers `buffer_bytes` (0: the OS
+/// default, as rmw_fastrtps leaves them). Writer and reader histories of discovery may grow (as
 /// rmw_fastrtps sets them). Thread-safety: one thread creates entities; Fast DDS's own threads
 /// call listeners.
-class LoopbackParticipant {
+class PeerParticipant {
  public:
   /// @return nullptr with `error` set when Fast DDS refuses the participant.
-  static std::unique_ptr<LoopbackParticipant> create(std::uint32_t domain,
-                                                     std::uint32_t buffer_bytes,
-                                                     std::string& error);
-  ~LoopbackParticipant();
-  LoopbackParticipant(const LoopbackParticipant&) = delete;
-  LoopbackParticipant& operator=(const LoopbackParticipant&) = delete;
+  static std::unique_ptr<PeerParticipant> create(std::uint32_t domain, Discovery discovery,
+                                                 std::uint32_t buffer_bytes, std::string& error);
+  ~PeerParticipant();
+  PeerParticipant(const PeerParticipant&) = delete;
+  PeerParticipant& operator=(const PeerParticipant&) = delete;
 
   /// @brief The topic `name` of the type `type` (taking ownership), registered under its own
   /// name (the IDL's, e.g. sensor_msgs::msg::dds_::PointCloud2_) without TypeObject or type
@@ -50,7 +60,7 @@ class LoopbackParticipant {
   eprosima::fastdds::dds::Subscriber& subscriber() noexcept { return *subscriber_; }
 
  private:
-  LoopbackParticipant() = default;
+  PeerParticipant() = default;
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;

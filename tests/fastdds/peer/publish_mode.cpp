@@ -31,7 +31,7 @@ struct Writers {
   dds::DataWriter* tf_static = nullptr;
 };
 
-dds::DataWriter* makeWriter(LoopbackParticipant& participant, const std::string& topic_name,
+dds::DataWriter* makeWriter(PeerParticipant& participant, const std::string& topic_name,
                             dds::TopicDataType* type, RosProfile profile) {
   dds::Topic* topic = participant.topic(topic_name, type);
   return topic == nullptr ? nullptr
@@ -123,8 +123,7 @@ Clock::time_point nextDue(Clock::time_point due, std::chrono::nanoseconds period
 
 }  // namespace
 
-bool runPublish(LoopbackParticipant& participant, const PublishOptions& options,
-                JsonObject& result) {
+bool runPublish(PeerParticipant& participant, const PublishOptions& options, JsonObject& result) {
   Writers writers;
   writers.cloud =
       makeWriter(participant, options.points_topic,

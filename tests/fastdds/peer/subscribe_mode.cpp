@@ -3,6 +3,7 @@
 // main thread waits and then reports.
 #include "tests/fastdds/peer/subscribe_mode.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
+#include "platform/socket_buffers.hpp"
 #include "tests/fastdds/peer/message_summary.hpp"
 #include "tests/fastdds/peer/period_stats.hpp"
 #include "tests/fastdds/peer/ros_qos.hpp"
@@ -84,7 +86,7 @@ std::unique_ptr<TakingListener<Message, OnMessage>> takingListener(OnMessage on_
   return std::make_unique<TakingListener<Message, OnMessage>>(std::move(on_message));
 }
 
-dds::DataReader* makeReader(LoopbackParticipant& participant, const std::string& topic_name,
+dds::DataReader* makeReader(PeerParticipant& participant, const std::string& topic_name,
                             dds::TopicDataType* type, dds::DataReaderListener& listener) {
   dds::Topic* topic = participant.topic(topic_name, type);
   return topic == nullptr ? nullptr
@@ -98,10 +100,11 @@ std::int64_t matchedWriters(dds::DataReader* reader) {
   return status.current_count;
 }
 
-bool enough(Received& received, std::int64_t until) {
+bool enough(Received& received, const SubscribeOptions& options) {
+  const std::int64_t until = options.until;
   const std::lock_guard<std::mutex> lock(received.mutex);
   const auto maps = static_cast<std::int64_t>(received.map_arrivals_ns.size());
-  return until > 0 && maps >= until && received.costmaps >= until &&
+  return until > 0 && maps >= std::max(until, options.min_maps) && received.costmaps >= until &&
          received.diagnostics_after_first_map >= until;
 }
 
@@ -142,7 +145,7 @@ void report(Received& received, std::int64_t start_ns, std::int64_t matched_ns,
 
 }  // namespace
 
-bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& options,
+bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options,
                   JsonObject& result) {
   const std::int64_t start_ns = steadyNs();
   Received received;
@@ -190,10 +193,13 @@ bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& opti
     result.text("error", "Fast DDS refused a reader");
     return false;
   }
+  // Every socket exists once the participant does: count what the kernel drops from here on.
+  raymap::platform::UdpDrops socket_drops = raymap::platform::UdpDrops::ofThisProcess();
+  const std::uint64_t drops_before = socket_drops.total();
   const auto run = std::chrono::nanoseconds(std::llround(options.seconds * 1e9));
   Clock::time_point end = Clock::now() + run;
   bool window_from_match = options.from_match;
-  while (Clock::now() < end && !stopRequested() && !enough(received, options.until)) {
+  while (Clock::now() < end && !stopRequested() && !enough(received, options)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     if (window_from_match && maps->matchedNs() != 0) {
       end = Clock::time_point(std::chrono::nanoseconds(maps->matchedNs())) + run;
@@ -202,6 +208,7 @@ bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& opti
   }
   const std::int64_t writers[3] = {matchedWriters(map_reader), matchedWriters(costmap_reader),
                                    matchedWriters(diagnostics_reader)};
+  const std::uint64_t drops_after = socket_drops.total();
   delete_readers();
   const std::int64_t end_ns = steadyNs();
   result.number("seconds", static_cast<double>(end_ns - start_ns) * 1e-9);
@@ -212,6 +219,10 @@ bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& opti
                                .integer("grid_map", writers[0])
                                .integer("costmap", writers[1])
                                .integer("diagnostics", writers[2]));
+  // Datagrams the kernel dropped because a socket's buffer was full: fragments of maps that
+  // had to be sent again (or were never completed).
+  result.integer("socket_sockets", static_cast<std::int64_t>(socket_drops.sockets()))
+      .integer("socket_datagrams_dropped", static_cast<std::int64_t>(drops_after - drops_before));
   return true;
 }
 

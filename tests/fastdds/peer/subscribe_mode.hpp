@@ -7,7 +7,7 @@
 #include <string>
 
 #include "tests/fastdds/peer/json_writer.hpp"
-#include "tests/fastdds/peer/loopback_participant.hpp"
+#include "tests/fastdds/peer/peer_participant.hpp"
 
 namespace raymap::fastdds_peer {
 
@@ -16,6 +16,8 @@ struct SubscribeOptions {
   /// End early once this many GridMaps, costmaps and diagnostic arrays each have arrived, the
   /// diagnostic arrays counted from the first GridMap on (0: run the whole time).
   std::int64_t until = 0;
+  /// With `until`: end early only once this many GridMaps have arrived too.
+  std::int64_t min_maps = 0;
   /// Count `seconds` from when the GridMap reader first matched raymapd's writer (discovery
   /// left out of a measurement), not from the start.
   bool from_match = false;
@@ -31,9 +33,10 @@ struct SubscribeOptions {
 /// from the arrival times, the longest time without a map in the window measured, the first
 /// map's delay after the subscriber started and after the match, costmaps and diagnostics
 /// received, the last
-/// pipeline level, and summaries of the last GridMap, costmap and diagnostic values
+/// pipeline level, summaries of the last GridMap, costmap and diagnostic values, and the
+/// datagrams the kernel dropped on the participant's sockets meanwhile (buffer full)
 /// @return false when an endpoint could not be created (result says why)
-bool runSubscribe(LoopbackParticipant& participant, const SubscribeOptions& options,
+bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options,
                   JsonObject& result);
 
 }  // namespace raymap::fastdds_peer
