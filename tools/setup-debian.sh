@@ -12,6 +12,7 @@ packages=(
   pocl-opencl-icd clinfo  # OpenCL on the CPU: the OpenCL tests run for real without a GPU
   cyclonedds-dev cyclonedds-tools  # raymapd's DDS I/O (C API; idlc is in -tools)
   libfastrtps-dev fastddsgen  # Fast DDS 2.9 and its type generator: the tests' independent peer
+  iproute2                # ip netns: the multicast discovery test between two network namespaces
   libsystemd-dev systemd  # sd_notify for Type=notify; systemd-analyze lints the unit in the tests
   libboost-dev            # Boost.Lockfree SPSC queues (header-only)
   liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks (zstd: above), SQLite (.db3) bags

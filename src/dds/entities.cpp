@@ -72,16 +72,12 @@ std::string domainConfiguration(const DomainSettings& settings) {
     internal +=
         "<SocketReceiveBufferSize min=\"" + std::to_string(settings.receive_buffer_bytes) + "B\"/>";
   }
-  if (settings.send_burst_bytes > 0) {
-    // MaxInitTransmit is a percentage of the receive buffer Cyclone presumes its readers have
-    // (a Cyclone reader's own, announced; for any other, this process's: ours is large, sized
-    // for clouds). 0 makes the first burst the repair burst: MaxRexmit, or two thirds of a
-    // Cyclone reader's announced buffer when that is less.
-    const std::string burst = std::to_string(settings.send_burst_bytes) + "B";
+  if (settings.repair_burst_bytes > 0) {
+    const std::string burst = std::to_string(settings.repair_burst_bytes) + "B";
     internal += "<BurstSize><MaxRexmit>" + burst +
-                "</MaxRexmit><MaxInitTransmit>0</MaxInitTransmit></BurstSize>"
+                "</MaxRexmit></BurstSize>"
                 "<MaxQueuedRexmitBytes>4MiB</MaxQueuedRexmitBytes>"
-                "<HeartbeatInterval min=\"2ms\" minsched=\"5ms\">10ms</HeartbeatInterval>";
+                "<HeartbeatInterval min=\"1ms\" minsched=\"2ms\">5ms</HeartbeatInterval>";
   }
   if (internal.empty()) {
     return {};

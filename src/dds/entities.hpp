@@ -25,19 +25,20 @@ struct DomainSettings {
   /// configuration CYCLONEDDS_URI names, so a size the user's file sets wins. The kernel must
   /// allow it (net.core.rmem_max), or the domain cannot be created.
   std::uint64_t receive_buffer_bytes = 0;
-  /// Largest burst of one reliable sample's data sent to its readers at once (bytes; 0: leave
-  /// it to Cyclone, which sends a sample whole and repairs in bursts of up to 1 MiB). A sample
-  /// larger than this (a GridMap: 0.2-1 MB) goes out as a first burst of this size, the rest as
-  /// the readers ask for it, each request answered with at most this much: so a reader whose
-  /// socket buffer is the OS default (208 KiB on Linux, as rmw_fastrtps and a plain Cyclone file
-  /// leave it) is never sent more than it can hold. The kernel charges a socket buffer for the
-  /// memory a datagram occupies, up to twice its size (a 64 KB datagram on loopback: 128 KiB),
-  /// so keep it at most a third of the smallest reader buffer. With it, writers send
-  /// heartbeats every 10 ms (at least 2 ms apart) while a
-  /// sample is unacknowledged, so that the requests come promptly (Fast DDS readers do not
-  /// answer the fragment heartbeats that follow a burst), and the retransmit queue holds 4 MiB
-  /// (a map for several readers; Cyclone's default, 512 kB, is less than one map).
-  std::uint64_t send_burst_bytes = 0;
+  /// Largest burst of a reliable sample's data resent at once to a reader that missed part of it
+  /// (bytes; 0: leave it to Cyclone, which resends up to 1 MiB, or two thirds of a Cyclone
+  /// reader's announced buffer, per request). A sample still goes out whole the first time, so a
+  /// reader that can take it pays nothing. A reader whose socket buffer is smaller than the
+  /// sample (the OS default, 208 KiB on Linux, as rmw_fastrtps and a plain Cyclone file leave it,
+  /// against a 0.2-1 MB GridMap) loses the fragments that did not fit; its repairs then come in
+  /// bursts it can hold, each as it asks, instead of bursts that overrun it again. The kernel
+  /// charges a socket buffer for the memory a datagram occupies, up to twice its size (a 64 KB
+  /// datagram on loopback: 128 KiB), so keep it at most a third of the smallest reader buffer.
+  /// With it, writers send heartbeats every 5 ms (at least 1 ms apart) while a sample is
+  /// unacknowledged, so that readers ask again promptly (Fast DDS readers answer heartbeats,
+  /// not the fragment heartbeats after a burst), and the retransmit queue holds 4 MiB (a map for
+  /// several readers; Cyclone's default, 512 kB, is less than one map).
+  std::uint64_t repair_burst_bytes = 0;
 };
 
 /// @brief Owns a domain participant (dds_delete on destruction deletes every entity created

@@ -338,14 +338,15 @@ void readHeightmap(Context& ctx, const YAML::Node& node, HeightmapConfig& hm) {
 
 void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
   Fields f(ctx, node, "dds");
-  f.knownKeys({"domain", "cyclonedds_uri", "receive_buffer_mb", "send_burst_kb", "grid_map_topic",
+  f.knownKeys({"domain", "cyclonedds_uri", "receive_buffer_mb", "repair_burst_kb", "grid_map_topic",
                "diagnostics_topic", "diagnostics_rate_hz", "voxels_topic", "voxels_rate_hz",
                "voxels_max_points", "costmap_topic"});
   dds.domain = f.integer<std::uint32_t>("domain", 0u, 0u, 232u);
   dds.cyclonedds_uri = text(f, "cyclonedds_uri", "");
   dds.receive_buffer_mb = f.integer<std::uint32_t>("receive_buffer_mb", 0u, 0u, 2048u);
-  dds.send_burst_kb = f.integer<std::uint32_t>("send_burst_kb", dds.send_burst_kb, 0u, 65536u);
-  f.check(dds.send_burst_kb == 0 || dds.send_burst_kb >= 8, "send_burst_kb",
+  dds.repair_burst_kb =
+      f.integer<std::uint32_t>("repair_burst_kb", dds.repair_burst_kb, 0u, 65536u);
+  f.check(dds.repair_burst_kb == 0 || dds.repair_burst_kb >= 8, "repair_burst_kb",
           "must be 0 (off) or at least 8 (KiB)");
   dds.grid_map_topic = topic(f, "grid_map_topic", dds.grid_map_topic);
   dds.diagnostics_topic = topic(f, "diagnostics_topic", dds.diagnostics_topic);

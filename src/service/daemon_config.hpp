@@ -116,12 +116,12 @@ struct DdsConfig {
   /// kernel's net.core.rmem_max (service::planReceiveBuffer). A size set in the Cyclone
   /// configuration wins over both.
   std::uint32_t receive_buffer_mb = 0;
-  /// Largest burst of one map's data sent to a reader at once (KiB; dds::DomainSettings::
-  /// send_burst_bytes): the rest follows as the reader asks for it, so a planner whose socket
-  /// buffer is the OS default (208 KiB, of which a 64 KB datagram takes 128 KiB) receives every
-  /// map. 0: Cyclone's own behaviour (each map sent whole). Settings of the Cyclone
-  /// configuration win.
-  std::uint32_t send_burst_kb = 64;
+  /// Largest burst of a map's data resent at once to a reader that missed part of it (KiB;
+  /// dds::DomainSettings::repair_burst_bytes). Maps go out whole; a planner whose socket buffer
+  /// is the OS default (208 KiB, of which a 64 KB datagram takes 128 KiB) loses what did not
+  /// fit and gets it again in bursts it can hold, every map. 0: Cyclone's own repairs (up to
+  /// 1 MiB at once). Settings of the Cyclone configuration win.
+  std::uint32_t repair_burst_kb = 64;
   std::string grid_map_topic = "rt/height_map";
   std::string diagnostics_topic = "rt/diagnostics";
   double diagnostics_rate_hz = 1.0;

@@ -317,7 +317,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   }
   dds::DomainSettings domain_settings;
   domain_settings.receive_buffer_bytes = receive_buffer->bytes;
-  domain_settings.send_burst_bytes = std::uint64_t{config.dds.send_burst_kb} * 1024;
+  domain_settings.repair_burst_bytes = std::uint64_t{config.dds.repair_burst_kb} * 1024;
   auto participant = dds::Participant::create(config.dds.domain, domain_settings);
   if (!participant) {
     // Cyclone reads its configuration when the participant is created: a bad one fails here.

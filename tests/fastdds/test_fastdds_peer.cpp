@@ -208,13 +208,14 @@ TEST(FastDdsPeer, AFastDdsSubscriberDecodesRaymapdsGridMapsCostmapsAndDiagnostic
 
 // A planner on a stock ROS 2 install: Fast DDS leaves its socket buffers at the OS default
 // (208 KiB here), less than one of these GridMaps (20 m: 200 x 200 cells x 4 layers, 640 KB).
-// Sent whole, each map overruns the buffer, and so do its repairs (20 to 50 datagrams dropped a
-// map measured here, and a keep-last reader often never completes one before the next);
-// raymapd sends at most dds.send_burst_kb (64 KiB) at once and the rest as the reader asks for
-// it. Counted, not timed: the datagrams the kernel dropped on the subscriber's sockets while at
-// least 25 maps arrived. Every other map is allowed one, for a receiver that a busy machine
-// stalls while bursts come (measured over 50 maps: 0 in 4 of 5 runs, 7 in one).
-TEST(FastDdsPeer, RaymapdSendsAStockBufferSubscriberNoMoreThanItsSocketHolds) {
+// raymapd sends each map whole and the subscriber loses what does not fit. Cyclone's own repairs
+// (up to 1 MiB at once) overrun the buffer again, and with keep-last 1 a map not complete when
+// the next is written is never delivered: 37 to 66 skipped while 25 arrived, in three runs here.
+// raymapd resends in bursts of dds.repair_burst_kb (64 KiB) that the buffer holds, so each map
+// completes (0 skipped). Counted, not timed: the maps skipped (gaps in the writer's sequence
+// numbers) while at least 25 arrived. One in ten may be, for a receiver that a busy machine
+// stalls for a period.
+TEST(FastDdsPeer, AStockBufferSubscriberReceivesRaymapdsMapsWithoutSkipping) {
   RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
   const std::uint32_t domain = uniqueDomain();
   std::string config = fastDdsConfig(domain);
@@ -237,9 +238,7 @@ TEST(FastDdsPeer, RaymapdSendsAStockBufferSubscriberNoMoreThanItsSocketHolds) {
   ASSERT_GE(maps, 25.0) << "raymapd:\n" << daemon.log() << "\npeer:\n" << peer.log();
   EXPECT_EQ(numberAt(*result, {"buffer_bytes"}), 0.0);  // the OS default
   EXPECT_EQ(textsAt(*result, {"last_map", "dim_sizes"}), (std::vector<std::string>{"200", "200"}));
-  EXPECT_GT(numberAt(*result, {"socket_sockets"}).value_or(0.0), 0.0) << "/proc not readable";
-  EXPECT_LE(numberAt(*result, {"socket_datagrams_dropped"}).value_or(1e9), maps / 2.0)
-      << peer.log();
+  EXPECT_LE(numberAt(*result, {"maps_skipped"}).value_or(1e9), maps / 10.0) << peer.log();
   expectCleanStop(daemon);
 }
 

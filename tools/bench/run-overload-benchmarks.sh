@@ -8,8 +8,8 @@
 # map lock given up every 5 ms, the adaptive publish lead, the latency bound while the integrator
 # is saturated), "always" (the same with queues.shed_when: always) and "unbounded" (the behaviour
 # before them: max_lock_hold_s 1, publish_lead_max_s = publish_lead_s, max_latency_s 0). A fourth,
-# "unpaced" (not in the default list), is "bounded" with dds.send_burst_kb: 0: each map written
-# whole, as before issue 53.
+# "unpaced" (not in the default list), is "bounded" with dds.repair_burst_kb: 0: Cyclone's own
+# repairs, up to 1 MiB at once, as before issue 53.
 # Prints one JSON object per run (raymap-load's output plus rate and policy, with the CPU seconds of
 # each raymapd thread: thread_cpu_s) to stdout.
 #   tools/bench/run-overload-benchmarks.sh [BUILD_DIR] [SECONDS]
@@ -41,7 +41,7 @@ for rate in ${RATES:-10 20 50 100 200}; do
     if [ "$policy" = always ]; then
       extra=(-e "s/^  shed_when: [a-z]*/  shed_when: always/")
     elif [ "$policy" = unpaced ]; then
-      extra=(-e "s/^  send_burst_kb: [0-9]*/  send_burst_kb: 0/")
+      extra=(-e "s/^  repair_burst_kb: [0-9]*/  repair_burst_kb: 0/")
     elif [ "$policy" = unbounded ]; then
       extra=(-e "s/^  max_lock_hold_s: [0-9.]*/  max_lock_hold_s: 1/"
         -e "s/^  publish_lead_max_s: [0-9.]*/  publish_lead_max_s: 0.015/"

@@ -33,6 +33,10 @@ namespace {
 struct Received {
   std::mutex mutex;
   std::vector<std::int64_t> map_arrivals_ns;  // steady clock
+  /// GridMaps the writer wrote but this reader never received (gaps in the writer's sequence
+  /// numbers: with keep-last 1 a map not complete when the next is written is dropped).
+  std::int64_t maps_skipped = 0;
+  std::int64_t last_map_sequence = 0;  // 0: none yet
   std::int64_t costmaps = 0;
   std::int64_t diagnostics = 0;
   std::int64_t diagnostics_after_first_map = 0;  // what they say counts the maps
@@ -46,7 +50,8 @@ std::int64_t steadyNs() {
       .count();
 }
 
-/// Takes every sample of type `Message` when data is available and hands it to `on_message`;
+/// Takes every sample of type `Message` when data is available and hands it to `on_message`
+/// (message, arrival, the writer's sequence number);
 /// notes when the reader first matched a writer.
 template <typename Message, typename OnMessage>
 class TakingListener : public dds::DataReaderListener {
@@ -69,7 +74,8 @@ class TakingListener : public dds::DataReaderListener {
     dds::SampleInfo info;
     while (reader->take_next_sample(&message_, &info) == ReturnCode_t::RETCODE_OK) {
       if (info.valid_data) {
-        on_message_(message_, arrival_ns);
+        on_message_(message_, arrival_ns,
+                    static_cast<std::int64_t>(info.sample_identity.sequence_number().to64long()));
       }
     }
   }
@@ -122,6 +128,7 @@ void report(Received& received, std::int64_t start_ns, std::int64_t matched_ns,
   const std::int64_t first_ns = arrivals.empty() ? 0 : arrivals.front();
   result.number("grid_map_writer_matched_after_ms", afterMs(start_ns, matched_ns))
       .integer("maps", static_cast<std::int64_t>(arrivals.size()))
+      .integer("maps_skipped", received.maps_skipped)
       .number("map_period_p50_ms", period.p50_ms)
       .number("map_period_p99_ms", period.p99_ms)
       .number("map_period_max_ms", period.max_ms)
@@ -150,21 +157,27 @@ bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options,
   const std::int64_t start_ns = steadyNs();
   Received received;
   auto maps = takingListener<grid_map_msgs::msg::dds_::GridMap_>(
-      [&received](const grid_map_msgs::msg::dds_::GridMap_& map, std::int64_t arrival_ns) {
+      [&received](const grid_map_msgs::msg::dds_::GridMap_& map, std::int64_t arrival_ns,
+                  std::int64_t sequence) {
         GridMapSummary summary = summarize(map);
         const std::lock_guard<std::mutex> lock(received.mutex);
+        if (received.last_map_sequence > 0 && sequence > received.last_map_sequence + 1) {
+          received.maps_skipped += sequence - received.last_map_sequence - 1;
+        }
+        received.last_map_sequence = sequence;
         received.map_arrivals_ns.push_back(arrival_ns);
         received.last_map = std::move(summary);
       });
   auto costmaps = takingListener<nav_msgs::msg::dds_::OccupancyGrid_>(
-      [&received](const nav_msgs::msg::dds_::OccupancyGrid_& costmap, std::int64_t) {
+      [&received](const nav_msgs::msg::dds_::OccupancyGrid_& costmap, std::int64_t, std::int64_t) {
         CostmapSummary summary = summarize(costmap);
         const std::lock_guard<std::mutex> lock(received.mutex);
         ++received.costmaps;
         received.last_costmap = std::move(summary);
       });
   auto diagnostics = takingListener<diagnostic_msgs::msg::dds_::DiagnosticArray_>(
-      [&received](const diagnostic_msgs::msg::dds_::DiagnosticArray_& array, std::int64_t) {
+      [&received](const diagnostic_msgs::msg::dds_::DiagnosticArray_& array, std::int64_t,
+                  std::int64_t) {
         const std::lock_guard<std::mutex> lock(received.mutex);
         ++received.diagnostics;
         if (!received.map_arrivals_ns.empty()) {

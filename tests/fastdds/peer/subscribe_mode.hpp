@@ -29,7 +29,8 @@ struct SubscribeOptions {
 /// @brief Subscribes (reliable, volatile, keep last 10: ROS's default profile) to the three
 /// topics, stamps each message's arrival (steady clock, in Fast DDS's listener) and decodes it,
 /// until `seconds` have passed, `until` is met, or SIGINT/SIGTERM.
-/// @param[out] result when the GridMap writer matched, maps received, their period p50/p99/max
+/// @param[out] result when the GridMap writer matched, maps received and skipped (gaps in the
+/// writer's sequence numbers), their period p50/p99/max
 /// from the arrival times, the longest time without a map in the window measured, the first
 /// map's delay after the subscriber started and after the match, costmaps and diagnostics
 /// received, the last

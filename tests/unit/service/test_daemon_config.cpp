@@ -326,15 +326,15 @@ TEST(DaemonConfig, ValuesOutOfRangeAreNamed) {
   expectError("map:\n  resolution: .nan\n", "map.resolution", "finite");
 }
 
-TEST(DaemonConfig, MapsGoOutInBurstsOfSendBurstKb) {
+TEST(DaemonConfig, MapRepairsGoOutInBurstsOfRepairBurstKb) {
   auto defaults = parseDaemonConfig("{}\n", kName);
   ASSERT_TRUE(defaults) << defaults.error().message;
-  EXPECT_EQ(defaults->dds.send_burst_kb, 64u);  // one 64 KB datagram: within a stock buffer
-  auto off = parseDaemonConfig("dds: {send_burst_kb: 0}\n", kName);
+  EXPECT_EQ(defaults->dds.repair_burst_kb, 64u);  // one 64 KB datagram: within a stock buffer
+  auto off = parseDaemonConfig("dds: {repair_burst_kb: 0}\n", kName);
   ASSERT_TRUE(off) << off.error().message;
-  EXPECT_EQ(off->dds.send_burst_kb, 0u);
-  expectError("dds: {send_burst_kb: 4}\n", "dds.send_burst_kb", "at least 8");
-  expectError("dds: {send_burst_kb: -1}\n", "dds.send_burst_kb", "");
+  EXPECT_EQ(off->dds.repair_burst_kb, 0u);
+  expectError("dds: {repair_burst_kb: 4}\n", "dds.repair_burst_kb", "at least 8");
+  expectError("dds: {repair_burst_kb: -1}\n", "dds.repair_burst_kb", "");
 }
 
 TEST(DaemonConfig, HeightMapMustFitTheWindow) {
