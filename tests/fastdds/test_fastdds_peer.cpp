@@ -5,6 +5,8 @@
 // and diagnostics. Behaviour only: counts and decoded fields, never rates or periods.
 #include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <utility>
@@ -14,9 +16,13 @@
 
 #include "platform/clock.hpp"
 #include "src/dds/entities.hpp"
+#include "src/io/map_file.hpp"
 #include "tests/fastdds/peer_process.hpp"
 #include "tests/fastdds/veth_hosts.hpp"
 #include "tests/service/service_fixture.hpp"
+#include "tests/support/cli_runner.hpp"
+#include "tests/support/temp_dir.hpp"
+#include "tests/support/test_rays.hpp"
 #include "tools/dds_driver/lidar_playback.hpp"
 #include "tools/dds_driver/ros_endpoints.hpp"
 
@@ -256,6 +262,123 @@ TEST(FastDdsPeer, FastDdsAtBothEndsMapsTheRoomsFloor) {
       {"--seconds", std::to_string(kPeerRun.count()), "--clouds-after-tf-static"});
 
   expectTheRoomsFloorMapped(daemon, publisher, subscriber);
+}
+
+/// What raymapd did with the clouds it received.
+struct ScanOutcomes {
+  double integrated = 0.0;
+  double accounted = 0.0;  ///< every outcome: integrated, dropped for want of a pose, shed, ...
+};
+
+/// Polls raymapd's diagnostics on `domain` until `clouds` received clouds each have an outcome
+/// (at most 60 s). @return the last counts reported.
+ScanOutcomes waitForOutcomes(std::uint32_t domain, double clouds) {
+  ScanOutcomes outcomes;
+  auto participant = dds::Participant::create(domain);
+  EXPECT_TRUE(participant.has_value());
+  if (!participant) {
+    return outcomes;
+  }
+  auto diagnostics = driver::DiagnosticsListener::create(participant.value(), "rt/diagnostics");
+  EXPECT_TRUE(diagnostics.has_value());
+  if (!diagnostics) {
+    return outcomes;
+  }
+  const auto count = [&](const char* key) {
+    return diagnostics.value()->number(std::string("raymapd: pipeline/") + key).value_or(0.0);
+  };
+  const std::int64_t end = platform::monotonicNowNs() + 60'000'000'000;
+  while (outcomes.accounted < clouds && platform::monotonicNowNs() < end) {
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 50'000'000);
+    diagnostics.value()->poll();
+    outcomes.integrated = count("scans_integrated");
+    outcomes.accounted = outcomes.integrated + count("scans_dropped_no_pose") +
+                         count("scans_empty") + count("scans_shed") +
+                         count("clouds_dropped_overflow") + count("clouds_malformed") +
+                         count("clouds_wrong_frame");
+  }
+  return outcomes;
+}
+
+/// The tests' raymapd configuration with the map saved to `map_path` when it stops.
+std::string savingConfig(std::uint32_t domain, const std::string& map_path) {
+  std::string config = fastDdsConfig(domain);
+  const std::string map = "map: {resolution: 0.1, window: [6, 6, 3]}";
+  EXPECT_NE(config.find(map), std::string::npos);
+  if (config.find(map) != std::string::npos) {
+    config.replace(config.find(map), map.size(),
+                   "map: {resolution: 0.1, window: [6, 6, 3], save_on_exit: '" + map_path + "'}");
+  }
+  return config;
+}
+
+// The same lidar data gives the same map whichever middleware carried it: the Fast DDS peer's
+// lidar (best effort, SensorDataQoS), odometry and /tf_static go into one raymapd while
+// `raymap record` (Cyclone) records them; `raymap replay` sends the recording, the same bytes,
+// through Cyclone into a second raymapd. Both integrate the same clouds (all, or all but the
+// last), and the saved maps agree voxel for voxel, bit for bit.
+TEST(FastDdsPeer, AFastDdsLidarGivesTheSameMapAsItsDataThroughCyclone) {
+  RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
+  TempDir dir;
+  const std::string log = dir.file("room.rmlog");
+  const std::string fastdds_map = dir.file("fastdds.rmap");
+  const std::string cyclone_map = dir.file("cyclone.rmap");
+
+  const std::uint32_t first = uniqueDomain();
+  double clouds = 0.0;
+  double integrated = 0.0;
+  {
+    RunningDaemon daemon(savingConfig(first, fastdds_map), false);
+    ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+    DaemonProcess recorder(RAYMAP_CLI_PATH,
+                           {"record", "-o", log, "--domain", std::to_string(first)}, {},
+                           dir.file("record.log"));
+    // The lidar starts once raymapd and the recorder both hold the transform and match the
+    // clouds: both get every cloud.
+    PeerProcess publisher(first, "publish",
+                          {"--seconds", "4", "--clouds-after-tf-static", "--readers", "2"});
+    ASSERT_EQ(publisher.finish(kPeerRun), 0) << publisher.log();
+    const std::optional<JsonValue> result = publisher.result();
+    ASSERT_TRUE(result.has_value()) << publisher.log();
+    clouds = numberAt(*result, {"clouds_published"}).value_or(0.0);
+    ASSERT_GE(clouds, 10.0) << publisher.log();
+    // The last cloud may find no odometry after its end (the peer stops both at once) and be
+    // dropped for want of a pose; then it is in neither map.
+    const ScanOutcomes outcomes = waitForOutcomes(first, clouds);
+    EXPECT_EQ(outcomes.accounted, clouds) << daemon.log();
+    EXPECT_GE(outcomes.integrated, clouds - 1.0) << daemon.log();
+    integrated = outcomes.integrated;
+    const auto recorded = recorder.stop(SIGINT, kStopWait);
+    ASSERT_TRUE(recorded.has_value());
+    ASSERT_EQ(recorded->first, 0) << readFile(dir.file("record.log"));
+    expectCleanStop(daemon);
+  }
+
+  const std::uint32_t second = uniqueDomain();
+  {
+    RunningDaemon daemon(savingConfig(second, cyclone_map), false);
+    ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+    const auto [status, output] =
+        runToCompletion(RAYMAP_CLI_PATH, {"replay", log, "--domain", std::to_string(second)});
+    ASSERT_EQ(status, 0) << output;
+    const ScanOutcomes outcomes = waitForOutcomes(second, clouds);
+    EXPECT_EQ(outcomes.accounted, clouds) << daemon.log();
+    EXPECT_EQ(outcomes.integrated, integrated) << daemon.log();
+    expectCleanStop(daemon);
+  }
+
+  auto through_fastdds = io::loadMap(fastdds_map);
+  ASSERT_TRUE(through_fastdds.has_value()) << through_fastdds.error().message;
+  auto through_cyclone = io::loadMap(cyclone_map);
+  ASSERT_TRUE(through_cyclone.has_value()) << through_cyclone.error().message;
+  const MapComparison comparison = compareMaps(*through_fastdds, *through_cyclone);
+  std::printf("%.0f scans integrated; %llu voxels compared, %llu in the same state, %llu exact\n",
+              integrated, static_cast<unsigned long long>(comparison.compared),
+              static_cast<unsigned long long>(comparison.same_state),
+              static_cast<unsigned long long>(comparison.exact_value));
+  EXPECT_GT(comparison.compared, 10000u);
+  EXPECT_EQ(comparison.same_state, comparison.compared);
+  EXPECT_EQ(comparison.exact_value, comparison.compared);
 }
 
 // As on a robot whose planner runs on another computer: raymapd in one network namespace, the

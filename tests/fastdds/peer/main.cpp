@@ -90,6 +90,11 @@ int main(int argc, char** argv) {
       "--clouds-after-tf-static", publish.clouds_after_tf_static,
       "start the lidar once the readers of /tf_static have acknowledged the transform (as on a "
       "robot whose /tf_static was latched before the lidar driver started)");
+  publish_command
+      ->add_option("--readers", publish.readers,
+                   "with --clouds-after-tf-static: wait for this many readers of "
+                   "/tf_static and of the clouds")
+      ->check(CLI::Range(1, 100));
   publish_command->add_option("--beams", publish.lidar.beams)->check(CLI::Range(1, 1024));
   publish_command->add_option("--columns", publish.lidar.columns)->check(CLI::Range(1, 8192));
   publish_command->add_option("--points-topic", publish.points_topic);

@@ -98,10 +98,10 @@ void publishOdometry(dds::DataWriter& writer, const PublishOptions& options, Vec
   writer.write(&odometry);
 }
 
-/// True once at least one reader matched the writer and every matched reader acknowledged
-/// everything it wrote.
-bool acknowledged(dds::DataWriter& writer) {
-  return matchedReaders(&writer) > 0 &&
+/// True once at least `readers` readers matched the writer and every matched reader
+/// acknowledged everything it wrote.
+bool acknowledged(dds::DataWriter& writer, std::int64_t readers) {
+  return matchedReaders(&writer) >= std::max<std::int64_t>(readers, 1) &&
          writer.wait_for_acknowledgments(eprosima::fastrtps::Duration_t(0, 0)) ==
              eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
 }
@@ -154,17 +154,21 @@ bool runPublish(PeerParticipant& participant, const PublishOptions& options, Jso
   const Clock::time_point end =
       timeline.start() + std::chrono::nanoseconds(std::llround(options.seconds * 1e9));
   std::optional<Clock::time_point> tf_static_acknowledged;
+  bool lidar_started = false;
   for (Clock::time_point now = Clock::now(); now < end && !stopRequested(); now = Clock::now()) {
-    if (!tf_static_acknowledged && acknowledged(*writers.tf_static)) {
+    if (!tf_static_acknowledged && acknowledged(*writers.tf_static, options.readers)) {
       tf_static_acknowledged = now;
     }
+    // Once started, the lidar runs whoever comes and goes.
+    lidar_started = lidar_started || !options.clouds_after_tf_static ||
+                    (tf_static_acknowledged && matchedReaders(writers.cloud) >= options.readers);
     if (now >= next_odometry) {
       publishOdometry(*writers.odometry, options, timeline.base(next_odometry),
                       timeline.unixNs(next_odometry));
       ++odometry;
       next_odometry = nextDue(next_odometry, odometry_period, now);
     }
-    if (options.clouds_after_tf_static && !tf_static_acknowledged) {
+    if (!lidar_started) {
       scan_start = now;  // the lidar has not started yet
     } else if (now >= scan_start + scan_period) {
       const Vec3 base = timeline.base(scan_start);

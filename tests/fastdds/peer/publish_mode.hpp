@@ -20,6 +20,10 @@ struct PublishOptions {
   /// Hold the clouds until a reader of /tf_static has acknowledged the transform, as on a robot
   /// whose robot_state_publisher latched it before the lidar driver started.
   bool clouds_after_tf_static = false;
+  /// With clouds_after_tf_static: how many readers must have acknowledged /tf_static, and
+  /// matched the clouds, before the lidar starts (every one of a known set of subscribers gets
+  /// every cloud).
+  std::int64_t readers = 1;
   std::string points_topic = "rt/points";
   std::string odom_topic = "rt/odom";
   std::string tf_static_topic = "rt/tf_static";
