@@ -125,6 +125,28 @@ Result<Participant> Participant::create(std::uint32_t domain_id, const DomainSet
   return Participant(handle, domain);
 }
 
+bool Participant::waitForAcknowledgements(std::int64_t timeout_ns) const noexcept {
+  // Writers belong to publishers (an implicit one when created on the participant): waiting on
+  // a publisher waits for all of its writers.
+  constexpr std::size_t kMaxChildren = 64;
+  dds_entity_t children[kMaxChildren] = {};
+  const dds_return_t n = dds_get_children(handle_, children, kMaxChildren);
+  if (n < 0) {
+    return false;
+  }
+  const dds_time_t deadline = dds_time() + timeout_ns;
+  bool all = true;
+  for (dds_return_t i = 0; i < n && i < static_cast<dds_return_t>(kMaxChildren); ++i) {
+    // Cyclone 0.10 has no entity-kind query: a subscriber or a topic refuses the call
+    // (ILLEGAL_OPERATION or BAD_PARAMETER), only a publisher can time out.
+    const dds_duration_t left = std::max<dds_duration_t>(0, deadline - dds_time());
+    if (dds_wait_for_acks(children[i], left) == DDS_RETCODE_TIMEOUT) {
+      all = false;
+    }
+  }
+  return all;
+}
+
 Participant& Participant::operator=(Participant&& other) noexcept {
   if (this != &other) {
     deleteEntity(handle_);

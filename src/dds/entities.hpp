@@ -64,6 +64,12 @@ class Participant {
 
   dds_entity_t handle() const noexcept { return handle_; }
 
+  /// @brief Waits until every matched reader has acknowledged everything the participant's
+  /// reliable writers wrote, at most `timeout_ns` (best-effort writers never wait): before a
+  /// program that writes and exits deletes its writers, which drops what is unacknowledged.
+  /// @return false when it timed out (or a writer was refused). Blocks; not for a real-time loop.
+  bool waitForAcknowledgements(std::int64_t timeout_ns) const noexcept;
+
  private:
   Participant(dds_entity_t handle, dds_entity_t domain) noexcept
       : handle_(handle), domain_(domain) {}

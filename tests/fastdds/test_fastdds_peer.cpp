@@ -315,8 +315,8 @@ std::string savingConfig(std::uint32_t domain, const std::string& map_path) {
 // The same lidar data gives the same map whichever middleware carried it: the Fast DDS peer's
 // lidar (best effort, SensorDataQoS), odometry and /tf_static go into one raymapd while
 // `raymap record` (Cyclone) records them; `raymap replay` sends the recording, the same bytes,
-// through Cyclone into a second raymapd. Both integrate the same clouds (all, or all but the
-// last), and the saved maps agree voxel for voxel, bit for bit.
+// through Cyclone into a second raymapd. Both integrate every cloud (one at either end may miss
+// its pose), and the saved maps agree voxel for voxel, bit for bit.
 TEST(FastDdsPeer, AFastDdsLidarGivesTheSameMapAsItsDataThroughCyclone) {
   RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
   TempDir dir;
@@ -363,7 +363,11 @@ TEST(FastDdsPeer, AFastDdsLidarGivesTheSameMapAsItsDataThroughCyclone) {
     ASSERT_EQ(status, 0) << output;
     const ScanOutcomes outcomes = waitForOutcomes(second, clouds);
     EXPECT_EQ(outcomes.accounted, clouds) << daemon.log();
-    EXPECT_EQ(outcomes.integrated, integrated) << daemon.log();
+    // One scan at either end may find its odometry on one side and not on the other (a pose
+    // must arrive within pose.max_wait_s of the scan); the robot stands still, so the map does
+    // not depend on one scan more or less once its voxels have reached their clamps (10 scans).
+    EXPECT_NEAR(outcomes.integrated, integrated, 1.0) << daemon.log();
+    EXPECT_GE(outcomes.integrated, clouds - 2.0) << daemon.log();
     expectCleanStop(daemon);
   }
 

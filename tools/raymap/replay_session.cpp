@@ -317,8 +317,13 @@ Result<ReplayStats> ReplaySession::run() {
     }
   } while (options_.loop && !clock_.stopped());
   // Best-effort samples still in flight when the participant goes are lost: a moment for the
-  // last cloud to leave.
+  // last cloud to leave. Reliable ones not yet acknowledged (a recorded odometry or transform
+  // after the last cloud) would be lost with their writers too: wait for the readers, at most
+  // 2 s (a reader that went away is no longer waited for).
   (void)clock_.sleepFor(0.2);
+  if (!clock_.stopped() && !participant_->waitForAcknowledgements(2'000'000'000)) {
+    stats_.warnings.push_back("the last reliable messages were not acknowledged within 2 s");
+  }
   stats_.wall_seconds = clock_.elapsed();
   stats_.max_late_ms = clock_.maxLateMs();
   reportProgress(1.0, "", true);
