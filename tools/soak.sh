@@ -49,6 +49,12 @@ for program in "$raymapd_program" "$build/tools/raymap" "$build/tools/raymap-loa
   [ -x "$program" ] || { echo "soak: $program is missing: build first (cmake --build $build)" >&2; exit 2; }
 done
 mkdir -p "$out"
+# A folder used before (SOAK_OUT given twice) holds an earlier run's files; its markers
+# (sampled, inputs-stopped) and counts (replay.json, intruder-N.json) would stop this run's inputs
+# at once and be counted as this run's: start from none of them.
+rm -f "$out"/{sampled,inputs-stopped,replay.json,replay.log,summary.json,soak.csv,soak.png} \
+  "$out"/{diagnostics.jsonl,maps.jsonl,raymapd.log,record.log,echo-maps.log,echo-diagnostics.log} \
+  "$out"/intruder*
 work=$(mktemp -d)
 pids=()
 cleanup() {
