@@ -39,17 +39,24 @@ constexpr seconds kPeerRun{90};
     GTEST_SKIP() << "raymap-fastdds-peer is not built (libfastrtps-dev, fastddsgen)"; \
   }
 
+/// Replaces the first `from` in `text` with `to`. @return false (and the text unchanged) when
+/// `from` is not there: the tests' base configuration changed under a test.
+bool replaceFirst(std::string& text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  if (at == std::string::npos) {
+    ADD_FAILURE() << "'" << from << "' is not in:\n" << text;
+    return false;
+  }
+  text.replace(at, from.size(), to);
+  return true;
+}
+
 /// The tests' raymapd configuration (one lidar on rt/points in frame lidar, odometry on rt/odom,
 /// a 12 m GridMap at 5 Hz) with the Nav2 costmap on rt/costmap.
 std::string fastDdsConfig(std::uint32_t domain) {
   std::string config = serviceConfig(domain);
-  const std::string voxels = "voxels_topic: rt/raymap/occupied_voxels}";
-  const std::size_t at = config.find(voxels);
-  EXPECT_NE(at, std::string::npos);
-  if (at != std::string::npos) {
-    config.replace(at, voxels.size(),
-                   "voxels_topic: rt/raymap/occupied_voxels, costmap_topic: rt/costmap}");
-  }
+  replaceFirst(config, "voxels_topic: rt/raymap/occupied_voxels}",
+               "voxels_topic: rt/raymap/occupied_voxels, costmap_topic: rt/costmap}");
   return config;
 }
 
@@ -225,11 +232,8 @@ TEST(FastDdsPeer, AStockBufferSubscriberReceivesRaymapdsMapsWithoutSkipping) {
   RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
   const std::uint32_t domain = uniqueDomain();
   std::string config = fastDdsConfig(domain);
-  for (const auto& [from, to] : {std::pair<std::string, std::string>{"size: 12,", "size: 20,"},
-                                 {"window: [6, 6, 3]", "window: [8, 8, 3]"}}) {
-    ASSERT_NE(config.find(from), std::string::npos) << from;
-    config.replace(config.find(from), from.size(), to);
-  }
+  ASSERT_TRUE(replaceFirst(config, "size: 12,", "size: 20,"));
+  ASSERT_TRUE(replaceFirst(config, "window: [6, 6, 3]", "window: [8, 8, 3]"));
   RunningDaemon daemon(config, false);
   ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
   PeerProcess peer(
@@ -303,12 +307,8 @@ ScanOutcomes waitForOutcomes(std::uint32_t domain, double clouds) {
 /// The tests' raymapd configuration with the map saved to `map_path` when it stops.
 std::string savingConfig(std::uint32_t domain, const std::string& map_path) {
   std::string config = fastDdsConfig(domain);
-  const std::string map = "map: {resolution: 0.1, window: [6, 6, 3]}";
-  EXPECT_NE(config.find(map), std::string::npos);
-  if (config.find(map) != std::string::npos) {
-    config.replace(config.find(map), map.size(),
-                   "map: {resolution: 0.1, window: [6, 6, 3], save_on_exit: '" + map_path + "'}");
-  }
+  replaceFirst(config, "map: {resolution: 0.1, window: [6, 6, 3]}",
+               "map: {resolution: 0.1, window: [6, 6, 3], save_on_exit: '" + map_path + "'}");
   return config;
 }
 
