@@ -15,6 +15,8 @@ packages=(
   iproute2                # ip netns: the multicast discovery test between two network namespaces
   libsystemd-dev systemd  # sd_notify for Type=notify; systemd-analyze lints the unit in the tests
   libboost-dev            # Boost.Lockfree SPSC queues (header-only)
+  libssl-dev openssl      # DDS Security: keystores (raymap security), checks of enclave files
+  tcpdump                 # the security tests capture loopback traffic to prove it is encrypted
   liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks (zstd: above), SQLite (.db3) bags
   clang-format
   clang libclang-rt-14-dev clang-tidy  # the asan/tsan/fuzz presets (libFuzzer), clang-tidy

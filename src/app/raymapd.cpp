@@ -2,6 +2,7 @@
 // raymapd: the real-time height-map service. Reads its configuration, starts the service and
 // runs until SIGTERM or SIGINT (systemd stop, Ctrl-C). The only code of the service that exits.
 #include <cstdio>
+#include <ctime>
 #include <exception>
 #include <string>
 
@@ -12,6 +13,7 @@
 #include "platform/memory.hpp"
 #include "platform/signals.hpp"
 #include "src/service/daemon_config.hpp"
+#include "src/service/daemon_security.hpp"
 #include "src/service/log.hpp"
 #include "src/service/service.hpp"
 #include "src/service/startup_checks.hpp"
@@ -32,10 +34,20 @@ int checkConfig(const std::string& path) {
     std::fprintf(stderr, "%s\n", ok.error().message.c_str());
     return kExitConfig;
   }
+  // DDS Security: the enclave's files checked as at start (Enforce refuses here too).
+  auto secure = raymap::service::resolveDaemonSecurity(c, std::time(nullptr));
+  if (!secure) {
+    std::fprintf(stderr, "%s\n", secure.error().message.c_str());
+    return kExitConfig;
+  }
   std::printf("%s: ok (backend %s, %zu sensor%s, height map %g m at %g Hz on %s, domain %u)\n",
               path.c_str(), c.backend.name.c_str(), c.sensors.size(),
               c.sensors.size() == 1 ? "" : "s", c.heightmap.size_m, c.heightmap.rate_hz,
               c.dds.grid_map_topic.c_str(), c.dds.domain);
+  std::printf("%s\n", secure->summary.c_str());
+  if (!secure->warning.empty()) {
+    std::printf("warning: %s\n", secure->warning.c_str());
+  }
   return 0;
 }
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <string_view>
 
 #include <dds/ddsi/ddsi_serdata.h>
 
@@ -22,6 +23,42 @@ std::string describe(const char* what, const char* topic_name, dds_return_t code
   message += ": ";
   message += dds_strretcode(code);
   return message;
+}
+
+/// describe() for a reader or writer, naming the permissions document when it refused.
+std::string describeEndpoint(const Participant& participant, const char* what,
+                             const char* topic_name, dds_return_t code) {
+  if (code == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && !participant.permissionsFile().empty()) {
+    const std::string_view call = what;
+    const char* use = call == "dds_create_writer"   ? "publishing"
+                      : call == "dds_create_reader" ? "subscribing to"
+                                                    : "publishing or subscribing to";
+    return participant.permissionsFile() + ": the enclave's permissions do not allow " + use +
+           " \"" + topic_name + "\" (DDS Security refused " + what + ")";
+  }
+  return describe(what, topic_name, code);
+}
+
+/// The participant QoS that turns on Cyclone's DDS Security plugins with an enclave's files.
+dds_qos_t* makeSecureParticipantQos(const SecurityFiles& files) {
+  dds_qos_t* qos = dds_create_qos();
+  const auto file = [](const std::string& path) { return "file:" + path; };
+  dds_qset_prop(qos, "dds.sec.auth.library.path", "dds_security_auth");
+  dds_qset_prop(qos, "dds.sec.auth.library.init", "init_authentication");
+  dds_qset_prop(qos, "dds.sec.auth.library.finalize", "finalize_authentication");
+  dds_qset_prop(qos, "dds.sec.crypto.library.path", "dds_security_crypto");
+  dds_qset_prop(qos, "dds.sec.crypto.library.init", "init_crypto");
+  dds_qset_prop(qos, "dds.sec.crypto.library.finalize", "finalize_crypto");
+  dds_qset_prop(qos, "dds.sec.access.library.path", "dds_security_ac");
+  dds_qset_prop(qos, "dds.sec.access.library.init", "init_access_control");
+  dds_qset_prop(qos, "dds.sec.access.library.finalize", "finalize_access_control");
+  dds_qset_prop(qos, "dds.sec.auth.identity_ca", file(files.identity_ca).c_str());
+  dds_qset_prop(qos, "dds.sec.auth.identity_certificate", file(files.certificate).c_str());
+  dds_qset_prop(qos, "dds.sec.auth.private_key", file(files.private_key).c_str());
+  dds_qset_prop(qos, "dds.sec.access.permissions_ca", file(files.permissions_ca).c_str());
+  dds_qset_prop(qos, "dds.sec.access.governance", file(files.governance).c_str());
+  dds_qset_prop(qos, "dds.sec.access.permissions", file(files.permissions).c_str());
+  return qos;
 }
 
 void deleteEntity(dds_entity_t entity) noexcept {
@@ -59,7 +96,8 @@ Result<void> createTopic(const Participant& participant, const char* topic_name,
   const dds_entity_t created =
       dds_create_topic(participant.handle(), descriptor, topic_name, nullptr, nullptr);
   if (created < 0) {
-    return fail(ErrorCode::kInvalidArgument, describe("dds_create_topic", topic_name, created));
+    return fail(ErrorCode::kInvalidArgument,
+                describeEndpoint(participant, "dds_create_topic", topic_name, created));
   }
   *topic = created;
   return {};
@@ -116,13 +154,28 @@ Result<Participant> Participant::create(std::uint32_t domain_id, const DomainSet
       return fail(ErrorCode::kIo, describe(what.c_str(), nullptr, domain));
     }
   }
-  const dds_entity_t handle = dds_create_participant(domain_id, nullptr, nullptr);
+  dds_qos_t* qos =
+      settings.security.enabled() ? makeSecureParticipantQos(settings.security) : nullptr;
+  const dds_entity_t handle = dds_create_participant(domain_id, qos, nullptr);
+  dds_delete_qos(qos);
   if (handle < 0) {
     deleteEntity(domain);
+    if (settings.security.enabled()) {
+      // Cyclone's security plugins say why on stderr (its log); they refuse files they cannot
+      // use and a domain the governance does not list.
+      return fail(
+          ErrorCode::kIo,
+          describe(("dds_create_participant with DDS Security (certificate " +
+                    settings.security.certificate + ", governance " + settings.security.governance +
+                    ", permissions " + settings.security.permissions +
+                    "; does the governance cover domain " + std::to_string(domain_id) + "?)")
+                       .c_str(),
+                   nullptr, handle));
+    }
     return fail(ErrorCode::kIo,
                 describe("dds_create_participant (check CYCLONEDDS_URI)", nullptr, handle));
   }
-  return Participant(handle, domain);
+  return Participant(handle, domain, settings.security.permissions);
 }
 
 bool Participant::waitForAcknowledgements(std::int64_t timeout_ns) const noexcept {
@@ -153,6 +206,7 @@ Participant& Participant::operator=(Participant&& other) noexcept {
     deleteEntity(domain_);
     handle_ = std::exchange(other.handle_, 0);
     domain_ = std::exchange(other.domain_, 0);
+    permissions_ = std::move(other.permissions_);
   }
   return *this;
 }
@@ -180,7 +234,8 @@ Result<RawReader> RawReader::create(const Participant& participant, const char* 
   dds_delete_qos(qos);
   if (reader < 0) {
     deleteEntity(topic);
-    return fail(ErrorCode::kInvalidArgument, describe("dds_create_reader", topic_name, reader));
+    return fail(ErrorCode::kInvalidArgument,
+                describeEndpoint(participant, "dds_create_reader", topic_name, reader));
   }
   return RawReader(topic, reader);
 }
@@ -342,7 +397,8 @@ Result<Writer> Writer::create(const Participant& participant, const char* topic_
   dds_delete_qos(qos);
   if (writer < 0) {
     deleteEntity(topic);
-    return fail(ErrorCode::kInvalidArgument, describe("dds_create_writer", topic_name, writer));
+    return fail(ErrorCode::kInvalidArgument,
+                describeEndpoint(participant, "dds_create_writer", topic_name, writer));
   }
   return Writer(topic, writer);
 }

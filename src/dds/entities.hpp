@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <type_traits>
 #include <utility>
 
@@ -16,6 +17,18 @@
 #include "src/dds/dds_error.hpp"
 
 namespace raymap::dds {
+
+/// @brief The files of an SROS2 enclave that Cyclone's DDS Security plugins read (absolute
+/// paths; all empty: no security). Checked beforehand by src/security (enclave_check.hpp).
+struct SecurityFiles {
+  std::string identity_ca;     ///< identity_ca.cert.pem: the CA that signed every identity
+  std::string certificate;     ///< cert.pem: this participant's identity
+  std::string private_key;     ///< key.pem: its private key
+  std::string permissions_ca;  ///< permissions_ca.cert.pem: the CA that signed both documents
+  std::string governance;      ///< governance.p7s: how the domain is protected
+  std::string permissions;     ///< permissions.p7s: what this identity may publish and subscribe
+  bool enabled() const noexcept { return !certificate.empty(); }
+};
 
 /// @brief What a process asks of its DDS domain beyond CYCLONEDDS_URI. Settings of the
 /// configuration CYCLONEDDS_URI names win over these.
@@ -39,6 +52,10 @@ struct DomainSettings {
   /// not the fragment heartbeats after a burst), and the retransmit queue holds 4 MiB (a map for
   /// several readers; Cyclone's default, 512 kB, is less than one map).
   std::uint64_t repair_burst_bytes = 0;
+  /// DDS Security for the participant (authentication, access control, encryption as the
+  /// governance says), set as participant QoS properties as rmw_cyclonedds sets them. Empty:
+  /// none (a participant without security neither hears nor is heard by secure ones).
+  SecurityFiles security;
 };
 
 /// @brief Owns a domain participant (dds_delete on destruction deletes every entity created
@@ -56,13 +73,19 @@ class Participant {
   static Result<Participant> create(std::uint32_t domain_id, const DomainSettings& settings = {});
 
   Participant(Participant&& other) noexcept
-      : handle_(std::exchange(other.handle_, 0)), domain_(std::exchange(other.domain_, 0)) {}
+      : handle_(std::exchange(other.handle_, 0)),
+        domain_(std::exchange(other.domain_, 0)),
+        permissions_(std::move(other.permissions_)) {}
   Participant& operator=(Participant&& other) noexcept;
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
   ~Participant();
 
   dds_entity_t handle() const noexcept { return handle_; }
+
+  /// @brief The permissions document this participant runs under ("" without security): named
+  /// in the error when a reader or writer is not allowed by it.
+  const std::string& permissionsFile() const noexcept { return permissions_; }
 
   /// @brief Waits until every matched reader has acknowledged everything the participant's
   /// reliable writers wrote, at most `timeout_ns` (best-effort writers never wait): before a
@@ -71,10 +94,11 @@ class Participant {
   bool waitForAcknowledgements(std::int64_t timeout_ns) const noexcept;
 
  private:
-  Participant(dds_entity_t handle, dds_entity_t domain) noexcept
-      : handle_(handle), domain_(domain) {}
+  Participant(dds_entity_t handle, dds_entity_t domain, std::string permissions) noexcept
+      : handle_(handle), domain_(domain), permissions_(std::move(permissions)) {}
   dds_entity_t handle_ = 0;
   dds_entity_t domain_ = 0;  // the domain this participant created (deleted after it), or 0
+  std::string permissions_;
 };
 
 /// Reliability QoS. Subscribe to sensor data best effort (matches best-effort and reliable

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <fstream>
 #include <set>
@@ -336,11 +337,44 @@ void readHeightmap(Context& ctx, const YAML::Node& node, HeightmapConfig& hm) {
           "must be shorter than 90 % of the publish period (1 / rate_hz)");
 }
 
+/// `dds.security`: keys the file leaves out come from ROS 2's variables where those name them
+/// (ROS_SECURITY_KEYSTORE, ROS_SECURITY_ENCLAVE_OVERRIDE), so one keystore set-up serves both.
+void readSecurity(Context& ctx, const YAML::Node& node, security::SecurityConfig& sec) {
+  Fields f(ctx, node, "dds.security");
+  f.knownKeys({"enable", "keystore", "enclave", "enclave_dir", "strategy"});
+  sec.enabled = flag(f, "enable", true);
+  const char* keystore_env = std::getenv("ROS_SECURITY_KEYSTORE");
+  const char* enclave_env = std::getenv("ROS_SECURITY_ENCLAVE_OVERRIDE");
+  sec.keystore = text(f, "keystore", keystore_env != nullptr ? keystore_env : "");
+  sec.enclave = text(f, "enclave",
+                     enclave_env != nullptr && enclave_env[0] != '\0'
+                         ? std::string(enclave_env)
+                         : std::string(security::kDaemonEnclave));
+  sec.enclave_dir = text(f, "enclave_dir", "");
+  if (auto name = security::checkEnclaveName(sec.enclave, "enclave"); !name) {
+    f.check(false, "enclave", name.error().message.substr(std::string("enclave: ").size()));
+  }
+  const std::string strategy = text(f, "strategy", "Enforce");
+  if (auto parsed = security::parseStrategy(strategy, "strategy"); parsed) {
+    sec.strategy = *parsed;
+  } else {
+    f.check(false, "strategy", "must be Enforce or Permissive (got '" + strategy + "')");
+  }
+  f.check(!sec.enabled || !sec.keystore.empty() || !sec.enclave_dir.empty(), "keystore",
+          "security is enabled: name the SROS2 keystore (or enclave_dir, the folder of the "
+          "enclave's files)");
+}
+
 void readDds(Context& ctx, const YAML::Node& node, DdsConfig& dds) {
   Fields f(ctx, node, "dds");
   f.knownKeys({"domain", "cyclonedds_uri", "receive_buffer_mb", "repair_burst_kb", "grid_map_topic",
                "diagnostics_topic", "diagnostics_rate_hz", "voxels_topic", "voxels_rate_hz",
-               "voxels_max_points", "costmap_topic"});
+               "voxels_max_points", "costmap_topic", "security"});
+  if (const YAML::Node security = f.get("security"); security.IsDefined() && !ctx.failed()) {
+    dds.security_in_file = true;
+    readSecurity(ctx, security.IsNull() ? YAML::Node(YAML::NodeType::Map) : security, dds.security);
+    dds.security.source = "dds.security";
+  }
   dds.domain = f.integer<std::uint32_t>("domain", 0u, 0u, 232u);
   dds.cyclonedds_uri = text(f, "cyclonedds_uri", "");
   dds.receive_buffer_mb = f.integer<std::uint32_t>("receive_buffer_mb", 0u, 0u, 2048u);

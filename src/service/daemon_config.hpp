@@ -17,6 +17,7 @@
 #include "src/io/trajectory.hpp"
 #include "src/map/voxel_map.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
+#include "src/security/security_config.hpp"
 
 namespace raymap::service {
 
@@ -130,6 +131,10 @@ struct DdsConfig {
   std::string costmap_topic;
   double voxels_rate_hz = 1.0;
   std::uint32_t voxels_max_points = 200000;
+  /// DDS Security (the `dds.security` section; docs/security.md). Without the section, ROS 2's
+  /// ROS_SECURITY_* variables decide, as for any ROS 2 node (security_in_file false).
+  security::SecurityConfig security;
+  bool security_in_file = false;
 };
 
 /// @brief Buffers between the threads.

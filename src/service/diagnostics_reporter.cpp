@@ -52,9 +52,10 @@ DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
       pipeline_name_(settings_.name + ": pipeline"),
       heightmap_name_(settings_.name + ": height map"),
       realtime_name_(settings_.name + ": real time"),
+      security_name_(settings_.name + ": security"),
       started_ns_(started_ns),
       // Up to 96 values a status: the pipeline's has 75 with a depth camera configured.
-      message_(3 + static_cast<int>(settings_.sensors.size()), 96),
+      message_(4 + static_cast<int>(settings_.sensors.size()), 96),
       has_depth_(std::any_of(settings_.sensors.begin(), settings_.sensors.end(),
                              [](const ReporterSettings::Sensor& sensor) {
                                return !sensor.camera_info_topic.empty();
@@ -164,11 +165,14 @@ void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& real
       dt > 0.0 ? static_cast<double>(s.totals.maps - base_->totals.maps) / dt : 0.0;
   std::snprintf(status_line_, sizeof(status_line_),
                 "%s %s: %.1f maps/s, %" PRIu64 " scans, %" PRIu64
-                " dropped, latency p99 %.0f ms; %s",
+                " dropped, latency p99 %.0f ms; %s; %s",
                 settings_.backend.c_str(), levelName(pipeline_level_), map_rate, s.totals.scans,
                 s.totals.overflow + s.totals.no_pose + s.totals.malformed + s.totals.too_large +
                     s.totals.wrong_frame + s.totals.missing,
-                s.latency.quantileUs(0.99) / 1000.0, realtime.summary.c_str());
+                s.latency.quantileUs(0.99) / 1000.0, realtime.summary.c_str(),
+                settings_.secure                     ? "security on"
+                : settings_.security_warning.empty() ? "security off"
+                                                     : "security OFF (Permissive)");
 }
 
 void DiagnosticsReporter::describeDrops() noexcept {
@@ -637,6 +641,13 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
                     realtime_ != nullptr ? realtime_->summary.c_str() : "unknown");
   message_.addValue(r, "memory_locked", "%s",
                     realtime_ != nullptr && realtime_->memory_locked ? "true" : "false");
+
+  // DDS Security: decided at start; WARN while running without what was asked for.
+  const bool security_warn = !settings_.security_warning.empty();
+  const int sec = message_.addStatus(
+      security_warn ? dds::kDiagnosticWarn : dds::kDiagnosticOk, security_name_.c_str(),
+      security_warn ? settings_.security_warning.c_str() : settings_.security_summary.c_str(), hw);
+  message_.addValue(sec, "enabled", "%s", settings_.secure ? "true" : "false");
   return message_.sample();
 }
 

@@ -39,6 +39,13 @@ struct ReporterSettings {
   /// clouds want (service::planReceiveBuffer), reported as values.
   std::uint64_t receive_buffer_bytes = 0;
   std::uint64_t receive_buffer_wanted_bytes = 0;
+  /// DDS Security as the service started (security::SecurityOutcome): a status "<name>:
+  /// security", WARN with `security_warning` when that is set (running without the security
+  /// asked for, Permissive; keys about to expire), else OK with `security_summary`; the systemd
+  /// status line ends with "security on" or "security OFF".
+  bool secure = false;
+  std::string security_summary = "DDS Security: off";
+  std::string security_warning;
   /// One per configured sensor (same order): a status "<name>: sensor <sensor.name>" each.
   struct Sensor {
     std::string name;
@@ -171,7 +178,7 @@ class DiagnosticsReporter {
   const pipeline::PendingScans* pending_ = nullptr;
   const pipeline::PoseQueue& poses_;
   ReporterSettings settings_;
-  std::string pipeline_name_, heightmap_name_, realtime_name_;
+  std::string pipeline_name_, heightmap_name_, realtime_name_, security_name_;
   std::int64_t started_ns_;
   std::int64_t window_ns_;
   dds::DiagnosticsMessage message_;

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <limits>
 #include <optional>
@@ -47,6 +48,7 @@
 #include "src/pipeline/sensor_decoder.hpp"
 #include "src/pipeline/stamp_gaps.hpp"
 #include "src/pipeline/tf_router.hpp"
+#include "src/service/daemon_security.hpp"
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/log.hpp"
 #include "src/service/startup_checks.hpp"
@@ -315,7 +317,17 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   if (!receive_buffer->warning.empty()) {
     logLine(LogLevel::kWarning, "%s", receive_buffer->warning.c_str());
   }
+  auto secure = resolveDaemonSecurity(config, std::time(nullptr));
+  if (!secure) {
+    return Unexpected(std::move(secure).error());
+  }
+  logLine(secure->warning.empty() ? LogLevel::kInfo : LogLevel::kWarning, "%s",
+          secure->summary.c_str());
+  if (!secure->warning.empty()) {
+    logLine(LogLevel::kWarning, "%s", secure->warning.c_str());
+  }
   dds::DomainSettings domain_settings;
+  domain_settings.security = secure->files;
   domain_settings.receive_buffer_bytes = receive_buffer->bytes;
   domain_settings.repair_burst_bytes = std::uint64_t{config.dds.repair_burst_kb} * 1024;
   auto participant = dds::Participant::create(config.dds.domain, domain_settings);
@@ -483,6 +495,9 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   reporting.grid_map_topic = config.dds.grid_map_topic;
   reporting.receive_buffer_bytes = receive_buffer->bytes;
   reporting.receive_buffer_wanted_bytes = receive_buffer->wanted;
+  reporting.security_warning = secure->warning;
+  reporting.security_summary = secure->summary;
+  reporting.secure = secure->secure();
   for (const SensorConfig& sensor : config.sensors) {
     reporting.sensor_frames.push_back(sensor.frame);
     reporting.sensors.push_back(

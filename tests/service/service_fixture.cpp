@@ -117,20 +117,31 @@ driver::SimulatedLidar yardLidar(int beams, int columns, bool moving) {
   return driver::SimulatedLidar(file.value().scene, simulation);
 }
 
-RosSide::RosSide(std::uint32_t domain, std::uint32_t max_points) {
-  auto pub = dds::Participant::create(domain);
-  auto sub = dds::Participant::create(domain);
-  EXPECT_TRUE(pub.has_value() && sub.has_value());
+RosSide::RosSide(std::uint32_t domain, std::uint32_t max_points,
+                 const dds::SecurityFiles& publisher_security,
+                 const dds::SecurityFiles& subscriber_security) {
+  dds::DomainSettings pub_settings;
+  pub_settings.security = publisher_security;
+  dds::DomainSettings sub_settings;
+  sub_settings.security = subscriber_security;
+  auto pub = dds::Participant::create(domain, pub_settings);
+  auto sub = dds::Participant::create(domain, sub_settings);
+  EXPECT_TRUE(pub.has_value() && sub.has_value())
+      << (pub ? std::string() : pub.error().message) << (sub ? "" : sub.error().message);
   publisher_participant.emplace(std::move(pub).value());
   subscriber_participant.emplace(std::move(sub).value());
-  publisher = std::move(driver::DriverPublisher::create(*publisher_participant, "rt/points",
-                                                        "rt/odom", max_points))
-                  .value();
-  grid_maps =
-      std::move(driver::GridMapListener::create(*subscriber_participant, "rt/height_map")).value();
+  // Each endpoint's error said before value() stops the test (a refusal by DDS Security).
+  const auto made = [](auto&& created) {
+    if (!created) {
+      std::fprintf(stderr, "RosSide: %s\n", created.error().message.c_str());
+    }
+    return std::move(created).value();
+  };
+  publisher = made(
+      driver::DriverPublisher::create(*publisher_participant, "rt/points", "rt/odom", max_points));
+  grid_maps = made(driver::GridMapListener::create(*subscriber_participant, "rt/height_map"));
   diagnostics =
-      std::move(driver::DiagnosticsListener::create(*subscriber_participant, "rt/diagnostics"))
-          .value();
+      made(driver::DiagnosticsListener::create(*subscriber_participant, "rt/diagnostics"));
 }
 
 bool RosSide::waitForService(double timeout_s) {

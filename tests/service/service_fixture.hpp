@@ -102,7 +102,11 @@ void expectCleanStop(RunningDaemon& daemon);
 /// @brief The test's side of the DDS graph, in its own participants (the publisher and the
 /// subscribers are independent of each other, like separate ROS nodes).
 struct RosSide {
-  explicit RosSide(std::uint32_t domain, std::uint32_t max_points);
+  /// @param publisher_security, subscriber_security DDS Security of each participant (the
+  ///        files of its enclave; empty: none)
+  explicit RosSide(std::uint32_t domain, std::uint32_t max_points,
+                   const dds::SecurityFiles& publisher_security = {},
+                   const dds::SecurityFiles& subscriber_security = {});
   std::optional<dds::Participant> publisher_participant;
   std::optional<dds::Participant> subscriber_participant;
   std::unique_ptr<driver::DriverPublisher> publisher;

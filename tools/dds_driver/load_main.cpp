@@ -16,6 +16,7 @@
 
 #include "platform/clock.hpp"
 #include "platform/rt.hpp"
+#include "src/security/secure_participant.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tools/dds_driver/default_scene.hpp"
 #include "tools/dds_driver/depth_playback.hpp"
@@ -133,7 +134,8 @@ int main(int argc, char** argv) {
   }
   driver::SimulatedLidar lidar(scene_file.value().scene, simulation);
 
-  auto participant = dds::Participant::create(domain_id.value());
+  auto participant =
+      security::openToolParticipant(domain_id.value(), "raymap-load", security::kToolsEnclave);
   if (!participant) {
     std::fprintf(stderr, "raymap-load: %s\n", participant.error().message.c_str());
     return 1;

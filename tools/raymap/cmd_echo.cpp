@@ -15,6 +15,7 @@
 #include "src/dds/discovery.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/echo_printers.hpp"
@@ -85,7 +86,7 @@ int runEcho(const EchoFlags& flags) {
   // Before the participant: Cyclone's threads inherit the blocked set, so SIGINT/SIGTERM wait
   // for this thread to take them and the loop below ends cleanly.
   platform::ShutdownSignals signals = platform::ShutdownSignals::install();
-  auto participant = dds::Participant::create(*domain);
+  auto participant = security::openToolParticipant(*domain, "raymap echo", security::kToolsEnclave);
   if (!participant) {
     printError("echo", "domain " + std::to_string(*domain) + ": " + participant.error().message);
     return kExitFailure;

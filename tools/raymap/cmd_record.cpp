@@ -17,6 +17,7 @@
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
 #include "src/record/record_log_writer.hpp"
+#include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
 
@@ -150,7 +151,8 @@ class Recorder {
       printError("record", domain.error().message);
       return kExitUsage;
     }
-    auto participant = dds::Participant::create(domain.value());
+    auto participant =
+        security::openToolParticipant(domain.value(), "raymap record", security::kToolsEnclave);
     if (!participant) {
       printError("record", participant.error().message);
       return kExitFailure;

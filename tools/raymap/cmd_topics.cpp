@@ -13,6 +13,7 @@
 #include "src/dds/discovery.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/json_writer.hpp"
@@ -140,7 +141,8 @@ int runTopics(const TopicsFlags& flags) {
   // Before the participant: Cyclone's threads inherit the blocked set, so a Ctrl-C during the
   // wait is taken here and ends the wait early.
   platform::ShutdownSignals signals = platform::ShutdownSignals::install();
-  auto participant = dds::Participant::create(*domain);
+  auto participant =
+      security::openToolParticipant(*domain, "raymap topics", security::kToolsEnclave);
   if (!participant) {
     printError("topics", "domain " + std::to_string(*domain) + ": " + participant.error().message);
     return kExitFailure;

@@ -36,6 +36,8 @@ void addEchoCommand(CLI::App& app, int* exit_code);
 void addReplayCommand(CLI::App& app, int* exit_code);
 /// `raymap record`: DDS topics recorded as raw CDR into a log.
 void addRecordCommand(CLI::App& app, int* exit_code);
+/// `raymap security`: SROS2 keystores, enclaves and permissions for DDS Security.
+void addSecurityCommand(CLI::App& app, int* exit_code);
 
 /// @brief Prints "raymap <command>: error: <message>" on stderr.
 void printError(const std::string& command, const std::string& message);

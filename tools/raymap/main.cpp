@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   addEchoCommand(app, &exit_code);
   addReplayCommand(app, &exit_code);
   addRecordCommand(app, &exit_code);
+  addSecurityCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

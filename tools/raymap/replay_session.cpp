@@ -13,6 +13,7 @@
 #include "src/bag/bag_reader.hpp"
 #include "src/core/eigen_conversions.hpp"
 #include "src/record/record_log_reader.hpp"
+#include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
 
 namespace raymap::cli {
@@ -58,7 +59,8 @@ ReplaySession::ReplaySession(const ReplayOptions& options, platform::ShutdownSig
 Result<std::unique_ptr<ReplaySession>> ReplaySession::create(const ReplayOptions& options,
                                                              platform::ShutdownSignals signals) {
   std::unique_ptr<ReplaySession> s(new ReplaySession(options, signals));
-  auto participant = dds::Participant::create(options.domain);
+  auto participant =
+      security::openToolParticipant(options.domain, "raymap replay", security::kToolsEnclave);
   if (!participant) {
     return Unexpected(std::move(participant).error());
   }
@@ -80,7 +82,8 @@ Result<std::unique_ptr<ReplaySession>> ReplaySession::create(const ReplayOptions
   }
   if (options.rate <= 0.0) {
     // The progress reports come from another participant, as from any other node.
-    auto feedback_participant = dds::Participant::create(options.domain);
+    auto feedback_participant =
+        security::openToolParticipant(options.domain, "raymap replay", security::kToolsEnclave);
     if (!feedback_participant) {
       return Unexpected(std::move(feedback_participant).error());
     }

@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Certificates and private keys to and from PEM text (PKCS#8 keys, unencrypted, as sros2).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "raymap/error.hpp"
+
+#include "src/security/openssl_handles.hpp"
+
+namespace raymap::security {
+
+/// @brief The PEM text of a certificate ("-----BEGIN CERTIFICATE-----").
+Result<std::string> certificatePem(X509* certificate);
+/// @brief The PKCS#8 PEM text of a private key ("-----BEGIN PRIVATE KEY-----"), unencrypted.
+Result<std::string> privateKeyPem(EVP_PKEY* key);
+
+/// @brief Reads a PEM certificate file; errors read "FILE: cannot read WHAT: REASON".
+Result<X509Ptr> loadCertificate(const std::filesystem::path& file, std::string_view what);
+/// @brief Reads an unencrypted PEM private key file (never asks for a passphrase).
+Result<PkeyPtr> loadPrivateKey(const std::filesystem::path& file, std::string_view what);
+
+/// A CA's certificate and private key.
+struct CertificateAndKey {
+  X509Ptr certificate;
+  PkeyPtr key;
+};
+
+/// @brief Reads a certificate and its private key (WHAT: "the identity CA") and checks that
+/// they belong together.
+Result<CertificateAndKey> loadCertificateAndKey(const std::filesystem::path& certificate_file,
+                                                const std::filesystem::path& key_file,
+                                                const std::string& what);
+
+/// A certificate's validity as ISO 8601 UTC texts ("2026-12-05T18:00:00"), as DDS Security's
+/// permissions documents write them.
+struct ValidityText {
+  std::string not_before;
+  std::string not_after;
+};
+
+/// @brief The validity of `certificate` as text.
+Result<ValidityText> validityText(const X509* certificate);
+
+}  // namespace raymap::security
