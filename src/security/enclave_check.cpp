@@ -2,42 +2,21 @@
 // The enclave checks: certificates, key, signed documents (OpenSSL) and the grant.
 #include "src/security/enclave_check.hpp"
 
-#include <cerrno>
-#include <cstring>
-#include <fstream>
-#include <sstream>
-
 #include <openssl/pem.h>
 
 #include "src/security/openssl_handles.hpp"
+#include "src/security/pem_reading.hpp"
 
 namespace raymap::security {
 namespace {
 
 /// A file's bytes, or an error naming it, what it is for and the reason.
 Result<std::string> readFile(const std::string& path, const char* role) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return fail(ErrorCode::kIo,
-                path + ": cannot read the enclave's " + role + ": " + std::strerror(errno));
-  }
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
+  return readWholeFile(path, std::string("the enclave's ") + role);
 }
 
 Result<X509Ptr> readCertificate(const std::string& path, const char* role) {
-  auto text = readFile(path, role);
-  if (!text) {
-    return Unexpected(std::move(text).error());
-  }
-  BioPtr bio = memoryBio(*text);
-  X509Ptr certificate(PEM_read_bio_X509(bio.get(), nullptr, nullptr, nullptr));
-  if (!certificate) {
-    return fail(ErrorCode::kFormat, path + ": the " + std::string(role) +
-                                        " is not a PEM certificate (" + takeOpensslErrors() + ")");
-  }
-  return certificate;
+  return loadCertificate(path, std::string("the enclave's ") + role);
 }
 
 std::time_t asTime(const ASN1_TIME* time) {
@@ -141,17 +120,11 @@ Result<Certificates> checkIdentity(const dds::SecurityFiles& files, std::time_t 
                 files.certificate + ": the identity certificate is not signed by the identity CA " +
                     files.identity_ca + " (" + signed_by.error().message + ")");
   }
-  auto key_text = readFile(files.private_key, "private key");
-  if (!key_text) {
-    return Unexpected(std::move(key_text).error());
-  }
-  BioPtr key_bio = memoryBio(*key_text);
-  PkeyPtr key(PEM_read_bio_PrivateKey(key_bio.get(), nullptr, nullptr, nullptr));
+  auto key = loadPrivateKey(files.private_key, "the enclave's private key");
   if (!key) {
-    return fail(ErrorCode::kFormat, files.private_key + ": not an unencrypted PEM private key (" +
-                                        takeOpensslErrors() + ")");
+    return Unexpected(std::move(key).error());
   }
-  if (X509_check_private_key(c.identity.get(), key.get()) != 1) {
+  if (X509_check_private_key(c.identity.get(), key->get()) != 1) {
     takeOpensslErrors();
     return fail(ErrorCode::kInvalidArgument,
                 files.private_key + ": the private key is not the one of " + files.certificate);
@@ -175,6 +148,11 @@ Result<PermissionsGrant> checkGrant(const std::string& xml, const dds::SecurityF
     return fail(ErrorCode::kInvalidArgument, files.permissions + ": the grant of " + subject +
                                                  " is not valid before " +
                                                  utcText(grant->notBefore()));
+  }
+  if (!grant->coversDomain(domain)) {
+    return fail(ErrorCode::kInvalidArgument, files.permissions + ": the permissions of " + subject +
+                                                 " do not cover domain " + std::to_string(domain) +
+                                                 " (ROS_DOMAIN_ID / dds.domain)");
   }
   std::string refused;
   for (const TopicNeed& need : needs) {

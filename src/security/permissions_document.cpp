@@ -228,6 +228,15 @@ bool governanceCoversDomain(std::string_view xml, std::uint32_t domain) {
   return false;
 }
 
+bool PermissionsGrant::coversDomain(std::uint32_t domain) const {
+  return default_allow_ || std::any_of(rules_.begin(), rules_.end(), [&](const Rule& rule) {
+           return rule.allow &&
+                  std::any_of(rule.domains.begin(), rule.domains.end(), [&](auto range) {
+                    return domain >= range.first && domain <= range.second;
+                  });
+         });
+}
+
 bool PermissionsGrant::allows(std::uint32_t domain, std::string_view topic, TopicUse use) const {
   const std::string name(topic);
   for (const Rule& rule : rules_) {

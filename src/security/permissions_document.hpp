@@ -39,6 +39,10 @@ class PermissionsGrant {
   /// @brief Whether the grant allows `use` of `topic` on `domain`.
   bool allows(std::uint32_t domain, std::string_view topic, TopicUse use) const;
 
+  /// @brief Whether any rule of the grant (or an ALLOW default) covers `domain`: Cyclone refuses
+  /// a participant on a domain its grant says nothing about ("denied by default rule").
+  bool coversDomain(std::uint32_t domain) const;
+
   /// @brief The validity of the grant (seconds since the epoch, UTC).
   std::time_t notBefore() const noexcept { return not_before_; }
   std::time_t notAfter() const noexcept { return not_after_; }

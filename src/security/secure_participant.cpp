@@ -45,9 +45,10 @@ Result<SecurityOutcome> resolveSecurity(const SecurityConfig& config, std::uint3
   }
   outcome.files = files;
   outcome.warning = expiryWarning(*check, now);
-  outcome.summary = "DDS Security: enclave " +
-                    (config.enclave.empty() ? config.enclave_dir : config.enclave) + " (subject " +
-                    check->subject + ", certificate valid until " +
+  outcome.summary = "DDS Security: " +
+                    (config.enclave_dir.empty() ? "enclave " + config.enclave
+                                                : "enclave files in " + config.enclave_dir) +
+                    " (subject " + check->subject + ", certificate valid until " +
                     utcText(check->certificate_not_after) + ", permissions until " +
                     utcText(check->permissions_not_after) + ")";
   return outcome;

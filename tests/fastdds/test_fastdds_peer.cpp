@@ -7,6 +7,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <utility>
@@ -17,6 +18,8 @@
 #include "platform/clock.hpp"
 #include "src/dds/entities.hpp"
 #include "src/io/map_file.hpp"
+#include "src/security/enclave_check.hpp"
+#include "src/security/keystore/keystore_writer.hpp"
 #include "tests/fastdds/peer_process.hpp"
 #include "tests/fastdds/veth_hosts.hpp"
 #include "tests/service/service_fixture.hpp"
@@ -116,9 +119,9 @@ void expectMapsCostmapsAndDiagnostics(const JsonValue& result, const std::string
 }
 
 /// The input: the tests' Cyclone lidar driver in the yard, until `peer` has had enough.
-void feedYardLidarWhileRunning(std::uint32_t domain, PeerProcess& peer,
-                               const RunningDaemon& daemon) {
-  RosSide ros(domain, 70000);
+void feedYardLidarWhileRunning(std::uint32_t domain, PeerProcess& peer, const RunningDaemon& daemon,
+                               const dds::SecurityFiles& security = {}) {
+  RosSide ros(domain, 70000, security, security);
   ASSERT_TRUE(ros.waitForService(kStartWaitS)) << daemon.log();
   const driver::SimulatedLidar lidar = yardLidar(16, 512, /*moving=*/false);
   driver::LidarPlayback playback(lidar, *ros.publisher, driver::PlaybackOptions{});
@@ -217,6 +220,50 @@ TEST(FastDdsPeer, AFastDdsSubscriberDecodesRaymapdsGridMapsCostmapsAndDiagnostic
   ASSERT_TRUE(result.has_value()) << peer.log();
   expectMapsCostmapsAndDiagnostics(*result, "raymapd:\n" + daemon.log() + "\npeer:\n" + peer.log());
   expectCleanStop(daemon);
+}
+
+// ROS 2's default middleware with an SROS2 keystore made by `raymap security`: a Fast DDS 2.9
+// lidar and planner with Fast DDS's built-in security plugins (set up as rmw_fastrtps does from
+// an enclave) map the room through raymapd, encrypted end to end; a Fast DDS planner without
+// credentials receives nothing. Fast DDS checks the keystore's certificates and signed documents
+// with its own implementation: an independent check of the writer. (Every participant is a
+// process of its own: see docs/security.md on one identity per process.)
+TEST(FastDdsPeer, SecureFastDdsNodesWorkWithAKeystoreMadeByRaymapSecurity) {
+  RAYMAP_SKIP_WITHOUT_FASTDDS_PEER();
+  const std::uint32_t domain = uniqueDomain();
+  const TempDir dir;
+  const std::filesystem::path keystore = dir.path() / "keystore";
+  security::KeystoreOptions options;
+  options.domains = {domain, domain};
+  ASSERT_TRUE(security::createKeystore(keystore, options));
+  for (const char* enclave : {"/raymap/raymapd", "/robot/driver", "/nav2/planner"}) {
+    ASSERT_TRUE(security::createEnclave(keystore, enclave,
+                                        {options.domains, security::validityForDays(30)}));
+  }
+  const auto folder = [&](const char* enclave) {
+    security::SecurityConfig config;
+    config.keystore = keystore.string();
+    config.enclave = enclave;
+    return security::enclaveFolder(config).string();
+  };
+  std::string config = fastDdsConfig(domain);
+  ASSERT_TRUE(replaceFirst(
+      config, "dds: {domain: ", "dds: {security: {keystore: " + keystore.string() + "}, domain: "));
+  RunningDaemon daemon(config, false);
+  ASSERT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
+  PeerProcess outsider(domain, "subscribe", {"--seconds", std::to_string(kPeerRun.count())});
+  PeerProcess subscriber(domain, "subscribe", subscribeArgs(),
+                         {"--enclave-dir", folder("/nav2/planner")});
+  PeerProcess publisher(domain, "publish",
+                        {"--seconds", std::to_string(kPeerRun.count()), "--clouds-after-tf-static"},
+                        {"--enclave-dir", folder("/robot/driver")});
+  expectTheRoomsFloorMapped(daemon, publisher, subscriber);
+  outsider.finish(seconds(0));
+  const std::optional<JsonValue> outside = outsider.result();
+  ASSERT_TRUE(outside.has_value()) << outsider.log();
+  EXPECT_EQ(numberAt(*outside, {"maps"}), 0.0) << outsider.log();
+  EXPECT_EQ(numberAt(*outside, {"costmaps"}), 0.0) << outsider.log();
+  EXPECT_EQ(numberAt(*outside, {"diagnostics"}), 0.0) << outsider.log();
 }
 
 // A planner on a stock ROS 2 install: Fast DDS leaves its socket buffers at the OS default

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -165,9 +166,37 @@ struct Observed {
   bool captured = false;
   std::string capture_skipped;
   bool marker_on_wire = false;
-  int map_windows = 0;          ///< 16-byte windows of the last map's first layer
-  int map_windows_on_wire = 0;  ///< of those, found in the capture
+  int map_windows = 0;               ///< 16-byte windows of the last map's first layer
+  int map_windows_on_wire = 0;       ///< of those, found in the capture
+  driver::ReceivedGridMap last_map;  ///< the authorised side's last GridMap
 };
+
+/// Whether two GridMaps are the same cell for cell in every layer but observed_count (which
+/// counts the scans that went in): the same bits, NaN (unknown) included.
+::testing::AssertionResult sameCells(const driver::ReceivedGridMap& a,
+                                     const driver::ReceivedGridMap& b) {
+  if (a.layers != b.layers || a.data.size() != b.data.size() || a.centre_x != b.centre_x ||
+      a.centre_y != b.centre_y) {
+    return ::testing::AssertionFailure() << "different layers or geometry";
+  }
+  for (std::size_t i = 0; i < a.layers.size(); ++i) {
+    if (a.layers[i] == "observed_count") {
+      continue;
+    }
+    if (a.data[i].size() != b.data[i].size() ||
+        std::memcmp(a.data[i].data(), b.data[i].data(), a.data[i].size() * sizeof(float)) != 0) {
+      std::size_t differ = 0;
+      for (std::size_t c = 0; c < std::min(a.data[i].size(), b.data[i].size()); ++c) {
+        if (std::memcmp(&a.data[i][c], &b.data[i][c], sizeof(float)) != 0) {
+          ++differ;
+        }
+      }
+      return ::testing::AssertionFailure() << "layer " << a.layers[i] << ": " << differ << " of "
+                                           << a.data[i].size() << " cells differ";
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
 
 /// 16-byte windows of a received map's first layer (its serialized floats as on the wire).
 std::vector<std::string> mapWindows(const driver::ReceivedGridMap& map) {
@@ -198,7 +227,7 @@ std::vector<std::string> mapWindows(const driver::ReceivedGridMap& map) {
 /// and a map subscriber) runs on the same domain. Cyclone DDS 0.10 checks topics against the
 /// permissions of a process's first participant on a domain, so each identity has a process.
 Observed runScenario(const RobotKeystore& keystore, bool secure,
-                     const std::string& security_section) {
+                     const std::string& security_section, bool with_intruder = true) {
   Observed seen;
   const std::uint32_t domain = keystore.domain_id;
   TempDir work;
@@ -211,14 +240,20 @@ Observed runScenario(const RobotKeystore& keystore, bool secure,
   RosSide robot(domain, 70000, driver_files, driver_files);
   EXPECT_TRUE(daemon.notify.waitFor("READY=1", kStartWait).has_value()) << daemon.log();
   EXPECT_TRUE(robot.waitForService(kStartWaitS)) << daemon.log();
+  // Without the intruder, a process that lasts about as long bounds the run.
   DaemonProcess intruder(
       "/bin/sh",
-      {"-c", "exec '" + std::string(RAYMAP_LOAD_PATH) + "' --domain " + std::to_string(domain) +
-                 " --beams 16 --columns 512 --warmup 1 --duration 4 > '" +
-                 work.file("intruder.json") + "'"},
+      {"-c", with_intruder ? "exec '" + std::string(RAYMAP_LOAD_PATH) + "' --domain " +
+                                 std::to_string(domain) +
+                                 " --beams 16 --columns 512 --warmup 1 --duration 4 > '" +
+                                 work.file("intruder.json") + "'"
+                           : std::string("exec sleep 6")},
       {}, work.file("intruder.log"));
   driver::PlaybackOptions options;
   options.frame = kMarkerFrame;
+  // One scan, repeated exactly: after a few the map saturates (log-odds clamped), so the last
+  // map does not depend on how many scans went in, and runs can be compared cell for cell.
+  options.distinct_scans = 1;
   std::vector<driver::ReceivedGridMap> maps;
   driver::LidarPlayback lidar(yardLidar(16, 512, false), *robot.publisher, options);
   const std::int64_t t0 = platform::monotonicNowNs();
@@ -236,6 +271,9 @@ Observed runScenario(const RobotKeystore& keystore, bool secure,
   seen.lidar_scans = lidar.scansPublished();
   robot.settle(2.5, &maps);  // a report after the last cloud: its counts include them all
   seen.planner_maps = maps.size();
+  if (!maps.empty()) {
+    seen.last_map = maps.back();
+  }
   seen.intruder_report =
       fileBytes(work.file("intruder.json")) + fileBytes(work.file("intruder.log"));
   seen.intruder_maps = reportNumber(seen.intruder_report, "maps_received");
@@ -256,7 +294,9 @@ Observed runScenario(const RobotKeystore& keystore, bool secure,
     if (!maps.empty()) {
       for (const std::string& window : mapWindows(maps.back())) {
         ++seen.map_windows;
-        seen.map_windows_on_wire += wire.find(window) != std::string::npos ? 1 : 0;
+        if (wire.find(window) != std::string::npos) {
+          ++seen.map_windows_on_wire;
+        }
       }
     }
   }
@@ -283,6 +323,12 @@ TEST(SecureRaymapd, OnlyAuthorisedEnclavesReadAndWriteAndNothingIsReadableOnTheW
     EXPECT_GT(secure.map_windows, 0);
     EXPECT_EQ(secure.map_windows_on_wire, 0);
   }
+
+  // The map fed by the authorised lidar alone is, cell for cell, the map with the intruder there.
+  const Observed alone = runScenario(keystore, true, keystore.section(), false);
+  ASSERT_FALSE(alone.last_map.data.empty());
+  ASSERT_FALSE(secure.last_map.data.empty());
+  EXPECT_TRUE(sameCells(secure.last_map, alone.last_map));
 
   // The control: the same without security. The intruder reads raymapd's topics and its clouds
   // reach raymapd; the capture shows the frame and the map's bytes (so each check above can
@@ -431,6 +477,46 @@ TEST_F(SecurityStartChecks, PermissionsNotCoveringTheConfiguredTopicsAreRefused)
                   " do not allow: subscribe rt/points, publish rt/diagnostics"),
       std::string::npos)
       << output;
+}
+
+TEST_F(SecurityStartChecks, TheServiceRefusesToStartAsTheCheckDoes) {
+  ASSERT_TRUE(keystore.created);
+  fs::remove(enclaveFile("permissions.p7s"));
+  const std::string config = dir.file("raymapd.yaml");
+  std::ofstream(config) << securityTestConfig(keystore.domain_id, keystore.section());
+  const auto [status, output] = runToCompletion(RAYMAPD_PATH, {"--config", config});
+  EXPECT_EQ(status, 2) << output;
+  EXPECT_NE(output.find("raymapd/permissions.p7s: cannot read the enclave's permissions"),
+            std::string::npos)
+      << output;
+}
+
+TEST_F(SecurityStartChecks, SystemdCredentialsServeAsTheEnclavesFolder) {
+  ASSERT_TRUE(keystore.created);
+  // What LoadCredential= makes: the six files (copies, not links) in a folder of their own.
+  const fs::path credentials = dir.path() / "credentials";
+  fs::create_directory(credentials);
+  for (const char* name : {"cert.pem", "key.pem", "identity_ca.cert.pem", "permissions_ca.cert.pem",
+                           "governance.p7s", "permissions.p7s"}) {
+    fs::copy_file(fs::canonical(enclaveFile(name)), credentials / name);
+  }
+  const std::string config = dir.file("raymapd.yaml");
+  std::ofstream(config) << securityTestConfig(keystore.domain_id,
+                                              "  security:\n"
+                                              "    enclave_dir: ${CREDENTIALS_DIRECTORY}\n");
+  const auto [status, output] = runToCompletion(
+      "/usr/bin/env",
+      {"CREDENTIALS_DIRECTORY=" + credentials.string(), RAYMAPD_PATH, "--check-config", config});
+  EXPECT_EQ(status, 0) << output;
+  EXPECT_NE(output.find("DDS Security: enclave files in " + credentials.string()),
+            std::string::npos)
+      << output;
+  const auto [unset_status, unset_output] = runToCompletion(
+      "/usr/bin/env", {"-u", "CREDENTIALS_DIRECTORY", RAYMAPD_PATH, "--check-config", config});
+  EXPECT_EQ(unset_status, 2) << unset_output;
+  EXPECT_NE(unset_output.find("dds.security.enclave_dir: CREDENTIALS_DIRECTORY is not set"),
+            std::string::npos)
+      << unset_output;
 }
 
 TEST_F(SecurityStartChecks, PermissiveWithoutKeysStartsAndWarns) {

@@ -48,8 +48,8 @@ bool setSubject(X509* certificate, std::string_view common_name) {
   X509_NAME* subject = X509_get_subject_name(certificate);
   return X509_NAME_add_entry_by_txt(
              subject, "CN", MBSTRING_UTF8,
-             reinterpret_cast<const unsigned char*>(common_name.data()),  // NOLINT: OpenSSL's
-             static_cast<int>(common_name.size()), -1, 0) == 1;           // byte type
+             reinterpret_cast<const unsigned char*>(common_name.data()),  // OpenSSL's bytes
+             static_cast<int>(common_name.size()), -1, 0) == 1;
 }
 
 bool addBasicConstraints(X509* certificate, bool ca) {

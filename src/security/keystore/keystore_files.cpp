@@ -154,34 +154,6 @@ Result<void> CreatedFolders::create(const std::filesystem::path& folder, mode_t 
   return {};
 }
 
-Result<std::string> readWholeFile(const std::filesystem::path& file, std::string_view what) {
-  auto failed = [&](int error) {
-    return fail(ErrorCode::kIo,
-                file.string() + ": cannot read " + std::string(what) + ": " + errnoText(error));
-  };
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    return failed(errno);
-  }
-  std::string content;
-  char buffer[4096];
-  for (;;) {
-    const ssize_t n = ::read(fd, buffer, sizeof buffer);
-    if (n < 0 && errno == EINTR) {
-      continue;
-    }
-    if (n <= 0) {
-      const int error = n < 0 ? errno : 0;
-      ::close(fd);
-      if (error != 0) {
-        return failed(error);
-      }
-      return content;
-    }
-    content.append(buffer, static_cast<std::size_t>(n));
-  }
-}
-
 bool pathExists(const std::filesystem::path& path) {
   struct stat info {};
   return ::lstat(path.c_str(), &info) == 0;

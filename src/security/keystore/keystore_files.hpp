@@ -73,9 +73,6 @@ class CreatedFolders {
   std::vector<std::filesystem::path> created_;
 };
 
-/// @brief The whole content of `file`; the error reads "FILE: cannot read WHAT: REASON".
-Result<std::string> readWholeFile(const std::filesystem::path& file, std::string_view what);
-
 /// @brief Whether `path` exists as anything (a dangling link counts).
 bool pathExists(const std::filesystem::path& path);
 

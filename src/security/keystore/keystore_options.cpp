@@ -20,7 +20,8 @@ Result<DomainRange> defaultDomainRange() {
   if (errno != 0 || end == text || *end != '\0' || value < 0 || value > kMaxKeystoreDomainId) {
     return fail(ErrorCode::kInvalidArgument,
                 std::string("ROS_DOMAIN_ID=\"") + text + "\" is not a domain id (0.." +
-                    std::to_string(kMaxKeystoreDomainId) + "); set it right or pass --domain");
+                    std::to_string(kMaxKeystoreDomainId) +
+                    "): set it right, or name the domains to cover explicitly");
   }
   const auto domain = static_cast<std::uint32_t>(value);
   return DomainRange{domain, domain};

@@ -6,18 +6,10 @@
 
 #include <openssl/pem.h>
 
-#include "src/security/keystore/keystore_files.hpp"
+#include "src/security/pem_reading.hpp"
 
 namespace raymap::security {
 namespace {
-
-/// A passphrase callback that gives none: an encrypted key fails instead of prompting.
-int noPassphrase(char* /*buffer*/, int /*size*/, int /*rwflag*/, void* /*user*/) { return -1; }
-
-Unexpected<Error> opensslFailure(const std::string& what) {
-  std::string reason = takeOpensslErrors();
-  return fail(ErrorCode::kFormat, what + (reason.empty() ? "" : ": " + reason));
-}
 
 Result<std::string> isoText(const ASN1_TIME* time, const char* which) {
   std::tm tm{};
@@ -46,34 +38,6 @@ Result<std::string> privateKeyPem(EVP_PKEY* key) {
     return opensslFailure("cannot write the private key as PEM");
   }
   return bioText(out.get());
-}
-
-Result<X509Ptr> loadCertificate(const std::filesystem::path& file, std::string_view what) {
-  auto text = readWholeFile(file, what);
-  if (!text) {
-    return Unexpected(std::move(text).error());
-  }
-  BioPtr in = memoryBio(*text);
-  X509Ptr certificate(PEM_read_bio_X509(in.get(), nullptr, noPassphrase, nullptr));
-  if (!certificate) {
-    return opensslFailure(file.string() + ": cannot read " + std::string(what) +
-                          ": not a PEM certificate");
-  }
-  return certificate;
-}
-
-Result<PkeyPtr> loadPrivateKey(const std::filesystem::path& file, std::string_view what) {
-  auto text = readWholeFile(file, what);
-  if (!text) {
-    return Unexpected(std::move(text).error());
-  }
-  BioPtr in = memoryBio(*text);
-  PkeyPtr key(PEM_read_bio_PrivateKey(in.get(), nullptr, noPassphrase, nullptr));
-  if (!key) {
-    return opensslFailure(file.string() + ": cannot read " + std::string(what) +
-                          ": not an unencrypted PEM private key");
-  }
-  return key;
 }
 
 Result<CertificateAndKey> loadCertificateAndKey(const std::filesystem::path& certificate_file,

@@ -9,6 +9,7 @@
 #include "raymap/error.hpp"
 
 #include "src/security/openssl_handles.hpp"
+#include "src/security/pem_reading.hpp"
 
 namespace raymap::security {
 
@@ -16,11 +17,6 @@ namespace raymap::security {
 Result<std::string> certificatePem(X509* certificate);
 /// @brief The PKCS#8 PEM text of a private key ("-----BEGIN PRIVATE KEY-----"), unencrypted.
 Result<std::string> privateKeyPem(EVP_PKEY* key);
-
-/// @brief Reads a PEM certificate file; errors read "FILE: cannot read WHAT: REASON".
-Result<X509Ptr> loadCertificate(const std::filesystem::path& file, std::string_view what);
-/// @brief Reads an unencrypted PEM private key file (never asks for a passphrase).
-Result<PkeyPtr> loadPrivateKey(const std::filesystem::path& file, std::string_view what);
 
 /// A CA's certificate and private key.
 struct CertificateAndKey {

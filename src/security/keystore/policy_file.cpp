@@ -10,6 +10,7 @@
 #include "src/security/keystore/keystore_files.hpp"
 #include "src/security/keystore/keystore_layout.hpp"
 #include "src/security/keystore/keystore_writer.hpp"
+#include "src/security/pem_reading.hpp"
 
 namespace raymap::security {
 namespace {

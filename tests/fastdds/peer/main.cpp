@@ -68,6 +68,10 @@ int main(int argc, char** argv) {
                  "UDP send and receive buffer sizes (0: the OS default, as rmw_fastrtps leaves "
                  "them; for comparison runs)");
   app.add_option("--output", output, "also write the JSON to this file");
+  std::string enclave_dir;
+  app.add_option("--enclave-dir", enclave_dir,
+                 "DDS Security with this SROS2 enclave folder's files (as rmw_fastrtps with "
+                 "ROS_SECURITY_ENABLE=true); default: none");
   Discovery discovery = Discovery::kLoopback;
   app.add_option("--discovery", discovery,
                  "loopback: unicast on 127.0.0.1 only (default); stock: Fast DDS's own transports "
@@ -120,7 +124,7 @@ int main(int argc, char** argv) {
   logToStandardError();
   installStopHandlers();
   std::string error;
-  auto participant = PeerParticipant::create(domain, discovery, buffer_bytes, error);
+  auto participant = PeerParticipant::create(domain, discovery, buffer_bytes, enclave_dir, error);
   if (!participant) {
     std::fprintf(stderr, "raymap-fastdds-peer: %s\n", error.c_str());
     return 1;

@@ -61,17 +61,42 @@ dds::DomainParticipantQos participantQos(Discovery discovery, std::uint32_t buff
   return qos;
 }
 
+/// Fast DDS's built-in security plugins with an SROS2 enclave's files: the properties
+/// rmw_fastrtps sets (its file names are SROS2's; the values are file:// URIs).
+void addSecurity(dds::DomainParticipantQos& qos, const std::string& enclave_dir) {
+  auto& properties = qos.properties().properties();
+  const auto file = [&](const char* name) { return "file://" + enclave_dir + "/" + name; };
+  const std::string auth = "dds.sec.auth.builtin.PKI-DH.";
+  const std::string access = "dds.sec.access.builtin.Access-Permissions.";
+  properties.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
+  properties.emplace_back(auth + "identity_ca", file("identity_ca.cert.pem"));
+  properties.emplace_back(auth + "identity_certificate", file("cert.pem"));
+  properties.emplace_back(auth + "private_key", file("key.pem"));
+  properties.emplace_back("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+  properties.emplace_back("dds.sec.access.plugin", "builtin.Access-Permissions");
+  properties.emplace_back(access + "permissions_ca", file("permissions_ca.cert.pem"));
+  properties.emplace_back(access + "governance", file("governance.p7s"));
+  properties.emplace_back(access + "permissions", file("permissions.p7s"));
+}
+
 }  // namespace
 
 std::unique_ptr<PeerParticipant> PeerParticipant::create(std::uint32_t domain, Discovery discovery,
                                                          std::uint32_t buffer_bytes,
+                                                         const std::string& enclave_dir,
                                                          std::string& error) {
   std::unique_ptr<PeerParticipant> self(new PeerParticipant());
   auto* factory = dds::DomainParticipantFactory::get_instance();
-  self->participant_ = factory->create_participant(static_cast<dds::DomainId_t>(domain),
-                                                   participantQos(discovery, buffer_bytes));
+  dds::DomainParticipantQos qos = participantQos(discovery, buffer_bytes);
+  if (!enclave_dir.empty()) {
+    addSecurity(qos, enclave_dir);
+  }
+  self->participant_ = factory->create_participant(static_cast<dds::DomainId_t>(domain), qos);
   if (self->participant_ == nullptr) {
-    error = "Fast DDS refused the participant on domain " + std::to_string(domain);
+    error =
+        "Fast DDS refused the participant on domain " + std::to_string(domain) +
+        (enclave_dir.empty() ? std::string()
+                             : " with DDS Security from " + enclave_dir + " (its log says why)");
     return nullptr;
   }
   self->publisher_ = self->participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);

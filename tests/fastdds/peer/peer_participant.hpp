@@ -44,9 +44,13 @@ enum class Discovery : std::uint8_t {
 /// call listeners.
 class PeerParticipant {
  public:
+  /// @param enclave_dir an SROS2 enclave's folder: DDS Security with its files, as
+  ///        rmw_fastrtps sets it up from ROS_SECURITY_KEYSTORE and the enclave ("": none)
   /// @return nullptr with `error` set when Fast DDS refuses the participant.
   static std::unique_ptr<PeerParticipant> create(std::uint32_t domain, Discovery discovery,
-                                                 std::uint32_t buffer_bytes, std::string& error);
+                                                 std::uint32_t buffer_bytes,
+                                                 const std::string& enclave_dir,
+                                                 std::string& error);
   ~PeerParticipant();
   PeerParticipant(const PeerParticipant&) = delete;
   PeerParticipant& operator=(const PeerParticipant&) = delete;

@@ -164,6 +164,18 @@ TEST_F(EnclaveCheckTest, ADomainOutsideTheGovernanceIsRefused) {
       << check.error().message;
 }
 
+TEST_F(EnclaveCheckTest, PermissionsForAnotherDomainAreRefused) {
+  EnclaveOptions other_domain = enclave_options_;
+  other_domain.domains = {5, 5};
+  ASSERT_TRUE(createEnclave(keystore_, "/elsewhere", other_domain));
+  auto check = checkEnclave(files("/elsewhere"), kDomain, {}, now());
+  ASSERT_FALSE(check);
+  EXPECT_NE(check.error().message.find("elsewhere/permissions.p7s: the permissions of "
+                                       "CN=/elsewhere do not cover domain 7"),
+            std::string::npos)
+      << check.error().message;
+}
+
 TEST_F(EnclaveCheckTest, PermissionsNotCoveringATopicNameEachOneRefused) {
   EnclaveGrant grant{"/planner", {"rt/plan"}, {"rt/height_map"}};
   ASSERT_TRUE(writePermissions(keystore_, grant, enclave_options_));
