@@ -2,6 +2,7 @@
 // ROS 2's security environment variables and enclave names.
 #include "src/security/security_config.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <string>
 
@@ -13,8 +14,15 @@ std::string_view environment(const char* name) {
   return value == nullptr ? std::string_view() : std::string_view(value);
 }
 
+constexpr std::size_t kMaxCommonNameLength = 64;  // X.509's ub-common-name
+
 bool isNameCharacter(char c) {
   return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+}
+
+std::string quoted(std::string_view name) {
+  std::string text(1, '"');  // (not "\"" + string: a false -Wrestrict from GCC 12 at -O3)
+  return text.append(name).append(1, '"');
 }
 
 }  // namespace
@@ -35,28 +43,41 @@ const char* strategyName(Strategy strategy) noexcept {
   return strategy == Strategy::kEnforce ? "Enforce" : "Permissive";
 }
 
-Result<void> checkEnclaveName(std::string_view enclave, std::string_view where) {
-  const auto bad = [&](const char* why) {
-    return fail(ErrorCode::kInvalidArgument, std::string(where) + ": \"" + std::string(enclave) +
-                                                 "\" is not an enclave name: " + why +
-                                                 " (e.g. /raymap/raymapd)");
-  };
-  if (enclave.size() < 2 || enclave.front() != '/') {
-    return bad("it must start with '/' and name at least one segment");
+Result<void> checkEnclaveName(std::string_view name) {
+  if (name.empty() || name.front() != '/') {
+    return fail(ErrorCode::kInvalidArgument,
+                "enclave name " + quoted(name) + ": must start with '/' (e.g. /raymap/raymapd)");
   }
-  if (enclave.back() == '/') {
-    return bad("it must not end with '/'");
+  if (name.size() == 1) {
+    return fail(ErrorCode::kInvalidArgument,
+                "enclave name \"/\": the root is not an enclave; name one below it (e.g. /raymap)");
   }
-  char previous = '/';
-  for (std::size_t i = 1; i < enclave.size(); ++i) {
-    const char c = enclave[i];
-    if (c == '/' && previous == '/') {
-      return bad("it has an empty segment");
+  if (name.size() > kMaxCommonNameLength) {
+    return fail(ErrorCode::kInvalidArgument,
+                "enclave name " + quoted(name) + ": longer than " +
+                    std::to_string(kMaxCommonNameLength) +
+                    " characters, the most a certificate's common name holds");
+  }
+  std::size_t start = 1;
+  while (start <= name.size()) {
+    const std::size_t end = std::min(name.find('/', start), name.size());
+    const std::string_view segment = name.substr(start, end - start);
+    if (segment.empty()) {
+      return fail(ErrorCode::kInvalidArgument,
+                  "enclave name " + quoted(name) + ": has an empty segment ('//' or a final '/')");
     }
-    if (c != '/' && !isNameCharacter(c)) {
-      return bad("segments are letters, digits and '_'");
+    if (!std::all_of(segment.begin(), segment.end(), isNameCharacter)) {
+      return fail(ErrorCode::kInvalidArgument, "enclave name " + quoted(name) + ": segment \"" +
+                                                   std::string(segment) +
+                                                   "\" may hold only letters, digits and '_'");
     }
-    previous = c;
+    if (segment.front() >= '0' && segment.front() <= '9') {
+      // As ROS 2's namespace rules (rmw_validate_namespace), which sros2 applies.
+      return fail(ErrorCode::kInvalidArgument, "enclave name " + quoted(name) + ": segment \"" +
+                                                   std::string(segment) +
+                                                   "\" must not start with a digit");
+    }
+    start = end + 1;
   }
   return {};
 }
@@ -91,11 +112,11 @@ Result<SecurityConfig> securityFromEnvironment(std::string_view default_enclave)
   }
   const std::string_view override_enclave = environment("ROS_SECURITY_ENCLAVE_OVERRIDE");
   config.enclave = std::string(override_enclave.empty() ? default_enclave : override_enclave);
-  if (auto ok = checkEnclaveName(config.enclave, override_enclave.empty()
-                                                     ? "the default enclave"
-                                                     : "ROS_SECURITY_ENCLAVE_OVERRIDE");
-      !ok) {
-    return Unexpected(std::move(ok).error());
+  if (auto ok = checkEnclaveName(config.enclave); !ok) {
+    return fail(ok.error().code,
+                (override_enclave.empty() ? std::string("the default enclave")
+                                          : std::string("ROS_SECURITY_ENCLAVE_OVERRIDE")) +
+                    ": " + ok.error().message);
   }
   return config;
 }

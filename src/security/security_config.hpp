@@ -55,9 +55,11 @@ const char* strategyName(Strategy strategy) noexcept;
 /// enclave that is not an absolute name). Reads the environment: start-up only.
 Result<SecurityConfig> securityFromEnvironment(std::string_view default_enclave);
 
-/// @brief Checks an enclave name: "/" followed by segments of letters, digits and '_' separated
-/// by single '/' (ROS 2's namespace rules), e.g. "/raymap/raymapd".
-/// @return an error naming `where` and the reason
-Result<void> checkEnclaveName(std::string_view enclave, std::string_view where);
+/// @brief Checks an enclave name: "/" then segments of [A-Za-z0-9_] separated by single '/'
+/// ("/raymap/raymapd"), none starting with a digit (ROS 2's namespace rule, which sros2
+/// applies), at most 64 characters (a certificate's CN); "/" alone, empty segments, "." and ".."
+/// are refused.
+/// @return an error quoting the name and saying what is wrong
+Result<void> checkEnclaveName(std::string_view name);
 
 }  // namespace raymap::security

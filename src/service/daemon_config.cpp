@@ -351,8 +351,8 @@ void readSecurity(Context& ctx, const YAML::Node& node, security::SecurityConfig
                          ? std::string(enclave_env)
                          : std::string(security::kDaemonEnclave));
   sec.enclave_dir = text(f, "enclave_dir", "");
-  if (auto name = security::checkEnclaveName(sec.enclave, "enclave"); !name) {
-    f.check(false, "enclave", name.error().message.substr(std::string("enclave: ").size()));
+  if (auto name = security::checkEnclaveName(sec.enclave); !name) {
+    f.check(false, "enclave", name.error().message);
   }
   const std::string strategy = text(f, "strategy", "Enforce");
   if (auto parsed = security::parseStrategy(strategy, "strategy"); parsed) {

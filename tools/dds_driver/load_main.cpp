@@ -145,7 +145,11 @@ int main(int argc, char** argv) {
   auto grids = driver::GridMapListener::create(participant.value(), grid_topic);
   auto diagnostics = driver::DiagnosticsListener::create(participant.value(), diag_topic);
   if (!publisher || !grids || !diagnostics) {
-    std::fprintf(stderr, "raymap-load: cannot create the DDS endpoints\n");
+    // Each refusal says why (a topic DDS Security does not allow names the permissions file).
+    const std::string why = !publisher ? publisher.error().message
+                            : !grids   ? grids.error().message
+                                       : diagnostics.error().message;
+    std::fprintf(stderr, "raymap-load: cannot create the DDS endpoints: %s\n", why.c_str());
     return 1;
   }
 

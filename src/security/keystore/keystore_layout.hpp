@@ -8,6 +8,8 @@
 
 #include "raymap/error.hpp"
 
+#include "src/security/security_config.hpp"
+
 namespace raymap::security {
 
 /// The files of a keystore, relative to its folder (sros2's names).
@@ -32,12 +34,6 @@ inline constexpr const char* kGovernanceP7s = "governance.p7s";
 inline constexpr const char* kPermissionsXml = "permissions.xml";
 inline constexpr const char* kPermissionsP7s = "permissions.p7s";
 }  // namespace enclave_files
-
-/// @brief Checks an enclave name: "/" then segments of [A-Za-z0-9_] separated by single '/'
-/// ("/raymap/raymapd"), none starting with a digit (ROS 2's namespace rule), at most 64
-/// characters (a certificate's CN); "/" alone, empty segments, "." and ".." are refused.
-/// @return an error quoting the name and saying what is wrong
-Result<void> checkEnclaveName(std::string_view name);
 
 /// @brief enclaves/<name without its leading '/'> inside `keystore`. @pre a checked name
 std::filesystem::path enclaveFolder(const std::filesystem::path& keystore, std::string_view name);
