@@ -81,15 +81,12 @@ Result<std::unique_ptr<ReplaySession>> ReplaySession::create(const ReplayOptions
     s->driver_ = std::move(driver).value();
   }
   if (options.rate <= 0.0) {
-    // The progress reports come from another participant, as from any other node.
-    auto feedback_participant =
-        security::openToolParticipant(options.domain, "raymap replay", security::kToolsEnclave);
-    if (!feedback_participant) {
-      return Unexpected(std::move(feedback_participant).error());
-    }
-    s->feedback_participant_.emplace(std::move(feedback_participant).value());
+    // raymapd's progress reports are read on the same participant: one DDS identity per process
+    // (Cyclone DDS 0.10 checks topics against a process's first participant's permissions, and
+    // a process with two secure participants crashed in Cyclone when a secure Fast DDS node
+    // joined: docs/security.md).
     auto feedback =
-        driver::DiagnosticsListener::create(*s->feedback_participant_, options.diagnostics_topic);
+        driver::DiagnosticsListener::create(*s->participant_, options.diagnostics_topic);
     if (!feedback) {
       return Unexpected(std::move(feedback).error());
     }

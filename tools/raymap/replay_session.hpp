@@ -116,7 +116,6 @@ class ReplaySession {
   ReplayClock clock_;
   std::optional<dds::Participant> participant_;
   std::unique_ptr<driver::DriverPublisher> driver_;
-  std::optional<dds::Participant> feedback_participant_;
   std::unique_ptr<driver::DiagnosticsListener> feedback_;
   std::map<std::string, dds::CdrWriter> log_writers_;
   ReplayStats stats_;
