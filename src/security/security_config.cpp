@@ -10,7 +10,7 @@ namespace raymap::security {
 namespace {
 
 std::string_view environment(const char* name) {
-  const char* value = std::getenv(name);
+  const char* value = std::getenv(name);  // NOLINT(concurrency-mt-unsafe): start-up, one thread
   return value == nullptr ? std::string_view() : std::string_view(value);
 }
 

@@ -343,7 +343,9 @@ void readSecurity(Context& ctx, const YAML::Node& node, security::SecurityConfig
   Fields f(ctx, node, "dds.security");
   f.knownKeys({"enable", "keystore", "enclave", "enclave_dir", "strategy"});
   sec.enabled = flag(f, "enable", true);
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): configuration is read at start-up, on one thread
   const char* keystore_env = std::getenv("ROS_SECURITY_KEYSTORE");
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): as above
   const char* enclave_env = std::getenv("ROS_SECURITY_ENCLAVE_OVERRIDE");
   sec.keystore = text(f, "keystore", keystore_env != nullptr ? keystore_env : "");
   sec.enclave = text(f, "enclave",

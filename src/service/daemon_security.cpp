@@ -16,6 +16,7 @@ Result<std::string> expandEnclaveDir(const DaemonConfig& config, const std::stri
   if (dir.rfind(kCredentialsVariable, 0) != 0) {
     return dir;
   }
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): start-up, before any thread that sets variables
   const char* credentials = std::getenv("CREDENTIALS_DIRECTORY");
   if (credentials == nullptr || credentials[0] == '\0') {
     return fail(ErrorCode::kInvalidArgument,
