@@ -8,6 +8,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -39,8 +40,15 @@ DaemonProcess::DaemonProcess(const std::string& binary, const std::vector<std::s
                              const std::vector<std::string>& environment,
                              const std::string& stderr_path) {
   std::vector<char*> arguments = argv(binary, args);
+  const pid_t test = ::getpid();
   pid_ = ::fork();
   if (pid_ == 0) {
+    // Killed with the test: a test that dies (an abort, a crash) leaves no daemon, capture or
+    // peer running behind it. Kept across exec; lost only by a set-user-ID program.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != test) {
+      ::_exit(127);  // the test died before the line above
+    }
     for (const std::string& e : environment) {
       // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): the child owns its copy
       ::putenv(const_cast<char*>(e.c_str()));

@@ -137,9 +137,13 @@ class LoopbackCapture {
       : pcap_(dir.file("lo.pcap")), log_(dir.file("tcpdump.log")) {
     const std::uint32_t first = 7400 + 250 * domain;
     // -U: each packet written at once (nothing is lost in tcpdump's buffer when it stops).
+    // -Z root: tcpdump keeps the test's user, so that it dies with the test (DaemonProcess's
+    // parent-death signal does not survive a change of user); -c: at most 100,000 packets
+    // whatever happens (a run here sends a few thousand, about 80 MB).
     process_ = std::make_unique<DaemonProcess>(
         "/usr/bin/tcpdump",
-        std::vector<std::string>{"-i", "lo", "-U", "-n", "-s", "0", "-w", pcap_, "udp", "portrange",
+        std::vector<std::string>{"-i", "lo", "-U", "-n", "-Z", "root", "-c", "100000", "-s", "0",
+                                 "-w", pcap_, "udp", "portrange",
                                  std::to_string(first) + "-" + std::to_string(first + 249)},
         std::vector<std::string>{}, log_);
   }
