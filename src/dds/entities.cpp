@@ -25,14 +25,11 @@ std::string describe(const char* what, const char* topic_name, dds_return_t code
   return message;
 }
 
-/// describe() for a reader or writer, naming the permissions document when it refused.
-std::string describeEndpoint(const Participant& participant, const char* what,
+/// describe() for a topic, reader or writer, naming the permissions document and `use`
+/// ("publishing") when DDS Security refused it.
+std::string describeEndpoint(const Participant& participant, const char* what, const char* use,
                              const char* topic_name, dds_return_t code) {
   if (code == DDS_RETCODE_NOT_ALLOWED_BY_SECURITY && !participant.permissionsFile().empty()) {
-    const std::string_view call = what;
-    const char* use = call == "dds_create_writer"   ? "publishing"
-                      : call == "dds_create_reader" ? "subscribing to"
-                                                    : "publishing or subscribing to";
     return participant.permissionsFile() + ": the enclave's permissions do not allow " + use +
            " \"" + topic_name + "\" (DDS Security refused " + what + ")";
   }
@@ -97,7 +94,8 @@ Result<void> createTopic(const Participant& participant, const char* topic_name,
       dds_create_topic(participant.handle(), descriptor, topic_name, nullptr, nullptr);
   if (created < 0) {
     return fail(ErrorCode::kInvalidArgument,
-                describeEndpoint(participant, "dds_create_topic", topic_name, created));
+                describeEndpoint(participant, "dds_create_topic", "publishing or subscribing to",
+                                 topic_name, created));
   }
   *topic = created;
   return {};
@@ -234,8 +232,9 @@ Result<RawReader> RawReader::create(const Participant& participant, const char* 
   dds_delete_qos(qos);
   if (reader < 0) {
     deleteEntity(topic);
-    return fail(ErrorCode::kInvalidArgument,
-                describeEndpoint(participant, "dds_create_reader", topic_name, reader));
+    return fail(
+        ErrorCode::kInvalidArgument,
+        describeEndpoint(participant, "dds_create_reader", "subscribing to", topic_name, reader));
   }
   return RawReader(topic, reader);
 }
@@ -397,8 +396,8 @@ Result<Writer> Writer::create(const Participant& participant, const char* topic_
   dds_delete_qos(qos);
   if (writer < 0) {
     deleteEntity(topic);
-    return fail(ErrorCode::kInvalidArgument,
-                describeEndpoint(participant, "dds_create_writer", topic_name, writer));
+    return fail(ErrorCode::kInvalidArgument, describeEndpoint(participant, "dds_create_writer",
+                                                              "publishing", topic_name, writer));
   }
   return Writer(topic, writer);
 }

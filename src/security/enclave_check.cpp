@@ -15,10 +15,6 @@ Result<std::string> readFile(const std::string& path, const char* role) {
   return readWholeFile(path, std::string("the enclave's ") + role);
 }
 
-Result<X509Ptr> readCertificate(const std::string& path, const char* role) {
-  return loadCertificate(path, std::string("the enclave's ") + role);
-}
-
 std::time_t asTime(const ASN1_TIME* time) {
   std::tm tm{};
   ASN1_TIME_to_tm(time, &tm);
@@ -39,6 +35,18 @@ Result<void> checkValidity(const X509* certificate, const std::string& path, con
                 path + ": the " + role + " is not valid before " + utcText(not_before));
   }
   return {};
+}
+
+/// A certificate of the enclave, read and valid at `now`.
+Result<X509Ptr> validCertificate(const std::string& path, const char* role, std::time_t now) {
+  auto certificate = loadCertificate(path, std::string("the enclave's ") + role);
+  if (!certificate) {
+    return certificate;
+  }
+  if (auto valid = checkValidity(certificate->get(), path, role, now); !valid) {
+    return Unexpected(std::move(valid).error());
+  }
+  return certificate;
 }
 
 /// A store trusting `ca` alone, checking at `now`.
@@ -96,25 +104,15 @@ struct Certificates {
 
 /// The three certificates, each valid at `now`, the identity signed by its CA, the key its own.
 Result<Certificates> checkIdentity(const dds::SecurityFiles& files, std::time_t now) {
-  Certificates c;
-  auto identity_ca = readCertificate(files.identity_ca, "identity CA");
-  auto permissions_ca = readCertificate(files.permissions_ca, "permissions CA");
-  auto identity = readCertificate(files.certificate, "identity certificate");
+  auto identity_ca = validCertificate(files.identity_ca, "identity CA", now);
+  auto permissions_ca = validCertificate(files.permissions_ca, "permissions CA", now);
+  auto identity = validCertificate(files.certificate, "identity certificate", now);
   for (auto* read : {&identity_ca, &permissions_ca, &identity}) {
     if (!*read) {
       return Unexpected(std::move(*read).error());
     }
   }
-  c = {std::move(*identity_ca), std::move(*permissions_ca), std::move(*identity)};
-  const std::pair<const X509*, std::pair<const std::string*, const char*>> each[] = {
-      {c.identity_ca.get(), {&files.identity_ca, "identity CA"}},
-      {c.permissions_ca.get(), {&files.permissions_ca, "permissions CA"}},
-      {c.identity.get(), {&files.certificate, "identity certificate"}}};
-  for (const auto& [certificate, named] : each) {
-    if (auto valid = checkValidity(certificate, *named.first, named.second, now); !valid) {
-      return Unexpected(std::move(valid).error());
-    }
-  }
+  Certificates c{std::move(*identity_ca), std::move(*permissions_ca), std::move(*identity)};
   if (auto signed_by = checkSignedBy(c.identity.get(), c.identity_ca.get(), now); !signed_by) {
     return fail(ErrorCode::kInvalidArgument,
                 files.certificate + ": the identity certificate is not signed by the identity CA " +
@@ -175,19 +173,18 @@ std::filesystem::path enclaveFolder(const SecurityConfig& config) {
   if (!config.enclave_dir.empty()) {
     return config.enclave_dir;
   }
-  std::string_view relative = config.enclave;
-  while (!relative.empty() && relative.front() == '/') {
-    relative.remove_prefix(1);
-  }
-  return std::filesystem::path(config.keystore) / "enclaves" / relative;
+  return enclaveFolder(config.keystore, config.enclave);
 }
 
 dds::SecurityFiles enclaveFilesIn(const std::filesystem::path& folder) {
   const std::filesystem::path absolute = std::filesystem::absolute(folder);
   const auto file = [&](const char* name) { return (absolute / name).string(); };
-  return dds::SecurityFiles{
-      file("identity_ca.cert.pem"),    file("cert.pem"),       file("key.pem"),
-      file("permissions_ca.cert.pem"), file("governance.p7s"), file("permissions.p7s")};
+  return dds::SecurityFiles{file(enclave_files::kIdentityCaCert),
+                            file(enclave_files::kCert),
+                            file(enclave_files::kKey),
+                            file(enclave_files::kPermissionsCaCert),
+                            file(enclave_files::kGovernanceP7s),
+                            file(enclave_files::kPermissionsP7s)};
 }
 
 Result<EnclaveCheck> checkEnclave(const dds::SecurityFiles& files, std::uint32_t domain,

@@ -33,9 +33,6 @@ struct X509StoreFree {
 struct X509StoreCtxFree {
   void operator()(X509_STORE_CTX* p) const noexcept { X509_STORE_CTX_free(p); }
 };
-struct X509NameFree {
-  void operator()(X509_NAME* p) const noexcept { X509_NAME_free(p); }
-};
 
 using BioPtr = std::unique_ptr<BIO, BioFree>;
 using X509Ptr = std::unique_ptr<X509, X509Free>;
@@ -43,7 +40,6 @@ using PkeyPtr = std::unique_ptr<EVP_PKEY, PkeyFree>;
 using Pkcs7Ptr = std::unique_ptr<PKCS7, Pkcs7Free>;
 using X509StorePtr = std::unique_ptr<X509_STORE, X509StoreFree>;
 using X509StoreCtxPtr = std::unique_ptr<X509_STORE_CTX, X509StoreCtxFree>;
-using X509NamePtr = std::unique_ptr<X509_NAME, X509NameFree>;
 
 /// @brief OpenSSL's queued errors for this thread as one line ("" when none), and the queue
 /// cleared: for the reason part of an error message. Thread-safety: per thread (OpenSSL's queue

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <iterator>
 #include <string>
 
 #include <fnmatch.h>
@@ -128,26 +129,6 @@ std::vector<std::string> topicsOf(std::string_view rule, std::string_view criter
   return topics;
 }
 
-/// The allow and deny rules of a grant, in document order.
-template <class Rule>
-std::vector<Rule> rulesOf(std::string_view grant) {
-  std::vector<Rule> rules;
-  std::size_t from = 0;
-  while (true) {
-    const Element allow = findElement(grant, "allow_rule", from);
-    const Element deny = findElement(grant, "deny_rule", from);
-    if (allow.end == std::string_view::npos && deny.end == std::string_view::npos) {
-      return rules;
-    }
-    const bool is_allow = deny.end == std::string_view::npos ||
-                          (allow.end != std::string_view::npos && allow.end < deny.end);
-    const Element& e = is_allow ? allow : deny;
-    rules.push_back(Rule{is_allow, domainsOf(e.inner), topicsOf(e.inner, "publish"),
-                         topicsOf(e.inner, "subscribe")});
-    from = e.end;
-  }
-}
-
 int twoDigits(std::string_view text, std::size_t at) {
   return (text[at] - '0') * 10 + (text[at + 1] - '0');
 }
@@ -188,6 +169,24 @@ Result<std::time_t> parseIsoTime(std::string_view text) {
   return seconds;
 }
 
+std::vector<PermissionsGrant::Rule> PermissionsGrant::rulesOf(std::string_view grant) {
+  std::vector<Rule> rules;
+  std::size_t from = 0;
+  while (true) {
+    const Element allow = findElement(grant, "allow_rule", from);
+    const Element deny = findElement(grant, "deny_rule", from);
+    if (allow.end == std::string_view::npos && deny.end == std::string_view::npos) {
+      return rules;
+    }
+    const bool is_allow = deny.end == std::string_view::npos ||
+                          (allow.end != std::string_view::npos && allow.end < deny.end);
+    const Element& e = is_allow ? allow : deny;
+    rules.push_back(Rule{is_allow, domainsOf(e.inner), topicsOf(e.inner, "publish"),
+                         topicsOf(e.inner, "subscribe")});
+    from = e.end;
+  }
+}
+
 Result<PermissionsGrant> PermissionsGrant::find(std::string_view xml, std::string_view subject) {
   const std::string wanted = withoutSpaces(subject);
   std::string subjects;
@@ -198,7 +197,7 @@ Result<PermissionsGrant> PermissionsGrant::find(std::string_view xml, std::strin
       continue;
     }
     PermissionsGrant result;
-    result.rules_ = rulesOf<Rule>(grant);
+    result.rules_ = rulesOf(grant);
     result.default_allow_ = textOf(findElement(grant, "default").inner) == "ALLOW";
     const std::string_view validity = findElement(grant, "validity").inner;
     auto not_before = parseIsoTime(findElement(validity, "not_before").inner);

@@ -54,6 +54,9 @@ class PermissionsGrant {
     std::vector<std::string> publish;
     std::vector<std::string> subscribe;
   };
+  /// The allow and deny rules of a grant's XML, in document order.
+  static std::vector<Rule> rulesOf(std::string_view grant);
+
   std::vector<Rule> rules_;
   bool default_allow_ = false;
   std::time_t not_before_ = 0;

@@ -82,6 +82,10 @@ Result<void> checkEnclaveName(std::string_view name) {
   return {};
 }
 
+std::filesystem::path enclaveFolder(const std::filesystem::path& keystore, std::string_view name) {
+  return keystore / "enclaves" / std::filesystem::path(name.substr(1));
+}
+
 Result<SecurityConfig> securityFromEnvironment(std::string_view default_enclave) {
   SecurityConfig config;
   config.source = "ROS_SECURITY_ENABLE";

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <string_view>
 
@@ -54,6 +55,22 @@ const char* strategyName(Strategy strategy) noexcept;
 /// ROS_SECURITY_ENABLE or ROS_SECURITY_STRATEGY, security on without ROS_SECURITY_KEYSTORE, an
 /// enclave that is not an absolute name). Reads the environment: start-up only.
 Result<SecurityConfig> securityFromEnvironment(std::string_view default_enclave);
+
+/// The files of an enclave folder (enclaves/<name>/): SROS2's names, what Cyclone and Fast DDS
+/// read.
+namespace enclave_files {
+inline constexpr const char* kKey = "key.pem";
+inline constexpr const char* kCert = "cert.pem";
+inline constexpr const char* kIdentityCaCert = "identity_ca.cert.pem";
+inline constexpr const char* kPermissionsCaCert = "permissions_ca.cert.pem";
+inline constexpr const char* kGovernanceP7s = "governance.p7s";
+inline constexpr const char* kPermissionsXml = "permissions.xml";
+inline constexpr const char* kPermissionsP7s = "permissions.p7s";
+}  // namespace enclave_files
+
+/// @brief <keystore>/enclaves/<name without its leading '/'> (SROS2's layout). @pre a name
+/// that checkEnclaveName accepts
+std::filesystem::path enclaveFolder(const std::filesystem::path& keystore, std::string_view name);
 
 /// @brief Checks an enclave name: "/" then segments of [A-Za-z0-9_] separated by single '/'
 /// ("/raymap/raymapd"), none starting with a digit (ROS 2's namespace rule, which sros2

@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "src/security/keystore/keystore_layout.hpp"
 #include "src/security/keystore/keystore_writer.hpp"
+#include "src/security/security_config.hpp"
 #include "tools/raymap/commands.hpp"
 
 namespace raymap::cli {
@@ -98,13 +100,13 @@ void printPaths(const fs::path& base, const std::vector<const char*>& files) {
 
 /// Whether enclave `name` already has its identity (so writing it keeps key and certificate).
 bool hasIdentity(const std::string& keystore, const std::string& name) {
-  if (name.size() < 2 || name.front() != '/') {
+  if (!security::checkEnclaveName(name)) {
     return false;
   }
-  const fs::path folder = fs::path(keystore) / "enclaves" / name.substr(1);
+  const fs::path folder = security::enclaveFolder(keystore, name);
   std::error_code error;
-  return fs::is_regular_file(folder / "key.pem", error) &&
-         fs::is_regular_file(folder / "cert.pem", error);
+  return fs::is_regular_file(folder / security::enclave_files::kKey, error) &&
+         fs::is_regular_file(folder / security::enclave_files::kCert, error);
 }
 
 int runCreateKeystore(const SecurityFlags& f) {
@@ -124,10 +126,10 @@ int runCreateKeystore(const SecurityFlags& f) {
     printError(command, made.error().message);
     return kExitFailure;
   }
-  printPaths(f.keystore,
-             {"public/ca.cert.pem", "public/identity_ca.cert.pem", "public/permissions_ca.cert.pem",
-              "private/ca.key.pem", "private/identity_ca.key.pem", "private/permissions_ca.key.pem",
-              "enclaves/governance.xml", "enclaves/governance.p7s"});
+  namespace files = security::keystore_files;
+  printPaths(f.keystore, {files::kCaCert, files::kIdentityCaCert, files::kPermissionsCaCert,
+                          files::kCaKey, files::kIdentityCaKey, files::kPermissionsCaKey,
+                          files::kGovernanceXml, files::kGovernanceP7s});
   return kExitOk;
 }
 
@@ -154,12 +156,13 @@ int runCreateEnclave(const SecurityFlags& f) {
     printError(command, made.error().message);
     return kExitFailure;
   }
-  const fs::path folder = fs::path(f.keystore) / "enclaves" / f.enclave.substr(1);
+  namespace files = security::enclave_files;
+  const fs::path folder = security::enclaveFolder(f.keystore, f.enclave);
   if (!kept) {
-    printPaths(folder, {"key.pem", "cert.pem"});
+    printPaths(folder, {files::kKey, files::kCert});
   }
-  printPaths(folder, {"identity_ca.cert.pem", "permissions_ca.cert.pem", "governance.p7s",
-                      "permissions.xml", "permissions.p7s"});
+  printPaths(folder, {files::kIdentityCaCert, files::kPermissionsCaCert, files::kGovernanceP7s,
+                      files::kPermissionsXml, files::kPermissionsP7s});
   return kExitOk;
 }
 
@@ -196,8 +199,8 @@ int runCreatePermissions(const SecurityFlags& f) {
       printError(command, written.error().message);
       return kExitFailure;
     }
-    const fs::path p7s =
-        fs::path(f.keystore) / "enclaves" / grant.enclave.substr(1) / "permissions.p7s";
+    const fs::path p7s = security::enclaveFolder(f.keystore, grant.enclave) /
+                         security::enclave_files::kPermissionsP7s;
     std::printf("%s: %s (%zu publish, %zu subscribe topics%s)\n", grant.enclave.c_str(),
                 p7s.c_str(), grant.publish.size(), grant.subscribe.size(),
                 kept ? "" : "; new enclave: key.pem, cert.pem");

@@ -7,10 +7,6 @@
 
 namespace raymap::security {
 
-std::filesystem::path enclaveFolder(const std::filesystem::path& keystore, std::string_view name) {
-  return keystore / "enclaves" / std::filesystem::path(name.substr(1));
-}
-
 std::filesystem::path fromEnclaveTo(std::string_view name, std::string_view keystore_file) {
   // Relative to the keystore on both sides, as sros2's os.path.relpath: the governance of
   // enclave /a/b is "../../governance.p7s", its CA "../../../public/identity_ca.cert.pem".

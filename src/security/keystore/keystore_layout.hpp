@@ -24,20 +24,6 @@ inline constexpr const char* kGovernanceXml = "enclaves/governance.xml";
 inline constexpr const char* kGovernanceP7s = "enclaves/governance.p7s";
 }  // namespace keystore_files
 
-/// The files of an enclave folder (enclaves/<name>/).
-namespace enclave_files {
-inline constexpr const char* kKey = "key.pem";
-inline constexpr const char* kCert = "cert.pem";
-inline constexpr const char* kIdentityCaCert = "identity_ca.cert.pem";
-inline constexpr const char* kPermissionsCaCert = "permissions_ca.cert.pem";
-inline constexpr const char* kGovernanceP7s = "governance.p7s";
-inline constexpr const char* kPermissionsXml = "permissions.xml";
-inline constexpr const char* kPermissionsP7s = "permissions.p7s";
-}  // namespace enclave_files
-
-/// @brief enclaves/<name without its leading '/'> inside `keystore`. @pre a checked name
-std::filesystem::path enclaveFolder(const std::filesystem::path& keystore, std::string_view name);
-
 /// @brief The link target from an enclave folder to `keystore_file` (relative to the keystore),
 /// e.g. "../../../public/identity_ca.cert.pem" for "/a/b". @pre a checked name
 std::filesystem::path fromEnclaveTo(std::string_view name, std::string_view keystore_file);
