@@ -8,9 +8,9 @@
 #include <set>
 #include <utility>
 
-#include "src/dds/point_cloud.hpp"
-#include "src/dds/pose.hpp"
-#include "src/dds/topic_types.hpp"
+#include "src/msgs/point_cloud.hpp"
+#include "src/msgs/pose.hpp"
+#include "src/msgs/ros_names.hpp"
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_history.hpp"
@@ -51,7 +51,7 @@ std::string topicsWithTypes(const std::vector<BagTopic>& topics) {
 /// (rt/points, as raymapd's configuration and replay take them), its ROS topic (/points); -1.
 int findBagTopic(const BagReader& bag, const std::string& name) {
   const int at = findTopic(bag.topics(), name);
-  const std::string ros = dds::rosTopicName(name);
+  const std::string ros = msgs::rosTopicName(name);
   return at >= 0 || ros.empty() ? at : findTopic(bag.topics(), ros);
 }
 
@@ -304,8 +304,8 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
 
  private:
   struct Scan {
-    dds::CloudHeader header{};
-    std::vector<dds::ScanPoint> points;
+    msgs::CloudHeader header{};
+    std::vector<msgs::ScanPoint> points;
     std::uint32_t sensor = 0;
     std::int64_t log_time_ns = 0;  // when the recorder got it (bag time, for the pose wait)
     pipeline::ScanTimes times;
@@ -317,8 +317,8 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     std::size_t n = 0;
     const io::Pose& extrinsic = extrinsics_[scan.sensor];
     while (n < out.size() && point_ < scan.points.size()) {
-      const dds::ScanPoint& p = scan.points[point_++];
-      if ((p.flags & dds::kPointNoReturn) != 0u) {
+      const msgs::ScanPoint& p = scan.points[point_++];
+      if ((p.flags & msgs::kPointNoReturn) != 0u) {
         ++report_.points_no_return;
         continue;
       }
@@ -442,7 +442,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   void onCameraInfo(std::uint32_t sensor) {
     if (auto taken = decoders_[sensor].onCameraInfo(message_.data); !taken) {
       ++report_.camera_infos_skipped;
-      skip("message", dds::toString(taken.error()));
+      skip("message", msgs::toString(taken.error()));
       return;
     }
     ++report_.camera_infos;
@@ -471,8 +471,8 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       case pipeline::DecodeOutcome::kWrongFrame:  // no frame is configured: unreachable
         ++report_.clouds_skipped;
         skip("message", decoder.settings().kind == pipeline::SensorInputKind::kDepth
-                            ? dds::toString(decoded.image_error)
-                            : dds::toString(decoded.cloud_error));
+                            ? msgs::toString(decoded.image_error)
+                            : msgs::toString(decoded.cloud_error));
         return;
     }
     router_->learnSensorFrame(sensor, decoded.header.frame_id, *this);
@@ -487,7 +487,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   }
 
   void onOdometry() {
-    auto odometry = dds::decodeOdometry(message_.data);
+    auto odometry = msgs::decodeOdometry(message_.data);
     if (!odometry) {
       ++report_.poses_skipped;
       skip("message", "not a valid nav_msgs/msg/Odometry");
@@ -498,15 +498,15 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   }
 
   void onTf(bool is_static) {
-    std::array<dds::StampedTransform, 64> transforms;
-    auto count = dds::decodeTfMessage(message_.data, transforms);
+    std::array<msgs::StampedTransform, 64> transforms;
+    auto count = msgs::decodeTfMessage(message_.data, transforms);
     if (!count) {
       ++report_.poses_skipped;
       skip("message", "not a valid tf2_msgs/msg/TFMessage (or more than 64 transforms)");
       return;
     }
     if (is_static) {
-      for (const dds::StampedTransform& t : std::span(transforms).first(count.value())) {
+      for (const msgs::StampedTransform& t : std::span(transforms).first(count.value())) {
         static_frames_.insert(t.parent);
         static_frames_.insert(t.child);
       }
@@ -568,11 +568,11 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
   std::vector<bool> extrinsic_from_tf_;  // per sensor: /tf_static gave its extrinsic
   std::set<std::string> static_frames_;  // every frame /tf_static named (for the error)
   pipeline::PointDeskewer deskewer_;
-  std::vector<dds::ScanPoint> decoded_;  // the decoder's output (grows to the largest cloud)
-  std::deque<Scan> waiting_;             // decoded clouds waiting for their poses, oldest first
-  std::vector<Scan> spare_;              // emptied scans whose buffers are reused
-  std::optional<Scan> current_;          // the scan being converted
-  std::size_t point_ = 0;                // its next point
+  std::vector<msgs::ScanPoint> decoded_;  // the decoder's output (grows to the largest cloud)
+  std::deque<Scan> waiting_;              // decoded clouds waiting for their poses, oldest first
+  std::vector<Scan> spare_;               // emptied scans whose buffers are reused
+  std::optional<Scan> current_;           // the scan being converted
+  std::size_t point_ = 0;                 // its next point
   std::uint64_t scan_sequence_ = 0;
   BagMessage message_;
   std::int64_t bag_time_ns_ = INT64_MIN;

@@ -11,9 +11,9 @@
 #include "raymap/error.hpp"
 
 #include "src/bag/bag_reader.hpp"
-#include "src/dds/depth_image.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/io/trajectory.hpp"
+#include "src/msgs/depth_image.hpp"
 
 namespace raymap::bag {
 
@@ -31,7 +31,7 @@ struct BagRaysOptions {
   std::vector<std::string> camera_info_topics;
   /// Depth images: down-sampling, the minimum range of a block's depth, the length of free rays
   /// for invalid pixels (max_range_m, needed by invalid_as_free), as raymapd's sensors[] keys.
-  dds::DepthDecodeOptions depth;
+  msgs::DepthDecodeOptions depth;
   /// Messages of a sensor faster than this (by header stamp) are skipped and counted; 0 = all.
   double max_rate_hz = 0.0;
   /// kAuto: the Odometry topic when `pose_topic` is given or the bag has exactly one, else TF

@@ -9,13 +9,9 @@
 
 #include <dds/dds.h>
 
-namespace raymap::dds {
+#include "src/msgs/diagnostic_levels.hpp"
 
-/// DiagnosticStatus levels (diagnostic_msgs/DiagnosticStatus constants).
-inline constexpr std::uint8_t kDiagnosticOk = 0;
-inline constexpr std::uint8_t kDiagnosticWarn = 1;
-inline constexpr std::uint8_t kDiagnosticError = 2;
-inline constexpr std::uint8_t kDiagnosticStale = 3;
+namespace raymap::dds {
 
 /// @brief A DiagnosticArray with room for `max_statuses` statuses of `max_values` key/value
 /// pairs each. Strings live in fixed buffers and are truncated: name, message and hardware_id

@@ -74,7 +74,7 @@ PointCloudMessage::PointCloudMessage(std::uint32_t capacity, CloudLayout layout)
   m.layout = layout;
   std::uint32_t field_count = 0;
   std::uint32_t offset = 0;
-  const auto add = [&](const char* name, PointFieldType type, std::uint32_t bytes) {
+  const auto add = [&](const char* name, msgs::PointFieldType type, std::uint32_t bytes) {
     auto& field = m.fields[field_count++];
     field.name = mutableText(name);
     field.offset = offset;
@@ -84,17 +84,17 @@ PointCloudMessage::PointCloudMessage(std::uint32_t capacity, CloudLayout layout)
     offset += bytes;
     return at;
   };
-  add("x", PointFieldType::kFloat32, 4);
-  add("y", PointFieldType::kFloat32, 4);
-  add("z", PointFieldType::kFloat32, 4);
+  add("x", msgs::PointFieldType::kFloat32, 4);
+  add("y", msgs::PointFieldType::kFloat32, 4);
+  add("z", msgs::PointFieldType::kFloat32, 4);
   if (layout.intensity) {
-    m.intensity_offset = add("intensity", PointFieldType::kFloat32, 4);
+    m.intensity_offset = add("intensity", msgs::PointFieldType::kFloat32, 4);
   }
   if (layout.time) {
-    m.time_offset = add("t", PointFieldType::kUInt32, 4);
+    m.time_offset = add("t", msgs::PointFieldType::kUInt32, 4);
   }
   if (layout.ring) {
-    m.ring_offset = add("ring", PointFieldType::kUInt16, 2);
+    m.ring_offset = add("ring", msgs::PointFieldType::kUInt16, 2);
   }
   m.point_step = (offset + 3U) / 4U * 4U;  // 4-byte aligned points
   RAYMAP_EXPECTS(std::uint64_t{capacity} * m.point_step <=
@@ -140,7 +140,7 @@ void PointCloudMessage::fill(std::span<const float> xyz, std::int64_t stamp_ns,
   m.msg.is_dense = dense;
 }
 
-void PointCloudMessage::fill(std::span<const ScanPoint> points,
+void PointCloudMessage::fill(std::span<const msgs::ScanPoint> points,
                              std::span<const std::uint16_t> rings, std::int64_t stamp_ns,
                              const char* frame_id) noexcept {
   Impl& m = *impl_;
@@ -150,9 +150,9 @@ void PointCloudMessage::fill(std::span<const ScanPoint> points,
   constexpr double kMaxTimeNs = std::numeric_limits<std::uint32_t>::max();
   bool dense = true;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const ScanPoint& point = points[i];
+    const msgs::ScanPoint& point = points[i];
     std::uint8_t* p = data + i * m.point_step;
-    const bool no_return = (point.flags & kPointNoReturn) != 0U;
+    const bool no_return = (point.flags & msgs::kPointNoReturn) != 0U;
     const float x = no_return ? kNaN : point.x;
     const float y = no_return ? kNaN : point.y;
     const float z = no_return ? kNaN : point.z;

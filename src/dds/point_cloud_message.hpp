@@ -10,7 +10,7 @@
 
 #include <dds/dds.h>
 
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 namespace raymap::dds {
 
@@ -51,7 +51,7 @@ class PointCloudMessage {
   /// @pre points.size() <= capacity() and a multiple of layout.rows; rings empty or as many
   /// as points
   /// @rt allocates: no.
-  void fill(std::span<const ScanPoint> points, std::span<const std::uint16_t> rings,
+  void fill(std::span<const msgs::ScanPoint> points, std::span<const std::uint16_t> rings,
             std::int64_t stamp_ns, const char* frame_id) noexcept;
 
   std::uint32_t capacity() const noexcept;

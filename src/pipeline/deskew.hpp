@@ -11,9 +11,9 @@
 #include <span>
 
 #include "src/core/eigen_conversions.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/ray.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/pipeline/pose_history.hpp"
 
 namespace raymap::pipeline {
@@ -36,14 +36,14 @@ struct ScanTimes {
 };
 
 /// @brief A point with a corrupt time is left out, not allowed to stretch the scan.
-inline ScanTimes scanTimes(std::span<const dds::ScanPoint> points, std::int64_t stamp_ns,
+inline ScanTimes scanTimes(std::span<const msgs::ScanPoint> points, std::int64_t stamp_ns,
                            float max_offset_s) noexcept {
   float t_min = 0.0f;
   float t_max = 0.0f;
   ScanTimes times;
-  for (const dds::ScanPoint& p : points) {
+  for (const msgs::ScanPoint& p : points) {
     if (!usableTime(p.time_s, max_offset_s)) {
-      times.bad_time += (p.flags & dds::kPointNoReturn) == 0u ? 1u : 0u;
+      times.bad_time += (p.flags & msgs::kPointNoReturn) == 0u ? 1u : 0u;
       continue;
     }
     t_min = std::min(t_min, p.time_s);
@@ -65,7 +65,7 @@ class PointDeskewer {
   /// gives a kRayNoReturn ray) of a scan stamped
   /// `stamp_ns`, from sensor `extrinsic` on the base whose poses `history` holds.
   /// @return false when `history` has no pose for the point's time (nothing written).
-  bool toRay(const dds::ScanPoint& p, std::int64_t stamp_ns, const PoseHistory& history,
+  bool toRay(const msgs::ScanPoint& p, std::int64_t stamp_ns, const PoseHistory& history,
              std::int64_t hold_ns, const io::Pose& extrinsic, std::uint64_t scan,
              Ray& ray) noexcept {
     const std::int64_t t = pointTimeNs(stamp_ns, p.time_s);
@@ -83,7 +83,7 @@ class PointDeskewer {
         {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}));
     ray.time_s = static_cast<double>(t) * 1e-9;
     ray.intensity = p.intensity;
-    ray.flags = (p.flags & dds::kPointFreeOnly) != 0u ? kRayNoReturn : 0u;
+    ray.flags = (p.flags & msgs::kPointFreeOnly) != 0u ? kRayNoReturn : 0u;
     ray.scan = scan;
     return true;
   }

@@ -142,13 +142,13 @@ bool Integrator::beginSegment() noexcept {
 template <class Convert>
 bool Integrator::visitScan(std::uint32_t capacity, std::uint64_t max_visits,
                            Convert&& convert) noexcept {
-  const std::span<const dds::ScanPoint> points = scan_->points();
+  const std::span<const msgs::ScanPoint> points = scan_->points();
   const SensorSettings& sensor = sensors_[scan_->sensor];
   std::uint32_t index = 0;
   while (batch_size_ < capacity && max_visits > 0 && order_.next(&index)) {
     --max_visits;
-    const dds::ScanPoint& p = points[index];
-    if ((p.flags & dds::kPointNoReturn) != 0u) {
+    const msgs::ScanPoint& p = points[index];
+    if ((p.flags & msgs::kPointNoReturn) != 0u) {
       stats_.points_no_return.add();  // no direction: nothing to clear along
       continue;
     }
@@ -168,13 +168,13 @@ bool Integrator::convertScanToPoints(std::uint64_t max_visits) noexcept {
   const std::int64_t latest = history_.newestStamp() + settings_.pose_hold_ns;
   const std::int64_t stamp = scan_->header.stamp_ns;
   return visitScan(
-      static_cast<std::uint32_t>(points_.size()), max_visits, [&](const dds::ScanPoint& p) {
+      static_cast<std::uint32_t>(points_.size()), max_visits, [&](const msgs::ScanPoint& p) {
         const std::int64_t t = pointTimeNs(stamp, p.time_s);
         if (t < oldest || t > latest) {
           return false;  // unreachable, as for PointDeskewer
         }
         const std::uint32_t flags =
-            (p.flags & dds::kPointFreeOnly) != 0u ? RM_RAW_RAY_NO_RETURN : 0u;
+            (p.flags & msgs::kPointFreeOnly) != 0u ? RM_RAW_RAY_NO_RETURN : 0u;
         points_[batch_size_] = rm_scan_point{p.x, p.y, p.z, p.intensity, flags, segment, t};
         return true;
       });
@@ -202,7 +202,7 @@ bool Integrator::convertScan(std::uint64_t max_visits) noexcept {
   }
   const SensorSettings& sensor = sensors_[scan_->sensor];
   return visitScan(
-      static_cast<std::uint32_t>(rays_.size()), max_visits, [&](const dds::ScanPoint& p) {
+      static_cast<std::uint32_t>(rays_.size()), max_visits, [&](const msgs::ScanPoint& p) {
         // false is unreachable: the scan's first and last times were checked
         return deskewer_.toRay(p, scan_->header.stamp_ns, history_, settings_.pose_hold_ns,
                                sensor.extrinsic, scan_->sequence, rays_[batch_size_]);

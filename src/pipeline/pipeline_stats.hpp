@@ -6,9 +6,9 @@
 #include <atomic>
 #include <cstdint>
 
-#include "src/dds/camera_info.hpp"
-#include "src/dds/depth_image.hpp"
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/camera_info.hpp"
+#include "src/msgs/depth_image.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/pipeline/histogram.hpp"
 
 namespace raymap::pipeline {
@@ -59,16 +59,16 @@ struct PipelineStats {
   Counter clouds_malformed;      ///< rejected by the decoder (clouds_rejected_by says why)
   Counter clouds_too_large;      ///< more points than the sensor's max_points
   Counter clouds_unknown_frame;  ///< frame_id is not the configured sensors[].frame
-  /// Clouds the decoder rejected, per reason (indexed by dds::CloudError; too_many_points is
+  /// Clouds the decoder rejected, per reason (indexed by msgs::CloudError; too_many_points is
   /// clouds_too_large, the others add up to clouds_malformed).
-  std::array<Counter, dds::kCloudErrorCount> clouds_rejected_by;
+  std::array<Counter, msgs::kCloudErrorCount> clouds_rejected_by;
   /// The first frame_id that matched no configured frame, and the sensor it came for (written
   /// once by the ingest thread, then wrong_frame_seen is set with release).
   /// Depth images and CameraInfo messages the decoders rejected, per reason (indexed by
-  /// dds::DepthImageError and dds::CameraInfoError); images also count in clouds_malformed (or
+  /// msgs::DepthImageError and msgs::CameraInfoError); images also count in clouds_malformed (or
   /// clouds_too_large for too_many_points).
-  std::array<Counter, dds::kDepthImageErrorCount> images_rejected_by;
-  std::array<Counter, dds::kCameraInfoErrorCount> camera_info_rejected_by;
+  std::array<Counter, msgs::kDepthImageErrorCount> images_rejected_by;
+  std::array<Counter, msgs::kCameraInfoErrorCount> camera_info_rejected_by;
   /// Per configured sensor, by its index in sensors[].
   std::array<SensorCounters, kMaxSensors> sensors;
   char wrong_frame[64] = {};

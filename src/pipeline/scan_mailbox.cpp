@@ -10,11 +10,11 @@ ScanMailbox::ScanMailbox(std::uint32_t slots, std::uint32_t max_points)
     : slot_count_(slots),
       max_points_(max_points),
       entries_(std::make_unique<Entry[]>(slots)),
-      points_(std::make_unique<dds::ScanPoint[]>(std::size_t{slots} * max_points)) {
+      points_(std::make_unique<msgs::ScanPoint[]>(std::size_t{slots} * max_points)) {
   RAYMAP_EXPECTS(slots >= 2 && max_points >= 1);
   for (std::uint32_t i = 0; i < slots; ++i) {
     entries_[i].slot.buffer =
-        std::span<dds::ScanPoint>(points_.get() + std::size_t{i} * max_points, max_points);
+        std::span<msgs::ScanPoint>(points_.get() + std::size_t{i} * max_points, max_points);
   }
 }
 

@@ -9,20 +9,20 @@
 #include <memory>
 #include <span>
 
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 namespace raymap::pipeline {
 
 /// @brief One scan buffer: a decoded point cloud (sensor frame) and where it came from.
 /// Owned by the mailbox; whoever holds it (see ScanMailbox) may read and write it freely.
 struct ScanSlot {
-  dds::CloudHeader header{};         ///< stamp, frame and counts as decoded
-  std::uint32_t sensor = 0;          ///< index of the sensor in the configuration
-  std::int64_t arrival_ns = 0;       ///< monotonic clock when the message was taken from DDS
-  std::uint64_t sequence = 0;        ///< order of publication (set by ScanMailbox::publish)
-  std::span<dds::ScanPoint> buffer;  ///< the slot's whole capacity
+  msgs::CloudHeader header{};         ///< stamp, frame and counts as decoded
+  std::uint32_t sensor = 0;           ///< index of the sensor in the configuration
+  std::int64_t arrival_ns = 0;        ///< monotonic clock when the message was taken from DDS
+  std::uint64_t sequence = 0;         ///< order of publication (set by ScanMailbox::publish)
+  std::span<msgs::ScanPoint> buffer;  ///< the slot's whole capacity
   /// The decoded points: the first header.points of buffer.
-  std::span<const dds::ScanPoint> points() const noexcept { return buffer.first(header.points); }
+  std::span<const msgs::ScanPoint> points() const noexcept { return buffer.first(header.points); }
 };
 
 /// @brief A bounded single-producer single-consumer mailbox of scan buffers with a drop-oldest
@@ -120,7 +120,7 @@ class ScanMailbox {
   std::uint32_t slot_count_;
   std::uint32_t max_points_;
   std::unique_ptr<Entry[]> entries_;
-  std::unique_ptr<dds::ScanPoint[]> points_;
+  std::unique_ptr<msgs::ScanPoint[]> points_;
   std::atomic<std::uint64_t> next_sequence_{0};  // written by the producer only
   std::atomic<std::uint64_t> dropped_oldest_{0};
   std::atomic<std::uint64_t> dropped_undecoded_{0};

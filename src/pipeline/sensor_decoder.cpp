@@ -6,8 +6,8 @@
 #include <cstring>
 #include <utility>
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/ros_time.hpp"
 
 namespace raymap::pipeline {
 namespace {
@@ -23,8 +23,8 @@ SensorDecoder::SensorDecoder(SensorDecodeSettings settings) : settings_(std::mov
   }
 }
 
-Expected<void, dds::CameraInfoError> SensorDecoder::onCameraInfo(std::span<const std::byte> cdr) {
-  auto info = dds::decodeCameraInfo(cdr);
+Expected<void, msgs::CameraInfoError> SensorDecoder::onCameraInfo(std::span<const std::byte> cdr) {
+  auto info = msgs::decodeCameraInfo(cdr);
   if (!info) {
     return Unexpected(info.error());
   }
@@ -35,22 +35,22 @@ Expected<void, dds::CameraInfoError> SensorDecoder::onCameraInfo(std::span<const
   if (refused_any_ && camera == refused_camera_) {
     return Unexpected(refused_error_);
   }
-  const auto refuse = [&](dds::CameraInfoError error) {
+  const auto refuse = [&](msgs::CameraInfoError error) {
     refused_camera_ = camera;
     refused_error_ = error;
     refused_any_ = true;
     return Unexpected(error);
   };
   if (settings_.max_points > 0 &&
-      dds::depthPointCapacity(camera.width, camera.height, settings_.depth.downsample) >
+      msgs::depthPointCapacity(camera.width, camera.height, settings_.depth.downsample) >
           settings_.max_points) {
-    return refuse(dds::CameraInfoError::kTooLarge);
+    return refuse(msgs::CameraInfoError::kTooLarge);
   }
   if (!rays_.build(camera)) {
     // decodeCameraInfo checked the intrinsics; a pixel that cannot be inverted is the same
     // defect seen at a pixel that check did not sample.
     std::memset(camera_frame_, 0, sizeof(camera_frame_));
-    return refuse(dds::CameraInfoError::kInvalidIntrinsics);
+    return refuse(msgs::CameraInfoError::kInvalidIntrinsics);
   }
   std::memcpy(camera_frame_, info.value().frame_id, sizeof(camera_frame_));
   return {};
@@ -70,13 +70,13 @@ bool SensorDecoder::rateAllows(bool any, std::int64_t last_ns,
 }
 
 std::optional<std::int64_t> headerStampNs(std::span<const std::byte> cdr) noexcept {
-  dds::CdrReader reader(cdr);
+  msgs::CdrReader reader(cdr);
   std::int32_t sec = 0;
   std::uint32_t nanosec = 0;
   if (!reader.readI32(sec) || !reader.readU32(nanosec)) {
     return std::nullopt;
   }
-  return dds::nanosecondsOf(sec, nanosec);
+  return msgs::nanosecondsOf(sec, nanosec);
 }
 
 bool SensorDecoder::overRateOnArrival(std::span<const std::byte> cdr) noexcept {
@@ -97,23 +97,23 @@ bool SensorDecoder::overRateOnArrival(std::span<const std::byte> cdr) noexcept {
 }
 
 DecodedScan SensorDecoder::decode(std::span<const std::byte> cdr,
-                                  std::span<dds::ScanPoint> out) noexcept {
+                                  std::span<msgs::ScanPoint> out) noexcept {
   return settings_.kind == SensorInputKind::kDepth ? decodeDepth(cdr, out) : decodeCloud(cdr, out);
 }
 
 DecodedScan SensorDecoder::decodeCloud(std::span<const std::byte> cdr,
-                                       std::span<dds::ScanPoint> out) noexcept {
+                                       std::span<msgs::ScanPoint> out) noexcept {
   DecodedScan result;
-  dds::CloudDecodeOptions options;
+  msgs::CloudDecodeOptions options;
   options.ignore_time = settings_.time_field == "none";
   options.time_field = settings_.time_field == "auto" || options.ignore_time
                            ? nullptr
                            : settings_.time_field.c_str();
-  auto cloud = dds::decodePointCloud2(cdr, out, options);
+  auto cloud = msgs::decodePointCloud2(cdr, out, options);
   if (!cloud) {
     result.cloud_error = cloud.error();
-    result.outcome = cloud.error() == dds::CloudError::kTooManyPoints ? DecodeOutcome::kTooLarge
-                                                                      : DecodeOutcome::kMalformed;
+    result.outcome = cloud.error() == msgs::CloudError::kTooManyPoints ? DecodeOutcome::kTooLarge
+                                                                       : DecodeOutcome::kMalformed;
     return result;
   }
   result.header = cloud.value();
@@ -122,11 +122,11 @@ DecodedScan SensorDecoder::decodeCloud(std::span<const std::byte> cdr,
 }
 
 DecodedScan SensorDecoder::decodeDepth(std::span<const std::byte> cdr,
-                                       std::span<dds::ScanPoint> out) noexcept {
+                                       std::span<msgs::ScanPoint> out) noexcept {
   DecodedScan result;
   // Stamp and frame first: an image of a camera without intrinsics yet, of the wrong frame or
   // above the rate limit is dropped before it is back-projected.
-  const auto image = dds::inspectDepthImage(cdr);
+  const auto image = msgs::inspectDepthImage(cdr);
   if (!image) {
     result.image_error = image.error();
     result.outcome = DecodeOutcome::kMalformed;
@@ -143,10 +143,10 @@ DecodedScan SensorDecoder::decodeDepth(std::span<const std::byte> cdr,
     result.outcome = admitted;
     return result;
   }
-  const auto decoded = dds::decodeDepthImage(cdr, rays_, settings_.depth, out);
+  const auto decoded = msgs::decodeDepthImage(cdr, rays_, settings_.depth, out);
   if (!decoded) {
     result.image_error = decoded.error();
-    result.outcome = decoded.error() == dds::DepthImageError::kTooManyPoints
+    result.outcome = decoded.error() == msgs::DepthImageError::kTooManyPoints
                          ? DecodeOutcome::kTooLarge
                          : DecodeOutcome::kMalformed;
     return result;

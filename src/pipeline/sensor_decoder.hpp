@@ -14,9 +14,9 @@
 #include "raymap/expected.hpp"
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/camera_info.hpp"
-#include "src/dds/depth_image.hpp"
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/camera_info.hpp"
+#include "src/msgs/depth_image.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 namespace raymap::pipeline {
 
@@ -31,8 +31,8 @@ struct SensorDecodeSettings {
   SensorInputKind kind = SensorInputKind::kPointCloud;
   /// Point clouds: the per-point time field ("auto", "none" or a name).
   std::string time_field = "auto";
-  /// Depth cameras: down-sampling, ranges and invalid pixels (dds::DepthDecodeOptions).
-  dds::DepthDecodeOptions depth;
+  /// Depth cameras: down-sampling, ranges and invalid pixels (msgs::DepthDecodeOptions).
+  msgs::DepthDecodeOptions depth;
   /// The frame messages must carry; empty: any (the message's frame is used).
   std::string frame;
   /// Messages whose stamps follow the last accepted one's by less than 1 / max_rate_hz (less
@@ -59,9 +59,9 @@ enum class DecodeOutcome : std::uint8_t {
 /// @brief What decode() did with one message.
 struct DecodedScan {
   DecodeOutcome outcome = DecodeOutcome::kMalformed;
-  dds::CloudHeader header{};  ///< valid when accepted (and frame_id when kWrongFrame)
-  dds::CloudError cloud_error = dds::CloudError::kTruncated;            ///< point clouds
-  dds::DepthImageError image_error = dds::DepthImageError::kTruncated;  ///< depth images
+  msgs::CloudHeader header{};  ///< valid when accepted (and frame_id when kWrongFrame)
+  msgs::CloudError cloud_error = msgs::CloudError::kTruncated;            ///< point clouds
+  msgs::DepthImageError image_error = msgs::DepthImageError::kTruncated;  ///< depth images
   /// Depth images: blocks (pixels at downsample 1) that gave no point because something in them
   /// is nearer than the sensor's min range. Counted, so that a min range beyond what the camera
   /// sees is reported instead of giving empty scans silently.
@@ -89,10 +89,10 @@ class SensorDecoder {
   /// @brief Takes a CameraInfo (depth cameras). A valid one replaces the intrinsics images are
   /// back-projected with (the newest of its frame is used for every later image: drivers
   /// publish the same intrinsics with every frame). @return why it was refused.
-  Expected<void, dds::CameraInfoError> onCameraInfo(std::span<const std::byte> cdr);
+  Expected<void, msgs::CameraInfoError> onCameraInfo(std::span<const std::byte> cdr);
 
   /// @brief Decodes a PointCloud2 or depth Image into `out` (the sensor's frame).
-  DecodedScan decode(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
+  DecodedScan decode(std::span<const std::byte> cdr, std::span<msgs::ScanPoint> out) noexcept;
 
   /// @brief Whether a message comes faster than max_rate_hz, from its header stamp alone (no
   /// decoding). raymapd asks on arrival, before it holds a message undecoded, so that a camera
@@ -109,8 +109,8 @@ class SensorDecoder {
  private:
   /// Whether `stamp_ns` is at least a period after `last_ns` (or any is false).
   bool rateAllows(bool any, std::int64_t last_ns, std::int64_t stamp_ns) const noexcept;
-  DecodedScan decodeCloud(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
-  DecodedScan decodeDepth(std::span<const std::byte> cdr, std::span<dds::ScanPoint> out) noexcept;
+  DecodedScan decodeCloud(std::span<const std::byte> cdr, std::span<msgs::ScanPoint> out) noexcept;
+  DecodedScan decodeDepth(std::span<const std::byte> cdr, std::span<msgs::ScanPoint> out) noexcept;
   /// The configured frame and the rate limit; `commit`: an accepted message starts the next
   /// rate period.
   DecodeOutcome admit(const char* frame_id, std::int64_t stamp_ns, bool commit = true) noexcept;
@@ -121,7 +121,7 @@ class SensorDecoder {
   // The last CameraInfo refused, so that the same one arriving with every frame is refused at
   // once (not rebuilt up to its bad pixel each time).
   CameraIntrinsics refused_camera_;
-  dds::CameraInfoError refused_error_ = dds::CameraInfoError::kInvalidIntrinsics;
+  msgs::CameraInfoError refused_error_ = msgs::CameraInfoError::kInvalidIntrinsics;
   bool refused_any_ = false;
   std::int64_t last_accepted_ns_ = 0;
   bool accepted_any_ = false;

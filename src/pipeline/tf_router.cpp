@@ -116,9 +116,9 @@ bool TfRouter::isBaseAncestor(const char* frame) const noexcept {
   return false;
 }
 
-void TfRouter::onTransforms(std::span<const dds::StampedTransform> transforms, bool is_static,
+void TfRouter::onTransforms(std::span<const msgs::StampedTransform> transforms, bool is_static,
                             PoseSink& sink) noexcept {
-  for (const dds::StampedTransform& t : transforms) {
+  for (const msgs::StampedTransform& t : transforms) {
     const io::Pose pose = poseOf(t);
     if (is_static) {
       // Every static edge is kept, whatever order they come in and whether or not a sensor's

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "src/dds/pose.hpp"
+#include "src/msgs/pose.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_update.hpp"
 #include "src/pipeline/transform_table.hpp"
@@ -18,13 +18,13 @@
 namespace raymap::pipeline {
 
 /// @brief The transform's pose (child in parent).
-inline io::Pose poseOf(const dds::StampedTransform& t) noexcept {
+inline io::Pose poseOf(const msgs::StampedTransform& t) noexcept {
   // The wire struct stays plain (tx..qz); Eigen's quaternion takes (w, x, y, z).
   return io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}};
 }
 
 /// @brief An Odometry message's pose as the base's pose in the world at its stamp.
-inline PoseUpdate baseInWorld(const dds::StampedTransform& odometry) noexcept {
+inline PoseUpdate baseInWorld(const msgs::StampedTransform& odometry) noexcept {
   PoseUpdate update;
   update.stamp_ns = odometry.stamp_ns;
   update.pose = poseOf(odometry);
@@ -64,7 +64,7 @@ class TfRouter {
   /// and /tf_static heard before now applies. Later calls do nothing.
   void learnSensorFrame(std::uint32_t s, const char* frame, PoseSink& sink) noexcept;
   /// @brief The transforms of one TFMessage from /tf (`is_static` false) or /tf_static.
-  void onTransforms(std::span<const dds::StampedTransform> transforms, bool is_static,
+  void onTransforms(std::span<const msgs::StampedTransform> transforms, bool is_static,
                     PoseSink& sink) noexcept;
 
  private:

@@ -20,6 +20,7 @@
 #include "src/core/eigen_conversions.hpp"
 #include "src/dds/grid_map_message.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/ros_names.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
 
 namespace raymap::service {
@@ -58,7 +59,7 @@ std::string topic(Fields& f, const std::string& key, const std::string& fallback
   f.check(!name.empty() && name.find_first_of(" \t") == std::string::npos && name != "/", key,
           "must be a DDS topic name (rt/points) or a ROS one (/points), without spaces (got '" +
               name + "')");
-  return dds::ddsTopicName(name);
+  return msgs::ddsTopicName(name);
 }
 
 std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::string>& choices,

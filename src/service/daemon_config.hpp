@@ -57,7 +57,7 @@ struct SensorConfig {
   /// left out and counted: a corrupt time field costs the point, not the scan.
   double max_time_offset_s = 1.0;
   // ---- depth cameras ----
-  /// N: each N x N block of pixels gives its nearest valid depth (dds::DepthDecodeOptions).
+  /// N: each N x N block of pixels gives its nearest valid depth (msgs::DepthDecodeOptions).
   std::uint32_t downsample = 1;
   /// Pixels without a depth (0, NaN, inf) clear free space up to max_range along their ray.
   bool invalid_as_free = false;

@@ -12,7 +12,7 @@
 #include <cstring>
 
 #include "platform/allocation_scope.hpp"
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/service/log.hpp"
 #include "src/service/service.hpp"
 
@@ -36,7 +36,7 @@ void appendf(char* out, std::size_t size, const char* format, ...) {
 }
 
 const char* levelName(std::uint8_t level) {
-  return level == dds::kDiagnosticError ? "ERROR" : level == dds::kDiagnosticWarn ? "WARN" : "OK";
+  return level == msgs::kDiagnosticError ? "ERROR" : level == msgs::kDiagnosticWarn ? "WARN" : "OK";
 }
 
 }  // namespace
@@ -101,13 +101,13 @@ DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
   t.poses = stats_.poses_received.get();
   t.poses_malformed = stats_.poses_malformed.get();
   t.poses_dropped = stats_.poses_dropped.get();
-  for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
+  for (std::size_t i = 0; i < msgs::kCloudErrorCount; ++i) {
     t.rejected_by[i] = stats_.clouds_rejected_by[i].get();
   }
-  for (std::size_t i = 0; i < dds::kDepthImageErrorCount; ++i) {
+  for (std::size_t i = 0; i < msgs::kDepthImageErrorCount; ++i) {
     t.image_rejected_by[i] = stats_.images_rejected_by[i].get();
   }
-  for (std::size_t i = 0; i < dds::kCameraInfoErrorCount; ++i) {
+  for (std::size_t i = 0; i < msgs::kCameraInfoErrorCount; ++i) {
     t.camera_info_rejected_by[i] = stats_.camera_info_rejected_by[i].get();
   }
   for (std::size_t i = 0; i < settings_.sensors.size() && i < t.sensor.size(); ++i) {
@@ -204,19 +204,19 @@ void DiagnosticsReporter::describeDrops() noexcept {
     appendf(out, size, "%s%" PRIu64 " malformed %s (", sep, c.malformed - b.malformed,
             has_depth_ ? "clouds or depth images" : "clouds");
     const char* inner = "";
-    for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
-      if (i != static_cast<std::size_t>(dds::CloudError::kTooManyPoints) &&
+    for (std::size_t i = 0; i < msgs::kCloudErrorCount; ++i) {
+      if (i != static_cast<std::size_t>(msgs::CloudError::kTooManyPoints) &&
           c.rejected_by[i] > b.rejected_by[i]) {
-        appendf(out, size, "%s%s %" PRIu64, inner, dds::toString(static_cast<dds::CloudError>(i)),
+        appendf(out, size, "%s%s %" PRIu64, inner, msgs::toString(static_cast<msgs::CloudError>(i)),
                 c.rejected_by[i] - b.rejected_by[i]);
         inner = ", ";
       }
     }
-    for (std::size_t i = 0; i < dds::kDepthImageErrorCount; ++i) {
-      if (i != static_cast<std::size_t>(dds::DepthImageError::kTooManyPoints) &&
+    for (std::size_t i = 0; i < msgs::kDepthImageErrorCount; ++i) {
+      if (i != static_cast<std::size_t>(msgs::DepthImageError::kTooManyPoints) &&
           c.image_rejected_by[i] > b.image_rejected_by[i]) {
         appendf(out, size, "%simage %s %" PRIu64, inner,
-                dds::toString(static_cast<dds::DepthImageError>(i)),
+                msgs::toString(static_cast<msgs::DepthImageError>(i)),
                 c.image_rejected_by[i] - b.image_rejected_by[i]);
         inner = ", ";
       }
@@ -238,9 +238,9 @@ void DiagnosticsReporter::describeDrops() noexcept {
       appendf(out, size, "%s%" PRIu64 " CameraInfo refused for sensors[%zu] (all cameras: ", sep,
               cs.camera_info_bad - bs.camera_info_bad, i);
       const char* inner = "";
-      for (std::size_t r = 0; r < dds::kCameraInfoErrorCount; ++r) {
+      for (std::size_t r = 0; r < msgs::kCameraInfoErrorCount; ++r) {
         if (c.camera_info_rejected_by[r] > b.camera_info_rejected_by[r]) {
-          appendf(out, size, "%s%s", inner, dds::toString(static_cast<dds::CameraInfoError>(r)));
+          appendf(out, size, "%s%s", inner, msgs::toString(static_cast<msgs::CameraInfoError>(r)));
           inner = ", ";
         }
       }
@@ -300,7 +300,7 @@ std::uint8_t DiagnosticsReporter::describeIntegration(char* out, std::size_t siz
   const auto [integrated, offered] = raysInWindow();
   if (offered == 0 || static_cast<double>(integrated) >=
                           settings_.min_integrated_fraction * static_cast<double>(offered)) {
-    return dds::kDiagnosticOk;
+    return msgs::kDiagnosticOk;
   }
   const double dt = static_cast<double>(ring_[head_].ns - base_->ns) * 1e-9;
   appendf(out, size, "integrating %" PRIu64 " of %" PRIu64 " rays (%.0f %%) in %.1f s:", integrated,
@@ -317,7 +317,7 @@ std::uint8_t DiagnosticsReporter::describeIntegration(char* out, std::size_t siz
   reason(c.out_of_bounds, b.out_of_bounds, "beyond the map's bounds or max_ray_length");
   reason(c.outside_window, b.outside_window, "outside the rolling window");
   reason(c.invalid, b.invalid, "with coordinates that are not finite");
-  return integrated == 0 ? dds::kDiagnosticError : dds::kDiagnosticWarn;
+  return integrated == 0 ? msgs::kDiagnosticError : msgs::kDiagnosticWarn;
 }
 
 bool DiagnosticsReporter::describePublishers(char* out, std::size_t size,
@@ -411,7 +411,7 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   }
   char integration[320];
   const std::uint8_t integration_level = describeIntegration(integration, sizeof(integration));
-  if (integration_level != dds::kDiagnosticOk) {
+  if (integration_level != msgs::kDiagnosticOk) {
     appendf(m, size, "%s%s", m[0] == '\0' ? "" : "; ", integration);
   }
   char publishers[384];
@@ -421,40 +421,40 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
     appendf(m, size, "%s%s", m[0] == '\0' ? "" : "; ", publishers);
   }
   const bool error = other_publishers_ > 0 || (stale_ && !waiting_first_) || failing ||
-                     integration_level == dds::kDiagnosticError || two_poses;
+                     integration_level == msgs::kDiagnosticError || two_poses;
   const bool warn =
-      dropping || waiting_first_ || integration_level != dds::kDiagnosticOk || extra_sensor;
+      dropping || waiting_first_ || integration_level != msgs::kDiagnosticOk || extra_sensor;
   if (dropping) {
     appendf(m, size, "%sdropping input: %s", m[0] == '\0' ? "" : "; ", drop_reasons_);
   }
-  pipeline_level_ = error  ? dds::kDiagnosticError
-                    : warn ? dds::kDiagnosticWarn
-                           : dds::kDiagnosticOk;
+  pipeline_level_ = error  ? msgs::kDiagnosticError
+                    : warn ? msgs::kDiagnosticWarn
+                           : msgs::kDiagnosticOk;
   if (m[0] == '\0') {
     appendf(m, size, "ok");
   }
 
   heightmap_message_[0] = '\0';
   if (waiting_first_) {
-    heightmap_level_ = dds::kDiagnosticWarn;
+    heightmap_level_ = msgs::kDiagnosticWarn;
     appendf(heightmap_message_, sizeof(heightmap_message_), "no map yet: waiting for the first %s",
             has_depth_ ? "cloud or image" : "cloud");
   } else if (stale_) {
-    heightmap_level_ = dds::kDiagnosticError;
+    heightmap_level_ = msgs::kDiagnosticError;
     appendf(heightmap_message_, sizeof(heightmap_message_),
             "withheld: the map is stale (no scan integrated for %.1f s)", seconds_since_scan_);
   } else if (c.withheld > b.withheld) {
-    heightmap_level_ = dds::kDiagnosticError;
+    heightmap_level_ = msgs::kDiagnosticError;
     appendf(heightmap_message_, sizeof(heightmap_message_),
             "%" PRIu64 " maps withheld in the last %.1f s: the map was stale",
             c.withheld - b.withheld, static_cast<double>(now.ns - base_->ns) * 1e-9);
   } else if (c.late > b.late || c.hm_errors > b.hm_errors) {
-    heightmap_level_ = dds::kDiagnosticWarn;
+    heightmap_level_ = msgs::kDiagnosticWarn;
     appendf(heightmap_message_, sizeof(heightmap_message_),
             "%" PRIu64 " late and %" PRIu64 " failed cycles", c.late - b.late,
             c.hm_errors - b.hm_errors);
   } else {
-    heightmap_level_ = dds::kDiagnosticOk;
+    heightmap_level_ = msgs::kDiagnosticOk;
     appendf(heightmap_message_, sizeof(heightmap_message_), "ok");
   }
 }
@@ -498,29 +498,29 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
     message_.addValue(s, "clouds_rate_limited", "%" PRIu64, rate_limited);
     message_.addValue(s, "images_without_camera_info", "%" PRIu64, no_camera_info);
   }
-  for (std::size_t i = 0; i < dds::kCloudErrorCount; ++i) {
-    if (i == static_cast<std::size_t>(dds::CloudError::kTooManyPoints)) {
+  for (std::size_t i = 0; i < msgs::kCloudErrorCount; ++i) {
+    if (i == static_cast<std::size_t>(msgs::CloudError::kTooManyPoints)) {
       continue;  // clouds_too_large
     }
     char key[64];
     std::snprintf(key, sizeof(key), "clouds_malformed_%s",
-                  dds::toString(static_cast<dds::CloudError>(i)));
+                  msgs::toString(static_cast<msgs::CloudError>(i)));
     message_.addValue(s, key, "%" PRIu64, c.rejected_by[i]);
   }
   if (has_depth_) {
-    for (std::size_t i = 0; i < dds::kDepthImageErrorCount; ++i) {
-      if (i == static_cast<std::size_t>(dds::DepthImageError::kTooManyPoints)) {
+    for (std::size_t i = 0; i < msgs::kDepthImageErrorCount; ++i) {
+      if (i == static_cast<std::size_t>(msgs::DepthImageError::kTooManyPoints)) {
         continue;  // clouds_too_large
       }
       char key[64];
       std::snprintf(key, sizeof(key), "images_malformed_%s",
-                    dds::toString(static_cast<dds::DepthImageError>(i)));
+                    msgs::toString(static_cast<msgs::DepthImageError>(i)));
       message_.addValue(s, key, "%" PRIu64, c.image_rejected_by[i]);
     }
-    for (std::size_t i = 0; i < dds::kCameraInfoErrorCount; ++i) {
+    for (std::size_t i = 0; i < msgs::kCameraInfoErrorCount; ++i) {
       char key[64];
       std::snprintf(key, sizeof(key), "camera_info_rejected_%s",
-                    dds::toString(static_cast<dds::CameraInfoError>(i)));
+                    msgs::toString(static_cast<msgs::CameraInfoError>(i)));
       message_.addValue(s, key, "%" PRIu64, c.camera_info_rejected_by[i]);
     }
     message_.addValue(s, "points_too_near", "%" PRIu64, c.too_near);
@@ -634,7 +634,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
 
   // Real time.
   const bool degraded = realtime_ != nullptr && realtime_->degraded;
-  const int r = message_.addStatus(degraded ? dds::kDiagnosticWarn : dds::kDiagnosticOk,
+  const int r = message_.addStatus(degraded ? msgs::kDiagnosticWarn : msgs::kDiagnosticOk,
                                    realtime_name_.c_str(),
                                    degraded ? "real-time settings refused" : "ok", hw);
   message_.addValue(r, "scheduling", "%s",
@@ -645,7 +645,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   // DDS Security: decided at start; WARN while running without what was asked for.
   const bool security_warn = !settings_.security_warning.empty();
   const int sec = message_.addStatus(
-      security_warn ? dds::kDiagnosticWarn : dds::kDiagnosticOk, security_name_.c_str(),
+      security_warn ? msgs::kDiagnosticWarn : msgs::kDiagnosticOk, security_name_.c_str(),
       security_warn ? settings_.security_warning.c_str() : settings_.security_summary.c_str(), hw);
   message_.addValue(sec, "enabled", "%s", settings_.secure ? "true" : "false");
   return message_.sample();
@@ -663,24 +663,24 @@ void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {
   // a fault); rejections at once. The pipeline status says what the rejections were.
   const bool whole_window = ring_[head_].ns - started_ns_ >= window_ns_;
   char text[160];
-  std::uint8_t level = dds::kDiagnosticOk;
+  std::uint8_t level = msgs::kDiagnosticOk;
   if (inputs_ != nullptr && inputs_->clouds[i] > 1) {
-    level = dds::kDiagnosticWarn;
+    level = msgs::kDiagnosticWarn;
     std::snprintf(text, sizeof(text), "%u publishers of %s (see pipeline)", inputs_->clouds[i],
                   sensor.topic.c_str());
   } else if (c.rejected > b.rejected) {
-    level = dds::kDiagnosticWarn;
+    level = msgs::kDiagnosticWarn;
     std::snprintf(text, sizeof(text), "%" PRIu64 " of %" PRIu64 " %s rejected (see pipeline)",
                   c.rejected - b.rejected, c.received - b.received,
                   depth ? "depth images" : "clouds");
   } else if (c.missing > b.missing) {
-    level = dds::kDiagnosticWarn;
+    level = msgs::kDiagnosticWarn;
     std::snprintf(text, sizeof(text),
                   "%" PRIu64 " %s missing by the gaps in their stamps, %" PRIu64 " received",
                   c.missing - b.missing, depth ? "depth images" : "clouds",
                   c.received - b.received);
   } else if (whole_window && c.received == b.received) {
-    level = dds::kDiagnosticWarn;
+    level = msgs::kDiagnosticWarn;
     std::snprintf(text, sizeof(text), "no %s on %s %s", depth ? "depth image" : "point cloud",
                   sensor.topic.c_str(), c.received == 0 ? "since start" : "any more");
   } else {
@@ -711,12 +711,12 @@ void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {
 }
 
 void DiagnosticsReporter::logChanges() noexcept {
-  if (pipeline_level_ != dds::kDiagnosticOk) {
-    logLine(pipeline_level_ == dds::kDiagnosticError ? LogLevel::kError : LogLevel::kWarning,
+  if (pipeline_level_ != msgs::kDiagnosticOk) {
+    logLine(pipeline_level_ == msgs::kDiagnosticError ? LogLevel::kError : LogLevel::kWarning,
             "%s %s: %s", pipeline_name_.c_str(), levelName(pipeline_level_), pipeline_message_);
   }
-  if (heightmap_level_ != dds::kDiagnosticOk && !stale_) {  // stale: said once, above
-    logLine(heightmap_level_ == dds::kDiagnosticError ? LogLevel::kError : LogLevel::kWarning,
+  if (heightmap_level_ != msgs::kDiagnosticOk && !stale_) {  // stale: said once, above
+    logLine(heightmap_level_ == msgs::kDiagnosticError ? LogLevel::kError : LogLevel::kWarning,
             "%s %s: %s", heightmap_name_.c_str(), levelName(heightmap_level_), heightmap_message_);
   }
 }

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "src/dds/diagnostics_message.hpp"
-#include "src/pipeline/pending_scans.hpp"
 #include "src/pipeline/pipeline_stats.hpp"
 #include "src/pipeline/pose_update.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
+#include "src/service/pending_scans.hpp"
 
 namespace raymap::service {
 
@@ -98,7 +98,7 @@ class DiagnosticsReporter {
 
   /// @brief Scans the ingest thread holds undecoded: counted in `scan_queue_depth` with the
   /// mailbox's (start-up, before update() runs).
-  void countHeldScans(const pipeline::PendingScans* pending) noexcept { pending_ = pending; }
+  void countHeldScans(const PendingScans* pending) noexcept { pending_ = pending; }
 
   /// @brief Takes a snapshot at `now_ns` (monotonic) and decides the levels and messages.
   /// @param other_map_publishers writers of the height-map topic in other participants
@@ -111,7 +111,7 @@ class DiagnosticsReporter {
   const char* statusLine() const noexcept { return status_line_; }
   /// @brief Logs one line per status that is not OK, naming the reason.
   void logChanges() noexcept;
-  /// @brief The pipeline status's level after the last update (dds::kDiagnosticOk, ...).
+  /// @brief The pipeline status's level after the last update (msgs::kDiagnosticOk, ...).
   std::uint8_t pipelineLevel() const noexcept { return pipeline_level_; }
   /// @brief The pipeline status's message after the last update ("ok", or the reasons).
   const char* pipelineMessage() const noexcept { return pipeline_message_; }
@@ -132,9 +132,9 @@ class DiagnosticsReporter {
     std::uint64_t scans_shed = 0, scans_cut_short = 0, points_shed = 0;
     std::uint64_t maps = 0, withheld = 0, late = 0, hm_errors = 0, integrate_errors = 0;
     std::uint64_t poses = 0, poses_malformed = 0, poses_dropped = 0;
-    std::array<std::uint64_t, dds::kCloudErrorCount> rejected_by{};
-    std::array<std::uint64_t, dds::kDepthImageErrorCount> image_rejected_by{};
-    std::array<std::uint64_t, dds::kCameraInfoErrorCount> camera_info_rejected_by{};
+    std::array<std::uint64_t, msgs::kCloudErrorCount> rejected_by{};
+    std::array<std::uint64_t, msgs::kDepthImageErrorCount> image_rejected_by{};
+    std::array<std::uint64_t, msgs::kCameraInfoErrorCount> camera_info_rejected_by{};
     struct PerSensor {
       std::uint64_t received = 0, accepted = 0, rate_limited = 0, rejected = 0;
       std::uint64_t no_camera_info = 0, camera_info = 0, camera_info_bad = 0, scans = 0;
@@ -175,7 +175,7 @@ class DiagnosticsReporter {
 
   const pipeline::PipelineStats& stats_;
   const pipeline::ScanMailbox& mailbox_;
-  const pipeline::PendingScans* pending_ = nullptr;
+  const PendingScans* pending_ = nullptr;
   const pipeline::PoseQueue& poses_;
   ReporterSettings settings_;
   std::string pipeline_name_, heightmap_name_, realtime_name_, security_name_;

@@ -34,16 +34,15 @@
 #include "src/dds/entities.hpp"
 #include "src/dds/grid_map_message.hpp"
 #include "src/dds/occupancy_grid_message.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/dds/point_cloud_message.hpp"
-#include "src/dds/pose.hpp"
 #include "src/dds/topic_types.hpp"
 #include "src/heightmap/costmap.hpp"
 #include "src/io/map_file.hpp"
+#include "src/msgs/point_cloud.hpp"
+#include "src/msgs/pose.hpp"
 #include "src/pipeline/frame_writers.hpp"
 #include "src/pipeline/heightmap_cycle.hpp"
 #include "src/pipeline/integrator.hpp"
-#include "src/pipeline/pending_scans.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
 #include "src/pipeline/stamp_gaps.hpp"
@@ -51,6 +50,7 @@
 #include "src/service/daemon_security.hpp"
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/log.hpp"
+#include "src/service/pending_scans.hpp"
 #include "src/service/startup_checks.hpp"
 
 namespace raymap::service {
@@ -124,7 +124,7 @@ struct Service::Impl {
   std::optional<dds::Waitset> waitset;
   /// Ingest thread: scans held as received while a decoded one waits (drop before decode).
   /// Declared after the readers, so their buffers go back to Cyclone before the participant.
-  std::unique_ptr<pipeline::PendingScans> pending;
+  std::unique_ptr<PendingScans> pending;
   std::optional<dds::Writer> grid_map_writer;
   std::optional<dds::Writer> diagnostics_writer;
   std::optional<dds::Writer> voxels_writer;
@@ -255,7 +255,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   impl->mailbox = std::make_unique<pipeline::ScanMailbox>(config.queues.scan_slots + 1, max_points);
   // The scan_slots scans that may wait do so as received; one is decoded when the integrator
   // is ready for it (drop before decode: docs/raymapd.md, Overflow).
-  impl->pending = std::make_unique<pipeline::PendingScans>(config.queues.scan_slots);
+  impl->pending = std::make_unique<PendingScans>(config.queues.scan_slots);
   impl->mailbox->setReleaseListener(&Impl::onScanReleased, impl.get());
   impl->poses = std::make_unique<pipeline::PoseQueue>(config.queues.pose_queue);
   impl->arrivals = std::make_unique<pipeline::ArrivalQueue>(4096);
@@ -597,7 +597,7 @@ void Service::Impl::decodePending() {
     if (mailbox->waiting() > 0 || mailbox->consumerHolds()) {
       return;  // the integrator's next release wakes this thread again (onScanReleased)
     }
-    pipeline::PendingScans::Entry next = pending->pop();
+    PendingScans::Entry next = pending->pop();
     decodeCloud(next.sensor, next.sample.bytes(), next.arrival_ns);
     platform::ForeignScope dds;
     next.sample.reset();
@@ -686,7 +686,7 @@ void Service::Impl::onCameraInfo(std::uint32_t sensor, std::span<const std::byte
 }
 
 void Service::Impl::onOdometry(std::span<const std::byte> cdr) {
-  auto odometry = dds::decodeOdometry(cdr);
+  auto odometry = msgs::decodeOdometry(cdr);
   if (!odometry) {
     stats.poses_malformed.add();
     return;
@@ -700,8 +700,8 @@ void Service::Impl::onOdometry(std::span<const std::byte> cdr) {
 }
 
 void Service::Impl::onTf(std::span<const std::byte> cdr, bool is_static, std::uint64_t writer) {
-  std::array<dds::StampedTransform, kTfPerMessage> transforms;
-  auto count = dds::decodeTfMessage(cdr, transforms);
+  std::array<msgs::StampedTransform, kTfPerMessage> transforms;
+  auto count = msgs::decodeTfMessage(cdr, transforms);
   if (!count) {
     stats.poses_malformed.add();
     return;

@@ -11,8 +11,8 @@
 #include <unistd.h>
 
 #include "platform/socket_buffers.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/map/ray.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/pipeline/pose_update.hpp"
 
 namespace raymap::service {
@@ -78,7 +78,7 @@ std::vector<PoolEstimate> estimatePools(const DaemonConfig& config) {
   pools.push_back(
       {"queues.scan_slots x sensors[].max_points",
        "decoded scan slots (" + thousands(slots) + " of " + thousands(max_points) + " points)",
-       slots * max_points * static_cast<double>(sizeof(dds::ScanPoint))});
+       slots * max_points * static_cast<double>(sizeof(msgs::ScanPoint))});
   // The integrator's batch: whole scans under per-scan semantics.
   const double batch = map.semantics == Semantics::kPerScan
                            ? std::max<double>(config.queues.batch_rays, max_points)

@@ -79,7 +79,7 @@ struct IntegratorRig {
   void pushExtrinsic(const io::Pose& sensor_in_base) {
     pushSensorExtrinsic(poses, 0, sensor_in_base);
   }
-  void publishScan(std::int64_t stamp_ns, const std::vector<dds::ScanPoint>& points) {
+  void publishScan(std::int64_t stamp_ns, const std::vector<msgs::ScanPoint>& points) {
     test::publishScan(mailbox, stamp_ns, points, 0, kIntegratorNow);
   }
 
@@ -95,25 +95,25 @@ struct IntegratorRig {
 };
 
 /// A 0.1 s sweep of `count` points with times across it, ranges 0.2-5 m.
-std::vector<dds::ScanPoint> sweep(std::mt19937_64& rng, int count) {
+std::vector<msgs::ScanPoint> sweep(std::mt19937_64& rng, int count) {
   std::uniform_real_distribution<double> elevation(-0.3, 0.3);
   std::uniform_real_distribution<double> range(0.2, 5.0);
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   for (int i = 0; i < count; ++i) {
     const double azimuth = 2.0 * 3.14159265358979 * i / count;
     const double e = elevation(rng);
     const double r = range(rng);
-    dds::ScanPoint p{static_cast<float>(r * std::cos(azimuth) * std::cos(e)),
-                     static_cast<float>(r * std::sin(azimuth) * std::cos(e)),
-                     static_cast<float>(r * std::sin(e)),
-                     static_cast<float>(0.1 * i / count),
-                     1.0f,
-                     0u};
+    msgs::ScanPoint p{static_cast<float>(r * std::cos(azimuth) * std::cos(e)),
+                      static_cast<float>(r * std::sin(azimuth) * std::cos(e)),
+                      static_cast<float>(r * std::sin(e)),
+                      static_cast<float>(0.1 * i / count),
+                      1.0f,
+                      0u};
     if (i % 29 == 0) {
-      p.flags = dds::kPointFreeOnly;
+      p.flags = msgs::kPointFreeOnly;
     }
     if (i % 97 == 0) {
-      p.flags = dds::kPointNoReturn;
+      p.flags = msgs::kPointNoReturn;
     }
     points.push_back(p);
   }
@@ -144,7 +144,7 @@ TEST(DeviceIntegrator, PointsDeskewedOnTheDeviceGiveTheHostsMapAndCounts) {
         host.pushExtrinsic(turned);
         device.pushExtrinsic(turned);
       }
-      const std::vector<dds::ScanPoint> points = sweep(rng, 3000);
+      const std::vector<msgs::ScanPoint> points = sweep(rng, 3000);
       host.publishScan(stamp, points);
       device.publishScan(stamp, points);
       (void)host.integrator->step(kIntegratorNow);

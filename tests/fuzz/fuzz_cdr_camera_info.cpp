@@ -6,10 +6,10 @@
 #include <span>
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/camera_info.hpp"
+#include "src/msgs/camera_info.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  auto info = raymap::dds::decodeCameraInfo(
+  auto info = raymap::msgs::decodeCameraInfo(
       std::span<const std::byte>(reinterpret_cast<const std::byte*>(data), size));
   if (!info) {
     return 0;

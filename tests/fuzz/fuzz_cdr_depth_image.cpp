@@ -8,7 +8,7 @@
 #include <span>
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/depth_image.hpp"
+#include "src/msgs/depth_image.hpp"
 
 namespace {
 
@@ -36,7 +36,7 @@ const raymap::PixelRayTable* raysFor(std::uint32_t width, std::uint32_t height) 
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::span<const std::byte> cdr(reinterpret_cast<const std::byte*>(data), size);
-  auto info = raymap::dds::inspectDepthImage(cdr);
+  auto info = raymap::msgs::inspectDepthImage(cdr);
   if (!info || info->width == 0 || info->height == 0 ||
       std::uint64_t{info->width} * info->height > 16384) {
     return 0;
@@ -45,17 +45,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (rays == nullptr) {
     return 0;
   }
-  static std::array<raymap::dds::ScanPoint, 16384> points;
-  raymap::dds::DepthDecodeOptions options;
+  static std::array<raymap::msgs::ScanPoint, 16384> points;
+  raymap::msgs::DepthDecodeOptions options;
   options.min_range_m = 0.2f;
   options.max_range_m = 4.0f;
   for (std::uint32_t downsample : {1u, 3u}) {
     for (bool invalid_as_free : {false, true}) {
       options.downsample = downsample;
       options.invalid_as_free = invalid_as_free;
-      auto header = raymap::dds::decodeDepthImage(cdr, *rays, options, points);
-      if (header &&
-          header->points > raymap::dds::depthPointCapacity(info->width, info->height, downsample)) {
+      auto header = raymap::msgs::decodeDepthImage(cdr, *rays, options, points);
+      if (header && header->points >
+                        raymap::msgs::depthPointCapacity(info->width, info->height, downsample)) {
         std::abort();  // never more points than blocks
       }
     }

@@ -4,14 +4,14 @@
 #include <cstdint>
 #include <span>
 
-#include "src/dds/diagnostics_decode.hpp"
+#include "src/msgs/diagnostics_decode.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  auto array = raymap::dds::decodeDiagnosticArray(
+  auto array = raymap::msgs::decodeDiagnosticArray(
       std::span<const std::byte>(reinterpret_cast<const std::byte*>(data), size));
   if (array) {
     for (const auto& status : array->statuses) {
-      (void)raymap::dds::diagnosticLevelName(status.level);
+      (void)raymap::msgs::diagnosticLevelName(status.level);
     }
   }
   return 0;

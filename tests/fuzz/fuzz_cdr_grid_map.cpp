@@ -4,14 +4,14 @@
 #include <cstdint>
 #include <span>
 
-#include "src/dds/grid_map_decode.hpp"
+#include "src/msgs/grid_map_decode.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  auto map = raymap::dds::decodeGridMap(
+  auto map = raymap::msgs::decodeGridMap(
       std::span<const std::byte>(reinterpret_cast<const std::byte*>(data), size));
   if (map) {
     for (const auto& layer : map->data) {
-      (void)raymap::dds::layerStats(layer.data);
+      (void)raymap::msgs::layerStats(layer.data);
     }
   }
   return 0;

@@ -4,10 +4,10 @@
 #include <cstdint>
 #include <span>
 
-#include "src/dds/occupancy_grid_decode.hpp"
+#include "src/msgs/occupancy_grid_decode.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  (void)raymap::dds::decodeOccupancyGrid(
+  (void)raymap::msgs::decodeOccupancyGrid(
       std::span<const std::byte>(reinterpret_cast<const std::byte*>(data), size));
   return 0;
 }

@@ -4,10 +4,10 @@
 #include <cstdint>
 #include <span>
 
-#include "src/dds/pose.hpp"
+#include "src/msgs/pose.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  (void)raymap::dds::decodeOdometry(
+  (void)raymap::msgs::decodeOdometry(
       std::span<const std::byte>(reinterpret_cast<const std::byte*>(data), size));
   return 0;
 }

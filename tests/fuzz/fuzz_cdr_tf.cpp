@@ -7,12 +7,12 @@
 #include <cstdlib>
 #include <span>
 
-#include "src/dds/pose.hpp"
+#include "src/msgs/pose.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::span<const std::byte> cdr(reinterpret_cast<const std::byte*>(data), size);
-  static std::array<raymap::dds::StampedTransform, 4> transforms;
-  auto written = raymap::dds::decodeTfMessage(cdr, transforms);
+  static std::array<raymap::msgs::StampedTransform, 4> transforms;
+  auto written = raymap::msgs::decodeTfMessage(cdr, transforms);
   if (written && *written > transforms.size()) {
     std::abort();
   }

@@ -182,12 +182,12 @@ class TrafficPublisher {
             cycle % 2 == 0 ? map_message_.sample() : static_cast<const void*>(&bad_map_)));
       }
       diagnostics.begin(stamp_ns);
-      const int status = diagnostics.addStatus(dds::kDiagnosticWarn, "raymapd: pipeline",
+      const int status = diagnostics.addStatus(msgs::kDiagnosticWarn, "raymapd: pipeline",
                                                "dropping input", "raymapd");
       diagnostics.addValue(status, "backend", "%s", "cpu");
       diagnostics.addValue(status, "clouds_received", "%llu",
                            static_cast<unsigned long long>(cycle));
-      diagnostics.addStatus(dds::kDiagnosticOk, "raymapd: height map", "ok", "raymapd");
+      diagnostics.addStatus(msgs::kDiagnosticOk, "raymapd: height map", "ok", "raymapd");
       if (diagnostics_writer_) {
         static_cast<void>(diagnostics_writer_->write(diagnostics.sample()));
       }

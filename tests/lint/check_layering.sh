@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
 # src/heightmap, src/sim <- src/io, src/device/staging <- src/device/opencl, src/device/cuda <-
-# src/device (the backend factory) <- src/dds <- src/pipeline <- src/service <- tools;
+# src/device (the backend factory); src/msgs (ROS 2 messages, no transport) <- src/pipeline,
+# src/bag, src/dds <- src/service <- tools;
 # src/config (YAML reading) and src/record (the record log format) depend on core only.
 # Includes are written relative to the repository root, so grep can tell.
 set -euo pipefail
@@ -27,8 +28,10 @@ check src/io 'src/sim|tools/|tests/' 'file formats do not know scenes or tools'
 check src/sim 'src/io|tools/|tests/' 'scenes produce rays, not files'
 check src/config 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|platform/|tools/|tests/' 'configuration reading depends only on core'
 check src/record 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|platform/|tools/|tests/' 'the log format knows bytes, not DDS'
+check src/msgs 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|src/bag|src/device/|platform/|tools/|tests/|dds/|ddsc/' 'message codecs need no transport, map or files'
 check src/dds 'src/sim|src/device/|src/pipeline|src/service|tools/|tests/' 'DDS I/O knows messages, not the pipeline'
-check src/pipeline 'src/sim|src/device/|src/service|tools/|tests/' 'the pipeline runs any backend through src/map/backend.hpp'
+check src/pipeline 'src/sim|src/device/|src/dds/|src/service|tools/|tests/' 'the pipeline runs any backend through src/map/backend.hpp, and needs no DDS'
+check src/bag 'src/sim|src/device/|src/dds/|src/service|tools/|tests/' 'bags are read without DDS'
 check src/service 'src/sim|tools/|tests/' 'the service does not know scenes or tools'
 check kernels/device 'src/|platform/|tools/|tests/' 'device code depends only on kernels/'
 check src/device 'src/sim|src/dds|src/pipeline|src/service|tools/|tests/' 'backends run maps; they know no messages, pipeline or tools'

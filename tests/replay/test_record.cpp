@@ -54,7 +54,7 @@ bool waitForText(const std::string& path, const std::string& text, double second
 void publishDrive(driver::DriverPublisher& publisher, int scans, Capture& clouds,
                   Capture& odometry) {
   const driver::SimulatedLidar lidar = yardLidar(8, 256, /*moving=*/false);
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   std::vector<std::uint16_t> rings;
   const std::int64_t stamp0 = platform::realtimeNowNs();
   for (int k = 0; k < scans; ++k) {

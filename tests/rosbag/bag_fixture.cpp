@@ -27,7 +27,7 @@ std::string harnessDir() { return std::string(RAYMAP_SOURCE_DIR) + "/tests/rosba
 /// so that what the test computes with is bit for bit what raymap decodes.
 Eigen::Quaterniond decoderStable(Eigen::Quaterniond q) {
   for (int i = 0; i < 8; ++i) {
-    const Eigen::Quaterniond next = q.normalized();  // what dds::decodeOdometry/TfMessage do
+    const Eigen::Quaterniond next = q.normalized();  // what msgs::decodeOdometry/TfMessage do
     if (next.coeffs() == q.coeffs()) {
       break;
     }
@@ -73,8 +73,8 @@ void writeBag(const std::string& spec, const std::string& out,
   ASSERT_EQ(r.exit_code, 0) << describe(r);
 }
 
-std::vector<dds::ScanPoint> ringCloud(std::size_t n) {
-  std::vector<dds::ScanPoint> points(n);
+std::vector<msgs::ScanPoint> ringCloud(std::size_t n) {
+  std::vector<msgs::ScanPoint> points(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double a = 0.1 * static_cast<double>(i);
     points[i] = {static_cast<float>(5.0 * std::cos(a)),
@@ -144,9 +144,9 @@ Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans) {
   PlyTestFile ply = float64RayCloud();
 
   std::int64_t next_pose = kT0 - 5 * kOdometryPeriod;
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   std::vector<std::uint16_t> rings;
-  std::vector<std::pair<std::int64_t, std::vector<dds::ScanPoint>>> pending;  // stamp, points
+  std::vector<std::pair<std::int64_t, std::vector<msgs::ScanPoint>>> pending;  // stamp, points
   for (int k = 0; k <= scans; ++k) {
     const std::int64_t stamp = kT0 + period * k;
     const std::int64_t logged = stamp + period + 1;  // a driver publishes at the scan's end
@@ -168,13 +168,13 @@ Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans) {
     spec.ousterCloud("/ouster/points", logged, stamp, "os_sensor", points, rings);
     // The points as raymap decodes them: float coordinates; the time written as integer
     // nanoseconds and read back as float seconds; (0, 0, 0) and NaN are no-returns.
-    std::vector<dds::ScanPoint> decoded;
-    for (const dds::ScanPoint& p : points) {
+    std::vector<msgs::ScanPoint> decoded;
+    for (const msgs::ScanPoint& p : points) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
           (p.x == 0.0f && p.y == 0.0f && p.z == 0.0f)) {
         continue;
       }
-      dds::ScanPoint q = p;
+      msgs::ScanPoint q = p;
       const auto ns = static_cast<std::uint32_t>(std::llround(double(p.time_s) * 1e9));
       q.time_s = static_cast<float>(static_cast<double>(ns) * 1e-9);
       q.flags = 0;
@@ -183,7 +183,7 @@ Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans) {
     pending.emplace_back(stamp, std::move(decoded));
   }
   for (std::size_t k = 0; k < pending.size(); ++k) {
-    for (const dds::ScanPoint& p : pending[k].second) {
+    for (const msgs::ScanPoint& p : pending[k].second) {
       Ray ray;
       if (!deskewer.toRay(p, pending[k].first, history, 20000000, extrinsic, k, ray)) {
         ADD_FAILURE() << "no pose for a point of scan " << k;

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "src/dds/point_cloud.hpp"
 #include "src/io/trajectory.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/sim/scene.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/ply_test_writer.hpp"
@@ -59,7 +59,7 @@ Drive makeDrive(const TempDir& dir, DrivePoses poses, int scans);
 
 /// @brief `n` points on a 5 m ring half a metre below the sensor, 1 ms apart in time: a small
 /// cloud for bags built by hand.
-std::vector<dds::ScanPoint> ringCloud(std::size_t n);
+std::vector<msgs::ScanPoint> ringCloud(std::size_t n);
 
 /// @brief Writes `spec` as a bag at `out` with write_bag.mjs `options` (e.g. --compression zstd).
 /// Fails the test when the harness fails.

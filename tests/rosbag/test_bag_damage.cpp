@@ -119,7 +119,7 @@ std::string smallSpec(const TempDir& dir) {
   w.channel("/points", "sensor_msgs/msg/PointCloud2");
   const std::int64_t t0 = 1700000000000000000;
   w.tf("/tf_static", t0, {{t0, "base_link", "lidar", io::Pose{{0.1, 0.0, 0.5}}}});
-  const std::vector<dds::ScanPoint> points = ringCloud(64);
+  const std::vector<msgs::ScanPoint> points = ringCloud(64);
   std::vector<std::uint16_t> rings(64, 0);
   for (int k = 0; k < 5; ++k) {
     const std::int64_t t = t0 + k * 100000000LL;

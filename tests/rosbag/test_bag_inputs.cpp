@@ -44,7 +44,7 @@ std::string writeSmallBag(const TempDir& dir, const std::string& name, const Sma
     if (!how.cloud_topic.empty()) {
       w.channel(how.cloud_topic, "sensor_msgs/msg/PointCloud2");
     }
-    const std::vector<dds::ScanPoint> points = ringCloud(64);
+    const std::vector<msgs::ScanPoint> points = ringCloud(64);
     const std::vector<std::uint16_t> rings(64, 0);
     for (int k = 0; k <= 5; ++k) {
       const std::int64_t t = kInputsT0 + k * 100000000LL;

@@ -71,7 +71,7 @@ TEST(BagOuster, TheOusterDataSetAsABagGivesTheVoxelsOfItsRays) {
       spec.odometry("/odom", stamp - 10000, stamp - 10000, "odom", "base_link", pose);
       spec.odometry("/odom", kOusterT0 + nanoseconds(last) + 10000,
                     kOusterT0 + nanoseconds(last) + 10000, "odom", "base_link", pose);
-      std::vector<dds::ScanPoint> points;
+      std::vector<msgs::ScanPoint> points;
       for (const Ray& r : scan) {
         if ((r.flags & kRayNoReturn) != 0u) {
           continue;

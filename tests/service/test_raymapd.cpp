@@ -14,8 +14,8 @@
 #include <signal.h>
 
 #include "platform/clock.hpp"
-#include "src/dds/occupancy_grid_decode.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/occupancy_grid_decode.hpp"
 #include "src/sim/scene.hpp"
 #include "tests/service/daemon_process.hpp"
 #include "tests/service/service_fixture.hpp"
@@ -260,13 +260,13 @@ TEST(Raymapd, TakesThePoseFromTfAndPublishesOccupiedVoxelsWhileSubscribed) {
   EXPECT_GT(ros.diagnostics->number("raymapd: pipeline/poses_received").value_or(0.0), 100.0);
 
   // Occupied voxels at 1 Hz while this reader is matched: voxel centres on the scene's surfaces.
-  std::vector<dds::ScanPoint> points(200000);
+  std::vector<msgs::ScanPoint> points(200000);
   int clouds = 0;
   std::uint32_t occupied = 0;
   std::uint32_t on_grid = 0;
   voxels->takeEach(
       [&](std::span<const std::byte> cdr, std::int64_t) {
-        auto header = dds::decodePointCloud2(cdr, points, dds::CloudDecodeOptions{});
+        auto header = msgs::decodePointCloud2(cdr, points, msgs::CloudDecodeOptions{});
         if (!header) {
           return;
         }
@@ -421,11 +421,11 @@ TEST(Raymapd, PublishesANav2CostmapWithEachHeightMapOnTheSameGrid) {
   ros.play(lidar, driver::PlaybackOptions{}, 3.0, maps);
   ros.settle(0.5, &maps);
   ASSERT_GE(maps.size(), fewestMaps(3.0)) << daemon.log();
-  std::vector<dds::DecodedOccupancyGrid> grids;
+  std::vector<msgs::DecodedOccupancyGrid> grids;
   costmaps->takeEach(
       [&](std::span<const std::byte> cdr, std::int64_t) {
-        auto grid = dds::decodeOccupancyGrid(cdr);
-        ASSERT_TRUE(grid.has_value()) << dds::toString(grid.error());
+        auto grid = msgs::decodeOccupancyGrid(cdr);
+        ASSERT_TRUE(grid.has_value()) << msgs::toString(grid.error());
         grids.push_back(std::move(grid).value());
       },
       64);

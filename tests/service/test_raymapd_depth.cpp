@@ -12,8 +12,8 @@
 
 #include "platform/clock.hpp"
 #include "src/dds/cdr_writer.hpp"
-#include "src/dds/depth_image_writer.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/depth_image_writer.hpp"
 #include "tests/service/service_fixture.hpp"
 #include "tools/dds_driver/depth_playback.hpp"
 
@@ -142,8 +142,8 @@ TEST(RaymapdDepth, RefusedImagesAreCountedByReasonAndTheCameraWarns) {
   const std::string s = std::string("raymapd: sensor ") + kCamera + "/";
   std::vector<std::byte> cdr;
   std::vector<float> depth(16 * 12, 1.0f);
-  dds::serializeDepthImage(platform::realtimeNowNs(), "body_front_optical_frame", 16, 12,
-                           dds::DepthEncoding::k32FC1, false, depth, cdr);
+  msgs::serializeDepthImage(platform::realtimeNowNs(), "body_front_optical_frame", 16, 12,
+                            msgs::DepthEncoding::k32FC1, false, depth, cdr);
   std::vector<driver::ReceivedGridMap> maps;
   const auto counted = [&] { return rig.value(s + "images_without_camera_info") >= 1.0; };
   for (int attempt = 0; attempt < 30 && !counted(); ++attempt) {

@@ -14,15 +14,15 @@ namespace {
 
 TEST(SimulatedLidar, PointsPutBackWithThePosesLieOnTheSceneWhileMoving) {
   const driver::SimulatedLidar lidar = yardLidar(16, 256, /*moving=*/true);
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   std::vector<std::uint16_t> rings;
   for (std::uint64_t k : {0u, 7u, 15u}) {
     lidar.scan(k, points, rings);
     ASSERT_EQ(points.size(), 16u * 256u);
     int checked = 0;
     int on_surface = 0;
-    for (const dds::ScanPoint& p : points) {
-      if ((p.flags & dds::kPointNoReturn) != 0u) {
+    for (const msgs::ScanPoint& p : points) {
+      if ((p.flags & msgs::kPointNoReturn) != 0u) {
         continue;
       }
       const double t = static_cast<double>(k) * lidar.scanPeriod() + static_cast<double>(p.time_s);

@@ -71,12 +71,12 @@ void BagSpecWriter::message(const std::string& topic, std::int64_t log_time_ns,
 
 void BagSpecWriter::ousterCloud(const std::string& topic, std::int64_t log_time_ns,
                                 std::int64_t stamp_ns, const std::string& frame,
-                                std::span<const dds::ScanPoint> points,
+                                std::span<const msgs::ScanPoint> points,
                                 std::span<const std::uint16_t> rings) {
   constexpr std::size_t kStep = 48;
   std::vector<std::byte> data(points.size() * kStep, std::byte{0});
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const dds::ScanPoint& p = points[i];
+    const msgs::ScanPoint& p = points[i];
     const bool none = !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z);
     const std::size_t at = i * kStep;
     put(data, at + 0, none ? 0.0f : p.x);

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/io/trajectory.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 namespace raymap::test {
 
@@ -35,7 +35,7 @@ class BagSpecWriter {
   /// float32 at 16, t uint32 ns at 20, ring uint16 at 26), one row; no-return points (NaN in
   /// `points`) as (0, 0, 0), as Ouster publishes them.
   void ousterCloud(const std::string& topic, std::int64_t log_time_ns, std::int64_t stamp_ns,
-                   const std::string& frame, std::span<const dds::ScanPoint> points,
+                   const std::string& frame, std::span<const msgs::ScanPoint> points,
                    std::span<const std::uint16_t> rings);
   void odometry(const std::string& topic, std::int64_t log_time_ns, std::int64_t stamp_ns,
                 const std::string& frame, const std::string& child, const io::Pose& pose);

@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "src/dds/point_cloud.hpp"
 #include "src/io/trajectory.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/pipeline/pose_update.hpp"
 #include "src/pipeline/scan_mailbox.hpp"
 
@@ -38,12 +38,12 @@ inline void pushSensorExtrinsic(pipeline::PoseQueue& queue, std::uint32_t sensor
 
 /// Publishes a scan of `points` (per-point times) stamped `stamp_ns` from `sensor`.
 inline void publishScan(pipeline::ScanMailbox& mailbox, std::int64_t stamp_ns,
-                        const std::vector<dds::ScanPoint>& points, std::uint32_t sensor,
+                        const std::vector<msgs::ScanPoint>& points, std::uint32_t sensor,
                         std::int64_t arrival_ns) {
   pipeline::ScanSlot* slot = mailbox.acquire();
   ASSERT_NE(slot, nullptr);
   ASSERT_LE(points.size(), slot->buffer.size());
-  slot->header = dds::CloudHeader{};
+  slot->header = msgs::CloudHeader{};
   slot->header.stamp_ns = stamp_ns;
   slot->header.points = static_cast<std::uint32_t>(points.size());
   slot->header.width = slot->header.points;

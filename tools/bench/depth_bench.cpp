@@ -25,12 +25,12 @@
 #include <Eigen/Geometry>
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/depth_image.hpp"
-#include "src/dds/depth_image_writer.hpp"
 #include "src/device/backend_choice.hpp"
 #include "src/map/ray_batcher.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
+#include "src/msgs/depth_image.hpp"
+#include "src/msgs/depth_image_writer.hpp"
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pose_history.hpp"
 #include "src/sim/depth_camera.hpp"
@@ -123,8 +123,8 @@ struct Frames {
 
 std::string decodeRun(const char* encoding, const std::vector<std::byte>& bytes,
                       const PixelRayTable& rays, std::uint32_t downsample, int repetitions) {
-  std::vector<dds::ScanPoint> out(dds::depthPointCapacity(kWidth, kHeight, downsample));
-  dds::DepthDecodeOptions options;
+  std::vector<msgs::ScanPoint> out(msgs::depthPointCapacity(kWidth, kHeight, downsample));
+  msgs::DepthDecodeOptions options;
   options.downsample = downsample;
   options.max_range_m = kMaxRangeM;
   std::vector<double> ns;
@@ -132,9 +132,9 @@ std::string decodeRun(const char* encoding, const std::vector<std::byte>& bytes,
   for (int r = 0; r < repetitions; ++r) {
     const auto start = Clock::now();
     for (int f = 0; f < kDecodeFrames; ++f) {
-      const auto header = dds::decodeDepthImage(bytes, rays, options, out);
+      const auto header = msgs::decodeDepthImage(bytes, rays, options, out);
       if (!header) {
-        die(std::string("decode: ") + dds::toString(header.error()));
+        die(std::string("decode: ") + msgs::toString(header.error()));
       }
       points = header->points;
     }
@@ -173,9 +173,9 @@ std::string integrateRun(const std::vector<std::byte>& bytes, const PixelRayTabl
   history.push(kStampNs + 1'000'000'000, identity);
   const io::Pose extrinsic = cameraInBody();
   pipeline::PointDeskewer deskewer;
-  std::vector<dds::ScanPoint> points(dds::depthPointCapacity(kWidth, kHeight, downsample));
+  std::vector<msgs::ScanPoint> points(msgs::depthPointCapacity(kWidth, kHeight, downsample));
   std::vector<Ray> world(points.size());
-  dds::DepthDecodeOptions options;
+  msgs::DepthDecodeOptions options;
   options.downsample = downsample;
   options.max_range_m = kMaxRangeM;
 
@@ -186,9 +186,9 @@ std::string integrateRun(const std::vector<std::byte>& bytes, const PixelRayTabl
   std::size_t rays_per_frame = 0;
   const auto frame = [&] {
     auto t0 = Clock::now();
-    const auto header = dds::decodeDepthImage(bytes, rays, options, points);
+    const auto header = msgs::decodeDepthImage(bytes, rays, options, points);
     if (!header) {
-      die(std::string("decode: ") + dds::toString(header.error()));
+      die(std::string("decode: ") + msgs::toString(header.error()));
     }
     auto t1 = Clock::now();
     std::size_t n = 0;
@@ -311,10 +311,10 @@ int main(int argc, char** argv) {
   }
   const std::vector<float> depth = renderDepth(camera, cameraInBody());
   Frames frames;
-  dds::serializeDepthImage(kStampNs, "camera_depth_optical_frame", kWidth, kHeight,
-                           dds::DepthEncoding::k32FC1, false, depth, frames.f32);
-  dds::serializeDepthImage(kStampNs, "camera_depth_optical_frame", kWidth, kHeight,
-                           dds::DepthEncoding::k16UC1, false, depth, frames.u16);
+  msgs::serializeDepthImage(kStampNs, "camera_depth_optical_frame", kWidth, kHeight,
+                            msgs::DepthEncoding::k32FC1, false, depth, frames.f32);
+  msgs::serializeDepthImage(kStampNs, "camera_depth_optical_frame", kWidth, kHeight,
+                            msgs::DepthEncoding::k16UC1, false, depth, frames.u16);
 
   std::printf("{\n  \"image\": \"%ux%u, fx=fy=%.0f, %.1f m up, %.0f deg down, floor + box\",\n",
               kWidth, kHeight, kFocalPx, kHeightM, kPitchDeg);

@@ -50,8 +50,8 @@ io::Pose extrinsic() {
 /// The scan's points in the sensor frame (metres), ranges 5 to 30 m. Column-major (a column's
 /// beams together: 1024 pose lookups per scan) or row-major as Ouster drivers publish them (each
 /// point's time differs from the previous one's: a lookup per point).
-std::vector<dds::ScanPoint> scanPoints(bool row_major) {
-  std::vector<dds::ScanPoint> points;
+std::vector<msgs::ScanPoint> scanPoints(bool row_major) {
+  std::vector<msgs::ScanPoint> points;
   points.reserve(std::size_t{kColumns} * kBeams);
   const auto add = [&](int column, int beam) {
     const double azimuth = 2.0 * std::numbers::pi * column / kColumns;
@@ -85,7 +85,7 @@ void BM_DeskewScan(benchmark::State& state) {
     history.push(kStampNs + t, basePose(static_cast<double>(t) * 1e-9));
   }
   const io::Pose sensor_in_base = extrinsic();
-  const std::vector<dds::ScanPoint> points = scanPoints(row_major);
+  const std::vector<msgs::ScanPoint> points = scanPoints(row_major);
   std::vector<Ray> rays(points.size());
   pipeline::PointDeskewer deskewer;
   for (auto _ : state) {

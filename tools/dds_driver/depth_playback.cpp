@@ -8,8 +8,8 @@
 #include <Eigen/Geometry>
 
 #include "src/core/eigen_conversions.hpp"
-#include "src/dds/depth_image_writer.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/depth_image_writer.hpp"
 
 namespace raymap::driver {
 namespace {
@@ -109,11 +109,11 @@ void DepthPlayback::publishFrame(Camera& camera, std::uint32_t index, std::int64
       sim::frameSeed(seed_, static_cast<std::uint32_t>(&camera - cameras_.data()), index), depth);
   const sim::DepthCameraModel& m = camera.camera.model();
   const std::int64_t stamp = stamp0_ + (due_ns - t0_);
-  dds::serializeCameraInfo(stamp, camera.topics.frame, camera.camera.intrinsics(), info_cdr_);
-  dds::serializeDepthImage(stamp, camera.topics.frame, m.width, m.height,
-                           m.encoding == sim::DepthEncoding::k16UC1 ? dds::DepthEncoding::k16UC1
-                                                                    : dds::DepthEncoding::k32FC1,
-                           false, depth, image_cdr_);
+  msgs::serializeCameraInfo(stamp, camera.topics.frame, camera.camera.intrinsics(), info_cdr_);
+  msgs::serializeDepthImage(stamp, camera.topics.frame, m.width, m.height,
+                            m.encoding == sim::DepthEncoding::k16UC1 ? msgs::DepthEncoding::k16UC1
+                                                                     : msgs::DepthEncoding::k32FC1,
+                            false, depth, image_cdr_);
   // CameraInfo first, as drivers publish it (an image never waits for its intrinsics).
   (void)camera.info->write(info_cdr_);
   (void)camera.image->write(image_cdr_);

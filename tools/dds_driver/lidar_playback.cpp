@@ -25,7 +25,7 @@ LidarPlayback::LidarPlayback(const SimulatedLidar& lidar, DriverPublisher& publi
   odometry_period_ = std::llround(1e9 / options_.odometry_rate_hz);
 }
 
-void LidarPlayback::corruptTimes(std::vector<dds::ScanPoint>& scan) const {
+void LidarPlayback::corruptTimes(std::vector<msgs::ScanPoint>& scan) const {
   const std::size_t n = std::min<std::size_t>(options_.bad_time_points, scan.size());
   for (std::size_t i = 0; i < n; ++i) {
     scan[i].time_s = 4.294967295f;  // t = 0xFFFFFFFF ns once written back as nanoseconds

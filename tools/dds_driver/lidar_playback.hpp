@@ -42,12 +42,12 @@ class LidarPlayback {
   std::uint64_t pointsPublished() const noexcept { return points_; }
 
  private:
-  void corruptTimes(std::vector<dds::ScanPoint>& scan) const;  // bad_time_points
+  void corruptTimes(std::vector<msgs::ScanPoint>& scan) const;  // bad_time_points
 
   const SimulatedLidar& lidar_;
   DriverPublisher& publisher_;
   PlaybackOptions options_;
-  std::vector<std::vector<dds::ScanPoint>> scans_cache_;
+  std::vector<std::vector<msgs::ScanPoint>> scans_cache_;
   std::vector<std::vector<std::uint16_t>> rings_cache_;
   std::int64_t t0_ = 0, stamp0_ = 0, scan_period_ = 0, odometry_period_ = 0;
   std::int64_t next_scan_ = 0, next_odometry_ = 0;

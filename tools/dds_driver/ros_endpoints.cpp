@@ -86,7 +86,7 @@ void DriverPublisher::reserveCloud(std::uint32_t points) {
   }
 }
 
-void DriverPublisher::publishCloud(std::span<const dds::ScanPoint> points,
+void DriverPublisher::publishCloud(std::span<const msgs::ScanPoint> points,
                                    std::span<const std::uint16_t> rings, std::int64_t stamp_ns,
                                    const char* frame_id) {
   cloud_->fill(points, rings, stamp_ns, frame_id);
@@ -214,7 +214,7 @@ int GridMapListener::poll(std::int64_t timeout_ns, std::vector<ReceivedGridMap>&
       const auto* m = static_cast<const grid_map_msgs_msg_dds__GridMap_*>(samples[0]);
       ReceivedGridMap r;
       r.arrival_ns = arrival;
-      r.stamp_ns = dds::nanosecondsOf(m->header.stamp.sec, m->header.stamp.nanosec);
+      r.stamp_ns = msgs::nanosecondsOf(m->header.stamp.sec, m->header.stamp.nanosec);
       r.frame_id = m->header.frame_id != nullptr ? m->header.frame_id : "";
       r.resolution = m->info.resolution;
       r.length_x = m->info.length_x;

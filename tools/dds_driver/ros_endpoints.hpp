@@ -15,9 +15,9 @@
 #include "raymap/error.hpp"
 
 #include "src/dds/entities.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/dds/point_cloud_message.hpp"
 #include "src/io/trajectory.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 namespace raymap::driver {
 
@@ -32,7 +32,7 @@ class DriverPublisher {
   /// @brief Grows the preallocated cloud to hold `points` (allocates; never shrinks).
   void reserveCloud(std::uint32_t points);
   /// @pre points.size() <= the capacity (create()'s max_points or reserveCloud())
-  void publishCloud(std::span<const dds::ScanPoint> points, std::span<const std::uint16_t> rings,
+  void publishCloud(std::span<const msgs::ScanPoint> points, std::span<const std::uint16_t> rings,
                     std::int64_t stamp_ns, const char* frame_id);
   void publishOdometry(std::int64_t stamp_ns, const io::Pose& pose, const char* world_frame,
                        const char* base_frame);

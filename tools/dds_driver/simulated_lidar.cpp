@@ -24,7 +24,7 @@ io::Pose SimulatedLidar::poseAt(double time_s) const {
                   Eigen::Quaterniond(Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()))};
 }
 
-void SimulatedLidar::scan(std::uint64_t k, std::vector<dds::ScanPoint>& points,
+void SimulatedLidar::scan(std::uint64_t k, std::vector<msgs::ScanPoint>& points,
                           std::vector<std::uint16_t>& rings) const {
   // Simulate only scan k: a one-scan recording along the piece of the path it covers, shifted
   // to start at time 0 (knots every tenth of the scan keep the motion within the scan).
@@ -52,10 +52,10 @@ void SimulatedLidar::scan(std::uint64_t k, std::vector<dds::ScanPoint>& points,
     const Vec3d d = ray.sample - ray.origin;
     const double c = std::cos(yaw);
     const double s = std::sin(yaw);
-    dds::ScanPoint& p = points[i];
+    msgs::ScanPoint& p = points[i];
     if ((ray.flags & kRayNoReturn) != 0u) {
       p.x = p.y = p.z = nan;
-      p.flags = dds::kPointNoReturn;
+      p.flags = msgs::kPointNoReturn;
     } else {
       // World direction into the level sensor frame: rotate by -yaw about z.
       p.x = static_cast<float>(c * d.x + s * d.y);

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "src/dds/point_cloud.hpp"
 #include "src/io/trajectory.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/sim/lidar.hpp"
 #include "src/sim/scene.hpp"
 
@@ -22,7 +22,7 @@ class SimulatedLidar {
 
   /// @brief Scan `k` (start time k * scan period after the path's start): points in the sensor
   /// frame (metres; NaN for no-return), time_s after the scan start, ring = beam index.
-  void scan(std::uint64_t k, std::vector<dds::ScanPoint>& points,
+  void scan(std::uint64_t k, std::vector<msgs::ScanPoint>& points,
             std::vector<std::uint16_t>& rings) const;
   /// @brief The base (= sensor) pose in the world at `time_s` after the path's start.
   io::Pose poseAt(double time_s) const;

@@ -15,6 +15,7 @@
 #include "src/dds/discovery.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/ros_names.hpp"
 #include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
@@ -72,7 +73,7 @@ std::optional<dds::DiscoveredEndpoint> waitForPublisher(dds::Discovery& discover
 }
 
 int runEcho(const EchoFlags& flags) {
-  const std::string topic = dds::ddsTopicName(flags.topic);
+  const std::string topic = msgs::ddsTopicName(flags.topic);
   if (topic.empty()) {
     printError("echo",
                "TOPIC is empty: give a DDS name (rt/height_map) or a ROS name (/height_map)");
@@ -110,7 +111,7 @@ int runEcho(const EchoFlags& flags) {
   }
   const dds::KnownTopicType* type = dds::findTopicType(writer->type);
   if (type == nullptr) {
-    const std::string ros_type = dds::rosTypeName(writer->type);
+    const std::string ros_type = msgs::rosTypeName(writer->type);
     printError("echo", topic + " has type " + writer->type +
                            (ros_type != writer->type ? " (" + ros_type + ")" : std::string()) +
                            ", which raymap cannot decode; known types: " + knownTypeList());

@@ -16,6 +16,7 @@
 #include "src/dds/discovery.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/ros_names.hpp"
 #include "src/record/record_log_writer.hpp"
 #include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
@@ -95,7 +96,7 @@ class RosbagSink final : public RecordSink {
                                  bool reliable, bool latched) override {
     // Bags name types the ROS way (sensor_msgs/msg/PointCloud2), DDS the IDL way.
     const dds::KnownTopicType* known = dds::findTopicType(type);
-    return bag_->addTopic(dds::rosTopicName(dds_topic), known != nullptr ? known->ros_name : type,
+    return bag_->addTopic(msgs::rosTopicName(dds_topic), known != nullptr ? known->ros_name : type,
                           bag::offeredQosYaml(reliable, latched, latched ? 1 : kRecordReaderDepth));
   }
   Result<void> write(std::uint32_t id, std::int64_t receive_unix_ns, std::int64_t,
@@ -141,7 +142,7 @@ class Recorder {
   Recorder(const RecordFlags& flags, platform::ShutdownSignals signals)
       : flags_(flags), signals_(signals) {
     for (const std::string& topic : flags.topics) {
-      requested_.insert(dds::ddsTopicName(topic));
+      requested_.insert(msgs::ddsTopicName(topic));
     }
   }
 

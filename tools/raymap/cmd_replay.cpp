@@ -9,6 +9,7 @@
 
 #include "src/bag/bag_reader.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/ros_names.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
@@ -85,9 +86,9 @@ Result<ReplayOptions> toOptions(const ReplayFlags& f) {
     return Unexpected(offset.error());
   }
   o.source.sensor_offset = *offset;
-  o.cloud_topic = dds::ddsTopicName(f.cloud_topic);
-  o.odometry_topic = dds::ddsTopicName(f.odometry_topic);
-  o.diagnostics_topic = dds::ddsTopicName(f.diagnostics_topic);
+  o.cloud_topic = msgs::ddsTopicName(f.cloud_topic);
+  o.odometry_topic = msgs::ddsTopicName(f.odometry_topic);
+  o.diagnostics_topic = msgs::ddsTopicName(f.diagnostics_topic);
   o.pose_odometry = f.pose == "odometry" || f.pose == "both";
   o.pose_tf = f.pose == "tf" || f.pose == "both";
   o.tf_static = !f.no_tf_static;

@@ -13,6 +13,7 @@
 #include "src/dds/discovery.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/ros_names.hpp"
 #include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
@@ -59,7 +60,7 @@ std::string rosTypesText(const std::vector<std::string>& types) {
   std::string text;
   for (const std::string& type : types) {
     text += text.empty() ? "" : " | ";
-    text += printableText(dds::rosTypeName(type), true);
+    text += printableText(msgs::rosTypeName(type), true);
   }
   return text;
 }
@@ -71,10 +72,10 @@ void printJson(const std::map<std::string, TopicSummary>& topics) {
     std::string types = "[";
     for (std::size_t i = 0; i < s.types.size(); ++i) {
       types += i == 0 ? "" : ",";
-      types += jsonQuote(printableText(dds::rosTypeName(s.types[i]), false));
+      types += jsonQuote(printableText(msgs::rosTypeName(s.types[i]), false));
     }
     types += "]";
-    const std::string ros_topic = dds::rosTopicName(name);
+    const std::string ros_topic = msgs::rosTopicName(name);
     const std::string reliability = reliabilityText(s);
     const std::string durability = durabilityText(s);
     const std::string type = s.types.empty() ? std::string() : s.types.front();
@@ -85,7 +86,7 @@ void printJson(const std::map<std::string, TopicSummary>& topics) {
     } else {
       j.add("ros_topic", printableText(ros_topic, false));
     }
-    j.add("type", printableText(dds::rosTypeName(type), false))
+    j.add("type", printableText(msgs::rosTypeName(type), false))
         .add("dds_type", printableText(type, false))
         .raw("types", types)
         .add("known_type", dds::findTopicType(type) != nullptr)
@@ -111,7 +112,7 @@ void printTable(const std::map<std::string, TopicSummary>& topics) {
   std::vector<Row> rows;
   rows.push_back({"TOPIC", "ROS TOPIC", "TYPE", "PUB", "SUB", "RELIABILITY"});
   for (const auto& [name, s] : topics) {
-    const std::string ros_topic = dds::rosTopicName(name);
+    const std::string ros_topic = msgs::rosTopicName(name);
     const std::string reliability = reliabilityText(s);
     rows.push_back({printableText(name, true),
                     ros_topic.empty() ? "-" : printableText(ros_topic, true), rosTypesText(s.types),

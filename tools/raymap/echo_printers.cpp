@@ -10,15 +10,15 @@
 #include <vector>
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/camera_info.hpp"
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/depth_image.hpp"
-#include "src/dds/diagnostics_decode.hpp"
-#include "src/dds/grid_map_decode.hpp"
-#include "src/dds/occupancy_grid_decode.hpp"
-#include "src/dds/point_cloud.hpp"
-#include "src/dds/pose.hpp"
 #include "src/dds/ros_time.hpp"
+#include "src/msgs/camera_info.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/depth_image.hpp"
+#include "src/msgs/diagnostics_decode.hpp"
+#include "src/msgs/grid_map_decode.hpp"
+#include "src/msgs/occupancy_grid_decode.hpp"
+#include "src/msgs/point_cloud.hpp"
+#include "src/msgs/pose.hpp"
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/json_writer.hpp"
 
@@ -103,34 +103,35 @@ std::string jsonQuaternion(double w, double x, double y, double z) {
 
 // ---------------------------------------------------------------- GridMap
 
-const char* describe(dds::GridMapError error) {
+const char* describe(msgs::GridMapError error) {
   switch (error) {
-    case dds::GridMapError::kTruncated:
+    case msgs::GridMapError::kTruncated:
       return "the bytes end before the message does";
-    case dds::GridMapError::kBadEncapsulation:
+    case msgs::GridMapError::kBadEncapsulation:
       return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
-    case dds::GridMapError::kMalformed:
+    case msgs::GridMapError::kMalformed:
       return "a string without its terminating NUL";
-    case dds::GridMapError::kLayerCountMismatch:
+    case msgs::GridMapError::kLayerCountMismatch:
       return "data does not hold one array per layer name";
-    case dds::GridMapError::kLayoutMismatch:
+    case msgs::GridMapError::kLayoutMismatch:
       return "a layer's array does not have two dimensions whose sizes match its data";
   }
   return "unknown error";
 }
 
 Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
-  auto decoded = dds::decodeGridMap(sample.cdr);
+  auto decoded = msgs::decodeGridMap(sample.cdr);
   if (!decoded) {
     return fail(ErrorCode::kFormat,
-                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+                std::string(msgs::toString(decoded.error())) + ": " + describe(decoded.error()));
   }
-  const dds::DecodedGridMap& map = *decoded;
-  std::vector<dds::LayerStats> stats;
+  const msgs::DecodedGridMap& map = *decoded;
+  std::vector<msgs::LayerStats> stats;
   stats.reserve(map.data.size());
-  for (const dds::GridMapLayerData& array : map.data) {
+  for (const msgs::GridMapLayerData& array : map.data) {
     // decodeGridMap checked data_offset + cells == data.size()
-    stats.push_back(dds::layerStats(std::span<const float>(array.data).subspan(array.data_offset)));
+    stats.push_back(
+        msgs::layerStats(std::span<const float>(array.data).subspan(array.data_offset)));
   }
   const long cells_x = map.resolution > 0.0 ? std::lround(map.length_x / map.resolution) : 0;
   const long cells_y = map.resolution > 0.0 ? std::lround(map.length_y / map.resolution) : 0;
@@ -187,7 +188,7 @@ Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
     width = std::max(width, humanText(name).size());
   }
   for (std::size_t i = 0; i < map.layers.size(); ++i) {
-    const dds::LayerStats& s = stats[i];
+    const msgs::LayerStats& s = stats[i];
     appendFormat(out, "    %-*s %llu / %llu finite", static_cast<int>(width),
                  humanText(map.layers[i]).c_str(), static_cast<unsigned long long>(s.finite),
                  static_cast<unsigned long long>(s.cells));
@@ -202,15 +203,15 @@ Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
 
 // ---------------------------------------------------------------- OccupancyGrid
 
-const char* describe(dds::OccupancyGridError error) {
+const char* describe(msgs::OccupancyGridError error) {
   switch (error) {
-    case dds::OccupancyGridError::kTruncated:
+    case msgs::OccupancyGridError::kTruncated:
       return "the bytes end before the message does";
-    case dds::OccupancyGridError::kBadEncapsulation:
+    case msgs::OccupancyGridError::kBadEncapsulation:
       return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
-    case dds::OccupancyGridError::kMalformed:
+    case msgs::OccupancyGridError::kMalformed:
       return "a string without its terminating NUL";
-    case dds::OccupancyGridError::kSizeMismatch:
+    case msgs::OccupancyGridError::kSizeMismatch:
       return "data does not hold width x height cells";
   }
   return "unknown error";
@@ -241,12 +242,12 @@ OccupancyCounts countCells(const std::vector<std::int8_t>& data) {
 }
 
 Result<std::string> formatOccupancyGrid(const EchoSample& sample, EchoFormat format) {
-  auto decoded = dds::decodeOccupancyGrid(sample.cdr);
+  auto decoded = msgs::decodeOccupancyGrid(sample.cdr);
   if (!decoded) {
     return fail(ErrorCode::kFormat,
-                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+                std::string(msgs::toString(decoded.error())) + ": " + describe(decoded.error()));
   }
-  const dds::DecodedOccupancyGrid& grid = *decoded;
+  const msgs::DecodedOccupancyGrid& grid = *decoded;
   const OccupancyCounts c = countCells(grid.data);
   if (format == EchoFormat::kJsonLines) {
     JsonObject j = jsonCommon(sample, grid.stamp_ns);
@@ -280,13 +281,13 @@ Result<std::string> formatOccupancyGrid(const EchoSample& sample, EchoFormat for
 // ---------------------------------------------------------------- depth Image, CameraInfo
 
 Result<std::string> formatDepthImage(const EchoSample& sample, EchoFormat format) {
-  const auto info = dds::inspectDepthImage(sample.cdr);
+  const auto info = msgs::inspectDepthImage(sample.cdr);
   if (!info) {
-    return fail(ErrorCode::kFormat, std::string(dds::toString(info.error())) +
+    return fail(ErrorCode::kFormat, std::string(msgs::toString(info.error())) +
                                         ": not a depth image raymap reads (16UC1, mono16 or "
                                         "32FC1 with a step and data that fit its size)");
   }
-  const dds::DepthImageInfo& image = *info;
+  const msgs::DepthImageInfo& image = *info;
   // The depths themselves: decoded through a unit camera (fx = fy = 1 at the top-left pixel),
   // whose points' z is each pixel's depth in metres.
   std::uint64_t valid = 0;
@@ -298,9 +299,9 @@ Result<std::string> formatDepthImage(const EchoSample& sample, EchoFormat format
     unit.fx = 1.0;
     unit.fy = 1.0;
     PixelRayTable rays;
-    std::vector<dds::ScanPoint> points(std::size_t{image.width} * image.height);
+    std::vector<msgs::ScanPoint> points(std::size_t{image.width} * image.height);
     if (rays.build(unit)) {
-      const auto decoded = dds::decodeDepthImage(sample.cdr, rays, {}, points);
+      const auto decoded = msgs::decodeDepthImage(sample.cdr, rays, {}, points);
       if (decoded) {
         for (std::uint32_t i = 0; i < decoded->points; ++i) {
           depths.push_back(points[i].z);
@@ -342,12 +343,12 @@ Result<std::string> formatDepthImage(const EchoSample& sample, EchoFormat format
 }
 
 Result<std::string> formatCameraInfo(const EchoSample& sample, EchoFormat format) {
-  const auto decoded = dds::decodeCameraInfo(sample.cdr);
+  const auto decoded = msgs::decodeCameraInfo(sample.cdr);
   if (!decoded) {
     return fail(ErrorCode::kFormat,
-                std::string(dds::toString(decoded.error())) + ": not a usable camera model");
+                std::string(msgs::toString(decoded.error())) + ": not a usable camera model");
   }
-  const dds::CameraInfoHeader& info = *decoded;
+  const msgs::CameraInfoHeader& info = *decoded;
   const CameraIntrinsics& c = info.camera;
   const bool distorted = c.distortion == DistortionModel::kPlumbBob;
   if (format == EchoFormat::kJsonLines) {
@@ -405,7 +406,7 @@ struct CloudInfo {
 /// Reads the header and layout of a PointCloud2 (decodePointCloud2 needs x/y/z; echo shows any
 /// cloud). false: truncated or malformed (`malformed` tells which).
 bool readCloudInfo(std::span<const std::byte> cdr, CloudInfo& info, bool& malformed) {
-  dds::CdrReader reader(cdr);
+  msgs::CdrReader reader(cdr);
   std::int32_t sec = 0;
   std::uint32_t nanosec = 0;
   std::string_view frame;
@@ -436,27 +437,27 @@ bool readCloudInfo(std::span<const std::byte> cdr, CloudInfo& info, bool& malfor
     return false;
   }
   info.frame_id.assign(frame);
-  info.stamp_ns = dds::nanosecondsOf(sec, nanosec);
+  info.stamp_ns = msgs::nanosecondsOf(sec, nanosec);
   return true;
 }
 
 const char* datatypeName(std::uint8_t datatype) {
-  switch (static_cast<dds::PointFieldType>(datatype)) {
-    case dds::PointFieldType::kInt8:
+  switch (static_cast<msgs::PointFieldType>(datatype)) {
+    case msgs::PointFieldType::kInt8:
       return "int8";
-    case dds::PointFieldType::kUInt8:
+    case msgs::PointFieldType::kUInt8:
       return "uint8";
-    case dds::PointFieldType::kInt16:
+    case msgs::PointFieldType::kInt16:
       return "int16";
-    case dds::PointFieldType::kUInt16:
+    case msgs::PointFieldType::kUInt16:
       return "uint16";
-    case dds::PointFieldType::kInt32:
+    case msgs::PointFieldType::kInt32:
       return "int32";
-    case dds::PointFieldType::kUInt32:
+    case msgs::PointFieldType::kUInt32:
       return "uint32";
-    case dds::PointFieldType::kFloat32:
+    case msgs::PointFieldType::kFloat32:
       return "float32";
-    case dds::PointFieldType::kFloat64:
+    case msgs::PointFieldType::kFloat64:
       return "float64";
   }
   return "unknown";
@@ -464,13 +465,13 @@ const char* datatypeName(std::uint8_t datatype) {
 
 /// Errors after which the cloud is still worth showing (its header and layout are sound); the
 /// points are then not counted, and the reason is shown instead.
-bool layoutOnlyError(dds::CloudError error) {
-  return error == dds::CloudError::kMissingXyz || error == dds::CloudError::kBadFieldType ||
-         error == dds::CloudError::kFrameIdTooLong || error == dds::CloudError::kMissingTimeField;
+bool layoutOnlyError(msgs::CloudError error) {
+  return error == msgs::CloudError::kMissingXyz || error == msgs::CloudError::kBadFieldType ||
+         error == msgs::CloudError::kFrameIdTooLong || error == msgs::CloudError::kMissingTimeField;
 }
 
 Result<std::string> formatPointCloud(const EchoSample& sample, EchoFormat format) {
-  if (sample.cdr.size() < 4 || !dds::CdrReader(sample.cdr).ok()) {
+  if (sample.cdr.size() < 4 || !msgs::CdrReader(sample.cdr).ok()) {
     return fail(ErrorCode::kFormat,
                 "bad_encapsulation: not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)");
   }
@@ -486,17 +487,17 @@ Result<std::string> formatPointCloud(const EchoSample& sample, EchoFormat format
   const std::uint64_t points = std::uint64_t{info.width} * info.height;
   const bool consistent =
       info.point_step > 0 && points * info.point_step <= std::uint64_t{info.data_bytes};
-  std::vector<dds::ScanPoint> scratch(consistent ? points : 0);
-  dds::CloudDecodeOptions options;
+  std::vector<msgs::ScanPoint> scratch(consistent ? points : 0);
+  msgs::CloudDecodeOptions options;
   options.intensity_field = nullptr;  // not shown; a strange intensity type must not hide points
-  const auto decoded = dds::decodePointCloud2(sample.cdr, scratch, options);
+  const auto decoded = msgs::decodePointCloud2(sample.cdr, scratch, options);
   std::string points_note;
   if (!decoded) {
     if (!layoutOnlyError(decoded.error())) {
-      return fail(ErrorCode::kFormat, std::string(dds::toString(decoded.error())) +
+      return fail(ErrorCode::kFormat, std::string(msgs::toString(decoded.error())) +
                                           ": the cloud's layout does not match its data");
     }
-    points_note = dds::toString(decoded.error());
+    points_note = msgs::toString(decoded.error());
   }
   if (format == EchoFormat::kJsonLines) {
     std::vector<std::string> fields;
@@ -551,35 +552,35 @@ Result<std::string> formatPointCloud(const EchoSample& sample, EchoFormat format
 
 // ---------------------------------------------------------------- DiagnosticArray
 
-const char* describe(dds::DiagnosticsError error) {
+const char* describe(msgs::DiagnosticsError error) {
   switch (error) {
-    case dds::DiagnosticsError::kTruncated:
+    case msgs::DiagnosticsError::kTruncated:
       return "the bytes end before the message does";
-    case dds::DiagnosticsError::kBadEncapsulation:
+    case msgs::DiagnosticsError::kBadEncapsulation:
       return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
-    case dds::DiagnosticsError::kMalformed:
+    case msgs::DiagnosticsError::kMalformed:
       return "a string without its terminating NUL";
   }
   return "unknown error";
 }
 
 Result<std::string> formatDiagnostics(const EchoSample& sample, EchoFormat format) {
-  auto decoded = dds::decodeDiagnosticArray(sample.cdr);
+  auto decoded = msgs::decodeDiagnosticArray(sample.cdr);
   if (!decoded) {
     return fail(ErrorCode::kFormat,
-                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+                std::string(msgs::toString(decoded.error())) + ": " + describe(decoded.error()));
   }
-  const dds::DecodedDiagnostics& array = *decoded;
+  const msgs::DecodedDiagnostics& array = *decoded;
   if (format == EchoFormat::kJsonLines) {
     std::vector<std::string> statuses;
-    for (const dds::DecodedDiagnosticStatus& status : array.statuses) {
+    for (const msgs::DecodedDiagnosticStatus& status : array.statuses) {
       JsonObject values(JsonStyle::kCompact);
-      for (const dds::DiagnosticKeyValue& pair : status.values) {
+      for (const msgs::DiagnosticKeyValue& pair : status.values) {
         values.raw(printableText(pair.key, false), jsonText(pair.value));
       }
       JsonObject s(JsonStyle::kCompact);
       s.add("level", static_cast<std::uint64_t>(status.level))
-          .add("level_name", dds::diagnosticLevelName(status.level))
+          .add("level_name", msgs::diagnosticLevelName(status.level))
           .raw("name", jsonText(status.name))
           .raw("message", jsonText(status.message))
           .raw("hardware_id", jsonText(status.hardware_id))
@@ -593,13 +594,13 @@ Result<std::string> formatDiagnostics(const EchoSample& sample, EchoFormat forma
   std::string out = humanFirstLine(sample, array.stamp_ns);
   appendFormat(out, ", %zu status%s\n", array.statuses.size(),
                array.statuses.size() == 1 ? "" : "es");
-  for (const dds::DecodedDiagnosticStatus& status : array.statuses) {
-    appendFormat(out, "  %-6s %s: %s\n", dds::diagnosticLevelName(status.level),
+  for (const msgs::DecodedDiagnosticStatus& status : array.statuses) {
+    appendFormat(out, "  %-6s %s: %s\n", msgs::diagnosticLevelName(status.level),
                  printableText(status.name, true).c_str(),
                  printableText(status.message, true).c_str());
     if (!status.values.empty()) {
       std::string pairs;
-      for (const dds::DiagnosticKeyValue& pair : status.values) {
+      for (const msgs::DiagnosticKeyValue& pair : status.values) {
         pairs += pairs.empty() ? "" : " ";
         pairs += humanText(pair.key) + "=" + humanText(pair.value);
       }
@@ -611,25 +612,25 @@ Result<std::string> formatDiagnostics(const EchoSample& sample, EchoFormat forma
 
 // ---------------------------------------------------------------- Odometry and TFMessage
 
-const char* describe(dds::PoseError error) {
+const char* describe(msgs::PoseError error) {
   switch (error) {
-    case dds::PoseError::kTruncated:
+    case msgs::PoseError::kTruncated:
       return "the bytes end before the message does";
-    case dds::PoseError::kBadEncapsulation:
+    case msgs::PoseError::kBadEncapsulation:
       return "not XCDR1 (the encapsulation header is not CDR_LE or CDR_BE)";
-    case dds::PoseError::kMalformed:
+    case msgs::PoseError::kMalformed:
       return "a string without its terminating NUL";
-    case dds::PoseError::kFrameIdTooLong:
+    case msgs::PoseError::kFrameIdTooLong:
       return "a frame id of 64 characters or more";
-    case dds::PoseError::kBadQuaternion:
+    case msgs::PoseError::kBadQuaternion:
       return "a rotation that is not finite or has zero norm";
-    case dds::PoseError::kBadTranslation:
+    case msgs::PoseError::kBadTranslation:
       return "a translation that is not finite";
   }
   return "unknown error";
 }
 
-std::string jsonTransform(const dds::StampedTransform& t, bool with_stamp) {
+std::string jsonTransform(const msgs::StampedTransform& t, bool with_stamp) {
   JsonObject j(JsonStyle::kCompact);
   if (with_stamp) {
     j.add("stamp_ns", t.stamp_ns);
@@ -641,7 +642,7 @@ std::string jsonTransform(const dds::StampedTransform& t, bool with_stamp) {
   return j.str();
 }
 
-std::string humanTransform(const dds::StampedTransform& t) {
+std::string humanTransform(const msgs::StampedTransform& t) {
   std::string out;
   appendFormat(
       out, "%s -> %s position (%.6g, %.6g, %.6g) m orientation (w %.4f, x %.4f, y %.4f, z %.4f)",
@@ -651,12 +652,12 @@ std::string humanTransform(const dds::StampedTransform& t) {
 }
 
 Result<std::string> formatOdometry(const EchoSample& sample, EchoFormat format) {
-  const auto decoded = dds::decodeOdometry(sample.cdr);
+  const auto decoded = msgs::decodeOdometry(sample.cdr);
   if (!decoded) {
     return fail(ErrorCode::kFormat,
-                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+                std::string(msgs::toString(decoded.error())) + ": " + describe(decoded.error()));
   }
-  const dds::StampedTransform& t = *decoded;
+  const msgs::StampedTransform& t = *decoded;
   if (format == EchoFormat::kJsonLines) {
     JsonObject j = jsonCommon(sample, t.stamp_ns);
     j.raw("frame", jsonText(t.parent))
@@ -672,18 +673,18 @@ Result<std::string> formatTfMessage(const EchoSample& sample, EchoFormat format)
   // A TransformStamped takes at least 64 bytes (stamp, frame lengths, seven doubles), so this
   // has room for every transform of the message.
   constexpr std::size_t kMinTransformBytes = 64;
-  std::vector<dds::StampedTransform> transforms(sample.cdr.size() / kMinTransformBytes + 1);
-  const auto decoded = dds::decodeTfMessage(sample.cdr, transforms);
+  std::vector<msgs::StampedTransform> transforms(sample.cdr.size() / kMinTransformBytes + 1);
+  const auto decoded = msgs::decodeTfMessage(sample.cdr, transforms);
   if (!decoded) {
     return fail(ErrorCode::kFormat,
-                std::string(dds::toString(decoded.error())) + ": " + describe(decoded.error()));
+                std::string(msgs::toString(decoded.error())) + ": " + describe(decoded.error()));
   }
   transforms.resize(*decoded);
   // TFMessage has no header: its stamp is the first transform's (0 when empty).
   const std::int64_t stamp_ns = transforms.empty() ? 0 : transforms.front().stamp_ns;
   if (format == EchoFormat::kJsonLines) {
     std::vector<std::string> items;
-    for (const dds::StampedTransform& t : transforms) {
+    for (const msgs::StampedTransform& t : transforms) {
       items.push_back(jsonTransform(t, true));
     }
     JsonObject j = jsonCommon(sample, stamp_ns);
@@ -692,7 +693,7 @@ Result<std::string> formatTfMessage(const EchoSample& sample, EchoFormat format)
   }
   std::string out = humanFirstLine(sample, stamp_ns);
   appendFormat(out, ", %zu transform%s\n", transforms.size(), transforms.size() == 1 ? "" : "s");
-  for (const dds::StampedTransform& t : transforms) {
+  for (const msgs::StampedTransform& t : transforms) {
     out += "  " + humanTransform(t) + " stamp " + stampText(t.stamp_ns) + "\n";
   }
   return out;

@@ -6,6 +6,7 @@
 
 #include "src/bag/bag_reader.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/ros_names.hpp"
 #include "tools/raymap/replay_session.hpp"
 
 namespace raymap::cli {
@@ -82,7 +83,7 @@ Result<void> ReplaySession::playBag(const std::string& path) {
       const int durability = qosValue(topic.offered_qos_profiles, "durability");
       const bool latched = durability == 1 || (durability < 0 && topic.name == "/tf_static");
       auto created =
-          logWriter(dds::ddsTopicName(topic.name), known->dds_name, reliability != 2, latched);
+          logWriter(msgs::ddsTopicName(topic.name), known->dds_name, reliability != 2, latched);
       if (!created) {
         return Unexpected(std::move(created).error());
       }

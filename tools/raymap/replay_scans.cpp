@@ -129,13 +129,13 @@ void toDriverScan(const RecordedScan& scan, std::int64_t stamp_of_zero_ns, doubl
   for (const Ray& ray : scan.rays) {
     const std::int64_t stamp = stampOf(ray.time_s, stamp_of_zero_ns, t_zero_s);
     const Vec3d p = ray.sample - positionAt(out.knots, stamp);
-    dds::ScanPoint point;
+    msgs::ScanPoint point;
     point.x = static_cast<float>(p.x);
     point.y = static_cast<float>(p.y);
     point.z = static_cast<float>(p.z);
     point.time_s = static_cast<float>(static_cast<double>(stamp - out.stamp_ns) * 1e-9);
     point.intensity = ray.intensity;
-    point.flags = (ray.flags & kRayNoReturn) != 0 ? dds::kPointNoReturn : 0u;
+    point.flags = (ray.flags & kRayNoReturn) != 0 ? msgs::kPointNoReturn : 0u;
     out.points.push_back(point);
   }
 }

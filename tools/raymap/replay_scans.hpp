@@ -10,9 +10,9 @@
 #include "raymap/error.hpp"
 
 #include "src/core/vec3.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/io/ray_source.hpp"
 #include "src/map/ray.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 namespace raymap::cli {
 
@@ -50,10 +50,10 @@ struct PoseKnot {
 
 /// @brief One scan as a driver publishes it.
 struct DriverScan {
-  std::int64_t stamp_ns = 0;           ///< header stamp: the scan's first ray
-  std::vector<PoseKnot> knots;         ///< strictly increasing stamps over the whole scan
-  std::vector<dds::ScanPoint> points;  ///< sensor frame, time_s after stamp_ns
-  std::uint64_t origin_conflicts = 0;  ///< rays sharing an instant but not an origin
+  std::int64_t stamp_ns = 0;            ///< header stamp: the scan's first ray
+  std::vector<PoseKnot> knots;          ///< strictly increasing stamps over the whole scan
+  std::vector<msgs::ScanPoint> points;  ///< sensor frame, time_s after stamp_ns
+  std::uint64_t origin_conflicts = 0;   ///< rays sharing an instant but not an origin
 };
 
 /// @brief Converts a recorded scan. File time t maps to stamp `stamp_of_zero_ns + (t - t_zero_s)`.

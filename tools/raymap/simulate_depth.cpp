@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Depth frames to rays for `raymap simulate`: each frame is serialised as sensor_msgs/Image +
-// CameraInfo and decoded by dds::decodeCameraInfo and dds::decodeDepthImage, exactly as raymapd
+// CameraInfo and decoded by msgs::decodeCameraInfo and msgs::decodeDepthImage, exactly as raymapd
 // and `raymap populate` read a real camera, so the simulated recordings test that code.
 #include "tools/raymap/simulate_depth.hpp"
 
@@ -9,9 +9,9 @@
 #include <limits>
 #include <string>
 
-#include "src/dds/camera_info.hpp"
-#include "src/dds/depth_image.hpp"
-#include "src/dds/depth_image_writer.hpp"
+#include "src/msgs/camera_info.hpp"
+#include "src/msgs/depth_image.hpp"
+#include "src/msgs/depth_image_writer.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -22,29 +22,29 @@ Expected<void, Error> pointsViaDecoder(const sim::DepthCamera& camera, double ti
   const sim::DepthCameraModel& m = camera.model();
   const auto stamp_ns = static_cast<std::int64_t>(std::llround(time_s * 1e9));
   const std::string frame_id = m.name + "_optical_frame";
-  dds::serializeCameraInfo(stamp_ns, frame_id, camera.intrinsics(), s.camera_info_cdr);
-  dds::serializeDepthImage(stamp_ns, frame_id, m.width, m.height,
-                           m.encoding == sim::DepthEncoding::k16UC1 ? dds::DepthEncoding::k16UC1
-                                                                    : dds::DepthEncoding::k32FC1,
-                           false, depth_m, s.image_cdr);
-  const auto info = dds::decodeCameraInfo(s.camera_info_cdr);
+  msgs::serializeCameraInfo(stamp_ns, frame_id, camera.intrinsics(), s.camera_info_cdr);
+  msgs::serializeDepthImage(stamp_ns, frame_id, m.width, m.height,
+                            m.encoding == sim::DepthEncoding::k16UC1 ? msgs::DepthEncoding::k16UC1
+                                                                     : msgs::DepthEncoding::k32FC1,
+                            false, depth_m, s.image_cdr);
+  const auto info = msgs::decodeCameraInfo(s.camera_info_cdr);
   if (!info) {
     return fail(ErrorCode::kFormat,
-                std::string("simulated CameraInfo not decoded: ") + dds::toString(info.error()));
+                std::string("simulated CameraInfo not decoded: ") + msgs::toString(info.error()));
   }
   if (auto built = s.rays.build(info->camera); !built) {
     return Unexpected(built.error());
   }
-  dds::DepthDecodeOptions options;
+  msgs::DepthDecodeOptions options;
   options.downsample = m.downsample;
   options.min_range_m = static_cast<float>(m.min_range_m);
   options.max_range_m = static_cast<float>(m.max_range_m);
   options.invalid_as_free = true;  // no-return rays, as the lidar writes them
-  s.points.resize(dds::depthPointCapacity(m.width, m.height, m.downsample));
-  const auto decoded = dds::decodeDepthImage(s.image_cdr, s.rays, options, s.points);
+  s.points.resize(msgs::depthPointCapacity(m.width, m.height, m.downsample));
+  const auto decoded = msgs::decodeDepthImage(s.image_cdr, s.rays, options, s.points);
   if (!decoded) {
     return fail(ErrorCode::kFormat, std::string("simulated depth image not decoded: ") +
-                                        dds::toString(decoded.error()));
+                                        msgs::toString(decoded.error()));
   }
   s.points.resize(decoded->points);
   return {};
@@ -60,14 +60,14 @@ Expected<void, Error> appendDepthFrameRays(const sim::DepthCamera& camera,
   if (!points) {
     return points;
   }
-  for (const dds::ScanPoint& p : scratch.points) {
+  for (const msgs::ScanPoint& p : scratch.points) {
     Ray ray;
     ray.origin = pose.origin;
     ray.sample = pose.toWorld(
         {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)});
     ray.time_s = time_s;
     ray.scan = scan;
-    ray.flags = (p.flags & dds::kPointFreeOnly) != 0 ? kRayNoReturn : 0U;
+    ray.flags = (p.flags & msgs::kPointFreeOnly) != 0 ? kRayNoReturn : 0U;
     out.push_back(ray);
   }
   return {};

@@ -10,8 +10,8 @@
 #include "raymap/error.hpp"
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/map/ray.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/sim/depth_camera.hpp"
 
 namespace raymap::cli {
@@ -20,8 +20,8 @@ namespace raymap::cli {
 struct DepthRayScratch {
   std::vector<std::byte> camera_info_cdr;
   std::vector<std::byte> image_cdr;
-  std::vector<dds::ScanPoint> points;  ///< one frame's points, optical frame
-  PixelRayTable rays;                  ///< the CameraInfo's rays, as the decoder builds them
+  std::vector<msgs::ScanPoint> points;  ///< one frame's points, optical frame
+  PixelRayTable rays;                   ///< the CameraInfo's rays, as the decoder builds them
 };
 
 /// @brief Appends the rays of one frame (`depth_m` from camera.render()) to `out`, world frame:

@@ -11,14 +11,16 @@
 #include "sensor_msgs.h"
 #include <gtest/gtest.h>
 
-#include "src/dds/camera_info.hpp"
-#include "src/dds/depth_image_writer.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/camera_info.hpp"
+#include "src/msgs/depth_image_writer.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 #include "tests/unit/dds/loopback_bytes.hpp"
 
 namespace raymap::dds {
+
+using namespace msgs;  // the ROS 2 message codecs (src/msgs) these tests exercise
 namespace {
 
 using test::encodeCameraInfo;

@@ -19,14 +19,16 @@
 #include "src/dds/diagnostics_message.hpp"
 #include "src/dds/entities.hpp"
 #include "src/dds/grid_map_message.hpp"
-#include "src/dds/point_cloud.hpp"
 #include "src/dds/point_cloud_message.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 #include "tests/unit/dds/test_domain.hpp"
 
 namespace raymap::dds {
+
+using namespace msgs;  // the ROS 2 message codecs (src/msgs) these tests exercise
 namespace {
 
 // Waits for discovery and delivery end as soon as they happen; the bound is for a loaded machine.

@@ -8,13 +8,15 @@
 
 #include <gtest/gtest.h>
 
-#include "src/dds/diagnostics_decode.hpp"
 #include "src/dds/diagnostics_message.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/diagnostics_decode.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 #include "tests/unit/dds/loopback_bytes.hpp"
 
 namespace raymap::dds {
+
+using namespace msgs;  // the ROS 2 message codecs (src/msgs) these tests exercise
 namespace {
 
 /// Three statuses as raymapd reports them, one without values.

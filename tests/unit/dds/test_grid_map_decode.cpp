@@ -10,13 +10,15 @@
 
 #include <gtest/gtest.h>
 
-#include "src/dds/grid_map_decode.hpp"
 #include "src/dds/grid_map_message.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/grid_map_decode.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 #include "tests/unit/dds/loopback_bytes.hpp"
 
 namespace raymap::dds {
+
+using namespace msgs;  // the ROS 2 message codecs (src/msgs) these tests exercise
 namespace {
 
 /// A 5 x 3 map with NaN, +inf and every kind.

@@ -6,12 +6,14 @@
 
 #include <gtest/gtest.h>
 
-#include "src/dds/occupancy_grid_decode.hpp"
 #include "src/dds/occupancy_grid_message.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/occupancy_grid_decode.hpp"
 #include "tests/unit/dds/loopback_bytes.hpp"
 
 namespace raymap::dds {
+
+using namespace msgs;  // the ROS 2 message codecs (src/msgs) these tests exercise
 namespace {
 
 std::vector<std::byte> cycloneCostmapBytes() {

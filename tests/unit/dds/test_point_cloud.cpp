@@ -9,11 +9,13 @@
 
 #include <gtest/gtest.h>
 
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 
 namespace raymap::dds {
+
+using namespace msgs;  // the ROS 2 message codecs (src/msgs) these tests exercise
 namespace {
 
 using test::encodeCloud;

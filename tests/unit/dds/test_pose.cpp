@@ -7,10 +7,12 @@
 
 #include <gtest/gtest.h>
 
-#include "src/dds/pose.hpp"
+#include "src/msgs/pose.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 
 namespace raymap::dds {
+
+using namespace msgs;  // the ROS 2 message codecs (src/msgs) these tests exercise
 namespace {
 
 using test::encodeOdometry;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "src/dds/topic_types.hpp"
+#include "src/msgs/ros_names.hpp"
 
 namespace raymap::dds {
 namespace {
@@ -17,7 +18,7 @@ TEST(KnownTopicTypes, ListsTheEightTypesWithTheirDescriptorsNames) {
     ASSERT_NE(type.descriptor, nullptr) << type.ros_name;
     // The spelled-out DDS name is what the descriptor registers, i.e. what discovery shows.
     EXPECT_STREQ(type.dds_name, type.descriptor->m_typename);
-    EXPECT_EQ(rosTypeName(type.dds_name), type.ros_name);
+    EXPECT_EQ(msgs::rosTypeName(type.dds_name), type.ros_name);
   }
   EXPECT_EQ(types[0].descriptor, pointCloud2Type());
   EXPECT_EQ(types[1].descriptor, odometryType());
@@ -57,38 +58,38 @@ TEST(FindTopicType, ReturnsNullForUnknownOrInexactNames) {
 }
 
 TEST(DdsTopicName, PrefixesRosNamesAndKeepsDdsNames) {
-  EXPECT_EQ(ddsTopicName("/height_map"), "rt/height_map");
-  EXPECT_EQ(ddsTopicName("/ouster/points"), "rt/ouster/points");
-  EXPECT_EQ(ddsTopicName("rt/height_map"), "rt/height_map");
-  EXPECT_EQ(ddsTopicName("rt/ouster/points"), "rt/ouster/points");
-  EXPECT_EQ(ddsTopicName("ros_discovery_info"), "ros_discovery_info");
-  EXPECT_EQ(ddsTopicName(""), "");
+  EXPECT_EQ(msgs::ddsTopicName("/height_map"), "rt/height_map");
+  EXPECT_EQ(msgs::ddsTopicName("/ouster/points"), "rt/ouster/points");
+  EXPECT_EQ(msgs::ddsTopicName("rt/height_map"), "rt/height_map");
+  EXPECT_EQ(msgs::ddsTopicName("rt/ouster/points"), "rt/ouster/points");
+  EXPECT_EQ(msgs::ddsTopicName("ros_discovery_info"), "ros_discovery_info");
+  EXPECT_EQ(msgs::ddsTopicName(""), "");
 }
 
 TEST(RosTopicName, StripsTheRtPrefixOnly) {
-  EXPECT_EQ(rosTopicName("rt/height_map"), "/height_map");
-  EXPECT_EQ(rosTopicName("rt/ouster/points"), "/ouster/points");
-  EXPECT_EQ(rosTopicName("rq/add_two_intsRequest"), "");
-  EXPECT_EQ(rosTopicName("ros_discovery_info"), "");
-  EXPECT_EQ(rosTopicName("rt/"), "");
-  EXPECT_EQ(rosTopicName("rtx/a"), "");
-  EXPECT_EQ(rosTopicName(""), "");
+  EXPECT_EQ(msgs::rosTopicName("rt/height_map"), "/height_map");
+  EXPECT_EQ(msgs::rosTopicName("rt/ouster/points"), "/ouster/points");
+  EXPECT_EQ(msgs::rosTopicName("rq/add_two_intsRequest"), "");
+  EXPECT_EQ(msgs::rosTopicName("ros_discovery_info"), "");
+  EXPECT_EQ(msgs::rosTopicName("rt/"), "");
+  EXPECT_EQ(msgs::rosTopicName("rtx/a"), "");
+  EXPECT_EQ(msgs::rosTopicName(""), "");
 }
 
 TEST(RosTypeName, ConvertsTheRmwConventionAndKeepsOtherNames) {
-  EXPECT_EQ(rosTypeName("grid_map_msgs::msg::dds_::GridMap_"), "grid_map_msgs/msg/GridMap");
-  EXPECT_EQ(rosTypeName("rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"),
+  EXPECT_EQ(msgs::rosTypeName("grid_map_msgs::msg::dds_::GridMap_"), "grid_map_msgs/msg/GridMap");
+  EXPECT_EQ(msgs::rosTypeName("rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"),
             "rmw_dds_common/msg/ParticipantEntitiesInfo");
-  EXPECT_EQ(rosTypeName("example::srv::dds_::AddTwoInts_Request_"),
+  EXPECT_EQ(msgs::rosTypeName("example::srv::dds_::AddTwoInts_Request_"),
             "example/srv/AddTwoInts_Request");
   // Not the convention: unchanged.
-  EXPECT_EQ(rosTypeName("KeyedSeq"), "KeyedSeq");
-  EXPECT_EQ(rosTypeName("rtmap::msg::HeightMap"), "rtmap::msg::HeightMap");
-  EXPECT_EQ(rosTypeName("a::dds_::X_"), "a::dds_::X_");
-  EXPECT_EQ(rosTypeName("pkg::msg::dds_::Name"), "pkg::msg::dds_::Name");
-  EXPECT_EQ(rosTypeName("pkg::msg::dds_::_"), "pkg::msg::dds_::_");
-  EXPECT_EQ(rosTypeName("::msg::dds_::X_"), "::msg::dds_::X_");
-  EXPECT_EQ(rosTypeName(""), "");
+  EXPECT_EQ(msgs::rosTypeName("KeyedSeq"), "KeyedSeq");
+  EXPECT_EQ(msgs::rosTypeName("rtmap::msg::HeightMap"), "rtmap::msg::HeightMap");
+  EXPECT_EQ(msgs::rosTypeName("a::dds_::X_"), "a::dds_::X_");
+  EXPECT_EQ(msgs::rosTypeName("pkg::msg::dds_::Name"), "pkg::msg::dds_::Name");
+  EXPECT_EQ(msgs::rosTypeName("pkg::msg::dds_::_"), "pkg::msg::dds_::_");
+  EXPECT_EQ(msgs::rosTypeName("::msg::dds_::X_"), "::msg::dds_::X_");
+  EXPECT_EQ(msgs::rosTypeName(""), "");
 }
 
 }  // namespace

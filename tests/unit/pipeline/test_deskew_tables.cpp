@@ -35,16 +35,16 @@ TEST(DeskewTables, GiveThePointDeskewersRaysBitForBit) {
   // A scan of 0.1 s around the stamp, and points up to the hold past the newest pose.
   std::uniform_real_distribution<float> offset(-0.05f, 0.35f);
   std::uniform_real_distribution<float> coordinate(-40.0f, 40.0f);
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   for (int i = 0; i < 5000; ++i) {
-    points.push_back(dds::ScanPoint{coordinate(rng), coordinate(rng), coordinate(rng),
-                                    i % 50 == 0 ? 0.0f : offset(rng), 7.0f,
-                                    i % 17 == 0 ? dds::kPointFreeOnly : 0u});
+    points.push_back(msgs::ScanPoint{coordinate(rng), coordinate(rng), coordinate(rng),
+                                     i % 50 == 0 ? 0.0f : offset(rng), 7.0f,
+                                     i % 17 == 0 ? msgs::kPointFreeOnly : 0u});
   }
   points.push_back(
-      dds::ScanPoint{1.0f, 2.0f, 3.0f,
-                     static_cast<float>(static_cast<double>(history.newestStamp() - stamp) * 1e-9),
-                     0.0f, 0});  // exactly at the newest pose
+      msgs::ScanPoint{1.0f, 2.0f, 3.0f,
+                      static_cast<float>(static_cast<double>(history.newestStamp() - stamp) * 1e-9),
+                      0.0f, 0});  // exactly at the newest pose
   const ScanTimes times = scanTimes(points, stamp, 1.0f);
   std::vector<rm_pose_sample> samples(64);
   const std::size_t n = history.copyCovering(times.start_ns, times.end_ns, samples);
@@ -52,7 +52,7 @@ TEST(DeskewTables, GiveThePointDeskewersRaysBitForBit) {
   const rm_deskew_segment segment{io::toRmPose(extrinsic), 0, static_cast<rm_u32>(n)};
   PointDeskewer deskewer;
   std::size_t compared = 0;
-  for (const dds::ScanPoint& p : points) {
+  for (const msgs::ScanPoint& p : points) {
     Ray ray;
     if (!deskewer.toRay(p, stamp, history, hold, extrinsic, 0, ray)) {
       continue;  // past the hold: not covered

@@ -79,13 +79,13 @@ Vec3d toWorld(const io::Pose& pose, Vec3d p_local) {
   return toVec3(pose.transform(toEigen(p_local)));
 }
 
-dds::ScanPoint scanPoint(Vec3d p_sensor, float time_s = 0.0f, std::uint32_t flags = 0) {
-  return dds::ScanPoint{static_cast<float>(p_sensor.x),
-                        static_cast<float>(p_sensor.y),
-                        static_cast<float>(p_sensor.z),
-                        time_s,
-                        1.0f,
-                        flags};
+msgs::ScanPoint scanPoint(Vec3d p_sensor, float time_s = 0.0f, std::uint32_t flags = 0) {
+  return msgs::ScanPoint{static_cast<float>(p_sensor.x),
+                         static_cast<float>(p_sensor.y),
+                         static_cast<float>(p_sensor.z),
+                         time_s,
+                         1.0f,
+                         flags};
 }
 
 SensorSettings sensorAt(const io::Pose& extrinsic = {}) {
@@ -143,7 +143,7 @@ struct Rig {
     test::pushSensorExtrinsic(poses, sensor, sensor_in_base);
   }
   /// Publishes a scan as the ingest thread does.
-  void publishScan(std::int64_t stamp_ns, const std::vector<dds::ScanPoint>& points,
+  void publishScan(std::int64_t stamp_ns, const std::vector<msgs::ScanPoint>& points,
                    std::uint32_t sensor = 0, std::int64_t arrival_ns = kNow) {
     test::publishScan(mailbox, stamp_ns, points, sensor, arrival_ns);
   }
@@ -374,7 +374,7 @@ TEST(Integrator, ScanOlderThanThePoseHistoryIsDroppedAtOnce) {
 TEST(Integrator, NoReturnPointsAreCountedAndNotIntegrated) {
   auto rig = std::make_unique<Rig>();
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
-  dds::ScanPoint no_return{kNaN, kNaN, kNaN, 0.0f, 0.0f, dds::kPointNoReturn};
+  msgs::ScanPoint no_return{kNaN, kNaN, kNaN, 0.0f, 0.0f, msgs::kPointNoReturn};
   rig->publishScan(kStamp, {scanPoint(kWall), no_return, scanPoint({3.05, 1.05, 0.05}), no_return,
                             scanPoint({3.05, -1.05, 0.05})});
 
@@ -409,8 +409,8 @@ TEST(Integrator, APointWithACorruptTimeCostsThatPointNotTheScan) {
 }
 
 /// A scan of `n` points at the wall, all at the header stamp.
-std::vector<dds::ScanPoint> wallScan(std::size_t n) {
-  return std::vector<dds::ScanPoint>(n, scanPoint(kWall));
+std::vector<msgs::ScanPoint> wallScan(std::size_t n) {
+  return std::vector<msgs::ScanPoint>(n, scanPoint(kWall));
 }
 
 TEST(Integrator, LatencyBoundSubsamplesAScanThatWouldMissTheLastMapWithinIt) {
@@ -514,7 +514,7 @@ TEST(Integrator, AScanWhoseEveryRayIsShorterThanMinRangeIsEmptyAndCountedPerReas
   sensors[0].filter.min_range_m = 5.0;  // beyond the wall at 3 m
   auto rig = std::make_unique<Rig>(defaultSettings(), sensors);
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
-  rig->publishScan(kStamp, std::vector<dds::ScanPoint>(100, scanPoint(kWall)));
+  rig->publishScan(kStamp, std::vector<msgs::ScanPoint>(100, scanPoint(kWall)));
 
   rig->integrator.step(kNow);
   rig->integrator.flush(kNow);
@@ -675,7 +675,7 @@ TEST(Integrator, BatchesAreSplitAtBatchRays) {
   settings.batch_rays = 4;
   auto rig = std::make_unique<Rig>(settings);
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   for (int i = 0; i < 10; ++i) {
     points.push_back(scanPoint({3.05, -1.95 + 0.4 * i, 0.05}));
   }
@@ -705,7 +705,7 @@ TEST(Integrator, FullBatchIsIntegratedWithoutWaitingForTheDeadline) {
   settings.batch_rays = 4;
   auto rig = std::make_unique<Rig>(settings);
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   for (int i = 0; i < 4; ++i) {
     points.push_back(scanPoint({3.05, -1.95 + 0.4 * i, 0.05}));
   }
@@ -741,7 +741,7 @@ TEST(Integrator, PerScanSemanticsIntegrateEachScanInOneCallAtOnce) {
       std::make_unique<Rig>(settings, std::vector<SensorSettings>{sensorAt()}, Semantics::kPerScan);
   rig->pushPose(kStamp, makePose({0.0, 0.0, 0.0}));
   rig->pushPose(kStamp + 100 * kMs, makePose({0.0, 0.0, 0.0}));
-  std::vector<dds::ScanPoint> points;
+  std::vector<msgs::ScanPoint> points;
   for (int i = 0; i < 10; ++i) {
     points.push_back(scanPoint({3.05, -1.95 + 0.4 * i, 0.05}));
   }

@@ -23,7 +23,7 @@ void writePattern(ScanSlot* slot, std::uint64_t tag, std::uint32_t n) {
   slot->sensor = static_cast<std::uint32_t>(tag % 3);
   slot->arrival_ns = static_cast<std::int64_t>(tag) * 7;
   for (std::uint32_t i = 0; i < n; ++i) {
-    dds::ScanPoint& p = slot->buffer[i];
+    msgs::ScanPoint& p = slot->buffer[i];
     p.x = static_cast<float>(tag & 0xFFFFu);
     p.y = static_cast<float>(i);
     p.z = static_cast<float>((tag >> 16) & 0xFFFFu);
@@ -45,7 +45,7 @@ bool checkPattern(const ScanSlot& slot, std::uint64_t tag) {
     return false;
   }
   for (std::uint32_t i = 0; i < n; ++i) {
-    const dds::ScanPoint& p = slot.points()[i];
+    const msgs::ScanPoint& p = slot.points()[i];
     if (p.x != static_cast<float>(tag & 0xFFFFu) || p.y != static_cast<float>(i) ||
         p.z != static_cast<float>((tag >> 16) & 0xFFFFu) || p.time_s != static_cast<float>(n) ||
         p.intensity != static_cast<float>(i ^ 0x5Au) ||
@@ -93,8 +93,8 @@ TEST(ScanMailbox, EverySlotHasItsOwnBufferOfMaxPoints) {
     EXPECT_EQ(slots[i]->buffer.size(), 10u);
     for (std::size_t j = i + 1; j < slots.size(); ++j) {
       EXPECT_NE(slots[i], slots[j]);
-      const dds::ScanPoint* a = slots[i]->buffer.data();
-      const dds::ScanPoint* b = slots[j]->buffer.data();
+      const msgs::ScanPoint* a = slots[i]->buffer.data();
+      const msgs::ScanPoint* b = slots[j]->buffer.data();
       EXPECT_TRUE(a + 10 <= b || b + 10 <= a) << "buffers " << i << " and " << j << " overlap";
     }
   }

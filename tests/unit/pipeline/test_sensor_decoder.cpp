@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "src/dds/depth_image_writer.hpp"
+#include "src/msgs/depth_image_writer.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
 
 namespace raymap::pipeline {
@@ -27,7 +27,7 @@ CameraIntrinsics camera(std::uint32_t width, std::uint32_t height) {
 
 std::vector<std::byte> info(const CameraIntrinsics& c, const char* frame = "cam") {
   std::vector<std::byte> cdr;
-  dds::serializeCameraInfo(kDecoderStamp, frame, c, cdr);
+  msgs::serializeCameraInfo(kDecoderStamp, frame, c, cdr);
   return cdr;
 }
 
@@ -35,8 +35,8 @@ std::vector<std::byte> image(std::uint32_t width, std::uint32_t height, std::int
                              const char* frame = "cam") {
   std::vector<float> depth(std::size_t{width} * height, 1.5f);
   std::vector<std::byte> cdr;
-  dds::serializeDepthImage(stamp, frame, width, height, dds::DepthEncoding::k32FC1, false, depth,
-                           cdr);
+  msgs::serializeDepthImage(stamp, frame, width, height, msgs::DepthEncoding::k32FC1, false, depth,
+                            cdr);
   return cdr;
 }
 
@@ -51,7 +51,7 @@ SensorDecodeSettings depthSettings() {
 
 TEST(SensorDecoder, ImagesWaitForTheCameraInfoOfTheirOwnFrame) {
   SensorDecoder decoder(depthSettings());
-  std::vector<dds::ScanPoint> out(64 * 48);
+  std::vector<msgs::ScanPoint> out(64 * 48);
   EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp), out).outcome,
             DecodeOutcome::kNoCameraInfo);
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48), "other")));
@@ -70,7 +70,7 @@ TEST(SensorDecoder, ACameraLargerThanTheSensorTakesIsRefusedAndRemembered) {
   // 65535 x 65535 pixels: refused before a 34 GB ray table is built.
   const auto huge = decoder.onCameraInfo(info(camera(65535, 65535)));
   ASSERT_FALSE(huge);
-  EXPECT_EQ(huge.error(), dds::CameraInfoError::kTooLarge);
+  EXPECT_EQ(huge.error(), msgs::CameraInfoError::kTooLarge);
   EXPECT_FALSE(decoder.ready());
   // With down-sampling the same sensor takes a larger camera.
   SensorDecodeSettings blocks = depthSettings();
@@ -81,14 +81,14 @@ TEST(SensorDecoder, ACameraLargerThanTheSensorTakesIsRefusedAndRemembered) {
   // likewise; the sensor stays without intrinsics.
   const auto again = decoder.onCameraInfo(info(camera(65535, 65535)));
   ASSERT_FALSE(again);
-  EXPECT_EQ(again.error(), dds::CameraInfoError::kTooLarge);
+  EXPECT_EQ(again.error(), msgs::CameraInfoError::kTooLarge);
   CameraIntrinsics folding = camera(64, 48);
   folding.distortion = DistortionModel::kPlumbBob;
   folding.k1 = -3.0;
   for (int i = 0; i < 2; ++i) {
     const auto refused = decoder.onCameraInfo(info(folding));
     ASSERT_FALSE(refused);
-    EXPECT_EQ(refused.error(), dds::CameraInfoError::kInvalidIntrinsics);
+    EXPECT_EQ(refused.error(), msgs::CameraInfoError::kInvalidIntrinsics);
   }
   EXPECT_FALSE(decoder.ready());
 }
@@ -99,7 +99,7 @@ TEST(SensorDecoder, TheRateLimitAndTheFrameApplyBeforeBackProjection) {
   settings.frame = "cam";
   SensorDecoder decoder(settings);
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
-  std::vector<dds::ScanPoint> out(64 * 48);
+  std::vector<msgs::ScanPoint> out(64 * 48);
   EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp), out).outcome, DecodeOutcome::kAccepted);
   // 33 ms later: above 5 Hz; 200 ms after the accepted one: taken (1 ms of jitter allowed).
   EXPECT_EQ(decoder.decode(image(64, 48, kDecoderStamp + 33000000), out).outcome,
@@ -139,10 +139,10 @@ TEST(SensorDecoder, TheRateLimitIsKnownOnArrivalFromTheStampAlone) {
 TEST(SensorDecoder, AnImageLargerThanItsBufferIsTooLarge) {
   SensorDecoder decoder(depthSettings());
   ASSERT_TRUE(decoder.onCameraInfo(info(camera(64, 48))));
-  std::vector<dds::ScanPoint> out(100);  // the sensor's own max_points (raymapd slices slots)
+  std::vector<msgs::ScanPoint> out(100);  // the sensor's own max_points (raymapd slices slots)
   const DecodedScan scan = decoder.decode(image(64, 48, kDecoderStamp), out);
   EXPECT_EQ(scan.outcome, DecodeOutcome::kTooLarge);
-  EXPECT_EQ(scan.image_error, dds::DepthImageError::kTooManyPoints);
+  EXPECT_EQ(scan.image_error, msgs::DepthImageError::kTooManyPoints);
 }
 
 TEST(SensorDecoder, CameraInfoTopicIsBesideTheImageTopic) {

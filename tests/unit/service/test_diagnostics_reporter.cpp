@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "src/dds/diagnostics_message.hpp"
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/service.hpp"
 #include "tests/support/nanoseconds.hpp"
@@ -65,29 +65,29 @@ struct Rig {
 TEST(DiagnosticsReporter, NoScanSinceStartIsAnErrorOnceTheStaleTimeHasPassed) {
   Rig rig;
   rig.report(500);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticOk) << rig.message();
   rig.report(1500);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError);
   EXPECT_NE(rig.message().find("no scan integrated since start"), std::string::npos)
       << rig.message();
   EXPECT_NE(rig.message().find("no point cloud arrives at all"), std::string::npos)
       << rig.message();
-  EXPECT_EQ(rig.reporter->heightmapLevel(), dds::kDiagnosticError) << "maps are withheld";
+  EXPECT_EQ(rig.reporter->heightmapLevel(), msgs::kDiagnosticError) << "maps are withheld";
 }
 
 TEST(DiagnosticsReporter, BeforeTheFirstCloudTheServiceWaitsWithAWarningUntilTheGraceEnds) {
   Rig rig(1.0, /*startup_grace_s=*/3.0);
   rig.report(1500);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticWarn) << rig.message();
   EXPECT_NE(rig.message().find("waiting for the first point cloud, 1.5 s since start"),
             std::string::npos)
       << rig.message();
-  EXPECT_EQ(rig.reporter->heightmapLevel(), dds::kDiagnosticWarn);
+  EXPECT_EQ(rig.reporter->heightmapLevel(), msgs::kDiagnosticWarn);
   rig.report(3500);  // the grace is over: the staleness rule
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError) << rig.message();
   EXPECT_NE(rig.message().find("no point cloud arrives at all"), std::string::npos)
       << rig.message();
-  EXPECT_EQ(rig.reporter->heightmapLevel(), dds::kDiagnosticError);
+  EXPECT_EQ(rig.reporter->heightmapLevel(), msgs::kDiagnosticError);
 }
 
 TEST(DiagnosticsReporter, CloudsThatComeWithinTheGraceButAreNotIntegratedAreAnErrorAtOnce) {
@@ -95,7 +95,7 @@ TEST(DiagnosticsReporter, CloudsThatComeWithinTheGraceButAreNotIntegratedAreAnEr
   rig.stats.clouds_received.add(15);
   rig.stats.last_cloud_received_ns.store(kStart + 1400 * kMs);
   rig.report(1500);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError) << rig.message();
   EXPECT_NE(rig.message().find("no scan integrated since start"), std::string::npos)
       << rig.message();
 }
@@ -123,11 +123,11 @@ TEST(DiagnosticsReporter, ScansWhoseEveryRayIsRejectedAreAnErrorNamingTheReasonA
   Rig rig;
   flowRays(rig, 0, 1000, 1000, 0);
   rig.report(1000);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticOk) << rig.message();
   EXPECT_EQ(rig.value("rays_integrated_fraction"), "1.000");
   flowRays(rig, 1100, 2000, 0, 1000);
   rig.report(2000);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError) << rig.message();
   EXPECT_NE(rig.message().find("integrating 0 of 10000 rays (0 %) in 1.0 s: 10000 shorter than "
                                "the sensor's min_range"),
             std::string::npos)
@@ -142,13 +142,13 @@ TEST(DiagnosticsReporter, ASmallFractionOfRaysIntegratedIsAWarningAndEnoughIsOk)
   rig.report(0);  // the window's first base
   flowRays(rig, 0, 1000, 300, 700);
   rig.report(1000);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticWarn) << rig.message();
   EXPECT_NE(rig.message().find("integrating 3300 of 11000 rays (30 %) in 1.0 s: 7700 shorter"),
             std::string::npos)
       << rig.message();
   flowRays(rig, 1100, 2000, 700, 300);
   rig.report(2000);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticOk) << rig.message();
 }
 
 TEST(DiagnosticsReporter, DepthBlocksNearerThanMinRangeCountAsRaysNotIntegrated) {
@@ -161,7 +161,7 @@ TEST(DiagnosticsReporter, DepthBlocksNearerThanMinRangeCountAsRaysNotIntegrated)
     rig.stats.scans_empty.add();
   }
   rig.report(1000);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError) << rig.message();
   EXPECT_NE(rig.message().find("52800 depth blocks nearer than the sensor's min_range"),
             std::string::npos)
       << rig.message();
@@ -176,12 +176,12 @@ TEST(DiagnosticsReporter, InputThatStopsTurnsThePipelineToErrorAfterTheStaleTime
     rig.stats.last_scan_integrated_ns.store(kStart + ms * kMs);
   }
   rig.report(2000);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticOk) << rig.message();
   EXPECT_EQ(rig.message(), "ok");
   rig.report(3000);  // 1.0 s without a scan: not yet beyond
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticOk) << rig.message();
   rig.report(3500);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError);
   EXPECT_NE(rig.message().find("no scan integrated for 1.5 s"), std::string::npos) << rig.message();
   EXPECT_NE(rig.message().find("no point cloud arrives any more"), std::string::npos)
       << rig.message();
@@ -203,7 +203,7 @@ TEST(DiagnosticsReporter, InputThatStoppedIsNotReportedAsArrivingWhileTheWindowS
   }
   rig.report(2000);
   rig.report(2600);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError);
   EXPECT_NE(rig.message().find("no scan integrated for 1.1 s (no point cloud arrives any more)"),
             std::string::npos)
       << rig.message();
@@ -224,7 +224,7 @@ TEST(DiagnosticsReporter, CloudsThatArriveButAreNotIntegratedAreReportedArriving
     }
   }
   rig.report(2600);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError);
   EXPECT_NE(rig.message().find("no scan integrated for 1.6 s"), std::string::npos) << rig.message();
   EXPECT_NE(rig.message().find("clouds/s arrive)"), std::string::npos) << rig.message();
 }
@@ -238,7 +238,7 @@ TEST(DiagnosticsReporter, CloudsInTheWrongFrameAreAWarningNamingBothFramesThenAn
   rig.stats.clouds_received.add(5);
   rig.stats.clouds_unknown_frame.add(5);
   rig.report(600);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticWarn) << rig.message();
   EXPECT_NE(rig.message().find("5 clouds in frame 'lidar', not sensors[0].frame 'lidar_typo'"),
             std::string::npos)
       << rig.message();
@@ -246,7 +246,7 @@ TEST(DiagnosticsReporter, CloudsInTheWrongFrameAreAWarningNamingBothFramesThenAn
   rig.stats.clouds_unknown_frame.add(5);
   rig.stats.last_cloud_received_ns.store(kStart + 1100 * kMs);
   rig.report(1200);  // and nothing has been integrated since start
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError) << rig.message();
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError) << rig.message();
   EXPECT_NE(rig.message().find("clouds/s arrive"), std::string::npos) << rig.message();
   EXPECT_NE(rig.message().find("frame 'lidar'"), std::string::npos) << rig.message();
   EXPECT_EQ(rig.value("clouds_wrong_frame"), "10");
@@ -257,11 +257,11 @@ TEST(DiagnosticsReporter, MalformedCloudsAreCountedAndNamedPerReason) {
   rig.stats.last_scan_integrated_ns.store(kStart);
   rig.report(0);
   rig.stats.clouds_malformed.add(3);
-  rig.stats.clouds_rejected_by[static_cast<std::size_t>(dds::CloudError::kTruncated)].add(2);
-  rig.stats.clouds_rejected_by[static_cast<std::size_t>(dds::CloudError::kMissingXyz)].add(1);
+  rig.stats.clouds_rejected_by[static_cast<std::size_t>(msgs::CloudError::kTruncated)].add(2);
+  rig.stats.clouds_rejected_by[static_cast<std::size_t>(msgs::CloudError::kMissingXyz)].add(1);
   rig.stats.last_scan_integrated_ns.store(kStart + 500 * kMs);
   rig.report(500);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticWarn);
   EXPECT_NE(rig.message().find("3 malformed clouds (truncated 2, missing_xyz 1)"),
             std::string::npos)
       << rig.message();
@@ -279,7 +279,7 @@ TEST(DiagnosticsReporter, BadTimesAndSheddingAreWarningsNamedAsSuch) {
   rig.stats.points_shed.add(4096);
   rig.stats.last_scan_integrated_ns.store(kStart + 500 * kMs);
   rig.report(500);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticWarn);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticWarn);
   EXPECT_NE(rig.message().find("200 points with a per-point time out of range"), std::string::npos)
       << rig.message();
   EXPECT_NE(rig.message().find("2 scans shed"), std::string::npos) << rig.message();
@@ -290,7 +290,7 @@ TEST(DiagnosticsReporter, AnotherPublisherOfTheHeightMapIsAnError) {
   Rig rig;
   rig.stats.last_scan_integrated_ns.store(kStart + 400 * kMs);
   rig.report(500, 1);
-  EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticError);
+  EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticError);
   EXPECT_NE(rig.message().find("1 other publisher of rt/height_map"), std::string::npos)
       << rig.message();
   EXPECT_EQ(rig.value("other_map_publishers"), "1");
@@ -309,7 +309,7 @@ TEST(DiagnosticsReporter, RatesAtTenReportsASecondAreTakenOverASecondNotOneInter
     rig.report(k * 100);
     if (k >= 12) {
       EXPECT_EQ(rig.value("cloud_rate_hz"), "5.00") << "report " << k;
-      EXPECT_EQ(rig.reporter->pipelineLevel(), dds::kDiagnosticOk) << rig.message();
+      EXPECT_EQ(rig.reporter->pipelineLevel(), msgs::kDiagnosticOk) << rig.message();
     }
   }
 }
@@ -323,7 +323,7 @@ TEST(DiagnosticsReporter, ADropStaysAWarningForTheWholeWindowAtHighReportRates) 
     }
     rig.report(k * 100);
     const bool within = k >= 10 && k < 20;
-    EXPECT_EQ(rig.reporter->pipelineLevel(), within ? dds::kDiagnosticWarn : dds::kDiagnosticOk)
+    EXPECT_EQ(rig.reporter->pipelineLevel(), within ? msgs::kDiagnosticWarn : msgs::kDiagnosticOk)
         << "report " << k << ": " << rig.message();
   }
 }

@@ -3,9 +3,9 @@
 // (Held DDS buffers themselves: DdsLoopback.HeldSamplesStayReadableAfterTheirTakeUntilGivenBack.)
 #include <gtest/gtest.h>
 
-#include "src/pipeline/pending_scans.hpp"
+#include "src/service/pending_scans.hpp"
 
-namespace raymap::pipeline {
+namespace raymap::service {
 namespace {
 
 TEST(PendingScans, ScansComeOutInArrivalOrder) {
@@ -55,4 +55,4 @@ TEST(PendingScans, CapacityZeroHoldsNothing) {
 }
 
 }  // namespace
-}  // namespace raymap::pipeline
+}  // namespace raymap::service

@@ -11,9 +11,9 @@
 
 #include "src/core/pinhole_camera.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
-/// The depth encodings raymap writes (and reads: src/dds/depth_image.hpp).
+/// The depth encodings raymap writes (and reads: src/msgs/depth_image.hpp).
 enum class DepthEncoding : std::uint8_t {
   k16UC1,  ///< "16UC1": uint16 millimetres, 0 = no data (REP 118)
   k32FC1,  ///< "32FC1": float metres, NaN = no data
@@ -47,4 +47,4 @@ void serializeDepthImage(std::int64_t stamp_ns, std::string_view frame_id, std::
 /// @brief The encoding's name on the wire ("16UC1", "32FC1").
 const char* toString(DepthEncoding encoding) noexcept;
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

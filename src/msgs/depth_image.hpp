@@ -11,9 +11,9 @@
 #include "raymap/expected.hpp"
 
 #include "src/core/pinhole_camera.hpp"
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/point_cloud.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// @brief How a depth image becomes points (raymapd's sensors[] with kind: depth).
 struct DepthDecodeOptions {
@@ -106,4 +106,4 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
                                                              const DepthDecodeOptions& options,
                                                              std::span<ScanPoint> out) noexcept;
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // CameraInfo and Image written straight into a byte vector: the size is computed first, so the
 // vector is resized once (within its capacity once warm) and filled through a cursor.
-#include "src/dds/depth_image_writer.hpp"
+#include "src/msgs/depth_image_writer.hpp"
 
 #include <bit>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include "raymap/assert.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 /// CDR_LE: the encapsulation header of little-endian XCDR1 (representation 00 01, options 0).
@@ -208,4 +208,4 @@ void serializeDepthImage(std::int64_t stamp_ns, std::string_view frame_id, std::
   RAYMAP_ENSURES(cursor.position() + kHeaderBytes == out.size());
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // decodePointCloud2: validates the layout once, then reads the points row by row.
-#include "src/dds/point_cloud.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <string_view>
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/ros_time.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 /// A field of the cloud that the decoder uses.
@@ -377,4 +377,4 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
   return header;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

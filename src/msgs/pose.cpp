@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // decodeOdometry and decodeTfMessage over the bounded CDR reader.
-#include "src/dds/pose.hpp"
+#include "src/msgs/pose.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -8,10 +8,10 @@
 
 #include <Eigen/Geometry>
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/ros_time.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 /// Below this norm a quaternion carries no usable rotation.
@@ -150,4 +150,4 @@ Expected<std::uint32_t, PoseError> decodeTfMessage(std::span<const std::byte> cd
   return written;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -9,7 +9,7 @@
 
 #include "src/dds/entities.hpp"
 
-namespace raymap::pipeline {
+namespace raymap::service {
 
 /// @brief A bounded first-in first-out ring of received, undecoded scans (Cyclone's own receive
 /// buffers, held without a copy), dropping the oldest when full.
@@ -55,4 +55,4 @@ class PendingScans {
   std::atomic<std::uint32_t> size_{0};
 };
 
-}  // namespace raymap::pipeline
+}  // namespace raymap::service

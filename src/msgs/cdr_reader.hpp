@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// @brief Reads an XCDR1 payload that starts with its 4-byte encapsulation header
 /// (00 01 = CDR little endian, 00 00 = CDR big endian; the options bytes are ignored).
@@ -81,4 +81,4 @@ class CdrReader {
   bool malformed_ = false;
 };
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

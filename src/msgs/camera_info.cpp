@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // decodeCameraInfo over the bounded CDR reader: the intrinsics, binning and ROI applied as
 // image_geometry applies them, then CameraIntrinsics::validate().
-#include "src/dds/camera_info.hpp"
+#include "src/msgs/camera_info.hpp"
 
 #include <cmath>
 #include <cstring>
 #include <string_view>
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/ros_time.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 /// plumb_bob's coefficients (k1 k2 p1 p2 k3); rational_polynomial adds k4 k5 k6 after them.
@@ -186,4 +186,4 @@ Expected<CameraInfoHeader, CameraInfoError> decodeCameraInfo(
   return out;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -10,7 +10,7 @@
 
 #include "raymap/expected.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// @brief A rigid transform T_parent_child at a time: p_parent = R(q) * p_child + t.
 struct StampedTransform {
@@ -48,4 +48,4 @@ Expected<StampedTransform, PoseError> decodeOdometry(std::span<const std::byte> 
 Expected<std::uint32_t, PoseError> decodeTfMessage(std::span<const std::byte> cdr,
                                                    std::span<StampedTransform> out) noexcept;
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -11,7 +11,7 @@
 
 #include "raymap/expected.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// diagnostic_msgs/KeyValue.
 struct DiagnosticKeyValue {
@@ -56,4 +56,4 @@ const char* diagnosticLevelName(std::uint8_t level) noexcept;
 Expected<DecodedDiagnostics, DiagnosticsError> decodeDiagnosticArray(
     std::span<const std::byte> cdr);
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // decodeOccupancyGrid over the bounded CDR reader, field by field in the order of
 // config/idl/nav_msgs.idl (what OccupancyGridMessage writes).
-#include "src/dds/occupancy_grid_decode.hpp"
+#include "src/msgs/occupancy_grid_decode.hpp"
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/ros_time.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 const char* toString(OccupancyGridError error) noexcept {
   switch (error) {
@@ -66,4 +66,4 @@ Expected<DecodedOccupancyGrid, OccupancyGridError> decodeOccupancyGrid(
   return grid;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

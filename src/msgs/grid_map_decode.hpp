@@ -11,7 +11,7 @@
 
 #include "raymap/expected.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// std_msgs/MultiArrayDimension.
 struct GridMapArrayDim {
@@ -76,4 +76,4 @@ struct LayerStats {
 /// @brief Counts the finite values and their range. @rt allocates: no; thread: any.
 LayerStats layerStats(std::span<const float> values) noexcept;
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -2,7 +2,7 @@
 // decodeDepthImage: the message is validated once, then the pixels are read row by row through
 // one of a few specialised loops (pixel format × byte order × down-sampling), each a plain loop
 // over the row without calls, so that the compiler keeps it tight.
-#include "src/dds/depth_image.hpp"
+#include "src/msgs/depth_image.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -13,10 +13,10 @@
 
 #include "raymap/assert.hpp"
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/ros_time.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 /// In double: raw × 1e-3 rounded to double and then to float is the float nearest raw / 1000
@@ -366,4 +366,4 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
   return header;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

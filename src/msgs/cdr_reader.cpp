@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The bounded XCDR1 reader.
-#include "src/dds/cdr_reader.hpp"
+#include "src/msgs/cdr_reader.hpp"
 
 #include <bit>
 #include <cstring>
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 template <class T>
@@ -146,4 +146,4 @@ bool CdrReader::skip(std::size_t count) noexcept {
   return true;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -9,7 +9,7 @@
 
 #include "raymap/expected.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// ScanPoint::flags bit: x, y or z is not finite (no return); the point is kept so that a
 /// caller can use the direction of an organised cloud, but its coordinates are meaningless.
@@ -123,4 +123,4 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
                                                     std::span<ScanPoint> out,
                                                     const CloudDecodeOptions& options) noexcept;
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -12,7 +12,7 @@
 
 #include "src/core/pinhole_camera.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// @brief A decoded CameraInfo: its header and the pinhole model it describes.
 struct CameraInfoHeader {
@@ -55,4 +55,4 @@ const char* toString(CameraInfoError error) noexcept;
 Expected<CameraInfoHeader, CameraInfoError> decodeCameraInfo(
     std::span<const std::byte> cdr) noexcept;
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

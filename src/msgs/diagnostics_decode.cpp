@@ -1,15 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // decodeDiagnosticArray over the bounded CDR reader, in the order of
 // config/idl/diagnostic_msgs.idl.
-#include "src/dds/diagnostics_decode.hpp"
+#include "src/msgs/diagnostics_decode.hpp"
 
 #include <string_view>
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/diagnostics_message.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/diagnostic_levels.hpp"
+#include "src/msgs/ros_time.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 // Smallest encodings, so that a corrupt count is refused before anything is reserved for it:
@@ -92,4 +92,4 @@ Expected<DecodedDiagnostics, DiagnosticsError> decodeDiagnosticArray(
   return array;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // decodeGridMap over the bounded CDR reader, field by field in the order of
 // config/idl/grid_map_msgs.idl (what GridMapMessage writes).
-#include "src/dds/grid_map_decode.hpp"
+#include "src/msgs/grid_map_decode.hpp"
 
 #include <cmath>
 #include <limits>
 #include <string_view>
 
-#include "src/dds/cdr_reader.hpp"
-#include "src/dds/ros_time.hpp"
+#include "src/msgs/cdr_reader.hpp"
+#include "src/msgs/ros_time.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 namespace {
 
 // Smallest encodings, so that a corrupt count is refused before anything is reserved for it:
@@ -156,4 +156,4 @@ LayerStats layerStats(std::span<const float> values) noexcept {
   return stats;
 }
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

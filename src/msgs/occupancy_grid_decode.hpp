@@ -9,7 +9,7 @@
 
 #include "raymap/expected.hpp"
 
-namespace raymap::dds {
+namespace raymap::msgs {
 
 /// @brief A decoded OccupancyGrid. Metres; the origin is cell (0, 0)'s outer corner in
 /// `frame_id`.
@@ -41,4 +41,4 @@ const char* toString(OccupancyGridError error) noexcept;
 Expected<DecodedOccupancyGrid, OccupancyGridError> decodeOccupancyGrid(
     std::span<const std::byte> cdr);
 
-}  // namespace raymap::dds
+}  // namespace raymap::msgs

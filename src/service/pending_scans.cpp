@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PendingScans: a fixed ring of held DDS samples.
-#include "src/pipeline/pending_scans.hpp"
+#include "src/service/pending_scans.hpp"
 
 #include <utility>
 
 #include "raymap/assert.hpp"
 
-namespace raymap::pipeline {
+namespace raymap::service {
 
 PendingScans::PendingScans(std::uint32_t capacity)
     : capacity_(capacity), ring_(std::make_unique<Entry[]>(capacity > 0 ? capacity : 1)) {}
@@ -48,4 +48,4 @@ void PendingScans::clear() noexcept {
   }
 }
 
-}  // namespace raymap::pipeline
+}  // namespace raymap::service
