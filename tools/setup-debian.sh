@@ -19,6 +19,7 @@ packages=(
   tcpdump                 # the security tests capture loopback traffic to prove it is encrypted
   liblz4-dev libsqlite3-dev  # rosbag2: compressed MCAP chunks (zstd: above), SQLite (.db3) bags
   clang-format
+  universal-ctags         # tests/lint/check_function_length.sh: where each function ends
   clang libclang-rt-14-dev clang-tidy  # the asan/tsan/fuzz presets (libFuzzer), clang-tidy
   patchelf                # tools/device-kit.sh: the kit's executables find its own libraries
   dpkg-dev file           # cpack -G DEB: dpkg-shlibdeps computes Depends: (tools/check-deb.sh)
