@@ -171,6 +171,23 @@ struct Service::Impl {
   InputPublishers input_publishers;
   char input_publishers_who[512] = {};
 
+  /// What opening the participant decided, which the diagnostics report.
+  struct Transport {
+    ReceiveBufferPlan receive_buffer;
+    security::SecurityOutcome security;
+  };
+  Expected<void, Error> createMapAndBackend();
+  Expected<void, Error> planHeightmap(heightmap::HeightmapOptions& options,
+                                      heightmap::HeightmapPlan& plan) const;
+  pipeline::IntegratorSettings integratorSettings() const;
+  void createPipeline(const heightmap::HeightmapOptions& options,
+                      const heightmap::HeightmapPlan& plan);
+  Result<Transport> openParticipant();
+  Expected<void, Error> createSensorReaders();
+  Expected<void, Error> createPoseReaders();
+  Expected<void, Error> createMapWriters(const heightmap::HeightmapPlan& plan);
+  void createReporter(const Transport& transport);
+
   void applyThreadSettings(const char* name, const ThreadConfig& t);
   /// Counts the writers of every input (discovery's matched publications). @rt allocates only
   /// while an input has more than one writer and the counts have just changed.
@@ -193,48 +210,47 @@ struct Service::Impl {
 
 // ---------------------------------------------------------------- start-up
 
-Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
-  auto impl = std::make_unique<Impl>();
-  impl->config = config;
-  const std::string& file = config.path;
+// Start-up in named steps (members of Impl, in the order create() calls them). Each returns an
+// error that names the configuration file and key; nothing is started before all succeeded.
 
-  if (!config.dds.cyclonedds_uri.empty()) {
-    // Read by Cyclone when the participant's domain is created below.
-    ::setenv("CYCLONEDDS_URI", config.dds.cyclonedds_uri.c_str(), 1);
-  }
+Expected<void, Error> Service::Impl::createMapAndBackend() {
+  const std::string& file = config.path;
   MapConfig map_config = config.map;
   // The CPU keeps its once-per-scan bits outside the map; a device (or a fallback from one to
   // the CPU) needs the scan-mark layer.
   map_config.device_scan_marks = config.backend.name != "cpu";
-  auto map = VoxelMap::create(map_config);
-  if (!map) {
-    return fail(map.error().code, file + ": map: " + map.error().message);
+  auto created = VoxelMap::create(map_config);
+  if (!created) {
+    return fail(created.error().code, file + ": map: " + created.error().message);
   }
-  impl->map.emplace(std::move(map).value());
-  VoxelMap& m = *impl->map;
-  m.setWindowCentre({0.0, 0.0, 0.0});
+  map.emplace(std::move(created).value());
+  map->setWindowCentre({0.0, 0.0, 0.0});
 
-  auto backend = createBackend(m, config.backend);
-  if (!backend) {
-    return fail(backend.error().code, file + ": backend: " + backend.error().message);
+  auto made = createBackend(*map, config.backend);
+  if (!made) {
+    return fail(made.error().code, file + ": backend: " + made.error().message);
   }
-  impl->backend = std::move(backend).value();
-  if (!impl->backend.fallback_warning.empty()) {
-    logLine(LogLevel::kWarning, "%s", impl->backend.fallback_warning.c_str());
+  backend = std::move(made).value();
+  if (!backend.fallback_warning.empty()) {
+    logLine(LogLevel::kWarning, "%s", backend.fallback_warning.c_str());
   }
-  if (!impl->backend.startup_warning.empty()) {
-    logLine(LogLevel::kWarning, "%s", impl->backend.startup_warning.c_str());
+  if (!backend.startup_warning.empty()) {
+    logLine(LogLevel::kWarning, "%s", backend.startup_warning.c_str());
   }
   // The height map runs where the integration runs (a CPU fallback takes both to the CPU), on a
   // device in the backend's own context: it reads the map where integration left it.
-  auto generator = createHeightmapGenerator(*impl->backend.backend);
-  if (!generator) {
-    return fail(generator.error().code, file + ": backend: " + generator.error().message);
+  auto made_generator = createHeightmapGenerator(*backend.backend);
+  if (!made_generator) {
+    return fail(made_generator.error().code,
+                config.path + ": backend: " + made_generator.error().message);
   }
-  impl->generator = std::move(generator).value().generator;
+  generator = std::move(made_generator).value().generator;
+  return {};
+}
 
+Expected<void, Error> Service::Impl::planHeightmap(heightmap::HeightmapOptions& options,
+                                                   heightmap::HeightmapPlan& plan) const {
   // The height-map request, checked once here so that the cycle cannot fail on it later.
-  heightmap::HeightmapOptions options;
   options.size = config.heightmap.size_m;
   options.mode = config.heightmap.mode;
   options.min_clearance = config.heightmap.min_clearance_m;
@@ -242,23 +258,14 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   options.ceiling_height = config.heightmap.ceiling_height_m;
   options.virtual_surfaces = config.heightmap.virtual_surfaces;
   options.use_voxel_mean = config.map.voxel_mean;
-  heightmap::HeightmapPlan plan;
-  if (auto planned = heightmap::planHeightmap(m, options, plan); !planned) {
-    return fail(ErrorCode::kInvalidArgument, file + ": heightmap: " + planned.error().message);
+  if (auto planned = heightmap::planHeightmap(*map, options, plan); !planned) {
+    return fail(ErrorCode::kInvalidArgument,
+                config.path + ": heightmap: " + planned.error().message);
   }
+  return {};
+}
 
-  // Buffers.
-  std::uint32_t max_points = 1;
-  for (const SensorConfig& s : config.sensors) {
-    max_points = std::max(max_points, s.max_points);
-  }
-  impl->mailbox = std::make_unique<pipeline::ScanMailbox>(config.queues.scan_slots + 1, max_points);
-  // The scan_slots scans that may wait do so as received; one is decoded when the integrator
-  // is ready for it (drop before decode: docs/raymapd.md, Overflow).
-  impl->pending = std::make_unique<PendingScans>(config.queues.scan_slots);
-  impl->mailbox->setReleaseListener(&Impl::onScanReleased, impl.get());
-  impl->poses = std::make_unique<pipeline::PoseQueue>(config.queues.pose_queue);
-  impl->arrivals = std::make_unique<pipeline::ArrivalQueue>(4096);
+pipeline::IntegratorSettings Service::Impl::integratorSettings() const {
   pipeline::IntegratorSettings settings;
   settings.batch_rays = config.queues.batch_rays;
   settings.batch_deadline_ns = seconds(config.queues.batch_deadline_s);
@@ -273,7 +280,24 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   settings.publish_period_ns = seconds(1.0 / config.heightmap.rate_hz);
   settings.max_stride = config.queues.shed_subsample ? config.queues.max_subsample : 1u;
   settings.shed_always = config.queues.shed_always;
+  return settings;
+}
+
+void Service::Impl::createPipeline(const heightmap::HeightmapOptions& options,
+                                   const heightmap::HeightmapPlan& plan) {
+  std::uint32_t max_points = 1;
+  for (const SensorConfig& s : config.sensors) {
+    max_points = std::max(max_points, s.max_points);
+  }
+  mailbox = std::make_unique<pipeline::ScanMailbox>(config.queues.scan_slots + 1, max_points);
+  // The scan_slots scans that may wait do so as received; one is decoded when the integrator
+  // is ready for it (drop before decode: docs/raymapd.md, Overflow).
+  pending = std::make_unique<PendingScans>(config.queues.scan_slots);
+  mailbox->setReleaseListener(&Impl::onScanReleased, this);
+  poses = std::make_unique<pipeline::PoseQueue>(config.queues.pose_queue);
+  arrivals = std::make_unique<pipeline::ArrivalQueue>(4096);
   std::vector<pipeline::SensorSettings> sensors;
+  std::vector<std::string> frames;
   for (const SensorConfig& s : config.sensors) {
     pipeline::SensorSettings ss;
     ss.extrinsic = s.extrinsic;
@@ -281,23 +305,18 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     ss.filter.max_range_m = s.max_range_m;
     ss.max_time_offset_s = static_cast<float>(s.max_time_offset_s);
     sensors.push_back(ss);
-    impl->decoders.emplace_back(decodeSettings(s));
+    decoders.emplace_back(decodeSettings(s));
+    frames.push_back(s.frame);
   }
-  {
-    std::vector<std::string> frames;
-    for (const SensorConfig& s : config.sensors) {
-      frames.push_back(s.frame);
-    }
-    impl->tf_router = std::make_unique<pipeline::TfRouter>(
-        config.pose.world_frame, config.pose.base_frame, frames, impl->stats);
-    impl->pose_sink.queue = impl->poses.get();
-  }
-  impl->integrator = std::make_unique<pipeline::Integrator>(
-      m, *impl->backend.backend, impl->map_mutex, *impl->mailbox, *impl->poses, *impl->arrivals,
-      impl->latest, settings, std::move(sensors), impl->stats);
-  impl->cycle = std::make_unique<pipeline::HeightmapCycle>(
-      m, *impl->backend.backend, impl->map_mutex, *impl->generator, options,
-      config.heightmap.base_height_m, impl->latest, *impl->arrivals, impl->stats);
+  tf_router = std::make_unique<pipeline::TfRouter>(config.pose.world_frame, config.pose.base_frame,
+                                                   frames, stats);
+  pose_sink.queue = poses.get();
+  integrator = std::make_unique<pipeline::Integrator>(
+      *map, *backend.backend, map_mutex, *mailbox, *poses, *arrivals, latest, integratorSettings(),
+      std::move(sensors), stats);
+  cycle = std::make_unique<pipeline::HeightmapCycle>(*map, *backend.backend, map_mutex, *generator,
+                                                     options, config.heightmap.base_height_m,
+                                                     latest, *arrivals, stats);
   dds::GridLayerSet layers = dds::GridLayerSet::all(plan.grid.has_normals);
   if (!config.heightmap.layers.empty()) {
     layers = dds::GridLayerSet{};
@@ -306,9 +325,11 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     }
     RAYMAP_EXPECTS(!layers.hasNormals() || plan.grid.has_normals);  // checked with the file
   }
-  impl->grid_map_message =
+  grid_map_message =
       std::make_unique<dds::GridMapMessage>(plan.grid.cells_x, plan.grid.cells_y, layers);
+}
 
+Result<Service::Impl::Transport> Service::Impl::openParticipant() {
   // DDS: the sockets' receive buffer sized for the clouds (a Cyclone file that sets one wins).
   auto receive_buffer = planReceiveBuffer(config, platform::socketReceiveBufferCap());
   if (!receive_buffer) {
@@ -330,23 +351,28 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
   domain_settings.security = secure->files;
   domain_settings.receive_buffer_bytes = receive_buffer->bytes;
   domain_settings.repair_burst_bytes = std::uint64_t{config.dds.repair_burst_kb} * 1024;
-  auto participant = dds::Participant::create(config.dds.domain, domain_settings);
-  if (!participant) {
+  auto created = dds::Participant::create(config.dds.domain, domain_settings);
+  if (!created) {
     // Cyclone reads its configuration when the participant is created: a bad one fails here.
     const std::string& uri = config.dds.cyclonedds_uri;
-    return fail(participant.error().code,
-                uri.empty() ? config.where("dds.domain") + ": " + participant.error().message
+    return fail(created.error().code,
+                uri.empty() ? config.where("dds.domain") + ": " + created.error().message
                             : config.where("dds.cyclonedds_uri") + " (" + uri +
-                                  ") or dds.domain: " + participant.error().message);
+                                  ") or dds.domain: " + created.error().message);
   }
-  impl->participant.emplace(std::move(participant).value());
-  const dds::Participant& pp = *impl->participant;
-  auto waitset = dds::Waitset::create(pp);
-  if (!waitset) {
-    return Unexpected(waitset.error());
+  participant.emplace(std::move(created).value());
+  auto made_waitset = dds::Waitset::create(*participant);
+  if (!made_waitset) {
+    return Unexpected(made_waitset.error());
   }
-  impl->waitset.emplace(std::move(waitset).value());
-  impl->camera_info_readers.resize(config.sensors.size());
+  waitset.emplace(std::move(made_waitset).value());
+  return Transport{*std::move(receive_buffer), *std::move(secure)};
+}
+
+Expected<void, Error> Service::Impl::createSensorReaders() {
+  const std::string& file = config.path;
+  const dds::Participant& pp = *participant;
+  camera_info_readers.resize(config.sensors.size());
   for (std::size_t i = 0; i < config.sensors.size(); ++i) {
     const SensorConfig& s = config.sensors[i];
     const bool depth = s.kind == SensorKind::kDepth;
@@ -357,67 +383,66 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
       return fail(reader.error().code,
                   file + ": sensors[" + std::to_string(i) + "].topic: " + reader.error().message);
     }
-    impl->cloud_readers.push_back(std::move(reader).value());
-    if (auto attached = impl->waitset->attach(impl->cloud_readers.back().handle(),
-                                              static_cast<std::intptr_t>(i));
+    cloud_readers.push_back(std::move(reader).value());
+    if (auto attached =
+            waitset->attach(cloud_readers.back().handle(), static_cast<std::intptr_t>(i));
         !attached) {
       return Unexpected(attached.error());
     }
-    if (depth) {
-      // Drivers publish CameraInfo best-effort beside each image (reliable writers match too).
-      auto info = dds::RawReader::create(pp, s.camera_info_topic.c_str(), dds::cameraInfoType(),
-                                         dds::Reliability::kBestEffort, 4);
-      if (!info) {
-        return fail(info.error().code, file + ": sensors[" + std::to_string(i) +
-                                           "].camera_info_topic: " + info.error().message);
-      }
-      impl->camera_info_readers[i].emplace(std::move(info).value());
-      if (auto attached = impl->waitset->attach(impl->camera_info_readers[i]->handle(),
-                                                kCameraInfoToken + static_cast<std::intptr_t>(i));
-          !attached) {
-        return Unexpected(attached.error());
-      }
+    if (!depth) {
+      continue;
+    }
+    // Drivers publish CameraInfo best-effort beside each image (reliable writers match too).
+    auto info = dds::RawReader::create(pp, s.camera_info_topic.c_str(), dds::cameraInfoType(),
+                                       dds::Reliability::kBestEffort, 4);
+    if (!info) {
+      return fail(info.error().code, file + ": sensors[" + std::to_string(i) +
+                                         "].camera_info_topic: " + info.error().message);
+    }
+    camera_info_readers[i].emplace(std::move(info).value());
+    if (auto attached = waitset->attach(camera_info_readers[i]->handle(),
+                                        kCameraInfoToken + static_cast<std::intptr_t>(i));
+        !attached) {
+      return Unexpected(attached.error());
     }
   }
+  return {};
+}
+
+Expected<void, Error> Service::Impl::createPoseReaders() {
   const auto poseReader = [&](const std::string& topic, const dds_topic_descriptor_t* type,
                               std::intptr_t token, const char* key,
                               std::optional<dds::RawReader>& out) -> Expected<void, Error> {
-    auto reader =
-        dds::RawReader::create(pp, topic.c_str(), type, dds::Reliability::kBestEffort, 256);
+    auto reader = dds::RawReader::create(*participant, topic.c_str(), type,
+                                         dds::Reliability::kBestEffort, 256);
     if (!reader) {
-      return fail(reader.error().code, file + ": " + key + ": " + reader.error().message);
+      return fail(reader.error().code, config.path + ": " + key + ": " + reader.error().message);
     }
     out.emplace(std::move(reader).value());
-    return impl->waitset->attach(out->handle(), token);
+    return waitset->attach(out->handle(), token);
   };
-  if (config.pose.source == PoseConfig::Source::kOdometry) {
-    if (auto r = poseReader(config.pose.odometry_topic, dds::odometryType(), kOdometryToken,
-                            "pose.topic", impl->odometry_reader);
-        !r) {
-      return Unexpected(r.error());
-    }
-  } else {
-    if (auto r =
-            poseReader("rt/tf", dds::tfMessageType(), kTfToken, "pose.source", impl->tf_reader);
-        !r) {
-      return Unexpected(r.error());
-    }
+  if (auto r = config.pose.source == PoseConfig::Source::kOdometry
+                   ? poseReader(config.pose.odometry_topic, dds::odometryType(), kOdometryToken,
+                                "pose.topic", odometry_reader)
+                   : poseReader("rt/tf", dds::tfMessageType(), kTfToken, "pose.source", tf_reader);
+      !r) {
+    return r;
   }
-  {
-    // ROS latches /tf_static (reliable, transient-local): a reader of the same kind also gets the
-    // transforms published before raymapd started (or restarted).
-    auto reader =
-        dds::RawReader::create(pp, "rt/tf_static", dds::tfMessageType(),
-                               dds::Reliability::kReliable, 100, dds::Durability::kTransientLocal);
-    if (!reader) {
-      return fail(reader.error().code, file + ": rt/tf_static: " + reader.error().message);
-    }
-    impl->tf_static_reader.emplace(std::move(reader).value());
-    if (auto attached = impl->waitset->attach(impl->tf_static_reader->handle(), kTfStaticToken);
-        !attached) {
-      return Unexpected(attached.error());
-    }
+  // ROS latches /tf_static (reliable, transient-local): a reader of the same kind also gets the
+  // transforms published before raymapd started (or restarted).
+  auto reader =
+      dds::RawReader::create(*participant, "rt/tf_static", dds::tfMessageType(),
+                             dds::Reliability::kReliable, 100, dds::Durability::kTransientLocal);
+  if (!reader) {
+    return fail(reader.error().code, config.path + ": rt/tf_static: " + reader.error().message);
   }
+  tf_static_reader.emplace(std::move(reader).value());
+  return waitset->attach(tf_static_reader->handle(), kTfStaticToken);
+}
+
+Expected<void, Error> Service::Impl::createMapWriters(const heightmap::HeightmapPlan& plan) {
+  const std::string& file = config.path;
+  const dds::Participant& pp = *participant;
   auto grid_writer =
       dds::Writer::create(pp, config.dds.grid_map_topic.c_str(), dds::GridMapMessage::descriptor(),
                           dds::Reliability::kReliable, 1);
@@ -425,7 +450,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     return fail(grid_writer.error().code,
                 file + ": dds.grid_map_topic: " + grid_writer.error().message);
   }
-  impl->grid_map_writer.emplace(std::move(grid_writer).value());
+  grid_map_writer.emplace(std::move(grid_writer).value());
   auto diag_writer =
       dds::Writer::create(pp, config.dds.diagnostics_topic.c_str(),
                           dds::DiagnosticsMessage::descriptor(), dds::Reliability::kReliable, 1);
@@ -433,7 +458,7 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     return fail(diag_writer.error().code,
                 file + ": dds.diagnostics_topic: " + diag_writer.error().message);
   }
-  impl->diagnostics_writer.emplace(std::move(diag_writer).value());
+  diagnostics_writer.emplace(std::move(diag_writer).value());
   if (!config.dds.voxels_topic.empty()) {
     auto voxels =
         dds::Writer::create(pp, config.dds.voxels_topic.c_str(),
@@ -441,9 +466,9 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     if (!voxels) {
       return fail(voxels.error().code, file + ": dds.voxels_topic: " + voxels.error().message);
     }
-    impl->voxels_writer.emplace(std::move(voxels).value());
-    impl->voxels_message = std::make_unique<dds::PointCloudMessage>(config.dds.voxels_max_points);
-    impl->voxels_xyz.resize(std::size_t{config.dds.voxels_max_points} * 3);
+    voxels_writer.emplace(std::move(voxels).value());
+    voxels_message = std::make_unique<dds::PointCloudMessage>(config.dds.voxels_max_points);
+    voxels_xyz.resize(std::size_t{config.dds.voxels_max_points} * 3);
   }
   if (!config.dds.costmap_topic.empty()) {
     // As Nav2's StaticLayer subscribes by default: reliable, transient-local, keep last 1 (a
@@ -454,26 +479,27 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     if (!costmap) {
       return fail(costmap.error().code, file + ": dds.costmap_topic: " + costmap.error().message);
     }
-    impl->costmap_writer.emplace(std::move(costmap).value());
-    impl->costmap_message =
+    costmap_writer.emplace(std::move(costmap).value());
+    costmap_message =
         std::make_unique<dds::OccupancyGridMessage>(plan.grid.cells_x, plan.grid.cells_y);
   }
-  {
-    auto watch =
-        dds::RawReader::create(pp, config.dds.grid_map_topic.c_str(),
-                               dds::GridMapMessage::descriptor(), dds::Reliability::kBestEffort, 1,
-                               dds::Durability::kVolatile, dds::Origin::kOtherParticipants);
-    if (!watch) {
-      return fail(watch.error().code, file + ": dds.grid_map_topic: " + watch.error().message);
-    }
-    impl->map_publisher_watch.emplace(std::move(watch).value());
+  auto watch =
+      dds::RawReader::create(pp, config.dds.grid_map_topic.c_str(),
+                             dds::GridMapMessage::descriptor(), dds::Reliability::kBestEffort, 1,
+                             dds::Durability::kVolatile, dds::Origin::kOtherParticipants);
+  if (!watch) {
+    return fail(watch.error().code, file + ": dds.grid_map_topic: " + watch.error().message);
   }
+  map_publisher_watch.emplace(std::move(watch).value());
+  return {};
+}
+
+void Service::Impl::createReporter(const Transport& transport) {
   if (config.pose.source == PoseConfig::Source::kTf) {
-    impl->input_publishers.odometry_topic =
-        "the transform to " + config.pose.base_frame + " on rt/tf";
-    impl->input_publishers.pose_key = "pose.base_frame";
+    input_publishers.odometry_topic = "the transform to " + config.pose.base_frame + " on rt/tf";
+    input_publishers.pose_key = "pose.base_frame";
   } else {
-    impl->input_publishers.odometry_topic = config.pose.odometry_topic;
+    input_publishers.odometry_topic = config.pose.odometry_topic;
   }
   ReporterSettings reporting;
   reporting.name = config.name;
@@ -485,19 +511,19 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
     }
     reporting.hardware_id = std::string(host) + "/" + config.name;
   }
-  reporting.backend = impl->backend.backend->name();
-  reporting.device = impl->backend.backend->deviceName();
+  reporting.backend = backend.backend->name();
+  reporting.device = backend.backend->deviceName();
   reporting.publish_rate_hz = config.heightmap.rate_hz;
   reporting.report_rate_hz = config.dds.diagnostics_rate_hz;
   reporting.stale_after_s = config.health.stale_after_s;
   reporting.startup_grace_s = config.health.startup_grace_s;
   reporting.min_integrated_fraction = config.health.min_integrated_fraction;
   reporting.grid_map_topic = config.dds.grid_map_topic;
-  reporting.receive_buffer_bytes = receive_buffer->bytes;
-  reporting.receive_buffer_wanted_bytes = receive_buffer->wanted;
-  reporting.security_warning = secure->warning;
-  reporting.security_summary = secure->summary;
-  reporting.secure = secure->secure();
+  reporting.receive_buffer_bytes = transport.receive_buffer.bytes;
+  reporting.receive_buffer_wanted_bytes = transport.receive_buffer.wanted;
+  reporting.security_warning = transport.security.warning;
+  reporting.security_summary = transport.security.summary;
+  reporting.secure = transport.security.secure();
   for (const SensorConfig& sensor : config.sensors) {
     reporting.sensor_frames.push_back(sensor.frame);
     reporting.sensors.push_back(
@@ -505,9 +531,40 @@ Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
          sensor.kind == SensorKind::kDepth ? sensor.camera_info_topic : std::string(),
          sensor.max_rate_hz});
   }
-  impl->reporter = std::make_unique<DiagnosticsReporter>(
-      impl->stats, *impl->mailbox, *impl->poses, std::move(reporting), platform::monotonicNowNs());
-  impl->reporter->countHeldScans(impl->pending.get());
+  reporter = std::make_unique<DiagnosticsReporter>(stats, *mailbox, *poses, std::move(reporting),
+                                                   platform::monotonicNowNs());
+  reporter->countHeldScans(pending.get());
+}
+
+Result<std::unique_ptr<Service>> Service::create(const DaemonConfig& config) {
+  auto impl = std::make_unique<Impl>();
+  impl->config = config;
+  if (!config.dds.cyclonedds_uri.empty()) {
+    // Read by Cyclone when the participant's domain is created below.
+    ::setenv("CYCLONEDDS_URI", config.dds.cyclonedds_uri.c_str(), 1);
+  }
+  if (auto ok = impl->createMapAndBackend(); !ok) {
+    return Unexpected(std::move(ok).error());
+  }
+  heightmap::HeightmapOptions options;
+  heightmap::HeightmapPlan plan;
+  if (auto ok = impl->planHeightmap(options, plan); !ok) {
+    return Unexpected(std::move(ok).error());
+  }
+  impl->createPipeline(options, plan);
+  auto transport = impl->openParticipant();
+  if (!transport) {
+    return Unexpected(std::move(transport).error());
+  }
+  for (auto step : {&Impl::createSensorReaders, &Impl::createPoseReaders}) {
+    if (auto ok = (impl.get()->*step)(); !ok) {
+      return Unexpected(std::move(ok).error());
+    }
+  }
+  if (auto ok = impl->createMapWriters(plan); !ok) {
+    return Unexpected(std::move(ok).error());
+  }
+  impl->createReporter(*transport);
   return std::unique_ptr<Service>(new Service(std::move(impl)));
 }
 
