@@ -459,25 +459,44 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   }
 }
 
-const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
-  const Sample& now = ring_[head_];
-  const Sample& base = *base_;
-  const double dt = static_cast<double>(now.ns - base.ns) * 1e-9;
-  const auto rate = [&](std::uint64_t a, std::uint64_t b) {
+// The message, one status at a time. `w` is the rate window: the newest sample and the one a
+// window before it.
+
+struct DiagnosticsReporter::Window {
+  const Sample& now;
+  const Sample& base;
+  double dt;  ///< seconds between them
+  double rate(std::uint64_t a, std::uint64_t b) const noexcept {
     return dt > 0.0 ? static_cast<double>(a - b) / dt : 0.0;
-  };
-  const Totals& c = now.totals;
-  const Totals& p = base.totals;
+  }
+};
+
+const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
+  const Window w{ring_[head_], *base_, static_cast<double>(ring_[head_].ns - base_->ns) * 1e-9};
   const char* hw = settings_.hardware_id.c_str();
   message_.begin(stamp_ns);
-
   // Pipeline: input, queues, drops, integration.
   const int s = message_.addStatus(pipeline_level_, pipeline_name_.c_str(), pipeline_message_, hw);
+  addInputValues(s, w);
+  addIntegrationValues(s, w);
+  addQueueValues(s, w);
+  addHeightmapStatus(w, hw);
+  const Totals& c = w.now.totals;
+  for (std::size_t i = 0; i < settings_.sensors.size() && i < c.sensor.size(); ++i) {
+    addSensorStatus(i, w.dt);
+  }
+  addRealtimeAndSecurityStatuses(hw);
+  return message_.sample();
+}
+
+void DiagnosticsReporter::addInputValues(int s, const Window& w) noexcept {
+  const Totals& c = w.now.totals;
+  const Totals& p = w.base.totals;
   message_.addValue(s, "backend", "%s", settings_.backend.c_str());
   message_.addValue(s, "device", "%s",
                     settings_.device.empty() ? "host CPU" : settings_.device.c_str());
   message_.addValue(s, "clouds_received", "%" PRIu64, c.clouds);
-  message_.addValue(s, "cloud_rate_hz", "%.2f", rate(c.clouds, p.clouds));
+  message_.addValue(s, "cloud_rate_hz", "%.2f", w.rate(c.clouds, p.clouds));
   message_.addValue(s, "clouds_missing", "%" PRIu64, c.missing);
   message_.addValue(s, "socket_datagrams_dropped", "%" PRIu64, c.socket_drops);
   message_.addValue(s, "socket_receive_buffer_bytes", "%" PRIu64, settings_.receive_buffer_bytes);
@@ -525,12 +544,17 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
     }
     message_.addValue(s, "points_too_near", "%" PRIu64, c.too_near);
   }
+}
+
+void DiagnosticsReporter::addIntegrationValues(int s, const Window& w) noexcept {
+  const Totals& c = w.now.totals;
+  const Totals& p = w.base.totals;
   message_.addValue(s, "scans_integrated", "%" PRIu64, c.scans);
-  message_.addValue(s, "scan_rate_hz", "%.2f", rate(c.scans, p.scans));
+  message_.addValue(s, "scan_rate_hz", "%.2f", w.rate(c.scans, p.scans));
   message_.addValue(s, "seconds_since_last_scan", "%.2f", seconds_since_scan_);
   message_.addValue(s, "scans_dropped_no_pose", "%" PRIu64, c.no_pose);
   message_.addValue(s, "rays_integrated", "%" PRIu64, c.rays);
-  message_.addValue(s, "ray_rate_per_s", "%.0f", rate(c.rays, p.rays));
+  message_.addValue(s, "ray_rate_per_s", "%.0f", w.rate(c.rays, p.rays));
   message_.addValue(s, "rays_rejected", "%" PRIu64, c.rejected);
   message_.addValue(s, "rays_rejected_too_short", "%" PRIu64, c.too_short);
   message_.addValue(s, "rays_rejected_out_of_bounds", "%" PRIu64, c.out_of_bounds);
@@ -553,6 +577,10 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
     // Only in raymapd_counted (tools/soak.sh): heap allocations the real-time loops made.
     message_.addValue(s, "realtime_allocations", "%" PRIu64, counter());
   }
+}
+
+void DiagnosticsReporter::addQueueValues(int s, const Window& w) noexcept {
+  const Totals& c = w.now.totals;
   message_.addValue(s, "integrator_load_percent", "%d",
                     stats_.integrator_load_percent.load(std::memory_order_relaxed));
   message_.addValue(s, "subsample_stride", "%d",
@@ -576,8 +604,14 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(s, "window_clears", "%" PRIu64, c.window_clears);
   message_.addValue(s, "other_map_publishers", "%u", other_publishers_);
   message_.addValue(s, "pose_publishers", "%u", inputs_ != nullptr ? inputs_->odometry : 0u);
-  message_.addValue(s, "rate_window_s", "%.2f", dt);
+  message_.addValue(s, "rate_window_s", "%.2f", w.dt);
+}
 
+void DiagnosticsReporter::addHeightmapStatus(const Window& w, const char* hw) noexcept {
+  const Sample& now = w.now;
+  const Sample& base = w.base;
+  const Totals& c = now.totals;
+  const Totals& p = base.totals;
   // Height map: rate, timing, latency (percentiles over the same window).
   const pipeline::DurationHistogram::Snapshot latency = now.latency.since(base.latency);
   const pipeline::DurationHistogram::Snapshot period = now.period.since(base.period);
@@ -587,7 +621,7 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(h, "maps_published", "%" PRIu64, c.maps);
   message_.addValue(h, "maps_withheld_stale", "%" PRIu64, c.withheld);
   message_.addValue(h, "costmaps_published", "%" PRIu64, stats_.costmaps_published.get());
-  message_.addValue(h, "publish_rate_hz", "%.3f", rate(c.maps, p.maps));
+  message_.addValue(h, "publish_rate_hz", "%.3f", w.rate(c.maps, p.maps));
   message_.addValue(h, "nominal_rate_hz", "%g", settings_.publish_rate_hz);
   message_.addValue(h, "cycles_late", "%" PRIu64, c.late);
   message_.addValue(h, "heightmap_errors", "%" PRIu64, c.hm_errors);
@@ -627,11 +661,9 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
   message_.addValue(
       h, "publish_lead_ms", "%.1f",
       static_cast<double>(stats_.publish_lead_us.load(std::memory_order_relaxed)) / 1000.0);
+}
 
-  for (std::size_t i = 0; i < settings_.sensors.size() && i < c.sensor.size(); ++i) {
-    addSensorStatus(i, dt);
-  }
-
+void DiagnosticsReporter::addRealtimeAndSecurityStatuses(const char* hw) noexcept {
   // Real time.
   const bool degraded = realtime_ != nullptr && realtime_->degraded;
   const int r = message_.addStatus(degraded ? msgs::kDiagnosticWarn : msgs::kDiagnosticOk,
@@ -648,7 +680,6 @@ const void* DiagnosticsReporter::message(std::int64_t stamp_ns) noexcept {
       security_warn ? msgs::kDiagnosticWarn : msgs::kDiagnosticOk, security_name_.c_str(),
       security_warn ? settings_.security_warning.c_str() : settings_.security_summary.c_str(), hw);
   message_.addValue(sec, "enabled", "%s", settings_.secure ? "true" : "false");
-  return message_.sample();
 }
 
 void DiagnosticsReporter::addSensorStatus(std::size_t i, double dt) noexcept {

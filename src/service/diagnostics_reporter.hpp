@@ -171,6 +171,12 @@ class DiagnosticsReporter {
   /// ERROR for none.
   std::uint8_t describeIntegration(char* out, std::size_t size) const noexcept;
   /// Adds the status of sensor `i` (its counters over the window) to message_.
+  struct Window;  // the rate window (diagnostics_reporter.cpp)
+  void addInputValues(int status, const Window& w) noexcept;
+  void addIntegrationValues(int status, const Window& w) noexcept;
+  void addQueueValues(int status, const Window& w) noexcept;
+  void addHeightmapStatus(const Window& w, const char* hardware_id) noexcept;
+  void addRealtimeAndSecurityStatuses(const char* hardware_id) noexcept;
   void addSensorStatus(std::size_t i, double dt) noexcept;
 
   const pipeline::PipelineStats& stats_;
