@@ -5,11 +5,49 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "raymap/map_types.hpp"
 
 namespace raymap {
+
+/// @brief NDT-OM and NDT-TM (MapMode::kNdtOm, kNdtTm): each voxel's Gaussian of its samples
+/// shapes the misses of rays that pass it. Keys map.ndt.* in messages (raymapd's YAML names);
+/// `raymap populate --ndt-*`.
+struct NdtOptions {
+  double sensor_noise = 0.05;  ///< range noise of the sensor (sigma), metres
+  double regulariser = 0.1;    ///< sigma added where a Gaussian is inverted, voxel edges, (0, 1]
+  std::uint32_t sample_threshold = 4;  ///< samples before a Gaussian shapes the misses
+  /// A voxel whose occupancy probability fell below this restarts its Gaussian at its next hit,
+  /// in (0, 0.5).
+  double reinit_probability = 0.2;
+  std::uint32_t reinit_count = 100;  ///< samples a Gaussian needs before it can restart
+  /// How strongly a ray through a surfel lowers its occupancy, [0, 1]; unset: from the miss
+  /// probability (clamp(2 (1 - 2 p_miss), 0, 1)).
+  std::optional<double> adaptation_rate;
+  double initial_intensity_variance = 1.0;  ///< NDT-TM: intensity variance after the first sample
+};
+
+/// @brief A truncated signed distance field (MapMode::kTsdf). Keys map.tsdf.*; `--tsdf-*`.
+struct TsdfOptions {
+  std::optional<double> truncation;  ///< tau, metres; unset: 3 voxel edges
+  double max_weight = 1.0e4;         ///< largest voxel weight (each ray adds at most 1)
+  std::optional<double> dropoff;     ///< metres behind the surface where weight starts to fall;
+                                     ///< unset: 1 voxel edge; 0: constant weight
+};
+
+/// @brief Maps larger than memory (docs/large-maps.md): past max_memory_bytes the least recently
+/// used regions are compressed in memory, and past compressed_memory_bytes spilled to an
+/// unnamed file. Off by default in the library (a full pool is then a kCapacity error);
+/// `raymap populate` turns them on unless --no-tiers.
+struct TierOptions {
+  bool enabled = false;
+  std::uint64_t compressed_memory_bytes = std::uint64_t{1} << 30;  ///< 1 GiB
+  /// Folder of the spill file (it has no name and vanishes with the process); empty: no spill
+  /// file, so a full compressed tier is a kCapacity error.
+  std::string spill_dir;
+};
 
 /// @brief The map: geometry, how rays combine, the occupancy model and the memory it may use.
 /// Defaults are OctoMap's probabilities at 0.1 m, as `raymap populate` uses them.
@@ -21,14 +59,23 @@ struct MapOptions {
   /// no occupancy layer, so occupancy queries answer "unobserved" and height maps are refused).
   MapMode mode = MapMode::kOccupancy;
   bool voxel_mean = true;  ///< keep each voxel's mean sample position (sub-voxel surface heights)
+  /// Keep decay rates (reflections per metre of ray path: the traversal layer, 4 bytes a voxel)
+  /// beside occupancy or NDT; needs voxel_mean (its sample count is the numerator).
+  bool decay_rate = false;
+  /// Keep the occupancy layer. false with decay_rate (and kOccupancy, per-ray semantics): a map of
+  /// decay rates only, what `raymap populate --mode decay` makes. kTsdf maps have none.
+  bool occupancy = true;
+  NdtOptions ndt;    ///< used by kNdtOm and kNdtTm only
+  TsdfOptions tsdf;  ///< used by kTsdf only
   double hit_probability = 0.9;      ///< occupancy update of the voxel holding a return
   double miss_probability = 0.45;    ///< update of each voxel a ray crosses before its return
   float clamp_min_log_odds = -2.0f;  ///< occupancy is clamped to [min, max] (log-odds)
   float clamp_max_log_odds = 3.511f;
   double occupied_threshold = 0.5;  ///< probability at and above which a voxel is occupied
-  /// Memory for the map's regions (one preallocated pool); integration fails with a capacity
-  /// error once the map needs more.
+  /// Memory for the map's regions (one preallocated pool); once the map needs more, integration
+  /// fails with a capacity error, or with tiers enabled the coldest regions move out.
   std::uint64_t max_memory_bytes = std::uint64_t{4} << 30;
+  TierOptions tiers;
 };
 
 /// @brief Limits applied to every ray before it is integrated (invalid rays are counted, never
@@ -58,6 +105,16 @@ struct BackendOptions {
   /// OpenCL and CUDA: where each batch is planned (its rays' regions, span records, hit groups),
   /// "host" or "device" (the host only places each batch's distinct regions; the same map).
   std::string device_planning = "host";
+  /// Device region cache: bytes, or regions when gpu_cache_regions is set (it wins); 0 and 0:
+  /// min(1 GiB, half the device memory). Never more regions than max_memory_bytes holds.
+  std::uint64_t gpu_cache_bytes = 0;
+  std::uint32_t gpu_cache_regions = 0;
+  /// Where a device keeps the map while it works: "cache" (device buffers, regions copied in and
+  /// out), "shared" (the host map in place: integrated GPUs, PoCL, Jetson) or "auto".
+  std::string gpu_memory = "auto";
+  /// OpenCL: "span" (a work-item per span record, atomics), "region" (one work-item per region,
+  /// right for CPU devices) or "auto" (region on CPU devices).
+  std::string opencl_span_work = "auto";
   /// Prepared rays per backend call; 0 = the backend's preference (32,768 on the CPU for per-ray
   /// maps other than NDT; 262,144 for per-scan and NDT maps and on a device).
   std::size_t batch_rays = 0;

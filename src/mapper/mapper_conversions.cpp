@@ -18,18 +18,87 @@ static_assert(MapOptions{}.clamp_min_log_odds == OccupancyParams::kDefaultClampM
 static_assert(MapOptions{}.clamp_max_log_odds == OccupancyParams::kDefaultClampMax);
 static_assert(MapOptions{}.occupied_threshold == OccupancyParams::kDefaultThresholdProbability);
 static_assert(MapOptions{}.max_memory_bytes == MapConfig::kDefaultMemoryBudget);
+static_assert(NdtOptions{}.sensor_noise == NdtParams::kDefaultSensorNoise);
+static_assert(NdtOptions{}.regulariser == NdtParams::kDefaultRegulariser);
+static_assert(NdtOptions{}.sample_threshold == NdtParams::kDefaultSampleThreshold);
+static_assert(NdtOptions{}.reinit_probability == NdtParams::kDefaultReinitProbability);
+static_assert(NdtOptions{}.reinit_count == NdtParams::kDefaultReinitCount);
+static_assert(NdtOptions{}.initial_intensity_variance ==
+              NdtParams::kDefaultInitialIntensityVariance);
+static_assert(TsdfOptions{}.max_weight == TsdfParams::kDefaultMaxWeight);
+static_assert(TierOptions{}.compressed_memory_bytes == RegionTierConfig::kDefaultCompressedBytes);
 static_assert(static_cast<int>(HeightCell::kUnknown) == RM_HM_UNKNOWN);
 static_assert(static_cast<int>(HeightCell::kSurface) == RM_HM_SURFACE);
 static_assert(static_cast<int>(HeightCell::kVirtualSurface) == RM_HM_VIRTUAL);
 static_assert(static_cast<int>(HeightCell::kVacant) == RM_HM_VACANT);
+
+namespace {
+
+Result<MapConfig> fail(const std::string& message) {
+  return raymap::fail(ErrorCode::kInvalidArgument, message);
+}
+
+/// The mode's layers and parameters (after the geometry, semantics and occupancy are set): the
+/// combinations `raymap populate --mode` allows, named by the keys of raymapd's `map:` section.
+Expected<void, Error> applyMode(const MapOptions& options, MapConfig& config) {
+  const bool ndt = isNdt(options.mode);
+  const bool tsdf = options.mode == MapMode::kTsdf;
+  const bool decay_only = !options.occupancy && !tsdf;
+  if (decay_only && (!options.decay_rate || options.mode != MapMode::kOccupancy)) {
+    return raymap::fail(ErrorCode::kInvalidArgument,
+                        "map.occupancy: false is a map of decay rates only: it needs "
+                        "map.decay_rate: true and map.mode occupancy");
+  }
+  if (options.decay_rate && !options.voxel_mean) {
+    return raymap::fail(ErrorCode::kInvalidArgument,
+                        "map.decay_rate needs map.voxel_mean (its sample count over the metres "
+                        "of ray path is the rate)");
+  }
+  if ((ndt || tsdf || decay_only) && options.semantics != Semantics::kPerRay) {
+    return raymap::fail(ErrorCode::kInvalidArgument,
+                        std::string("map.mode ") +
+                            (decay_only ? "decay" : std::string(toString(options.mode))) +
+                            " needs map.semantics per-ray: every ray's own update counts");
+  }
+  if (tsdf) {
+    if (options.decay_rate) {
+      return raymap::fail(ErrorCode::kInvalidArgument,
+                          "map.decay_rate does not combine with map.mode tsdf (a TSDF map has no "
+                          "occupancy or voxel mean for the rate)");
+    }
+    config = config.forTsdf();
+    config.tsdf.truncation_m = options.tsdf.truncation;
+    config.tsdf.max_weight = options.tsdf.max_weight;
+    config.tsdf.dropoff_m = options.tsdf.dropoff;
+    return config.tsdf.validate(config.geometry.resolution);
+  }
+  config.decay_rate = options.decay_rate;
+  if (decay_only) {
+    config = config.forDecay();
+  }
+  if (ndt) {
+    NdtParams& p = config.ndt;
+    p.sensor_noise = options.ndt.sensor_noise;
+    p.regulariser = options.ndt.regulariser;
+    p.sample_threshold = options.ndt.sample_threshold;
+    p.reinit_probability = options.ndt.reinit_probability;
+    p.reinit_count = options.ndt.reinit_count;
+    p.adaptation_rate = options.ndt.adaptation_rate;
+    p.initial_intensity_variance = options.ndt.initial_intensity_variance;
+    return p.validate();
+  }
+  return {};
+}
+
+}  // namespace
 
 Result<MapConfig> toMapConfig(const MapOptions& options) {
   for (const auto& [name, p] : {std::pair{"map.hit_probability", options.hit_probability},
                                 std::pair{"map.miss_probability", options.miss_probability},
                                 std::pair{"map.occupied_threshold", options.occupied_threshold}}) {
     if (!(p > 0.0 && p < 1.0)) {
-      return fail(ErrorCode::kInvalidArgument,
-                  std::string(name) + " must be a probability in (0, 1), got " + std::to_string(p));
+      return fail(std::string(name) + " must be a probability in (0, 1), got " +
+                  std::to_string(p));
     }
   }
   MapConfig config;
@@ -45,8 +114,11 @@ Result<MapConfig> toMapConfig(const MapOptions& options) {
   config.occupancy.threshold = logOdds(options.occupied_threshold);
   config.memory_budget_bytes = options.max_memory_bytes;
   config.policy = StorePolicy::kGlobal;
-  if (options.mode == MapMode::kTsdf) {
-    config = config.forTsdf();
+  config.tiers.enabled = options.tiers.enabled;
+  config.tiers.compressed_bytes = options.tiers.compressed_memory_bytes;
+  config.tiers.spill_dir = options.tiers.spill_dir;
+  if (auto ok = applyMode(options, config); !ok) {
+    return Unexpected(Error{ok.error().code, "map options: " + ok.error().message});
   }
   if (auto ok = config.validate(); !ok) {
     return Unexpected(Error{ok.error().code, "map options: " + ok.error().message});
@@ -67,6 +139,21 @@ MapOptions toMapOptions(const MapConfig& config) {
   options.clamp_max_log_odds = config.occupancy.clamp_max;
   options.occupied_threshold = probability(config.occupancy.threshold);
   options.max_memory_bytes = config.memory_budget_bytes;
+  options.decay_rate = config.decay_rate;
+  options.occupancy = config.occupancy_layer;
+  options.ndt.sensor_noise = config.ndt.sensor_noise;
+  options.ndt.regulariser = config.ndt.regulariser;
+  options.ndt.sample_threshold = config.ndt.sample_threshold;
+  options.ndt.reinit_probability = config.ndt.reinit_probability;
+  options.ndt.reinit_count = config.ndt.reinit_count;
+  options.ndt.adaptation_rate = config.ndt.adaptation_rate;
+  options.ndt.initial_intensity_variance = config.ndt.initial_intensity_variance;
+  options.tsdf.truncation = config.tsdf.truncation_m;
+  options.tsdf.max_weight = config.tsdf.max_weight;
+  options.tsdf.dropoff = config.tsdf.dropoff_m;
+  options.tiers.enabled = config.tiers.enabled;
+  options.tiers.compressed_memory_bytes = config.tiers.compressed_bytes;
+  options.tiers.spill_dir = config.tiers.spill_dir;
   return options;
 }
 
@@ -95,6 +182,13 @@ backends::BackendChoice toBackendChoice(const BackendOptions& options) {
   choice.cuda_device = options.cuda_device;
   choice.fallback_cpu = options.fallback_cpu;
   choice.device_planning = options.device_planning;
+  choice.gpu_cache_bytes = options.gpu_cache_bytes;
+  choice.gpu_cache_regions = options.gpu_cache_regions;
+  choice.gpu_memory = options.gpu_memory;
+  choice.opencl_span_work = options.opencl_span_work;
+  if (options.batch_rays != 0) {
+    choice.gpu_batch_rays = options.batch_rays;  // as `raymap populate --batch-rays`
+  }
   return choice;
 }
 

@@ -1,0 +1,234 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Every `raymap populate` map option has a library equivalent (issue 55): the same rays mapped by
+// `raymap populate` with flags and by raymap::Mapper with the public MapperConfig give the same
+// map, region for region and byte for byte in every layer — NDT-OM and NDT-TM with their
+// parameters, decay rates (beside occupancy and alone), TSDF, per-scan occupancy with OctoMap's
+// probabilities, and a map larger than its memory budget (compressed and spilled regions).
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "raymap/mapper.hpp"
+#include "raymap/ray_cloud.hpp"
+#include <gtest/gtest.h>
+
+#include "src/io/map_file.hpp"
+#include "tests/device/device_map_compare.hpp"
+#include "tests/support/cli_runner.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace raymap::test {
+namespace {
+
+/// The room scene's lidar, five scans: a ray cloud, and the same returns as a point cloud with
+/// its trajectory (with intensities, for NDT-TM).
+struct Room {
+  TempDir dir;
+  std::string rays = dir.file("room.ply");
+  std::string points = dir.file("room_points.ply");
+  std::string trajectory = dir.file("room_trajectory.txt");
+  Room() {
+    const RunResult r = runRaymap({"simulate", std::string(RAYMAP_SCENES_DIR) + "/room.yaml",
+                                   "--sensors", "lidar", "--scans", "5", "--rays", rays, "--points",
+                                   points, "--trajectory", trajectory, "-q"});
+    EXPECT_EQ(r.exit_code, 0) << describe(r);
+  }
+};
+
+/// Maps `input` scan by scan with the library and saves the map to `out`.
+void mapWithLibrary(const std::string& input, const RayCloudOptions& read,
+                    const MapperConfig& config, const std::string& out) {
+  auto mapper = Mapper::create(config);
+  ASSERT_TRUE(mapper) << mapper.error().message;
+  auto reader = RayCloudReader::open(input, read);
+  ASSERT_TRUE(reader) << reader.error().message;
+  std::vector<WorldRay> scan;
+  for (;;) {
+    auto more = reader->nextScan(scan);
+    ASSERT_TRUE(more) << more.error().message;
+    if (!*more) {
+      break;
+    }
+    ASSERT_TRUE(mapper->integrate(scan));
+  }
+  auto saved = mapper->save(out);
+  ASSERT_TRUE(saved) << saved.error().message;
+}
+
+/// Both maps hold the same regions with the same bytes in every layer.
+void expectSameMap(const std::string& cli, const std::string& library) {
+  auto a = io::loadMap(cli);
+  ASSERT_TRUE(a) << a.error().message;
+  auto b = io::loadMap(library);
+  ASSERT_TRUE(b) << b.error().message;
+  EXPECT_EQ(a->config().schema().size(), b->config().schema().size());
+  // The parameters the file records (the layers alone may not show a small difference).
+  const MapConfig& x = a->config();
+  const MapConfig& y = b->config();
+  EXPECT_EQ(a->mode(), b->mode());
+  EXPECT_EQ(x.semantics, y.semantics);
+  EXPECT_EQ(x.geometry.resolution, y.geometry.resolution);
+  EXPECT_EQ(x.geometry.region_voxels, y.geometry.region_voxels);
+  EXPECT_EQ(x.voxel_mean, y.voxel_mean);
+  EXPECT_EQ(x.decay_rate, y.decay_rate);
+  EXPECT_EQ(x.occupancy_layer, y.occupancy_layer);
+  EXPECT_EQ(x.occupancy.hit, y.occupancy.hit);
+  EXPECT_EQ(x.occupancy.miss, y.occupancy.miss);
+  EXPECT_EQ(x.occupancy.clamp_min, y.occupancy.clamp_min);
+  EXPECT_EQ(x.occupancy.clamp_max, y.occupancy.clamp_max);
+  EXPECT_EQ(x.occupancy.threshold, y.occupancy.threshold);
+  EXPECT_EQ(x.ndt.sensor_noise, y.ndt.sensor_noise);
+  EXPECT_EQ(x.ndt.regulariser, y.ndt.regulariser);
+  EXPECT_EQ(x.ndt.sample_threshold, y.ndt.sample_threshold);
+  EXPECT_EQ(x.ndt.reinit_probability, y.ndt.reinit_probability);
+  EXPECT_EQ(x.ndt.reinit_count, y.ndt.reinit_count);
+  EXPECT_EQ(x.ndt.adaptation_rate, y.ndt.adaptation_rate);
+  EXPECT_EQ(x.ndt.initial_intensity_variance, y.ndt.initial_intensity_variance);
+  EXPECT_EQ(x.tsdf.truncation_m, y.tsdf.truncation_m);
+  EXPECT_EQ(x.tsdf.max_weight, y.tsdf.max_weight);
+  EXPECT_EQ(x.tsdf.dropoff_m, y.tsdf.dropoff_m);
+  EXPECT_GT(a->summarise().regions, 0u);
+  EXPECT_EQ(a->summarise().regions, b->summarise().regions);
+  EXPECT_EQ(differingRegions(*a, *b), 0u);
+}
+
+struct Case {
+  const char* name;
+  std::vector<std::string> flags;  ///< `raymap populate` flags
+  std::function<void(MapperConfig&)> library;
+  bool points = false;  ///< the point cloud with its trajectory instead of the ray cloud
+};
+
+class LibraryEqualsCli : public testing::TestWithParam<Case> {};
+
+TEST_P(LibraryEqualsCli, TheSameMapFromFlagsAndFromMapperConfig) {
+  const Case& c = GetParam();
+  Room room;
+  const std::string cli = room.dir.file("cli.rmap");
+  const std::string library = room.dir.file("library.rmap");
+  const std::string input = c.points ? room.points : room.rays;
+  std::vector<std::string> args{"populate",    input, "-o",        cli, "-q",
+                                "--max-range", "20",  "--threads", "1"};
+  RayCloudOptions read;
+  if (c.points) {
+    args.insert(args.end(), {"--trajectory", room.trajectory});
+    read.trajectory_path = room.trajectory;
+  }
+  args.insert(args.end(), c.flags.begin(), c.flags.end());
+  const RunResult r = runRaymap(args);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+
+  MapperConfig config;
+  config.rays.max_range = 20.0;
+  config.backend.threads = 1;
+  c.library(config);
+  ASSERT_NO_FATAL_FAILURE(mapWithLibrary(input, read, config, library));
+  expectSameMap(cli, library);
+}
+
+std::vector<Case> cases() {
+  return {
+      {"OccupancyPerScanWithOctomapsProbabilities",
+       {"--semantics", "scan", "--hit", "0.7", "--miss", "0.4", "--resolution", "0.05"},
+       [](MapperConfig& c) {
+         c.map.semantics = Semantics::kPerScan;
+         c.map.hit_probability = 0.7;
+         c.map.miss_probability = 0.4;
+         c.map.resolution = 0.05;
+       }},
+      {"NdtOmWithItsParameters",
+       {"--mode", "ndt-om", "--ndt-sensor-noise", "0.03", "--ndt-sample-threshold", "6",
+        "--ndt-adaptation-rate", "0.5"},
+       [](MapperConfig& c) {
+         c.map.mode = MapMode::kNdtOm;
+         c.map.ndt.sensor_noise = 0.03;
+         c.map.ndt.sample_threshold = 6;
+         c.map.ndt.adaptation_rate = 0.5;
+       }},
+      {"NdtTmWithDecayRatesFromPointsAndATrajectory",
+       {"--mode", "ndt-tm", "--decay-rate", "--ndt-initial-intensity-variance", "4"},
+       [](MapperConfig& c) {
+         c.map.mode = MapMode::kNdtTm;
+         c.map.decay_rate = true;
+         c.map.ndt.initial_intensity_variance = 4.0;
+       },
+       true},
+      {"DecayRatesOnly",
+       {"--mode", "decay"},
+       [](MapperConfig& c) {
+         c.map.decay_rate = true;
+         c.map.occupancy = false;
+       }},
+      {"TsdfWithItsParameters",
+       {"--mode", "tsdf", "--tsdf-truncation", "0.25", "--tsdf-max-weight", "50", "--tsdf-dropoff",
+        "0.05"},
+       [](MapperConfig& c) {
+         c.map.mode = MapMode::kTsdf;
+         c.map.tsdf.truncation = 0.25;
+         c.map.tsdf.max_weight = 50.0;
+         c.map.tsdf.dropoff = 0.05;
+       }},
+      {"AMapLargerThanItsMemoryBudget",
+       {"--region-voxels", "8", "--max-memory", "200KiB", "--compressed-memory", "64KiB",
+        "--no-mean"},
+       [](MapperConfig& c) {
+         c.map.region_voxels = 8;
+         c.map.max_memory_bytes = 200 * 1024;
+         c.map.voxel_mean = false;
+         c.map.tiers.enabled = true;
+         c.map.tiers.compressed_memory_bytes = 64 * 1024;
+         c.map.tiers.spill_dir = testing::TempDir();
+       }},
+  };
+}
+
+INSTANTIATE_TEST_SUITE_P(Options, LibraryEqualsCli, testing::ValuesIn(cases()),
+                         [](const testing::TestParamInfo<Case>& param) {
+                           return param.param.name;
+                         });
+
+TEST(LibraryOptions, ImpossibleCombinationsAreRefusedNamingTheKey) {
+  const auto refused = [](const std::function<void(MapperConfig&)>& change,
+                          const std::string& key) {
+    MapperConfig config;
+    change(config);
+    auto mapper = Mapper::create(config);
+    ASSERT_FALSE(mapper) << key;
+    EXPECT_NE(mapper.error().message.find(key), std::string::npos) << mapper.error().message;
+  };
+  refused(
+      [](MapperConfig& c) {
+        c.map.mode = MapMode::kNdtOm;
+        c.map.semantics = Semantics::kPerScan;
+      },
+      "map.semantics");
+  refused(
+      [](MapperConfig& c) {
+        c.map.decay_rate = true;
+        c.map.voxel_mean = false;
+      },
+      "map.voxel_mean");
+  refused(
+      [](MapperConfig& c) {
+        c.map.mode = MapMode::kTsdf;
+        c.map.decay_rate = true;
+      },
+      "map.decay_rate");
+  refused([](MapperConfig& c) { c.map.occupancy = false; }, "map.occupancy");
+  refused(
+      [](MapperConfig& c) {
+        c.map.mode = MapMode::kNdtOm;
+        c.map.ndt.regulariser = 2.0;
+      },
+      "regulariser");
+  refused(
+      [](MapperConfig& c) {
+        c.map.mode = MapMode::kTsdf;
+        c.map.tsdf.truncation = -1.0;
+      },
+      "truncation");
+}
+
+}  // namespace
+}  // namespace raymap::test
