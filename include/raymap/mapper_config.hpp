@@ -13,28 +13,32 @@
 namespace raymap {
 
 /// @brief NDT-OM and NDT-TM (MapMode::kNdtOm, kNdtTm): each voxel's Gaussian of its samples
-/// shapes the misses of rays that pass it. Keys map.ndt.* in messages (raymapd's YAML names);
-/// `raymap populate --ndt-*`.
+/// shapes the misses of rays that pass it. Unset fields take the library's defaults (given
+/// here); setting one for a map of another mode is refused, naming it. Keys map.ndt.* in
+/// messages (raymapd's YAML names); `raymap populate --ndt-*`.
 struct NdtOptions {
-  double sensor_noise = 0.05;  ///< range noise of the sensor (sigma), metres
-  double regulariser = 0.1;    ///< sigma added where a Gaussian is inverted, voxel edges, (0, 1]
-  std::uint32_t sample_threshold = 4;  ///< samples before a Gaussian shapes the misses
+  std::optional<double> sensor_noise;  ///< range noise of the sensor (sigma), metres; 0.05
+  /// Sigma added on every axis where a Gaussian is inverted, voxel edges, (0, 1]; 0.1.
+  std::optional<double> regulariser;
+  std::optional<std::uint32_t> sample_threshold;  ///< samples before a Gaussian shapes misses; 4
   /// A voxel whose occupancy probability fell below this restarts its Gaussian at its next hit,
-  /// in (0, 0.5).
-  double reinit_probability = 0.2;
-  std::uint32_t reinit_count = 100;  ///< samples a Gaussian needs before it can restart
+  /// in (0, 0.5); 0.2.
+  std::optional<double> reinit_probability;
+  std::optional<std::uint32_t> reinit_count;  ///< samples before a Gaussian can restart; 100
   /// How strongly a ray through a surfel lowers its occupancy, [0, 1]; unset: from the miss
   /// probability (clamp(2 (1 - 2 p_miss), 0, 1)).
   std::optional<double> adaptation_rate;
-  double initial_intensity_variance = 1.0;  ///< NDT-TM: intensity variance after the first sample
+  /// NDT-TM: intensity variance of a voxel after its first sample (intensity units squared); 1.
+  std::optional<double> initial_intensity_variance;
 };
 
-/// @brief A truncated signed distance field (MapMode::kTsdf). Keys map.tsdf.*; `--tsdf-*`.
+/// @brief A truncated signed distance field (MapMode::kTsdf). Unset fields take the defaults
+/// given here; setting one for a map of another mode is refused. Keys map.tsdf.*; `--tsdf-*`.
 struct TsdfOptions {
-  std::optional<double> truncation;  ///< tau, metres; unset: 3 voxel edges
-  double max_weight = 1.0e4;         ///< largest voxel weight (each ray adds at most 1)
-  std::optional<double> dropoff;     ///< metres behind the surface where weight starts to fall;
-                                     ///< unset: 1 voxel edge; 0: constant weight
+  std::optional<double> truncation;  ///< tau, metres; 3 voxel edges
+  std::optional<double> max_weight;  ///< largest voxel weight (each ray adds at most 1); 10,000
+  /// Metres behind the surface where a ray's weight starts to fall; 1 voxel edge; 0: constant.
+  std::optional<double> dropoff;
 };
 
 /// @brief Maps larger than memory (docs/large-maps.md): past max_memory_bytes the least recently
@@ -65,8 +69,8 @@ struct MapOptions {
   /// Keep the occupancy layer. false with decay_rate (and kOccupancy, per-ray semantics): a map of
   /// decay rates only, what `raymap populate --mode decay` makes. kTsdf maps have none.
   bool occupancy = true;
-  NdtOptions ndt;    ///< used by kNdtOm and kNdtTm only
-  TsdfOptions tsdf;  ///< used by kTsdf only
+  NdtOptions ndt;                    ///< used by kNdtOm and kNdtTm only
+  TsdfOptions tsdf;                  ///< used by kTsdf only
   double hit_probability = 0.9;      ///< occupancy update of the voxel holding a return
   double miss_probability = 0.45;    ///< update of each voxel a ray crosses before its return
   float clamp_min_log_odds = -2.0f;  ///< occupancy is clamped to [min, max] (log-odds)

@@ -18,14 +18,6 @@ static_assert(MapOptions{}.clamp_min_log_odds == OccupancyParams::kDefaultClampM
 static_assert(MapOptions{}.clamp_max_log_odds == OccupancyParams::kDefaultClampMax);
 static_assert(MapOptions{}.occupied_threshold == OccupancyParams::kDefaultThresholdProbability);
 static_assert(MapOptions{}.max_memory_bytes == MapConfig::kDefaultMemoryBudget);
-static_assert(NdtOptions{}.sensor_noise == NdtParams::kDefaultSensorNoise);
-static_assert(NdtOptions{}.regulariser == NdtParams::kDefaultRegulariser);
-static_assert(NdtOptions{}.sample_threshold == NdtParams::kDefaultSampleThreshold);
-static_assert(NdtOptions{}.reinit_probability == NdtParams::kDefaultReinitProbability);
-static_assert(NdtOptions{}.reinit_count == NdtParams::kDefaultReinitCount);
-static_assert(NdtOptions{}.initial_intensity_variance ==
-              NdtParams::kDefaultInitialIntensityVariance);
-static_assert(TsdfOptions{}.max_weight == TsdfParams::kDefaultMaxWeight);
 static_assert(TierOptions{}.compressed_memory_bytes == RegionTierConfig::kDefaultCompressedBytes);
 static_assert(static_cast<int>(HeightCell::kUnknown) == RM_HM_UNKNOWN);
 static_assert(static_cast<int>(HeightCell::kSurface) == RM_HM_SURFACE);
@@ -36,6 +28,76 @@ namespace {
 
 Result<MapConfig> fail(const std::string& message) {
   return raymap::fail(ErrorCode::kInvalidArgument, message);
+}
+
+/// NdtParams and TsdfParams name a parameter as "ndt sensor-noise ..." / "tsdf max-weight ...":
+/// the same error naming its key, "map.ndt.sensor_noise ...".
+Error withKey(Error error) {
+  std::string& m = error.message;
+  const std::size_t space = m.find(' ');
+  const std::size_t end = m.find(' ', space + 1);
+  if (space == std::string::npos || end == std::string::npos) {
+    return error;
+  }
+  std::string name = m.substr(space + 1, end - space - 1);
+  for (char& c : name) {
+    c = c == '-' ? '_' : c;
+  }
+  m = "map." + m.substr(0, space) + "." + name + m.substr(end);
+  return error;
+}
+
+/// The first NDT or TSDF option set (as its key), or nullptr when none is.
+const char* firstNdtOption(const NdtOptions& n) {
+  const std::pair<bool, const char*> given[] = {
+      {n.sensor_noise.has_value(), "map.ndt.sensor_noise"},
+      {n.regulariser.has_value(), "map.ndt.regulariser"},
+      {n.sample_threshold.has_value(), "map.ndt.sample_threshold"},
+      {n.reinit_probability.has_value(), "map.ndt.reinit_probability"},
+      {n.reinit_count.has_value(), "map.ndt.reinit_count"},
+      {n.adaptation_rate.has_value(), "map.ndt.adaptation_rate"},
+      {n.initial_intensity_variance.has_value(), "map.ndt.initial_intensity_variance"}};
+  for (const auto& [set, key] : given) {
+    if (set) {
+      return key;
+    }
+  }
+  return nullptr;
+}
+
+const char* firstTsdfOption(const TsdfOptions& t) {
+  if (t.truncation) {
+    return "map.tsdf.truncation";
+  }
+  if (t.max_weight) {
+    return "map.tsdf.max_weight";
+  }
+  return t.dropoff ? "map.tsdf.dropoff" : nullptr;
+}
+
+/// The name of the mode the options ask for, as `raymap info` and `--mode` spell it.
+std::string modeName(const MapOptions& options) {
+  if (!options.occupancy && options.mode != MapMode::kTsdf) {
+    return "decay";
+  }
+  return toString(options.mode);
+}
+
+/// Refuses NDT or TSDF parameters for a map of another mode, naming the first one set.
+Expected<void, Error> checkModeParameters(const MapOptions& options) {
+  const char* ndt = firstNdtOption(options.ndt);
+  if (ndt != nullptr && !isNdt(options.mode)) {
+    return raymap::fail(ErrorCode::kInvalidArgument,
+                        std::string(ndt) + " applies only to map.mode ndt-om or ndt-tm (it is " +
+                            modeName(options) + ")");
+  }
+  const char* tsdf = firstTsdfOption(options.tsdf);
+  if (tsdf != nullptr && options.mode != MapMode::kTsdf) {
+    return raymap::fail(
+        ErrorCode::kInvalidArgument,
+        std::string(tsdf) + " applies only to map.mode tsdf (it is " + modeName(options) + ")");
+  }
+  return {};
 }
 
 /// The mode's layers and parameters (after the geometry, semantics and occupancy are set): the
@@ -49,43 +111,52 @@ Expected<void, Error> applyMode(const MapOptions& options, MapConfig& config) {
                         "map.occupancy: false is a map of decay rates only: it needs "
                         "map.decay_rate: true and map.mode occupancy");
   }
+  if (tsdf && options.decay_rate) {
+    return raymap::fail(ErrorCode::kInvalidArgument,
+                        "map.decay_rate does not combine with map.mode tsdf (a TSDF map has no "
+                        "occupancy or voxel mean for the rate)");
+  }
   if (options.decay_rate && !options.voxel_mean) {
     return raymap::fail(ErrorCode::kInvalidArgument,
-                        "map.decay_rate needs map.voxel_mean (its sample count over the metres "
-                        "of ray path is the rate)");
+                        "map.mode decay and map.decay_rate need the voxel mean (its sample count "
+                        "over the metres of ray path is the rate): map.voxel_mean: true");
   }
   if ((ndt || tsdf || decay_only) && options.semantics != Semantics::kPerRay) {
     return raymap::fail(ErrorCode::kInvalidArgument,
-                        std::string("map.mode ") +
-                            (decay_only ? "decay" : std::string(toString(options.mode))) +
-                            " needs map.semantics per-ray: every ray's own update counts");
+                        "map.mode " + modeName(options) +
+                            " needs map.semantics: ray (every ray's own update counts)");
+  }
+  if (auto ok = checkModeParameters(options); !ok) {
+    return ok;
   }
   if (tsdf) {
-    if (options.decay_rate) {
-      return raymap::fail(ErrorCode::kInvalidArgument,
-                          "map.decay_rate does not combine with map.mode tsdf (a TSDF map has no "
-                          "occupancy or voxel mean for the rate)");
-    }
     config = config.forTsdf();
     config.tsdf.truncation_m = options.tsdf.truncation;
-    config.tsdf.max_weight = options.tsdf.max_weight;
+    config.tsdf.max_weight = options.tsdf.max_weight.value_or(config.tsdf.max_weight);
     config.tsdf.dropoff_m = options.tsdf.dropoff;
-    return config.tsdf.validate(config.geometry.resolution);
+    if (auto ok = config.tsdf.validate(config.geometry.resolution); !ok) {
+      return Unexpected(withKey(ok.error()));
+    }
+    return {};
   }
   config.decay_rate = options.decay_rate;
   if (decay_only) {
     config = config.forDecay();
   }
   if (ndt) {
+    const NdtOptions& n = options.ndt;
     NdtParams& p = config.ndt;
-    p.sensor_noise = options.ndt.sensor_noise;
-    p.regulariser = options.ndt.regulariser;
-    p.sample_threshold = options.ndt.sample_threshold;
-    p.reinit_probability = options.ndt.reinit_probability;
-    p.reinit_count = options.ndt.reinit_count;
-    p.adaptation_rate = options.ndt.adaptation_rate;
-    p.initial_intensity_variance = options.ndt.initial_intensity_variance;
-    return p.validate();
+    p.sensor_noise = n.sensor_noise.value_or(p.sensor_noise);
+    p.regulariser = n.regulariser.value_or(p.regulariser);
+    p.sample_threshold = n.sample_threshold.value_or(p.sample_threshold);
+    p.reinit_probability = n.reinit_probability.value_or(p.reinit_probability);
+    p.reinit_count = n.reinit_count.value_or(p.reinit_count);
+    p.adaptation_rate = n.adaptation_rate;
+    p.initial_intensity_variance =
+        n.initial_intensity_variance.value_or(p.initial_intensity_variance);
+    if (auto ok = p.validate(); !ok) {
+      return Unexpected(withKey(ok.error()));
+    }
   }
   return {};
 }
@@ -97,8 +168,7 @@ Result<MapConfig> toMapConfig(const MapOptions& options) {
                                 std::pair{"map.miss_probability", options.miss_probability},
                                 std::pair{"map.occupied_threshold", options.occupied_threshold}}) {
     if (!(p > 0.0 && p < 1.0)) {
-      return fail(std::string(name) + " must be a probability in (0, 1), got " +
-                  std::to_string(p));
+      return fail(std::string(name) + " must be a probability in (0, 1), got " + std::to_string(p));
     }
   }
   MapConfig config;
@@ -141,16 +211,20 @@ MapOptions toMapOptions(const MapConfig& config) {
   options.max_memory_bytes = config.memory_budget_bytes;
   options.decay_rate = config.decay_rate;
   options.occupancy = config.occupancy_layer;
-  options.ndt.sensor_noise = config.ndt.sensor_noise;
-  options.ndt.regulariser = config.ndt.regulariser;
-  options.ndt.sample_threshold = config.ndt.sample_threshold;
-  options.ndt.reinit_probability = config.ndt.reinit_probability;
-  options.ndt.reinit_count = config.ndt.reinit_count;
-  options.ndt.adaptation_rate = config.ndt.adaptation_rate;
-  options.ndt.initial_intensity_variance = config.ndt.initial_intensity_variance;
-  options.tsdf.truncation = config.tsdf.truncation_m;
-  options.tsdf.max_weight = config.tsdf.max_weight;
-  options.tsdf.dropoff = config.tsdf.dropoff_m;
+  if (isNdt(config.mode)) {
+    options.ndt.sensor_noise = config.ndt.sensor_noise;
+    options.ndt.regulariser = config.ndt.regulariser;
+    options.ndt.sample_threshold = config.ndt.sample_threshold;
+    options.ndt.reinit_probability = config.ndt.reinit_probability;
+    options.ndt.reinit_count = config.ndt.reinit_count;
+    options.ndt.adaptation_rate = config.ndt.adaptation_rate;
+    options.ndt.initial_intensity_variance = config.ndt.initial_intensity_variance;
+  }
+  if (config.mode == MapMode::kTsdf) {
+    options.tsdf.truncation = config.tsdf.truncation_m;
+    options.tsdf.max_weight = config.tsdf.max_weight;
+    options.tsdf.dropoff = config.tsdf.dropoff_m;
+  }
   options.tiers.enabled = config.tiers.enabled;
   options.tiers.compressed_memory_bytes = config.tiers.compressed_bytes;
   options.tiers.spill_dir = config.tiers.spill_dir;

@@ -9,11 +9,13 @@
 #include <cstring>
 #include <sstream>
 #include <string_view>
+#include <tuple>
 #include <utility>
 
 #include "src/core/eigen_conversions.hpp"
 #include "src/io/atomic_file.hpp"
 #include "src/map/cpu_backend.hpp"
+#include "src/mapper/mapper_conversions.hpp"
 
 namespace raymap::cli {
 
@@ -58,144 +60,36 @@ void addTsdfOptions(CLI::App& c, MappingFlags& f) {
                "truncation, metres; 0 = constant weight (default 1 voxel edge)");
 }
 
-/// --mode tsdf and the --tsdf-* options into config.
-Expected<void, Error> applyTsdf(const MappingFlags& f, MapConfig& config) {
-  const bool tsdf = f.mode == "tsdf";
-  if (!tsdf) {
-    for (const auto& [set, name] : {std::pair{f.tsdf_truncation.has_value(), "--tsdf-truncation"},
-                                    std::pair{f.tsdf_max_weight.has_value(), "--tsdf-max-weight"},
-                                    std::pair{f.tsdf_dropoff.has_value(), "--tsdf-dropoff"}}) {
-      if (set) {
-        return fail(ErrorCode::kInvalidArgument,
-                    std::string(name) + " applies only to --mode tsdf");
-      }
-    }
-    return {};
-  }
-  if (f.decay_rate) {
-    return fail(ErrorCode::kInvalidArgument,
-                "--decay-rate does not combine with --mode tsdf (a TSDF map has no occupancy or "
-                "voxel mean for the rate)");
-  }
-  if (config.semantics != Semantics::kPerRay) {
-    return fail(ErrorCode::kInvalidArgument,
-                "--mode tsdf needs --semantics ray: every ray's distance is averaged in");
-  }
-  config = config.forTsdf();
-  if (f.tsdf_truncation) {
-    config.tsdf.truncation_m = *f.tsdf_truncation;
-  }
-  if (f.tsdf_max_weight) {
-    config.tsdf.max_weight = *f.tsdf_max_weight;
-  }
-  if (f.tsdf_dropoff) {
-    config.tsdf.dropoff_m = *f.tsdf_dropoff;
-  }
-  if (auto ok = config.tsdf.validate(config.geometry.resolution); !ok) {
-    // TsdfParams names the parameter as "tsdf truncation"; the user typed --tsdf-truncation.
-    std::string message = ok.error().message;
-    message[4] = '-';
-    return fail(ErrorCode::kInvalidArgument, std::string("--") + message);
-  }
-  return {};
-}
-
-/// The flags with a "<mode>+decay" --mode (as `info` names such maps) spelled as --mode <mode>
-/// --decay-rate.
-MappingFlags withDecaySuffixSplit(const MappingFlags& given) {
+/// --mode as MapOptions: "decay" is decay rates only (no occupancy), "<mode>+decay" (as `info`
+/// names such maps) is that mode with --decay-rate.
+void applyModeName(const MappingFlags& f, MapOptions& map) {
   constexpr std::string_view kSuffix = "+decay";
-  MappingFlags f = given;
-  if (f.mode.size() > kSuffix.size() && f.mode.ends_with(kSuffix)) {
-    f.mode.resize(f.mode.size() - kSuffix.size());
-    f.decay_rate = true;
+  std::string mode = f.mode;
+  map.decay_rate = f.decay_rate;
+  if (mode.size() > kSuffix.size() && mode.ends_with(kSuffix)) {
+    mode.resize(mode.size() - kSuffix.size());
+    map.decay_rate = true;
   }
-  return f;
+  if (mode == "decay") {
+    map.mode = MapMode::kOccupancy;
+    map.occupancy = false;
+    map.decay_rate = true;
+    return;
+  }
+  map.mode = mapModeFromName(mode).value_or(MapMode::kOccupancy);  // CLI11 checked the name
 }
 
-/// --mode and the --ndt-* options into config (after the semantics are set).
-Expected<void, Error> applyMode(const MappingFlags& flags, MapConfig& config) {
-  const MappingFlags f = withDecaySuffixSplit(flags);
-  // "decay" is decay rates only (voxel mean and traversal, no occupancy); --decay-rate adds the
-  // traversal layer to occupancy or NDT maps.
-  const bool decay_mode = f.mode == "decay";
-  const std::optional<MapMode> mode =
-      decay_mode ? std::optional<MapMode>(MapMode::kOccupancy) : mapModeFromName(f.mode);
-  if (!mode) {
-    return fail(ErrorCode::kInvalidArgument,
-                "--mode: unknown mode '" + f.mode +
-                    "' (expected occupancy, ndt-om, ndt-tm, decay or tsdf)");
-  }
-  if (auto ok = applyTsdf(f, config); !ok || *mode == MapMode::kTsdf) {
-    if (!ok) {
-      return ok;
-    }
-    for (const bool set : {f.ndt_sensor_noise.has_value(), f.ndt_regulariser.has_value(),
-                           f.ndt_sample_threshold.has_value(), f.ndt_reinit_probability.has_value(),
-                           f.ndt_reinit_count.has_value(), f.ndt_adaptation_rate.has_value(),
-                           f.ndt_initial_intensity_variance.has_value()}) {
-      if (set) {
-        return fail(ErrorCode::kInvalidArgument,
-                    "the --ndt-* options apply only to --mode ndt-om or ndt-tm");
-      }
-    }
-    return {};
-  }
-  config.mode = *mode;
-  config.decay_rate = decay_mode || f.decay_rate;
-  if (config.decay_rate && !config.voxel_mean) {
-    return fail(ErrorCode::kInvalidArgument,
-                "--mode decay / --decay-rate need the voxel mean (its sample count over the "
-                "metres of ray path is the rate): drop --no-mean");
-  }
-  if (decay_mode) {
-    if (config.semantics != Semantics::kPerRay) {
-      return fail(ErrorCode::kInvalidArgument,
-                  "--mode decay needs --semantics ray: every ray's path counts (for decay rates "
-                  "beside per-scan occupancy use --mode occupancy --decay-rate)");
-    }
-    config = config.forDecay();
-  }
-  const std::pair<bool, const char*> given[] = {
-      {f.ndt_sensor_noise.has_value(), "--ndt-sensor-noise"},
-      {f.ndt_regulariser.has_value(), "--ndt-regulariser"},
-      {f.ndt_sample_threshold.has_value(), "--ndt-sample-threshold"},
-      {f.ndt_reinit_probability.has_value(), "--ndt-reinit-probability"},
-      {f.ndt_reinit_count.has_value(), "--ndt-reinit-count"},
-      {f.ndt_adaptation_rate.has_value(), "--ndt-adaptation-rate"},
-      {f.ndt_initial_intensity_variance.has_value(), "--ndt-initial-intensity-variance"}};
-  if (!isNdt(*mode)) {
-    for (const auto& [set, name] : given) {
-      if (set) {
-        return fail(ErrorCode::kInvalidArgument,
-                    std::string(name) + " applies only to --mode ndt-om or ndt-tm");
-      }
-    }
-    return {};
-  }
-  if (config.semantics != Semantics::kPerRay) {
-    return fail(ErrorCode::kInvalidArgument,
-                "--mode " + f.mode +
-                    " needs --semantics ray: each ray's miss depends on where it crosses a "
-                    "voxel's Gaussian, and per-scan semantics keep one update per voxel");
-  }
-  NdtParams& ndt = config.ndt;
-  ndt.sensor_noise = f.ndt_sensor_noise.value_or(ndt.sensor_noise);
-  ndt.regulariser = f.ndt_regulariser.value_or(ndt.regulariser);
-  ndt.sample_threshold = f.ndt_sample_threshold.value_or(ndt.sample_threshold);
-  ndt.reinit_probability = f.ndt_reinit_probability.value_or(ndt.reinit_probability);
-  ndt.reinit_count = f.ndt_reinit_count.value_or(ndt.reinit_count);
-  if (f.ndt_adaptation_rate) {
-    ndt.adaptation_rate = *f.ndt_adaptation_rate;
-  }
-  ndt.initial_intensity_variance =
-      f.ndt_initial_intensity_variance.value_or(ndt.initial_intensity_variance);
-  if (auto ok = ndt.validate(); !ok) {
-    // NdtParams names the parameter as "ndt sensor-noise"; the user typed --ndt-sensor-noise.
-    std::string message = ok.error().message;
-    message[3] = '-';
-    return fail(ErrorCode::kInvalidArgument, std::string("--") + message);
-  }
-  return {};
+void copyNdtAndTsdf(const MappingFlags& f, MapOptions& map) {
+  map.ndt.sensor_noise = f.ndt_sensor_noise;
+  map.ndt.regulariser = f.ndt_regulariser;
+  map.ndt.sample_threshold = f.ndt_sample_threshold;
+  map.ndt.reinit_probability = f.ndt_reinit_probability;
+  map.ndt.reinit_count = f.ndt_reinit_count;
+  map.ndt.adaptation_rate = f.ndt_adaptation_rate;
+  map.ndt.initial_intensity_variance = f.ndt_initial_intensity_variance;
+  map.tsdf.truncation = f.tsdf_truncation;
+  map.tsdf.max_weight = f.tsdf_max_weight;
+  map.tsdf.dropoff = f.tsdf_dropoff;
 }
 
 }  // namespace
@@ -397,7 +291,7 @@ Expected<void, Error> writeTextFile(const std::string& path, const std::string& 
 namespace {
 
 /// --gpu-cache: "auto", a byte size ("512MiB") or a region count ("2000regions").
-Expected<void, Error> parseCacheSize(const std::string& text, BackendChoice* choice) {
+Expected<void, Error> parseCacheSize(const std::string& text, BackendOptions* choice) {
   if (text == "auto") {
     return {};
   }
@@ -422,6 +316,66 @@ Expected<void, Error> parseCacheSize(const std::string& text, BackendChoice* cho
 }
 
 }  // namespace
+
+Result<MapperConfig> toMapperConfig(const MappingFlags& f) {
+  MapperConfig c;
+  MapOptions& m = c.map;
+  m.resolution = f.resolution;
+  m.region_voxels = f.region_voxels;
+  m.semantics = f.semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
+  m.voxel_mean = !f.no_mean;
+  applyModeName(f, m);
+  copyNdtAndTsdf(f, m);
+  m.hit_probability = f.hit.value_or(m.hit_probability);
+  m.miss_probability = f.miss.value_or(m.miss_probability);
+  m.occupied_threshold = f.threshold.value_or(m.occupied_threshold);
+  for (const auto& [p, name, log_odds] :
+       {std::tuple{f.clamp_min, "--clamp-min", &m.clamp_min_log_odds},
+        std::tuple{f.clamp_max, "--clamp-max", &m.clamp_max_log_odds}}) {
+    if (!p) {
+      continue;
+    }
+    if (!(*p > 0.0 && *p < 1.0)) {
+      return fail(ErrorCode::kInvalidArgument,
+                  std::string(name) + ": a probability strictly between 0 and 1 is required");
+    }
+    *log_odds = logOdds(*p);
+  }
+  auto budget = parseByteSize(f.max_memory);
+  if (!budget) {
+    return fail(ErrorCode::kInvalidArgument, "--max-memory: " + budget.error().message);
+  }
+  m.max_memory_bytes = *budget;
+  auto tiers = toTierConfig(f.tiers, "");  // the spill folder follows the output (runPopulate)
+  if (!tiers) {
+    return Unexpected(tiers.error());
+  }
+  m.tiers.enabled = tiers->enabled;
+  m.tiers.compressed_memory_bytes = tiers->compressed_bytes;
+  m.tiers.spill_dir = tiers->spill_dir;
+  c.rays.min_range = f.min_range;
+  c.rays.max_range = f.max_range;
+  c.rays.max_ray_length = f.max_ray_length;
+  c.rays.segment_length = f.segment_length;
+  c.rays.walk = f.reverse   ? RayOptions::Walk::kReverse
+                : f.forward ? RayOptions::Walk::kForward
+                            : RayOptions::Walk::kAuto;
+  BackendOptions& b = c.backend;
+  b.name = f.backend;
+  b.threads = f.threads;
+  b.opencl_platform = f.opencl_platform;
+  b.opencl_device = f.opencl_device;
+  b.cuda_device = f.cuda_device;
+  b.fallback_cpu = f.fallback == "cpu";
+  b.gpu_memory = f.gpu_memory;
+  b.opencl_span_work = f.opencl_span_work;
+  b.device_planning = f.device_planning;
+  b.batch_rays = f.batch_rays;
+  if (auto cache = parseCacheSize(f.gpu_cache, &b); !cache) {
+    return Unexpected(cache.error());
+  }
+  return c;
+}
 
 Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& f) {
   PopulateOptions o;
@@ -467,57 +421,21 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
                     "--camera-info-topic, --downsample, --invalid-as-free, --max-rate and "
                     "--skip-damaged apply to bags only");
   }
-  o.map.geometry.resolution = f.resolution;
-  o.map.geometry.region_voxels = f.region_voxels;
-  o.map.semantics = f.semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
-  o.map.voxel_mean = !f.no_mean;
-  auto budget = parseByteSize(f.max_memory);
-  if (!budget) {
-    return fail(ErrorCode::kInvalidArgument, "--max-memory: " + budget.error().message);
+  auto config = toMapperConfig(f);
+  if (!config) {
+    return Unexpected(config.error());
   }
-  o.map.memory_budget_bytes = *budget;
-  auto tiers = toTierConfig(f.tiers, "");  // the spill folder follows the output (runPopulate)
-  if (!tiers) {
-    return Unexpected(tiers.error());
+  // One conversion, the library's (the same as raymap::Mapper's): it checks the combinations.
+  auto map = mapper::toMapConfig(config->map);
+  if (!map) {
+    return Unexpected(map.error());
   }
-  o.map.tiers = *tiers;
-  auto probability_option = [](const std::optional<double>& p, const char* name,
-                               float* log_odds) -> Expected<void, Error> {
-    if (!p) {
-      return {};
-    }
-    if (!(*p > 0.0 && *p < 1.0)) {
-      return fail(ErrorCode::kInvalidArgument,
-                  std::string(name) + ": a probability strictly between 0 and 1 is required");
-    }
-    *log_odds = logOdds(*p);
-    return {};
-  };
-  for (auto ok : {probability_option(f.hit, "--hit", &o.map.occupancy.hit),
-                  probability_option(f.miss, "--miss", &o.map.occupancy.miss),
-                  probability_option(f.clamp_min, "--clamp-min", &o.map.occupancy.clamp_min),
-                  probability_option(f.clamp_max, "--clamp-max", &o.map.occupancy.clamp_max),
-                  probability_option(f.threshold, "--threshold", &o.map.occupancy.threshold)}) {
-    if (!ok) {
-      return Unexpected(ok.error());
-    }
+  o.map = *map;
+  auto filter = mapper::toRayFilter(config->rays, config->backend.name != "cpu");
+  if (!filter) {
+    return Unexpected(filter.error());
   }
-  if (auto ok = applyMode(f, o.map); !ok) {
-    return Unexpected(ok.error());
-  }
-  if (auto ok = o.map.validate(); !ok) {
-    return Unexpected(ok.error());
-  }
-  o.filter.min_range_m = f.min_range;
-  o.filter.max_range_m = f.max_range;
-  o.filter.max_length_m = f.max_ray_length;
-  o.filter.segment_length_m = f.segment_length;
-  // Device backends walk from the sample back to the sensor unless told otherwise: rays of a scan
-  // all start near the sensor, and forward walks make the device's threads collide there.
-  o.filter.reverse = f.reverse || (f.backend != "cpu" && !f.forward);
-  if (auto ok = o.filter.validate(); !ok) {
-    return Unexpected(ok.error());
-  }
+  o.filter = *filter;
   if (f.segment_length > 0.0 && f.segment_length < f.resolution) {
     return fail(ErrorCode::kInvalidArgument,
                 "--segment-length must be 0 (off) or at least the resolution");
@@ -527,21 +445,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
                                                  std::to_string(CpuBackendOptions::kMaxThreads) +
                                                  " (got " + std::to_string(f.threads) + ")");
   }
-  o.backend.name = f.backend;
-  o.backend.threads = f.threads;
-  o.backend.opencl_platform = f.opencl_platform;
-  o.backend.opencl_device = f.opencl_device;
-  o.backend.cuda_device = f.cuda_device;
-  o.backend.fallback_cpu = f.fallback == "cpu";
-  o.backend.gpu_memory = f.gpu_memory;
-  o.backend.opencl_span_work = f.opencl_span_work;
-  o.backend.device_planning = f.device_planning;
-  if (f.batch_rays != 0) {
-    o.backend.gpu_batch_rays = f.batch_rays;
-  }
-  if (auto cache = parseCacheSize(f.gpu_cache, &o.backend); !cache) {
-    return Unexpected(cache.error());
-  }
+  o.backend = mapper::toBackendChoice(config->backend);
   o.batch_rays = f.batch_rays;
   return o;
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "raymap/error.hpp"
+#include "raymap/mapper_config.hpp"
 #include <CLI/CLI.hpp>
 
 #include "tools/raymap/memory_tiers.hpp"
@@ -78,6 +79,12 @@ struct MappingFlags {
 
 /// @brief Registers the input and mapping options on a subcommand.
 void addMappingOptions(CLI::App& command, MappingFlags& flags);
+
+/// @brief The library configuration the mapping flags ask for (raymap::MapperConfig, the same
+/// a program linking the library fills in); what the flags cannot express wrongly is checked
+/// by the library's one conversion (mapper::toMapConfig), naming configuration keys that
+/// withCliFlags() shows as flags.
+Result<MapperConfig> toMapperConfig(const MappingFlags& flags);
 
 /// @brief Converts and validates the flags; errors name the option and the reason.
 Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& flags);
