@@ -30,6 +30,9 @@ int checkConfig(const std::string& path) {
     return kExitConfig;
   }
   const raymap::service::DaemonConfig& c = config.value();
+  for (const std::string& warning : c.warnings) {
+    std::printf("warning: %s: %s\n", path.c_str(), warning.c_str());
+  }
   if (auto ok = raymap::service::checkStartup(c, raymap::platform::availableMemory()); !ok) {
     std::fprintf(stderr, "%s\n", ok.error().message.c_str());
     return kExitConfig;
@@ -61,6 +64,9 @@ int run(const std::string& path) {
   if (!config) {
     logLine(LogLevel::kError, "%s", config.error().message.c_str());
     return kExitConfig;
+  }
+  for (const std::string& warning : config->warnings) {
+    logLine(LogLevel::kWarning, "%s: %s", path.c_str(), warning.c_str());
   }
   // Every pool is sized before any is allocated: a configuration that cannot fit is refused
   // here, naming its key, instead of failing halfway (or being killed) later.

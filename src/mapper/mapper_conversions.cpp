@@ -3,6 +3,7 @@
 #include "src/mapper/mapper_conversions.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 #include "kernels/common/heightmap.h"
 #include "src/core/eigen_conversions.hpp"
@@ -168,7 +169,10 @@ Result<MapConfig> toMapConfig(const MapOptions& options) {
                                 std::pair{"map.miss_probability", options.miss_probability},
                                 std::pair{"map.occupied_threshold", options.occupied_threshold}}) {
     if (!(p > 0.0 && p < 1.0)) {
-      return fail(std::string(name) + " must be a probability in (0, 1), got " + std::to_string(p));
+      char got[32];
+      std::snprintf(got, sizeof(got), "%g", p);
+      return fail(std::string(name) + " must be a probability between 0 and 1 (exclusive), got " +
+                  got);
     }
   }
   MapConfig config;

@@ -17,9 +17,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include "src/config/yaml_reader.hpp"
+#include "src/core/byte_size.hpp"
 #include "src/core/eigen_conversions.hpp"
 #include "src/dds/grid_map_message.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/mapper/mapper_conversions.hpp"
 #include "src/msgs/ros_names.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
 
@@ -67,38 +69,86 @@ std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::s
   return f.has(key) ? f.choice(key, choices) : fallback;
 }
 
-/// map.ndt: the NDT-OM / NDT-TM parameters (docs/raymapd.md), checked by NdtParams::validate.
-void readNdt(Context& ctx, const YAML::Node& node, const std::string& path, NdtParams& ndt) {
+/// map.ndt: the NDT-OM / NDT-TM parameters (docs/raymapd.md): only the keys given are set, so
+/// that the library's conversion refuses them for a map of another mode and supplies the
+/// defaults; it also checks their ranges.
+void readNdt(Context& ctx, const YAML::Node& node, const std::string& path, NdtOptions& ndt) {
   Fields f(ctx, node, path);
   f.knownKeys({"sensor_noise", "regulariser", "sample_threshold", "reinit_probability",
                "reinit_count", "adaptation_rate", "initial_intensity_variance"});
-  ndt.sensor_noise = f.number("sensor_noise", NdtParams::kDefaultSensorNoise);
-  ndt.regulariser = f.number("regulariser", NdtParams::kDefaultRegulariser);
-  ndt.sample_threshold = f.integer<std::uint32_t>(
-      "sample_threshold", NdtParams::kDefaultSampleThreshold, 1u, 1'000'000u);
-  ndt.reinit_probability = f.number("reinit_probability", NdtParams::kDefaultReinitProbability);
-  ndt.reinit_count =
-      f.integer<std::uint32_t>("reinit_count", NdtParams::kDefaultReinitCount, 1u, 1'000'000'000u);
-  if (f.has("adaptation_rate")) {
-    ndt.adaptation_rate = f.number("adaptation_rate");
+  const auto number = [&](const char* key, std::optional<double>& out) {
+    if (f.has(key)) {
+      out = f.number(key);
+    }
+  };
+  number("sensor_noise", ndt.sensor_noise);
+  number("regulariser", ndt.regulariser);
+  number("reinit_probability", ndt.reinit_probability);
+  number("adaptation_rate", ndt.adaptation_rate);
+  number("initial_intensity_variance", ndt.initial_intensity_variance);
+  if (f.has("sample_threshold")) {
+    ndt.sample_threshold = f.integer<std::uint32_t>("sample_threshold", 0u, 1u, 1'000'000u);
   }
-  ndt.initial_intensity_variance =
-      f.number("initial_intensity_variance", NdtParams::kDefaultInitialIntensityVariance);
-  if (auto ok = ndt.validate(); !ok) {
-    ctx.fail(node, path, ok.error().message);
+  if (f.has("reinit_count")) {
+    ndt.reinit_count = f.integer<std::uint32_t>("reinit_count", 0u, 1u, 1'000'000'000u);
   }
 }
 
-void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& save_on_exit) {
+/// map.semantics: "ray" or "scan", as `raymap populate --semantics` and `raymap info` spell them;
+/// the older "per-ray" and "per-scan" are read with a warning naming the new value.
+Semantics readSemantics(Fields& f, std::vector<std::string>& warnings) {
+  static const std::vector<std::string> kNames = {"ray", "scan", "per-ray", "per-scan"};
+  const std::size_t choice = choiceOr(f, "semantics", kNames, 0);
+  if (choice >= 2) {
+    warnings.push_back(f.path("semantics") + ": " + kNames[choice] + " is the old name: write " +
+                       kNames[choice - 2] + " (the old one is read until the next release)");
+  }
+  return choice % 2 == 0 ? Semantics::kPerRay : Semantics::kPerScan;
+}
+
+/// The `map:` section as the library's MapOptions (the names raymap::MapperConfig and
+/// `raymap populate` use), converted by the library's one conversion, which checks the
+/// combinations; then what only a rolling service map has.
+void readMap(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
   Fields f(ctx, node, "map");
   f.knownKeys({"resolution", "region_voxels", "window", "semantics", "voxel_mean",
                "hit_probability", "miss_probability", "clamp_min", "clamp_max", "save_on_exit",
                "mode", "ndt", "decay_rate"});
-  map.policy = StorePolicy::kRolling;
-  map.geometry.resolution = f.positive("resolution", MapGeometry::kDefaultResolution);
-  map.geometry.region_voxels =
+  MapOptions o;
+  o.resolution = f.positive("resolution", MapGeometry::kDefaultResolution);
+  o.region_voxels =
       f.integer<std::int32_t>("region_voxels", MapGeometry::kDefaultRegionVoxels,
                               MapGeometry::kMinRegionVoxels, MapGeometry::kMaxRegionVoxels);
+  o.semantics = readSemantics(f, config.warnings);
+  o.voxel_mean = flag(f, "voxel_mean", true);
+  o.decay_rate = flag(f, "decay_rate", false);
+  // A service publishes height maps, which need occupancy: no TSDF or decay-only maps.
+  static const std::vector<std::string> kModes = {"occupancy", "ndt-om", "ndt-tm"};
+  o.mode = *mapModeFromName(kModes[choiceOr(f, "mode", kModes, 0)]);
+  if (f.has("ndt")) {
+    readNdt(ctx, f.get("ndt"), f.path("ndt"), o.ndt);
+  }
+  o.hit_probability = f.number("hit_probability", OccupancyParams::kDefaultHitProbability);
+  o.miss_probability = f.number("miss_probability", OccupancyParams::kDefaultMissProbability);
+  o.clamp_min_log_odds = static_cast<float>(
+      f.number("clamp_min", static_cast<double>(OccupancyParams::kDefaultClampMin)));
+  o.clamp_max_log_odds = static_cast<float>(
+      f.number("clamp_max", static_cast<double>(OccupancyParams::kDefaultClampMax)));
+  config.save_map_on_exit = text(f, "save_on_exit", "");
+  if (ctx.failed()) {
+    return;
+  }
+  auto converted = mapper::toMapConfig(o);
+  if (!converted) {
+    ctx.fail(node, "", converted.error().message);
+    return;
+  }
+  MapConfig& map = config.map;
+  map = *converted;
+  map.policy = StorePolicy::kRolling;
+  map.tiers = RegionTierConfig{};  // a rolling map keeps its window in its pool
+  map.prefault = true;             // a service touches its pool once at start-up, not in the loop
+  map.window_regions = {8, 8, 3};
   if (f.has("window")) {
     const YAML::Node w = f.get("window");
     const std::string path = f.path("window");
@@ -109,47 +159,39 @@ void readMap(Context& ctx, const YAML::Node& node, MapConfig& map, std::string& 
                             config::toInteger<std::int32_t>(ctx, w[1], path + "[1]", 1, 256),
                             config::toInteger<std::int32_t>(ctx, w[2], path + "[2]", 1, 256)};
     }
-  } else {
-    map.window_regions = {8, 8, 3};
   }
-  map.semantics = choiceOr(f, "semantics", {"per-ray", "per-scan"}, 0) == 0 ? Semantics::kPerRay
-                                                                            : Semantics::kPerScan;
-  map.voxel_mean = flag(f, "voxel_mean", true);
-  map.decay_rate = flag(f, "decay_rate", false);
-  f.check(!map.decay_rate || map.voxel_mean, "decay_rate",
-          "needs voxel_mean: true (the voxel mean's sample count over the metres is the rate)");
-  static const std::vector<std::string> kModes = {"occupancy", "ndt-om", "ndt-tm"};
-  map.mode = *mapModeFromName(kModes[choiceOr(f, "mode", kModes, 0)]);
-  f.check(!isNdt(map.mode) || map.semantics == Semantics::kPerRay, "mode",
-          "NDT maps need semantics: per-ray");
-  if (f.has("ndt")) {
-    readNdt(ctx, f.get("ndt"), f.path("ndt"), map.ndt);
-  }
-  const auto probability = [&](const char* key, double fallback) {
-    const double p = f.number(key, fallback);
-    f.check(p > 0.0 && p < 1.0, key, "must be a probability strictly between 0 and 1");
-    return p;
-  };
-  const double hit = probability("hit_probability", OccupancyParams::kDefaultHitProbability);
-  const double miss = probability("miss_probability", OccupancyParams::kDefaultMissProbability);
-  f.check(hit > 0.5, "hit_probability", "must be above 0.5 (a hit raises occupancy)");
-  f.check(miss < 0.5, "miss_probability", "must be below 0.5 (a miss lowers occupancy)");
-  map.occupancy.hit = logOdds(hit);
-  map.occupancy.miss = logOdds(miss);
-  map.occupancy.clamp_min = static_cast<float>(
-      f.number("clamp_min", static_cast<double>(OccupancyParams::kDefaultClampMin)));
-  map.occupancy.clamp_max = static_cast<float>(
-      f.number("clamp_max", static_cast<double>(OccupancyParams::kDefaultClampMax)));
-  f.check(map.occupancy.clamp_min < 0.0f && map.occupancy.clamp_max > 0.0f, "clamp_max",
-          "clamp_min must be below 0 and clamp_max above 0 (log-odds)");
-  save_on_exit = text(f, "save_on_exit", "");
-  map.prefault = true;  // a service touches its pool once at start-up, not in the loop
 }
 
-void readBackend(Context& ctx, const YAML::Node& node, BackendChoice& backend) {
+/// backend.gpu_cache: "auto", a size ("512MiB") or a region count ("2000regions"), as
+/// `raymap populate --gpu-cache`; the older gpu_cache_mb (MiB, 0 = automatic) is read with a
+/// warning naming the new key.
+void readGpuCache(Fields& f, BackendOptions& backend, std::vector<std::string>& warnings) {
+  if (f.has("gpu_cache_mb")) {
+    warnings.push_back(f.path("gpu_cache_mb") +
+                       " is the old key: write backend.gpu_cache with a size (512MiB), a region "
+                       "count (2000regions) or auto (the old one is read until the next release)");
+    f.check(!f.has("gpu_cache"), "gpu_cache_mb",
+            "give backend.gpu_cache or gpu_cache_mb, not both");
+    backend.gpu_cache_bytes =
+        std::uint64_t{f.integer<std::uint32_t>("gpu_cache_mb", 0u, 0u, 1u << 20)} << 20;
+    return;
+  }
+  auto size = parseCacheSize(text(f, "gpu_cache", "auto"));
+  if (!size) {
+    f.check(false, "gpu_cache", size.error().message);
+    return;
+  }
+  backend.gpu_cache_bytes = size->bytes;
+  backend.gpu_cache_regions = size->regions;
+}
+
+/// The `backend:` section as the library's BackendOptions, converted as raymap::Mapper and
+/// `raymap populate` convert them.
+void readBackend(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
   Fields f(ctx, node, "backend");
   f.knownKeys({"name", "threads", "fallback", "opencl_platform", "opencl_device", "cuda_device",
-               "gpu_cache_mb", "gpu_memory", "opencl_span_work", "device_planning"});
+               "gpu_cache", "gpu_cache_mb", "gpu_memory", "opencl_span_work", "device_planning"});
+  BackendOptions backend;
   static const std::vector<std::string> kNames = {"cpu", "opencl", "cuda"};
   backend.name = kNames[choiceOr(f, "name", kNames, 0)];
   const std::vector<std::string> available = backends::availableBackends();
@@ -162,14 +204,16 @@ void readBackend(Context& ctx, const YAML::Node& node, BackendChoice& backend) {
   backend.opencl_platform = text(f, "opencl_platform", "");
   backend.opencl_device = text(f, "opencl_device", "");
   backend.cuda_device = f.integer<int>("cuda_device", 0, 0, 64);
-  backend.gpu_cache_bytes =
-      std::uint64_t{f.integer<std::uint32_t>("gpu_cache_mb", 0u, 0u, 1u << 20)} << 20;
+  readGpuCache(f, backend, config.warnings);
   static const std::vector<std::string> kMemory = {"auto", "cache", "shared"};
   backend.gpu_memory = kMemory[choiceOr(f, "gpu_memory", kMemory, 0)];
   static const std::vector<std::string> kSpanWork = {"auto", "span", "region"};
   backend.opencl_span_work = kSpanWork[choiceOr(f, "opencl_span_work", kSpanWork, 0)];
   static const std::vector<std::string> kPlanning = {"host", "device"};
   backend.device_planning = kPlanning[choiceOr(f, "device_planning", kPlanning, 0)];
+  const std::size_t gpu_batch_rays = config.backend.gpu_batch_rays;
+  config.backend = mapper::toBackendChoice(backend);
+  config.backend.gpu_batch_rays = gpu_batch_rays;  // raymapd's own default (BackendChoice)
 }
 
 void readPose(Context& ctx, const YAML::Node& node, PoseConfig& pose) {
@@ -560,8 +604,8 @@ Result<DaemonConfig> parse(const YAML::Node& root, const std::string& name) {
     const YAML::Node node = top.get(key);
     return node.IsDefined() && !node.IsNull() ? node : YAML::Node(YAML::NodeType::Map);
   };
-  if (!ctx.failed()) readMap(ctx, section("map"), config.map, config.save_map_on_exit);
-  if (!ctx.failed()) readBackend(ctx, section("backend"), config.backend);
+  if (!ctx.failed()) readMap(ctx, section("map"), config);
+  if (!ctx.failed()) readBackend(ctx, section("backend"), config);
   if (!ctx.failed()) readPose(ctx, section("pose"), config.pose);
   if (!ctx.failed()) readSensors(ctx, top.get("sensors"), config.sensors);
   if (!ctx.failed()) readHeightmap(ctx, section("heightmap"), config.heightmap);

@@ -195,6 +195,9 @@ struct HealthConfig {
 /// @brief Everything raymapd reads from its YAML file.
 struct DaemonConfig {
   std::string path;  ///< the file it came from
+  /// Keys and values the file writes in an older form, each with its new name (they are read
+  /// until the next release): logged at start and printed by --check-config.
+  std::vector<std::string> warnings;
   /// The service's name: the diagnostics' status names ("<name>: pipeline", ...) and the default
   /// hardware_id.
   std::string name = "raymapd";

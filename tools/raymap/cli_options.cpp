@@ -12,6 +12,7 @@
 #include <tuple>
 #include <utility>
 
+#include "src/core/byte_size.hpp"
 #include "src/core/eigen_conversions.hpp"
 #include "src/io/atomic_file.hpp"
 #include "src/map/cpu_backend.hpp"
@@ -230,37 +231,6 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
       ->check(CLI::Range(std::size_t{1024}, std::size_t{1} << 26));
 }
 
-Result<std::uint64_t> parseByteSize(const std::string& text) {
-  std::size_t used = 0;
-  double value = 0.0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    return fail(ErrorCode::kInvalidArgument, "'" + text + "' is not a size (try 4GiB or 512MiB)");
-  }
-  std::string unit = text.substr(used);
-  double scale = 1.0;
-  if (unit.empty() || unit == "B") {
-    scale = 1.0;
-  } else if (unit == "K" || unit == "KiB" || unit == "k") {
-    scale = 1024.0;
-  } else if (unit == "M" || unit == "MiB") {
-    scale = 1024.0 * 1024.0;
-  } else if (unit == "G" || unit == "GiB") {
-    scale = 1024.0 * 1024.0 * 1024.0;
-  } else if (unit == "T" || unit == "TiB") {
-    scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
-  } else {
-    return fail(ErrorCode::kInvalidArgument,
-                "unknown size unit '" + unit + "' in '" + text + "' (use B, KiB, MiB, GiB, TiB)");
-  }
-  const double bytes = value * scale;
-  if (!std::isfinite(bytes) || bytes < 0.0 || bytes > 1.8e19) {
-    return fail(ErrorCode::kInvalidArgument, "size '" + text + "' is out of range");
-  }
-  return static_cast<std::uint64_t>(bytes);
-}
-
 Result<Vec3d> parseVector(const std::string& text, const std::string& option) {
   Vec3d v;
   char c1 = 0;
@@ -291,27 +261,13 @@ Expected<void, Error> writeTextFile(const std::string& path, const std::string& 
 namespace {
 
 /// --gpu-cache: "auto", a byte size ("512MiB") or a region count ("2000regions").
-Expected<void, Error> parseCacheSize(const std::string& text, BackendOptions* choice) {
-  if (text == "auto") {
-    return {};
+Expected<void, Error> applyCacheSize(const std::string& text, BackendOptions* choice) {
+  auto size = parseCacheSize(text);
+  if (!size) {
+    return fail(ErrorCode::kInvalidArgument, "--gpu-cache: " + size.error().message);
   }
-  const std::string suffix = "regions";
-  if (text.size() > suffix.size() && text.ends_with(suffix)) {
-    const std::string digits = text.substr(0, text.size() - suffix.size());
-    char* end = nullptr;
-    const unsigned long long n = std::strtoull(digits.c_str(), &end, 10);
-    if (digits.empty() || end != digits.c_str() + digits.size() || n == 0 || n > 0xFFFFFFFFull) {
-      return fail(ErrorCode::kInvalidArgument,
-                  "--gpu-cache: '" + text + "' is not a region count such as 2000regions");
-    }
-    choice->gpu_cache_regions = static_cast<std::uint32_t>(n);
-    return {};
-  }
-  auto bytes = parseByteSize(text);
-  if (!bytes) {
-    return fail(ErrorCode::kInvalidArgument, "--gpu-cache: " + bytes.error().message);
-  }
-  choice->gpu_cache_bytes = *bytes;
+  choice->gpu_cache_bytes = size->bytes;
+  choice->gpu_cache_regions = size->regions;
   return {};
 }
 
@@ -371,7 +327,7 @@ Result<MapperConfig> toMapperConfig(const MappingFlags& f) {
   b.opencl_span_work = f.opencl_span_work;
   b.device_planning = f.device_planning;
   b.batch_rays = f.batch_rays;
-  if (auto cache = parseCacheSize(f.gpu_cache, &b); !cache) {
+  if (auto cache = applyCacheSize(f.gpu_cache, &b); !cache) {
     return Unexpected(cache.error());
   }
   return c;

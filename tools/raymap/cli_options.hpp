@@ -89,9 +89,6 @@ Result<MapperConfig> toMapperConfig(const MappingFlags& flags);
 /// @brief Converts and validates the flags; errors name the option and the reason.
 Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& flags);
 
-/// @brief Parses sizes such as "4GiB", "512M", "1.5G" or plain bytes.
-Result<std::uint64_t> parseByteSize(const std::string& text);
-
 /// @brief Parses "x,y,z" (metres).
 Result<Vec3d> parseVector(const std::string& text, const std::string& option);
 

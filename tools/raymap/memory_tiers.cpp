@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "src/core/byte_size.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_writer.hpp"

@@ -52,7 +52,7 @@ constexpr std::array kOptionFlags{
     OptionFlag{"backend.fallback", "--fallback", "none cpu"},
     OptionFlag{"backend.device_planning", "--device-planning", "host device"},
     OptionFlag{"backend.gpu_memory", "--gpu-memory", "auto cache shared"},
-    OptionFlag{"backend.gpu_cache_mb", "--gpu-cache", ""},
+    OptionFlag{"backend.gpu_cache", "--gpu-cache", ""},
     OptionFlag{"backend.cuda_device", "--cuda-device", ""},
     OptionFlag{"bag.topic", "--topic", ""},
     OptionFlag{"bag.camera_info_topic", "--camera-info-topic", ""},

@@ -78,7 +78,7 @@ Result<std::uint32_t> deviceCacheSlots(const VoxelMap& map, const DeviceMemoryLi
     return fail(ErrorCode::kInvalidArgument,
                 std::string("the ") + api + " region cache of " + std::to_string(budget) +
                     " bytes cannot hold one region of " + std::to_string(region_bytes) +
-                    " bytes; raise backend.gpu_cache_mb");
+                    " bytes; raise backend.gpu_cache");
   }
   return static_cast<std::uint32_t>(slots);
 }

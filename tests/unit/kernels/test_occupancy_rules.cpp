@@ -73,7 +73,7 @@ TEST(Occupancy, ValidationNamesTheProblem) {
   p.hit = logOdds(0.4);
   auto bad = p.validate();
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("hit probability"), std::string::npos);
+  EXPECT_NE(bad.error().message.find("map.hit_probability"), std::string::npos);
   p = OccupancyParams();
   p.threshold = p.clamp_max + 1.0f;
   ASSERT_FALSE(p.validate());

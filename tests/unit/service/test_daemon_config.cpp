@@ -261,10 +261,11 @@ TEST(DaemonConfig, NdtModeAndParametersParseAndAreChecked) {
   EXPECT_EQ(parseDaemonConfig("map: {}\n", kName)->map.mode, MapMode::kOccupancy);
 
   expectError("map:\n  mode: ndt\n", "map.mode", "occupancy, ndt-om or ndt-tm");
-  expectError("map:\n  mode: ndt-om\n  semantics: per-scan\n", "map.mode", "per-ray");
+  expectError("map:\n  mode: ndt-om\n  semantics: per-scan\n", "map.mode", "semantics: ray");
   expectError("map:\n  mode: ndt-om\n  ndt: {sensor_nois: 0.1}\n", "map.ndt.sensor_nois",
               "unknown key");
-  expectError("map:\n  mode: ndt-om\n  ndt: {sensor_noise: -1}\n", "map.ndt", "sensor-noise");
+  expectError("map:\n  mode: ndt-om\n  ndt: {sensor_noise: -1}\n", "map.ndt.sensor_noise",
+              "positive");
 }
 
 TEST(DaemonConfig, DecayRateIsAFlagThatNeedsTheVoxelMean) {
@@ -385,7 +386,7 @@ TEST(DaemonConfig, ValuesAreRead) {
       "  resolution: 0.05\n"
       "  region_voxels: 16\n"
       "  window: [20, 20, 6]\n"
-      "  semantics: per-scan\n"
+      "  semantics: scan\n"
       "pose:\n"
       "  source: tf\n"
       "  history: 128\n"
@@ -621,6 +622,59 @@ TEST(DaemonConfig, DepthCameraKeysAreRefusedOnPointCloudsAndCheckedOnCameras) {
     ASSERT_FALSE(config);
     EXPECT_NE(config.error().message.find(c.key), std::string::npos) << config.error().message;
   }
+}
+
+}  // namespace
+}  // namespace raymap::service
+
+namespace raymap::service {
+namespace {
+
+// One set of names (issue 55): map.semantics takes `ray` and `scan` as `raymap populate
+// --semantics` does, and backend.gpu_cache a size, a region count or auto as `--gpu-cache`; the
+// older spellings still work for one release, each with a warning naming the new one.
+TEST(DaemonConfigNames, OldSpellingsAreReadWithAWarningNamingTheNewOnes) {
+  auto current =
+      parseDaemonConfig("map:\n  semantics: scan\nbackend:\n  gpu_cache: 512MiB\n", "robot.yaml");
+  ASSERT_TRUE(current) << current.error().message;
+  EXPECT_TRUE(current->warnings.empty());
+  EXPECT_EQ(current->map.semantics, Semantics::kPerScan);
+  EXPECT_EQ(current->backend.gpu_cache_bytes, std::uint64_t{512} << 20);
+
+  auto old = parseDaemonConfig("map:\n  semantics: per-scan\nbackend:\n  gpu_cache_mb: 512\n",
+                               "robot.yaml");
+  ASSERT_TRUE(old) << old.error().message;
+  EXPECT_EQ(old->map.semantics, Semantics::kPerScan);
+  EXPECT_EQ(old->backend.gpu_cache_bytes, std::uint64_t{512} << 20);
+  ASSERT_EQ(old->warnings.size(), 2u);
+  EXPECT_NE(old->warnings[0].find("map.semantics: per-scan is the old name: write scan"),
+            std::string::npos)
+      << old->warnings[0];
+  EXPECT_NE(old->warnings[1].find("backend.gpu_cache_mb is the old key: write backend.gpu_cache"),
+            std::string::npos)
+      << old->warnings[1];
+
+  auto regions = parseDaemonConfig("backend:\n  gpu_cache: 2000regions\n", "robot.yaml");
+  ASSERT_TRUE(regions) << regions.error().message;
+  EXPECT_EQ(regions->backend.gpu_cache_regions, 2000u);
+  auto both = parseDaemonConfig("backend:\n  gpu_cache: auto\n  gpu_cache_mb: 64\n", "robot.yaml");
+  ASSERT_FALSE(both);
+  EXPECT_NE(both.error().message.find("not both"), std::string::npos) << both.error().message;
+  auto bad = parseDaemonConfig("backend:\n  gpu_cache: 5xregions\n", "robot.yaml");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("backend.gpu_cache"), std::string::npos)
+      << bad.error().message;
+}
+
+// The map section goes through the library's conversion (mapper::toMapConfig), the same as
+// raymap::Mapper and `raymap populate`: NDT parameters for a map that is not NDT are refused
+// there, naming the key, as the command line refuses --ndt-* without an NDT --mode.
+TEST(DaemonConfigNames, NdtParametersForAnOccupancyMapAreRefusedByTheLibrarysRule) {
+  auto refused = parseDaemonConfig("map:\n  ndt: {sensor_noise: 0.1}\n", "robot.yaml");
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("map.ndt.sensor_noise applies only to map.mode ndt-om"),
+            std::string::npos)
+      << refused.error().message;
 }
 
 }  // namespace
