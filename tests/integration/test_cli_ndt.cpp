@@ -236,7 +236,8 @@ TEST(CliNdtErrors, NdtOptionsWithoutAnNdtModeAndBadValuesAreNamed) {
   const RunResult negative = runRaymap({"populate", input, "--output", dir.file("m.rmap"), "--mode",
                                         "ndt-tm", "--ndt-sensor-noise", "-1"});
   EXPECT_EQ(without.exit_code, 2) << describe(without);
-  EXPECT_TRUE(contains(without.err, "--ndt-sensor-noise applies only to populate --mode ndt-om or ndt-tm"));
+  EXPECT_TRUE(
+      contains(without.err, "--ndt-sensor-noise applies only to populate --mode ndt-om or ndt-tm"));
   EXPECT_EQ(negative.exit_code, 2) << describe(negative);
   EXPECT_TRUE(contains(negative.err, "--ndt-sensor-noise must be a positive distance"));
 }

@@ -155,7 +155,8 @@ TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
   const RunResult stray =
       runRaymap({"populate", rays, "--output", dir.file("x.rmap"), "--tsdf-truncation", "0.3"});
   EXPECT_NE(stray.exit_code, 0);
-  EXPECT_TRUE(contains(stray.err, "--tsdf-truncation applies only to populate --mode tsdf")) << stray.err;
+  EXPECT_TRUE(contains(stray.err, "--tsdf-truncation applies only to populate --mode tsdf"))
+      << stray.err;
 
   const RunResult no_layer =
       runRaymap({"export", plain, "--mode", "tsdf", "--ply", dir.file("x.ply")});
