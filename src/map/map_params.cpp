@@ -24,11 +24,13 @@ Expected<void, Error> OccupancyParams::validate() const {
   }
   if (!(hit > 0.0f)) {
     return fail(ErrorCode::kInvalidArgument,
-                "map.hit_probability must be above 0.5 (a hit raises occupancy; got " + number(probability(hit)) + ")");
+                "map.hit_probability must be above 0.5 (a hit raises occupancy; got " +
+                    number(probability(hit)) + ")");
   }
   if (!(miss < 0.0f)) {
     return fail(ErrorCode::kInvalidArgument,
-                "map.miss_probability must be below 0.5 (a miss lowers occupancy; got " + number(probability(miss)) + ")");
+                "map.miss_probability must be below 0.5 (a miss lowers occupancy; got " +
+                    number(probability(miss)) + ")");
   }
   if (!(clamp_min < threshold) || !(threshold <= clamp_max)) {
     return fail(ErrorCode::kInvalidArgument,
