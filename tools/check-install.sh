@@ -28,7 +28,7 @@ if find "$prefix/include" -name '*.hpp' -exec grep -lE '#include "(src|platform|
 fi
 
 cp -r examples "$work/examples"  # outside the source tree: only the installed package is there
-for example in map_ray_cloud heightmap_from_scans; do
+for example in map_ray_cloud heightmap_from_scans map_recording; do
   echo "== example $example against the installed package"
   cmake -S "$work/examples/$example" -B "$work/build-$example" -G Ninja \
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >"$work/$example-configure.log" ||
@@ -44,7 +44,7 @@ done
 echo "== map_ray_cloud agrees with raymap populate"
 "$build/tools/raymap" simulate "$source_dir/config/scenes/room.yaml" --rays "$work/room.ply" >/dev/null
 count() {  # count <key> <file of "key value" lines or JSON>
-  grep -oE "\"?$1\"?[: ]+[0-9]+" "$2" | grep -oE '[0-9]+$'
+  grep -oE "(^|[^a-z_])$1\"?[: ]+[0-9]+" "$2" | head -1 | grep -oE '[0-9]+$'
 }
 for semantics in ray scan; do
   "$work/build-map_ray_cloud/map_ray_cloud" "$work/room.ply" --semantics "$semantics" \
@@ -71,6 +71,27 @@ for bad in "--semantics bogus" "--save" "--resolution ten"; do
   fi
 done
 
+echo "== map_recording: NDT-OM and TSDF maps with the tiers on agree with raymap populate"
+for mode in ndt-om tsdf; do
+  "$work/build-map_recording/map_recording" "$work/room.ply" "$work/example-$mode.rmap" \
+    --mode "$mode" --max-memory-mib 64 | tee "$work/example-$mode.txt"
+  "$build/tools/raymap" populate "$work/room.ply" -o "$work/populate-$mode.rmap" --mode "$mode" \
+    --max-memory 64MiB --stats-json "$work/populate-$mode.json" --quiet >/dev/null
+  for key in regions rays_integrated; do
+    ours=$(count "$key" "$work/example-$mode.txt")
+    theirs=$(count "$key" "$work/populate-$mode.json")
+    if [ "$ours" != "$theirs" ] || [ "$ours" -eq 0 ]; then
+      echo "check-install: --mode $mode $key: example $ours, raymap populate $theirs" >&2
+      exit 1
+    fi
+  done
+  # The same layers: `raymap info` of both files says the same except the provenance.
+  diff <("$build/tools/raymap" info "$work/example-$mode.rmap" | grep -vE '^(map|source|created_by|rays_in|rays_integrated|min_range_m|max_range_m|segment_length_m|walk) ') \
+    <("$build/tools/raymap" info "$work/populate-$mode.rmap" | grep -vE '^(map|source|created_by|rays_in|rays_integrated|min_range_m|max_range_m|segment_length_m|walk) ') ||
+    { echo "check-install: --mode $mode: the example's map differs from raymap populate's" >&2; exit 1; }
+  echo "--mode $mode: the example and raymap populate agree"
+done
+
 echo "== heightmap_from_scans"
 "$work/build-heightmap_from_scans/heightmap_from_scans" "$work/heightmap.csv" | tee "$work/hm.txt"
 step=$(grep -oE 'elevation at \(3.55, 0.05\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
@@ -79,4 +100,4 @@ awk -v s="$step" -v f="$floor" 'BEGIN { exit !(s > 0.2 && s < 0.35 && f > -0.1 &
   { echo "check-install: step at $step m, floor at $floor m (want about 0.3 and 0)" >&2; exit 1; }
 [ "$(wc -l <"$work/heightmap.csv")" -eq 10001 ] ||
   { echo "check-install: the height-map CSV does not have 100 x 100 cells" >&2; exit 1; }
-echo "check-install: the installed package builds and runs both examples"
+echo "check-install: the installed package builds and runs the three examples"

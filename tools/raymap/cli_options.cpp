@@ -336,33 +336,36 @@ Result<MapperConfig> toMapperConfig(const MappingFlags& f) {
 Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& f) {
   PopulateOptions o;
   o.input = input;
-  o.source.trajectory_path = f.trajectory;
-  o.source.scan_period_s = f.scan_period;
   auto offset = parseVector(f.sensor_offset.empty() ? "0,0,0" : f.sensor_offset, "--sensor-offset");
   if (!offset) {
     return Unexpected(offset.error());
   }
-  o.source.sensor_offset = *offset;
-  o.bag.cloud_topics = f.topics;
-  o.bag.pose_topic = f.pose_topic;
-  o.bag.pose_source = f.pose_source == "odometry" ? bag::BagRaysOptions::PoseSource::kOdometry
-                      : f.pose_source == "tf"     ? bag::BagRaysOptions::PoseSource::kTf
-                                                  : bag::BagRaysOptions::PoseSource::kAuto;
-  o.bag.world_frame = f.world_frame;
-  o.bag.base_frame = f.base_frame;
-  o.bag.time_field = f.time_field;
-  o.bag.camera_info_topics = f.camera_info_topics;
-  o.bag.depth.downsample = f.downsample;
-  o.bag.depth.min_range_m = static_cast<float>(f.min_range);
-  o.bag.depth.max_range_m = static_cast<float>(f.max_range);
-  o.bag.depth.invalid_as_free = f.invalid_as_free;
-  o.bag.max_rate_hz = f.max_rate_hz;
-  o.bag.skip_damaged = f.skip_damaged;
   if (f.max_rate_hz != 0.0 && f.max_rate_hz < 0.01) {
     return fail(ErrorCode::kInvalidArgument, "--max-rate: must be 0 (all) or at least 0.01 Hz");
   }
-  o.bag.extrinsic.position = toEigen(*offset);
-  o.bag.extrinsic_given = !f.sensor_offset.empty();
+  RecordingOptions& r = o.recording;
+  r.trajectory_path = f.trajectory;
+  r.scan_period_s = f.scan_period;
+  r.sensor_offset = toEigen(*offset);
+  BagOptions& b = r.bag;
+  b.topics = f.topics;
+  b.pose_topic = f.pose_topic;
+  b.pose_source = f.pose_source == "odometry" ? BagOptions::PoseSource::kOdometry
+                  : f.pose_source == "tf"     ? BagOptions::PoseSource::kTf
+                                              : BagOptions::PoseSource::kAuto;
+  b.world_frame = f.world_frame;
+  b.base_frame = f.base_frame;
+  b.time_field = f.time_field;
+  b.camera_info_topics = f.camera_info_topics;
+  b.downsample = f.downsample;
+  b.depth_min_range = f.min_range;
+  b.depth_max_range = f.max_range;
+  b.invalid_as_free = f.invalid_as_free;
+  b.max_rate_hz = f.max_rate_hz;
+  b.skip_damaged = f.skip_damaged;
+  if (!f.sensor_offset.empty()) {
+    b.sensor_offset = toEigen(*offset);
+  }
   const bool is_bag = bag::isBag(input);
   if (is_bag && !f.trajectory.empty()) {
     return fail(ErrorCode::kInvalidArgument,

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "platform/process.hpp"
+#include "src/mapper/recording.hpp"
 #include "tools/raymap/bench_heightmaps.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
@@ -66,15 +67,16 @@ int runBench(const BenchFlags& f) {
     json_temp = std::move(*temp);
   }
   // Preload: the benchmark measures preparation and integration, not file decoding.
-  auto source = io::openRaySource(f.input, base->source);
-  if (!source) {
-    printError(command, source.error().message);
+  auto recording = mapper::openRecording(f.input, base->recording);
+  if (!recording) {
+    printError(command, recording.error().message);
     return kExitFailure;
   }
+  io::RaySource* source = recording->source.get();
   std::vector<Ray> rays;
   std::vector<Ray> chunk(std::size_t{1} << 16);
   for (;;) {
-    auto n = (*source)->read(chunk);
+    auto n = source->read(chunk);
     if (!n) {
       printError(command, n.error().message);
       return kExitFailure;
@@ -84,8 +86,7 @@ int runBench(const BenchFlags& f) {
     }
     rays.insert(rays.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(*n));
   }
-  if (const std::string warning = inputWarning(base->map.mode, (*source)->info());
-      !warning.empty()) {
+  if (const std::string warning = inputWarning(base->map.mode, source->info()); !warning.empty()) {
     std::fprintf(stderr, "bench: warning: %s\n", withCliFlags(warning).c_str());
   }
   // NDT, TSDF and decay-rate-only maps integrate per ray only: the default list shrinks to

@@ -7,7 +7,7 @@
 
 #include "platform/process.hpp"
 #include "src/map/ray_batcher.hpp"
-#include "src/record/record_log.hpp"
+#include "src/mapper/recording.hpp"
 #include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/progress.hpp"
@@ -182,27 +182,13 @@ Result<PopulateReport> integrateStream(
 }
 
 Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& options) {
-  std::unique_ptr<io::RaySource> opened;
-  bag::BagRaySource* bag_source = nullptr;
-  if (record::isRecordLogInput(options.input)) {
-    return fail(ErrorCode::kFormat, options.input +
-                                        " is a raymap record log: populate maps PLY files and "
-                                        "rosbag2 bags (raymap replay plays a log to raymapd)");
+  // The library's reader choice and option conversion, the same as raymap::RecordingReader's.
+  auto recording = mapper::openRecording(options.input, options.recording);
+  if (!recording) {
+    return Unexpected(recording.error());
   }
-  if (bag::isBag(options.input)) {
-    auto bag_or = bag::openBagRaySource(options.input, options.bag);
-    if (!bag_or) {
-      return Unexpected(bag_or.error());
-    }
-    bag_source = bag_or.value().get();
-    opened = std::move(bag_or).value();
-  } else {
-    auto source_or = io::openRaySource(options.input, options.source);
-    if (!source_or) {
-      return Unexpected(source_or.error());
-    }
-    opened = std::move(source_or).value();
-  }
+  const std::unique_ptr<io::RaySource>& opened = recording->source;
+  bag::BagRaySource* bag_source = recording->bag;
   io::RaySource& source = *opened;
   const std::string warning = inputWarning(map.mode(), source.info());
   auto report = integrateStream(

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "raymap/error.hpp"
+#include "raymap/recording.hpp"
 
 #include "src/bag/bag_ray_source.hpp"
 #include "src/device/backend_choice.hpp"
@@ -35,8 +36,7 @@ using backends::createHeightmapGenerator;
 /// @brief Everything `raymap populate` needs besides output paths.
 struct PopulateOptions {
   std::string input;
-  io::RaySourceOptions source;  ///< PLY input
-  bag::BagRaysOptions bag;      ///< rosbag2 input (a directory, .mcap or .db3)
+  RecordingOptions recording;  ///< how the input is read (a PLY, or a rosbag2 bag)
   MapConfig map;
   RayFilter filter;
   BackendChoice backend;       ///< backend, CPU threads, device options

@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The library reads rosbag2 bags (issue 55): raymap::RecordingReader gives the scans of a bag
+// written by Foxglove's libraries — lidar clouds deskewed with odometry or a TF chain, depth
+// images with their CameraInfo — and raymap::Mapper maps them to the same map, byte for byte in
+// every layer, as `raymap populate` with the same options. No DDS is involved.
+#include <string>
+#include <vector>
+
+#include "raymap/mapper.hpp"
+#include "raymap/recording.hpp"
+#include <gtest/gtest.h>
+
+#include "tests/rosbag/bag_fixture.hpp"
+#include "tests/rosbag/depth_bag.hpp"
+#include "tests/support/same_map.hpp"
+
+namespace raymap::test {
+namespace {
+
+/// Maps every scan of `bag` with the library; returns the reader's report.
+RecordingReport mapWithLibrary(const std::string& bag, const RecordingOptions& read,
+                               const MapperConfig& config, const std::string& out) {
+  auto mapper = Mapper::create(config);
+  EXPECT_TRUE(mapper) << mapper.error().message;
+  auto reader = RecordingReader::open(bag, read);
+  EXPECT_TRUE(reader) << reader.error().message;
+  if (!mapper || !reader) {
+    return {};
+  }
+  EXPECT_TRUE(reader->isBag());
+  std::vector<WorldRay> scan;
+  for (;;) {
+    auto more = reader->nextScan(scan);
+    EXPECT_TRUE(more) << more.error().message;
+    if (!more || !*more) {
+      break;
+    }
+    EXPECT_TRUE(mapper->integrate(scan));
+  }
+  auto saved = mapper->save(out);
+  EXPECT_TRUE(saved) << saved.error().message;
+  return reader->report();
+}
+
+TEST(LibraryBags, LidarCloudsWithOdometryOrATfChainMapAsPopulateMapsThem) {
+  REQUIRE_NODE_HARNESS();
+  for (const DrivePoses poses : {DrivePoses::kOdometry, DrivePoses::kTfChain}) {
+    const bool odometry = poses == DrivePoses::kOdometry;
+    SCOPED_TRACE(odometry ? "odometry" : "tf");
+    TempDir dir;
+    const Drive drive = makeDrive(dir, poses, 6);
+    const std::string bag = dir.file("drive_bag");
+    writeBag(drive.spec, bag, {"--compression", "zstd"});
+    std::vector<std::string> flags = {"populate", bag,           "-o",  dir.file("cli.rmap"),
+                                      "-q",       "--semantics", "scan"};
+    RecordingOptions read;
+    if (!odometry) {
+      flags.insert(flags.end(), {"--pose-source", "tf", "--world-frame", "map"});
+      read.bag.pose_source = BagOptions::PoseSource::kTf;
+      read.bag.world_frame = "map";
+    }
+    const RunResult r = runRaymap(flags);
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+
+    MapperConfig config;
+    config.map.semantics = Semantics::kPerScan;
+    const RecordingReport report = mapWithLibrary(bag, read, config, dir.file("library.rmap"));
+    EXPECT_EQ(report.scans, drive.scans);
+    EXPECT_EQ(report.scans_no_pose, 0u);
+    EXPECT_EQ(report.topics, std::vector<std::string>{"/ouster/points"});
+    EXPECT_EQ(report.pose_source, odometry ? "odometry /odom" : "tf map -> base_link");
+    expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
+  }
+}
+
+TEST(LibraryBags, DepthImagesWithTheirCameraInfoMapAsPopulateMapsThem) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const DepthBag depth = makeDepthBag(dir, 6, true, true);
+  const std::string bag = dir.file("depth_bag");
+  writeBag(depth.spec, bag, {});
+  const RunResult r = runRaymap({"populate", bag, "-o", dir.file("cli.rmap"), "-q", "--max-range",
+                                 "3", "--downsample", "2", "--invalid-as-free"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+
+  RecordingOptions read;
+  read.bag.downsample = 2;
+  read.bag.depth_max_range = 3.0;
+  read.bag.invalid_as_free = true;
+  MapperConfig config;
+  config.rays.max_range = 3.0;
+  const RecordingReport report = mapWithLibrary(bag, read, config, dir.file("library.rmap"));
+  EXPECT_EQ(report.scans, 6u);
+  EXPECT_EQ(report.images_no_camera_info, 0u);
+  expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
+}
+
+TEST(LibraryBags, AMissingTopicIsNamedWithTheBagsTopicsOfThatType) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const Drive drive = makeDrive(dir, DrivePoses::kOdometry, 2);
+  const std::string bag = dir.file("drive_bag");
+  writeBag(drive.spec, bag, {});
+  RecordingOptions read;
+  read.bag.topics = {"/front/points"};
+  auto reader = RecordingReader::open(bag, read);
+  ASSERT_FALSE(reader);
+  EXPECT_NE(reader.error().message.find("/front/points"), std::string::npos)
+      << reader.error().message;
+  EXPECT_NE(reader.error().message.find("/ouster/points"), std::string::npos)
+      << reader.error().message;
+}
+
+}  // namespace
+}  // namespace raymap::test
