@@ -19,7 +19,7 @@ target_include_directories(raymap_core PUBLIC $<BUILD_INTERFACE:${PROJECT_BINARY
 # Every static library raymap::raymap links, and the INTERFACE targets they name.
 set(raymap_exported raymap_library raymap_mapper raymap_backends raymap_io raymap_heightmap
   raymap_device_staging raymap_map raymap_platform raymap_core raymap_kernels raymap_warnings
-  raymap_bag raymap_pipeline raymap_msgs raymap_record)
+  raymap_bag raymap_pipeline raymap_msgs raymap_record raymap_config)
 if(RAYMAP_HAVE_OPENCL)
   list(APPEND raymap_exported raymap_opencl)
 endif()

@@ -48,4 +48,30 @@ std::vector<double> toNumbers(Context& ctx, const YAML::Node& node, const std::s
   return values;
 }
 
+std::string text(Fields& f, const std::string& key, const std::string& fallback) {
+  const YAML::Node value = f.get(key);
+  if (!value.IsDefined()) {
+    return fallback;
+  }
+  if (!value.IsScalar()) {
+    f.check(false, key, "expected a text value");
+    return fallback;
+  }
+  return value.Scalar();
+}
+
+bool flag(Fields& f, const std::string& key, bool fallback) {
+  const YAML::Node value = f.get(key);
+  bool result = fallback;
+  if (value.IsDefined() && (!value.IsScalar() || !YAML::convert<bool>::decode(value, result))) {
+    f.check(false, key, "expected true or false");
+  }
+  return result;
+}
+
+std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::string>& choices,
+                     std::size_t fallback) {
+  return f.has(key) ? f.choice(key, choices) : fallback;
+}
+
 }  // namespace raymap::config

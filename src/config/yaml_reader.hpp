@@ -225,4 +225,13 @@ class Fields {
   bool map_ = false;
 };
 
+/// @brief A text value (a YAML scalar) at `key`, or `fallback` when the key is absent.
+std::string text(Fields& f, const std::string& key, const std::string& fallback);
+/// @brief true/false at `key`, or `fallback` when absent.
+bool flag(Fields& f, const std::string& key, bool fallback);
+/// @brief The index of the value at `key` in `choices` (an error lists them), or `fallback`
+/// when absent.
+std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::string>& choices,
+                     std::size_t fallback);
+
 }  // namespace raymap::config

@@ -22,40 +22,20 @@
 #include "src/dds/grid_map_message.hpp"
 #include "src/dds/topic_types.hpp"
 #include "src/mapper/mapper_conversions.hpp"
+#include "src/mapper/mapper_yaml.hpp"
 #include "src/msgs/ros_names.hpp"
 #include "src/pipeline/sensor_decoder.hpp"
 
 namespace raymap::service {
 namespace {
 
+using config::choiceOr;
 using config::Context;
 using config::Fields;
+using config::flag;
 using config::formatNumber;
+using config::text;
 
-std::string text(Fields& f, const std::string& key, const std::string& fallback) {
-  const YAML::Node value = f.get(key);
-  if (!value.IsDefined()) {
-    return fallback;
-  }
-  if (!value.IsScalar()) {
-    f.check(false, key, "expected a text value");
-    return fallback;
-  }
-  return value.Scalar();
-}
-
-bool flag(Fields& f, const std::string& key, bool fallback) {
-  const YAML::Node value = f.get(key);
-  bool result = fallback;
-  if (value.IsDefined() && (!value.IsScalar() || !YAML::convert<bool>::decode(value, result))) {
-    f.check(false, key, "expected true or false");
-  }
-  return result;
-}
-
-/// A DDS topic name: non-empty, no spaces; ROS 2 topics carry the "rt/" prefix.
-/// A topic key: a DDS name (rt/points) as it is, or a ROS name (/points) as rmw_cyclonedds
-/// names it on the wire (rt/points).
 std::string topic(Fields& f, const std::string& key, const std::string& fallback) {
   std::string name = text(f, key, fallback);
   f.check(!name.empty() && name.find_first_of(" \t") == std::string::npos && name != "/", key,
@@ -64,76 +44,13 @@ std::string topic(Fields& f, const std::string& key, const std::string& fallback
   return msgs::ddsTopicName(name);
 }
 
-std::size_t choiceOr(Fields& f, const std::string& key, const std::vector<std::string>& choices,
-                     std::size_t fallback) {
-  return f.has(key) ? f.choice(key, choices) : fallback;
-}
-
-/// map.ndt: the NDT-OM / NDT-TM parameters (docs/raymapd.md): only the keys given are set, so
-/// that the library's conversion refuses them for a map of another mode and supplies the
-/// defaults; it also checks their ranges.
-void readNdt(Context& ctx, const YAML::Node& node, const std::string& path, NdtOptions& ndt) {
-  Fields f(ctx, node, path);
-  f.knownKeys({"sensor_noise", "regulariser", "sample_threshold", "reinit_probability",
-               "reinit_count", "adaptation_rate", "initial_intensity_variance"});
-  const auto number = [&](const char* key, std::optional<double>& out) {
-    if (f.has(key)) {
-      out = f.number(key);
-    }
-  };
-  number("sensor_noise", ndt.sensor_noise);
-  number("regulariser", ndt.regulariser);
-  number("reinit_probability", ndt.reinit_probability);
-  number("adaptation_rate", ndt.adaptation_rate);
-  number("initial_intensity_variance", ndt.initial_intensity_variance);
-  if (f.has("sample_threshold")) {
-    ndt.sample_threshold = f.integer<std::uint32_t>("sample_threshold", 0u, 1u, 1'000'000u);
-  }
-  if (f.has("reinit_count")) {
-    ndt.reinit_count = f.integer<std::uint32_t>("reinit_count", 0u, 1u, 1'000'000'000u);
-  }
-}
-
-/// map.semantics: "ray" or "scan", as `raymap populate --semantics` and `raymap info` spell them;
-/// the older "per-ray" and "per-scan" are read with a warning naming the new value.
-Semantics readSemantics(Fields& f, std::vector<std::string>& warnings) {
-  static const std::vector<std::string> kNames = {"ray", "scan", "per-ray", "per-scan"};
-  const std::size_t choice = choiceOr(f, "semantics", kNames, 0);
-  if (choice >= 2) {
-    warnings.push_back(f.path("semantics") + ": " + kNames[choice] + " is the old name: write " +
-                       kNames[choice - 2] + " (the old one is read until the next release)");
-  }
-  return choice % 2 == 0 ? Semantics::kPerRay : Semantics::kPerScan;
-}
-
 /// The `map:` section as the library's MapOptions (the names raymap::MapperConfig and
 /// `raymap populate` use), converted by the library's one conversion, which checks the
 /// combinations; then what only a rolling service map has.
 void readMap(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
-  Fields f(ctx, node, "map");
-  f.knownKeys({"resolution", "region_voxels", "window", "semantics", "voxel_mean",
-               "hit_probability", "miss_probability", "clamp_min", "clamp_max", "save_on_exit",
-               "mode", "ndt", "decay_rate"});
   MapOptions o;
-  o.resolution = f.positive("resolution", MapGeometry::kDefaultResolution);
-  o.region_voxels =
-      f.integer<std::int32_t>("region_voxels", MapGeometry::kDefaultRegionVoxels,
-                              MapGeometry::kMinRegionVoxels, MapGeometry::kMaxRegionVoxels);
-  o.semantics = readSemantics(f, config.warnings);
-  o.voxel_mean = flag(f, "voxel_mean", true);
-  o.decay_rate = flag(f, "decay_rate", false);
-  // A service publishes height maps, which need occupancy: no TSDF or decay-only maps.
-  static const std::vector<std::string> kModes = {"occupancy", "ndt-om", "ndt-tm"};
-  o.mode = *mapModeFromName(kModes[choiceOr(f, "mode", kModes, 0)]);
-  if (f.has("ndt")) {
-    readNdt(ctx, f.get("ndt"), f.path("ndt"), o.ndt);
-  }
-  o.hit_probability = f.number("hit_probability", OccupancyParams::kDefaultHitProbability);
-  o.miss_probability = f.number("miss_probability", OccupancyParams::kDefaultMissProbability);
-  o.clamp_min_log_odds = static_cast<float>(
-      f.number("clamp_min", static_cast<double>(OccupancyParams::kDefaultClampMin)));
-  o.clamp_max_log_odds = static_cast<float>(
-      f.number("clamp_max", static_cast<double>(OccupancyParams::kDefaultClampMax)));
+  mapper::readMapOptions(ctx, node, o, config.warnings);
+  Fields f(ctx, node, "map");  // raymapd's own keys of the section
   config.save_map_on_exit = text(f, "save_on_exit", "");
   if (ctx.failed()) {
     return;
@@ -162,55 +79,11 @@ void readMap(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
   }
 }
 
-/// backend.gpu_cache: "auto", a size ("512MiB") or a region count ("2000regions"), as
-/// `raymap populate --gpu-cache`; the older gpu_cache_mb (MiB, 0 = automatic) is read with a
-/// warning naming the new key.
-void readGpuCache(Fields& f, BackendOptions& backend, std::vector<std::string>& warnings) {
-  if (f.has("gpu_cache_mb")) {
-    warnings.push_back(f.path("gpu_cache_mb") +
-                       " is the old key: write backend.gpu_cache with a size (512MiB), a region "
-                       "count (2000regions) or auto (the old one is read until the next release)");
-    f.check(!f.has("gpu_cache"), "gpu_cache_mb",
-            "give backend.gpu_cache or gpu_cache_mb, not both");
-    backend.gpu_cache_bytes =
-        std::uint64_t{f.integer<std::uint32_t>("gpu_cache_mb", 0u, 0u, 1u << 20)} << 20;
-    return;
-  }
-  auto size = parseCacheSize(text(f, "gpu_cache", "auto"));
-  if (!size) {
-    f.check(false, "gpu_cache", size.error().message);
-    return;
-  }
-  backend.gpu_cache_bytes = size->bytes;
-  backend.gpu_cache_regions = size->regions;
-}
-
 /// The `backend:` section as the library's BackendOptions, converted as raymap::Mapper and
 /// `raymap populate` convert them.
 void readBackend(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
-  Fields f(ctx, node, "backend");
-  f.knownKeys({"name", "threads", "fallback", "opencl_platform", "opencl_device", "cuda_device",
-               "gpu_cache", "gpu_cache_mb", "gpu_memory", "opencl_span_work", "device_planning"});
   BackendOptions backend;
-  static const std::vector<std::string> kNames = {"cpu", "opencl", "cuda"};
-  backend.name = kNames[choiceOr(f, "name", kNames, 0)];
-  const std::vector<std::string> available = backends::availableBackends();
-  if (std::find(available.begin(), available.end(), backend.name) == available.end()) {
-    f.check(false, "name",
-            "this build has no " + backend.name + " backend (rebuild with it, or use cpu)");
-  }
-  backend.threads = f.integer<unsigned>("threads", 0u, 0u, 256u);
-  backend.fallback_cpu = choiceOr(f, "fallback", {"none", "cpu"}, 0) == 1;
-  backend.opencl_platform = text(f, "opencl_platform", "");
-  backend.opencl_device = text(f, "opencl_device", "");
-  backend.cuda_device = f.integer<int>("cuda_device", 0, 0, 64);
-  readGpuCache(f, backend, config.warnings);
-  static const std::vector<std::string> kMemory = {"auto", "cache", "shared"};
-  backend.gpu_memory = kMemory[choiceOr(f, "gpu_memory", kMemory, 0)];
-  static const std::vector<std::string> kSpanWork = {"auto", "span", "region"};
-  backend.opencl_span_work = kSpanWork[choiceOr(f, "opencl_span_work", kSpanWork, 0)];
-  static const std::vector<std::string> kPlanning = {"host", "device"};
-  backend.device_planning = kPlanning[choiceOr(f, "device_planning", kPlanning, 0)];
+  mapper::readBackendOptions(ctx, node, backend, config.warnings);
   const std::size_t gpu_batch_rays = config.backend.gpu_batch_rays;
   config.backend = mapper::toBackendChoice(backend);
   config.backend.gpu_batch_rays = gpu_batch_rays;  // raymapd's own default (BackendChoice)

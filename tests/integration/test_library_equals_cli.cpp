@@ -5,6 +5,7 @@
 // parameters, decay rates (beside occupancy and alone), TSDF, per-scan occupancy with OctoMap's
 // probabilities, and a map larger than its memory budget (compressed and spilled regions).
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
@@ -190,6 +191,91 @@ TEST(LibraryOptions, ImpossibleCombinationsAreRefusedNamingTheKey) {
         c.map.tsdf.truncation = -1.0;
       },
       "truncation");
+}
+
+}  // namespace
+}  // namespace raymap::test
+
+namespace raymap::test {
+namespace {
+
+// One configuration schema (issue 55): a file written for raymapd — its map: and backend:
+// sections, in raymapd's names, beside sections populate does not read — configures `raymap
+// populate --config` to the same map as the same options given as flags; a flag given as well
+// wins over the file, and an old spelling is read with a warning naming the new one.
+TEST(ConfigFile, RaymapdsMapSectionConfiguresPopulateAsItsFlagsDo) {
+  Room room;
+  const std::string yaml = room.dir.file("robot.yaml");
+  writeText(yaml,
+            "name: robot\n"
+            "map:\n"
+            "  resolution: 0.05\n"
+            "  region_voxels: 16\n"
+            "  window: [10, 10, 4]\n"
+            "  semantics: per-ray\n"
+            "  mode: ndt-om\n"
+            "  ndt: {sensor_noise: 0.03, sample_threshold: 6}\n"
+            "  hit_probability: 0.8\n"
+            "  clamp_max: 3.0\n"
+            "backend:\n"
+            "  name: cpu\n"
+            "  threads: 1\n"
+            "sensors:\n"
+            "  - {name: lidar, topic: rt/points}\n");
+  const std::string from_file = room.dir.file("file.rmap");
+  const RunResult r = runRaymap(
+      {"populate", room.rays, "--config", yaml, "--max-range", "20", "-o", from_file, "-q"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.err, "map.semantics: per-ray is the old name: write ray")) << r.err;
+
+  // clamp_max is log-odds in raymapd's file; --clamp-max takes a probability.
+  const std::string from_flags = room.dir.file("flags.rmap");
+  const RunResult f = runRaymap({"populate",
+                                 room.rays,
+                                 "--max-range",
+                                 "20",
+                                 "--resolution",
+                                 "0.05",
+                                 "--region-voxels",
+                                 "16",
+                                 "--mode",
+                                 "ndt-om",
+                                 "--ndt-sensor-noise",
+                                 "0.03",
+                                 "--ndt-sample-threshold",
+                                 "6",
+                                 "--hit",
+                                 "0.8",
+                                 "--clamp-max",
+                                 "0.95257412682243336",
+                                 "--threads",
+                                 "1",
+                                 "-o",
+                                 from_flags,
+                                 "-q"});
+  ASSERT_EQ(f.exit_code, 0) << describe(f);
+  expectSameMap(from_file, from_flags);
+
+  // A flag wins over the file.
+  const std::string coarse = room.dir.file("coarse.rmap");
+  ASSERT_EQ(runRaymap({"populate", room.rays, "--config", yaml, "--resolution", "0.1", "-o", coarse,
+                       "-q"})
+                .exit_code,
+            0);
+  const RunResult info = runRaymap({"info", coarse});
+  EXPECT_TRUE(contains(info.out, "resolution     0.1 m, regions of 16^3")) << info.out;
+  EXPECT_TRUE(contains(info.out, "ndt-om")) << info.out;
+}
+
+TEST(ConfigFile, ErrorsNameTheFileLineAndKey) {
+  TempDir dir;
+  const std::string yaml = dir.file("bad.yaml");
+  writeText(yaml, "map:\n  resolution: 0.1\n  semantics: sometimes\n");
+  const RunResult r =
+      runRaymap({"populate", dir.file("none.ply"), "--config", yaml, "-o", dir.file("m.rmap")});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.err, "bad.yaml: line 3: map.semantics")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.rmap")));
 }
 
 }  // namespace

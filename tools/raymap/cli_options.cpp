@@ -17,6 +17,7 @@
 #include "src/io/atomic_file.hpp"
 #include "src/map/cpu_backend.hpp"
 #include "src/mapper/mapper_conversions.hpp"
+#include "src/mapper/mapper_yaml.hpp"
 
 namespace raymap::cli {
 
@@ -66,7 +67,7 @@ void addTsdfOptions(CLI::App& c, MappingFlags& f) {
 void applyModeName(const MappingFlags& f, MapOptions& map) {
   constexpr std::string_view kSuffix = "+decay";
   std::string mode = f.mode;
-  map.decay_rate = f.decay_rate;
+  map.decay_rate = map.decay_rate || f.decay_rate;
   if (mode.size() > kSuffix.size() && mode.ends_with(kSuffix)) {
     mode.resize(mode.size() - kSuffix.size());
     map.decay_rate = true;
@@ -80,22 +81,31 @@ void applyModeName(const MappingFlags& f, MapOptions& map) {
   map.mode = mapModeFromName(mode).value_or(MapMode::kOccupancy);  // CLI11 checked the name
 }
 
+/// The --ndt-* and --tsdf-* options given (those of a --config file stay unless given).
 void copyNdtAndTsdf(const MappingFlags& f, MapOptions& map) {
-  map.ndt.sensor_noise = f.ndt_sensor_noise;
-  map.ndt.regulariser = f.ndt_regulariser;
-  map.ndt.sample_threshold = f.ndt_sample_threshold;
-  map.ndt.reinit_probability = f.ndt_reinit_probability;
-  map.ndt.reinit_count = f.ndt_reinit_count;
-  map.ndt.adaptation_rate = f.ndt_adaptation_rate;
-  map.ndt.initial_intensity_variance = f.ndt_initial_intensity_variance;
-  map.tsdf.truncation = f.tsdf_truncation;
-  map.tsdf.max_weight = f.tsdf_max_weight;
-  map.tsdf.dropoff = f.tsdf_dropoff;
+  const auto set = [](auto& field, const auto& flag) {
+    if (flag) {
+      field = flag;
+    }
+  };
+  set(map.ndt.sensor_noise, f.ndt_sensor_noise);
+  set(map.ndt.regulariser, f.ndt_regulariser);
+  set(map.ndt.sample_threshold, f.ndt_sample_threshold);
+  set(map.ndt.reinit_probability, f.ndt_reinit_probability);
+  set(map.ndt.reinit_count, f.ndt_reinit_count);
+  set(map.ndt.adaptation_rate, f.ndt_adaptation_rate);
+  set(map.ndt.initial_intensity_variance, f.ndt_initial_intensity_variance);
+  set(map.tsdf.truncation, f.tsdf_truncation);
+  set(map.tsdf.max_weight, f.tsdf_max_weight);
+  set(map.tsdf.dropoff, f.tsdf_dropoff);
 }
 
 }  // namespace
 
-void addMappingOptions(CLI::App& c, MappingFlags& f) {
+namespace {
+
+/// The input's options: files (trajectory, scans) and bags (topics, poses, depth images).
+void addInputOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--trajectory", f.trajectory,
                "Point clouds: sensor trajectory, lines 'time x y z [qw qx qy qz]'");
   c.add_option("--sensor-offset", f.sensor_offset,
@@ -137,6 +147,17 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
   c.add_flag("--skip-damaged", f.skip_damaged,
              "Bags: map what a damaged or cut-off bag holds (skipping to its next indexed chunk) "
              "instead of failing, and say what was skipped");
+}
+
+}  // namespace
+
+void addMappingOptions(CLI::App& c, MappingFlags& f) {
+  f.command = &c;
+  c.add_option("--config", f.config_file,
+               "A YAML file whose map: and backend: sections (raymapd's keys, e.g. its own "
+               "configuration) set the map and backend options; flags given as well win")
+      ->check(CLI::ExistingFile);
+  addInputOptions(c, f);
   c.add_option("--resolution", f.resolution, "Voxel edge, metres")->capture_default_str();
   c.add_option("--region-voxels", f.region_voxels, "Voxels per region edge (4 to 128)")
       ->capture_default_str();
@@ -273,14 +294,64 @@ Expected<void, Error> applyCacheSize(const std::string& text, BackendOptions* ch
 
 }  // namespace
 
-Result<MapperConfig> toMapperConfig(const MappingFlags& f) {
+/// The backend flags (those given, with a --config file) over `c.backend`.
+template <class Given>
+Result<MapperConfig> applyBackendFlags(const MappingFlags& f, const Given& given, MapperConfig c) {
+  BackendOptions& b = c.backend;
+  const auto set = [&](const char* flag, auto& field, const auto& value) {
+    if (given(flag)) {
+      field = value;
+    }
+  };
+  set("--backend", b.name, f.backend);
+  set("--threads", b.threads, f.threads);
+  set("--opencl-platform", b.opencl_platform, f.opencl_platform);
+  set("--opencl-device", b.opencl_device, f.opencl_device);
+  set("--cuda-device", b.cuda_device, f.cuda_device);
+  set("--fallback", b.fallback_cpu, f.fallback == "cpu");
+  set("--gpu-memory", b.gpu_memory, f.gpu_memory);
+  set("--opencl-span-work", b.opencl_span_work, f.opencl_span_work);
+  set("--device-planning", b.device_planning, f.device_planning);
+  b.batch_rays = f.batch_rays;
+  if (given("--gpu-cache")) {
+    if (auto cache = applyCacheSize(f.gpu_cache, &b); !cache) {
+      return Unexpected(cache.error());
+    }
+  }
+  return c;
+}
+
+Result<MapperConfig> toMapperConfig(const MappingFlags& f, std::vector<std::string>* warnings) {
   MapperConfig c;
+  if (!f.config_file.empty()) {
+    std::vector<std::string> notes;
+    auto loaded = mapper::loadMapperConfig(f.config_file, c, notes);
+    if (!loaded) {
+      return Unexpected(loaded.error());
+    }
+    c = *loaded;
+    if (warnings != nullptr) {
+      warnings->insert(warnings->end(), notes.begin(), notes.end());
+    }
+  }
+  // Without --config every flag applies (its default included); with one, a flag the user gave.
+  const auto given = [&](const char* flag) { return f.config_file.empty() || f.given(flag); };
   MapOptions& m = c.map;
-  m.resolution = f.resolution;
-  m.region_voxels = f.region_voxels;
-  m.semantics = f.semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
-  m.voxel_mean = !f.no_mean;
-  applyModeName(f, m);
+  if (given("--resolution")) {
+    m.resolution = f.resolution;
+  }
+  if (given("--region-voxels")) {
+    m.region_voxels = f.region_voxels;
+  }
+  if (given("--semantics")) {
+    m.semantics = f.semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
+  }
+  if (given("--no-mean")) {
+    m.voxel_mean = !f.no_mean;
+  }
+  if (given("--mode") || f.decay_rate) {
+    applyModeName(f, m);
+  }
   copyNdtAndTsdf(f, m);
   m.hit_probability = f.hit.value_or(m.hit_probability);
   m.miss_probability = f.miss.value_or(m.miss_probability);
@@ -316,21 +387,7 @@ Result<MapperConfig> toMapperConfig(const MappingFlags& f) {
   c.rays.walk = f.reverse   ? RayOptions::Walk::kReverse
                 : f.forward ? RayOptions::Walk::kForward
                             : RayOptions::Walk::kAuto;
-  BackendOptions& b = c.backend;
-  b.name = f.backend;
-  b.threads = f.threads;
-  b.opencl_platform = f.opencl_platform;
-  b.opencl_device = f.opencl_device;
-  b.cuda_device = f.cuda_device;
-  b.fallback_cpu = f.fallback == "cpu";
-  b.gpu_memory = f.gpu_memory;
-  b.opencl_span_work = f.opencl_span_work;
-  b.device_planning = f.device_planning;
-  b.batch_rays = f.batch_rays;
-  if (auto cache = applyCacheSize(f.gpu_cache, &b); !cache) {
-    return Unexpected(cache.error());
-  }
-  return c;
+  return applyBackendFlags(f, given, c);
 }
 
 Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& f) {
@@ -380,9 +437,14 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
                     "--camera-info-topic, --downsample, --invalid-as-free, --max-rate and "
                     "--skip-damaged apply to bags only");
   }
-  auto config = toMapperConfig(f);
+  std::vector<std::string> warnings;
+  auto config = toMapperConfig(f, &warnings);
   if (!config) {
     return Unexpected(config.error());
+  }
+  for (const std::string& warning : warnings) {  // --config: a key in an older spelling
+    std::fprintf(stderr, "raymap %s: warning: %s\n",
+                 f.command != nullptr ? f.command->get_name().c_str() : "", warning.c_str());
   }
   // One conversion, the library's (the same as raymap::Mapper's): it checks the combinations.
   auto map = mapper::toMapConfig(config->map);
@@ -395,7 +457,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
     return Unexpected(filter.error());
   }
   o.filter = *filter;
-  if (f.segment_length > 0.0 && f.segment_length < f.resolution) {
+  if (f.segment_length > 0.0 && f.segment_length < config->map.resolution) {
     return fail(ErrorCode::kInvalidArgument,
                 "--segment-length must be 0 (off) or at least the resolution");
   }

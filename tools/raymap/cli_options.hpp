@@ -17,6 +17,13 @@ namespace raymap::cli {
 
 /// @brief Options as typed by the user, before conversion (probabilities, sizes, vectors).
 struct MappingFlags {
+  /// --config: a YAML file whose map: and backend: sections (raymapd's names) set the options;
+  /// a flag given as well wins.
+  std::string config_file;
+  /// The subcommand the flags belong to, to tell a flag given from its default (--config).
+  const CLI::App* command = nullptr;
+  /// @brief Whether `flag` was given on the command line.
+  bool given(const char* flag) const { return command != nullptr && command->count(flag) > 0; }
   std::string trajectory;
   std::string sensor_offset;  ///< "" when not given: 0,0,0 (bags: only with a TF chain)
   double scan_period = io::RaySourceOptions::kDefaultScanPeriod;
@@ -84,7 +91,8 @@ void addMappingOptions(CLI::App& command, MappingFlags& flags);
 /// a program linking the library fills in); what the flags cannot express wrongly is checked
 /// by the library's one conversion (mapper::toMapConfig), naming configuration keys that
 /// withCliFlags() shows as flags.
-Result<MapperConfig> toMapperConfig(const MappingFlags& flags);
+Result<MapperConfig> toMapperConfig(const MappingFlags& flags,
+                                    std::vector<std::string>* warnings = nullptr);
 
 /// @brief Converts and validates the flags; errors name the option and the reason.
 Result<PopulateOptions> toPopulateOptions(const std::string& input, const MappingFlags& flags);

@@ -121,6 +121,24 @@ bool valueAt(std::string_view text, std::size_t at, std::string_view values) {
   return false;
 }
 
+/// Whether the word at `at` follows "line N: ", as a configuration file's errors name their keys
+/// ("robot.yaml: line 3: map.semantics: ..."): that is the file's key, not an option to show as
+/// a flag.
+bool afterFileLine(std::string_view text, std::size_t at) {
+  std::string_view before = text.substr(0, at);
+  if (!before.ends_with(": ")) {
+    return false;
+  }
+  before.remove_suffix(2);
+  std::size_t digits = 0;
+  while (digits < before.size() &&
+         std::isdigit(static_cast<unsigned char>(before[before.size() - 1 - digits])) != 0) {
+    ++digits;
+  }
+  before.remove_suffix(digits);
+  return digits > 0 && before.ends_with("line ");
+}
+
 /// The longest row whose key is the whole word at `at`, or nullptr.
 const OptionFlag* rowAt(std::string_view text, std::size_t at) {
   const OptionFlag* found = nullptr;
@@ -142,7 +160,8 @@ std::string withCliFlags(std::string_view text) {
   out.reserve(text.size());
   std::size_t at = 0;
   while (at < text.size()) {
-    const OptionFlag* row = startsWord(text, at) ? rowAt(text, at) : nullptr;
+    const OptionFlag* row =
+        startsWord(text, at) && !afterFileLine(text, at) ? rowAt(text, at) : nullptr;
     if (row == nullptr) {
       out += text[at++];
       continue;

@@ -8,6 +8,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "raymap/error.hpp"
 #include "raymap/recording.hpp"

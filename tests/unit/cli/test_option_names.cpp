@@ -104,5 +104,14 @@ TEST(OptionNames, TheTableHasEachKeyOnceInSectionFieldForm) {
   }
 }
 
+// A configuration file's error names the file's own key (raymap populate --config): it stays a
+// key, while the same key in a library message becomes the flag.
+TEST(OptionNames, AKeyAfterAFilesLineStaysTheFilesKey) {
+  EXPECT_EQ(withCliFlags("robot.yaml: line 3: map.semantics: must be ray or scan"),
+            "robot.yaml: line 3: map.semantics: must be ray or scan");
+  EXPECT_EQ(withCliFlags("map options: map.semantics: ray is needed"),
+            "map options: --semantics ray is needed");
+}
+
 }  // namespace
 }  // namespace raymap::cli
