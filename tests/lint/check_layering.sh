@@ -38,11 +38,12 @@ check src/device/cuda 'src/sim|src/device/opencl|src/device/backend|tools/|tests
 check kernels/cuda 'src/|platform/|tools/|tests/' 'CUDA entry points depend only on kernels/'
 # The map library (raymap::raymap) builds with a compiler, zlib, zstd and Eigen alone: none of its
 # code includes the service's or the tools' dependencies (DDS, YAML, CLI11, systemd, Boost, bags'
-# compression and SQLite), nor the folders built only with them. src/sim/scene_file.* is the
-# tools' (YAML scene files). zstd is the map's own in one file: the cold tiers' compressor.
+# compression and SQLite, the tools' JSON), nor the folders built only with them.
+# src/sim/scene_file.* is the tools' (YAML scene files). zstd is the map's own in one file: the
+# cold tiers' compressor.
 library_folders="include src/core src/map src/io src/heightmap src/device src/mapper src/record platform"
 for folder in $library_folders; do
-  hits=$(grep -rnE '#include [<"](yaml-cpp/|CLI/|dds/|systemd/|boost/|zstd|lz4|sqlite3|src/config/|src/dds/|src/pipeline/|src/service/|src/bag/|src/sim/scene_file|tools/)' \
+  hits=$(grep -rnE '#include [<"](yaml-cpp/|CLI/|dds/|systemd/|boost/|nlohmann/|zstd|lz4|sqlite3|src/config/|src/dds/|src/pipeline/|src/service/|src/bag/|src/sim/scene_file|tools/)' \
     "$folder" --include='*.hpp' --include='*.cpp' --include='*.h' | grep -v '^platform/linux/notify.cpp:' | grep -v '^src/map/region_tiers.cpp:[0-9]*:#include <zstd.h>$' || true)
   if [ -n "$hits" ]; then
     echo "layering: the map library ($folder) must build without the service's and tools' dependencies:"
