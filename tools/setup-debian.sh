@@ -6,6 +6,7 @@ packages=(
   cmake ninja-build g++ pkg-config
   zlib1g-dev libzstd-dev libeigen3-dev  # the map library: gzip, map files, cold tiers; host geometry and the public API
   libcli11-dev libyaml-cpp-dev
+  nlohmann-json3-dev      # the JSON the command line and benchmarks print and the tests read (header-only)
   libgtest-dev libgmock-dev libbenchmark-dev
   liboctomap-dev          # OctoMap: the reference in benchmarks and agreement tests only
   ocl-icd-opencl-dev opencl-headers  # the OpenCL backend (ICD loader and headers)

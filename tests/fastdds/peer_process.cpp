@@ -2,7 +2,6 @@
 // PeerProcess: DaemonProcess with the peer's arguments, and reading its JSON back.
 #include "tests/fastdds/peer_process.hpp"
 
-#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -44,7 +43,7 @@ std::optional<int> PeerProcess::finish(std::chrono::milliseconds timeout) {
   return stopped->first;
 }
 
-std::optional<JsonValue> PeerProcess::result() const {
+std::optional<Json> PeerProcess::result() const {
   if (!std::filesystem::exists(dir_.file("result.json"))) {
     return std::nullopt;
   }
@@ -55,32 +54,31 @@ std::optional<JsonValue> PeerProcess::result() const {
 
 std::string PeerProcess::log() const { return readFile(dir_.file("peer.log")); }
 
-std::optional<double> numberAt(const JsonValue& value, const std::vector<std::string>& path) {
-  const JsonValue* at = &value;
-  for (const std::string& key : path) {
-    at = at->find(key);
-    if (at == nullptr) {
-      return std::nullopt;
-    }
-  }
-  if (at->kind != JsonValue::Kind::kNumber) {
+std::optional<double> numberAt(const Json& value, const std::vector<std::string>& path) {
+  const Json* at = findPath(value, path);
+  if (at == nullptr || !at->is_number()) {
     return std::nullopt;
   }
-  return at->number;
+  return at->get<double>();
 }
 
-std::vector<std::string> textsAt(const JsonValue& value, const std::vector<std::string>& path) {
-  const JsonValue* at = &value;
-  for (const std::string& key : path) {
-    at = at->find(key);
-    if (at == nullptr) {
-      return {};
-    }
+std::optional<std::string> textAt(const Json& value, const std::vector<std::string>& path) {
+  const Json* at = findPath(value, path);
+  if (at == nullptr || !at->is_string()) {
+    return std::nullopt;
+  }
+  return at->get<std::string>();
+}
+
+std::vector<std::string> textsAt(const Json& value, const std::vector<std::string>& path) {
+  const Json* at = findPath(value, path);
+  if (at == nullptr || !at->is_array()) {
+    return {};
   }
   std::vector<std::string> out;
-  for (const JsonValue& item : at->items) {
-    out.push_back(item.kind == JsonValue::Kind::kNumber ? std::to_string(std::llround(item.number))
-                                                        : item.text);
+  for (const Json& item : *at) {
+    // Numbers as the peer writes them (integers: "120"), texts as they are.
+    out.push_back(item.is_string() ? item.get<std::string>() : item.dump());
   }
   return out;
 }

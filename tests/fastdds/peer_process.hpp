@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "tests/service/daemon_process.hpp"
-#include "tests/support/mini_json.hpp"
+#include "tests/support/json_doc.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
@@ -31,7 +31,7 @@ class PeerProcess {
   /// it did not exit even then.
   std::optional<int> finish(std::chrono::milliseconds timeout);
   /// @brief The peer's JSON, or nullopt (the test has failed) when it wrote none or not JSON.
-  std::optional<JsonValue> result() const;
+  std::optional<Json> result() const;
   std::string log() const;
 
  private:
@@ -41,9 +41,12 @@ class PeerProcess {
 
 /// @brief A number of a JSON object by a path of member names ("last_map", "resolution"), or
 /// nullopt.
-std::optional<double> numberAt(const JsonValue& value, const std::vector<std::string>& path);
+std::optional<double> numberAt(const Json& value, const std::vector<std::string>& path);
+
+/// @brief A string of a JSON object by a path of member names, or nullopt.
+std::optional<std::string> textAt(const Json& value, const std::vector<std::string>& path);
 
 /// @brief An array of strings (or numbers, as text) of a JSON object by a path of member names.
-std::vector<std::string> textsAt(const JsonValue& value, const std::vector<std::string>& path);
+std::vector<std::string> textsAt(const Json& value, const std::vector<std::string>& path);
 
 }  // namespace raymap::test

@@ -69,9 +69,9 @@ std::vector<std::string> subscribeArgs() {
 
 /// The GridMap's layout as raymapd sends it (docs/raymapd.md, What it publishes), decoded by
 /// Fast DDS's generated code.
-void expectRaymapdsGridMap(const JsonValue& result) {
-  ASSERT_NE(result.find("last_map"), nullptr);
-  EXPECT_EQ(result.find("last_map")->find("frame_id")->text, "odom");
+void expectRaymapdsGridMap(const Json& result) {
+  ASSERT_NE(findPath(result, {"last_map"}), nullptr);
+  EXPECT_EQ(textAt(result, {"last_map", "frame_id"}), "odom");
   EXPECT_NEAR(numberAt(result, {"last_map", "resolution"}).value_or(0.0), 0.1, 1e-9);
   EXPECT_NEAR(numberAt(result, {"last_map", "length_x"}).value_or(0.0), 12.0, 1e-9);
   EXPECT_NEAR(numberAt(result, {"last_map", "length_y"}).value_or(0.0), 12.0, 1e-9);
@@ -89,9 +89,9 @@ void expectRaymapdsGridMap(const JsonValue& result) {
 }
 
 /// The costmap as raymapd sends it: the GridMap's window, every cell a valid cost.
-void expectRaymapdsCostmap(const JsonValue& result) {
-  ASSERT_NE(result.find("last_costmap"), nullptr);
-  EXPECT_EQ(result.find("last_costmap")->find("frame_id")->text, "odom");
+void expectRaymapdsCostmap(const Json& result) {
+  ASSERT_NE(findPath(result, {"last_costmap"}), nullptr);
+  EXPECT_EQ(textAt(result, {"last_costmap", "frame_id"}), "odom");
   EXPECT_EQ(numberAt(result, {"last_costmap", "width"}), 120.0);
   EXPECT_EQ(numberAt(result, {"last_costmap", "height"}), 120.0);
   EXPECT_NEAR(numberAt(result, {"last_costmap", "resolution"}).value_or(0.0), 0.1, 1e-6);
@@ -104,7 +104,7 @@ void expectRaymapdsCostmap(const JsonValue& result) {
 }
 
 /// A Fast DDS subscriber's report: maps, costmaps and diagnostics all arrived and decoded.
-void expectMapsCostmapsAndDiagnostics(const JsonValue& result, const std::string& logs) {
+void expectMapsCostmapsAndDiagnostics(const Json& result, const std::string& logs) {
   EXPECT_GT(numberAt(result, {"maps"}).value_or(0.0), 0.0) << logs;
   EXPECT_GT(numberAt(result, {"costmaps"}).value_or(0.0), 0.0) << logs;
   EXPECT_GT(numberAt(result, {"diagnostics"}).value_or(0.0), 0.0) << logs;
@@ -141,7 +141,7 @@ void expectTheRoomsFloorMapped(RunningDaemon& daemon, PeerProcess& publisher,
   const std::optional<int> status = subscriber.finish(kPeerRun + seconds(30));
   EXPECT_EQ(publisher.finish(seconds(0)), 0) << publisher.log();
   ASSERT_EQ(status, 0) << subscriber.log();
-  const std::optional<JsonValue> result = subscriber.result();
+  const std::optional<Json> result = subscriber.result();
   ASSERT_TRUE(result.has_value()) << subscriber.log();
   const std::string logs = "raymapd:\n" + daemon.log() + "\nsubscriber:\n" + subscriber.log() +
                            "\npublisher:\n" + publisher.log();
@@ -194,7 +194,7 @@ TEST(FastDdsPeer, RaymapdIntegratesAFastDdsLidarWithItsOdometryAndTfStatic) {
   EXPECT_EQ(number("sensor lidar/publishers"), 1.0);
 
   ASSERT_EQ(status, 0) << peer.log();
-  const std::optional<JsonValue> result = peer.result();
+  const std::optional<Json> result = peer.result();
   ASSERT_TRUE(result.has_value()) << peer.log();
   EXPECT_GE(numberAt(*result, {"clouds_published"}).value_or(0.0), 10.0);
   EXPECT_GT(numberAt(*result, {"points_per_cloud"}).value_or(0.0), 0.0);
@@ -216,7 +216,7 @@ TEST(FastDdsPeer, AFastDdsSubscriberDecodesRaymapdsGridMapsCostmapsAndDiagnostic
   ASSERT_NO_FATAL_FAILURE(feedYardLidarWhileRunning(domain, peer, daemon));
   const std::optional<int> status = peer.finish(seconds(0));
   ASSERT_EQ(status, 0) << peer.log();
-  const std::optional<JsonValue> result = peer.result();
+  const std::optional<Json> result = peer.result();
   ASSERT_TRUE(result.has_value()) << peer.log();
   expectMapsCostmapsAndDiagnostics(*result, "raymapd:\n" + daemon.log() + "\npeer:\n" + peer.log());
   expectCleanStop(daemon);
@@ -259,7 +259,7 @@ TEST(FastDdsPeer, SecureFastDdsNodesWorkWithAKeystoreMadeByRaymapSecurity) {
                         {"--enclave-dir", folder("/robot/driver")});
   expectTheRoomsFloorMapped(daemon, publisher, subscriber);
   outsider.finish(seconds(0));
-  const std::optional<JsonValue> outside = outsider.result();
+  const std::optional<Json> outside = outsider.result();
   ASSERT_TRUE(outside.has_value()) << outsider.log();
   EXPECT_EQ(numberAt(*outside, {"maps"}), 0.0) << outsider.log();
   EXPECT_EQ(numberAt(*outside, {"costmaps"}), 0.0) << outsider.log();
@@ -289,7 +289,7 @@ TEST(FastDdsPeer, AStockBufferSubscriberReceivesRaymapdsMapsWithoutSkipping) {
   ASSERT_NO_FATAL_FAILURE(feedYardLidarWhileRunning(domain, peer, daemon));
   const std::optional<int> status = peer.finish(seconds(0));
   ASSERT_EQ(status, 0) << peer.log();
-  const std::optional<JsonValue> result = peer.result();
+  const std::optional<Json> result = peer.result();
   ASSERT_TRUE(result.has_value()) << peer.log();
   const double maps = numberAt(*result, {"maps"}).value_or(0.0);
   ASSERT_GE(maps, 25.0) << "raymapd:\n" << daemon.log() << "\npeer:\n" << peer.log();
@@ -385,7 +385,7 @@ TEST(FastDdsPeer, AFastDdsLidarGivesTheSameMapAsItsDataThroughCyclone) {
     PeerProcess publisher(first, "publish",
                           {"--seconds", "4", "--clouds-after-tf-static", "--readers", "2"});
     ASSERT_EQ(publisher.finish(kPeerRun), 0) << publisher.log();
-    const std::optional<JsonValue> result = publisher.result();
+    const std::optional<Json> result = publisher.result();
     ASSERT_TRUE(result.has_value()) << publisher.log();
     clouds = numberAt(*result, {"clouds_published"}).value_or(0.0);
     ASSERT_GE(clouds, 10.0) << publisher.log();

@@ -27,6 +27,7 @@
 #include "src/sim/yard_scan.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/dir_listing.hpp"
+#include "tests/support/json_doc.hpp"
 #include "tests/support/ply_test_writer.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -981,17 +982,15 @@ TEST(Cli, BenchPrintsJsonWithARunPerConfiguration) {
 
   // Assert
   ASSERT_EQ(r.exit_code, 0) << describe(r);
-  const std::size_t runs = r.out.find("\"runs\":");
-  ASSERT_NE(runs, std::string::npos) << r.out;
-  EXPECT_EQ(r.out.find_first_not_of(" \n", runs + 7), r.out.find('[', runs)) << "not an array";
-  const std::string run_list = r.out.substr(runs);
-  std::size_t run_count = 0;
-  for (std::size_t at = run_list.find("\"rays_in\":"); at != std::string::npos;
-       at = run_list.find("\"rays_in\":", at + 1)) {
-    ++run_count;
-    EXPECT_EQ(jsonCount(run_list.substr(at), "rays_in"), kYardRays);
+  const std::optional<Json> json = parseJson(r.out);
+  ASSERT_TRUE(json.has_value());
+  const Json* runs = findPath(*json, {"runs"});
+  ASSERT_NE(runs, nullptr) << r.out;
+  ASSERT_TRUE(runs->is_array()) << r.out;
+  EXPECT_EQ(runs->size(), 4u);  // 2 semantics x 2 thread counts
+  for (const Json& run : *runs) {
+    EXPECT_EQ(run.value("rays_in", std::uint64_t{0}), kYardRays);
   }
-  EXPECT_EQ(run_count, 4u);  // 2 semantics x 2 thread counts
   EXPECT_TRUE(noTemporaryFilesIn(dir.path()));
 }
 
@@ -1011,14 +1010,13 @@ TEST(Cli, BenchTakesSemanticsAndThreadsAsOneRunAndRefusesThemBesideTheirLists) {
 
   // Assert
   ASSERT_EQ(one.exit_code, 0) << describe(one);
-  std::size_t run_count = 0;
-  for (std::size_t at = one.out.find("\"rays_in\":"); at != std::string::npos;
-       at = one.out.find("\"rays_in\":", at + 1)) {
-    ++run_count;
-  }
-  EXPECT_EQ(run_count, 1u) << one.out;
-  EXPECT_TRUE(contains(one.out, "\"semantics\": \"scan\"")) << one.out;
-  EXPECT_FALSE(contains(one.out, "\"semantics\": \"ray\"")) << one.out;
+  const std::optional<Json> json = parseJson(one.out);
+  ASSERT_TRUE(json.has_value());
+  const Json* runs = findPath(*json, {"runs"});
+  ASSERT_NE(runs, nullptr) << one.out;
+  ASSERT_EQ(runs->size(), 1u) << one.out;
+  EXPECT_EQ((*runs)[0].value("semantics", ""), "scan") << one.out;
+  EXPECT_EQ((*runs)[0].value("threads", 0), 1) << one.out;
   EXPECT_EQ(both.exit_code, 2) << describe(both);
   EXPECT_TRUE(contains(both.err, "--semantics-list")) << both.err;
   EXPECT_EQ(both_threads.exit_code, 2) << describe(both_threads);
@@ -1143,9 +1141,11 @@ TEST(CliOpenCl, BenchHeightmapCyclesReadTheDeviceLayersAndCopyNoneOfTheMap) {
     }
     const RunResult r = runRaymap(args);
     ASSERT_EQ(r.exit_code, 0) << describe(r);
-    const std::size_t cycles = r.out.find("\"heightmap_cycles\":");
-    ASSERT_NE(cycles, std::string::npos) << r.out;
-    const std::string json = r.out.substr(cycles);
+    const std::optional<Json> document = parseJson(r.out);
+    ASSERT_TRUE(document.has_value());
+    const Json* cycles = findFirst(*document, "heightmap_cycles");
+    ASSERT_NE(cycles, nullptr) << r.out;
+    const std::string json = cycles->dump();
     EXPECT_EQ(jsonValue(json, "reads"),
               std::optional<std::string>(from_host ? "host store" : "device layers"));
     EXPECT_GE(jsonCount(json, "heightmaps"), 3u) << json;
@@ -1201,11 +1201,16 @@ TEST(CliCuda, DevicesListsBothApisAndSaysWhyOneHasNone) {
   EXPECT_TRUE(contains(text.out, "OpenCL\n")) << text.out;
   EXPECT_TRUE(contains(text.out, "\nCUDA\n")) << text.out;
   const RunResult json = runRaymap({"devices", "--json"});
-  EXPECT_TRUE(contains(json.out, "\"opencl\": {")) << json.out;
-  EXPECT_TRUE(contains(json.out, "\"cuda\": {")) << json.out;
+  const std::optional<Json> devices = parseJson(json.out);
+  ASSERT_TRUE(devices.has_value());
+  for (const char* api : {"opencl", "cuda"}) {
+    const Json* section = findPath(*devices, {api});
+    EXPECT_TRUE(section != nullptr && section->is_object()) << api << "\n" << json.out;
+  }
   if (!cudaUnavailable().empty()) {
     EXPECT_TRUE(contains(text.out, "none: ")) << text.out;
-    EXPECT_TRUE(contains(json.out, "\"error\": ")) << json.out;
+    const Json* error = findPath(*devices, {"cuda", "error"});
+    EXPECT_TRUE(error != nullptr && error->is_string()) << json.out;
   }
 }
 
@@ -1244,9 +1249,12 @@ TEST(CliOpenCl, DevicesListsTheDefaultDeviceAsJson) {
   }
   const RunResult r = runRaymap({"devices", "--json"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
-  EXPECT_TRUE(contains(r.out, "\"platforms\""));
-  EXPECT_TRUE(contains(r.out, "\"int64_atomics\""));
-  EXPECT_TRUE(contains(r.out, "\"default\""));
+  const std::optional<Json> json = parseJson(r.out);
+  ASSERT_TRUE(json.has_value());
+  const Json* platforms = findPath(*json, {"opencl", "platforms"});
+  ASSERT_TRUE(platforms != nullptr && platforms->is_array() && !platforms->empty()) << r.out;
+  EXPECT_NE(findFirst(*platforms, "int64_atomics"), nullptr) << r.out;
+  EXPECT_NE(findPath(*json, {"opencl", "default", "name"}), nullptr) << r.out;
 }
 
 }  // namespace

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support/cli_runner.hpp"
-#include "tests/support/mini_json.hpp"
+#include "tests/support/json_doc.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
 
@@ -31,23 +31,19 @@ const std::vector<std::string> kMapping = {"--region-voxels", "16", "--batch-ray
                                            "--threads",       "1"};
 
 /// A number in a JSON object (NaN, and a test failure, when it is not there).
-double number(const JsonValue& object, const std::string& key) {
-  const JsonValue* value = object.find(key);
-  EXPECT_TRUE(value != nullptr && value->kind == JsonValue::Kind::kNumber) << key;
-  return value != nullptr ? value->number : std::nan("");
+double number(const Json& object, const std::string& key) {
+  const Json* value = findPath(object, {key});
+  EXPECT_TRUE(value != nullptr && value->is_number()) << key;
+  return value != nullptr && value->is_number() ? value->get<double>() : std::nan("");
 }
 
-JsonValue parsed(const std::string& text) {
-  std::string error;
-  auto value = parseJson(text, &error);
-  EXPECT_TRUE(value.has_value()) << error << "\n" << text;
-  return value.value_or(JsonValue{});
-}
+/// The document `text` (null, and a test failure, when it is not JSON).
+Json parsed(const std::string& text) { return parseJson(text).value_or(Json()); }
 
-JsonValue member(const JsonValue& object, const std::string& key) {
-  const JsonValue* value = object.find(key);
+Json member(const Json& object, const std::string& key) {
+  const Json* value = findPath(object, {key});
   EXPECT_NE(value, nullptr) << key;
-  return value != nullptr ? *value : JsonValue{};
+  return value != nullptr ? *value : Json();
 }
 
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
@@ -77,7 +73,7 @@ TEST(CliLargeMaps, PopulateThroughAnEighthOfTheMemoryWritesTheSameMapAndSaysWher
   ASSERT_EQ(b.exit_code, 0) << describe(b);
   EXPECT_EQ(readFile(small), readFile(whole));
   EXPECT_TRUE(contains(b.out, "memory tiers   pool "));
-  const JsonValue tiers = member(parsed(readFile(drive.dir.file("stats.json"))), "memory_tiers");
+  const Json tiers = member(parsed(readFile(drive.dir.file("stats.json"))), "memory_tiers");
   EXPECT_EQ(number(tiers, "pool_regions"), static_cast<double>(regions / 8));
   EXPECT_GT(number(tiers, "regions_spilled"), 0.0);
   EXPECT_GT(number(tiers, "spill_bytes_written"), 0.0);
@@ -122,8 +118,8 @@ TEST(CliLargeMaps, InfoExportAndHeightmapReadAMapLargerThanTheirMemory) {
   const RunResult whole_info = runRaymap({"info", map, "--json"});
   const RunResult small_info = runRaymap(with({"info", map, "--json"}, small));
   ASSERT_EQ(small_info.exit_code, 0) << describe(small_info);
-  const JsonValue w = parsed(whole_info.out);
-  const JsonValue s = parsed(small_info.out);
+  const Json w = parsed(whole_info.out);
+  const Json s = parsed(small_info.out);
   for (const char* key : {"regions", "voxels_free", "voxels_occupied", "voxels_unobserved"}) {
     EXPECT_EQ(number(s, key), number(w, key)) << key;
   }

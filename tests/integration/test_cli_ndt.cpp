@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support/cli_runner.hpp"
-#include "tests/support/mini_json.hpp"
+#include "tests/support/json_doc.hpp"
 #include "tests/support/ply_test_writer.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -103,12 +103,10 @@ std::optional<PlyFile> readPly(const std::string& path) {
   return ply;
 }
 
-std::optional<double> jsonNumberAt(const JsonValue& root, const std::string& object,
+std::optional<double> jsonNumberAt(const Json& root, const std::string& object,
                                    const std::string& key) {
-  const JsonValue* o = root.find(object);
-  const JsonValue* v = o != nullptr ? o->find(key) : nullptr;
-  return v != nullptr && v->kind == JsonValue::Kind::kNumber ? std::optional(v->number)
-                                                             : std::nullopt;
+  const Json* v = findPath(root, {object, key});
+  return v != nullptr && v->is_number() ? std::optional(v->get<double>()) : std::nullopt;
 }
 
 class CliNdt : public ::testing::TestWithParam<std::string> {
@@ -139,23 +137,19 @@ TEST_P(CliNdt, InfoReportsTheModeLayersAndParameters) {
   EXPECT_TRUE(contains(text.out, "sample threshold 5"));
   EXPECT_TRUE(contains(text.out, "adaptation rate 0.2 (from miss probability)"));
   ASSERT_EQ(json.exit_code, 0) << describe(json);
-  std::string error;
-  const std::optional<JsonValue> root = parseJson(json.out, &error);
-  ASSERT_TRUE(root.has_value()) << error << "\n" << json.out;
-  const JsonValue* mode = root->find("mode");
-  ASSERT_NE(mode, nullptr);
-  EXPECT_EQ(mode->text, GetParam());
+  const std::optional<Json> root = parseJson(json.out);
+  ASSERT_TRUE(root.has_value());
+  EXPECT_EQ(root->value("mode", ""), GetParam());
   EXPECT_EQ(jsonNumberAt(*root, "ndt", "sensor_noise_m"), 0.02);
   EXPECT_EQ(jsonNumberAt(*root, "ndt", "sample_threshold"), 5.0);
   // Derived from the float log-odds miss, so 0.2 to float precision.
   EXPECT_NEAR(jsonNumberAt(*root, "ndt", "adaptation_rate").value_or(-1), 0.2, 1e-6);
-  const JsonValue* layers = root->find("layer_details");
+  const Json* layers = findPath(*root, {"layer_details"});
   ASSERT_NE(layers, nullptr);
   const std::size_t expected_layers = GetParam() == "ndt-tm" ? 5u : 3u;  // + occupancy, mean
-  ASSERT_EQ(layers->items.size(), expected_layers);
-  const JsonValue* ndt_bytes = layers->items[2].find("bytes_per_voxel");
-  ASSERT_NE(ndt_bytes, nullptr);
-  EXPECT_EQ(ndt_bytes->number, 40.0);
+  ASSERT_TRUE(layers->is_array());
+  ASSERT_EQ(layers->size(), expected_layers);
+  EXPECT_EQ((*layers)[2].value("bytes_per_voxel", -1), 40);
 }
 
 TEST_P(CliNdt, PointsLieOnTheWallWithItsNormalAndEllipsoidsSurroundThem) {
@@ -282,16 +276,14 @@ TEST(CliNdtBench, BenchMeasuresNdtAgainstOccupancyInTheSameJson) {
   const RunResult ndt =
       runRaymap({"bench", input, "--mode", "ndt-tm", "--threads-list", "1", "--repeat", "1"});
   ASSERT_EQ(ndt.exit_code, 0) << describe(ndt);
-  std::string error;
-  const std::optional<JsonValue> root = parseJson(ndt.out, &error);
-  ASSERT_TRUE(root.has_value()) << error << "\n" << ndt.out;
-  const JsonValue* runs = root->find("runs");
+  const std::optional<Json> root = parseJson(ndt.out);
+  ASSERT_TRUE(root.has_value());
+  const Json* runs = findPath(*root, {"runs"});
   ASSERT_NE(runs, nullptr);
-  ASSERT_EQ(runs->items.size(), 1u);  // the default semantics list shrinks to "ray"
-  const JsonValue* mode = runs->items[0].find("mode");
-  ASSERT_NE(mode, nullptr);
-  EXPECT_EQ(mode->text, "ndt-tm");
-  EXPECT_NE(runs->items[0].find("rays_per_second"), nullptr);
+  ASSERT_TRUE(runs->is_array());
+  ASSERT_EQ(runs->size(), 1u);  // the default semantics list shrinks to "ray"
+  EXPECT_EQ((*runs)[0].value("mode", ""), "ndt-tm");
+  EXPECT_NE(findPath((*runs)[0], {"rays_per_second"}), nullptr);
 }
 
 }  // namespace

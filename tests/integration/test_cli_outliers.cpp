@@ -2,6 +2,7 @@
 // Outlier returns (issue 52, M4): one ghost return tens of kilometres away is counted and left
 // out by --max-ray-length, never fatal, and cannot grow the map, whatever its memory budget.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,12 +33,13 @@ struct OutlierClouds {
 /// `raymap info --json`'s "regions" of `map` (-1 when the command fails).
 long regionsOf(const std::string& map) {
   const RunResult info = runRaymap({"info", map, "--json"});
-  const std::size_t at = info.out.find("\"regions\":");
-  if (info.exit_code != 0 || at == std::string::npos) {
+  const std::optional<std::string> regions =
+      info.exit_code == 0 ? jsonValue(info.out, "regions") : std::nullopt;
+  if (!regions) {
     ADD_FAILURE() << describe(info);
     return -1;
   }
-  return std::stol(info.out.substr(at + 10));
+  return std::stol(*regions);
 }
 
 TEST(CliOutliers, AReturnThirtyFiveKilometresAwayIsCountedAndLeftOutNotMapped) {

@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support/cli_runner.hpp"
+#include "tests/support/json_doc.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
@@ -27,15 +28,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// A number in the stats JSON `populate --stats-json -` prints ("key": value).
+/// A number in the stats JSON `populate --stats-json -` prints (NaN, and a test failure, when
+/// it has none by that name).
 double statsValue(const std::string& json, const std::string& key) {
-  const std::string tag = "\"" + key + "\":";
-  const std::size_t at = json.find(tag);
-  if (at == std::string::npos) {
-    ADD_FAILURE() << key << " not in " << json;
+  const std::optional<Json> document = parseJson(json);
+  const Json* value = document ? findFirst(*document, key) : nullptr;
+  if (value == nullptr || !value->is_number()) {
+    ADD_FAILURE() << key << " not a number in " << json;
     return std::nan("");
   }
-  return std::strtod(json.c_str() + at + tag.size(), nullptr);
+  return value->get<double>();
 }
 
 /// The counts of the summary line "simulated NAME: S scans, R rays, N no-return -> ...".

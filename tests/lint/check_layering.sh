@@ -42,10 +42,10 @@ check kernels/cuda 'src/|platform/|tools/|tests/' 'CUDA entry points depend only
 # The library (raymap::raymap) builds without the service's and the tools' dependencies: none of
 # its code includes DDS, CLI11 or systemd, nor the folders built only with them. It reads rosbag2
 # bags (src/bag, src/msgs, src/pipeline: yaml-cpp, lz4, SQLite, Boost.Lockfree) and YAML
-# configurations (src/config), so those are allowed; src/sim/scene_file.* is the tools' (scene files).
+# configurations (src/config), so those are allowed (the tools' JSON, nlohmann/, is not); src/sim/scene_file.* is the tools' (scene files).
 library_folders="include src/core src/map src/io src/heightmap src/device src/mapper src/record src/msgs src/pipeline src/bag platform"
 for folder in $library_folders; do
-  hits=$(grep -rnE '#include [<"](CLI/|dds/|systemd/|src/dds/|src/security/|src/service/|src/sim/scene_file|tools/)' \
+  hits=$(grep -rnE '#include [<"](CLI/|dds/|systemd/|nlohmann/|src/dds/|src/security/|src/service/|src/sim/scene_file|tools/)' \
     "$folder" --include='*.hpp' --include='*.cpp' --include='*.h' | grep -v '^platform/linux/notify.cpp:' || true)
   if [ -n "$hits" ]; then
     echo "layering: the library ($folder) must build without the service's and tools' dependencies:"

@@ -11,6 +11,7 @@
 
 #include "platform/clock.hpp"
 #include "tests/support/cli_runner.hpp"
+#include "tests/support/json_doc.hpp"
 
 namespace raymap::test {
 namespace {
@@ -75,15 +76,12 @@ void Watcher::collectUntilQuiet(double quiet_s, double max_s) {
 }
 
 std::optional<double> jsonNumber(const std::string& json, const std::string& key) {
-  const std::string quoted = "\"" + key + "\":";
-  const std::size_t at = json.find(quoted);
-  if (at == std::string::npos) {
+  const std::optional<Json> document = parseJson(json);
+  const Json* value = document ? findFirst(*document, key) : nullptr;
+  if (value == nullptr || !value->is_number()) {
     return std::nullopt;
   }
-  const char* start = json.c_str() + at + quoted.size();
-  char* end = nullptr;
-  const double value = std::strtod(start, &end);
-  return end == start ? std::nullopt : std::optional<double>(value);
+  return value->get<double>();
 }
 
 OfflineHeights offlineHeights(const TempDir& dir, const std::string& input,

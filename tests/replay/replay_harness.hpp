@@ -47,7 +47,8 @@ struct Watcher {
   std::vector<driver::ReceivedGridMap> maps;
 };
 
-/// @brief A number from a flat JSON text ("key": value), or nullopt.
+/// @brief The first number named `key` in the JSON document `json` (document order); nullopt
+/// when there is none. Text that is not JSON is a test failure (parseJson).
 std::optional<double> jsonNumber(const std::string& json, const std::string& key);
 
 /// @brief One height-map cell of the offline `raymap heightmap --csv`.

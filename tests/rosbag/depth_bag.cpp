@@ -13,6 +13,7 @@
 #include "src/sim/scene_file.hpp"
 #include "tests/rosbag/bag_fixture.hpp"
 #include "tests/support/bag_spec.hpp"
+#include "tests/support/json_doc.hpp"
 
 namespace raymap::test {
 namespace {
@@ -124,11 +125,15 @@ DepthBag makeDepthBag(const TempDir& dir, int frames, bool distorted, bool encod
     spec.depthImage(kImageTopic, logged + 1, stamp, kFrame, camera.width, camera.height, depth,
                     encoding_16);
     if (bad_image && k == 1) {
-      spec.message(kImageTopic, logged + 2,
-                   "{\"header\":{\"stamp\":{\"sec\":1,\"nanosec\":0},\"frame_id\":\"" +
-                       std::string(kFrame) +
-                       "\"},\"height\":1,\"width\":1,\"encoding\":\"rgb8\",\"step\":3,"
-                       "\"data\":[1,2,3]}");
+      const Json rgb = {
+          {"header", {{"stamp", {{"sec", 1}, {"nanosec", 0}}}, {"frame_id", kFrame}}},
+          {"height", 1},
+          {"width", 1},
+          {"encoding", "rgb8"},
+          {"step", 3},
+          {"data", {1, 2, 3}},
+      };
+      spec.message(kImageTopic, logged + 2, rgb.dump());
     }
   }
   // Poses past the last frame, so that it is covered.

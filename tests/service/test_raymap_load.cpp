@@ -1,21 +1,25 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // raymap-load as a user runs it (issue 52, M6): on the domain ROS_DOMAIN_ID names, with its
 // default scene found from any working directory.
+#include <optional>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "tests/service/service_fixture.hpp"
 #include "tests/support/cli_runner.hpp"
+#include "tests/support/json_doc.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
 namespace {
 
-/// The number after `"key": ` in raymap-load's JSON report (-1 when it is not there).
+/// The first number named `key` in raymap-load's JSON report, its nested objects included (-1
+/// when there is none). A report that is not JSON is a test failure.
 double loadReportNumber(const std::string& report, const std::string& key) {
-  const std::size_t at = report.find("\"" + key + "\": ");
-  return at == std::string::npos ? -1.0 : std::stod(report.substr(at + key.size() + 4));
+  const std::optional<Json> json = parseJson(report);
+  const Json* value = json ? findFirst(*json, key) : nullptr;
+  return value != nullptr && value->is_number() ? value->get<double>() : -1.0;
 }
 
 TEST(RaymapLoad, PublishesOnTheDomainOfRosDomainIdWithItsDefaultSceneFromAnyFolder) {

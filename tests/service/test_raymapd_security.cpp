@@ -27,6 +27,8 @@
 #include "src/security/keystore/keystore_writer.hpp"
 #include "tests/service/daemon_process.hpp"
 #include "tests/service/service_fixture.hpp"
+#include "tests/support/cli_runner.hpp"
+#include "tests/support/json_doc.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
@@ -151,10 +153,12 @@ class LoopbackCapture {
   std::unique_ptr<DaemonProcess> process_;
 };
 
-/// The number after `"key": ` in raymap-load's JSON report (-1 when it is not there).
+/// The first number named `key` in raymap-load's JSON report, its nested objects included (-1
+/// when there is none). A report that is not JSON is a test failure.
 double reportNumber(const std::string& report, const std::string& key) {
-  const std::size_t at = report.find("\"" + key + "\": ");
-  return at == std::string::npos ? -1.0 : std::stod(report.substr(at + key.size() + 4));
+  const std::optional<Json> json = parseJson(report);
+  const Json* value = json ? findFirst(*json, key) : nullptr;
+  return value != nullptr && value->is_number() ? value->get<double>() : -1.0;
 }
 
 /// What one run of the scenario observed.
@@ -278,11 +282,13 @@ Observed runScenario(const RobotKeystore& keystore, bool secure,
   if (!maps.empty()) {
     seen.last_map = maps.back();
   }
-  seen.intruder_report =
-      fileBytes(work.file("intruder.json")) + fileBytes(work.file("intruder.log"));
-  seen.intruder_maps = reportNumber(seen.intruder_report, "maps_received");
-  // raymap-load copies raymapd's diagnostics into its report: -1 when it read none.
-  seen.intruder_diagnostics = reportNumber(seen.intruder_report, "clouds_received");
+  const std::string intruder_json = fileBytes(work.file("intruder.json"));
+  seen.intruder_report = intruder_json + fileBytes(work.file("intruder.log"));
+  if (with_intruder) {
+    seen.intruder_maps = reportNumber(intruder_json, "maps_received");
+    // raymap-load copies raymapd's diagnostics into its report: -1 when it read none.
+    seen.intruder_diagnostics = reportNumber(intruder_json, "clouds_received");
+  }
   const auto& values = robot.diagnostics->values();
   const auto value = [&](const std::string& key) {
     const auto it = values.find(key);
@@ -386,14 +392,15 @@ TEST(SecureRaymapd, AnUnauthenticatedMapWriterIsNotSeenByRaymapd) {
   ASSERT_TRUE(second_writer);
   const TempDir work;
   const std::string enclave = "ROS_SECURITY_ENCLAVE_OVERRIDE=/robot/driver";
-  const auto [status, report] = runToCompletion(
-      "/usr/bin/env",
-      {"ROS_SECURITY_ENABLE=true", "ROS_SECURITY_STRATEGY=Enforce",
-       "ROS_SECURITY_KEYSTORE=" + keystore.path().string(), enclave, RAYMAP_LOAD_PATH, "--domain",
-       std::to_string(keystore.domain_id), "--beams", "16", "--columns", "512", "--warmup", "1",
-       "--duration", "3", "--frame", kMarkerFrame});
-  EXPECT_EQ(status, 0) << report;
-  EXPECT_GE(reportNumber(report, "maps_received"), static_cast<double>(fewestMaps(3.0))) << report;
+  // Standard output alone: the JSON report (its warnings go to standard error).
+  const RunResult load =
+      runProgram({"/usr/bin/env", "ROS_SECURITY_ENABLE=true", "ROS_SECURITY_STRATEGY=Enforce",
+                  "ROS_SECURITY_KEYSTORE=" + keystore.path().string(), enclave, RAYMAP_LOAD_PATH,
+                  "--domain", std::to_string(keystore.domain_id), "--beams", "16", "--columns",
+                  "512", "--warmup", "1", "--duration", "3", "--frame", kMarkerFrame});
+  EXPECT_EQ(load.exit_code, 0) << describe(load);
+  EXPECT_GE(reportNumber(load.out, "maps_received"), static_cast<double>(fewestMaps(3.0)))
+      << describe(load);
   EXPECT_EQ(second_writer->matchedReaders(), 0u);
   expectCleanStop(daemon);
   EXPECT_EQ(daemon.log().find("other publisher"), std::string::npos) << daemon.log();

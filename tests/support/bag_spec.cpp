@@ -3,49 +3,26 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <vector>
 
 namespace raymap::test {
 namespace {
 
-std::string timeJson(std::int64_t ns) {
-  char text[96];
+/// builtin_interfaces/Time: whole seconds (floor) and the nanoseconds after them.
+Json timeJson(std::int64_t ns) {
   const std::int64_t sec = ns >= 0 ? ns / 1000000000 : -((-ns + 999999999) / 1000000000);
-  std::snprintf(text, sizeof(text), "{\"sec\":%lld,\"nanosec\":%lld}", static_cast<long long>(sec),
-                static_cast<long long>(ns - sec * 1000000000));
-  return text;
+  return {{"sec", sec}, {"nanosec", ns - sec * 1000000000}};
 }
 
-std::string headerJson(std::int64_t stamp_ns, const std::string& frame) {
-  return "{\"stamp\":" + timeJson(stamp_ns) + ",\"frame_id\":\"" + frame + "\"}";
+Json headerJson(std::int64_t stamp_ns, const std::string& frame) {
+  return {{"stamp", timeJson(stamp_ns)}, {"frame_id", frame}};
 }
 
-std::string poseJson(const io::Pose& p) {
-  char text[320];
-  std::snprintf(text, sizeof(text),
-                "{\"position\":{\"x\":%.17g,\"y\":%.17g,\"z\":%.17g},\"orientation\":{\"x\":%.17g,"
-                "\"y\":%.17g,\"z\":%.17g,\"w\":%.17g}}",
-                p.position.x(), p.position.y(), p.position.z(), p.orientation.x(),
-                p.orientation.y(), p.orientation.z(), p.orientation.w());
-  return text;
-}
+Json pointJson(const Eigen::Vector3d& v) { return {{"x", v.x()}, {"y", v.y()}, {"z", v.z()}}; }
 
-/// `text` inside JSON quotes (quotes, backslashes and newlines escaped).
-std::string escaped(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    if (c == '\n') {
-      out += "\\n";
-    } else {
-      if (c == '"' || c == '\\') {
-        out += '\\';
-      }
-      out += c;
-    }
-  }
-  return out;
+Json quaternionJson(const Eigen::Quaterniond& q) {
+  return {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}};
 }
 
 template <class T>
@@ -59,14 +36,26 @@ BagSpecWriter::BagSpecWriter(const std::string& path) : out_(path) {}
 
 void BagSpecWriter::channel(const std::string& topic, const std::string& type,
                             const std::string& qos) {
-  out_ << "{\"op\":\"channel\",\"topic\":\"" << topic << "\",\"type\":\"" << type << "\",\"qos\":\""
-       << escaped(qos) << "\"}\n";
+  const Json line = {{"op", "channel"}, {"topic", topic}, {"type", type}, {"qos", qos}};
+  out_ << line.dump() << "\n";
 }
 
 void BagSpecWriter::message(const std::string& topic, std::int64_t log_time_ns,
                             const std::string& body) {
-  out_ << "{\"op\":\"message\",\"topic\":\"" << topic << "\",\"log_time_ns\":\"" << log_time_ns
-       << "\",\"publish_time_ns\":\"" << log_time_ns << "\",\"msg\":" << body << "}\n";
+  writeMessage(topic, log_time_ns, Json::parse(body));
+}
+
+void BagSpecWriter::writeMessage(const std::string& topic, std::int64_t log_time_ns,
+                                 const Json& body) {
+  // The times as strings: JavaScript's numbers hold integers exactly only up to 2^53.
+  const Json line = {
+      {"op", "message"},
+      {"topic", topic},
+      {"log_time_ns", std::to_string(log_time_ns)},
+      {"publish_time_ns", std::to_string(log_time_ns)},
+      {"msg", body},
+  };
+  out_ << line.dump() << "\n";
 }
 
 void BagSpecWriter::ousterCloud(const std::string& topic, std::int64_t log_time_ns,
@@ -86,42 +75,54 @@ void BagSpecWriter::ousterCloud(const std::string& topic, std::int64_t log_time_
     put(data, at + 20, static_cast<std::uint32_t>(std::llround(double(p.time_s) * 1e9)));
     put(data, at + 26, i < rings.size() ? rings[i] : std::uint16_t{0});
   }
-  const std::string fields =
-      "[{\"name\":\"x\",\"offset\":0,\"datatype\":7,\"count\":1},"
-      "{\"name\":\"y\",\"offset\":4,\"datatype\":7,\"count\":1},"
-      "{\"name\":\"z\",\"offset\":8,\"datatype\":7,\"count\":1},"
-      "{\"name\":\"intensity\",\"offset\":16,\"datatype\":7,\"count\":1},"
-      "{\"name\":\"t\",\"offset\":20,\"datatype\":6,\"count\":1},"
-      "{\"name\":\"ring\",\"offset\":26,\"datatype\":4,\"count\":1}]";
-  message(
-      topic, log_time_ns,
-      "{\"header\":" + headerJson(stamp_ns, frame) +
-          ",\"height\":1,\"width\":" + std::to_string(points.size()) + ",\"fields\":" + fields +
-          ",\"is_bigendian\":false,\"point_step\":48,\"row_step\":" + std::to_string(data.size()) +
-          ",\"data\":{\"base64\":\"" + base64(data) + "\"},\"is_dense\":true}");
+  const auto field = [](const char* name, int offset, int datatype) {
+    return Json{{"name", name}, {"offset", offset}, {"datatype", datatype}, {"count", 1}};
+  };
+  writeMessage(topic, log_time_ns,
+               Json{
+                   {"header", headerJson(stamp_ns, frame)},
+                   {"height", 1},
+                   {"width", points.size()},
+                   {"fields",
+                    {field("x", 0, 7), field("y", 4, 7), field("z", 8, 7),
+                     field("intensity", 16, 7), field("t", 20, 6), field("ring", 26, 4)}},
+                   {"is_bigendian", false},
+                   {"point_step", kStep},
+                   {"row_step", data.size()},
+                   {"data", {{"base64", base64(data)}}},
+                   {"is_dense", true},
+               });
 }
 
 void BagSpecWriter::odometry(const std::string& topic, std::int64_t log_time_ns,
                              std::int64_t stamp_ns, const std::string& frame,
                              const std::string& child, const io::Pose& pose) {
-  message(topic, log_time_ns,
-          "{\"header\":" + headerJson(stamp_ns, frame) + ",\"child_frame_id\":\"" + child +
-              "\",\"pose\":{\"pose\":" + poseJson(pose) + "}}");
+  writeMessage(topic, log_time_ns,
+               Json{
+                   {"header", headerJson(stamp_ns, frame)},
+                   {"child_frame_id", child},
+                   {"pose",
+                    {{"pose",
+                      {{"position", pointJson(pose.position)},
+                       {"orientation", quaternionJson(pose.orientation)}}}}},
+               });
 }
 
 void BagSpecWriter::cameraInfo(const std::string& topic, std::int64_t log_time_ns,
                                std::int64_t stamp_ns, const std::string& frame,
                                const CameraIntrinsics& c) {
   const bool distorted = c.distortion == DistortionModel::kPlumbBob;
-  char body[1024];
-  std::snprintf(body, sizeof(body),
-                ",\"height\":%u,\"width\":%u,\"distortion_model\":\"%s\","
-                "\"d\":[%.17g,%.17g,%.17g,%.17g,%.17g],"
-                "\"k\":[%.17g,0,%.17g,0,%.17g,%.17g,0,0,1],\"r\":[1,0,0,0,1,0,0,0,1],"
-                "\"p\":[%.17g,0,%.17g,0,0,%.17g,%.17g,0,0,0,1,0]}",
-                c.height, c.width, distorted ? "plumb_bob" : "", c.k1, c.k2, c.p1, c.p2, c.k3, c.fx,
-                c.cx, c.fy, c.cy, c.fx, c.cx, c.fy, c.cy);
-  message(topic, log_time_ns, "{\"header\":" + headerJson(stamp_ns, frame) + body);
+  writeMessage(topic, log_time_ns,
+               Json{
+                   {"header", headerJson(stamp_ns, frame)},
+                   {"height", c.height},
+                   {"width", c.width},
+                   {"distortion_model", distorted ? "plumb_bob" : ""},
+                   {"d", {c.k1, c.k2, c.p1, c.p2, c.k3}},
+                   {"k", {c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0}},
+                   {"r", {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0}},
+                   {"p", {c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0}},
+               });
 }
 
 void BagSpecWriter::depthImage(const std::string& topic, std::int64_t log_time_ns,
@@ -144,40 +145,31 @@ void BagSpecWriter::depthImage(const std::string& topic, std::int64_t log_time_n
       }
     }
   }
-  char fields[256];
-  std::snprintf(fields, sizeof(fields),
-                ",\"height\":%u,\"width\":%u,\"encoding\":\"%s\",\"is_bigendian\":0,"
-                "\"step\":%u,\"data\":{\"base64\":\"",
-                height, width, millimetres ? "16UC1" : "32FC1", width * (millimetres ? 2u : 4u));
-  message(topic, log_time_ns,
-          "{\"header\":" + headerJson(stamp_ns, frame) + fields + base64(data) + "\"}}");
+  writeMessage(topic, log_time_ns,
+               Json{
+                   {"header", headerJson(stamp_ns, frame)},
+                   {"height", height},
+                   {"width", width},
+                   {"encoding", millimetres ? "16UC1" : "32FC1"},
+                   {"is_bigendian", 0},
+                   {"step", width * (millimetres ? 2U : 4U)},
+                   {"data", {{"base64", base64(data)}}},
+               });
 }
 
 void BagSpecWriter::tf(const std::string& topic, std::int64_t log_time_ns,
                        const std::vector<SpecTransform>& transforms) {
-  std::string list;
+  Json list = Json::array();
   for (const SpecTransform& t : transforms) {
-    char translation[160];
-    std::snprintf(translation, sizeof(translation), "{\"x\":%.17g,\"y\":%.17g,\"z\":%.17g}",
-                  t.pose.position.x(), t.pose.position.y(), t.pose.position.z());
-    char rotation[200];
-    std::snprintf(rotation, sizeof(rotation), "{\"x\":%.17g,\"y\":%.17g,\"z\":%.17g,\"w\":%.17g}",
-                  t.pose.orientation.x(), t.pose.orientation.y(), t.pose.orientation.z(),
-                  t.pose.orientation.w());
-    if (!list.empty()) {
-      list += ',';
-    }
-    list.append("{\"header\":")
-        .append(headerJson(t.stamp_ns, t.parent))
-        .append(",\"child_frame_id\":\"")
-        .append(t.child)
-        .append("\",\"transform\":{\"translation\":")
-        .append(translation)
-        .append(",\"rotation\":")
-        .append(rotation)
-        .append("}}");
+    list.push_back(Json{
+        {"header", headerJson(t.stamp_ns, t.parent)},
+        {"child_frame_id", t.child},
+        {"transform",
+         {{"translation", pointJson(t.pose.position)},
+          {"rotation", quaternionJson(t.pose.orientation)}}},
+    });
   }
-  message(topic, log_time_ns, "{\"transforms\":[" + list + "]}");
+  writeMessage(topic, log_time_ns, Json{{"transforms", list}});
 }
 
 std::string base64(std::span<const std::byte> bytes) {

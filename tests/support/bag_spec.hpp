@@ -13,6 +13,7 @@
 #include "src/core/pinhole_camera.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/msgs/point_cloud.hpp"
+#include "tests/support/json_doc.hpp"
 
 namespace raymap::test {
 
@@ -51,10 +52,12 @@ class BagSpecWriter {
   void depthImage(const std::string& topic, std::int64_t log_time_ns, std::int64_t stamp_ns,
                   const std::string& frame, std::uint32_t width, std::uint32_t height,
                   std::span<const float> depth_m, bool millimetres);
-  /// Any message, its fields given as JSON (`body`).
+  /// Any message, its fields given as JSON text (`body`; not JSON throws).
   void message(const std::string& topic, std::int64_t log_time_ns, const std::string& body);
 
  private:
+  void writeMessage(const std::string& topic, std::int64_t log_time_ns, const Json& body);
+
   std::ofstream out_;
 };
 

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "platform/errno_text.hpp"
+#include "tests/support/json_doc.hpp"
 
 namespace raymap::test {
 
@@ -147,30 +148,15 @@ std::vector<std::string> concat(std::vector<std::string> a, const std::vector<st
 }
 
 std::optional<std::string> jsonValue(const std::string& json, const std::string& key) {
-  const std::string quoted = "\"" + key + "\"";
-  // The key is a quoted name followed by a colon (a string value equal to the key is not).
-  std::size_t at = 0;
-  for (at = json.find(quoted); at != std::string::npos; at = json.find(quoted, at + 1)) {
-    const std::size_t colon = json.find_first_not_of(" \t", at + quoted.size());
-    if (colon != std::string::npos && json[colon] == ':') {
-      at = colon + 1;
-      break;
-    }
+  const std::optional<Json> document = parseJson(json);
+  if (!document) {
+    return std::nullopt;  // a test failure already
   }
-  if (at == std::string::npos) {
+  const Json* value = findFirst(*document, key);
+  if (value == nullptr) {
     return std::nullopt;
   }
-  at = json.find_first_not_of(" \t", at);
-  if (at == std::string::npos) {
-    return std::nullopt;
-  }
-  if (json[at] == '"') {
-    const std::size_t end = json.find('"', at + 1);
-    return end == std::string::npos ? std::nullopt
-                                    : std::optional<std::string>(json.substr(at + 1, end - at - 1));
-  }
-  const std::size_t end = json.find_first_of(",}\n", at);
-  return json.substr(at, end == std::string::npos ? std::string::npos : end - at);
+  return value->is_string() ? value->get<std::string>() : value->dump();
 }
 
 std::string deviceUnavailable(const std::string& device) {

@@ -37,8 +37,9 @@ void writeText(const std::string& path, const std::string& text);
 /// @brief `a` followed by `b` (command-line arguments).
 std::vector<std::string> concat(std::vector<std::string> a, const std::vector<std::string>& b);
 
-/// @brief The raw text of the first value of `"key"` in the program's flat JSON output: a string
-/// without its quotes, or a number as written; nullopt when the key is missing.
+/// @brief The first value of member `key` anywhere in the JSON document `json` (document order):
+/// a string's text, or any other value as JSON text (a number, `true`, `null`); nullopt when no
+/// member has that name. Text that is not JSON is a test failure (parseJson).
 std::optional<std::string> jsonValue(const std::string& json, const std::string& key);
 
 /// @brief Why `--backend <device>` cannot run here, or "" when it can (as `raymap devices` says;

@@ -4,7 +4,10 @@
 # and `raymap-octomap` print, the machine line of a summary, and the list of shared data sets.
 
 value() {  # value KEY FILE [occurrence]: the number after "KEY": in a JSON file
-  grep -o "\"$1\": [0-9.e+-]*" "$2" | sed -n "${3:-1}p" | awk '{print $2}'
+  # Not inside a memory_tiers object: its wait_seconds is the tiers', not the run's (and would
+  # shift the occurrences of the runs' own). The tiers' keys: tvalue, run-large-map-benchmarks.sh.
+  sed '/"memory_tiers": {/,/}/d' "$2" | grep -o "\"$1\": [0-9.e+-]*" | sed -n "${3:-1}p" |
+    awk '{print $2}'
 }
 
 text() {  # text KEY FILE: the first string value of KEY

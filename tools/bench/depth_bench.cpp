@@ -34,6 +34,7 @@
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pose_history.hpp"
 #include "src/sim/depth_camera.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace raymap {
 namespace {
@@ -121,8 +122,8 @@ struct Frames {
   std::exit(1);
 }
 
-std::string decodeRun(const char* encoding, const std::vector<std::byte>& bytes,
-                      const PixelRayTable& rays, std::uint32_t downsample, int repetitions) {
+cli::Json decodeRun(const char* encoding, const std::vector<std::byte>& bytes,
+                    const PixelRayTable& rays, std::uint32_t downsample, int repetitions) {
   std::vector<msgs::ScanPoint> out(msgs::depthPointCapacity(kWidth, kHeight, downsample));
   msgs::DepthDecodeOptions options;
   options.downsample = downsample;
@@ -140,17 +141,18 @@ std::string decodeRun(const char* encoding, const std::vector<std::byte>& bytes,
     }
     ns.push_back(secondsSince(start) * 1e9 / kDecodeFrames);
   }
-  char text[256];
-  std::snprintf(text, sizeof(text),
-                "    {\"encoding\": \"%s\", \"downsample\": %u, \"points\": %u, "
-                "\"ns_per_frame\": %.0f, \"ns_per_pixel\": %.3f}",
-                encoding, downsample, points, median(ns), median(ns) / (double{kWidth} * kHeight));
-  return text;
+  return {
+      {"encoding", encoding},
+      {"downsample", downsample},
+      {"points", points},
+      {"ns_per_frame", median(ns)},
+      {"ns_per_pixel", median(ns) / (double{kWidth} * kHeight)},
+  };
 }
 
-std::string integrateRun(const std::vector<std::byte>& bytes, const PixelRayTable& rays,
-                         std::uint32_t downsample, Semantics semantics, int repetitions,
-                         const backends::BackendChoice& choice) {
+cli::Json integrateRun(const std::vector<std::byte>& bytes, const PixelRayTable& rays,
+                       std::uint32_t downsample, Semantics semantics, int repetitions,
+                       const backends::BackendChoice& choice) {
   MapConfig config;
   config.geometry.resolution = kResolutionM;
   config.semantics = semantics;
@@ -223,18 +225,21 @@ std::string integrateRun(const std::vector<std::byte>& bytes, const PixelRayTabl
     integrate_ms.push_back(integrate_s * 1e3 / kIntegrateFrames);
   }
   const double per_frame = median(frame_s);
-  char text[512];
-  std::snprintf(text, sizeof(text),
-                "    {\"encoding\": \"16UC1\", \"downsample\": %u, \"semantics\": \"%s\", "
-                "\"rays_per_frame\": %zu, \"frames_per_s\": %.1f, \"rays_per_s\": %.0f, "
-                "\"ms_per_frame\": %.3f, \"decode_ms\": %.3f, \"to_world_ray_ms\": %.3f, "
-                "\"prepare_and_integrate_ms\": %.3f, \"rays_clipped_share\": %.3f}",
-                downsample, semantics == Semantics::kPerScan ? "scan" : "ray", rays_per_frame,
-                1.0 / per_frame, static_cast<double>(rays_per_frame) / per_frame, per_frame * 1e3,
-                median(decode_ms), median(convert_ms), median(integrate_ms),
-                static_cast<double>(preparer.counters().rays_clipped) /
-                    static_cast<double>(std::max<std::uint64_t>(preparer.counters().rays_in, 1)));
-  return text;
+  return {
+      {"encoding", "16UC1"},
+      {"downsample", downsample},
+      {"semantics", semantics == Semantics::kPerScan ? "scan" : "ray"},
+      {"rays_per_frame", rays_per_frame},
+      {"frames_per_s", 1.0 / per_frame},
+      {"rays_per_s", static_cast<double>(rays_per_frame) / per_frame},
+      {"ms_per_frame", per_frame * 1e3},
+      {"decode_ms", median(decode_ms)},
+      {"to_world_ray_ms", median(convert_ms)},
+      {"prepare_and_integrate_ms", median(integrate_ms)},
+      {"rays_clipped_share",
+       static_cast<double>(preparer.counters().rays_clipped) /
+           static_cast<double>(std::max<std::uint64_t>(preparer.counters().rays_in, 1))},
+  };
 }
 
 /// The simulator (sim::DepthCamera) rendering a 640 × 480 frame of six steps between two walls,
@@ -316,32 +321,33 @@ int main(int argc, char** argv) {
   msgs::serializeDepthImage(kStampNs, "camera_depth_optical_frame", kWidth, kHeight,
                             msgs::DepthEncoding::k16UC1, false, depth, frames.u16);
 
-  std::printf("{\n  \"image\": \"%ux%u, fx=fy=%.0f, %.1f m up, %.0f deg down, floor + box\",\n",
-              kWidth, kHeight, kFocalPx, kHeightM, kPitchDeg);
-  std::printf("  \"repetitions\": %d,\n  \"decode\": [\n", repetitions);
-  bool first = true;
+  char image[128];
+  std::snprintf(image, sizeof(image), "%ux%u, fx=fy=%.0f, %.1f m up, %.0f deg down, floor + box",
+                kWidth, kHeight, kFocalPx, kHeightM, kPitchDeg);
+  cli::Json decode = cli::Json::array();
   for (const std::uint32_t n : {1U, 2U, 6U}) {
     for (const bool mm : {false, true}) {
-      std::printf(
-          "%s%s", first ? "" : ",\n",
-          decodeRun(mm ? "16UC1" : "32FC1", mm ? frames.u16 : frames.f32, rays, n, repetitions)
-              .c_str());
-      first = false;
+      decode.push_back(
+          decodeRun(mm ? "16UC1" : "32FC1", mm ? frames.u16 : frames.f32, rays, n, repetitions));
     }
   }
-  std::printf("\n  ],\n  \"integrate_%s\": [\n",
-              choice.name == "cpu"
-                  ? "cpu_1_thread"
-                  : (choice.name + "_" + choice.device_planning + "_planning").c_str());
-  first = true;
+  cli::Json integrate = cli::Json::array();
   for (const std::uint32_t n : {1U, 2U, 6U}) {
     for (const Semantics s : {Semantics::kPerRay, Semantics::kPerScan}) {
-      std::printf("%s%s", first ? "" : ",\n",
-                  integrateRun(frames.u16, rays, n, s, repetitions, choice).c_str());
-      first = false;
+      integrate.push_back(integrateRun(frames.u16, rays, n, s, repetitions, choice));
     }
   }
-  std::printf("\n  ],\n  \"simulator_render_640x480_ms\": %.1f\n}\n",
-              simulatorRenderMs(repetitions));
+  const std::string integrate_key =
+      "integrate_" + (choice.name == "cpu"
+                          ? std::string("cpu_1_thread")
+                          : choice.name + "_" + choice.device_planning + "_planning");
+  const cli::Json result = {
+      {"image", image},
+      {"repetitions", repetitions},
+      {"decode", decode},
+      {integrate_key, integrate},
+      {"simulator_render_640x480_ms", simulatorRenderMs(repetitions)},
+  };
+  std::printf("%s\n", cli::dumpJson(result).c_str());
   return 0;
 }

@@ -12,7 +12,7 @@
 #include "src/io/map_file.hpp"
 #include "src/io/ray_source.hpp"
 #include "tools/bench/octomap_reference.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace {
 
@@ -81,29 +81,30 @@ int run(int argc, char** argv) {
   }
   reference.integrate(scan);
   const bench::OctomapCounts c = reference.counts();
-  cli::JsonObject j;
-  j.add("input", input)
-      .add("mapper", "octomap")
-      .add("semantics", semantics)
-      .add("resolution", options.resolution)
-      .add("min_range", options.min_range_m)
-      .add("max_range", options.max_range_m)
-      .add("hit_probability", probability(options.occupancy.hit))
-      .add("miss_probability", probability(options.occupancy.miss))
-      .add("rays_in", c.rays_in)
-      .add("rays_integrated", c.rays_integrated)
-      .add("rays_rejected", c.rays_rejected)
-      .add("rays_skipped_no_return", c.rays_skipped_no_return)
-      .add("integrate_seconds", c.integrate_seconds)
-      .add("rays_per_second", c.integrate_seconds > 0
-                                  ? static_cast<double>(c.rays_integrated) / c.integrate_seconds
-                                  : 0.0)
-      .add("voxels_free", c.voxels_free)
-      .add("voxels_occupied", c.voxels_occupied)
-      .add("backend", "octomap")
-      .add("threads", 1)
-      .add("updates_dropped", std::uint64_t{0})
-      .add("peak_rss_bytes", platform::peakResidentBytes());
+  cli::Json j = {
+      {"input", input},
+      {"mapper", "octomap"},
+      {"semantics", semantics},
+      {"resolution", options.resolution},
+      {"min_range", options.min_range_m},
+      {"max_range", options.max_range_m},
+      {"hit_probability", probability(options.occupancy.hit)},
+      {"miss_probability", probability(options.occupancy.miss)},
+      {"rays_in", c.rays_in},
+      {"rays_integrated", c.rays_integrated},
+      {"rays_rejected", c.rays_rejected},
+      {"rays_skipped_no_return", c.rays_skipped_no_return},
+      {"integrate_seconds", c.integrate_seconds},
+      {"rays_per_second", c.integrate_seconds > 0
+                              ? static_cast<double>(c.rays_integrated) / c.integrate_seconds
+                              : 0.0},
+      {"voxels_free", c.voxels_free},
+      {"voxels_occupied", c.voxels_occupied},
+      {"backend", "octomap"},
+      {"threads", 1},
+      {"updates_dropped", 0},
+      {"peak_rss_bytes", platform::peakResidentBytes()},
+  };
   if (!compare.empty()) {
     auto map = io::loadMap(compare);
     if (!map) {
@@ -111,13 +112,13 @@ int run(int argc, char** argv) {
       return 1;
     }
     const bench::Agreement a = reference.compare(*map);
-    j.add("compared_voxels", a.compared)
-        .add("same_state", a.same)
-        .add("only_raymap", a.only_raymap)
-        .add("only_octomap", a.only_octomap)
-        .add("agreement", a.fraction());
+    j["compared_voxels"] = a.compared;
+    j["same_state"] = a.same;
+    j["only_raymap"] = a.only_raymap;
+    j["only_octomap"] = a.only_octomap;
+    j["agreement"] = a.fraction();
   }
-  std::printf("%s\n", j.str().c_str());
+  std::printf("%s\n", cli::dumpJson(j).c_str());
   return 0;
 }
 

@@ -54,8 +54,8 @@ for round in $(seq "$repeat"); do
   done
 done
 
-tvalue() {  # tvalue KEY FILE: a number of the compact memory_tiers object
-  grep -o "\"$1\":[0-9.e+-]*" "$2" | head -1 | cut -d: -f2
+tvalue() {  # tvalue KEY FILE: a number of the memory_tiers object (wait_seconds is also a top-level key)
+  sed -n '/"memory_tiers": *{/,/}/p' "$2" | grep -o "\"$1\": *[0-9.e+-]*" | head -1 | sed 's/.*: *//'
 }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 base=$(for r in $(seq "$repeat"); do value rays_per_second "$out/unlimited.$r.json"; done | median)

@@ -17,6 +17,7 @@
 
 #include "src/io/map_file.hpp"
 #include "src/map/region_planes.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace {
 
@@ -136,13 +137,17 @@ int main(int argc, char** argv) {
     std::sort(compress_s.begin(), compress_s.end());
     std::sort(decompress_s.begin(), decompress_s.end());
     const double mb = static_cast<double>(raw) / 1e6;
-    std::printf(
-        "{\"codec\": \"%s\", \"regions\": %zu, \"raw_bytes\": %llu, \"packed_bytes\": %llu, "
-        "\"ratio\": %.2f, \"compress_mb_s\": %.0f, \"decompress_mb_s\": %.0f}\n",
-        c.name, regions.size(), static_cast<unsigned long long>(raw),
-        static_cast<unsigned long long>(packed),
-        static_cast<double>(raw) / static_cast<double>(std::max<std::uint64_t>(packed, 1)),
-        mb / compress_s[compress_s.size() / 2], mb / decompress_s[decompress_s.size() / 2]);
+    const raymap::cli::Json line = {
+        {"codec", c.name},
+        {"regions", regions.size()},
+        {"raw_bytes", raw},
+        {"packed_bytes", packed},
+        {"ratio",
+         static_cast<double>(raw) / static_cast<double>(std::max<std::uint64_t>(packed, 1))},
+        {"compress_mb_s", mb / compress_s[compress_s.size() / 2]},
+        {"decompress_mb_s", mb / decompress_s[decompress_s.size() / 2]},
+    };
+    std::printf("%s\n", raymap::cli::dumpJson(line, raymap::cli::JsonStyle::kCompact).c_str());
   }
   return 0;
 }

@@ -24,6 +24,7 @@
 #include "tools/dds_driver/ros_endpoints.hpp"
 #include "tools/dds_driver/simulated_lidar.hpp"
 #include "tools/raymap/dds_cli.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace {
 
@@ -34,6 +35,43 @@ double quantile(std::vector<double> v, double q) {
   std::sort(v.begin(), v.end());
   const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
   return v[std::min(v.size() - 1, i == 0 ? 0 : i - 1)];
+}
+
+/// raymapd's figures as its diagnostics state them (strings of numbers); -1 when missing. The
+/// counts among them are JSON integers (null when one is not finite: JSON has no NaN).
+raymap::cli::Json raymapdFigures(const raymap::driver::DiagnosticsListener& d) {
+  const auto value = [&](const char* key) { return d.number(key).value_or(-1.0); };
+  const auto count = [&](const char* key) {
+    const double v = value(key);
+    return std::isfinite(v) ? raymap::cli::Json(std::llround(v)) : raymap::cli::Json();
+  };
+  return {
+      {"latency_p50_ms", value("raymapd: height map/latency_p50_ms_total")},
+      {"latency_p99_ms", value("raymapd: height map/latency_p99_ms_total")},
+      {"latency_max_ms", value("raymapd: height map/latency_max_ms_total")},
+      {"clouds_received", count("raymapd: pipeline/clouds_received")},
+      {"clouds_dropped_overflow", count("raymapd: pipeline/clouds_dropped_overflow")},
+      {"clouds_dropped_before_decode", count("raymapd: pipeline/clouds_dropped_before_decode")},
+      {"scans_dropped_no_pose", count("raymapd: pipeline/scans_dropped_no_pose")},
+      {"clouds_malformed", count("raymapd: pipeline/clouds_malformed")},
+      {"scans_integrated", count("raymapd: pipeline/scans_integrated")},
+      {"rays_integrated", count("raymapd: pipeline/rays_integrated")},
+      {"cycles_late", count("raymapd: height map/cycles_late")},
+      {"period_error_max_ms", value("raymapd: height map/period_error_max_ms_total")},
+      {"scans_shed", count("raymapd: pipeline/scans_shed")},
+      {"scans_cut_short", count("raymapd: pipeline/scans_cut_short")},
+      {"points_shed", count("raymapd: pipeline/points_shed")},
+      {"map_lock_hold_max_ms", value("raymapd: height map/map_lock_hold_max_ms_total")},
+      {"map_lock_wait_max_ms", value("raymapd: height map/map_lock_wait_max_ms_total")},
+      {"publish_lead_ms", value("raymapd: height map/publish_lead_ms")},
+      {"level", count("raymapd: pipeline/level")},
+      {"integrator_load_percent", count("raymapd: pipeline/integrator_load_percent")},
+      {"generate_p99_ms", value("raymapd: height map/generate_p99_ms")},
+      {"heightmap_lock_hold_p99_ms", value("raymapd: height map/heightmap_lock_hold_p99_ms")},
+      {"sync_copy_bytes_p99", count("raymapd: height map/sync_copy_bytes_p99")},
+      {"heightmap_copy_bytes_p99", count("raymapd: height map/heightmap_copy_bytes_p99")},
+      {"heightmap_transfer_bytes_p99", count("raymapd: height map/heightmap_transfer_bytes_p99")},
+  };
 }
 
 }  // namespace
@@ -262,52 +300,25 @@ int main(int argc, char** argv) {
     mean_period_ms = static_cast<double>(arrivals.back() - arrivals.front()) * 1e-6 /
                      static_cast<double>(arrivals.size() - 1);
   }
-  const auto& d = *diagnostics.value();
-  const auto value = [&](const char* key) { return d.number(key).value_or(-1.0); };
-  std::printf(
-      "{\n  \"depth_frames_published\": %llu,\n  \"depth_frames_published_total\": %llu,\n"
-      "  \"scan_rate_hz\": %g,\n  \"points_per_scan\": %u,\n  \"scans_published\": %llu,\n"
-      "  \"scans_published_total\": %llu,\n  \"points_per_s\": %.0f,\n  \"maps_received\": %zu,\n  "
-      "\"first_map_ms\": %.1f,\n  \"map_period_mean_ms\": %.3f,\n"
-      "  \"map_period_error_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
-      "  \"map_period_ms\": {\"p50\": %.3f, \"p99\": %.3f, \"max\": %.3f},\n"
-      "  \"raymapd\": {\"latency_p50_ms\": %.1f, \"latency_p99_ms\": %.1f, "
-      "\"latency_max_ms\": %.1f, \"clouds_received\": %.0f, \"clouds_dropped_overflow\": %.0f, "
-      "\"clouds_dropped_before_decode\": %.0f, "
-      "\"scans_dropped_no_pose\": %.0f, \"clouds_malformed\": %.0f, \"scans_integrated\": %.0f, "
-      "\"rays_integrated\": %.0f, \"cycles_late\": %.0f, \"period_error_max_ms\": %.3f, "
-      "\"scans_shed\": %.0f, \"scans_cut_short\": %.0f, \"points_shed\": %.0f, "
-      "\"map_lock_hold_max_ms\": %.2f, "
-      "\"map_lock_wait_max_ms\": %.2f, \"publish_lead_ms\": %.1f, \"level\": %.0f, "
-      "\"integrator_load_percent\": %.0f, \"generate_p99_ms\": %.2f, "
-      "\"heightmap_lock_hold_p99_ms\": %.2f, \"sync_copy_bytes_p99\": %.0f, "
-      "\"heightmap_copy_bytes_p99\": %.0f, \"heightmap_transfer_bytes_p99\": %.0f}\n}\n",
-      static_cast<unsigned long long>(frames),
-      static_cast<unsigned long long>(depth ? depth->framesPublished() : 0), scan_rate,
-      lidar.pointsPerScan(), static_cast<unsigned long long>(published),
-      static_cast<unsigned long long>(playback.scansPublished()),
-      static_cast<double>(points) / duration, arrivals.size(),
-      first_map_ns < 0 ? -1.0 : static_cast<double>(first_map_ns - t0) * 1e-6, mean_period_ms,
-      quantile(errors_ms, 0.5), quantile(errors_ms, 0.99), quantile(errors_ms, 1.0),
-      quantile(periods_ms, 0.5), quantile(periods_ms, 0.99), quantile(periods_ms, 1.0),
-      value("raymapd: height map/latency_p50_ms_total"),
-      value("raymapd: height map/latency_p99_ms_total"),
-      value("raymapd: height map/latency_max_ms_total"), value("raymapd: pipeline/clouds_received"),
-      value("raymapd: pipeline/clouds_dropped_overflow"),
-      value("raymapd: pipeline/clouds_dropped_before_decode"),
-      value("raymapd: pipeline/scans_dropped_no_pose"), value("raymapd: pipeline/clouds_malformed"),
-      value("raymapd: pipeline/scans_integrated"), value("raymapd: pipeline/rays_integrated"),
-      value("raymapd: height map/cycles_late"),
-      value("raymapd: height map/period_error_max_ms_total"), value("raymapd: pipeline/scans_shed"),
-      value("raymapd: pipeline/scans_cut_short"), value("raymapd: pipeline/points_shed"),
-      value("raymapd: height map/map_lock_hold_max_ms_total"),
-      value("raymapd: height map/map_lock_wait_max_ms_total"),
-      value("raymapd: height map/publish_lead_ms"), value("raymapd: pipeline/level"),
-      value("raymapd: pipeline/integrator_load_percent"),
-      value("raymapd: height map/generate_p99_ms"),
-      value("raymapd: height map/heightmap_lock_hold_p99_ms"),
-      value("raymapd: height map/sync_copy_bytes_p99"),
-      value("raymapd: height map/heightmap_copy_bytes_p99"),
-      value("raymapd: height map/heightmap_transfer_bytes_p99"));
+  const auto spread = [](const std::vector<double>& v) {
+    return cli::Json{
+        {"p50", quantile(v, 0.5)}, {"p99", quantile(v, 0.99)}, {"max", quantile(v, 1.0)}};
+  };
+  const cli::Json result = {
+      {"depth_frames_published", frames},
+      {"depth_frames_published_total", depth ? depth->framesPublished() : std::uint64_t{0}},
+      {"scan_rate_hz", scan_rate},
+      {"points_per_scan", lidar.pointsPerScan()},
+      {"scans_published", published},
+      {"scans_published_total", playback.scansPublished()},
+      {"points_per_s", static_cast<double>(points) / duration},
+      {"maps_received", arrivals.size()},
+      {"first_map_ms", first_map_ns < 0 ? -1.0 : static_cast<double>(first_map_ns - t0) * 1e-6},
+      {"map_period_mean_ms", mean_period_ms},
+      {"map_period_error_ms", spread(errors_ms)},
+      {"map_period_ms", spread(periods_ms)},
+      {"raymapd", raymapdFigures(*diagnostics.value())},
+  };
+  std::printf("%s\n", cli::dumpJson(result).c_str());
   return 0;
 }

@@ -9,11 +9,12 @@
 #include <cstdio>
 #include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "src/bag/bag_reader.hpp"
 #include "tools/raymap/commands.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
 
 namespace raymap::cli {
@@ -71,30 +72,31 @@ int runBagInfo(const std::string& path, bool json, bool full) {
   const double duration = total > 0 ? static_cast<double>(last - first) * 1e-9 : 0.0;
   const std::vector<bag::BagTopic>& topics = reader.topics();
   if (json) {
-    std::string list = "[";
+    Json list = Json::array();
     for (std::size_t i = 0; i < topics.size(); ++i) {
-      JsonObject t(JsonStyle::kCompact);
-      t.add("name", topics[i].name)
-          .add("type", topics[i].type)
-          .add("serialization_format", topics[i].serialization_format)
-          .add("messages", counts[i].messages);
+      Json t = {
+          {"name", topics[i].name},
+          {"type", topics[i].type},
+          {"serialization_format", topics[i].serialization_format},
+          {"messages", counts[i].messages},
+      };
       if (!stated) {
-        t.add("bytes", counts[i].bytes);
+        t["bytes"] = counts[i].bytes;
       }
-      list += (i > 0 ? ", " : "") + t.str();
+      list.push_back(std::move(t));
     }
-    list += "]";
-    JsonObject j;
-    j.add("path", path)
-        .add("storage", reader.storage())
-        .add("messages", total)
-        .add("start_ns", total > 0 ? first : std::int64_t{0})
-        .add("end_ns", total > 0 ? last : std::int64_t{0})
-        .add("duration_s", duration)
-        .add("counted_from", stated ? "summary" : "messages")
-        .add("truncated", read.truncated)
-        .raw("topics", list);
-    std::printf("%s\n", j.str().c_str());
+    const Json j = {
+        {"path", path},
+        {"storage", reader.storage()},
+        {"messages", total},
+        {"start_ns", total > 0 ? first : std::int64_t{0}},
+        {"end_ns", total > 0 ? last : std::int64_t{0}},
+        {"duration_s", duration},
+        {"counted_from", stated ? "summary" : "messages"},
+        {"truncated", read.truncated},
+        {"topics", list},
+    };
+    std::printf("%s\n", dumpJson(j).c_str());
   } else {
     std::printf("bag            %s (%s)\n", path.c_str(), reader.storage());
     std::printf("messages       %" PRIu64 " over %.3f s", total, duration);

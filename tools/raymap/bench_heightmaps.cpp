@@ -4,8 +4,6 @@
 #include <algorithm>
 #include <chrono>
 
-#include "tools/raymap/json_writer.hpp"
-
 namespace raymap::cli {
 namespace {
 
@@ -68,25 +66,25 @@ Expected<void, Error> BenchHeightmaps::maybeGenerate(std::uint64_t rays_read, Ve
   return {};
 }
 
-std::string BenchHeightmaps::json(std::uint64_t rays, double integrate_seconds) const {
-  JsonObject j;
+Json BenchHeightmaps::json(std::uint64_t rays, double integrate_seconds) const {
   const double total = integrate_seconds + seconds_;
-  j.add("every_rays", options_.every_rays)
-      .add("size_m", options_.size_m)
-      .add("reads", generator_ && !generator_->readsHostStore() ? "device layers" : "host store")
-      .add("generator", generator_ ? generator_->name() : "")
-      .add("heightmaps", static_cast<std::uint64_t>(generate_ms_.size()))
-      .add("skipped_outside_map", skipped_)
-      .add("cycle_p50_ms", quantile(generate_ms_, 0.5))
-      .add("cycle_p99_ms", quantile(generate_ms_, 0.99))
-      .add("cycle_seconds_total", seconds_)
-      .add("sync_copy_bytes_p50", quantile(sync_bytes_, 0.5))
-      .add("sync_copy_bytes_p99", quantile(sync_bytes_, 0.99))
-      .add("heightmap_copy_bytes_p50", quantile(copy_bytes_, 0.5))
-      .add("heightmap_copy_bytes_p99", quantile(copy_bytes_, 0.99))
-      .add("heightmap_transfer_bytes_p99", quantile(transfer_bytes_, 0.99))
-      .add("rays_per_second_with_heightmaps", total > 0 ? static_cast<double>(rays) / total : 0.0);
-  return j.str();
+  return {
+      {"every_rays", options_.every_rays},
+      {"size_m", options_.size_m},
+      {"reads", generator_ && !generator_->readsHostStore() ? "device layers" : "host store"},
+      {"generator", generator_ ? generator_->name() : ""},
+      {"heightmaps", generate_ms_.size()},
+      {"skipped_outside_map", skipped_},
+      {"cycle_p50_ms", quantile(generate_ms_, 0.5)},
+      {"cycle_p99_ms", quantile(generate_ms_, 0.99)},
+      {"cycle_seconds_total", seconds_},
+      {"sync_copy_bytes_p50", quantile(sync_bytes_, 0.5)},
+      {"sync_copy_bytes_p99", quantile(sync_bytes_, 0.99)},
+      {"heightmap_copy_bytes_p50", quantile(copy_bytes_, 0.5)},
+      {"heightmap_copy_bytes_p99", quantile(copy_bytes_, 0.99)},
+      {"heightmap_transfer_bytes_p99", quantile(transfer_bytes_, 0.99)},
+      {"rays_per_second_with_heightmaps", total > 0 ? static_cast<double>(rays) / total : 0.0},
+  };
 }
 
 }  // namespace raymap::cli

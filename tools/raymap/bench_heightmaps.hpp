@@ -15,6 +15,7 @@
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/map/backend.hpp"
 #include "src/map/voxel_map.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace raymap::cli {
 
@@ -41,7 +42,7 @@ class BenchHeightmaps {
                                       Backend& backend, const backends::BackendChoice& choice);
   /// @brief The costs as a JSON object (keys documented in docs/cli.md), with the run's
   /// `rays` and integration seconds for the combined rate.
-  std::string json(std::uint64_t rays, double integrate_seconds) const;
+  Json json(std::uint64_t rays, double integrate_seconds) const;
   double seconds() const noexcept { return seconds_; }
 
  private:

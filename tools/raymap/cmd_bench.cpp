@@ -13,7 +13,7 @@
 #include "tools/raymap/bench_heightmaps.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/populate.hpp"
 #include "tools/raymap/staged_outputs.hpp"
@@ -104,7 +104,7 @@ int runBench(const BenchFlags& f) {
       }
     }
   }
-  std::string runs = "[";
+  Json runs = Json::array();
   for (const std::string& semantics : splitComma(semantics_list)) {
     if (semantics != "ray" && semantics != "scan") {
       printError(command, "--semantics-list: unknown semantics '" + semantics + "'");
@@ -124,7 +124,7 @@ int runBench(const BenchFlags& f) {
         return kExitUsage;
       }
       std::vector<PopulateReport> reports;
-      std::vector<std::string> heightmap_json;  // per report, with --heightmap-every
+      std::vector<Json> heightmap_json;  // per report, with --heightmap-every
       for (int r = 0; r < std::max(f.repeat, 1); ++r) {
         auto map = VoxelMap::create(options.map);
         if (!map) {
@@ -190,16 +190,11 @@ int runBench(const BenchFlags& f) {
       });
       const std::size_t median_index = order[order.size() / 2];
       const PopulateReport& median = reports[median_index];
-      std::string run = statsJson(median, options);
-      if ((f.heightmaps.every_rays > 0)) {
-        // One more key in the run's object: the cycles of the median run.
-        run = run.substr(0, run.rfind('}'));
-        while (!run.empty() && (run.back() == '\n' || run.back() == ' ')) {
-          run.pop_back();
-        }
-        run += ",\n  \"heightmap_cycles\": " + heightmap_json[median_index] + "\n}";
+      Json run = statsJson(median, options);
+      if (f.heightmaps.every_rays > 0) {
+        run["heightmap_cycles"] = heightmap_json[median_index];  // the median run's cycles
       }
-      runs += (runs.size() > 1 ? ",\n" : "\n") + run;
+      runs.push_back(std::move(run));
       for (const std::string* warning : {&median.fallback_warning, &median.startup_warning}) {
         if (!warning->empty()) {
           std::fprintf(stderr, "bench: warning: %s\n", withCliFlags(*warning).c_str());
@@ -212,19 +207,17 @@ int runBench(const BenchFlags& f) {
                    static_cast<double>(median.rays.rays_accepted) / median.integrate_seconds / 1e6);
     }
   }
-  runs += "\n]";
-  JsonObject machine;
-  machine.add("cpu_model", platform::cpuModelName()).add("cores", platform::availableCores());
-  JsonObject result;
-  result.add("benchmark", "raymap bench")
-      .add("repeat", f.repeat)
-      .raw("machine", machine.str())
-      .raw("runs", runs);
+  const Json result = {
+      {"benchmark", "raymap bench"},
+      {"repeat", f.repeat},
+      {"machine", {{"cpu_model", platform::cpuModelName()}, {"cores", platform::availableCores()}}},
+      {"runs", runs},
+  };
   if (f.json.empty() || f.json == "-") {
-    std::printf("%s\n", result.str().c_str());
+    std::printf("%s\n", dumpJson(result).c_str());
     return kExitOk;
   }
-  if (auto ok = writeTextFile(json_temp, result.str()); !ok) {
+  if (auto ok = writeTextFile(json_temp, dumpJson(result)); !ok) {
     printError(command, "--json: " + ok.error().message);
     return kExitFailure;
   }

@@ -10,7 +10,7 @@
 
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/device_listing.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace raymap::cli {
 
@@ -36,24 +36,6 @@ std::string sizeText(std::uint64_t bytes) {
   return buffer;
 }
 
-// JsonObject renders objects only; array elements are indented here so the nesting reads well.
-std::string jsonArray(const std::vector<std::string>& items) {
-  if (items.empty()) {
-    return "[]";
-  }
-  std::string out = "[";
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    out += i == 0 ? "\n  " : ",\n  ";
-    for (const char c : items[i]) {
-      out += c;
-      if (c == '\n') {
-        out += "  ";
-      }
-    }
-  }
-  return out + "\n]";
-}
-
 namespace {
 
 struct DevicesFlags {
@@ -61,13 +43,11 @@ struct DevicesFlags {
 };
 
 /// A section's JSON: its listing, or {"error": "..."}.
-std::string sectionJson(const DeviceListing& listing) {
+Json sectionJson(const DeviceListing& listing) {
   if (listing.available) {
     return listing.json;
   }
-  JsonObject j;
-  j.add("error", listing.error);
-  return j.str();
+  return {{"error", listing.error}};
 }
 
 /// A section's text: its listing, or "  none: <why>".
@@ -80,9 +60,8 @@ int runDevices(const DevicesFlags& f) {
   const DeviceListing opencl = listOpenClDevices();
   const DeviceListing cuda = listCudaDevices();
   if (f.json) {
-    JsonObject j;
-    j.raw("opencl", sectionJson(opencl)).raw("cuda", sectionJson(cuda));
-    std::printf("%s\n", j.str().c_str());
+    const Json j = {{"opencl", sectionJson(opencl)}, {"cuda", sectionJson(cuda)}};
+    std::printf("%s\n", dumpJson(j).c_str());
   } else {
     std::printf("OpenCL\n%s", sectionText(opencl).c_str());
     std::printf("\nCUDA\n%s", sectionText(cuda).c_str());

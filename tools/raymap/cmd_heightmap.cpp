@@ -18,7 +18,7 @@
 #include "src/io/map_file.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 #include "tools/raymap/memory_tiers.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/staged_outputs.hpp"
@@ -194,33 +194,34 @@ int runHeightmap(const HeightmapFlags& f) {
   const double first = seconds.front();
   const double median = seconds[seconds.size() / 2];
   if (f.json) {
-    JsonObject j;
-    j.add("map", f.map)
-        .add("backend", generator.name())
-        .add("device", generator.deviceName())
-        .add("mode", heightmap::toString(options.mode))
-        .add("cells_x", result.cells_x)
-        .add("cells_y", result.cells_y)
-        .add("resolution_m", result.resolution)
-        .add("centre_x_m", result.centre_x)
-        .add("centre_y_m", result.centre_y)
-        .add("reference_z_m", result.reference_z)
-        .add("min_clearance_m", options.min_clearance)
-        .add("surface_cells", counts[RM_HM_SURFACE])
-        .add("virtual_cells", counts[RM_HM_VIRTUAL])
-        .add("vacant_cells", counts[RM_HM_VACANT])
-        .add("unknown_cells", counts[RM_HM_UNKNOWN])
-        .add("repeat", f.repeat)
-        .add("seconds_min", first)
-        .add("seconds_median", median);
+    Json j = {
+        {"map", f.map},
+        {"backend", generator.name()},
+        {"device", generator.deviceName()},
+        {"mode", heightmap::toString(options.mode)},
+        {"cells_x", result.cells_x},
+        {"cells_y", result.cells_y},
+        {"resolution_m", result.resolution},
+        {"centre_x_m", result.centre_x},
+        {"centre_y_m", result.centre_y},
+        {"reference_z_m", result.reference_z},
+        {"min_clearance_m", options.min_clearance},
+        {"surface_cells", counts[RM_HM_SURFACE]},
+        {"virtual_cells", counts[RM_HM_VIRTUAL]},
+        {"vacant_cells", counts[RM_HM_VACANT]},
+        {"unknown_cells", counts[RM_HM_UNKNOWN]},
+        {"repeat", f.repeat},
+        {"seconds_min", first},
+        {"seconds_median", median},
+    };
     if (counts[RM_HM_SURFACE] > 0) {
-      j.add("elevation_min_m", static_cast<double>(lowest))
-          .add("elevation_max_m", static_cast<double>(highest));
+      j["elevation_min_m"] = lowest;
+      j["elevation_max_m"] = highest;
     }
     if (result.has_normals) {
-      j.add("normal_cells", normal_cells);
+      j["normal_cells"] = normal_cells;
     }
-    std::printf("%s\n", j.str().c_str());
+    std::printf("%s\n", dumpJson(j).c_str());
   } else if (!f.quiet) {
     std::printf(
         "height map %d x %d cells at %s m around (%s, %s), reference z %s m, %s mode: "

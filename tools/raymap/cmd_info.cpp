@@ -10,7 +10,7 @@
 #include "src/map/tsdf_surface.hpp"
 #include "tools/raymap/bag_info.hpp"
 #include "tools/raymap/commands.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 #include "tools/raymap/memory_tiers.hpp"
 
 namespace raymap::cli {
@@ -24,25 +24,21 @@ struct InfoFlags {
   TierFlags tiers;
 };
 
-std::string vectorJson(Vec3d v) {
-  char buffer[128];
-  std::snprintf(buffer, sizeof(buffer), "[%.6g, %.6g, %.6g]", v.x, v.y, v.z);
-  return buffer;
-}
+Json vectorJson(Vec3d v) { return {v.x, v.y, v.z}; }
 
 /// The NDT parameters as stored, plus the adaptation rate in effect (given or derived).
-JsonObject ndtJson(const MapConfig& c) {
+Json ndtJson(const MapConfig& c) {
   const NdtParams& n = c.ndt;
-  JsonObject j;
-  j.add("sensor_noise_m", n.sensor_noise)
-      .add("regulariser_voxels", n.regulariser)
-      .add("sample_threshold", n.sample_threshold)
-      .add("reinit_probability", n.reinit_probability)
-      .add("reinit_count", n.reinit_count)
-      .add("adaptation_rate", n.adaptationRate(c.occupancy))
-      .add("adaptation_rate_source", n.adaptation_rate ? "given" : "from miss probability")
-      .add("initial_intensity_variance", n.initial_intensity_variance);
-  return j;
+  return {
+      {"sensor_noise_m", n.sensor_noise},
+      {"regulariser_voxels", n.regulariser},
+      {"sample_threshold", n.sample_threshold},
+      {"reinit_probability", n.reinit_probability},
+      {"reinit_count", n.reinit_count},
+      {"adaptation_rate", n.adaptationRate(c.occupancy)},
+      {"adaptation_rate_source", n.adaptation_rate ? "given" : "from miss probability"},
+      {"initial_intensity_variance", n.initial_intensity_variance},
+  };
 }
 
 void printNdt(const MapConfig& c) {
@@ -110,87 +106,81 @@ int runInfo(const InfoFlags& f) {
   }
   const std::uint64_t bytes_per_region = schema.bytesPerRegion(c.geometry.voxelsPerRegion());
   if (f.json) {
-    JsonObject params;
-    params.add("hit_probability", probability(o.hit))
-        .add("miss_probability", probability(o.miss))
-        .add("clamp_min_probability", probability(o.clamp_min))
-        .add("clamp_max_probability", probability(o.clamp_max))
-        .add("threshold_probability", probability(o.threshold))
-        .add("hit_log_odds", static_cast<double>(o.hit))
-        .add("miss_log_odds", static_cast<double>(o.miss))
-        .add("clamp_min_log_odds", static_cast<double>(o.clamp_min))
-        .add("clamp_max_log_odds", static_cast<double>(o.clamp_max))
-        .add("threshold_log_odds", static_cast<double>(o.threshold));
-    std::string layer_array = "[";
+    Json layer_array = Json::array();
+    Json layer_details = Json::array();
     for (int i = 0; i < schema.size(); ++i) {
       if (schema.at(i).saved) {
-        layer_array += (layer_array.size() > 1 ? ", " : "") + jsonQuote(schema.at(i).name);
+        layer_array.push_back(schema.at(i).name);
+        layer_details.push_back(Json{
+            {"name", schema.at(i).name},
+            {"bytes_per_voxel", schema.at(i).bytes_per_voxel},
+            {"version", unsigned{schema.at(i).version}},
+        });
       }
     }
-    layer_array += "]";
-    std::string layer_details = "[";
-    for (int i = 0; i < schema.size(); ++i) {
-      if (schema.at(i).saved) {
-        JsonObject layer;
-        layer.add("name", schema.at(i).name)
-            .add("bytes_per_voxel", schema.at(i).bytes_per_voxel)
-            .add("version", unsigned{schema.at(i).version});
-        if (layer_details.size() > 1) {
-          layer_details += ", ";
-        }
-        layer_details += layer.str();
-      }
-    }
-    layer_details += "]";
-    JsonObject info;
+    Json info = Json::object();  // {} rather than null for a map without provenance
     for (const auto& [key, value] : map->info()) {
-      info.add(key, value);
+      info[key] = value;
     }
-    JsonObject j;
-    j.add("path", f.map)
-        .add("format_version", version)
-        .add("resolution", c.geometry.resolution)
-        .add("region_voxels", c.geometry.region_voxels)
-        .add("region_extent", c.geometry.regionExtent())
-        .add("semantics", toString(c.semantics))
-        .add("mode", mapModeName(c))
-        .raw("occupancy", params.str())
-        .raw("layers", layer_array)
-        .raw("layer_details", layer_details);
+    Json j = {
+        {"path", f.map},
+        {"format_version", version},
+        {"resolution", c.geometry.resolution},
+        {"region_voxels", c.geometry.region_voxels},
+        {"region_extent", c.geometry.regionExtent()},
+        {"semantics", toString(c.semantics)},
+        {"mode", mapModeName(c)},
+        {"occupancy",
+         {
+             {"hit_probability", probability(o.hit)},
+             {"miss_probability", probability(o.miss)},
+             {"clamp_min_probability", probability(o.clamp_min)},
+             {"clamp_max_probability", probability(o.clamp_max)},
+             {"threshold_probability", probability(o.threshold)},
+             {"hit_log_odds", o.hit},
+             {"miss_log_odds", o.miss},
+             {"clamp_min_log_odds", o.clamp_min},
+             {"clamp_max_log_odds", o.clamp_max},
+             {"threshold_log_odds", o.threshold},
+         }},
+        {"layers", layer_array},
+        {"layer_details", layer_details},
+    };
     if (isNdt(c.mode)) {
-      j.raw("ndt", ndtJson(c).str());
+      j["ndt"] = ndtJson(c);
     }
     if (c.mode == MapMode::kTsdf) {
-      JsonObject tsdf;
-      tsdf.add("truncation_m", c.tsdf.truncationMetres(c.geometry.resolution))
-          .add("max_weight", c.tsdf.max_weight)
-          .add("dropoff_m", c.tsdf.dropoffMetres(c.geometry.resolution))
-          .add("voxels_updated", t.updated)
-          .add("voxels_behind_surface", t.behind)
-          .add("voxels_at_max_weight", t.saturated);
-      j.raw("tsdf", tsdf.str());
+      j["tsdf"] = {
+          {"truncation_m", c.tsdf.truncationMetres(c.geometry.resolution)},
+          {"max_weight", c.tsdf.max_weight},
+          {"dropoff_m", c.tsdf.dropoffMetres(c.geometry.resolution)},
+          {"voxels_updated", t.updated},
+          {"voxels_behind_surface", t.behind},
+          {"voxels_at_max_weight", t.saturated},
+      };
     }
     if (c.decay_rate) {
-      JsonObject decay;
-      decay.add("voxels_crossed", d.crossed)
-          .add("voxels_with_samples", d.with_samples)
-          .add("metres", d.metres)
-          .add("samples", d.samples);
-      j.raw("decay", decay.str());
+      j["decay"] = {
+          {"voxels_crossed", d.crossed},
+          {"voxels_with_samples", d.with_samples},
+          {"metres", d.metres},
+          {"samples", d.samples},
+      };
     }
-    j.add("regions", s.regions)
-        .add("memory_bytes", s.regions * bytes_per_region)
-        .add("voxels_free", s.voxels_free)
-        .add("voxels_occupied", s.voxels_occupied)
-        .add("voxels_unobserved", s.voxels_unobserved);
+    j["regions"] = s.regions;
+    j["memory_bytes"] = s.regions * bytes_per_region;
+    j["voxels_free"] = s.voxels_free;
+    j["voxels_occupied"] = s.voxels_occupied;
+    j["voxels_unobserved"] = s.voxels_unobserved;
     if (s.voxels_free + s.voxels_occupied > 0) {
-      j.raw("extent_min", vectorJson(s.observed_min)).raw("extent_max", vectorJson(s.observed_max));
+      j["extent_min"] = vectorJson(s.observed_min);
+      j["extent_max"] = vectorJson(s.observed_max);
     }
     if (tiers_used) {
-      j.raw("memory_tiers", tierJson(*tiers));
+      j["memory_tiers"] = tierJson(*tiers);
     }
-    j.raw("info", info.str());
-    std::printf("%s\n", j.str().c_str());
+    j["info"] = info;
+    std::printf("%s\n", dumpJson(j).c_str());
     return kExitOk;
   }
   std::printf("map            %s (format %u)\n", f.map.c_str(), version);

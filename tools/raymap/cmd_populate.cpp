@@ -17,6 +17,7 @@
 #include "src/io/map_file.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
+#include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/populate.hpp"
 #include "tools/raymap/staged_outputs.hpp"
@@ -279,7 +280,7 @@ int runPopulate(const PopulateFlags& f) {
     return kExitFailure;
   }
   if (!f.stats_json.empty()) {
-    const std::string json = statsJson(*report, *options);
+    const std::string json = dumpJson(statsJson(*report, *options));
     if (f.stats_json == "-") {
       std::printf("%s\n", json.c_str());
     } else if (auto ok = writeTextFile(stats_temp, json); !ok) {

@@ -13,7 +13,7 @@
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/replay_session.hpp"
 #include "tools/raymap/staged_outputs.hpp"
@@ -104,23 +104,23 @@ Result<ReplayOptions> toOptions(const ReplayFlags& f) {
   return o;
 }
 
-std::string statsJson(const ReplayStats& s) {
-  JsonObject json;
-  json.add("passes", s.passes)
-      .add("clouds", s.scans)
-      .add("points", s.points)
-      .add("poses", s.poses)
-      .add("log_messages", s.messages)
-      .add("log_messages_undecodable", s.undecodable)
-      .add("logs_truncated", s.truncated_logs)
-      .add("origin_conflicts", s.origin_conflicts)
-      .add("feedback_timeouts", s.feedback_timeouts)
-      .add("data_seconds", s.data_seconds)
-      .add("wall_seconds", s.wall_seconds)
-      .add("max_late_ms", s.max_late_ms)
-      .add("stamp_zero_ns", s.stamp_zero_ns);
-  json.raw("warnings", jsonList(s.warnings));
-  return json.str();
+Json statsJson(const ReplayStats& s) {
+  return {
+      {"passes", s.passes},
+      {"clouds", s.scans},
+      {"points", s.points},
+      {"poses", s.poses},
+      {"log_messages", s.messages},
+      {"log_messages_undecodable", s.undecodable},
+      {"logs_truncated", s.truncated_logs},
+      {"origin_conflicts", s.origin_conflicts},
+      {"feedback_timeouts", s.feedback_timeouts},
+      {"data_seconds", s.data_seconds},
+      {"wall_seconds", s.wall_seconds},
+      {"max_late_ms", s.max_late_ms},
+      {"stamp_zero_ns", s.stamp_zero_ns},
+      {"warnings", s.warnings},
+  };
 }
 
 int runReplay(const ReplayFlags& flags) {
@@ -162,7 +162,7 @@ int runReplay(const ReplayFlags& flags) {
     std::fprintf(stderr, "raymap replay: warning: %s\n", withCliFlags(warning).c_str());
   }
   if (!flags.stats_json.empty()) {
-    const std::string json = statsJson(stats.value());
+    const std::string json = dumpJson(statsJson(stats.value()));
     if (flags.stats_json == "-") {
       std::printf("%s\n", json.c_str());
     } else if (auto written = writeTextFile(stats_temp, json); !written) {

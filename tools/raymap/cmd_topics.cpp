@@ -17,7 +17,7 @@
 #include "src/security/secure_participant.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -65,40 +65,37 @@ std::string rosTypesText(const std::vector<std::string>& types) {
   return text;
 }
 
+/// `null` for an empty text (a topic outside ROS's naming; the policies of a topic without
+/// publishers).
+Json textOrNull(const std::string& text) { return text.empty() ? Json() : Json(text); }
+
 void printJson(const std::map<std::string, TopicSummary>& topics) {
+  // One array, but each topic's object on a line of its own (as docs/cli.md shows it), so the
+  // list reads and greps by topic: the array's brackets and commas are placed here, each object
+  // is dumped compact.
   std::string out = "[";
   bool first = true;
   for (const auto& [name, s] : topics) {
-    std::string types = "[";
-    for (std::size_t i = 0; i < s.types.size(); ++i) {
-      types += i == 0 ? "" : ",";
-      types += jsonQuote(printableText(msgs::rosTypeName(s.types[i]), false));
+    Json types = Json::array();
+    for (const std::string& t : s.types) {
+      types.push_back(printableText(msgs::rosTypeName(t), false));
     }
-    types += "]";
     const std::string ros_topic = msgs::rosTopicName(name);
-    const std::string reliability = reliabilityText(s);
-    const std::string durability = durabilityText(s);
     const std::string type = s.types.empty() ? std::string() : s.types.front();
-    JsonObject j(JsonStyle::kCompact);
-    j.add("topic", printableText(name, false));
-    if (ros_topic.empty()) {
-      j.raw("ros_topic", "null");
-    } else {
-      j.add("ros_topic", printableText(ros_topic, false));
-    }
-    j.add("type", printableText(msgs::rosTypeName(type), false))
-        .add("dds_type", printableText(type, false))
-        .raw("types", types)
-        .add("known_type", dds::findTopicType(type) != nullptr)
-        .add("publishers", s.publishers)
-        .add("subscribers", s.subscribers);
-    if (reliability.empty()) {
-      j.raw("reliability", "null").raw("durability", "null");
-    } else {
-      j.add("reliability", reliability).add("durability", durability);
-    }
+    const Json j = {
+        {"topic", printableText(name, false)},
+        {"ros_topic", textOrNull(printableText(ros_topic, false))},
+        {"type", printableText(msgs::rosTypeName(type), false)},
+        {"dds_type", printableText(type, false)},
+        {"types", types},
+        {"known_type", dds::findTopicType(type) != nullptr},
+        {"publishers", s.publishers},
+        {"subscribers", s.subscribers},
+        {"reliability", textOrNull(reliabilityText(s))},
+        {"durability", textOrNull(durabilityText(s))},
+    };
     out += first ? "\n  " : ",\n  ";
-    out += j.str();
+    out += dumpJson(j, JsonStyle::kCompact);
     first = false;
   }
   out += first ? "]\n" : "\n]\n";

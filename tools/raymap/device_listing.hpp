@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "tools/raymap/json_output.hpp"
+
 namespace raymap::cli {
 
 /// @brief The devices of one API (value type).
@@ -14,7 +16,7 @@ struct DeviceListing {
   bool available = false;  ///< at least one device
   std::string error;       ///< why not, when !available
   std::string text;        ///< human-readable lines, each ending in '\n'
-  std::string json;        ///< one JSON object
+  Json json;               ///< one JSON object
 };
 
 DeviceListing listOpenClDevices();
@@ -24,7 +26,5 @@ DeviceListing listCudaDevices();
 __attribute__((format(printf, 2, 3))) void appendf(std::string* out, const char* format, ...);
 /// @brief "1.5 GiB" / "512 MiB".
 std::string sizeText(std::uint64_t bytes);
-/// @brief A JSON array of already-rendered objects, indented to nest well.
-std::string jsonArray(const std::vector<std::string>& items);
 
 }  // namespace raymap::cli

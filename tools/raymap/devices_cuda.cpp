@@ -5,7 +5,6 @@
 #include <vector>
 
 #include "tools/raymap/device_listing.hpp"
-#include "tools/raymap/json_writer.hpp"
 
 #if RAYMAP_HAVE_CUDA
 #include "src/device/cuda/cuda_devices.hpp"
@@ -21,31 +20,31 @@ std::string capability(const cuda::DeviceInfo& d) {
   return std::to_string(d.compute_major) + "." + std::to_string(d.compute_minor);
 }
 
-std::string deviceJson(const cuda::DeviceInfo& d) {
-  JsonObject j;
-  j.add("index", d.index)
-      .add("name", d.name)
-      .add("compute_capability", capability(d))
-      .add("multiprocessors", d.multiprocessors)
-      .add("global_mem_bytes", d.global_mem_bytes)
-      .add("integrated", d.integrated)
-      .add("can_map_host_memory", d.can_map_host_memory)
-      .add("pci_bus_id", d.pci_bus_id)
-      .add("default", d.index == 0);
-  return j.str();
+Json deviceJson(const cuda::DeviceInfo& d) {
+  return {
+      {"index", d.index},
+      {"name", d.name},
+      {"compute_capability", capability(d)},
+      {"multiprocessors", d.multiprocessors},
+      {"global_mem_bytes", d.global_mem_bytes},
+      {"integrated", d.integrated},
+      {"can_map_host_memory", d.can_map_host_memory},
+      {"pci_bus_id", d.pci_bus_id},
+      {"default", d.index == 0},
+  };
 }
 
-std::string listJson(const std::vector<cuda::DeviceInfo>& devices) {
-  std::vector<std::string> items;
+Json listJson(const std::vector<cuda::DeviceInfo>& devices) {
+  Json items = Json::array();
   for (const cuda::DeviceInfo& d : devices) {
     items.push_back(deviceJson(d));
   }
-  JsonObject j;
-  j.add("runtime_version", cuda::versionText(devices.front().runtime_version))
-      .add("driver_version", cuda::versionText(devices.front().driver_version))
-      .raw("devices", jsonArray(items))
-      .add("default", 0);
-  return j.str();
+  return {
+      {"runtime_version", cuda::versionText(devices.front().runtime_version)},
+      {"driver_version", cuda::versionText(devices.front().driver_version)},
+      {"devices", items},
+      {"default", 0},
+  };
 }
 
 std::string listText(const std::vector<cuda::DeviceInfo>& devices) {

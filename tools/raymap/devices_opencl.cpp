@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "tools/raymap/device_listing.hpp"
-#include "tools/raymap/json_writer.hpp"
 
 #if RAYMAP_HAVE_OPENCL
 #include "src/device/opencl/cl_runtime.hpp"
@@ -23,52 +22,50 @@ bool isDefault(const opencl::DeviceInfo& d, const opencl::DeviceInfo* pick) {
          pick->device_index == d.device_index;
 }
 
-std::string deviceJson(const opencl::DeviceInfo& d, bool is_default) {
-  JsonObject j;
-  j.add("index", d.device_index)
-      .add("name", d.device_name)
-      .add("vendor", d.vendor)
-      .add("type", d.type)
-      .add("version", d.device_version)
-      .add("driver_version", d.driver_version)
-      .add("opencl_c_version", d.opencl_c_version)
-      .add("compute_units", d.compute_units)
-      .add("global_mem_bytes", d.global_mem_bytes)
-      .add("max_alloc_bytes", d.max_alloc_bytes)
-      .add("max_work_group_size", std::uint64_t{d.max_work_group_size})
-      .add("int64_atomics", d.int64_atomics)
-      .add("unified_memory", d.unified_memory)
-      .add("default", is_default);
-  return j.str();
+Json deviceJson(const opencl::DeviceInfo& d, bool is_default) {
+  return {
+      {"index", d.device_index},
+      {"name", d.device_name},
+      {"vendor", d.vendor},
+      {"type", d.type},
+      {"version", d.device_version},
+      {"driver_version", d.driver_version},
+      {"opencl_c_version", d.opencl_c_version},
+      {"compute_units", d.compute_units},
+      {"global_mem_bytes", d.global_mem_bytes},
+      {"max_alloc_bytes", d.max_alloc_bytes},
+      {"max_work_group_size", std::uint64_t{d.max_work_group_size}},
+      {"int64_atomics", d.int64_atomics},
+      {"unified_memory", d.unified_memory},
+      {"default", is_default},
+  };
 }
 
-std::string listJson(const std::vector<opencl::DeviceInfo>& devices,
-                     const opencl::DeviceInfo* pick) {
-  std::vector<std::string> platforms;
+Json listJson(const std::vector<opencl::DeviceInfo>& devices, const opencl::DeviceInfo* pick) {
+  Json platforms = Json::array();
   std::size_t i = 0;
   while (i < devices.size()) {
     const opencl::DeviceInfo& first = devices[i];
-    std::vector<std::string> items;
+    Json items = Json::array();
     for (; i < devices.size() && devices[i].platform_index == first.platform_index; ++i) {
       items.push_back(deviceJson(devices[i], isDefault(devices[i], pick)));
     }
-    JsonObject p;
-    p.add("index", first.platform_index)
-        .add("name", first.platform_name)
-        .add("version", first.platform_version)
-        .raw("devices", jsonArray(items));
-    platforms.push_back(p.str());
+    platforms.push_back(Json{
+        {"index", first.platform_index},
+        {"name", first.platform_name},
+        {"version", first.platform_version},
+        {"devices", items},
+    });
   }
-  JsonObject j;
-  j.raw("platforms", jsonArray(platforms));
+  Json j = {{"platforms", platforms}};
   if (pick != nullptr) {
-    JsonObject d;
-    d.add("platform", pick->platform_index)
-        .add("device", pick->device_index)
-        .add("name", pick->device_name);
-    j.raw("default", d.str());
+    j["default"] = {
+        {"platform", pick->platform_index},
+        {"device", pick->device_index},
+        {"name", pick->device_name},
+    };
   }
-  return j.str();
+  return j;
 }
 
 std::string listText(const std::vector<opencl::DeviceInfo>& devices,

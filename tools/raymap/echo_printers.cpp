@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <utility>
 #include <vector>
 
 #include "src/core/pinhole_camera.hpp"
@@ -20,7 +21,7 @@
 #include "src/msgs/point_cloud.hpp"
 #include "src/msgs/pose.hpp"
 #include "tools/raymap/dds_cli.hpp"
-#include "tools/raymap/json_writer.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -54,30 +55,25 @@ std::string humanText(std::string_view text) {
   return safe;
 }
 
-std::string jsonText(std::string_view text) { return jsonQuote(printableText(text, false)); }
+/// A wire string as a JSON string: valid UTF-8 (bad bytes become U+FFFD); control characters
+/// stay, JSON escapes them.
+std::string jsonText(std::string_view text) { return printableText(text, false); }
 
-std::string jsonArray(const std::vector<std::string>& items) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    out += i == 0 ? "" : ",";
-    out += items[i];
-  }
-  out += "]";
-  return out;
-}
+/// One object of the JSON Lines stream: compact, so that it is one line.
+std::string jsonLine(const Json& j) { return dumpJson(j, JsonStyle::kCompact) + "\n"; }
 
 /// The keys every JSON line has, in this order.
-JsonObject jsonCommon(const EchoSample& sample, std::int64_t stamp_ns) {
-  JsonObject j(JsonStyle::kCompact);
-  j.add("topic", sample.topic)
-      .add("type", sample.type->ros_name)
-      .add("index", sample.index)
-      .add("arrival_unix_ns", sample.arrival_unix_ns)
-      .add("arrival_monotonic_ns", sample.arrival_monotonic_ns)
-      .add("source_timestamp_ns", sample.source_timestamp_ns)
-      .add("stamp_ns", stamp_ns)
-      .add("bytes", static_cast<std::uint64_t>(sample.cdr.size()));
-  return j;
+Json jsonCommon(const EchoSample& sample, std::int64_t stamp_ns) {
+  return {
+      {"topic", sample.topic},
+      {"type", sample.type->ros_name},
+      {"index", sample.index},
+      {"arrival_unix_ns", sample.arrival_unix_ns},
+      {"arrival_monotonic_ns", sample.arrival_monotonic_ns},
+      {"source_timestamp_ns", sample.source_timestamp_ns},
+      {"stamp_ns", stamp_ns},
+      {"bytes", sample.cdr.size()},
+  };
 }
 
 /// "#3 rt/height_map grid_map_msgs/msg/GridMap stamp 1700000000.250000000"
@@ -89,16 +85,10 @@ std::string humanFirstLine(const EchoSample& sample, std::int64_t stamp_ns) {
   return out;
 }
 
-std::string jsonXyz(double x, double y, double z) {
-  JsonObject j(JsonStyle::kCompact);
-  j.add("x", x).add("y", y).add("z", z);
-  return j.str();
-}
+Json jsonXyz(double x, double y, double z) { return {{"x", x}, {"y", y}, {"z", z}}; }
 
-std::string jsonQuaternion(double w, double x, double y, double z) {
-  JsonObject j(JsonStyle::kCompact);
-  j.add("w", w).add("x", x).add("y", y).add("z", z);
-  return j.str();
+Json jsonQuaternion(double w, double x, double y, double z) {
+  return {{"w", w}, {"x", x}, {"y", y}, {"z", z}};
 }
 
 // ---------------------------------------------------------------- GridMap
@@ -119,6 +109,22 @@ const char* describe(msgs::GridMapError error) {
   return "unknown error";
 }
 
+/// A GridMap's layers as JSON: name, cells, finite cells, min and max (null when the layer has
+/// no finite cell: they are then not finite).
+Json layersJson(const msgs::DecodedGridMap& map, const std::vector<msgs::LayerStats>& stats) {
+  Json layers = Json::array();
+  for (std::size_t i = 0; i < map.layers.size(); ++i) {
+    layers.push_back(Json{
+        {"name", jsonText(map.layers[i])},
+        {"cells", stats[i].cells},
+        {"finite", stats[i].finite},
+        {"min", stats[i].min},
+        {"max", stats[i].max},
+    });
+  }
+  return layers;
+}
+
 Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
   auto decoded = msgs::decodeGridMap(sample.cdr);
   if (!decoded) {
@@ -136,35 +142,24 @@ Result<std::string> formatGridMap(const EchoSample& sample, EchoFormat format) {
   const long cells_x = map.resolution > 0.0 ? std::lround(map.length_x / map.resolution) : 0;
   const long cells_y = map.resolution > 0.0 ? std::lround(map.length_y / map.resolution) : 0;
   if (format == EchoFormat::kJsonLines) {
-    std::vector<std::string> layers;
-    for (std::size_t i = 0; i < map.layers.size(); ++i) {
-      JsonObject layer(JsonStyle::kCompact);
-      layer.raw("name", jsonText(map.layers[i]))
-          .add("cells", stats[i].cells)
-          .add("finite", stats[i].finite)
-          .add("min", static_cast<double>(stats[i].min))
-          .add("max", static_cast<double>(stats[i].max));
-      layers.push_back(layer.str());
-    }
-    std::vector<std::string> basic;
+    Json j = jsonCommon(sample, map.stamp_ns);
+    j["frame"] = jsonText(map.frame_id);
+    j["resolution"] = map.resolution;
+    j["length_x"] = map.length_x;
+    j["length_y"] = map.length_y;
+    j["cells_x"] = cells_x;
+    j["cells_y"] = cells_y;
+    j["centre_x"] = map.centre_x;
+    j["centre_y"] = map.centre_y;
+    j["centre_z"] = map.centre_z;
+    j["layers"] = layersJson(map, stats);
+    j["basic_layers"] = Json::array();
     for (const std::string& name : map.basic_layers) {
-      basic.push_back(jsonText(name));
+      j["basic_layers"].push_back(jsonText(name));
     }
-    JsonObject j = jsonCommon(sample, map.stamp_ns);
-    j.raw("frame", jsonText(map.frame_id))
-        .add("resolution", map.resolution)
-        .add("length_x", map.length_x)
-        .add("length_y", map.length_y)
-        .add("cells_x", static_cast<std::int64_t>(cells_x))
-        .add("cells_y", static_cast<std::int64_t>(cells_y))
-        .add("centre_x", map.centre_x)
-        .add("centre_y", map.centre_y)
-        .add("centre_z", map.centre_z)
-        .raw("layers", jsonArray(layers))
-        .raw("basic_layers", jsonArray(basic))
-        .add("outer_start_index", static_cast<std::uint64_t>(map.outer_start_index))
-        .add("inner_start_index", static_cast<std::uint64_t>(map.inner_start_index));
-    return j.str() + "\n";
+    j["outer_start_index"] = map.outer_start_index;
+    j["inner_start_index"] = map.inner_start_index;
+    return jsonLine(j);
   }
   std::string out = humanFirstLine(sample, map.stamp_ns);
   appendFormat(out, " frame %s\n", humanText(map.frame_id).c_str());
@@ -250,20 +245,20 @@ Result<std::string> formatOccupancyGrid(const EchoSample& sample, EchoFormat for
   const msgs::DecodedOccupancyGrid& grid = *decoded;
   const OccupancyCounts c = countCells(grid.data);
   if (format == EchoFormat::kJsonLines) {
-    JsonObject j = jsonCommon(sample, grid.stamp_ns);
-    j.raw("frame", jsonText(grid.frame_id))
-        .add("resolution", static_cast<double>(grid.resolution))
-        .add("width", static_cast<std::uint64_t>(grid.width))
-        .add("height", static_cast<std::uint64_t>(grid.height))
-        .add("origin_x", grid.origin_x)
-        .add("origin_y", grid.origin_y)
-        .add("origin_z", grid.origin_z)
-        .add("unknown", c.unknown)
-        .add("free", c.free)
-        .add("costed", c.costed)
-        .add("lethal", c.lethal)
-        .add("invalid", c.invalid);
-    return j.str() + "\n";
+    Json j = jsonCommon(sample, grid.stamp_ns);
+    j["frame"] = jsonText(grid.frame_id);
+    j["resolution"] = grid.resolution;
+    j["width"] = grid.width;
+    j["height"] = grid.height;
+    j["origin_x"] = grid.origin_x;
+    j["origin_y"] = grid.origin_y;
+    j["origin_z"] = grid.origin_z;
+    j["unknown"] = c.unknown;
+    j["free"] = c.free;
+    j["costed"] = c.costed;
+    j["lethal"] = c.lethal;
+    j["invalid"] = c.invalid;
+    return jsonLine(j);
   }
   std::string out = humanFirstLine(sample, grid.stamp_ns);
   appendFormat(out, " frame %s\n", humanText(grid.frame_id).c_str());
@@ -316,18 +311,18 @@ Result<std::string> formatDepthImage(const EchoSample& sample, EchoFormat format
   const double median = depths.empty() ? 0.0 : static_cast<double>(depths[depths.size() / 2]);
   const std::uint64_t pixels = std::uint64_t{image.width} * image.height;
   if (format == EchoFormat::kJsonLines) {
-    JsonObject j = jsonCommon(sample, image.stamp_ns);
-    j.raw("frame", jsonText(image.frame_id))
-        .raw("encoding", jsonText(image.encoding))
-        .add("width", static_cast<std::uint64_t>(image.width))
-        .add("height", static_cast<std::uint64_t>(image.height))
-        .add("step", static_cast<std::uint64_t>(image.step))
-        .add("big_endian", image.big_endian)
-        .add("pixels_with_depth", valid)
-        .add("depth_min_m", lo)
-        .add("depth_median_m", median)
-        .add("depth_max_m", hi);
-    return j.str() + "\n";
+    Json j = jsonCommon(sample, image.stamp_ns);
+    j["frame"] = jsonText(image.frame_id);
+    j["encoding"] = jsonText(image.encoding);
+    j["width"] = image.width;
+    j["height"] = image.height;
+    j["step"] = image.step;
+    j["big_endian"] = image.big_endian;
+    j["pixels_with_depth"] = valid;
+    j["depth_min_m"] = lo;
+    j["depth_median_m"] = median;
+    j["depth_max_m"] = hi;
+    return jsonLine(j);
   }
   std::string out = humanFirstLine(sample, image.stamp_ns);
   appendFormat(out, " frame %s\n", humanText(image.frame_id).c_str());
@@ -352,21 +347,21 @@ Result<std::string> formatCameraInfo(const EchoSample& sample, EchoFormat format
   const CameraIntrinsics& c = info.camera;
   const bool distorted = c.distortion == DistortionModel::kPlumbBob;
   if (format == EchoFormat::kJsonLines) {
-    JsonObject j = jsonCommon(sample, info.stamp_ns);
-    j.raw("frame", jsonText(info.frame_id))
-        .add("width", static_cast<std::uint64_t>(c.width))
-        .add("height", static_cast<std::uint64_t>(c.height))
-        .add("fx", c.fx)
-        .add("fy", c.fy)
-        .add("cx", c.cx)
-        .add("cy", c.cy)
-        .add("distortion", std::string(distorted ? "plumb_bob" : "none"))
-        .add("k1", c.k1)
-        .add("k2", c.k2)
-        .add("p1", c.p1)
-        .add("p2", c.p2)
-        .add("k3", c.k3);
-    return j.str() + "\n";
+    Json j = jsonCommon(sample, info.stamp_ns);
+    j["frame"] = jsonText(info.frame_id);
+    j["width"] = c.width;
+    j["height"] = c.height;
+    j["fx"] = c.fx;
+    j["fy"] = c.fy;
+    j["cx"] = c.cx;
+    j["cy"] = c.cy;
+    j["distortion"] = distorted ? "plumb_bob" : "none";
+    j["k1"] = c.k1;
+    j["k2"] = c.k2;
+    j["p1"] = c.p1;
+    j["p2"] = c.p2;
+    j["k3"] = c.k3;
+    return jsonLine(j);
   }
   std::string out = humanFirstLine(sample, info.stamp_ns);
   appendFormat(out, " frame %s\n", humanText(info.frame_id).c_str());
@@ -470,6 +465,20 @@ bool layoutOnlyError(msgs::CloudError error) {
          error == msgs::CloudError::kFrameIdTooLong || error == msgs::CloudError::kMissingTimeField;
 }
 
+/// A cloud's PointFields as JSON objects: name, datatype name, offset, count.
+Json fieldsJson(const std::vector<CloudField>& fields) {
+  Json out = Json::array();
+  for (const CloudField& field : fields) {
+    out.push_back(Json{
+        {"name", jsonText(field.name)},
+        {"type", datatypeName(field.datatype)},
+        {"offset", field.offset},
+        {"count", field.count},
+    });
+  }
+  return out;
+}
+
 Result<std::string> formatPointCloud(const EchoSample& sample, EchoFormat format) {
   if (sample.cdr.size() < 4 || !msgs::CdrReader(sample.cdr).ok()) {
     return fail(ErrorCode::kFormat,
@@ -500,32 +509,25 @@ Result<std::string> formatPointCloud(const EchoSample& sample, EchoFormat format
     points_note = msgs::toString(decoded.error());
   }
   if (format == EchoFormat::kJsonLines) {
-    std::vector<std::string> fields;
-    for (const CloudField& field : info.fields) {
-      JsonObject f(JsonStyle::kCompact);
-      f.raw("name", jsonText(field.name))
-          .add("type", datatypeName(field.datatype))
-          .add("offset", static_cast<std::uint64_t>(field.offset))
-          .add("count", static_cast<std::uint64_t>(field.count));
-      fields.push_back(f.str());
-    }
-    JsonObject j = jsonCommon(sample, info.stamp_ns);
-    j.raw("frame", jsonText(info.frame_id))
-        .add("width", static_cast<std::uint64_t>(info.width))
-        .add("height", static_cast<std::uint64_t>(info.height))
-        .add("point_step", static_cast<std::uint64_t>(info.point_step))
-        .add("row_step", static_cast<std::uint64_t>(info.row_step))
-        .add("is_bigendian", info.is_bigendian)
-        .add("is_dense", info.is_dense)
-        .raw("fields", jsonArray(fields))
-        .add("points", points);
+    Json j = jsonCommon(sample, info.stamp_ns);
+    j["frame"] = jsonText(info.frame_id);
+    j["width"] = info.width;
+    j["height"] = info.height;
+    j["point_step"] = info.point_step;
+    j["row_step"] = info.row_step;
+    j["is_bigendian"] = info.is_bigendian;
+    j["is_dense"] = info.is_dense;
+    j["fields"] = fieldsJson(info.fields);
+    j["points"] = points;
     if (decoded) {
-      j.add("valid_points", static_cast<std::uint64_t>(decoded->points - decoded->no_return))
-          .add("no_return", static_cast<std::uint64_t>(decoded->no_return));
+      j["valid_points"] = decoded->points - decoded->no_return;
+      j["no_return"] = decoded->no_return;
     } else {
-      j.raw("valid_points", "null").raw("no_return", "null").add("points_error", points_note);
+      j["valid_points"] = nullptr;
+      j["no_return"] = nullptr;
+      j["points_error"] = points_note;
     }
-    return j.str() + "\n";
+    return jsonLine(j);
   }
   std::string out = humanFirstLine(sample, info.stamp_ns);
   appendFormat(out, " frame %s\n", humanText(info.frame_id).c_str());
@@ -572,24 +574,26 @@ Result<std::string> formatDiagnostics(const EchoSample& sample, EchoFormat forma
   }
   const msgs::DecodedDiagnostics& array = *decoded;
   if (format == EchoFormat::kJsonLines) {
-    std::vector<std::string> statuses;
+    Json statuses = Json::array();
     for (const msgs::DecodedDiagnosticStatus& status : array.statuses) {
-      JsonObject values(JsonStyle::kCompact);
+      // An object of key: value strings; a key repeated in the message keeps its last value.
+      Json values = Json::object();
       for (const msgs::DiagnosticKeyValue& pair : status.values) {
-        values.raw(printableText(pair.key, false), jsonText(pair.value));
+        values[jsonText(pair.key)] = jsonText(pair.value);
       }
-      JsonObject s(JsonStyle::kCompact);
-      s.add("level", static_cast<std::uint64_t>(status.level))
-          .add("level_name", msgs::diagnosticLevelName(status.level))
-          .raw("name", jsonText(status.name))
-          .raw("message", jsonText(status.message))
-          .raw("hardware_id", jsonText(status.hardware_id))
-          .raw("values", values.str());
-      statuses.push_back(s.str());
+      statuses.push_back(Json{
+          {"level", std::uint64_t{status.level}},
+          {"level_name", msgs::diagnosticLevelName(status.level)},
+          {"name", jsonText(status.name)},
+          {"message", jsonText(status.message)},
+          {"hardware_id", jsonText(status.hardware_id)},
+          {"values", values},
+      });
     }
-    JsonObject j = jsonCommon(sample, array.stamp_ns);
-    j.raw("frame", jsonText(array.frame_id)).raw("statuses", jsonArray(statuses));
-    return j.str() + "\n";
+    Json j = jsonCommon(sample, array.stamp_ns);
+    j["frame"] = jsonText(array.frame_id);
+    j["statuses"] = statuses;
+    return jsonLine(j);
   }
   std::string out = humanFirstLine(sample, array.stamp_ns);
   appendFormat(out, ", %zu status%s\n", array.statuses.size(),
@@ -630,16 +634,12 @@ const char* describe(msgs::PoseError error) {
   return "unknown error";
 }
 
-std::string jsonTransform(const msgs::StampedTransform& t, bool with_stamp) {
-  JsonObject j(JsonStyle::kCompact);
-  if (with_stamp) {
-    j.add("stamp_ns", t.stamp_ns);
-  }
-  j.raw("frame", jsonText(t.parent))
-      .raw("child_frame", jsonText(t.child))
-      .raw("position", jsonXyz(t.tx, t.ty, t.tz))
-      .raw("orientation", jsonQuaternion(t.qw, t.qx, t.qy, t.qz));
-  return j.str();
+/// The transform's keys, appended to `j` (after the common keys, or to an empty object).
+void addTransform(Json& j, const msgs::StampedTransform& t) {
+  j["frame"] = jsonText(t.parent);
+  j["child_frame"] = jsonText(t.child);
+  j["position"] = jsonXyz(t.tx, t.ty, t.tz);
+  j["orientation"] = jsonQuaternion(t.qw, t.qx, t.qy, t.qz);
 }
 
 std::string humanTransform(const msgs::StampedTransform& t) {
@@ -659,12 +659,9 @@ Result<std::string> formatOdometry(const EchoSample& sample, EchoFormat format) 
   }
   const msgs::StampedTransform& t = *decoded;
   if (format == EchoFormat::kJsonLines) {
-    JsonObject j = jsonCommon(sample, t.stamp_ns);
-    j.raw("frame", jsonText(t.parent))
-        .raw("child_frame", jsonText(t.child))
-        .raw("position", jsonXyz(t.tx, t.ty, t.tz))
-        .raw("orientation", jsonQuaternion(t.qw, t.qx, t.qy, t.qz));
-    return j.str() + "\n";
+    Json j = jsonCommon(sample, t.stamp_ns);
+    addTransform(j, t);
+    return jsonLine(j);
   }
   return humanFirstLine(sample, t.stamp_ns) + "\n  " + humanTransform(t) + "\n";
 }
@@ -683,13 +680,15 @@ Result<std::string> formatTfMessage(const EchoSample& sample, EchoFormat format)
   // TFMessage has no header: its stamp is the first transform's (0 when empty).
   const std::int64_t stamp_ns = transforms.empty() ? 0 : transforms.front().stamp_ns;
   if (format == EchoFormat::kJsonLines) {
-    std::vector<std::string> items;
+    Json items = Json::array();
     for (const msgs::StampedTransform& t : transforms) {
-      items.push_back(jsonTransform(t, true));
+      Json item = {{"stamp_ns", t.stamp_ns}};
+      addTransform(item, t);
+      items.push_back(std::move(item));
     }
-    JsonObject j = jsonCommon(sample, stamp_ns);
-    j.raw("transforms", jsonArray(items));
-    return j.str() + "\n";
+    Json j = jsonCommon(sample, stamp_ns);
+    j["transforms"] = items;
+    return jsonLine(j);
   }
   std::string out = humanFirstLine(sample, stamp_ns);
   appendFormat(out, ", %zu transform%s\n", transforms.size(), transforms.size() == 1 ? "" : "s");

@@ -11,7 +11,6 @@
 #include "src/core/byte_size.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
-#include "tools/raymap/json_writer.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -114,34 +113,34 @@ std::string tierProgressText(const VoxelMap& map) {
          " (spilled " + withCommas(s->regions_spilled) + ")";
 }
 
-std::string tierJson(const TierReport& r) {
+Json tierJson(const TierReport& r) {
   const RegionTierStats& s = r.stats;
-  JsonObject j(JsonStyle::kCompact);
-  j.add("pool_regions", std::uint64_t{r.pool_regions})
-      .add("regions_hot", std::uint64_t{r.hot_regions})
-      .add("regions_compressed", s.regions_compressed + s.regions_staged)
-      .add("regions_spilled", s.regions_spilled)
-      .add("batches_split", r.batches_split)
-      .add("compressed_bytes", s.compressed_bytes)
-      .add("compressed_peak_bytes", s.compressed_peak_bytes)
-      .add("compression_ratio", s.compressionRatio())
-      .add("evictions", s.evictions)
-      .add("clean_evictions", s.clean_evictions)
-      .add("restores", s.restores)
-      .add("compressions", s.compressions)
-      .add("spill_writes", s.spill_writes)
-      .add("spill_bytes_written", s.spill_bytes_written)
-      .add("spill_reads", s.spill_reads)
-      .add("spill_bytes_read", s.spill_bytes_read)
-      .add("spill_file_bytes", s.spill_file_bytes)
-      .add("spill_garbage_bytes", s.spill_garbage_bytes)
-      .add("spill_compactions", s.spill_compactions)
-      .add("spill_bytes_reclaimed", s.spill_bytes_reclaimed)
-      .add("waits", s.waits)
-      .add("wait_seconds", s.wait_seconds)
-      .add("compress_seconds", s.compress_seconds)
-      .add("restore_seconds", s.restore_seconds);
-  return j.str();
+  return {
+      {"pool_regions", r.pool_regions},
+      {"regions_hot", r.hot_regions},
+      {"regions_compressed", s.regions_compressed + s.regions_staged},
+      {"regions_spilled", s.regions_spilled},
+      {"batches_split", r.batches_split},
+      {"compressed_bytes", s.compressed_bytes},
+      {"compressed_peak_bytes", s.compressed_peak_bytes},
+      {"compression_ratio", s.compressionRatio()},
+      {"evictions", s.evictions},
+      {"clean_evictions", s.clean_evictions},
+      {"restores", s.restores},
+      {"compressions", s.compressions},
+      {"spill_writes", s.spill_writes},
+      {"spill_bytes_written", s.spill_bytes_written},
+      {"spill_reads", s.spill_reads},
+      {"spill_bytes_read", s.spill_bytes_read},
+      {"spill_file_bytes", s.spill_file_bytes},
+      {"spill_garbage_bytes", s.spill_garbage_bytes},
+      {"spill_compactions", s.spill_compactions},
+      {"spill_bytes_reclaimed", s.spill_bytes_reclaimed},
+      {"waits", s.waits},
+      {"wait_seconds", s.wait_seconds},
+      {"compress_seconds", s.compress_seconds},
+      {"restore_seconds", s.restore_seconds},
+  };
 }
 
 Expected<void, Error> checkTiers(const VoxelMap& map) {

@@ -10,6 +10,7 @@
 
 #include "src/io/map_file.hpp"
 #include "src/map/voxel_map.hpp"
+#include "tools/raymap/json_output.hpp"
 
 namespace CLI {
 class App;
@@ -56,8 +57,8 @@ std::optional<TierReport> tierReport(const VoxelMap& map);
 std::string tierSummaryLine(const TierReport& report);
 /// @brief A short text for the progress line ("pool 812/1024, cold 6,400 (spilled 3,000)").
 std::string tierProgressText(const VoxelMap& map);
-/// @brief The tiers as a one-line JSON object (for --stats-json and info --json).
-std::string tierJson(const TierReport& report);
+/// @brief The tiers as a JSON object (for --stats-json and info --json).
+Json tierJson(const TierReport& report);
 
 /// @brief Fails with the tiers' error when a tiered map lost a region on the way (a query or a
 /// summary that met a damaged spill file): a command must not report success then.

@@ -8,7 +8,6 @@
 #include "platform/process.hpp"
 #include "src/map/ray_batcher.hpp"
 #include "src/mapper/recording.hpp"
-#include "tools/raymap/json_writer.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/progress.hpp"
 
@@ -72,6 +71,33 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   d.apply_seconds -= before.apply_seconds;
   d.apply_busy_seconds -= before.apply_busy_seconds;
   return d;  // cache_slots is a size, not a counter
+}
+
+/// What a bag's messages gave (the "bag" object of --stats-json).
+Json bagJson(const bag::BagRaysReport& b) {
+  return {
+      {"cloud_topics", b.cloud_topics},
+      {"pose_source", b.pose_source},
+      {"messages", b.messages},
+      {"clouds", b.clouds},
+      {"scans_integrated", b.scans_integrated},
+      {"scans_no_pose", b.scans_no_pose},
+      {"clouds_skipped", b.clouds_skipped},
+      {"images_no_camera_info", b.images_no_camera_info},
+      {"camera_infos", b.camera_infos},
+      {"camera_infos_skipped", b.camera_infos_skipped},
+      {"rate_limited", b.rate_limited},
+      {"poses", b.poses},
+      {"poses_skipped", b.poses_skipped},
+      {"poses_out_of_order", b.poses_out_of_order},
+      {"points_no_return", b.points_no_return},
+      {"points_bad_time", b.points_bad_time},
+      {"tf_ignored", b.tf_ignored},
+      {"tf_unresolved", b.tf_unresolved},
+      {"extrinsics_from_tf", b.extrinsics_from_tf},
+      {"truncated", b.truncated},
+      {"damage", b.damage},
+  };
 }
 
 }  // namespace
@@ -221,127 +247,105 @@ std::string inputWarning(MapMode mode, const io::RaySourceInfo& input) {
          "(hit/miss counts and the Gaussians are unaffected)";
 }
 
-std::string statsJson(const PopulateReport& r, const PopulateOptions& options) {
-  JsonObject j;
+Json statsJson(const PopulateReport& r, const PopulateOptions& options) {
   const double rate = r.integrate_seconds > 0
                           ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
                           : 0.0;
-  j.add("input", options.input)
-      .add("mapper", "raymap")
-      .add("semantics", toString(options.map.semantics))
-      .add("mode", mapModeName(options.map))
-      .add("resolution", options.map.geometry.resolution)
-      .add("region_voxels", options.map.geometry.region_voxels)
-      .add("min_range", options.filter.min_range_m)
-      .add("max_range", options.filter.max_range_m)
-      .add("walk", options.filter.reverse ? "reverse" : "forward")
-      .add("hit_probability", probability(options.map.occupancy.hit))
-      .add("miss_probability", probability(options.map.occupancy.miss))
-      .add("rays_in", r.rays.rays_in)
-      .add("rays_integrated", r.rays.rays_accepted)
-      .add("rays_rejected", r.rays.rejected())
-      .add("rays_invalid", r.rays.rays_invalid)
-      .add("rays_too_short", r.rays.rays_too_short)
-      .add("rays_out_of_bounds", r.rays.rays_out_of_bounds)
-      .add("rays_clipped", r.rays.rays_clipped)
-      .add("rays_no_return", r.rays.rays_no_return)
-      .add("ray_pieces", r.rays.pieces_out)
-      .add("scans", r.scans)
-      .add("scans_split", r.scans_split)
-      .add("integrate_seconds", r.integrate_seconds)
-      .add("rays_per_second", rate)
-      .add("integrate_cpu_seconds", r.integrate_cpu_seconds)
-      .add("integrate_thread_cpu_seconds", r.integrate_thread_cpu_seconds)
-      .add("host_cpu_ns_per_ray",
-           r.rays.rays_accepted > 0
-               ? r.integrate_cpu_seconds * 1e9 / static_cast<double>(r.rays.rays_accepted)
-               : 0.0)
-      .add("read_seconds", r.read_seconds)
-      .add("total_seconds", r.total_seconds)
-      .add("voxels_free", r.summary.voxels_free)
-      .add("voxels_occupied", r.summary.voxels_occupied)
-      .add("tsdf_voxels_updated", r.tsdf.updated)
-      .add("tsdf_voxels_behind_surface", r.tsdf.behind)
-      .add("decay_voxels_crossed", r.decay.crossed)
-      .add("decay_voxels_with_samples", r.decay.with_samples)
-      .add("regions", r.summary.regions)
-      .add("voxels_visited", r.backend.voxels_visited)
-      .add("backend", r.backend_name)
-      .add("device", r.device)
-      .add("threads", r.threads)
-      .add("updates_dropped", r.backend.updates_dropped);
+  Json j = {
+      {"input", options.input},
+      {"mapper", "raymap"},
+      {"semantics", toString(options.map.semantics)},
+      {"mode", mapModeName(options.map)},
+      {"resolution", options.map.geometry.resolution},
+      {"region_voxels", options.map.geometry.region_voxels},
+      {"min_range", options.filter.min_range_m},
+      {"max_range", options.filter.max_range_m},
+      {"walk", options.filter.reverse ? "reverse" : "forward"},
+      {"hit_probability", probability(options.map.occupancy.hit)},
+      {"miss_probability", probability(options.map.occupancy.miss)},
+      {"rays_in", r.rays.rays_in},
+      {"rays_integrated", r.rays.rays_accepted},
+      {"rays_rejected", r.rays.rejected()},
+      {"rays_invalid", r.rays.rays_invalid},
+      {"rays_too_short", r.rays.rays_too_short},
+      {"rays_out_of_bounds", r.rays.rays_out_of_bounds},
+      {"rays_clipped", r.rays.rays_clipped},
+      {"rays_no_return", r.rays.rays_no_return},
+      {"ray_pieces", r.rays.pieces_out},
+      {"scans", r.scans},
+      {"scans_split", r.scans_split},
+      {"integrate_seconds", r.integrate_seconds},
+      {"rays_per_second", rate},
+      {"integrate_cpu_seconds", r.integrate_cpu_seconds},
+      {"integrate_thread_cpu_seconds", r.integrate_thread_cpu_seconds},
+      {"host_cpu_ns_per_ray",
+       r.rays.rays_accepted > 0
+           ? r.integrate_cpu_seconds * 1e9 / static_cast<double>(r.rays.rays_accepted)
+           : 0.0},
+      {"read_seconds", r.read_seconds},
+      {"total_seconds", r.total_seconds},
+      {"voxels_free", r.summary.voxels_free},
+      {"voxels_occupied", r.summary.voxels_occupied},
+      {"tsdf_voxels_updated", r.tsdf.updated},
+      {"tsdf_voxels_behind_surface", r.tsdf.behind},
+      {"decay_voxels_crossed", r.decay.crossed},
+      {"decay_voxels_with_samples", r.decay.with_samples},
+      {"regions", r.summary.regions},
+      {"voxels_visited", r.backend.voxels_visited},
+      {"backend", r.backend_name},
+      {"device", r.device},
+      {"threads", r.threads},
+      {"updates_dropped", r.backend.updates_dropped},
+  };
   if (r.backend_name == "cpu" && r.threads > 1) {
     // Where the parallel integrator's time went; balance 1 = every worker walked as long.
     const BackendStats& b = r.backend;
     const double capacity = b.apply_seconds * static_cast<double>(r.threads);
-    j.add("survey_seconds", b.survey_seconds)
-        .add("serial_seconds", b.serial_seconds)
-        .add("resolve_seconds", b.resolve_seconds)
-        .add("apply_seconds", b.apply_seconds)
-        .add("apply_balance", capacity > 0 ? b.apply_busy_seconds / capacity : 0.0);
+    j["survey_seconds"] = b.survey_seconds;
+    j["serial_seconds"] = b.serial_seconds;
+    j["resolve_seconds"] = b.resolve_seconds;
+    j["apply_seconds"] = b.apply_seconds;
+    j["apply_balance"] = capacity > 0 ? b.apply_busy_seconds / capacity : 0.0;
   }
   if (r.backend_name != "cpu") {
     const BackendStats& b = r.backend;
     const std::uint64_t lookups = b.cache_hits + b.cache_misses;
-    j.add("planning", b.planned_on_device ? "device" : "host")
-        .add("plans_on_host", b.plans_on_host)
-        .add("rays_prepared_on_device", b.rays_prepared_on_device)
-        .add("rays_skipped", b.rays_skipped)
-        .add("bytes_to_device", b.bytes_to_device)
-        .add("bytes_from_device", b.bytes_from_device)
-        .add("region_bytes_to_device", b.region_bytes_to_device)
-        .add("region_bytes_from_device", b.region_bytes_from_device)
-        .add("cache_slots", b.cache_slots)
-        .add("cache_hits", b.cache_hits)
-        .add("cache_misses", b.cache_misses)
-        .add("cache_evictions", b.cache_evictions)
-        .add("transfer_stalls", b.transfer_stalls)
-        .add("plan_seconds", b.plan_seconds)
-        .add("wait_seconds", b.wait_seconds)
-        .add("sync_seconds", b.sync_seconds)
-        .add("cache_hit_rate",
-             lookups > 0 ? static_cast<double>(b.cache_hits) / static_cast<double>(lookups) : 0.0);
+    j["planning"] = b.planned_on_device ? "device" : "host";
+    j["plans_on_host"] = b.plans_on_host;
+    j["rays_prepared_on_device"] = b.rays_prepared_on_device;
+    j["rays_skipped"] = b.rays_skipped;
+    j["bytes_to_device"] = b.bytes_to_device;
+    j["bytes_from_device"] = b.bytes_from_device;
+    j["region_bytes_to_device"] = b.region_bytes_to_device;
+    j["region_bytes_from_device"] = b.region_bytes_from_device;
+    j["cache_slots"] = b.cache_slots;
+    j["cache_hits"] = b.cache_hits;
+    j["cache_misses"] = b.cache_misses;
+    j["cache_evictions"] = b.cache_evictions;
+    j["transfer_stalls"] = b.transfer_stalls;
+    j["plan_seconds"] = b.plan_seconds;
+    j["wait_seconds"] = b.wait_seconds;
+    j["sync_seconds"] = b.sync_seconds;
+    j["cache_hit_rate"] =
+        lookups > 0 ? static_cast<double>(b.cache_hits) / static_cast<double>(lookups) : 0.0;
   }
   if (r.tiers) {
-    j.raw("memory_tiers", tierJson(*r.tiers));
+    j["memory_tiers"] = tierJson(*r.tiers);
   }
   if (r.bag) {
-    const bag::BagRaysReport& b = *r.bag;
-    JsonObject bj;
-    bj.raw("cloud_topics", jsonList(b.cloud_topics))
-        .add("pose_source", b.pose_source)
-        .add("messages", b.messages)
-        .add("clouds", b.clouds)
-        .add("scans_integrated", b.scans_integrated)
-        .add("scans_no_pose", b.scans_no_pose)
-        .add("clouds_skipped", b.clouds_skipped)
-        .add("images_no_camera_info", b.images_no_camera_info)
-        .add("camera_infos", b.camera_infos)
-        .add("camera_infos_skipped", b.camera_infos_skipped)
-        .add("rate_limited", b.rate_limited)
-        .add("poses", b.poses)
-        .add("poses_skipped", b.poses_skipped)
-        .add("poses_out_of_order", b.poses_out_of_order)
-        .add("points_no_return", b.points_no_return)
-        .add("points_bad_time", b.points_bad_time)
-        .add("tf_ignored", b.tf_ignored)
-        .add("tf_unresolved", b.tf_unresolved)
-        .add("extrinsics_from_tf", b.extrinsics_from_tf)
-        .add("truncated", b.truncated)
-        .raw("damage", jsonList(b.damage));
-    j.raw("bag", bj.str());
+    j["bag"] = bagJson(*r.bag);
   }
   if (!r.fallback_warning.empty()) {
-    j.add("fallback", withCliFlags(r.fallback_warning));
+    j["fallback"] = withCliFlags(r.fallback_warning);
   }
   if (!r.startup_warning.empty()) {
-    j.add("backend_warning", withCliFlags(r.startup_warning));
+    j["backend_warning"] = withCliFlags(r.startup_warning);
   }
   if (!r.input_warning.empty()) {
-    j.add("input_warning", withCliFlags(r.input_warning));
+    j["input_warning"] = withCliFlags(r.input_warning);
   }
-  j.add("peak_rss_bytes", r.peak_rss_bytes);
-  return j.str();
+  j["peak_rss_bytes"] = r.peak_rss_bytes;
+  return j;
 }
 
 }  // namespace raymap::cli

@@ -22,6 +22,7 @@
 #include "src/map/ray_preparer.hpp"
 #include "src/map/tsdf_surface.hpp"
 #include "src/map/voxel_map.hpp"
+#include "tools/raymap/json_output.hpp"
 #include "tools/raymap/memory_tiers.hpp"
 
 namespace raymap::cli {
@@ -101,6 +102,6 @@ Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& op
 std::string inputWarning(MapMode mode, const io::RaySourceInfo& input);
 
 /// @brief The statistics JSON of a run (keys documented in docs/cli.md).
-std::string statsJson(const PopulateReport& report, const PopulateOptions& options);
+Json statsJson(const PopulateReport& report, const PopulateOptions& options);
 
 }  // namespace raymap::cli

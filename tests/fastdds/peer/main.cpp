@@ -15,7 +15,7 @@
 #include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/log/StdoutErrConsumer.hpp>
 
-#include "tests/fastdds/peer/json_writer.hpp"
+#include "tests/fastdds/peer/json_result.hpp"
 #include "tests/fastdds/peer/peer_participant.hpp"
 #include "tests/fastdds/peer/publish_mode.hpp"
 #include "tests/fastdds/peer/stop_signal.hpp"
@@ -23,7 +23,7 @@
 
 namespace {
 
-using raymap::fastdds_peer::JsonObject;
+using raymap::fastdds_peer::Json;
 
 /// Fast DDS logs to standard output by default, where the JSON goes: send its warnings and
 /// errors to standard error instead.
@@ -41,8 +41,9 @@ std::uint32_t domainFromEnvironment() {
 }
 
 /// The JSON on standard output, and into `path` too when one is given.
-bool emit(const JsonObject& result, const std::string& path) {
-  const std::string line = result.str() + "\n";
+bool emit(const Json& result, const std::string& path) {
+  // One line; bytes from the wire that are not UTF-8 become U+FFFD rather than an exception.
+  const std::string line = result.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
   std::fputs(line.c_str(), stdout);
   std::fflush(stdout);
   if (path.empty()) {
@@ -129,12 +130,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "raymap-fastdds-peer: %s\n", error.c_str());
     return 1;
   }
-  JsonObject result;
   const bool publishing = publish_command->parsed();
-  result.text("mode", publishing ? "publish" : "subscribe")
-      .integer("domain", domain)
-      .integer("buffer_bytes", buffer_bytes)
-      .text("discovery", discovery == Discovery::kLoopback ? "loopback" : "stock");
+  Json result = {
+      {"mode", publishing ? "publish" : "subscribe"},
+      {"domain", domain},
+      {"buffer_bytes", buffer_bytes},
+      {"discovery", discovery == Discovery::kLoopback ? "loopback" : "stock"},
+  };
   const bool ran = publishing ? runPublish(*participant, publish, result)
                               : runSubscribe(*participant, subscribe, result);
   participant.reset();

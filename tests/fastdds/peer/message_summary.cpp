@@ -123,58 +123,53 @@ std::string DiagnosticValues::find(const std::string& status_suffix, const std::
   return endingWith(values_, status_suffix, key);
 }
 
-JsonObject toJson(const GridMapSummary& map) {
-  JsonObject o;
-  o.text("frame_id", map.frame_id)
-      .integer("stamp_ns", map.stamp_ns)
-      .number("resolution", map.resolution)
-      .number("length_x", map.length_x)
-      .number("length_y", map.length_y)
-      .number("centre_x", map.centre_x)
-      .number("centre_y", map.centre_y)
-      .texts("layers", map.layers)
-      .texts("basic_layers", map.basic_layers)
-      .texts("dim_labels", map.dim_labels)
-      .integers("dim_sizes", map.dim_sizes)
-      .integers("dim_strides", map.dim_strides)
-      .integers("layer_sizes", map.layer_sizes)
-      .integer("surface_cells", map.surface_cells)
-      .number("surface_elevation_median", map.surface_elevation_median);
-  return o;
+Json toJson(const GridMapSummary& map) {
+  return {
+      {"frame_id", map.frame_id},
+      {"stamp_ns", map.stamp_ns},
+      {"resolution", map.resolution},
+      {"length_x", map.length_x},
+      {"length_y", map.length_y},
+      {"centre_x", map.centre_x},
+      {"centre_y", map.centre_y},
+      {"layers", map.layers},
+      {"basic_layers", map.basic_layers},
+      {"dim_labels", map.dim_labels},
+      {"dim_sizes", map.dim_sizes},
+      {"dim_strides", map.dim_strides},
+      {"layer_sizes", map.layer_sizes},
+      {"surface_cells", map.surface_cells},
+      {"surface_elevation_median", map.surface_elevation_median},
+  };
 }
 
-JsonObject toJson(const CostmapSummary& costmap) {
-  JsonObject o;
-  o.text("frame_id", costmap.frame_id)
-      .integer("stamp_ns", costmap.stamp_ns)
-      .integer("width", costmap.width)
-      .integer("height", costmap.height)
-      .number("resolution", costmap.resolution)
-      .number("origin_x", costmap.origin_x)
-      .number("origin_y", costmap.origin_y)
-      .integer("cells", costmap.cells)
-      .integer("unknown", costmap.unknown)
-      .integer("free", costmap.free)
-      .integer("costed", costmap.costed)
-      .integer("lethal", costmap.lethal)
-      .integer("invalid", costmap.invalid);
-  return o;
+Json toJson(const CostmapSummary& costmap) {
+  return {
+      {"frame_id", costmap.frame_id},     {"stamp_ns", costmap.stamp_ns},
+      {"width", costmap.width},           {"height", costmap.height},
+      {"resolution", costmap.resolution}, {"origin_x", costmap.origin_x},
+      {"origin_y", costmap.origin_y},     {"cells", costmap.cells},
+      {"unknown", costmap.unknown},       {"free", costmap.free},
+      {"costed", costmap.costed},         {"lethal", costmap.lethal},
+      {"invalid", costmap.invalid},
+  };
 }
 
-JsonObject toJson(const DiagnosticValues& values) {
-  JsonObject o;
-  const auto number = [&](const char* status, const char* key) {
+Json toJson(const DiagnosticValues& values) {
+  Json o = Json::object();
+  // The diagnostics carry numbers as text; these are all counts.
+  const auto count = [&](const char* status, const char* key) {
     const std::string text = values.find(status, key);
     char* end = nullptr;
     const double value = text.empty() ? -1.0 : std::strtod(text.c_str(), &end);
-    o.number(key, (end != nullptr && *end != '\0') ? -1.0 : value);
+    o[key] = std::llround((end != nullptr && *end != '\0') ? -1.0 : value);
   };
   for (const char* key : {"scans_integrated", "clouds_received", "clouds_malformed",
                           "pose_publishers", "poses_received", "tf_static_edges"}) {
-    number(": pipeline", key);
+    count(": pipeline", key);
   }
   for (const char* key : {"maps_published", "costmaps_published"}) {
-    number(": height map", key);
+    count(": height map", key);
   }
   return o;
 }

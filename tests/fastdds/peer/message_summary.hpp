@@ -12,7 +12,7 @@
 #include "grid_map_msgsPubSubTypes.h"
 #include "nav_msgsPubSubTypes.h"
 
-#include "tests/fastdds/peer/json_writer.hpp"
+#include "tests/fastdds/peer/json_result.hpp"
 
 namespace raymap::fastdds_peer {
 
@@ -58,9 +58,10 @@ class DiagnosticValues {
   std::map<std::string, std::string> values_;  // "status name/key"
 };
 
-JsonObject toJson(const GridMapSummary& map);
-JsonObject toJson(const CostmapSummary& costmap);
-/// @brief raymapd's pipeline and height-map figures the tests read (numbers; -1 when absent).
-JsonObject toJson(const DiagnosticValues& values);
+Json toJson(const GridMapSummary& map);
+Json toJson(const CostmapSummary& costmap);
+/// @brief raymapd's pipeline and height-map counters the tests read (integers; -1 when absent or
+/// not a number).
+Json toJson(const DiagnosticValues& values);
 
 }  // namespace raymap::fastdds_peer

@@ -123,7 +123,7 @@ Clock::time_point nextDue(Clock::time_point due, std::chrono::nanoseconds period
 
 }  // namespace
 
-bool runPublish(PeerParticipant& participant, const PublishOptions& options, JsonObject& result) {
+bool runPublish(PeerParticipant& participant, const PublishOptions& options, Json& result) {
   Writers writers;
   writers.cloud =
       makeWriter(participant, options.points_topic,
@@ -135,7 +135,7 @@ bool runPublish(PeerParticipant& participant, const PublishOptions& options, Jso
       makeWriter(participant, options.tf_static_topic,
                  new tf2_msgs::msg::dds_::TFMessage_PubSubType(), RosProfile::kStaticTf);
   if (writers.cloud == nullptr || writers.odometry == nullptr || writers.tf_static == nullptr) {
-    result.text("error", "Fast DDS refused a writer");
+    result["error"] = "Fast DDS refused a writer";
     return false;
   }
   RoomLidar lidar = options.lidar;
@@ -182,19 +182,19 @@ bool runPublish(PeerParticipant& participant, const PublishOptions& options, Jso
     std::this_thread::sleep_until(std::min({next_odometry, scan_start + scan_period, end}));
   }
   const double elapsed_s = std::chrono::duration<double>(Clock::now() - timeline.start()).count();
-  result.number("seconds", elapsed_s)
-      .integer("clouds_published", clouds)
-      .integer("points_per_cloud", static_cast<std::int64_t>(points.size()))
-      .integer("odometry_published", odometry)
-      .integer("tf_static_published", 1)
-      .number("tf_static_acknowledged_after_ms",
-              tf_static_acknowledged ? std::chrono::duration<double, std::milli>(
-                                           *tf_static_acknowledged - timeline.start())
-                                           .count()
-                                     : std::nan(""))
-      .integer("cloud_readers", matchedReaders(writers.cloud))
-      .integer("odometry_readers", matchedReaders(writers.odometry))
-      .integer("tf_static_readers", matchedReaders(writers.tf_static));
+  result["seconds"] = elapsed_s;
+  result["clouds_published"] = clouds;
+  result["points_per_cloud"] = points.size();
+  result["odometry_published"] = odometry;
+  result["tf_static_published"] = 1;
+  result["tf_static_acknowledged_after_ms"] =  // null when it never was
+      tf_static_acknowledged
+          ? std::chrono::duration<double, std::milli>(*tf_static_acknowledged - timeline.start())
+                .count()
+          : std::nan("");
+  result["cloud_readers"] = matchedReaders(writers.cloud);
+  result["odometry_readers"] = matchedReaders(writers.odometry);
+  result["tf_static_readers"] = matchedReaders(writers.tf_static);
   return true;
 }
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "tests/fastdds/peer/json_writer.hpp"
+#include "tests/fastdds/peer/json_result.hpp"
 #include "tests/fastdds/peer/peer_participant.hpp"
 #include "tests/fastdds/peer/room_lidar.hpp"
 
@@ -44,6 +44,6 @@ inline constexpr Vec3 kLidarInBase{0.1, 0.0, 0.3};
 /// @param[out] result what was published, how many readers matched, and when /tf_static was
 /// first acknowledged by every matched reader (at least one), after the start
 /// @return false when an endpoint could not be created (result says which)
-bool runPublish(PeerParticipant& participant, const PublishOptions& options, JsonObject& result);
+bool runPublish(PeerParticipant& participant, const PublishOptions& options, Json& result);
 
 }  // namespace raymap::fastdds_peer

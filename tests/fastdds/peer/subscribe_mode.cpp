@@ -121,39 +121,38 @@ double afterMs(std::int64_t from_ns, std::int64_t to_ns) {
 
 /// `window_*`: what was measured (from the start or the match to the end).
 void report(Received& received, std::int64_t start_ns, std::int64_t matched_ns,
-            std::int64_t window_start_ns, std::int64_t window_end_ns, JsonObject& result) {
+            std::int64_t window_start_ns, std::int64_t window_end_ns, Json& result) {
   const std::lock_guard<std::mutex> lock(received.mutex);
   const std::vector<std::int64_t>& arrivals = received.map_arrivals_ns;
   const PeriodStats period = periodStats(arrivals);
   const std::int64_t first_ns = arrivals.empty() ? 0 : arrivals.front();
-  result.number("grid_map_writer_matched_after_ms", afterMs(start_ns, matched_ns))
-      .integer("maps", static_cast<std::int64_t>(arrivals.size()))
-      .integer("maps_skipped", received.maps_skipped)
-      .number("map_period_p50_ms", period.p50_ms)
-      .number("map_period_p99_ms", period.p99_ms)
-      .number("map_period_max_ms", period.max_ms)
-      .number("map_gap_max_ms", longestGapMs(arrivals, window_start_ns, window_end_ns))
-      .number("first_map_after_ms", afterMs(start_ns, first_ns))
-      .number("first_map_after_match_ms", afterMs(matched_ns, first_ns))
-      .integer("costmaps", received.costmaps)
-      .integer("diagnostics", received.diagnostics)
-      .integer("diagnostics_after_first_map", received.diagnostics_after_first_map);
+  result["grid_map_writer_matched_after_ms"] = afterMs(start_ns, matched_ns);
+  result["maps"] = arrivals.size();
+  result["maps_skipped"] = received.maps_skipped;
+  result["map_period_p50_ms"] = period.p50_ms;
+  result["map_period_p99_ms"] = period.p99_ms;
+  result["map_period_max_ms"] = period.max_ms;
+  result["map_gap_max_ms"] = longestGapMs(arrivals, window_start_ns, window_end_ns);
+  result["first_map_after_ms"] = afterMs(start_ns, first_ns);
+  result["first_map_after_match_ms"] = afterMs(matched_ns, first_ns);
+  result["costmaps"] = received.costmaps;
+  result["diagnostics"] = received.diagnostics;
+  result["diagnostics_after_first_map"] = received.diagnostics_after_first_map;
   const std::string level = received.values.find(": pipeline", "level");
-  result.integer("pipeline_level", level.empty() ? -1 : std::stoll(level))
-      .text("pipeline_message", received.values.find(": pipeline", "message"));
+  result["pipeline_level"] = level.empty() ? -1 : std::stoll(level);
+  result["pipeline_message"] = received.values.find(": pipeline", "message");
   if (!arrivals.empty()) {
-    result.object("last_map", toJson(received.last_map));
+    result["last_map"] = toJson(received.last_map);
   }
   if (received.costmaps > 0) {
-    result.object("last_costmap", toJson(received.last_costmap));
+    result["last_costmap"] = toJson(received.last_costmap);
   }
-  result.object("last_diagnostics", toJson(received.values));
+  result["last_diagnostics"] = toJson(received.values);
 }
 
 }  // namespace
 
-bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options,
-                  JsonObject& result) {
+bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options, Json& result) {
   const std::int64_t start_ns = steadyNs();
   Received received;
   auto maps = takingListener<grid_map_msgs::msg::dds_::GridMap_>(
@@ -203,7 +202,7 @@ bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options,
   };
   if (map_reader == nullptr || costmap_reader == nullptr || diagnostics_reader == nullptr) {
     delete_readers();
-    result.text("error", "Fast DDS refused a reader");
+    result["error"] = "Fast DDS refused a reader";
     return false;
   }
   // Every socket exists once the participant does: count what the kernel drops from here on.
@@ -224,18 +223,19 @@ bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options,
   const std::uint64_t drops_after = socket_drops.total();
   delete_readers();
   const std::int64_t end_ns = steadyNs();
-  result.number("seconds", static_cast<double>(end_ns - start_ns) * 1e-9);
+  result["seconds"] = static_cast<double>(end_ns - start_ns) * 1e-9;
   const std::int64_t window_start_ns =
       options.from_match && maps->matchedNs() != 0 ? maps->matchedNs() : start_ns;
   report(received, start_ns, maps->matchedNs(), window_start_ns, end_ns, result);
-  result.object("writers", JsonObject()
-                               .integer("grid_map", writers[0])
-                               .integer("costmap", writers[1])
-                               .integer("diagnostics", writers[2]));
+  result["writers"] = {
+      {"grid_map", writers[0]},
+      {"costmap", writers[1]},
+      {"diagnostics", writers[2]},
+  };
   // Datagrams the kernel dropped because a socket's buffer was full: fragments of maps that
   // had to be sent again (or were never completed).
-  result.integer("socket_sockets", static_cast<std::int64_t>(socket_drops.sockets()))
-      .integer("socket_datagrams_dropped", static_cast<std::int64_t>(drops_after - drops_before));
+  result["socket_sockets"] = socket_drops.sockets();
+  result["socket_datagrams_dropped"] = static_cast<std::int64_t>(drops_after - drops_before);
   return true;
 }
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "tests/fastdds/peer/json_writer.hpp"
+#include "tests/fastdds/peer/json_result.hpp"
 #include "tests/fastdds/peer/peer_participant.hpp"
 
 namespace raymap::fastdds_peer {
@@ -37,7 +37,6 @@ struct SubscribeOptions {
 /// pipeline level, summaries of the last GridMap, costmap and diagnostic values, and the
 /// datagrams the kernel dropped on the participant's sockets meanwhile (buffer full)
 /// @return false when an endpoint could not be created (result says why)
-bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options,
-                  JsonObject& result);
+bool runSubscribe(PeerParticipant& participant, const SubscribeOptions& options, Json& result);
 
 }  // namespace raymap::fastdds_peer
