@@ -34,9 +34,10 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")
-# Building against the installed library needs Eigen and zlib headers (and OpenCL's, where the
-# package was built with OpenCL).
-set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, zlib1g-dev, libzstd-dev, ocl-icd-opencl-dev, pocl-opencl-icd")
+# Building against the installed library needs Eigen, zlib, zstd and libpng (its static libraries
+# link them) and OpenCL's headers, where the package was built with OpenCL.
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS
+  "libeigen3-dev, zlib1g-dev, libzstd-dev, libpng-dev, ocl-icd-opencl-dev, pocl-opencl-icd")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
   ${PROJECT_SOURCE_DIR}/cmake/debian/postinst
   ${PROJECT_SOURCE_DIR}/cmake/debian/prerm

@@ -39,10 +39,11 @@ check src/device/staging 'src/io|src/sim|src/device/opencl|src/device/cuda|src/d
 check src/device/opencl 'src/sim|src/device/cuda|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
 check src/device/cuda 'src/sim|src/device/opencl|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
 check kernels/cuda 'src/|platform/|tools/|tests/' 'CUDA entry points depend only on kernels/'
-# The map library (raymap::raymap) builds with a compiler, zlib, zstd and Eigen alone: none of its
-# code includes the service's or the tools' dependencies (DDS, YAML, CLI11, systemd, Boost, bags'
-# compression and SQLite), nor the folders built only with them. src/sim/scene_file.* is the
-# tools' (YAML scene files). zstd is the map's own in one file: the cold tiers' compressor.
+# The map library (raymap::raymap) builds with a compiler, zlib, zstd, libpng and Eigen alone: none
+# of its code includes the service's or the tools' dependencies (DDS, YAML, CLI11, systemd, Boost,
+# bags' compression and SQLite), nor the folders built only with them. src/sim/scene_file.* is the
+# tools' (YAML scene files). zstd is the map's own in one file: the cold tiers' compressor. libpng
+# writes height maps as PNG (src/io/png_writer.cpp).
 library_folders="include src/core src/map src/io src/heightmap src/device src/mapper src/record platform"
 for folder in $library_folders; do
   hits=$(grep -rnE '#include [<"](yaml-cpp/|CLI/|dds/|systemd/|boost/|zstd|lz4|sqlite3|src/config/|src/dds/|src/pipeline/|src/service/|src/bag/|src/sim/scene_file|tools/)' \
