@@ -34,9 +34,10 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")
-# Building against the installed library needs Eigen, zlib and zstd headers, for bags yaml-cpp's,
-# lz4's, SQLite's and Boost's (and OpenCL's, where the package was built with OpenCL).
-set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, zlib1g-dev, libzstd-dev, libyaml-cpp-dev, liblz4-dev, libsqlite3-dev, libboost-dev, ocl-icd-opencl-dev, pocl-opencl-icd")
+# Building against the installed library needs Eigen, zlib, zstd and libpng headers (its static
+# libraries link them), for bags yaml-cpp's, lz4's, SQLite's and Boost's, and OpenCL's where the
+# package was built with OpenCL.
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, zlib1g-dev, libzstd-dev, libpng-dev, libyaml-cpp-dev, liblz4-dev, libsqlite3-dev, libboost-dev, ocl-icd-opencl-dev, pocl-opencl-icd")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
   ${PROJECT_SOURCE_DIR}/cmake/debian/postinst
   ${PROJECT_SOURCE_DIR}/cmake/debian/prerm

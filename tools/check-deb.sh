@@ -25,7 +25,7 @@ deb=$(ls "$build"/raymap_*.deb)
 echo "package: $deb ($(du -h "$deb" | cut -f1))"
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
-for needed in adduser libddsc libyaml-cpp libzstd1 libsqlite3 libstdc++6 libc6; do
+for needed in adduser libddsc libyaml-cpp libzstd1 libpng16-16 libsqlite3 libstdc++6 libc6; do
   if [[ $depends != *"$needed"* ]]; then
     echo "check-deb: Depends lacks $needed (dpkg-shlibdeps did not run?)" >&2
     exit 1

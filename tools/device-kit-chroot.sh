@@ -29,7 +29,7 @@ fi
 debian_chroot_create
 root=$chroot_root
 # What makes the machine bare: none of the libraries the kit carries is installed.
-for lib in libyaml-cpp.so.0.7 libddsc.so.0debian libOpenCL.so.1 libbenchmark.so.1debian; do
+for lib in libyaml-cpp.so.0.7 libddsc.so.0debian libOpenCL.so.1 libbenchmark.so.1debian libpng16.so.16; do
   if [ -n "$(find "$root/usr/lib" "$root/lib" -name "$lib" 2>/dev/null | head -1)" ]; then
     echo "device-kit-chroot: the root file system has $lib: not a bare machine" >&2
     exit 1

@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
-  zlib1g-dev libzstd-dev libeigen3-dev  # the map library: gzip, map files, cold tiers; host geometry and the public API
+  zlib1g-dev libzstd-dev libpng-dev libeigen3-dev  # the map library: gzip, map files, cold tiers, PNG height maps; host geometry and the public API
   libcli11-dev libyaml-cpp-dev
   nlohmann-json3-dev      # the JSON the command line and benchmarks print and the tests read (header-only)
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -19,6 +19,7 @@
 #include "src/bag/bag_reader.hpp"
 #include "src/bag/mcap_records.hpp"
 #include "src/bag/mcap_summary.hpp"
+#include "src/core/crc32.hpp"
 #include "src/io/byte_reader.hpp"
 
 namespace raymap::bag {
@@ -355,7 +356,7 @@ class McapBagReader final : public BagReader {
         static_cast<Op>(start[mcap::kMagic.size()]) != Op::kHeader) {
       return fail(ErrorCode::kFormat, path_ + ": the MCAP magic is not followed by a header");
     }
-    data_crc_ = mcap::crc32(0, start.first(mcap::kMagic.size()));
+    data_crc_ = crc32(0, start.first(mcap::kMagic.size()));
     reader_->consume(mcap::kMagic.size());
     return {};
   }
@@ -363,7 +364,7 @@ class McapBagReader final : public BagReader {
   /// Marks the record last read as used (its bytes go into the data section's CRC).
   void finishRecord() noexcept {
     if (!pending_.empty()) {
-      data_crc_ = mcap::crc32(data_crc_, pending_);
+      data_crc_ = crc32(data_crc_, pending_);
       reader_->consume(pending_.size());
       pending_ = {};
     }
@@ -513,7 +514,7 @@ class McapBagReader final : public BagReader {
       }
       records = chunk_bytes_;
     }
-    if (uncompressed_crc != 0 && mcap::crc32(0, records) != uncompressed_crc) {
+    if (uncompressed_crc != 0 && crc32(0, records) != uncompressed_crc) {
       return fail(ErrorCode::kCorrupt,
                   path_ + ": " + where + " fails its CRC check: the file is corrupt");
     }

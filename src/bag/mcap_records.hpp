@@ -1,18 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The MCAP container's record layout (https://mcap.dev/spec, major version 0), shared by the
 // reader and the writer: the magic, the opcodes, and a bounds-checked little-endian cursor over
-// one record's content.
+// one record's content and its writing counterpart. MCAP's CRC-32 is zlib's: src/core/crc32.hpp.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <span>
 #include <string_view>
-#include <vector>
 
-#include <zlib.h>
+#include "src/core/byte_order.hpp"
 
 namespace raymap::bag::mcap {
 
@@ -20,12 +18,6 @@ namespace raymap::bag::mcap {
 inline constexpr std::array<std::byte, 8> kMagic{std::byte{0x89}, std::byte{'M'}, std::byte{'C'},
                                                  std::byte{'A'},  std::byte{'P'}, std::byte{'0'},
                                                  std::byte{'\r'}, std::byte{'\n'}};
-
-/// @brief The CRC-32 MCAP uses (zlib's), continued from `crc` over `bytes`.
-inline std::uint32_t crc32(std::uint32_t crc, std::span<const std::byte> bytes) noexcept {
-  return static_cast<std::uint32_t>(
-      ::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size()));
-}
 
 /// Every record: opcode (uint8) and content length (uint64), then the content.
 inline constexpr std::size_t kRecordPrefixBytes = 9;
@@ -63,10 +55,10 @@ class Cursor {
   bool ok() const noexcept { return ok_; }
   std::size_t left() const noexcept { return bytes_.size() - at_; }
 
-  std::uint8_t u8() noexcept { return static_cast<std::uint8_t>(little(1)); }
-  std::uint16_t u16() noexcept { return static_cast<std::uint16_t>(little(2)); }
-  std::uint32_t u32() noexcept { return static_cast<std::uint32_t>(little(4)); }
-  std::uint64_t u64() noexcept { return little(8); }
+  std::uint8_t u8() noexcept { return little<std::uint8_t>(); }
+  std::uint16_t u16() noexcept { return little<std::uint16_t>(); }
+  std::uint32_t u32() noexcept { return little<std::uint32_t>(); }
+  std::uint64_t u64() noexcept { return little<std::uint64_t>(); }
   /// A uint32 length prefix and that many bytes of UTF-8.
   std::string_view string() noexcept {
     const std::span<const std::byte> b = take(u32());
@@ -90,13 +82,11 @@ class Cursor {
   }
 
  private:
-  std::uint64_t little(std::size_t n) noexcept {
-    const std::span<const std::byte> b = take(n);
-    std::uint64_t v = 0;
-    for (std::size_t i = b.size(); i-- > 0;) {
-      v = (v << 8) | static_cast<std::uint64_t>(b[i]);
-    }
-    return v;
+  /// The next T, or 0 (and the failure flag) when fewer than sizeof(T) bytes are left.
+  template <ByteValue T>
+  T little() noexcept {
+    const std::span<const std::byte> b = take(sizeof(T));
+    return b.empty() ? T{0} : loadLe<T>(b.data());
   }
 
   std::span<const std::byte> bytes_;
@@ -104,51 +94,27 @@ class Cursor {
   bool ok_ = true;
 };
 
-/// @brief Appends record fields in little-endian order (the writer's counterpart of Cursor).
-/// Not thread-safe; allocates (offline and recording paths only).
-class Builder {
+/// @brief Appends record fields in little-endian order (the writer's counterpart of Cursor):
+/// LeWriter's fields, plus MCAP's strings and records. Not thread-safe; allocates (offline and
+/// recording paths only).
+class Builder : public LeWriter {
  public:
-  std::vector<std::byte>& bytes() noexcept { return bytes_; }
-  std::size_t size() const noexcept { return bytes_.size(); }
-  void clear() noexcept { bytes_.clear(); }
-
-  void u8(std::uint8_t v) { bytes_.push_back(static_cast<std::byte>(v)); }
-  void u16(std::uint16_t v) { little(v, 2); }
-  void u32(std::uint32_t v) { little(v, 4); }
-  void u64(std::uint64_t v) { little(v, 8); }
+  /// A uint32 length prefix and the bytes of `s`.
   void string(std::string_view s) {
     u32(static_cast<std::uint32_t>(s.size()));
-    raw({reinterpret_cast<const std::byte*>(s.data()), s.size()});
+    text(s);
   }
-  void raw(std::span<const std::byte> b) { bytes_.insert(bytes_.end(), b.begin(), b.end()); }
   /// Starts a record: opcode and a length to be filled in by endRecord(). @return its start.
   std::size_t beginRecord(Op op) {
-    const std::size_t at = bytes_.size();
+    const std::size_t at = size();
     u8(static_cast<std::uint8_t>(op));
     u64(0);
     return at;
   }
-  void endRecord(std::size_t at) { patch64(at + 1, bytes_.size() - at - kRecordPrefixBytes); }
+  void endRecord(std::size_t at) { patch64(at + 1, size() - at - kRecordPrefixBytes); }
   /// Overwrites the uint64 at `at` (a length prefix written before its content).
-  void patch64(std::size_t at, std::uint64_t v) {
-    for (std::size_t i = 0; i < 8; ++i) {
-      bytes_[at + i] = static_cast<std::byte>((v >> (8 * i)) & 0xFFu);
-    }
-  }
-  void patch32(std::size_t at, std::uint32_t v) {
-    for (std::size_t i = 0; i < 4; ++i) {
-      bytes_[at + i] = static_cast<std::byte>((v >> (8 * i)) & 0xFFu);
-    }
-  }
-
- private:
-  void little(std::uint64_t v, std::size_t n) {
-    for (std::size_t i = 0; i < n; ++i) {
-      bytes_.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFFu));
-    }
-  }
-
-  std::vector<std::byte> bytes_;
+  void patch64(std::size_t at, std::uint64_t v) { storeLe(bytes().data() + at, v); }
+  void patch32(std::size_t at, std::uint32_t v) { storeLe(bytes().data() + at, v); }
 };
 
 }  // namespace raymap::bag::mcap

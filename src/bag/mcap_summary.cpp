@@ -8,6 +8,7 @@
 #include <span>
 
 #include "src/bag/mcap_records.hpp"
+#include "src/core/crc32.hpp"
 
 namespace raymap::bag::mcap {
 namespace {

@@ -18,6 +18,7 @@
 #include "platform/errno_text.hpp"
 #include "src/bag/mcap_records.hpp"
 #include "src/bag/ros2_definitions.hpp"
+#include "src/core/crc32.hpp"
 
 namespace raymap::bag {
 namespace {
@@ -161,7 +162,7 @@ class McapRosbagWriter final : public RosbagWriter {
     s.u64(mcap::kFooterContentBytes);
     s.u64(summary_start);
     s.u64(0);  // no summary offset section
-    s.u32(mcap::crc32(0, s.bytes()));
+    s.u32(crc32(0, s.bytes()));
     s.raw(mcap::kMagic);
     if (auto ok = append(s.bytes(), false); !ok) {
       return ok;
@@ -198,7 +199,7 @@ class McapRosbagWriter final : public RosbagWriter {
       return fail(ErrorCode::kIo, file_path_ + ": cannot write: " + platform::errnoText(errno));
     }
     if (data) {
-      data_crc_ = mcap::crc32(data_crc_, bytes);
+      data_crc_ = crc32(data_crc_, bytes);
     }
     offset_ += bytes.size();
     return {};
@@ -304,7 +305,7 @@ class McapRosbagWriter final : public RosbagWriter {
     b.u64(chunk_start_);
     b.u64(chunk_end_);
     b.u64(records.size());
-    b.u32(mcap::crc32(0, records));
+    b.u32(crc32(0, records));
     b.string(compressionName());
     b.u64(stored.size());
     b.raw(stored);

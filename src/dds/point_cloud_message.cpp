@@ -3,7 +3,6 @@
 // buffer for `capacity` points, sequences with _release false.
 #include "src/dds/point_cloud_message.hpp"
 
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -12,6 +11,7 @@
 #include "raymap/assert.hpp"
 #include "sensor_msgs.h"
 
+#include "src/core/byte_order.hpp"
 #include "src/dds/frame_id.hpp"
 #include "src/dds/ros_time.hpp"
 #include "src/dds/topic_types.hpp"
@@ -21,18 +21,16 @@ namespace {
 
 constexpr std::size_t kMaxFields = 6;
 
-// The data is written in host order and published with is_bigendian = false.
-static_assert(std::endian::native == std::endian::little,
-              "PointCloudMessage writes little-endian point data");
-
 char* mutableText(const char* text) noexcept {
   // NOLINTNEXTLINE(cppcoreguidelines-pro-type-const-cast): C API
   return const_cast<char*>(text);
 }
 
-template <class T>
+/// Stores a field of a point: little-endian on any host, as the message says (is_bigendian is
+/// false).
+template <ByteValue T>
 void store(std::uint8_t* p, T value) noexcept {
-  std::memcpy(p, &value, sizeof(T));
+  storeLe(reinterpret_cast<std::byte*>(p), value);
 }
 
 }  // namespace

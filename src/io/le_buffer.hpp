@@ -2,31 +2,28 @@
 // Little-endian binary records (PLY bodies) buffered on their way into an AtomicFileWriter.
 #pragma once
 
-#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "raymap/error.hpp"
 
+#include "src/core/byte_order.hpp"
 #include "src/io/atomic_file.hpp"
 
 namespace raymap::io {
 
-/// @brief Appends values in little-endian order, byte by byte (correct on any host), and writes
-/// them out once a megabyte has built up. Not thread-safe; offline tools only (allocates).
+/// @brief Appends values in little-endian order (src/core/byte_order.hpp: correct on any host),
+/// and writes them out once a megabyte has built up. Not thread-safe; offline tools only
+/// (allocates).
 class LeBuffer {
  public:
   static constexpr std::size_t kFlushBytes = std::size_t{1} << 20;
 
-  void u8(std::uint8_t v) { bytes_.push_back(static_cast<std::byte>(v)); }
-  void u32(std::uint32_t v) {
-    for (int i = 0; i < 4; ++i) {
-      bytes_.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFFu));
-    }
-  }
+  void u8(std::uint8_t v) { appendLe(bytes_, v); }
+  void u32(std::uint32_t v) { appendLe(bytes_, v); }
   /// A float32 (the value is rounded from double).
-  void f32(double v) { u32(std::bit_cast<std::uint32_t>(static_cast<float>(v))); }
+  void f32(double v) { appendLe(bytes_, static_cast<float>(v)); }
   /// @brief Writes what is still buffered and commits the file (renames it into place).
   Expected<void, Error> finish(AtomicFileWriter& writer) {
     if (auto ok = flush(writer, true); !ok) {

@@ -3,7 +3,6 @@
 #include "src/io/map_export.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -13,6 +12,7 @@
 #include "kernels/common/decay.h"
 #include "kernels/common/occupancy.h"
 #include "kernels/common/voxel_mean.h"
+#include "src/core/byte_order.hpp"
 #include "src/io/atomic_file.hpp"
 
 namespace raymap::io {
@@ -132,13 +132,6 @@ std::string headerText(const VoxelMap& map, ExportMode mode, std::uint64_t count
          "end_header\n";
 }
 
-void putU32(std::byte*& out, std::uint32_t v) noexcept {
-  for (int i = 0; i < 4; ++i) {
-    *out++ = static_cast<std::byte>((v >> (8 * i)) & 0xFFu);
-  }
-}
-void putF32(std::byte*& out, float v) noexcept { putU32(out, std::bit_cast<std::uint32_t>(v)); }
-
 }  // namespace
 
 Result<ExportMode> exportModeFromString(const std::string& text) {
@@ -212,14 +205,14 @@ Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std:
   auto walked = forEachPoint(map, mode, options, [&](const Point& point) {
     std::byte record[kDecayRecordBytes];
     std::byte* out = record;
-    putF32(out, static_cast<float>(point.p_world.x));
-    putF32(out, static_cast<float>(point.p_world.y));
-    putF32(out, static_cast<float>(point.p_world.z));
-    putF32(out, point.probability);
-    putU32(out, point.count);
+    out = storeLe(out, static_cast<float>(point.p_world.x));
+    out = storeLe(out, static_cast<float>(point.p_world.y));
+    out = storeLe(out, static_cast<float>(point.p_world.z));
+    out = storeLe(out, point.probability);
+    out = storeLe(out, point.count);
     if (mode == ExportMode::kDecay) {
-      putF32(out, point.decay_rate);
-      putF32(out, point.traversal);
+      out = storeLe(out, point.decay_rate);
+      storeLe(out, point.traversal);
     }
     buffer.insert(buffer.end(), record, record + record_bytes);
     if (buffer.size() >= kPointsPerChunk * record_bytes) {

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstddef>
@@ -22,6 +21,8 @@
 #include <zlib.h>
 
 #include "platform/errno_text.hpp"
+#include "src/core/byte_order.hpp"
+#include "src/core/crc32.hpp"
 #include "src/io/atomic_file.hpp"
 #include "src/io/layer_values.hpp"
 #include "src/map/region_planes.hpp"
@@ -37,10 +38,10 @@ constexpr std::array<std::uint8_t, 8> kMagic = {'R', 'M', 'A', 'P', '\r', '\n', 
 
 /// Four ASCII characters as the little-endian u32 that spells them in the file.
 constexpr std::uint32_t fourCc(const char (&text)[5]) noexcept {
-  return static_cast<std::uint32_t>(static_cast<unsigned char>(text[0])) |
-         static_cast<std::uint32_t>(static_cast<unsigned char>(text[1])) << 8 |
-         static_cast<std::uint32_t>(static_cast<unsigned char>(text[2])) << 16 |
-         static_cast<std::uint32_t>(static_cast<unsigned char>(text[3])) << 24;
+  const std::array<std::byte, 4> bytes{
+      static_cast<std::byte>(text[0]), static_cast<std::byte>(text[1]),
+      static_cast<std::byte>(text[2]), static_cast<std::byte>(text[3])};
+  return loadLe<std::uint32_t>(bytes.data());
 }
 constexpr std::uint32_t kRegionTag = fourCc("RREG");
 constexpr std::uint32_t kIndexTag = fourCc("RIDX");
@@ -80,32 +81,8 @@ constexpr std::uint64_t kMaxRegions = std::numeric_limits<std::uint32_t>::max() 
 // damaged or foreign file (whose checksum happens to match), not a future raymap's map.
 constexpr std::uint32_t kPlausibleVersionsAhead = 16;
 
-// ---- little-endian encoding, byte by byte (correct whatever the host's byte order) ----
-
-class ByteWriter {
- public:
-  void u8(std::uint8_t v) { bytes_.push_back(static_cast<std::byte>(v)); }
-  void u16(std::uint16_t v) { put(v, 2); }
-  void u32(std::uint32_t v) { put(v, 4); }
-  void u64(std::uint64_t v) { put(v, 8); }
-  void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
-  void f32(float v) { u32(std::bit_cast<std::uint32_t>(v)); }
-  void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
-  void raw(std::string_view text) {
-    for (const char c : text) {
-      bytes_.push_back(static_cast<std::byte>(c));
-    }
-  }
-  std::vector<std::byte>& bytes() noexcept { return bytes_; }
-
- private:
-  void put(std::uint64_t v, int count) {
-    for (int i = 0; i < count; ++i) {
-      bytes_.push_back(static_cast<std::byte>((v >> (8 * i)) & 0xFFu));
-    }
-  }
-  std::vector<std::byte> bytes_;
-};
+// ---- little-endian fields (src/core/byte_order.hpp: right whatever the host's byte order) ----
+// Written with LeWriter; read with ByteReader.
 
 /// Bounds-checked little-endian reads over a byte span; every getter fails instead of overrunning.
 class ByteReader {
@@ -115,43 +92,13 @@ class ByteReader {
   std::size_t remaining() const noexcept { return bytes_.size() - pos_; }
   std::size_t position() const noexcept { return pos_; }
 
-  bool u8(std::uint8_t& v) noexcept {
-    std::uint64_t w = 0;
-    const bool ok = get(w, 1);
-    v = static_cast<std::uint8_t>(w);
-    return ok;
-  }
-  bool u16(std::uint16_t& v) noexcept {
-    std::uint64_t w = 0;
-    const bool ok = get(w, 2);
-    v = static_cast<std::uint16_t>(w);
-    return ok;
-  }
-  bool u32(std::uint32_t& v) noexcept {
-    std::uint64_t w = 0;
-    const bool ok = get(w, 4);
-    v = static_cast<std::uint32_t>(w);
-    return ok;
-  }
-  bool u64(std::uint64_t& v) noexcept { return get(v, 8); }
-  bool i32(std::int32_t& v) noexcept {
-    std::uint32_t w = 0;
-    const bool ok = u32(w);
-    v = static_cast<std::int32_t>(w);
-    return ok;
-  }
-  bool f32(float& v) noexcept {
-    std::uint32_t w = 0;
-    const bool ok = u32(w);
-    v = std::bit_cast<float>(w);
-    return ok;
-  }
-  bool f64(double& v) noexcept {
-    std::uint64_t w = 0;
-    const bool ok = u64(w);
-    v = std::bit_cast<double>(w);
-    return ok;
-  }
+  bool u8(std::uint8_t& v) noexcept { return get(v); }
+  bool u16(std::uint16_t& v) noexcept { return get(v); }
+  bool u32(std::uint32_t& v) noexcept { return get(v); }
+  bool u64(std::uint64_t& v) noexcept { return get(v); }
+  bool i32(std::int32_t& v) noexcept { return get(v); }
+  bool f32(float& v) noexcept { return get(v); }
+  bool f64(double& v) noexcept { return get(v); }
   bool text(std::size_t length, std::string& out) {
     if (length > remaining()) {
       return false;
@@ -162,26 +109,21 @@ class ByteReader {
   }
 
  private:
-  bool get(std::uint64_t& v, std::size_t count) noexcept {
-    if (count > remaining()) {
+  /// Reads the next T into `v`; false (and `v` zero) when fewer than sizeof(T) bytes are left.
+  template <ByteValue T>
+  bool get(T& v) noexcept {
+    if (sizeof(T) > remaining()) {
+      v = T{};
       return false;
     }
-    v = 0;
-    for (std::size_t i = 0; i < count; ++i) {
-      v |= static_cast<std::uint64_t>(std::to_integer<std::uint8_t>(bytes_[pos_ + i])) << (8 * i);
-    }
-    pos_ += count;
+    v = loadLe<T>(bytes_.data() + pos_);
+    pos_ += sizeof(T);
     return true;
   }
 
   std::span<const std::byte> bytes_;
   std::size_t pos_ = 0;
 };
-
-std::uint32_t crc32Of(std::span<const std::byte> bytes) noexcept {
-  const auto crc = ::crc32_z(0L, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size());
-  return static_cast<std::uint32_t>(crc);
-}
 
 // ---- the layers of a file ----
 
@@ -415,7 +357,7 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   }
   std::uint32_t stored_crc = 0;
   (void)ByteReader(std::span(header).last(4)).u32(stored_crc);
-  if (crc32Of(std::span(header).first(kPrefixBytes + body_bytes)) != stored_crc) {
+  if (crc32(0, std::span(header).first(kPrefixBytes + body_bytes)) != stored_crc) {
     if (newer || version == 0) {
       return fail(ErrorCode::kCorrupt, path +
                                            ": damaged header: its checksum does not match, and "
@@ -652,7 +594,7 @@ Expected<void, Error> readTrailer(FileReader& file, const std::string& path,
   }
   std::uint32_t index_crc = 0;
   (void)ByteReader(std::span(index).last(4)).u32(index_crc);
-  if (crc32Of(std::span(index).first(index.size() - 4)) != index_crc) {
+  if (crc32(0, std::span(index).first(index.size() - 4)) != index_crc) {
     return fail(ErrorCode::kCorrupt, path + ": region index checksum mismatch (offset " +
                                          std::to_string(index_offset) + ")");
   }
@@ -686,7 +628,7 @@ Expected<void, Error> readTrailer(FileReader& file, const std::string& path,
     return fail(ErrorCode::kCorrupt,
                 path + ": no end marker at offset " + std::to_string(footer_offset));
   }
-  if (crc32Of(std::span(footer).first(kFooterBytes - 4)) != footer_crc) {
+  if (crc32(0, std::span(footer).first(kFooterBytes - 4)) != footer_crc) {
     return fail(ErrorCode::kCorrupt, path + ": end marker checksum mismatch (offset " +
                                          std::to_string(footer_offset) + ")");
   }
@@ -751,7 +693,7 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
     if (tag != kRegionTag) {
       return fail(ErrorCode::kCorrupt, where + ": bad block marker");
     }
-    if (crc32Of(std::span(head).first(kBlockHeaderBytes - 4)) != head_crc) {
+    if (crc32(0, std::span(head).first(kBlockHeaderBytes - 4)) != head_crc) {
       return fail(ErrorCode::kCorrupt, where + ": block header checksum mismatch");
     }
     if (stored_raw != raw_bytes) {
@@ -781,7 +723,7 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
     if (auto ok = file.read(packed); !ok) {
       return ok;
     }
-    if (crc32Of(packed) != payload_crc) {
+    if (crc32(0, packed) != payload_crc) {
       return fail(ErrorCode::kCorrupt, where + ": checksum mismatch");
     }
     uLongf out_bytes = static_cast<uLongf>(raw.size());
@@ -843,7 +785,7 @@ Expected<void, Error> checkInfoFits(const VoxelMap& map, const std::string& path
 }
 
 std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSpec> layers) {
-  ByteWriter body;
+  LeWriter body;
   const MapConfig& config = map.config();
   body.f64(config.geometry.resolution);
   body.i32(config.geometry.region_voxels);
@@ -861,14 +803,14 @@ std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSp
     body.u16(spec.version);
     body.u32(spec.bytes_per_voxel);
     body.u16(static_cast<std::uint16_t>(spec.name.size()));
-    body.raw(spec.name);
+    body.text(spec.name);
   }
   body.u32(static_cast<std::uint32_t>(map.info().size()));
   for (const auto& [key, value] : map.info()) {
     body.u32(static_cast<std::uint32_t>(key.size()));
-    body.raw(key);
+    body.text(key);
     body.u32(static_cast<std::uint32_t>(value.size()));
-    body.raw(value);
+    body.text(value);
   }
   body.u64(map.regionCount());  // every tier of a tiered map
   // Version 2: mode and NDT parameters (written for every mode, so a config round-trips whole).
@@ -892,14 +834,14 @@ std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSp
   body.f64(config.tsdf.max_weight);
   body.f64(config.tsdf.dropoffMetres(resolution));
 
-  ByteWriter header;
+  LeWriter header;
   for (const std::uint8_t b : kMagic) {
     header.u8(b);
   }
   header.u32(kMapFormatVersion);
   header.u32(static_cast<std::uint32_t>(body.bytes().size()));
-  header.bytes().insert(header.bytes().end(), body.bytes().begin(), body.bytes().end());
-  header.u32(crc32Of(header.bytes()));
+  header.raw(body.bytes());
+  header.u32(crc32(0, header.bytes()));
   return std::move(header.bytes());
 }
 
@@ -933,7 +875,7 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
 
   std::vector<std::byte> raw(raw_bytes);
   std::vector<std::byte> packed(::compressBound(static_cast<uLong>(raw_bytes)));
-  ByteWriter index;
+  LeWriter index;
   index.u32(kIndexTag);
   std::uint64_t written = 0;
   while (cursor.next()) {
@@ -955,15 +897,15 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
                                       " failed (zlib " + std::to_string(z) + ")");
     }
     const auto payload = std::span<const std::byte>(packed).first(packed_bytes);
-    ByteWriter head;
+    LeWriter head;
     head.u32(kRegionTag);
     head.i32(coord.x);
     head.i32(coord.y);
     head.i32(coord.z);
     head.u32(static_cast<std::uint32_t>(raw.size()));
     head.u32(static_cast<std::uint32_t>(payload.size()));
-    head.u32(crc32Of(payload));
-    head.u32(crc32Of(head.bytes()));
+    head.u32(crc32(0, payload));
+    head.u32(crc32(0, head.bytes()));
 
     index.i32(coord.x);
     index.i32(coord.y);
@@ -984,15 +926,15 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
     return fail(ErrorCode::kCorrupt, path + ": the map's regions changed while it was saved");
   }
   const std::uint64_t index_offset = writer->size();
-  index.u32(crc32Of(index.bytes()));
+  index.u32(crc32(0, index.bytes()));
   if (auto ok = writer->write(index.bytes()); !ok) {
     return ok;
   }
-  ByteWriter footer;
+  LeWriter footer;
   footer.u32(kEndTag);
   footer.u64(written);
   footer.u64(index_offset);
-  footer.u32(crc32Of(footer.bytes()));
+  footer.u32(crc32(0, footer.bytes()));
   if (auto ok = writer->write(footer.bytes()); !ok) {
     return ok;
   }

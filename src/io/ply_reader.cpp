@@ -6,95 +6,52 @@
 #include <bit>
 #include <charconv>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <string_view>
 #include <utility>
+
+#include "src/core/byte_order.hpp"
 
 namespace raymap::io {
 namespace {
 
 constexpr double kMaxExactCount = 9007199254740992.0;  // 2^53: larger doubles skip integers
 
-template <std::size_t kBytes>
-struct UnsignedOfSize;
-template <>
-struct UnsignedOfSize<1> {
-  using Type = std::uint8_t;
-};
-template <>
-struct UnsignedOfSize<2> {
-  using Type = std::uint16_t;
-};
-template <>
-struct UnsignedOfSize<4> {
-  using Type = std::uint32_t;
-};
-template <>
-struct UnsignedOfSize<8> {
-  using Type = std::uint64_t;
-};
-
-template <class U>
-constexpr U byteSwap(U value) noexcept {
-  if constexpr (sizeof(U) == 1) {
-    return value;
-  } else if constexpr (sizeof(U) == 2) {
-    return __builtin_bswap16(value);
-  } else if constexpr (sizeof(U) == 4) {
-    return __builtin_bswap32(value);
-  } else {
-    return __builtin_bswap64(value);
-  }
-}
-
-/// Loads one T from unaligned bytes in the file's byte order.
-template <class T, bool kSwap>
-T load(const std::byte* bytes) noexcept {
-  using U = typename UnsignedOfSize<sizeof(T)>::Type;
-  U raw;
-  std::memcpy(&raw, bytes, sizeof(U));
-  if constexpr (kSwap) {
-    raw = byteSwap(raw);
-  }
-  return std::bit_cast<T>(raw);
-}
-
-template <class T, bool kSwap>
+/// Decodes `count` values of type T in the file's byte order `kOrder`, `stride` bytes apart.
+template <class T, std::endian kOrder>
 void decodeColumn(const std::byte* first, std::size_t stride, std::size_t count, double* out,
                   std::size_t out_stride) noexcept {
   for (std::size_t i = 0; i < count; ++i) {
-    out[i * out_stride] = static_cast<double>(load<T, kSwap>(first + i * stride));
+    out[i * out_stride] = static_cast<double>(loadEndian<T>(first + i * stride, kOrder));
   }
 }
 
-template <bool kSwap>
+template <std::endian kOrder>
 detail::PlyColumnDecoder decoderFor(PlyType type) noexcept {
   switch (type) {
     case PlyType::kInt8:
-      return &decodeColumn<std::int8_t, kSwap>;
+      return &decodeColumn<std::int8_t, kOrder>;
     case PlyType::kUint8:
-      return &decodeColumn<std::uint8_t, kSwap>;
+      return &decodeColumn<std::uint8_t, kOrder>;
     case PlyType::kInt16:
-      return &decodeColumn<std::int16_t, kSwap>;
+      return &decodeColumn<std::int16_t, kOrder>;
     case PlyType::kUint16:
-      return &decodeColumn<std::uint16_t, kSwap>;
+      return &decodeColumn<std::uint16_t, kOrder>;
     case PlyType::kInt32:
-      return &decodeColumn<std::int32_t, kSwap>;
+      return &decodeColumn<std::int32_t, kOrder>;
     case PlyType::kUint32:
-      return &decodeColumn<std::uint32_t, kSwap>;
+      return &decodeColumn<std::uint32_t, kOrder>;
     case PlyType::kFloat32:
-      return &decodeColumn<float, kSwap>;
+      return &decodeColumn<float, kOrder>;
     case PlyType::kFloat64:
-      return &decodeColumn<double, kSwap>;
+      return &decodeColumn<double, kOrder>;
   }
   return nullptr;
 }
 
 detail::PlyColumnDecoder decoderFor(PlyType type, PlyFormat format) noexcept {
-  const bool file_big = format == PlyFormat::kBinaryBigEndian;
-  const bool host_big = std::endian::native == std::endian::big;
-  return file_big != host_big ? decoderFor<true>(type) : decoderFor<false>(type);
+  return format == PlyFormat::kBinaryBigEndian ? decoderFor<std::endian::big>(type)
+                                               : decoderFor<std::endian::little>(type);
 }
 
 double decodeOne(const std::byte* bytes, PlyType type, PlyFormat format) noexcept {

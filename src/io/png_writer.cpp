@@ -1,80 +1,95 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// PNG encoding: signature, IHDR, zlib-compressed IDAT chunks, IEND, each with its CRC-32.
+// PNG encoding with libpng (Debian's libpng16), into memory, then through an AtomicFileWriter.
 #include "src/io/png_writer.hpp"
 
-#include <algorithm>
-#include <array>
+#include <csetjmp>
 #include <cstddef>
-#include <cstdlib>
-#include <limits>
+#include <cstdio>
+#include <new>
+#include <string>
 #include <vector>
 
-#include <zlib.h>
+#include <png.h>
 
 #include "src/io/atomic_file.hpp"
 
 namespace raymap::io {
 namespace {
 
-constexpr std::array<std::uint8_t, 8> kSignature{0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-// IDAT data is split into chunks of at most this many bytes (any split is valid PNG; bounded
-// chunks keep every length far below the format's 2^31 - 1 and zlib's uInt).
-constexpr std::size_t kIdatChunkBytes = std::size_t{1} << 20;
-constexpr int kCompressionLevel = 6;  // zlib's default trade-off
-constexpr std::uint8_t kFilterNone = 0;
-constexpr std::uint8_t kFilterUp = 2;
+constexpr int kBitDepth = 8;              // bits per sample: R, G and B each a byte
+constexpr int kCompressionLevel = 6;      // zlib's default trade-off of size against time
+constexpr std::size_t kErrorBytes = 200;  // room for libpng's message (its own are shorter)
 
-void putU32(std::vector<std::uint8_t>& out, std::uint32_t value) {
-  out.push_back(static_cast<std::uint8_t>(value >> 24));
-  out.push_back(static_cast<std::uint8_t>(value >> 16));
-  out.push_back(static_cast<std::uint8_t>(value >> 8));
-  out.push_back(static_cast<std::uint8_t>(value));
+/// What libpng's callbacks report back: the encoded bytes, and the reason of a failure. libpng
+/// reports errors by longjmp (below), so the callbacks leave their results here.
+struct Encoding {
+  std::vector<std::byte> png;
+  char error[kErrorBytes] = "";
+};
+
+/// libpng's error callback: keeps the message and jumps back to encode()'s setjmp (it must not
+/// return).
+[[noreturn]] void onError(png_structp png, png_const_charp message) {
+  auto* encoding = static_cast<Encoding*>(png_get_error_ptr(png));
+  std::snprintf(encoding->error, sizeof(encoding->error), "%s", message);
+  png_longjmp(png, 1);
 }
 
-/// Appends one chunk: length, type, data, CRC-32 of type and data.
-void appendChunk(std::vector<std::uint8_t>& out, const char (&type)[5],
-                 std::span<const std::uint8_t> data) {
-  putU32(out, static_cast<std::uint32_t>(data.size()));
-  const std::size_t type_at = out.size();
-  out.insert(out.end(), type, type + 4);
-  out.insert(out.end(), data.begin(), data.end());
-  const uLong crc = crc32(0L, out.data() + type_at, static_cast<uInt>(4 + data.size()));
-  putU32(out, static_cast<std::uint32_t>(crc));
-}
+/// libpng's warnings concern reading (and ancillary chunks we never write): nothing to report.
+void onWarning(png_structp /*png*/, png_const_charp /*message*/) {}
 
-/// Sum of the filtered bytes read as signed values' magnitudes: the PNG specification's
-/// suggested heuristic for choosing a row filter (smaller compresses better, usually).
-std::uint64_t filteredCost(std::span<const std::uint8_t> row, std::span<const std::uint8_t> prior) {
-  std::uint64_t cost = 0;
-  for (std::size_t k = 0; k < row.size(); ++k) {
-    const std::uint8_t up = prior.empty() ? row[k] : static_cast<std::uint8_t>(row[k] - prior[k]);
-    cost += static_cast<std::uint64_t>(std::abs(static_cast<int>(static_cast<std::int8_t>(up))));
+/// libpng's output: the bytes are appended to Encoding::png. An allocation failure becomes a
+/// libpng error once the exception is over (no exception may unwind through libpng's C frames).
+void appendBytes(png_structp png, png_bytep data, std::size_t length) {
+  auto* encoding = static_cast<Encoding*>(png_get_io_ptr(png));
+  bool out_of_memory = false;
+  try {
+    const auto* bytes = reinterpret_cast<const std::byte*>(data);
+    encoding->png.insert(encoding->png.end(), bytes, bytes + length);
+  } catch (const std::bad_alloc&) {
+    out_of_memory = true;
   }
-  return cost;
+  if (out_of_memory) {
+    png_error(png, "out of memory for the encoded image");
+  }
 }
 
-/// The filtered scanlines: each row is a filter byte, then the row. Filter None or Up per row,
-/// whichever the heuristic prefers; the blocky images raymap writes favour Up (repeated rows
-/// become zeros).
-std::vector<std::uint8_t> filterRows(int width, int height, std::span<const std::uint8_t> rgb) {
+/// Nothing to flush: the image is written to the file after encoding.
+void flushNothing(png_structp /*png*/) {}
+
+/// Writes the header, the rows and the end. Called after encode()'s setjmp: any libpng error
+/// jumps from here straight back to it (this frame holds nothing that needs destroying).
+void writeImage(png_structp png, png_infop info, int width, int height, const std::uint8_t* rgb) {
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height),
+               kBitDepth, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_set_compression_level(png, kCompressionLevel);
+  png_write_info(png, info);
   const std::size_t stride = static_cast<std::size_t>(width) * 3;
-  std::vector<std::uint8_t> raw;
-  raw.reserve((stride + 1) * static_cast<std::size_t>(height));
   for (std::size_t y = 0; y < static_cast<std::size_t>(height); ++y) {
-    const std::span<const std::uint8_t> row = rgb.subspan(y * stride, stride);
-    const bool up =
-        y > 0 && filteredCost(row, rgb.subspan((y - 1) * stride, stride)) < filteredCost(row, {});
-    raw.push_back(up ? kFilterUp : kFilterNone);
-    if (up) {
-      const std::uint8_t* prior = rgb.data() + (y - 1) * stride;
-      for (std::size_t k = 0; k < stride; ++k) {
-        raw.push_back(static_cast<std::uint8_t>(row[k] - prior[k]));
-      }
-    } else {
-      raw.insert(raw.end(), row.begin(), row.end());
-    }
+    png_write_row(png, rgb + y * stride);
   }
-  return raw;
+  png_write_end(png, nullptr);
+}
+
+/// Encodes the image into `encoding.png`; false with `encoding.error` set when libpng fails.
+/// Nothing in this frame changes after setjmp, so the longjmp of an error leaves it intact.
+bool encode(int width, int height, const std::uint8_t* rgb, Encoding& encoding) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &encoding, onError, onWarning);
+  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
+  if (info == nullptr) {
+    png_destroy_write_struct(&png, nullptr);
+    std::snprintf(encoding.error, sizeof(encoding.error), "%s", "libpng is out of memory");
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png)) != 0) {
+    png_destroy_write_struct(&png, &info);
+    return false;
+  }
+  png_set_write_fn(png, &encoding, appendBytes, flushNothing);
+  writeImage(png, info, width, height, rgb);
+  png_destroy_write_struct(&png, &info);
+  return true;
 }
 
 }  // namespace
@@ -95,43 +110,16 @@ Expected<void, Error> writePng(const std::string& path, int width, int height,
                     std::to_string(expected_bytes) + ")");
   }
 
-  const std::vector<std::uint8_t> raw = filterRows(width, height, rgb);
-  if (raw.size() > std::numeric_limits<uLong>::max()) {
-    return fail(ErrorCode::kCapacity, "cannot write '" + path + "': image too large for zlib");
+  Encoding encoding;
+  if (!encode(width, height, rgb.data(), encoding)) {
+    return fail(ErrorCode::kCapacity,
+                "cannot write '" + path + "': libpng: " + std::string(encoding.error));
   }
-  uLongf compressed_size = compressBound(static_cast<uLong>(raw.size()));
-  std::vector<std::uint8_t> compressed(compressed_size);
-  const int status = compress2(compressed.data(), &compressed_size, raw.data(),
-                               static_cast<uLong>(raw.size()), kCompressionLevel);
-  if (status != Z_OK) {
-    return fail(ErrorCode::kCapacity, "cannot write '" + path + "': zlib compress2 failed (" +
-                                          std::string(zError(status)) + ")");
-  }
-  compressed.resize(compressed_size);
-
-  std::vector<std::uint8_t> png(kSignature.begin(), kSignature.end());
-  png.reserve(png.size() + compressed.size() + 64 + 12 * (compressed.size() / kIdatChunkBytes));
-  std::vector<std::uint8_t> header;
-  putU32(header, static_cast<std::uint32_t>(width));
-  putU32(header, static_cast<std::uint32_t>(height));
-  header.push_back(8);  // bit depth
-  header.push_back(2);  // colour type: truecolour (RGB)
-  header.push_back(0);  // compression: deflate
-  header.push_back(0);  // filter method: adaptive
-  header.push_back(0);  // interlace: none
-  appendChunk(png, "IHDR", header);
-  const std::span<const std::uint8_t> data(compressed);
-  for (std::size_t at = 0; at < data.size(); at += kIdatChunkBytes) {
-    appendChunk(png, "IDAT", data.subspan(at, std::min(kIdatChunkBytes, data.size() - at)));
-  }
-  appendChunk(png, "IEND", {});
-
   auto file = AtomicFileWriter::open(path);
   if (!file.has_value()) {
     return Unexpected(std::move(file).error());
   }
-  if (auto written = file->write(std::as_bytes(std::span<const std::uint8_t>(png)));
-      !written.has_value()) {
+  if (auto written = file->write(encoding.png); !written.has_value()) {
     return written;
   }
   return file->commit();

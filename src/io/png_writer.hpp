@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Writing an 8-bit RGB image as a PNG file (zlib only, no image library).
+// Writing an 8-bit RGB image as a PNG file, encoded by libpng.
 #pragma once
 
 #include <cstdint>
@@ -20,8 +20,8 @@ inline constexpr int kMaxPngSide = 32768;
 /// @param[in] width, height image size in pixels, 1 to kMaxPngSide.
 /// @param[in] rgb width * height * 3 bytes: rows top to bottom, pixels left to right, R G B.
 /// @return nothing, or an Error naming the path: kInvalidArgument for a bad size or a buffer of
-/// the wrong length, kIo when the file cannot be written, kCapacity when compression runs out of
-/// memory.
+/// the wrong length, kIo when the file cannot be written, kCapacity when encoding fails (libpng
+/// out of memory; the message gives libpng's reason).
 Expected<void, Error> writePng(const std::string& path, int width, int height,
                                std::span<const std::uint8_t> rgb);
 

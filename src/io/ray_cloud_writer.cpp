@@ -4,10 +4,10 @@
 #include "src/io/ray_cloud_writer.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <limits>
 #include <vector>
 
+#include "src/core/byte_order.hpp"
 #include "src/io/atomic_file.hpp"
 
 namespace raymap::io {
@@ -61,14 +61,6 @@ std::string headerText(PlyLayout layout, std::uint64_t count) {
   return header + "end_header\n";
 }
 
-void putLe(std::byte*& out, std::uint64_t v, int bytes) noexcept {
-  for (int i = 0; i < bytes; ++i) {
-    *out++ = static_cast<std::byte>((v >> (8 * i)) & 0xFFu);
-  }
-}
-void putF64(std::byte*& out, double v) noexcept { putLe(out, std::bit_cast<std::uint64_t>(v), 8); }
-void putF32(std::byte*& out, float v) noexcept { putLe(out, std::bit_cast<std::uint32_t>(v), 4); }
-
 class PlyRayCloudWriter final : public RayCloudWriter {
  public:
   PlyRayCloudWriter(AtomicFileWriter file, PlyLayout layout) noexcept
@@ -96,17 +88,17 @@ class PlyRayCloudWriter final : public RayCloudWriter {
                                                        "': scan index " + std::to_string(ray.scan) +
                                                        " does not fit the PLY uint scan property");
         }
-        putF64(out, ray.sample.x);
-        putF64(out, ray.sample.y);
-        putF64(out, ray.sample.z);
-        putF64(out, ray.time_s);
+        out = storeLe(out, ray.sample.x);
+        out = storeLe(out, ray.sample.y);
+        out = storeLe(out, ray.sample.z);
+        out = storeLe(out, ray.time_s);
         if (rays_out) {
-          putF32(out, static_cast<float>(ray.origin.x - ray.sample.x));
-          putF32(out, static_cast<float>(ray.origin.y - ray.sample.y));
-          putF32(out, static_cast<float>(ray.origin.z - ray.sample.z));
+          out = storeLe(out, static_cast<float>(ray.origin.x - ray.sample.x));
+          out = storeLe(out, static_cast<float>(ray.origin.y - ray.sample.y));
+          out = storeLe(out, static_cast<float>(ray.origin.z - ray.sample.z));
         }
-        putF32(out, ray.intensity);
-        putLe(out, ray.scan, 4);
+        out = storeLe(out, ray.intensity);
+        out = storeLe(out, static_cast<std::uint32_t>(ray.scan));
         if (rays_out) {
           *out++ = static_cast<std::byte>(no_return ? 0u : 255u);
         }

@@ -9,33 +9,15 @@
 
 #include <fcntl.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #include "platform/errno_text.hpp"
+#include "src/core/byte_order.hpp"
+#include "src/core/crc32.hpp"
 
 namespace raymap {
 namespace {
 
 constexpr std::uint32_t kRecordTag = 0x4C505352u;  // "RSPL" as a little-endian u32
-
-std::uint32_t crc32Of(std::span<const std::byte> bytes) noexcept {
-  return static_cast<std::uint32_t>(
-      ::crc32(0L, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(bytes.size())));
-}
-
-void putLe(std::byte* at, std::uint64_t value, int bytes) noexcept {
-  for (int i = 0; i < bytes; ++i) {
-    at[i] = static_cast<std::byte>((value >> (8 * i)) & 0xFFu);
-  }
-}
-
-std::uint64_t getLe(const std::byte* at, int bytes) noexcept {
-  std::uint64_t value = 0;
-  for (int i = 0; i < bytes; ++i) {
-    value |= std::to_integer<std::uint64_t>(at[i]) << (8 * i);
-  }
-  return value;
-}
 
 }  // namespace
 
@@ -91,13 +73,13 @@ SpillFile::~SpillFile() {
 Result<SpillRecord> SpillFile::append(std::uint64_t key, std::uint32_t raw_bytes,
                                       std::span<const std::byte> packed) {
   std::array<std::byte, kHeaderBytes> header{};
-  putLe(header.data(), kRecordTag, 4);
-  putLe(header.data() + 4, key, 8);
-  putLe(header.data() + 12, raw_bytes, 4);
-  putLe(header.data() + 16, packed.size(), 4);
-  putLe(header.data() + 20, crc32Of(packed), 4);
-  putLe(header.data() + 24, crc32Of(std::span(header).first(24)), 4);
   const SpillRecord record{end_, static_cast<std::uint32_t>(packed.size())};
+  storeLe(header.data(), kRecordTag);
+  storeLe(header.data() + 4, key);
+  storeLe(header.data() + 12, raw_bytes);
+  storeLe(header.data() + 16, record.packed_bytes);
+  storeLe(header.data() + 20, crc32(0, packed));
+  storeLe(header.data() + 24, crc32(0, std::span(header).first(24)));
   std::uint64_t at = end_;
   for (std::span<const std::byte> part : {std::span<const std::byte>(header), packed}) {
     while (!part.empty()) {
@@ -144,15 +126,16 @@ Expected<void, Error> SpillFile::read(const SpillRecord& record, std::uint64_t k
       at += static_cast<std::uint64_t>(n);
     }
   }
-  if (getLe(header.data(), 4) != kRecordTag ||
-      getLe(header.data() + 24, 4) != crc32Of(std::span(header).first(24))) {
+  if (loadLe<std::uint32_t>(header.data()) != kRecordTag ||
+      loadLe<std::uint32_t>(header.data() + 24) != crc32(0, std::span(header).first(24))) {
     return fail(ErrorCode::kCorrupt, where + ": damaged record header");
   }
-  if (getLe(header.data() + 4, 8) != key || getLe(header.data() + 12, 4) != raw_bytes ||
-      getLe(header.data() + 16, 4) != record.packed_bytes) {
+  if (loadLe<std::uint64_t>(header.data() + 4) != key ||
+      loadLe<std::uint32_t>(header.data() + 12) != raw_bytes ||
+      loadLe<std::uint32_t>(header.data() + 16) != record.packed_bytes) {
     return fail(ErrorCode::kCorrupt, where + ": holds another region than the one expected");
   }
-  if (getLe(header.data() + 20, 4) != crc32Of(packed)) {
+  if (loadLe<std::uint32_t>(header.data() + 20) != crc32(0, packed)) {
     return fail(ErrorCode::kCorrupt, where + ": payload checksum mismatch");
   }
   return {};

@@ -5,25 +5,9 @@
 #include <bit>
 #include <cstring>
 
+#include "src/core/byte_order.hpp"
+
 namespace raymap::msgs {
-namespace {
-
-template <class T>
-T byteSwap(T value) noexcept {
-  std::byte bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  for (std::size_t i = 0; i < sizeof(T) / 2; ++i) {
-    const std::byte tmp = bytes[i];
-    bytes[i] = bytes[sizeof(T) - 1 - i];
-    bytes[sizeof(T) - 1 - i] = tmp;
-  }
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
-}
-
-constexpr bool kHostLittleEndian = std::endian::native == std::endian::little;
-
-}  // namespace
 
 CdrReader::CdrReader(std::span<const std::byte> cdr) noexcept {
   if (cdr.size() < 4 || cdr[0] != std::byte{0} ||
@@ -54,13 +38,9 @@ bool CdrReader::readPrimitive(T& out) noexcept {
     ok_ = false;
     return false;
   }
-  T value;
-  std::memcpy(&value, payload_.data() + position_, sizeof(T));
+  out = loadEndian<T>(payload_.data() + position_,
+                      little_endian_ ? std::endian::little : std::endian::big);
   position_ += sizeof(T);
-  if (little_endian_ != kHostLittleEndian) {
-    value = byteSwap(value);
-  }
-  out = value;
   return true;
 }
 

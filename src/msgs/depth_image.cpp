@@ -13,6 +13,7 @@
 
 #include "raymap/assert.hpp"
 
+#include "src/core/byte_order.hpp"
 #include "src/msgs/cdr_reader.hpp"
 #include "src/msgs/ros_time.hpp"
 
@@ -29,23 +30,13 @@ constexpr float kLargestDepth = std::numeric_limits<float>::max();
 /// converts to float without rounding; 0 = no data) and metres for 32FC1 (NaN/inf/<= 0 pass
 /// through and are rejected by isValid()). Comparisons (validity, the block minimum) run in this
 /// unit; only the depths that become points are converted to metres. The bytes may be unaligned
-/// (step is any number).
-template <bool kMillimetres, bool kSwap>
+/// (step is any number); kOrder is the image's byte order.
+template <bool kMillimetres, std::endian kOrder>
 inline float loadDepth(const std::byte* p) noexcept {
   if constexpr (kMillimetres) {
-    std::uint16_t raw = 0;
-    std::memcpy(&raw, p, sizeof(raw));
-    if constexpr (kSwap) {
-      raw = __builtin_bswap16(raw);
-    }
-    return static_cast<float>(raw);
+    return static_cast<float>(loadEndian<std::uint16_t>(p, kOrder));
   } else {
-    std::uint32_t bits = 0;
-    std::memcpy(&bits, p, sizeof(bits));
-    if constexpr (kSwap) {
-      bits = __builtin_bswap32(bits);
-    }
-    return std::bit_cast<float>(bits);
+    return loadEndian<float>(p, kOrder);
   }
 }
 
@@ -107,7 +98,7 @@ struct Image {
 };
 
 /// Every pixel: the fast path (no block bookkeeping).
-template <bool kMillimetres, bool kSwap>
+template <bool kMillimetres, std::endian kOrder>
 Counts decodeEveryPixel(const Image& image, const PixelRayTable& rays, const Limits& limits,
                         ScanPoint* out) noexcept {
   constexpr std::size_t kPixelBytes = kMillimetres ? 2 : 4;
@@ -117,7 +108,7 @@ Counts decodeEveryPixel(const Image& image, const PixelRayTable& rays, const Lim
     const std::byte* row = image.data + v * image.step;
     const float* ray = rays.ray(0, v);
     for (std::uint32_t u = 0; u < image.width; ++u, ray += 2) {
-      const float depth = loadDepth<kMillimetres, kSwap>(row + u * kPixelBytes);
+      const float depth = loadDepth<kMillimetres, kOrder>(row + u * kPixelBytes);
       if (isValid(depth, ray[0], ray[1], limits)) [[likely]] {
         writeReturn(out[n++], toMetres<kMillimetres>(depth), ray);
       } else {
@@ -137,7 +128,7 @@ Counts decodeEveryPixel(const Image& image, const PixelRayTable& rays, const Lim
 
 /// N × N blocks: the nearest valid depth of each, at its own pixel's ray (ties: the first in
 /// row-major order); a block without one gives a free-only point along its centre pixel's ray.
-template <bool kMillimetres, bool kSwap>
+template <bool kMillimetres, std::endian kOrder>
 Counts decodeBlocks(const Image& image, const PixelRayTable& rays, const Limits& limits,
                     std::uint32_t n_block, ScanPoint* out) noexcept {
   constexpr std::size_t kPixelBytes = kMillimetres ? 2 : 4;
@@ -155,7 +146,7 @@ Counts decodeBlocks(const Image& image, const PixelRayTable& rays, const Limits&
         const std::byte* row = image.data + v * image.step;
         const float* ray = rays.ray(u0, v);
         for (std::uint32_t u = u0; u < u1; ++u, ray += 2) {
-          const float depth = loadDepth<kMillimetres, kSwap>(row + u * kPixelBytes);
+          const float depth = loadDepth<kMillimetres, kOrder>(row + u * kPixelBytes);
           if (isValid(depth, ray[0], ray[1], limits)) {
             if (depth < best) {
               best = depth;
@@ -185,11 +176,11 @@ Counts decodeBlocks(const Image& image, const PixelRayTable& rays, const Limits&
   return counts;
 }
 
-template <bool kMillimetres, bool kSwap>
+template <bool kMillimetres, std::endian kOrder>
 Counts decodePixels(const Image& image, const PixelRayTable& rays, const Limits& limits,
                     std::uint32_t downsample, ScanPoint* out) noexcept {
-  return downsample == 1 ? decodeEveryPixel<kMillimetres, kSwap>(image, rays, limits, out)
-                         : decodeBlocks<kMillimetres, kSwap>(image, rays, limits, downsample, out);
+  return downsample == 1 ? decodeEveryPixel<kMillimetres, kOrder>(image, rays, limits, out)
+                         : decodeBlocks<kMillimetres, kOrder>(image, rays, limits, downsample, out);
 }
 
 std::uint64_t blocks(std::uint32_t pixels, std::uint32_t downsample) noexcept {
@@ -348,16 +339,17 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
   limits.free_invalid =
       options.invalid_as_free && options.max_range_m > 0.0f && options.max_range_m <= kLargestDepth;
   const Image image{data.data(), step, width, height};
-  const bool swap = is_bigendian != (std::endian::native == std::endian::big);
+  constexpr std::endian kBig = std::endian::big;
+  constexpr std::endian kLittle = std::endian::little;
   ScanPoint* points = out.data();
   const std::uint32_t n = options.downsample;
   Counts counts;
   if (header.millimetres) {
-    counts = swap ? decodePixels<true, true>(image, rays, limits, n, points)
-                  : decodePixels<true, false>(image, rays, limits, n, points);
+    counts = is_bigendian ? decodePixels<true, kBig>(image, rays, limits, n, points)
+                          : decodePixels<true, kLittle>(image, rays, limits, n, points);
   } else {
-    counts = swap ? decodePixels<false, true>(image, rays, limits, n, points)
-                  : decodePixels<false, false>(image, rays, limits, n, points);
+    counts = is_bigendian ? decodePixels<false, kBig>(image, rays, limits, n, points)
+                          : decodePixels<false, kLittle>(image, rays, limits, n, points);
   }
   header.points = counts.points;
   header.free_only = counts.free_only;

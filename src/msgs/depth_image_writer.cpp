@@ -9,6 +9,8 @@
 
 #include "raymap/assert.hpp"
 
+#include "src/core/byte_order.hpp"
+
 namespace raymap::msgs {
 namespace {
 
@@ -37,7 +39,7 @@ class Sizer {
   std::size_t size_ = 0;
 };
 
-/// Writes little-endian primitives into bytes sized by a Sizer that took the same steps.
+/// Writes little-endian primitives (CDR_LE) into bytes sized by a Sizer that took the same steps.
 class Cursor {
  public:
   explicit Cursor(std::byte* payload) noexcept : payload_(payload) {}
@@ -46,11 +48,10 @@ class Cursor {
     std::memset(payload_ + at_, 0, aligned - at_);
     at_ = aligned;
   }
-  template <class T>
+  template <ByteValue T>
   void put(T value) noexcept {
-    static_assert(std::endian::native == std::endian::little, "CDR_LE is written as is");
     align(sizeof(T));
-    std::memcpy(payload_ + at_, &value, sizeof(T));
+    storeLe(payload_ + at_, value);
     at_ += sizeof(T);
   }
   void string(std::string_view text) noexcept {
@@ -193,16 +194,12 @@ void serializeDepthImage(std::int64_t stamp_ns, std::string_view frame_id, std::
   cursor.put(static_cast<std::uint32_t>(width * pixel_bytes));
   cursor.put(static_cast<std::uint32_t>(data_bytes));
   std::byte* data = cursor.raw(data_bytes);
-  const bool swap = big_endian != (std::endian::native == std::endian::big);
+  const std::endian order = big_endian ? std::endian::big : std::endian::little;
   for (std::size_t i = 0; i < pixels; ++i) {
     if (millimetres) {
-      std::uint16_t mm = millimetresOf(depth_m[i]);
-      mm = swap ? __builtin_bswap16(mm) : mm;
-      std::memcpy(data + 2 * i, &mm, sizeof(mm));
+      storeEndian(data + 2 * i, millimetresOf(depth_m[i]), order);
     } else {
-      std::uint32_t bits = std::bit_cast<std::uint32_t>(depth_m[i]);
-      bits = swap ? __builtin_bswap32(bits) : bits;
-      std::memcpy(data + 4 * i, &bits, sizeof(bits));
+      storeEndian(data + 4 * i, depth_m[i], order);
     }
   }
   RAYMAP_ENSURES(cursor.position() + kHeaderBytes == out.size());

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string_view>
 
+#include "src/core/byte_order.hpp"
 #include "src/msgs/cdr_reader.hpp"
 #include "src/msgs/ros_time.hpp"
 
@@ -44,50 +45,35 @@ bool isFloatType(std::uint8_t datatype) noexcept {
          datatype == static_cast<std::uint8_t>(PointFieldType::kFloat64);
 }
 
-template <class T>
-T loadAs(const std::byte* p, bool swap) noexcept {
-  std::byte bytes[sizeof(T)];
-  std::memcpy(bytes, p, sizeof(T));
-  if (swap) {
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) {
-      const std::byte tmp = bytes[i];
-      bytes[i] = bytes[sizeof(T) - 1 - i];
-      bytes[sizeof(T) - 1 - i] = tmp;
-    }
-  }
-  T value;
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
-}
-
-/// Reads one value of a validated datatype as double (exact for every PointField type).
-double loadValue(const std::byte* p, std::uint8_t datatype, bool swap) noexcept {
+/// Reads one value of a validated datatype, stored in byte order `order`, as double (exact for
+/// every PointField type).
+double loadValue(const std::byte* p, std::uint8_t datatype, std::endian order) noexcept {
   switch (static_cast<PointFieldType>(datatype)) {
     case PointFieldType::kInt8:
-      return loadAs<std::int8_t>(p, false);
+      return loadEndian<std::int8_t>(p, order);
     case PointFieldType::kUInt8:
-      return loadAs<std::uint8_t>(p, false);
+      return loadEndian<std::uint8_t>(p, order);
     case PointFieldType::kInt16:
-      return loadAs<std::int16_t>(p, swap);
+      return loadEndian<std::int16_t>(p, order);
     case PointFieldType::kUInt16:
-      return loadAs<std::uint16_t>(p, swap);
+      return loadEndian<std::uint16_t>(p, order);
     case PointFieldType::kInt32:
-      return loadAs<std::int32_t>(p, swap);
+      return loadEndian<std::int32_t>(p, order);
     case PointFieldType::kUInt32:
-      return loadAs<std::uint32_t>(p, swap);
+      return loadEndian<std::uint32_t>(p, order);
     case PointFieldType::kFloat32:
-      return static_cast<double>(loadAs<float>(p, swap));
+      return static_cast<double>(loadEndian<float>(p, order));
     case PointFieldType::kFloat64:
-      return loadAs<double>(p, swap);
+      return loadEndian<double>(p, order);
   }
   return 0.0;
 }
 
-float loadCoordinate(const std::byte* p, std::uint8_t datatype, bool swap) noexcept {
+float loadCoordinate(const std::byte* p, std::uint8_t datatype, std::endian order) noexcept {
   if (datatype == static_cast<std::uint8_t>(PointFieldType::kFloat32)) {
-    return loadAs<float>(p, swap);
+    return loadEndian<float>(p, order);
   }
-  return static_cast<float>(loadAs<double>(p, swap));
+  return static_cast<float>(loadEndian<double>(p, order));
 }
 
 /// How the time values of this cloud become seconds after the header stamp.
@@ -321,7 +307,7 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
 
   // Absolute times are converted relative to the stamp in double: 1.7e9 s keeps ~0.2 us.
   const double stamp_s = static_cast<double>(sec) + static_cast<double>(nanosec) * 1e-9;
-  const bool swap = is_bigendian != (std::endian::native == std::endian::big);
+  const std::endian order = is_bigendian ? std::endian::big : std::endian::little;
   std::uint32_t no_return = 0;
   std::size_t n = 0;
   for (std::uint32_t row = 0; row < height; ++row) {
@@ -329,9 +315,9 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
     for (std::uint32_t column = 0; column < width; ++column, ++n) {
       const std::byte* p = row_bytes + std::size_t{column} * point_step;
       ScanPoint& point = out[n];
-      point.x = loadCoordinate(p + x.offset, x.datatype, swap);
-      point.y = loadCoordinate(p + y.offset, y.datatype, swap);
-      point.z = loadCoordinate(p + z.offset, z.datatype, swap);
+      point.x = loadCoordinate(p + x.offset, x.datatype, order);
+      point.y = loadCoordinate(p + y.offset, y.datatype, order);
+      point.z = loadCoordinate(p + z.offset, z.datatype, order);
       point.flags = 0;
       const bool finite =
           std::isfinite(point.x) && std::isfinite(point.y) && std::isfinite(point.z);
@@ -342,11 +328,11 @@ Expected<CloudHeader, CloudError> decodePointCloud2(std::span<const std::byte> c
       }
       point.intensity =
           intensity.present
-              ? static_cast<float>(loadValue(p + intensity.offset, intensity.datatype, swap))
+              ? static_cast<float>(loadValue(p + intensity.offset, intensity.datatype, order))
               : 0.0F;
       double time_s = 0.0;
       if (time_rule != TimeRule::kNone) {
-        const double value = loadValue(p + time_field.offset, time_field.datatype, swap);
+        const double value = loadValue(p + time_field.offset, time_field.datatype, order);
         switch (time_rule) {
           case TimeRule::kNone:
             break;

@@ -14,6 +14,8 @@
 #include <sys/stat.h>
 #include <sys/types.h>
 
+#include "src/core/byte_order.hpp"
+#include "src/core/crc32.hpp"
 #include "src/record/detail/record_codec.hpp"
 
 namespace raymap::record {
@@ -89,8 +91,8 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
   // Every version starts with magic, u32 version, u32 header size and ends its header with the
   // CRC-32 of the bytes before it (docs/record-format.md), so the checksum is checked first and a
   // damaged version field is reported as damage, not as a newer format.
-  const std::uint32_t version = detail::getU32(header.data() + 8);
-  const std::uint32_t header_bytes = detail::getU32(header.data() + 12);
+  const std::uint32_t version = loadLe<std::uint32_t>(header.data() + 8);
+  const std::uint32_t header_bytes = loadLe<std::uint32_t>(header.data() + 12);
   if (header_bytes < kMinHeaderBytes || header_bytes > kMaxHeaderBytes) {
     return fail(ErrorCode::kCorrupt, path + ": impossible file header size " +
                                          std::to_string(header_bytes) + " (damaged file)");
@@ -102,9 +104,8 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
       return truncated_header(header_bytes);
     }
   }
-  const std::uint32_t stored_crc = detail::getU32(header.data() + header_bytes - 4);
-  const bool crc_ok =
-      detail::crc32Update(0, std::span(header).first(header_bytes - 4)) == stored_crc;
+  const std::uint32_t stored_crc = loadLe<std::uint32_t>(header.data() + header_bytes - 4);
+  const bool crc_ok = crc32(0, std::span(header).first(header_bytes - 4)) == stored_crc;
   const std::string versions_read =
       "versions 1 to " + std::to_string(kRecordLogVersion);  // every version so far is read
   if (!crc_ok) {
@@ -138,11 +139,11 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
                                          std::to_string(header_bytes) + " bytes instead of " +
                                          std::to_string(kFileHeaderBytes));
   }
-  if (const std::uint32_t flags = detail::getU32(header.data() + 24); flags != 0) {
+  if (const std::uint32_t flags = loadLe<std::uint32_t>(header.data() + 24); flags != 0) {
     return fail(ErrorCode::kUnsupported, path + ": file header flags " + std::to_string(flags) +
                                              " are unknown to this raymap");
   }
-  const std::int64_t created = detail::getI64(header.data() + 16);
+  const std::int64_t created = loadLe<std::int64_t>(header.data() + 16);
   std::unique_ptr<RecordLogReader> reader(
       new RecordLogReader(path, file.release(), std::move(stdio_buffer), header_bytes, created));
   reader->refreshFileSize();
@@ -278,9 +279,9 @@ Result<std::optional<LogMessage>> RecordLogReader::next() {
                          std::to_string(kRecordHeaderBytes) + " bytes");
       return std::optional<LogMessage>();
     }
-    const std::uint32_t kind = detail::getU32(head.data());
-    const std::uint32_t length = detail::getU32(head.data() + 4);
-    const std::uint32_t stored_crc = detail::getU32(head.data() + 8);
+    const std::uint32_t kind = loadLe<std::uint32_t>(head.data());
+    const std::uint32_t length = loadLe<std::uint32_t>(head.data() + 4);
+    const std::uint32_t stored_crc = loadLe<std::uint32_t>(head.data() + 8);
     if (kind == 0 && length == 0 && stored_crc == 0) {
       // No record is all zeros (its CRC would not be 0). A zero-filled tail is what a file
       // system leaves when the size reached the disk and the data did not (power loss).
@@ -329,7 +330,7 @@ Result<std::optional<LogMessage>> RecordLogReader::next() {
       return std::optional<LogMessage>();
     }
     const std::span<const std::byte> payload(payload_.data(), length);
-    const std::uint32_t crc = detail::crc32Update(detail::recordCrcSeed(kind, length), payload);
+    const std::uint32_t crc = crc32(detail::recordCrcSeed(kind, length), payload);
     if (crc != stored_crc) {
       return Unexpected(recordError(ErrorCode::kCorrupt, at,
                                     "checksum mismatch in a " + kindName(kind) + " record of " +
@@ -372,15 +373,15 @@ Result<std::optional<LogMessage>> RecordLogReader::next() {
                                             std::to_string(kMessagePrefixBytes) + "-byte prefix"));
         }
         LogMessage message;
-        message.topic_id = detail::getU32(payload.data());
+        message.topic_id = loadLe<std::uint32_t>(payload.data());
         if (message.topic_id >= declared_in_pass_) {
           return Unexpected(recordError(ErrorCode::kCorrupt, at,
                                         "message on topic id " + std::to_string(message.topic_id) +
                                             ", which no earlier TOPIC record declares"));
         }
-        message.receive_unix_ns = detail::getI64(payload.data() + 4);
-        message.receive_monotonic_ns = detail::getI64(payload.data() + 12);
-        message.source_timestamp_ns = detail::getI64(payload.data() + 20);
+        message.receive_unix_ns = loadLe<std::int64_t>(payload.data() + 4);
+        message.receive_monotonic_ns = loadLe<std::int64_t>(payload.data() + 12);
+        message.source_timestamp_ns = loadLe<std::int64_t>(payload.data() + 20);
         message.cdr = payload.subspan(kMessagePrefixBytes);
         ++record_index_;
         ++messages_read_;

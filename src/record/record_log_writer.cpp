@@ -17,6 +17,7 @@
 #include <sys/uio.h>
 #include <unistd.h>
 
+#include "src/core/crc32.hpp"
 #include "src/record/detail/record_codec.hpp"
 
 namespace raymap::record {
@@ -154,7 +155,7 @@ Result<void> RecordLogWriter::appendRecord(RecordKind kind,
   const auto length32 = static_cast<std::uint32_t>(length);
   std::uint32_t crc = detail::recordCrcSeed(static_cast<std::uint32_t>(kind), length32);
   for (const auto& part : payload) {
-    crc = detail::crc32Update(crc, part);
+    crc = crc32(crc, part);
   }
   std::array<std::byte, kRecordHeaderBytes> header{};
   detail::encodeRecordHeader(header.data(), kind, length32, crc);

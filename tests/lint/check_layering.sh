@@ -39,7 +39,8 @@ check src/device/staging 'src/io|src/sim|src/device/opencl|src/device/cuda|src/d
 check src/device/opencl 'src/sim|src/device/cuda|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
 check src/device/cuda 'src/sim|src/device/opencl|src/device/backend|tools/|tests/' 'a backend does not know scenes, tools or the other API'
 check kernels/cuda 'src/|platform/|tools/|tests/' 'CUDA entry points depend only on kernels/'
-# The library (raymap::raymap) builds without the service's and the tools' dependencies: none of
+# The library (raymap::raymap) builds without the service's and the tools' dependencies (libpng
+# writes height maps as PNG, src/io/png_writer.cpp): none of
 # its code includes DDS, CLI11 or systemd, nor the folders built only with them. It reads rosbag2
 # bags (src/bag, src/msgs, src/pipeline: yaml-cpp, lz4, SQLite, Boost.Lockfree) and YAML
 # configurations (src/config), so those are allowed (the tools' JSON, nlohmann/, is not); src/sim/scene_file.* is the tools' (scene files).

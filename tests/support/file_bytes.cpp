@@ -2,9 +2,14 @@
 // Whole-file reads and writes, little-endian fields and the CRC-32 for forging test files.
 #include "tests/support/file_bytes.hpp"
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <span>
+
+#include "src/core/byte_order.hpp"
+#include "src/core/crc32.hpp"
 
 namespace raymap::test {
 
@@ -22,17 +27,22 @@ void writeFileBytes(const std::string& path, const Bytes& bytes) {
             static_cast<std::streamsize>(bytes.size()));
 }
 
+// The low `count` bytes of a u64 stored little-endian are the field: one u64 codec serves every
+// width, and bytes.at() checks the range.
+
 std::uint64_t getLe(const Bytes& bytes, std::size_t at, int count) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < count; ++i) {
-    v |= std::uint64_t{bytes.at(at + static_cast<std::size_t>(i))} << (8 * i);
+  std::array<std::byte, 8> field{};  // the bytes above `count` stay zero
+  for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
+    field.at(i) = std::byte{bytes.at(at + i)};
   }
-  return v;
+  return loadLe<std::uint64_t>(field.data());
 }
 
 void putLe(Bytes& bytes, std::size_t at, std::uint64_t v, int count) {
-  for (int i = 0; i < count; ++i) {
-    bytes.at(at + static_cast<std::size_t>(i)) = static_cast<std::uint8_t>(v >> (8 * i));
+  std::array<std::byte, 8> field{};
+  storeLe(field.data(), v);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
+    bytes.at(at + i) = std::to_integer<std::uint8_t>(field.at(i));
   }
 }
 
@@ -42,14 +52,7 @@ void appendLe(Bytes& bytes, std::uint64_t v, int count) {
 }
 
 std::uint32_t crc32(const std::uint8_t* data, std::size_t size) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (std::size_t i = 0; i < size; ++i) {
-    crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 1u) != 0 ? (crc >> 1) ^ 0xEDB88320u : crc >> 1;
-    }
-  }
-  return ~crc;
+  return raymap::crc32(0, std::as_bytes(std::span(data, size)));
 }
 
 }  // namespace raymap::test

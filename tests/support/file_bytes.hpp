@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Test-only file bytes: read and write whole files, little-endian fields and a written-out CRC-32.
+// Test-only file bytes: read and write whole files, bounds-checked little-endian fields and the
+// CRC-32 of some of them, for forging files.
 #pragma once
 
 #include <cstddef>
@@ -27,7 +28,7 @@ void putLe(Bytes& bytes, std::size_t at, std::uint64_t v, int count);
 /// @brief Appends the low `count` bytes of `v` little-endian.
 void appendLe(Bytes& bytes, std::uint64_t v, int count);
 
-/// @brief CRC-32 (IEEE, reflected, as zlib computes it), written out so tests can forge files
+/// @brief The CRC-32 (raymap::crc32, zlib's) of `size` bytes at `data`: so tests can forge files
 /// whose checksums are right but whose content is wrong.
 std::uint32_t crc32(const std::uint8_t* data, std::size_t size);
 

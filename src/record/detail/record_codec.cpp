@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Record log encoding: integers are built byte by byte, so the host's byte order never matters.
+// Record log encoding: integers are little-endian whatever the host's byte order.
 #include "src/record/detail/record_codec.hpp"
 
 #include <cstring>
 
-#include <zlib.h>
+#include "src/core/byte_order.hpp"
+#include "src/core/crc32.hpp"
 
 namespace raymap::record::detail {
 namespace {
@@ -19,54 +20,29 @@ std::string reasonAt(std::size_t offset, const std::string& what) {
 
 }  // namespace
 
-void putLe(std::byte* out, std::uint64_t value, int count) noexcept {
-  for (int i = 0; i < count; ++i) {
-    out[i] = static_cast<std::byte>((value >> (8 * i)) & 0xFFu);
-  }
-}
-
-std::uint64_t getLe(const std::byte* in, int count) noexcept {
-  std::uint64_t value = 0;
-  for (int i = 0; i < count; ++i) {
-    value |= std::to_integer<std::uint64_t>(in[i]) << (8 * i);
-  }
-  return value;
-}
-
-std::uint32_t crc32Update(std::uint32_t crc, std::span<const std::byte> bytes) noexcept {
-  // NOTE: zlib treats a null buffer as "give me the initial value" and returns 0 whatever `crc`
-  // is, and an empty span may well have a null data(): an empty piece must leave `crc` alone.
-  if (bytes.empty()) {
-    return crc;
-  }
-  // crc32_z takes a size_t length: no 4 GiB split needed.
-  return static_cast<std::uint32_t>(
-      ::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size()));
-}
-
 std::array<std::byte, kFileHeaderBytes> encodeFileHeader(std::int64_t created_unix_ns) noexcept {
   std::array<std::byte, kFileHeaderBytes> header{};
   std::memcpy(header.data(), kRecordLogMagic.data(), kRecordLogMagic.size());
-  putLe(header.data() + 8, kRecordLogVersion, 4);
-  putLe(header.data() + 12, kFileHeaderBytes, 4);
-  putLe(header.data() + 16, static_cast<std::uint64_t>(created_unix_ns), 8);
-  putLe(header.data() + 24, 0, 4);  // flags: none defined in version 1
-  putLe(header.data() + 28, crc32Update(0, std::span(header).first(kFileHeaderBytes - 4)), 4);
+  storeLe(header.data() + 8, kRecordLogVersion);
+  storeLe(header.data() + 12, static_cast<std::uint32_t>(kFileHeaderBytes));
+  storeLe(header.data() + 16, created_unix_ns);
+  storeLe(header.data() + 24, std::uint32_t{0});  // flags: none defined in version 1
+  storeLe(header.data() + 28, crc32(0, std::span(header).first(kFileHeaderBytes - 4)));
   return header;
 }
 
 std::uint32_t recordCrcSeed(std::uint32_t kind, std::uint32_t payload_length) noexcept {
   std::array<std::byte, 8> fields{};
-  putLe(fields.data(), kind, 4);
-  putLe(fields.data() + 4, payload_length, 4);
-  return crc32Update(0, fields);
+  storeLe(fields.data(), kind);
+  storeLe(fields.data() + 4, payload_length);
+  return crc32(0, fields);
 }
 
 void encodeRecordHeader(std::byte* out, RecordKind kind, std::uint32_t payload_length,
                         std::uint32_t crc) noexcept {
-  putLe(out, static_cast<std::uint32_t>(kind), 4);
-  putLe(out + 4, payload_length, 4);
-  putLe(out + 8, crc, 4);
+  storeLe(out, static_cast<std::uint32_t>(kind));
+  storeLe(out + 4, payload_length);
+  storeLe(out + 8, crc);
 }
 
 std::size_t topicPayloadBytes(const LogTopic& topic) noexcept {
@@ -75,14 +51,13 @@ std::size_t topicPayloadBytes(const LogTopic& topic) noexcept {
 }
 
 void encodeTopicPayload(std::byte* out, const LogTopic& topic) noexcept {
-  putLe(out, topic.id, 4);
-  putLe(out + 4, static_cast<std::uint8_t>(topic.reliability), 1);
-  putLe(out + 5, static_cast<std::uint8_t>(topic.durability), 1);
-  putLe(out + 6, 0, 2);  // reserved
+  storeLe(out, topic.id);
+  storeLe(out + 4, static_cast<std::uint8_t>(topic.reliability));
+  storeLe(out + 5, static_cast<std::uint8_t>(topic.durability));
+  storeLe(out + 6, std::uint16_t{0});  // reserved
   std::byte* at = out + kTopicFixedBytes;
   for (const std::string* text : {&topic.name, &topic.type}) {
-    putLe(at, text->size(), 2);
-    at += kStringLengthBytes;
+    at = storeLe(at, static_cast<std::uint16_t>(text->size()));
     std::memcpy(at, text->data(), text->size());
     at += text->size();
   }
@@ -96,7 +71,7 @@ Expected<LogTopic, std::string> decodeTopicPayload(std::span<const std::byte> pa
                       " bytes of its fixed fields");
   }
   LogTopic topic;
-  topic.id = getU32(payload.data());
+  topic.id = loadLe<std::uint32_t>(payload.data());
   const std::uint8_t reliability = std::to_integer<std::uint8_t>(payload[4]);
   const std::uint8_t durability = std::to_integer<std::uint8_t>(payload[5]);
   if (reliability > static_cast<std::uint8_t>(LogReliability::kReliable)) {
@@ -115,7 +90,7 @@ Expected<LogTopic, std::string> decodeTopicPayload(std::span<const std::byte> pa
     if (payload.size() - at < kStringLengthBytes) {
       return Unexpected(reasonAt(at, std::string("no room for the length of the ") + field));
     }
-    const std::size_t length = getU16(payload.data() + at);
+    const std::size_t length = loadLe<std::uint16_t>(payload.data() + at);
     at += kStringLengthBytes;
     if (payload.size() - at < length) {
       return Unexpected(reasonAt(at, std::string("the ") + field + " of " + std::to_string(length) +
@@ -134,15 +109,15 @@ Expected<LogTopic, std::string> decodeTopicPayload(std::span<const std::byte> pa
 void encodeMessagePrefix(std::byte* out, std::uint32_t topic_id, std::int64_t receive_unix_ns,
                          std::int64_t receive_monotonic_ns,
                          std::int64_t source_timestamp_ns) noexcept {
-  putLe(out, topic_id, 4);
-  putLe(out + 4, static_cast<std::uint64_t>(receive_unix_ns), 8);
-  putLe(out + 12, static_cast<std::uint64_t>(receive_monotonic_ns), 8);
-  putLe(out + 20, static_cast<std::uint64_t>(source_timestamp_ns), 8);
+  storeLe(out, topic_id);
+  storeLe(out + 4, receive_unix_ns);
+  storeLe(out + 12, receive_monotonic_ns);
+  storeLe(out + 20, source_timestamp_ns);
 }
 
 void encodeEndPayload(std::byte* out, const EndRecord& end) noexcept {
-  putLe(out, end.message_count, 8);
-  putLe(out + 8, static_cast<std::uint64_t>(end.end_unix_ns), 8);
+  storeLe(out, end.message_count);
+  storeLe(out + 8, end.end_unix_ns);
 }
 
 Expected<EndRecord, std::string> decodeEndPayload(std::span<const std::byte> payload) {
@@ -151,7 +126,7 @@ Expected<EndRecord, std::string> decodeEndPayload(std::span<const std::byte> pay
                       " bytes is shorter than its " + std::to_string(kEndPayloadBytes) +
                       " bytes of fields");
   }
-  return EndRecord{getU64(payload.data()), getI64(payload.data() + 8)};
+  return EndRecord{loadLe<std::uint64_t>(payload.data()), loadLe<std::int64_t>(payload.data() + 8)};
 }
 
 }  // namespace raymap::record::detail

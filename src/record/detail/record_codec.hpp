@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Byte-level encoding of the record log shared by its writer and reader: little-endian integers,
-// CRC-32, the file header and the TOPIC, MESSAGE and END payloads.
+// Byte-level encoding of the record log shared by its writer and reader: the file header and the
+// TOPIC, MESSAGE and END payloads (little-endian integers: src/core/byte_order.hpp; CRC-32:
+// src/core/crc32.hpp).
 #pragma once
 
 #include <array>
@@ -17,32 +18,13 @@ namespace raymap::record::detail {
 
 // Every function here is a pure function of its arguments: safe to call from any thread.
 
-/// @brief Stores the low `count` bytes of `value` at `out`, least significant first.
-void putLe(std::byte* out, std::uint64_t value, int count) noexcept;
-/// @brief Reads `count` bytes at `in` as a little-endian unsigned integer.
-std::uint64_t getLe(const std::byte* in, int count) noexcept;
-inline std::uint16_t getU16(const std::byte* in) noexcept {
-  return static_cast<std::uint16_t>(getLe(in, 2));
-}
-inline std::uint32_t getU32(const std::byte* in) noexcept {
-  return static_cast<std::uint32_t>(getLe(in, 4));
-}
-inline std::uint64_t getU64(const std::byte* in) noexcept { return getLe(in, 8); }
-/// Two's complement, as the format stores signed values.
-inline std::int64_t getI64(const std::byte* in) noexcept {
-  return static_cast<std::int64_t>(getLe(in, 8));
-}
-
-/// @brief Continues the zlib CRC-32 `crc` (start with 0) over `bytes`.
-std::uint32_t crc32Update(std::uint32_t crc, std::span<const std::byte> bytes) noexcept;
-
 /// @brief The version-1 file header for a log created at `created_unix_ns` (wall clock, ns).
 std::array<std::byte, kFileHeaderBytes> encodeFileHeader(std::int64_t created_unix_ns) noexcept;
 
 /// @brief CRC-32 of a record's kind and length fields. The stored checksum is the CRC-32 of kind,
-/// length and payload together: continue this seed over the payload with crc32Update().
+/// length and payload together: continue this seed over the payload with raymap::crc32().
 std::uint32_t recordCrcSeed(std::uint32_t kind, std::uint32_t payload_length) noexcept;
-/// @brief Fills the 12-byte record header at `out` with `crc` from recordCrcSeed/crc32Update.
+/// @brief Fills the 12-byte record header at `out` with `crc` from recordCrcSeed and crc32().
 void encodeRecordHeader(std::byte* out, RecordKind kind, std::uint32_t payload_length,
                         std::uint32_t crc) noexcept;
 

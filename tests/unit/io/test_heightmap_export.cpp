@@ -17,8 +17,8 @@
 
 #include "src/heightmap/height_map.hpp"
 #include "src/io/heightmap_export.hpp"
+#include "tests/support/decoded_png.hpp"
 #include "tests/support/temp_dir.hpp"
-#include "tests/unit/io/decoded_png.hpp"
 
 namespace raymap::io {
 
@@ -240,16 +240,15 @@ TEST(ElevationColour, TheOtherCellColoursAreFarFromTheScale) {
 // Image
 
 /// Pixel access into a decoded PNG.
-Rgb pixel(const png_test::DecodedPng& png, int x, int y) {
+Rgb pixel(const test::DecodedPng& png, int x, int y) {
   const std::size_t k = (static_cast<std::size_t>(y) * static_cast<std::size_t>(png.width) +
                          static_cast<std::size_t>(x)) *
                         3;
-  return {png.rgb.at(k), png.rgb.at(k + 1), png.rgb.at(k + 2)};
+  return {png.pixels.at(k), png.pixels.at(k + 1), png.pixels.at(k + 2)};
 }
 
 /// The colours in cell (i, j)'s block, computed from the layout's documented placement.
-std::set<std::tuple<int, int, int>> blockColours(const png_test::DecodedPng& png,
-                                                 const HeightMap& map,
+std::set<std::tuple<int, int, int>> blockColours(const test::DecodedPng& png, const HeightMap& map,
                                                  const HeightmapImageLayout& layout, int i, int j) {
   std::set<std::tuple<int, int, int>> colours;
   const int s = layout.cell_pixels;
@@ -268,7 +267,7 @@ std::tuple<int, int, int> tuple(Rgb c) { return {c.r, c.g, c.b}; }
 
 /// Writes the map as a PNG and decodes it (with the layout it was drawn with).
 struct WrittenImage {
-  png_test::DecodedPng png;
+  test::DecodedPng png;
   HeightmapImageLayout layout;
 };
 std::optional<WrittenImage> writeAndDecode(const TempDir& dir, const HeightMap& map,
@@ -280,7 +279,7 @@ std::optional<WrittenImage> writeAndDecode(const TempDir& dir, const HeightMap& 
     return std::nullopt;
   }
   auto layout = layoutHeightmapImage(map, options);
-  auto png = png_test::decodePng(path);
+  auto png = test::decodePng(path);
   if (!layout.has_value() || !png.has_value()) {
     ADD_FAILURE() << "no layout or no PNG";
     return std::nullopt;
