@@ -19,6 +19,7 @@
 #include "src/io/map_file.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/backend.hpp"
+#include "src/map/voxel_map.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
@@ -619,6 +620,21 @@ TEST(Mapper, AnUnknownDevicePlanningIsRefusedByName) {
 TEST(Mapper, VersionHeaderMatchesTheProject) {
   EXPECT_GE(RAYMAP_VERSION_MAJOR, 0);
   EXPECT_STRNE(RAYMAP_VERSION_STRING, "");
+}
+
+// The public defaults are the library's own: one set of numbers.
+TEST(MapperDefaults, AreTheLibrarys) {
+  const MapOptions map;
+  EXPECT_EQ(map.resolution, MapGeometry::kDefaultResolution);
+  EXPECT_EQ(map.region_voxels, MapGeometry::kDefaultRegionVoxels);
+  EXPECT_EQ(map.hit_probability, OccupancyParams::kDefaultHitProbability);
+  EXPECT_EQ(map.miss_probability, OccupancyParams::kDefaultMissProbability);
+  EXPECT_EQ(map.clamp_min_log_odds, OccupancyParams::kDefaultClampMin);
+  EXPECT_EQ(map.clamp_max_log_odds, OccupancyParams::kDefaultClampMax);
+  EXPECT_EQ(map.occupied_threshold, OccupancyParams::kDefaultThresholdProbability);
+  EXPECT_EQ(map.max_memory_bytes, MapConfig::kDefaultMemoryBudget);
+  EXPECT_EQ(map.tiers.compressed_memory_bytes, RegionTierConfig::kDefaultCompressedBytes);
+  EXPECT_EQ(map.tiers.enabled, RegionTierConfig{}.enabled);
 }
 
 }  // namespace
