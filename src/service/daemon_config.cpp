@@ -84,9 +84,8 @@ void readMap(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
 void readBackend(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
   BackendOptions backend;
   mapper::readBackendOptions(ctx, node, backend, config.warnings);
-  const std::size_t gpu_batch_rays = config.backend.gpu_batch_rays;
+  // backend.batch_rays stays 0: device batches keep BackendChoice's default size.
   config.backend = mapper::toBackendChoice(backend);
-  config.backend.gpu_batch_rays = gpu_batch_rays;  // raymapd's own default (BackendChoice)
 }
 
 void readPose(Context& ctx, const YAML::Node& node, PoseConfig& pose) {

@@ -36,26 +36,6 @@ struct Room {
   }
 };
 
-/// Maps `input` scan by scan with the library and saves the map to `out`.
-void mapWithLibrary(const std::string& input, const RayCloudOptions& read,
-                    const MapperConfig& config, const std::string& out) {
-  auto mapper = Mapper::create(config);
-  ASSERT_TRUE(mapper) << mapper.error().message;
-  auto reader = RayCloudReader::open(input, read);
-  ASSERT_TRUE(reader) << reader.error().message;
-  std::vector<WorldRay> scan;
-  for (;;) {
-    auto more = reader->nextScan(scan);
-    ASSERT_TRUE(more) << more.error().message;
-    if (!*more) {
-      break;
-    }
-    ASSERT_TRUE(mapper->integrate(scan));
-  }
-  auto saved = mapper->save(out);
-  ASSERT_TRUE(saved) << saved.error().message;
-}
-
 struct Case {
   const char* name;
   std::vector<std::string> flags;  ///< `raymap populate` flags

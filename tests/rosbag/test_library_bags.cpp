@@ -17,31 +17,6 @@
 namespace raymap::test {
 namespace {
 
-/// Maps every scan of `bag` with the library; returns the reader's report.
-RecordingReport mapWithLibrary(const std::string& bag, const RecordingOptions& read,
-                               const MapperConfig& config, const std::string& out) {
-  auto mapper = Mapper::create(config);
-  EXPECT_TRUE(mapper) << mapper.error().message;
-  auto reader = RecordingReader::open(bag, read);
-  EXPECT_TRUE(reader) << reader.error().message;
-  if (!mapper || !reader) {
-    return {};
-  }
-  EXPECT_TRUE(reader->isBag());
-  std::vector<WorldRay> scan;
-  for (;;) {
-    auto more = reader->nextScan(scan);
-    EXPECT_TRUE(more) << more.error().message;
-    if (!more || !*more) {
-      break;
-    }
-    EXPECT_TRUE(mapper->integrate(scan));
-  }
-  auto saved = mapper->save(out);
-  EXPECT_TRUE(saved) << saved.error().message;
-  return reader->report();
-}
-
 TEST(LibraryBags, LidarCloudsWithOdometryOrATfChainMapAsPopulateMapsThem) {
   REQUIRE_NODE_HARNESS();
   for (const DrivePoses poses : {DrivePoses::kOdometry, DrivePoses::kTfChain}) {
@@ -64,7 +39,10 @@ TEST(LibraryBags, LidarCloudsWithOdometryOrATfChainMapAsPopulateMapsThem) {
 
     MapperConfig config;
     config.map.semantics = Semantics::kPerScan;
-    const RecordingReport report = mapWithLibrary(bag, read, config, dir.file("library.rmap"));
+    LibraryRun run;
+    ASSERT_NO_FATAL_FAILURE(mapWithLibrary(bag, read, config, dir.file("library.rmap"), &run));
+    EXPECT_TRUE(run.bag);
+    const RecordingReport& report = run.report;
     EXPECT_EQ(report.scans, drive.scans);
     EXPECT_EQ(report.scans_no_pose, 0u);
     EXPECT_EQ(report.topics, std::vector<std::string>{"/ouster/points"});
@@ -89,9 +67,11 @@ TEST(LibraryBags, DepthImagesWithTheirCameraInfoMapAsPopulateMapsThem) {
   read.bag.invalid_as_free = true;
   MapperConfig config;
   config.rays.max_range = 3.0;
-  const RecordingReport report = mapWithLibrary(bag, read, config, dir.file("library.rmap"));
-  EXPECT_EQ(report.scans, 6u);
-  EXPECT_EQ(report.images_no_camera_info, 0u);
+  LibraryRun run;
+  ASSERT_NO_FATAL_FAILURE(mapWithLibrary(bag, read, config, dir.file("library.rmap"), &run));
+  EXPECT_TRUE(run.bag);
+  EXPECT_EQ(run.report.scans, 6u);
+  EXPECT_EQ(run.report.images_no_camera_info, 0u);
   expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
 }
 

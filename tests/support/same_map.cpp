@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "tests/support/same_map.hpp"
 
+#include <vector>
+
+#include "raymap/mapper.hpp"
 #include <gtest/gtest.h>
 
 #include "src/io/map_file.hpp"
@@ -42,6 +45,29 @@ void expectSameMap(const std::string& cli, const std::string& library) {
   EXPECT_GT(a->summarise().regions, 0u);
   EXPECT_EQ(a->summarise().regions, b->summarise().regions);
   EXPECT_EQ(differingRegions(*a, *b), 0u);
+}
+
+void mapWithLibrary(const std::string& input, const RecordingOptions& read,
+                    const MapperConfig& config, const std::string& out, LibraryRun* run) {
+  auto mapper = Mapper::create(config);
+  ASSERT_TRUE(mapper) << mapper.error().message;
+  auto reader = RecordingReader::open(input, read);
+  ASSERT_TRUE(reader) << reader.error().message;
+  std::vector<WorldRay> scan;
+  for (;;) {
+    auto more = reader->nextScan(scan);
+    ASSERT_TRUE(more) << more.error().message;
+    if (!*more) {
+      break;
+    }
+    ASSERT_TRUE(mapper->integrate(scan));
+  }
+  auto saved = mapper->save(out);
+  ASSERT_TRUE(saved) << saved.error().message;
+  if (run != nullptr) {
+    run->report = reader->report();
+    run->bag = reader->isBag();
+  }
 }
 
 }  // namespace raymap::test

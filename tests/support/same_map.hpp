@@ -5,10 +5,24 @@
 
 #include <string>
 
+#include "raymap/mapper_config.hpp"
+#include "raymap/recording.hpp"
+
 namespace raymap::test {
 
 /// @brief Expects (gtest) the same mode, parameters and regions, and the same bytes in every
 /// layer of every region; the files' provenance (source, created_by) may differ.
 void expectSameMap(const std::string& cli, const std::string& library);
+
+/// What the library's half of such a test read.
+struct LibraryRun {
+  RecordingReport report;  ///< a bag's counts (zero for a file)
+  bool bag = false;        ///< the input was read as a bag
+};
+
+/// @brief Maps `input` scan by scan with raymap::RecordingReader and raymap::Mapper (`config`)
+/// and saves the map to `out`; a failure is a fatal gtest failure (ASSERT_NO_FATAL_FAILURE).
+void mapWithLibrary(const std::string& input, const RecordingOptions& read,
+                    const MapperConfig& config, const std::string& out, LibraryRun* run = nullptr);
 
 }  // namespace raymap::test

@@ -213,9 +213,8 @@ Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& op
   if (!recording) {
     return Unexpected(recording.error());
   }
-  const std::unique_ptr<io::RaySource>& opened = recording->source;
-  bag::BagRaySource* bag_source = recording->bag;
-  io::RaySource& source = *opened;
+  io::RaySource& source = *recording->source;
+  const bag::BagRaySource* bag_source = recording->bag;
   const std::string warning = inputWarning(map.mode(), source.info());
   auto report = integrateStream(
       map, options, [&](std::span<Ray> out) { return source.read(out); },
