@@ -80,14 +80,6 @@ Result<io::MapLoadOptions> toLoadOptions(const std::string& max_memory, const Ti
   return options;
 }
 
-std::optional<TierReport> tierReport(const VoxelMap& map) {
-  const auto stats = map.tierStats();
-  if (!stats) {
-    return std::nullopt;
-  }
-  return TierReport{map.store().capacity(), map.store().size(), *stats};
-}
-
 std::string tierSummaryLine(const TierReport& r) {
   const RegionTierStats& s = r.stats;
   char text[512];
@@ -141,13 +133,6 @@ Json tierJson(const TierReport& r) {
       {"compress_seconds", s.compress_seconds},
       {"restore_seconds", s.restore_seconds},
   };
-}
-
-Expected<void, Error> checkTiers(const VoxelMap& map) {
-  if (auto failure = map.tierFailure()) {
-    return Unexpected(*failure);
-  }
-  return {};
 }
 
 }  // namespace raymap::cli

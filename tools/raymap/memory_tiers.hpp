@@ -10,6 +10,7 @@
 
 #include "src/io/map_file.hpp"
 #include "src/map/voxel_map.hpp"
+#include "src/mapper/tier_report.hpp"
 #include "tools/raymap/json_output.hpp"
 
 namespace CLI {
@@ -41,17 +42,10 @@ Result<io::MapLoadOptions> toLoadOptions(const std::string& max_memory, const Ti
 /// @brief Registers --max-memory (the region pool) on a subcommand that reads maps.
 void addMaxMemoryOption(CLI::App& command, std::string& max_memory);
 
-/// @brief Where a tiered map's regions are at the end of a command. Value type.
-struct TierReport {
-  std::uint32_t pool_regions = 0;  ///< the pool's capacity
-  std::uint32_t hot_regions = 0;   ///< regions in the pool
-  RegionTierStats stats;
-  /// Batches the backend cut in two because their regions did not fit the pool at once
-  /// (BackendStats::batches_split; populate fills it in).
-  std::uint64_t batches_split = 0;
-};
-/// @brief The report of a tiered map; nullopt without tiers.
-std::optional<TierReport> tierReport(const VoxelMap& map);
+// The report of a tiered map and the check that it lost nothing are the library's.
+using mapper::checkTiers;
+using mapper::TierReport;
+using mapper::tierReport;
 
 /// @brief One line for a summary: pool use, compressed and spilled regions, ratio, waits.
 std::string tierSummaryLine(const TierReport& report);
@@ -59,9 +53,5 @@ std::string tierSummaryLine(const TierReport& report);
 std::string tierProgressText(const VoxelMap& map);
 /// @brief The tiers as a JSON object (for --stats-json and info --json).
 Json tierJson(const TierReport& report);
-
-/// @brief Fails with the tiers' error when a tiered map lost a region on the way (a query or a
-/// summary that met a damaged spill file): a command must not report success then.
-Expected<void, Error> checkTiers(const VoxelMap& map);
 
 }  // namespace raymap::cli
