@@ -61,4 +61,25 @@ struct HeightMap {
   }
 };
 
+/// @brief What makes a costmap cell lethal, and how free cells are scaled (the `costmap:`
+/// section of raymapd, docs/configuration.md). Metres and degrees.
+struct CostmapOptions {
+  double max_step = 0.15;       ///< a step to a 4-neighbour's elevation above this is lethal
+  double max_slope_deg = 30.0;  ///< a slope above this is lethal
+  double min_clearance = 0.5;   ///< free height above the surface below this is lethal
+  bool virtual_lethal = true;   ///< virtual surfaces (a drop-off's edge) lethal, else unknown
+  int max_free_cost = 50;       ///< free cells cost slope / max_slope × this, 0..99
+};
+
+/// @brief A Nav2 costmap in nav_msgs/OccupancyGrid's layout: row-major, cell (x, y) at index
+/// x + y * width, row 0 along the grid's -y edge, column 0 along its -x edge. Costs -1 (unknown),
+/// 0..99 (free, by slope) and 100 (lethal). World frame, metres. Plain value type.
+struct Costmap {
+  double resolution = 0.1;                           ///< cell edge, metres
+  int width = 0;                                     ///< cells along x
+  int height = 0;                                    ///< cells along y
+  Eigen::Vector2d origin = Eigen::Vector2d::Zero();  ///< world x, y of cell (0, 0)'s -x/-y corner
+  std::vector<std::int8_t> cells;
+};
+
 }  // namespace raymap

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "raymap/error.hpp"
+#include "raymap/export.hpp"
 #include "raymap/heightmap.hpp"
 #include "raymap/map_types.hpp"
 #include "raymap/mapper_config.hpp"
@@ -140,6 +141,17 @@ class Mapper {
   /// device backend). Errors name the option and the reason (a map without occupancy, a size
   /// beyond 8192 cells, a centre outside the stored map).
   Result<HeightMap> heightmap(const HeightmapRequest& request);
+
+  /// @brief The Nav2 costmap of the height map `request` asks for (heightmap(), then each cell's
+  /// cost from its step, slope and clearance as raymapd publishes it). Errors as heightmap(), and
+  /// for options out of range naming the key (costmap.max_step …).
+  Result<Costmap> costmap(const HeightmapRequest& request, const CostmapOptions& options = {});
+
+  /// @brief Writes the map to `path` as a PLY file the way `raymap export` does (points,
+  /// NDT ellipsoids, a TSDF surface or mesh: ExportRequest), via a temporary file renamed into
+  /// place. Errors name the key of an option that does not fit the kind, or say which layer the
+  /// map lacks; an existing file at `path` is then left as it was.
+  Result<ExportCounts> exportPly(const std::string& path, const ExportRequest& request = {});
 
   /// @brief Writes the map to `path` (the .rmap format of `raymap populate`; a temporary file
   /// renamed into place, so a failure leaves any existing file as it was).

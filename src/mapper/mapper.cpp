@@ -15,10 +15,12 @@
 #include "src/core/eigen_conversions.hpp"
 #include "src/device/backend_choice.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
+#include "src/io/map_exports.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/ray_batcher.hpp"
 #include "src/mapper/mapper_conversions.hpp"
+#include "src/mapper/tier_report.hpp"
 
 namespace raymap {
 namespace {
@@ -346,6 +348,44 @@ Result<HeightMap> Mapper::heightmap(const HeightmapRequest& request) {
   HeightMap out;
   mapper::copyHeightMap(s.grid, out);
   return out;
+}
+
+Result<Costmap> Mapper::costmap(const HeightmapRequest& request, const CostmapOptions& options) {
+  auto params = mapper::toCostmapParams(options);
+  if (!params) {
+    return Unexpected(params.error());
+  }
+  if (auto made = heightmap(request); !made) {
+    return Unexpected(made.error());
+  }
+  const heightmap::HeightMap& grid = state_->grid;
+  Costmap out;
+  out.resolution = grid.resolution;
+  out.width = grid.cells_x;
+  out.height = grid.cells_y;
+  const Vec3d origin = heightmap::costmapOrigin(grid);
+  out.origin = {origin.x, origin.y};
+  out.cells.resize(grid.cellCount());
+  heightmap::computeCostmap(grid, *params, out.cells);
+  return out;
+}
+
+Result<ExportCounts> Mapper::exportPly(const std::string& path, const ExportRequest& request) {
+  if (auto ok = io::validateExportRequest(request); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (auto ok = state_->synchronise(); !ok) {
+    return Unexpected(ok.error());
+  }
+  auto counts = io::exportMap(state_->map, request, path);
+  if (!counts) {
+    return counts;
+  }
+  // A tiered map that could not read a region back wrote an incomplete file: say so.
+  if (auto ok = mapper::checkTiers(state_->map); !ok) {
+    return Unexpected(ok.error());
+  }
+  return counts;
 }
 
 Expected<void, Error> Mapper::save(const std::string& path) {

@@ -3,6 +3,7 @@
 #include "src/mapper/mapper_conversions.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "kernels/common/heightmap.h"
@@ -287,6 +288,31 @@ void copyHeightMap(const heightmap::HeightMap& from, HeightMap& to) {
   to.kind.resize(from.kind.size());
   std::transform(from.kind.begin(), from.kind.end(), to.kind.begin(),
                  [](std::uint32_t k) { return static_cast<HeightCell>(k); });
+}
+
+Result<heightmap::CostmapParams> toCostmapParams(const CostmapOptions& o) {
+  const auto bad = [](const char* key, const char* why) {
+    return fail(ErrorCode::kInvalidArgument, std::string("costmap.") + key + " " + why);
+  };
+  if (!(std::isfinite(o.max_step) && o.max_step > 0.0)) {
+    return bad("max_step", "must be a positive height in metres");
+  }
+  if (!(std::isfinite(o.max_slope_deg) && o.max_slope_deg > 0.0 && o.max_slope_deg < 90.0)) {
+    return bad("max_slope", "must be above 0 and below 90 degrees");
+  }
+  if (!(std::isfinite(o.min_clearance) && o.min_clearance >= 0.0)) {
+    return bad("min_clearance", "must be a height >= 0 in metres");
+  }
+  if (o.max_free_cost < 0 || o.max_free_cost > 99) {
+    return bad("max_free_cost", "must be 0 to 99");
+  }
+  heightmap::CostmapParams params;
+  params.max_step_m = o.max_step;
+  params.max_slope_deg = o.max_slope_deg;
+  params.min_clearance_m = o.min_clearance;
+  params.virtual_lethal = o.virtual_lethal;
+  params.max_free_cost = o.max_free_cost;
+  return params;
 }
 
 }  // namespace raymap::mapper

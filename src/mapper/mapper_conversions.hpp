@@ -8,6 +8,7 @@
 #include "raymap/mapper_config.hpp"
 
 #include "src/device/backend_choice.hpp"
+#include "src/heightmap/costmap.hpp"
 #include "src/heightmap/height_map.hpp"
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/map/ray_preparer.hpp"
@@ -25,5 +26,8 @@ backends::BackendChoice toBackendChoice(const BackendOptions& options);
 heightmap::HeightmapOptions toHeightmapOptions(const HeightmapRequest& request);
 /// @brief Copies the layers the public HeightMap has (elevation, clearance, kind, counts).
 void copyHeightMap(const heightmap::HeightMap& from, HeightMap& to);
+/// @brief The costmap parameters of `options`; errors name the key (costmap.max_step …) as
+/// raymapd's `costmap:` section does.
+Result<heightmap::CostmapParams> toCostmapParams(const CostmapOptions& options);
 
 }  // namespace raymap::mapper

@@ -176,7 +176,9 @@ TEST(CliTsdf, ErrorsNameTheOptionOrTheMapAndTheReason) {
   const RunResult mesh_threshold = runRaymap(
       {"export", tsdf, "--mode", "tsdf-mesh", "--threshold", "1", "--ply", dir.file("x.ply")});
   EXPECT_NE(mesh_threshold.exit_code, 0);
-  EXPECT_TRUE(contains(mesh_threshold.err, "do not apply to --mode tsdf-mesh"))
+  EXPECT_TRUE(
+      contains(mesh_threshold.err,
+               "--threshold does not apply to --mode tsdf-mesh (its option is --min-weight)"))
       << mesh_threshold.err;
   const RunResult unknown =
       runRaymap({"export", tsdf, "--mode", "mesh", "--ply", dir.file("x.ply")});

@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `raymap export`: a map as a point cloud for any viewer.
-#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 
-#include "src/io/map_export.hpp"
+#include "raymap/export.hpp"
+
+#include "src/io/map_exports.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/ndt_export.hpp"
-#include "src/io/tsdf_export.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/memory_tiers.hpp"
@@ -19,14 +19,11 @@
 namespace raymap::cli {
 namespace {
 
-// tsdf, tsdf-mesh: crossings between voxels with at least this many rays' weight by default.
-constexpr double kDefaultTsdfMinWeight = 1.0;
-
 struct ExportFlags {
   std::string map;
   std::string ply;
   std::string mode = "occupied";
-  double sigmas = io::NdtExportOptions::kDefaultSigmas;
+  std::optional<double> sigmas;
   std::optional<double> min_axis;
   std::optional<std::string> colour;
   std::optional<double> threshold;   ///< decay: lowest rate exported, per metre
@@ -77,141 +74,73 @@ int commitExport(StagedOutputs& staged, const VoxelMap& map) {
   return kExitOk;
 }
 
-int runNdtExport(const ExportFlags& f) {
-  const char* command = "export";
-  io::NdtExportOptions options;
-  options.sigmas = f.sigmas;
-  options.min_axis_m = f.min_axis;
-  if (f.colour) {
-    auto colour = io::ndtColourFromString(*f.colour);
-    if (!colour) {
-      printError(command, "--colour: " + colour.error().message);
-      return kExitUsage;
-    }
-    options.colour = *colour;
-  }
-  if (auto ok = options.validate(); !ok) {
-    printError(command, ok.error().message);
-    return kExitUsage;
-  }
-  StagedOutputs staged(command);
-  std::string ply;
-  int exit_code = kExitOk;
-  auto map = openMapForExport(f, staged, &ply, &exit_code);
-  if (!map) {
-    return exit_code;
-  }
-  const bool points = f.mode == "ndt-points";
-  auto count = points ? io::exportNdtPoints(*map, options, ply)
-                      : io::exportNdtEllipsoids(*map, options, ply);
-  if (!count) {
-    printError(command, f.map + ": " + count.error().message);
-    return kExitFailure;
-  }
-  if (const int committed = commitExport(staged, *map); committed != kExitOk) {
-    return committed;
-  }
-  if (!f.quiet) {
-    if (points) {
-      std::printf("wrote %s NDT means with normals (coloured by %s) to %s\n",
-                  withCommas(*count).c_str(), io::toString(options.colour), f.ply.c_str());
-    } else {
-      std::printf("wrote %s NDT ellipsoids (%g sigma, coloured by %s) to %s\n",
-                  withCommas(*count).c_str(), options.sigmas, io::toString(options.colour),
-                  f.ply.c_str());
-    }
-  }
-  return kExitOk;
-}
-
-int runTsdfExport(const ExportFlags& f) {
-  const char* command = "export";
-  const double min_weight = f.min_weight.value_or(kDefaultTsdfMinWeight);
-  if (!std::isfinite(min_weight) || min_weight < 0.0) {
-    printError(command, "--min-weight: must be a finite weight >= 0 (rays)");
-    return kExitUsage;
-  }
-  StagedOutputs staged(command);
-  std::string ply;
-  int exit_code = kExitOk;
-  auto map = openMapForExport(f, staged, &ply, &exit_code);
-  if (!map) {
-    return exit_code;
-  }
-  if (f.mode == "tsdf-mesh") {
-    auto counts = io::exportTsdfMesh(*map, ply, min_weight);
-    if (!counts) {
-      printError(command, f.map + ": " + counts.error().message);
-      return kExitFailure;
-    }
-    if (const int committed = commitExport(staged, *map); committed != kExitOk) {
-      return committed;
-    }
-    if (!f.quiet) {
-      std::printf(
-          "wrote a TSDF surface mesh of %s triangles, %s vertices (marching cubes, "
-          "weight >= %g) to %s\n",
-          withCommas(counts->triangles).c_str(), withCommas(counts->vertices).c_str(), min_weight,
-          f.ply.c_str());
-    }
-    return kExitOk;
-  }
-  auto count = io::exportTsdfSurface(*map, ply, min_weight);
-  if (!count) {
-    printError(command, f.map + ": " + count.error().message);
-    return kExitFailure;
-  }
-  if (const int committed = commitExport(staged, *map); committed != kExitOk) {
-    return committed;
-  }
-  if (!f.quiet) {
-    std::printf("wrote %s TSDF surface points (zero crossings, weight >= %g) to %s\n",
-                withCommas(*count).c_str(), min_weight, f.ply.c_str());
-  }
-  return kExitOk;
-}
-
-int runExport(const ExportFlags& f) {
-  if (f.mode == "ndt" || f.mode == "ndt-points") {
-    return runNdtExport(f);
-  }
-  const bool tsdf = f.mode == "tsdf" || f.mode == "tsdf-mesh";
-  if (f.min_weight && !tsdf) {
-    printError("export", "--min-weight applies only to --mode tsdf or tsdf-mesh");
-    return kExitUsage;
-  }
-  if (tsdf) {
-    if (f.threshold || f.colour || f.min_axis || f.sigmas != io::NdtExportOptions::kDefaultSigmas) {
-      const std::string options = "--threshold, --colour, --sigmas and --min-axis";
-      printError("export",
-                 options + " do not apply to --mode " + f.mode + " (its option is --min-weight)");
-      return kExitUsage;
-    }
-    return runTsdfExport(f);
-  }
-  if (f.colour || f.min_axis || f.sigmas != io::NdtExportOptions::kDefaultSigmas) {
-    printError("export",
-               "--colour, --sigmas and --min-axis apply only to --mode ndt or ndt-points");
-    return kExitUsage;
-  }
-  auto mode = io::exportModeFromString(f.mode);
-  if (!mode) {
+/// The request the flags ask for; prints why not (naming the flag) and returns nullopt.
+std::optional<ExportRequest> toExportRequest(const ExportFlags& f) {
+  ExportRequest request;
+  const auto kind = exportKindFromName(f.mode);
+  if (!kind) {
     printError("export", "--mode: unknown mode '" + f.mode +
                              "' (expected occupied, free, mean, decay, ndt, ndt-points, tsdf or "
                              "tsdf-mesh)");
-    return kExitUsage;
+    return std::nullopt;
   }
-  io::ExportOptions options;
-  if (f.threshold) {
-    if (*mode != io::ExportMode::kDecay) {
-      printError("export", "--threshold applies only to --mode decay");
-      return kExitUsage;
+  request.kind = *kind;
+  request.decay_threshold = f.threshold;
+  request.ndt_sigmas = f.sigmas;
+  request.ndt_min_axis = f.min_axis;
+  request.tsdf_min_weight = f.min_weight;
+  if (f.colour) {
+    request.ndt_colour = exportColourFromName(*f.colour);
+    if (!request.ndt_colour) {
+      printError("export", "--colour: unknown colour '" + *f.colour +
+                               "' (expected height, intensity or permeability)");
+      return std::nullopt;
     }
-    if (!std::isfinite(*f.threshold) || *f.threshold < 0.0) {
-      printError("export", "--threshold: must be a finite rate >= 0 (reflections per metre)");
-      return kExitUsage;
-    }
-    options.decay_threshold = *f.threshold;
+  }
+  if (auto ok = io::validateExportRequest(request); !ok) {
+    printError("export", ok.error().message);
+    return std::nullopt;
+  }
+  return request;
+}
+
+/// What an export wrote, as one line.
+void printWritten(const ExportFlags& f, const ExportRequest& r, const ExportCounts& counts) {
+  const std::string items = withCommas(counts.items);
+  const char* ply = f.ply.c_str();
+  const std::string colour(toString(r.ndt_colour.value_or(ExportColour::kHeight)));
+  switch (r.kind) {
+    case ExportKind::kNdt:
+      std::printf("wrote %s NDT ellipsoids (%g sigma, coloured by %s) to %s\n", items.c_str(),
+                  r.ndt_sigmas.value_or(io::NdtExportOptions::kDefaultSigmas), colour.c_str(), ply);
+      return;
+    case ExportKind::kNdtPoints:
+      std::printf("wrote %s NDT means with normals (coloured by %s) to %s\n", items.c_str(),
+                  colour.c_str(), ply);
+      return;
+    case ExportKind::kTsdf:
+      std::printf("wrote %s TSDF surface points (zero crossings, weight >= %g) to %s\n",
+                  items.c_str(), r.tsdf_min_weight.value_or(1.0), ply);
+      return;
+    case ExportKind::kTsdfMesh:
+      std::printf(
+          "wrote a TSDF surface mesh of %s triangles, %s vertices (marching cubes, "
+          "weight >= %g) to %s\n",
+          items.c_str(), withCommas(counts.vertices).c_str(), r.tsdf_min_weight.value_or(1.0), ply);
+      return;
+    case ExportKind::kOccupied:
+    case ExportKind::kFree:
+    case ExportKind::kMean:
+    case ExportKind::kDecay:
+      break;
+  }
+  std::printf("wrote %s points (%s) to %s\n", items.c_str(), f.mode.c_str(), ply);
+}
+
+int runExport(const ExportFlags& f) {
+  const auto request = toExportRequest(f);
+  if (!request) {
+    return kExitUsage;
   }
   StagedOutputs staged("export");
   std::string ply;
@@ -220,17 +149,16 @@ int runExport(const ExportFlags& f) {
   if (!map) {
     return exit_code;
   }
-  auto count = io::exportPly(*map, *mode, ply, options);
-  if (!count) {
-    printError("export", f.map + ": " + count.error().message);
+  auto counts = io::exportMap(*map, *request, ply);
+  if (!counts) {
+    printError("export", f.map + ": " + counts.error().message);
     return kExitFailure;
   }
   if (const int committed = commitExport(staged, *map); committed != kExitOk) {
     return committed;
   }
   if (!f.quiet) {
-    std::printf("wrote %s points (%s) to %s\n", withCommas(*count).c_str(), f.mode.c_str(),
-                f.ply.c_str());
+    printWritten(f, *request, *counts);
   }
   return kExitOk;
 }
@@ -254,8 +182,8 @@ void addExportCommand(CLI::App& app, int* exit_code) {
        "means with normals; tsdf: the zero crossings of a TSDF map (its surface) as points "
        "with normals; tsdf-mesh: that surface as a triangle mesh (marching cubes)")
       ->capture_default_str();
-  c->add_option("--sigmas", flags->sigmas, "NDT: ellipsoid half-axes in standard deviations")
-      ->capture_default_str();
+  c->add_option("--sigmas", flags->sigmas,
+                "NDT: ellipsoid half-axes in standard deviations (default 2)");
   c->add_option("--min-axis", flags->min_axis,
                 "NDT: smallest ellipsoid half-axis, metres (default 0.05 voxel edges), so flat "
                 "surfels stay visible");

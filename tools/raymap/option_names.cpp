@@ -67,6 +67,8 @@ constexpr std::array kOptionFlags{
     OptionFlag{"export.sigmas", "--sigmas", ""},
     OptionFlag{"export.min_axis", "--min-axis", ""},
     OptionFlag{"export.min_weight", "--min-weight", ""},
+    OptionFlag{"export.threshold", "--threshold", ""},
+    OptionFlag{"export.colour", "--colour", "height intensity permeability"},
 };
 
 bool isWordChar(char c) {
