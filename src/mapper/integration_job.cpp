@@ -72,6 +72,62 @@ BackendStats statsSince(const BackendStats& now, const BackendStats& before) {
   return d;  // cache_slots is a size, not a counter
 }
 
+namespace {
+
+/// The session's backend and batcher, made on first use.
+Expected<void, Error> startSession(VoxelMap& map, const IntegrationOptions& options,
+                                   IntegrationSession& session) {
+  if (!session.created.backend) {
+    auto made = backends::createBackend(map, options.backend);
+    if (!made) {
+      return Unexpected(made.error());
+    }
+    session.created = std::move(*made);
+  }
+  Backend& backend = *session.created.backend;
+  if (!session.batcher) {
+    session.batcher = std::make_unique<RayBatcher>(
+        map, backend, options.batch_rays != 0 ? options.batch_rays : backend.preferredBatchRays());
+  }
+  return {};
+}
+
+/// Runs `step` (preparation, integration or the device's sync) and adds its wall and CPU time to
+/// the report's integration time.
+template <class Step>
+auto timedIntegration(IntegrationReport& report, Step&& step) {
+  const Clock::time_point start = Clock::now();
+  const CpuTimes cpu_before = cpuTimes();
+  auto result = step();
+  report.integrate_seconds += secondsSince(start);
+  addCpuSince(cpu_before, &report);
+  return result;
+}
+
+/// After the last batch: the counters, the map's summaries and the tiers drained and checked.
+Expected<void, Error> finishReport(VoxelMap& map, const Backend& backend,
+                                   const RayPreparer& preparer, const BackendStats& stats_before,
+                                   IntegrationReport& report) {
+  report.rays = preparer.counters();
+  report.backend = statsSince(backend.stats(), stats_before);
+  report.summary = map.summarise();
+  report.tsdf = summariseTsdf(map);
+  report.decay = summariseDecay(map);
+  if (auto ok = map.drainTiers(); !ok) {
+    return ok;
+  }
+  if (auto ok = checkTiers(map); !ok) {
+    return ok;
+  }
+  report.tiers = tierReport(map);
+  if (report.tiers) {
+    report.tiers->batches_split = report.backend.batches_split;
+  }
+  return {};
+}
+
+}  // namespace
+
 Result<IntegrationReport> integrateRays(VoxelMap& map, const IntegrationOptions& options,
                                         const RayChunkReader& next_chunk,
                                         const std::function<double()>& fraction,
@@ -79,38 +135,27 @@ Result<IntegrationReport> integrateRays(VoxelMap& map, const IntegrationOptions&
                                         IntegrationSession* reuse) {
   const Clock::time_point start = Clock::now();
   IntegrationSession owned;
-  IntegrationSession& state = reuse != nullptr ? *reuse : owned;
-  backends::CreatedBackend* created = &state.created;
-  if (!created->backend) {
-    auto made = backends::createBackend(map, options.backend);
-    if (!made) {
-      return Unexpected(made.error());
-    }
-    *created = std::move(*made);
+  IntegrationSession& session = reuse != nullptr ? *reuse : owned;
+  if (auto ok = startSession(map, options, session); !ok) {
+    return Unexpected(ok.error());
   }
-  Backend& backend = *created->backend;
+  Backend& backend = *session.created.backend;
   const BackendStats stats_before = backend.stats();
   RayPreparer preparer(map, options.filter);
-  if (!state.batcher) {
-    state.batcher = std::make_unique<RayBatcher>(
-        map, backend, options.batch_rays != 0 ? options.batch_rays : backend.preferredBatchRays());
-  }
-  RayBatcher& batcher = *state.batcher;
+  RayBatcher& batcher = *session.batcher;
   batcher.endStream();  // the input starts again: its first rays are a new scan
   const BatcherCounters batcher_before = batcher.counters();
 
   IntegrationReport report;
   report.backend_name = backend.name();
   report.device = backend.deviceName();
-  report.fallback_warning = created->fallback_warning;
-  report.startup_warning = created->startup_warning;
+  report.fallback_warning = session.created.fallback_warning;
+  report.startup_warning = session.created.startup_warning;
   report.threads = backend.threads();
   std::vector<Ray> chunk(std::size_t{1} << 16);
-
   const auto integrate_failed = [&](IntegrateError error) {
     return integrateFailure(map, backend, error, "map.max_memory");
   };
-
   for (;;) {
     const Clock::time_point t_read = Clock::now();
     auto count = next_chunk(chunk);
@@ -121,58 +166,31 @@ Result<IntegrationReport> integrateRays(VoxelMap& map, const IntegrationOptions&
     if (*count == 0) {
       break;
     }
-    const Clock::time_point t_integrate = Clock::now();
-    const CpuTimes cpu_before = cpuTimes();
-    auto ok = batcher.add(preparer, std::span<const Ray>(chunk.data(), *count));
-    report.integrate_seconds += secondsSince(t_integrate);
-    addCpuSince(cpu_before, &report);
-    if (!ok) {
+    const std::span<const Ray> rays(chunk.data(), *count);
+    if (auto ok = timedIntegration(report, [&] { return batcher.add(preparer, rays); }); !ok) {
       return Unexpected(integrate_failed(ok.error()));
     }
     if (on_progress) {
       const double seconds = report.integrate_seconds;
-      const RayCounters& rays = preparer.counters();
+      const RayCounters& counted = preparer.counters();
       on_progress(IntegrationProgress{
-          fraction(), rays.rays_in,
-          seconds > 0 ? static_cast<double>(rays.rays_accepted) / seconds : 0.0});
+          fraction(), counted.rays_in,
+          seconds > 0 ? static_cast<double>(counted.rays_accepted) / seconds : 0.0});
     }
   }
-  {
-    const Clock::time_point t_integrate = Clock::now();
-    const CpuTimes cpu_before = cpuTimes();
-    auto ok = batcher.flush();
-    report.integrate_seconds += secondsSince(t_integrate);
-    addCpuSince(cpu_before, &report);
-    if (!ok) {
-      return Unexpected(integrate_failed(ok.error()));
-    }
+  if (auto ok = timedIntegration(report, [&] { return batcher.flush(); }); !ok) {
+    return Unexpected(integrate_failed(ok.error()));
   }
   report.scans = batcher.counters().scans - batcher_before.scans;
   report.scans_split = batcher.counters().scans_split - batcher_before.scans_split;
   // Device backends return before the device finishes: the wait and the download of the map
   // belong to the integration time.
-  const Clock::time_point t_sync = Clock::now();
-  const CpuTimes cpu_before_sync = cpuTimes();
-  if (auto ok = backend.synchronise(); !ok) {
+  if (auto ok = timedIntegration(report, [&] { return backend.synchronise(); }); !ok) {
     return fail(ErrorCode::kIo, std::string("integration failed on the ") + backend.name() +
                                     " backend: " + toString(ok.error()));
   }
-  report.integrate_seconds += secondsSince(t_sync);
-  addCpuSince(cpu_before_sync, &report);
-  report.rays = preparer.counters();
-  report.backend = statsSince(backend.stats(), stats_before);
-  report.summary = map.summarise();
-  report.tsdf = summariseTsdf(map);
-  report.decay = summariseDecay(map);
-  if (auto ok = map.drainTiers(); !ok) {
+  if (auto ok = finishReport(map, backend, preparer, stats_before, report); !ok) {
     return Unexpected(ok.error());
-  }
-  if (auto ok = checkTiers(map); !ok) {
-    return Unexpected(ok.error());
-  }
-  report.tiers = tierReport(map);
-  if (report.tiers) {
-    report.tiers->batches_split = report.backend.batches_split;
   }
   report.total_seconds = secondsSince(start);
   report.peak_rss_bytes = platform::peakResidentBytes();
