@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 
+#include "raymap/depth_image.hpp"
 #include "raymap/error.hpp"
 #include "raymap/export.hpp"
 #include "raymap/heightmap.hpp"
@@ -49,8 +50,11 @@ struct MapperCounters {
   std::uint64_t rays_clipped = 0;        ///< shortened to RayOptions::max_range (integrated)
   std::uint64_t rays_no_return = 0;      ///< free-space-only rays (integrated)
   std::uint64_t points_no_pose = 0;      ///< points left out: the pose function had no pose
-  std::uint64_t batches = 0;             ///< backend calls
-  std::uint64_t rays_pending = 0;        ///< prepared rays waiting in the batch (see flush())
+  /// Depth pixels (or blocks, with down-sampling) without a valid depth that gave no ray (no
+  /// return without invalid_as_free, or nearer than DepthOptions::min_range).
+  std::uint64_t depth_no_depth = 0;
+  std::uint64_t batches = 0;       ///< backend calls
+  std::uint64_t rays_pending = 0;  ///< prepared rays waiting in the batch (see flush())
   /// Device backends planning on the device: rays the device prepared (range limits, keys),
   /// and of them points it deskewed first (integrate() with a pose table). 0 on the CPU.
   std::uint64_t rays_prepared_on_device = 0;
@@ -120,6 +124,19 @@ class Mapper {
   /// integrate(). Nothing is integrated on an error.
   Expected<void, Error> integrate(std::span<const SensorPoint> scan,
                                   std::span<const TimedPose> sensor_poses);
+  /// @brief Integrates one depth image as one scan: each pixel's depth (or each block's nearest,
+  /// DepthOptions::downsample) back-projected along the pixel's undistorted ray (`camera`: the
+  /// plumb_bob model of sensor_msgs/CameraInfo) in the camera's optical frame (x right, y down, z
+  /// forward), then into the world with `camera_to_world`. The pixel rays are computed once per
+  /// camera and kept while the intrinsics stay the same. Pixels without depth are counted by the
+  /// decoder, not errors (with invalid_as_free they clear free space). @return kInvalidArgument
+  /// naming the field for an image whose size differs from the camera's, a step too small, no
+  /// data, a camera that validate() refuses, or options out of range (depth.downsample …);
+  /// nothing is integrated then. Else as integrate(). Allocates only when the intrinsics change
+  /// or an image gives more points than any before.
+  Expected<void, Error> integrate(const DepthImageView& image, const CameraIntrinsics& camera,
+                                  const Eigen::Isometry3d& camera_to_world,
+                                  const DepthOptions& options = {});
   /// @brief Integrates the rays waiting in the batch and waits for the backend (a device's map
   /// is copied back to the host), so that queries see every ray given so far.
   Expected<void, Error> flush();

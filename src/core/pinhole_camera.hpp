@@ -7,49 +7,13 @@
 #include <cstdint>
 #include <vector>
 
+#include "raymap/depth_image.hpp"
 #include "raymap/error.hpp"
 #include "raymap/expected.hpp"
 
 namespace raymap {
 
-/// Lens distortion models of sensor_msgs/CameraInfo::distortion_model.
-enum class DistortionModel : std::uint8_t {
-  kNone,      ///< "" or every coefficient zero: a rectified image
-  kPlumbBob,  ///< "plumb_bob" (and "rational_polynomial" with its extra terms zero): k1 k2 p1 p2 k3
-};
-
-/// @brief Intrinsics of a pinhole camera, as sensor_msgs/CameraInfo states them.
-///
-/// Frames and units: the optical frame (REP 103 "_optical": x right, y down, z forward); pixel
-/// coordinates in pixels, (0, 0) the centre of the top-left pixel, u to the right, v down (as
-/// OpenCV and ROS image_geometry use them). A point (x, y, z) with z > 0 projects to normalised
-/// coordinates (x / z, y / z), then through distortion to (u, v) = (fx x_d + cx, fy y_d + cy).
-/// Plain value type. Thread-safety: immutable use from any thread.
-struct CameraIntrinsics {
-  std::uint32_t width = 0;   ///< pixels
-  std::uint32_t height = 0;  ///< pixels
-  double fx = 0.0;           ///< focal length, pixels (K[0])
-  double fy = 0.0;           ///< focal length, pixels (K[4])
-  double cx = 0.0;           ///< principal point, pixels (K[2])
-  double cy = 0.0;           ///< principal point, pixels (K[5])
-  DistortionModel distortion = DistortionModel::kNone;
-  /// plumb_bob coefficients in CameraInfo's order: k1, k2, p1 (t1), p2 (t2), k3.
-  double k1 = 0.0;
-  double k2 = 0.0;
-  double p1 = 0.0;
-  double p2 = 0.0;
-  double k3 = 0.0;
-
-  /// @brief Checks that the camera can be used: a size of at least 1 × 1 pixel and at most
-  /// 65,535 on a side, finite focal lengths > 0, finite principal point and coefficients, and a
-  /// distortion that is invertible over the image (checked at the corners and edge midpoints).
-  /// The message names the field and the reason.
-  Expected<void, Error> validate() const;
-  /// @brief What validate() checks, without describing the failure. @rt allocates: no.
-  bool usable() const noexcept;
-
-  bool operator==(const CameraIntrinsics&) const = default;
-};
+// CameraIntrinsics and DistortionModel are public (raymap/depth_image.hpp).
 
 /// @brief Normalised image coordinates: the ray through (x, y, 1) in the optical frame.
 struct NormalisedPoint {

@@ -21,6 +21,7 @@
 #include "src/map/ray_batcher.hpp"
 #include "src/mapper/mapper_conversions.hpp"
 #include "src/mapper/tier_report.hpp"
+#include "src/msgs/depth_image.hpp"
 
 namespace raymap {
 namespace {
@@ -54,6 +55,9 @@ struct Mapper::State {
   std::uint64_t points_no_pose = 0;
   std::vector<rm_scan_point> table_points;  // integrateWithTable(): grow to the largest scan
   std::vector<rm_pose_sample> table_poses;
+  PixelRayTable depth_rays;                   // integrate(depth): the last camera's pixel rays
+  std::vector<msgs::ScanPoint> depth_points;  // grows to the largest image's points
+  std::uint64_t depth_no_depth = 0;
   std::unique_ptr<heightmap::HeightmapGenerator> generator;  // made on the first heightmap()
   heightmap::HeightmapPlan plan;
   heightmap::HeightMap grid;
@@ -119,6 +123,45 @@ struct Mapper::State {
       ray.time_s = p.time_s;
       ray.intensity = p.intensity;
       ray.flags = p.no_return ? kRayNoReturn : 0u;
+      if (auto ok = push(ray); !ok) {
+        return ok;
+      }
+    }
+    return endScan();
+  }
+  /// One depth image (Mapper::integrate's contract for depth images).
+  Expected<void, Error> integrateDepth(const DepthImageView& image, const CameraIntrinsics& camera,
+                                       const Eigen::Isometry3d& camera_to_world,
+                                       const DepthOptions& depth) {
+    auto settings = mapper::toDepthDecodeOptions(depth);
+    if (!settings) {
+      return Unexpected(settings.error());
+    }
+    auto pixels = mapper::toDepthPixels(image, camera);
+    if (!pixels) {
+      return Unexpected(pixels.error());
+    }
+    if (!depth_rays.matches(camera)) {
+      if (auto built = depth_rays.build(camera); !built) {
+        return Unexpected(built.error());  // names the camera's field ("camera focal lengths …")
+      }
+    }
+    const std::size_t capacity =
+        msgs::depthPointCapacity(image.width, image.height, depth.downsample);
+    if (depth_points.size() < capacity) {
+      depth_points.resize(capacity);
+    }
+    const msgs::DepthImageHeader decoded =
+        msgs::decodeDepthPixels(*pixels, depth_rays, *settings, depth_points);
+    depth_no_depth += decoded.invalid - decoded.free_only;
+    Ray ray;
+    ray.scan = next_scan;
+    ray.origin = toVec3(camera_to_world.translation());
+    for (const msgs::ScanPoint& p : std::span(depth_points).first(decoded.points)) {
+      const Eigen::Vector3d point(static_cast<double>(p.x), static_cast<double>(p.y),
+                                  static_cast<double>(p.z));
+      ray.sample = toVec3(camera_to_world * point);
+      ray.flags = (p.flags & msgs::kPointFreeOnly) != 0u ? kRayNoReturn : 0u;
       if (auto ok = push(ray); !ok) {
         return ok;
       }
@@ -266,6 +309,12 @@ Expected<void, Error> Mapper::integrate(std::span<const SensorPoint> scan,
   return state_->integrateWithTable(scan, sensor_poses);
 }
 
+Expected<void, Error> Mapper::integrate(const DepthImageView& image, const CameraIntrinsics& camera,
+                                        const Eigen::Isometry3d& camera_to_world,
+                                        const DepthOptions& options) {
+  return state_->integrateDepth(image, camera, camera_to_world, options);
+}
+
 Expected<void, Error> Mapper::flush() { return state_->synchronise(); }
 
 std::optional<VoxelKey> Mapper::key(const Eigen::Vector3d& point) const noexcept {
@@ -408,6 +457,7 @@ MapperCounters Mapper::counters() const noexcept {
   c.rays_clipped = rays.rays_clipped;
   c.rays_no_return = rays.rays_no_return;
   c.points_no_pose = s.points_no_pose;
+  c.depth_no_depth = s.depth_no_depth;
   c.batches = s.batcher->counters().batches;
   c.rays_pending = s.batcher->pending();
   const BackendStats backend = s.backend.backend->stats();

@@ -315,4 +315,56 @@ Result<heightmap::CostmapParams> toCostmapParams(const CostmapOptions& o) {
   return params;
 }
 
+Result<msgs::DepthDecodeOptions> toDepthDecodeOptions(const DepthOptions& o) {
+  const auto bad = [](const char* key, const char* why) {
+    return fail(ErrorCode::kInvalidArgument, std::string("depth.") + key + " " + why);
+  };
+  if (o.downsample < 1 || o.downsample > 64) {
+    return bad("downsample", "must be 1 to 64 (pixels per block side)");
+  }
+  if (!(std::isfinite(o.min_range) && o.min_range >= 0.0)) {
+    return bad("min_range", "must be a distance >= 0 in metres");
+  }
+  if (!(std::isfinite(o.max_range) && o.max_range >= 0.0)) {
+    return bad("max_range", "must be a distance >= 0 in metres (0: none)");
+  }
+  if (o.invalid_as_free && o.max_range <= 0.0) {
+    return bad("invalid_as_free", "needs depth.max_range (the length of the free rays)");
+  }
+  msgs::DepthDecodeOptions options;
+  options.downsample = o.downsample;
+  options.min_range_m = static_cast<float>(o.min_range);
+  options.max_range_m = static_cast<float>(o.max_range);
+  options.invalid_as_free = o.invalid_as_free;
+  return options;
+}
+
+Result<msgs::DepthPixels> toDepthPixels(const DepthImageView& image,
+                                        const CameraIntrinsics& camera) {
+  const auto bad = [](const std::string& why) {
+    return fail(ErrorCode::kInvalidArgument, "image." + why);
+  };
+  if (image.width != camera.width || image.height != camera.height) {
+    return bad("width, image.height: " + std::to_string(image.width) + " x " +
+               std::to_string(image.height) + " pixels, but the camera's are " +
+               std::to_string(camera.width) + " x " + std::to_string(camera.height));
+  }
+  const bool millimetres = image.encoding == DepthEncoding::k16UC1;
+  const std::size_t pixel_bytes = millimetres ? 2 : 4;
+  if (image.step < std::size_t{image.width} * pixel_bytes) {
+    return bad("step: " + std::to_string(image.step) + " bytes per row is less than " +
+               std::to_string(image.width) + " pixels of " + std::to_string(pixel_bytes) +
+               " bytes");
+  }
+  if (image.data == nullptr) {
+    return bad("data: no pixels (nullptr)");
+  }
+  return msgs::DepthPixels{static_cast<const std::byte*>(image.data),
+                           image.step,
+                           image.width,
+                           image.height,
+                           millimetres,
+                           image.big_endian};
+}
+
 }  // namespace raymap::mapper

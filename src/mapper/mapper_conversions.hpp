@@ -13,6 +13,7 @@
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/map/ray_preparer.hpp"
 #include "src/map/voxel_map.hpp"
+#include "src/msgs/depth_image.hpp"
 
 namespace raymap::mapper {
 
@@ -26,6 +27,12 @@ backends::BackendChoice toBackendChoice(const BackendOptions& options);
 heightmap::HeightmapOptions toHeightmapOptions(const HeightmapRequest& request);
 /// @brief Copies the layers the public HeightMap has (elevation, clearance, kind, counts).
 void copyHeightMap(const heightmap::HeightMap& from, HeightMap& to);
+/// @brief The depth decoder's options; errors name the key (depth.downsample …).
+Result<msgs::DepthDecodeOptions> toDepthDecodeOptions(const DepthOptions& options);
+/// @brief The decoder's view of a caller's image; errors name the field (image.width …) when it
+/// does not fit `camera` or holds no pixels.
+Result<msgs::DepthPixels> toDepthPixels(const DepthImageView& image,
+                                        const CameraIntrinsics& camera);
 /// @brief The costmap parameters of `options`; errors name the key (costmap.max_step …) as
 /// raymapd's `costmap:` section does.
 Result<heightmap::CostmapParams> toCostmapParams(const CostmapOptions& options);

@@ -311,24 +311,31 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
     return Unexpected(parsed.error());
   }
   const DepthImageInfo& info = parsed->info;
-  const std::uint32_t width = info.width;
-  const std::uint32_t height = info.height;
-  const std::uint32_t step = info.step;
-  const std::span<const std::byte> data = parsed->data;
-  const bool is_bigendian = info.big_endian;
-  DepthImageHeader header{};
-  header.millimetres = info.millimetres;
-  if (width != rays.width() || height != rays.height()) {
+  if (info.width != rays.width() || info.height != rays.height()) {
     return Unexpected(DepthImageError::kCameraInfoMismatch);
   }
-  if (depthPointCapacity(width, height, options.downsample) > out.size()) {
+  if (depthPointCapacity(info.width, info.height, options.downsample) > out.size()) {
     return Unexpected(DepthImageError::kTooManyPoints);
   }
+  const DepthPixels pixels{parsed->data.data(), info.step,        info.width,
+                           info.height,         info.millimetres, info.big_endian};
+  DepthImageHeader decoded = decodeDepthPixels(pixels, rays, options, out);
+  decoded.stamp_ns = info.stamp_ns;
+  std::memcpy(decoded.frame_id, info.frame_id, sizeof(decoded.frame_id));
+  return decoded;
+}
 
-  header.stamp_ns = info.stamp_ns;
-  std::memcpy(header.frame_id, info.frame_id, sizeof(header.frame_id));
-  header.width = width;
-  header.height = height;
+DepthImageHeader decodeDepthPixels(const DepthPixels& pixels, const PixelRayTable& rays,
+                                   const DepthDecodeOptions& options,
+                                   std::span<ScanPoint> out) noexcept {
+  RAYMAP_EXPECTS(rays.built() && pixels.width == rays.width() && pixels.height == rays.height());
+  RAYMAP_EXPECTS(options.downsample >= 1);
+  RAYMAP_EXPECTS(depthPointCapacity(pixels.width, pixels.height, options.downsample) <= out.size());
+  DepthImageHeader header{};
+  header.millimetres = pixels.millimetres;
+  header.width = pixels.width;
+  header.height = pixels.height;
+  const bool is_bigendian = pixels.big_endian;
 
   Limits limits;
   // NaN -> 0: none. In millimetres for 16UC1 (the unit its pixels are compared in).
@@ -338,7 +345,7 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
   // Free-only points need a length: without a max range invalid blocks are left out.
   limits.free_invalid =
       options.invalid_as_free && options.max_range_m > 0.0f && options.max_range_m <= kLargestDepth;
-  const Image image{data.data(), step, width, height};
+  const Image image{pixels.data, pixels.step, pixels.width, pixels.height};
   constexpr std::endian kBig = std::endian::big;
   constexpr std::endian kLittle = std::endian::little;
   ScanPoint* points = out.data();

@@ -106,4 +106,24 @@ Expected<DepthImageHeader, DepthImageError> decodeDepthImage(std::span<const std
                                                              const DepthDecodeOptions& options,
                                                              std::span<ScanPoint> out) noexcept;
 
+/// @brief The pixels of a depth image, wherever they came from (a message's data, a caller's
+/// buffer). Row-major, `step` bytes per row.
+struct DepthPixels {
+  const std::byte* data = nullptr;
+  std::size_t step = 0;
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  bool millimetres = false;  ///< 16-bit millimetres (else 32-bit float metres)
+  bool big_endian = false;
+};
+
+/// @brief decodeDepthImage's back-projection of pixels already checked: the header's stamp and
+/// frame are left empty.
+/// @pre rays built for pixels.width × pixels.height; step >= width × bytes per pixel; data holds
+/// step × height bytes; options.downsample >= 1; out.size() >= depthPointCapacity().
+/// @rt allocates: no; blocks: no; thread: any (no shared state).
+DepthImageHeader decodeDepthPixels(const DepthPixels& pixels, const PixelRayTable& rays,
+                                   const DepthDecodeOptions& options,
+                                   std::span<ScanPoint> out) noexcept;
+
 }  // namespace raymap::msgs

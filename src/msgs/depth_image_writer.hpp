@@ -9,15 +9,14 @@
 #include <string_view>
 #include <vector>
 
+#include "raymap/depth_image.hpp"
+
 #include "src/core/pinhole_camera.hpp"
 
 namespace raymap::msgs {
 
-/// The depth encodings raymap writes (and reads: src/msgs/depth_image.hpp).
-enum class DepthEncoding : std::uint8_t {
-  k16UC1,  ///< "16UC1": uint16 millimetres, 0 = no data (REP 118)
-  k32FC1,  ///< "32FC1": float metres, NaN = no data
-};
+/// The depth encodings raymap writes (and reads: src/msgs/depth_image.hpp): the public one.
+using raymap::DepthEncoding;
 
 /// @brief Serializes sensor_msgs/CameraInfo for `camera` (CDR_LE, with the 4-byte encapsulation
 /// header) into `out`, replacing its contents.

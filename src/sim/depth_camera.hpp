@@ -18,12 +18,9 @@
 
 namespace raymap::sim {
 
-/// How a frame is encoded on the wire (sensor_msgs/Image::encoding). Rendering is in float
-/// metres either way; the encoding matters when the frame is serialised.
-enum class DepthEncoding : std::uint8_t {
-  k16UC1,  ///< uint16 millimetres, 0 = invalid
-  k32FC1,  ///< float metres, REP 117 non-finite values for invalid
-};
+/// How a frame is encoded on the wire (sensor_msgs/Image::encoding; the public enum). Rendering
+/// is in float metres either way; the encoding matters when the frame is serialised.
+using raymap::DepthEncoding;
 
 /// @brief "16UC1" or "32FC1". @rt allocates: no.
 const char* toString(DepthEncoding encoding) noexcept;

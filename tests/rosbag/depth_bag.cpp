@@ -70,6 +70,7 @@ DepthBag makeDepthBag(const TempDir& dir, int frames, bool distorted, bool encod
   EXPECT_TRUE(file) << (file ? "" : file.error().message);
   bag.scene = file.value().scene;
   const CameraIntrinsics camera = bodyCamera(distorted);
+  bag.camera = camera;
   PixelRayTable rays;
   const auto built = rays.build(camera);
   EXPECT_TRUE(built) << (built ? "" : built.error().message);
@@ -124,6 +125,11 @@ DepthBag makeDepthBag(const TempDir& dir, int frames, bool distorted, bool encod
     }
     spec.depthImage(kImageTopic, logged + 1, stamp, kFrame, camera.width, camera.height, depth,
                     encoding_16);
+    DepthFrame frame;
+    frame.depth = depth;
+    frame.camera_to_world.translation() = sensor.position;
+    frame.camera_to_world.linear() = sensor.orientation.toRotationMatrix();
+    bag.frames.push_back(std::move(frame));
     if (bad_image && k == 1) {
       const Json rgb = {
           {"header", {{"stamp", {{"sec", 1}, {"nanosec", 0}}}, {"frame_id", kFrame}}},

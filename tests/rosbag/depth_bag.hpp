@@ -5,14 +5,27 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
+
+#include "raymap/depth_image.hpp"
+#include <Eigen/Geometry>
 
 #include "src/sim/scene.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
 
+/// @brief One image as the camera took it: 32FC1 metres (16UC1's rounding applied when the bag
+/// is 16UC1), and the optical frame's pose in the world at its stamp.
+struct DepthFrame {
+  std::vector<float> depth;
+  Eigen::Isometry3d camera_to_world = Eigen::Isometry3d::Identity();
+};
+
 /// @brief A recording of the body camera (160 x 120, 5 Hz, 3 m range) with 50 Hz odometry.
 struct DepthBag {
+  CameraIntrinsics camera;
+  std::vector<DepthFrame> frames;
   std::string spec;
   std::string ply;  ///< the valid pixels' rays, as the decoder gives them (no down-sampling)
   std::size_t rays = 0;

@@ -75,6 +75,40 @@ TEST(LibraryBags, DepthImagesWithTheirCameraInfoMapAsPopulateMapsThem) {
   expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
 }
 
+// The same images given to Mapper::integrate(DepthImageView, CameraIntrinsics, pose) directly,
+// as a program with its own camera driver would.
+TEST(LibraryDepth, ImagesWithTheirIntrinsicsMapAsPopulateMapsTheBag) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const DepthBag depth = makeDepthBag(dir, 6, true, false);
+  const std::string bag = dir.file("depth_bag");
+  writeBag(depth.spec, bag, {});
+  const RunResult r = runRaymap({"populate", bag, "-o", dir.file("cli.rmap"), "-q", "--max-range",
+                                 "3", "--downsample", "2", "--invalid-as-free"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+
+  MapperConfig config;
+  config.rays.max_range = 3.0;
+  auto mapper = Mapper::create(config);
+  ASSERT_TRUE(mapper) << mapper.error().message;
+  DepthOptions options;
+  options.downsample = 2;
+  options.max_range = 3.0;
+  options.invalid_as_free = true;
+  for (const DepthFrame& frame : depth.frames) {
+    DepthImageView image;
+    image.data = frame.depth.data();
+    image.width = depth.camera.width;
+    image.height = depth.camera.height;
+    image.step = depth.camera.width * sizeof(float);
+    image.encoding = DepthEncoding::k32FC1;
+    ASSERT_TRUE(mapper->integrate(image, depth.camera, frame.camera_to_world, options));
+  }
+  ASSERT_TRUE(mapper->save(dir.file("library.rmap")));
+  EXPECT_EQ(mapper->counters().scans, 6u);
+  expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
+}
+
 TEST(LibraryBags, AMissingTopicIsNamedWithTheBagsTopicsOfThatType) {
   REQUIRE_NODE_HARNESS();
   TempDir dir;
