@@ -28,7 +28,7 @@ if find "$prefix/include" -name '*.hpp' -exec grep -lE '#include "(src|platform|
 fi
 
 cp -r examples "$work/examples"  # outside the source tree: only the installed package is there
-for example in map_ray_cloud heightmap_from_scans map_recording map_outputs; do
+for example in map_ray_cloud heightmap_from_scans map_recording map_outputs depth_camera; do
   echo "== example $example against the installed package"
   cmake -S "$work/examples/$example" -B "$work/build-$example" -G Ninja \
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >"$work/$example-configure.log" ||
@@ -94,9 +94,9 @@ done
 
 echo "== map_outputs: a Nav2 costmap of the room and its export, as raymap export writes it"
 mkdir -p "$work/outputs"
-"$work/build-map_outputs/map_outputs" "$work/populate-tsdf.rmap" "$work/outputs" --size 9 \
-  --export tsdf-mesh | tee "$work/outputs.txt"
-"$build/tools/raymap" export "$work/populate-tsdf.rmap" --mode tsdf-mesh \
+"$work/build-map_outputs/map_outputs" "$work/populate-ndt-om.rmap" "$work/outputs" --size 9 \
+  --export ndt | tee "$work/outputs.txt"
+"$build/tools/raymap" export "$work/populate-ndt-om.rmap" --mode ndt \
   --ply "$work/raymap-export.ply" --quiet
 cmp "$work/outputs/voxels.ply" "$work/raymap-export.ply" ||
   { echo "check-install: map_outputs' export differs from raymap export's" >&2; exit 1; }
@@ -108,6 +108,14 @@ grep -qE '^image: costmap.pgm$' "$work/outputs/costmap.yaml" &&
 lethal=$(grep -oE '[0-9]+ lethal' "$work/outputs.txt" | grep -oE '^[0-9]+')
 [ "${lethal:-0}" -gt 0 ] || { echo "check-install: the room's costmap has no lethal cell" >&2; exit 1; }
 
+echo "== depth_camera: 16UC1 images with their intrinsics see the box, not what it hides"
+"$work/build-depth_camera/depth_camera" | tee "$work/depth.txt"
+for expected in "(1.05, 0.05, 0.45): free" "(2.05, 0.05, 0.45): occupied" \
+  "(2.75, 0.05, 0.45): unobserved" "(3.05, 1.05, 0.45): occupied"; do
+  grep -qF "voxel at $expected" "$work/depth.txt" ||
+    { echo "check-install: depth_camera: not '$expected'" >&2; exit 1; }
+done
+
 echo "== heightmap_from_scans"
 "$work/build-heightmap_from_scans/heightmap_from_scans" "$work/heightmap.csv" | tee "$work/hm.txt"
 step=$(grep -oE 'elevation at \(3.55, 0.05\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
@@ -116,4 +124,4 @@ awk -v s="$step" -v f="$floor" 'BEGIN { exit !(s > 0.2 && s < 0.35 && f > -0.1 &
   { echo "check-install: step at $step m, floor at $floor m (want about 0.3 and 0)" >&2; exit 1; }
 [ "$(wc -l <"$work/heightmap.csv")" -eq 10001 ] ||
   { echo "check-install: the height-map CSV does not have 100 x 100 cells" >&2; exit 1; }
-echo "check-install: the installed package builds and runs the four examples"
+echo "check-install: the installed package builds and runs the five examples"
