@@ -141,6 +141,13 @@ class Mapper {
   /// is copied back to the host), so that queries see every ray given so far.
   Expected<void, Error> flush();
 
+  /// @brief Centres the rolling window (MapOptions::window) on `centre` (world frame, metres; to
+  /// the nearest region): the rays waiting in the batch go in first, then regions that leave the
+  /// window are emptied and recycled for the ones that enter it. Call it as the robot moves (a
+  /// service does so before each height map). @return the regions recycled; 0 for a map without
+  /// a window. Errors as flush(). Allocates: no.
+  Result<std::uint32_t> moveWindow(const Eigen::Vector3d& centre);
+
   /// @brief The key of the voxel holding `point` (world frame, metres); nullopt beyond the
   /// map's key range (or for a non-finite point).
   std::optional<VoxelKey> key(const Eigen::Vector3d& point) const noexcept;

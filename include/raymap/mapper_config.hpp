@@ -9,6 +9,7 @@
 #include <string>
 
 #include "raymap/map_types.hpp"
+#include <Eigen/Core>
 
 namespace raymap {
 
@@ -80,6 +81,12 @@ struct MapOptions {
   /// fails with a capacity error, or with tiers enabled the coldest regions move out.
   std::uint64_t max_memory_bytes = std::uint64_t{4} << 30;
   TierOptions tiers;
+  /// A robot-centric rolling window instead of a map that grows (raymapd's map, `map.window`):
+  /// regions per axis (x, y, z; 1 to 4096 each), the pool holding exactly that many, so the
+  /// memory is fixed and max_memory_bytes is not used. Mapper::moveWindow() centres it on the
+  /// robot; regions that leave it are emptied and recycled, and rays outside it are counted
+  /// (rays_out_of_bounds), not integrated. No tiers with a window.
+  std::optional<Eigen::Vector3i> window;
 };
 
 /// @brief Limits applied to every ray before it is integrated (invalid rays are counted, never

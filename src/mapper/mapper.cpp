@@ -317,6 +317,18 @@ Expected<void, Error> Mapper::integrate(const DepthImageView& image, const Camer
 
 Expected<void, Error> Mapper::flush() { return state_->synchronise(); }
 
+Result<std::uint32_t> Mapper::moveWindow(const Eigen::Vector3d& centre) {
+  State& s = *state_;
+  if (s.map.config().policy != StorePolicy::kRolling) {
+    return std::uint32_t{0};
+  }
+  // The batch's rays were prepared against the window they arrived in: they go in first.
+  if (auto ok = s.batcher->flush(); !ok) {
+    return Unexpected(s.integrateError(ok.error()));
+  }
+  return s.map.setWindowCentre(toVec3(centre));
+}
+
 std::optional<VoxelKey> Mapper::key(const Eigen::Vector3d& point) const noexcept {
   const Vec3d p = toVec3(point);
   if (!p.isFinite() || !state_->map.voxelInRange(p)) {

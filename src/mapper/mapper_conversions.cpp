@@ -156,6 +156,26 @@ Expected<void, Error> applyMode(const MapOptions& options, MapConfig& config) {
   return {};
 }
 
+/// map.window: a rolling map whose pool is the window.
+Expected<void, Error> applyWindow(const MapOptions& options, MapConfig& config) {
+  if (!options.window) {
+    return {};
+  }
+  const Eigen::Vector3i& w = *options.window;
+  if (w.minCoeff() < 1 || w.maxCoeff() > 4096) {
+    return fail(ErrorCode::kInvalidArgument,
+                "map.window must be 1 to 4096 regions on each axis (x, y, z)");
+  }
+  if (options.tiers.enabled) {
+    return fail(ErrorCode::kInvalidArgument,
+                "map.window: a rolling window keeps its regions in its pool; it has no cold "
+                "tiers (map.tiers.enabled must be false)");
+  }
+  config.policy = StorePolicy::kRolling;
+  config.window_regions = Vec3i{w.x(), w.y(), w.z()};
+  return {};
+}
+
 }  // namespace
 
 Result<MapConfig> toMapConfig(const MapOptions& options) {
@@ -185,6 +205,9 @@ Result<MapConfig> toMapConfig(const MapOptions& options) {
   config.tiers.enabled = options.tiers.enabled;
   config.tiers.compressed_bytes = options.tiers.compressed_memory_bytes;
   config.tiers.spill_dir = options.tiers.spill_dir;
+  if (auto ok = applyWindow(options, config); !ok) {
+    return Unexpected(ok.error());
+  }
   if (auto ok = applyMode(options, config); !ok) {
     return Unexpected(Error{ok.error().code, "map options: " + ok.error().message});
   }
@@ -207,6 +230,10 @@ MapOptions toMapOptions(const MapConfig& config) {
   options.clamp_max_log_odds = config.occupancy.clamp_max;
   options.occupied_threshold = probability(config.occupancy.threshold);
   options.max_memory_bytes = config.memory_budget_bytes;
+  if (config.policy == StorePolicy::kRolling) {
+    const Vec3i& w = config.window_regions;
+    options.window = Eigen::Vector3i(w.x, w.y, w.z);
+  }
   options.decay_rate = config.decay_rate;
   options.occupancy = config.occupancy_layer;
   if (isNdt(config.mode)) {

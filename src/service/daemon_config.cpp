@@ -52,6 +52,18 @@ void readMap(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
   mapper::readMapOptions(ctx, node, o, config.warnings);
   Fields f(ctx, node, "map");  // raymapd's own keys of the section
   config.save_map_on_exit = text(f, "save_on_exit", "");
+  o.window = Eigen::Vector3i(8, 8, 3);  // a service's map is always a rolling window
+  if (f.has("window")) {
+    const YAML::Node w = f.get("window");
+    const std::string path = f.path("window");
+    if (!w.IsSequence() || w.size() != 3) {
+      ctx.fail(w, path, "expected [x, y, z]: the rolling window in regions per axis");
+    } else {
+      o.window = Eigen::Vector3i(config::toInteger<std::int32_t>(ctx, w[0], path + "[0]", 1, 256),
+                                 config::toInteger<std::int32_t>(ctx, w[1], path + "[1]", 1, 256),
+                                 config::toInteger<std::int32_t>(ctx, w[2], path + "[2]", 1, 256));
+    }
+  }
   if (ctx.failed()) {
     return;
   }
@@ -60,23 +72,8 @@ void readMap(Context& ctx, const YAML::Node& node, DaemonConfig& config) {
     ctx.fail(node, "", converted.error().message);
     return;
   }
-  MapConfig& map = config.map;
-  map = *converted;
-  map.policy = StorePolicy::kRolling;
-  map.tiers = RegionTierConfig{};  // a rolling map keeps its window in its pool
-  map.prefault = true;             // a service touches its pool once at start-up, not in the loop
-  map.window_regions = {8, 8, 3};
-  if (f.has("window")) {
-    const YAML::Node w = f.get("window");
-    const std::string path = f.path("window");
-    if (!w.IsSequence() || w.size() != 3) {
-      ctx.fail(w, path, "expected [x, y, z]: the rolling window in regions per axis");
-    } else {
-      map.window_regions = {config::toInteger<std::int32_t>(ctx, w[0], path + "[0]", 1, 256),
-                            config::toInteger<std::int32_t>(ctx, w[1], path + "[1]", 1, 256),
-                            config::toInteger<std::int32_t>(ctx, w[2], path + "[2]", 1, 256)};
-    }
-  }
+  config.map = *converted;
+  config.map.prefault = true;  // a service touches its pool once at start-up, not in the loop
 }
 
 /// The `backend:` section as the library's BackendOptions, converted as raymap::Mapper and
