@@ -116,12 +116,15 @@ for expected in "(1.05, 0.05, 0.45): free" "(2.05, 0.05, 0.45): occupied" \
     { echo "check-install: depth_camera: not '$expected'" >&2; exit 1; }
 done
 
-echo "== heightmap_from_scans"
-"$work/build-heightmap_from_scans/heightmap_from_scans" "$work/heightmap.csv" | tee "$work/hm.txt"
-step=$(grep -oE 'elevation at \(3.55, 0.05\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
-floor=$(grep -oE 'elevation at \(1.05, 2.55\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
-awk -v s="$step" -v f="$floor" 'BEGIN { exit !(s > 0.2 && s < 0.35 && f > -0.1 && f < 0.05) }' ||
-  { echo "check-install: step at $step m, floor at $floor m (want about 0.3 and 0)" >&2; exit 1; }
-[ "$(wc -l <"$work/heightmap.csv")" -eq 10001 ] ||
-  { echo "check-install: the height-map CSV does not have 100 x 100 cells" >&2; exit 1; }
+for rolling in "" --rolling; do
+  echo "== heightmap_from_scans $rolling"
+  # shellcheck disable=SC2086
+  "$work/build-heightmap_from_scans/heightmap_from_scans" "$work/heightmap.csv" $rolling | tee "$work/hm.txt"
+  step=$(grep -oE 'elevation at \(3.55, 0.05\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
+  floor=$(grep -oE 'elevation at \(1.05, 2.55\): [-0-9.]+' "$work/hm.txt" | grep -oE '[-0-9.]+$')
+  awk -v s="$step" -v f="$floor" 'BEGIN { exit !(s > 0.2 && s < 0.35 && f > -0.1 && f < 0.05) }' ||
+    { echo "check-install: $rolling step at $step m, floor at $floor m (want about 0.3 and 0)" >&2; exit 1; }
+  [ "$(wc -l <"$work/heightmap.csv")" -eq 10001 ] ||
+    { echo "check-install: the height-map CSV does not have 100 x 100 cells" >&2; exit 1; }
+done
 echo "check-install: the installed package builds and runs the five examples"

@@ -3,7 +3,9 @@
 // raymap::Mapper (as a driver with odometry would), then writes a height map around the robot.
 // The world: a floor at z = 0 and a 0.3 m step (a box from x = 3 to 4 m, y = -1 to 1 m). The
 // robot drives along +x at 0.5 m/s; its lidar, 1 m above the floor, sweeps once per 0.1 s.
-//   heightmap_from_scans OUT.csv [--backend cpu|opencl|cuda]
+// --rolling keeps a robot-centric window instead (25.6 m x 25.6 m x 9.6 m, as raymapd does),
+// moved to the robot before each sweep.
+//   heightmap_from_scans OUT.csv [--backend cpu|opencl|cuda] [--rolling]
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -96,15 +98,24 @@ const char* kindName(raymap::HeightCell kind) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2 && argc != 4) {
-    std::fprintf(stderr, "usage: heightmap_from_scans OUT.csv [--backend cpu|opencl|cuda]\n");
-    return 2;
-  }
   raymap::MapperConfig config;
   config.map.resolution = 0.1;
   config.map.max_memory_bytes = std::uint64_t{512} << 20;
-  if (argc == 4) {
-    config.backend.name = argv[3];
+  bool usage = argc < 2;
+  for (int i = 2; i < argc && !usage; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--backend" && i + 1 < argc) {
+      config.backend.name = argv[++i];
+    } else if (flag == "--rolling") {
+      config.map.window = Eigen::Vector3i(8, 8, 3);  // regions of 32 voxels: 3.2 m each
+    } else {
+      usage = true;
+    }
+  }
+  if (usage) {
+    std::fprintf(stderr,
+                 "usage: heightmap_from_scans OUT.csv [--backend cpu|opencl|cuda] [--rolling]\n");
+    return 2;
   }
   auto mapper = raymap::Mapper::create(config);
   if (!mapper) {
@@ -116,6 +127,11 @@ int main(int argc, char** argv) {
     return sensorPose(t);
   };
   for (int s = 0; s < 40; ++s) {
+    // A rolling window follows the robot (a map without one ignores this).
+    if (auto moved = mapper->moveWindow(sensorPose(s * kSweepPeriod).translation()); !moved) {
+      std::fprintf(stderr, "heightmap_from_scans: %s\n", moved.error().message.c_str());
+      return 1;
+    }
     const std::vector<raymap::SensorPoint> points = sweep(s * kSweepPeriod);
     if (auto ok = mapper->integrate(points, pose_at); !ok) {
       std::fprintf(stderr, "heightmap_from_scans: %s\n", ok.error().message.c_str());
