@@ -70,12 +70,14 @@ struct MapOptions {
   /// Keep the occupancy layer. false with decay_rate (and kOccupancy, per-ray semantics): a map of
   /// decay rates only, what `raymap populate --mode decay` makes. kTsdf maps have none.
   bool occupancy = true;
-  NdtOptions ndt;                    ///< used by kNdtOm and kNdtTm only
-  TsdfOptions tsdf;                  ///< used by kTsdf only
-  double hit_probability = 0.9;      ///< occupancy update of the voxel holding a return
-  double miss_probability = 0.45;    ///< update of each voxel a ray crosses before its return
-  float clamp_min_log_odds = -2.0f;  ///< occupancy is clamped to [min, max] (log-odds)
-  float clamp_max_log_odds = 3.511f;
+  NdtOptions ndt;                  ///< used by kNdtOm and kNdtTm only
+  TsdfOptions tsdf;                ///< used by kTsdf only
+  double hit_probability = 0.9;    ///< occupancy update of the voxel holding a return
+  double miss_probability = 0.45;  ///< update of each voxel a ray crosses before its return
+  /// Occupancy is clamped to [min, max] probability (map.clamp_min_probability and
+  /// map.clamp_max_probability; OctoMap's 0.1192 and 0.971, -2 and 3.511 in log-odds).
+  double clamp_min_probability = 0.11920292202211755;
+  double clamp_max_probability = 0.9709991372435236;
   double occupied_threshold = 0.5;  ///< probability at and above which a voxel is occupied
   /// Memory for the map's regions (one preallocated pool); once the map needs more, integration
   /// fails with a capacity error, or with tiers enabled the coldest regions move out.

@@ -34,8 +34,8 @@ Expected<void, Error> OccupancyParams::validate() const {
   }
   if (!(clamp_min < threshold) || !(threshold <= clamp_max)) {
     return fail(ErrorCode::kInvalidArgument,
-                "occupancy probabilities must satisfy map.clamp_min < map.occupied_threshold <= "
-                "map.clamp_max (got " +
+                "occupancy probabilities must satisfy map.clamp_min_probability < "
+                "map.occupied_threshold <= map.clamp_max_probability (got " +
                     number(probability(clamp_min)) + " / " + number(probability(threshold)) +
                     " / " + number(probability(clamp_max)) + ")");
   }

@@ -179,9 +179,12 @@ Expected<void, Error> applyWindow(const MapOptions& options, MapConfig& config) 
 }  // namespace
 
 Result<MapConfig> toMapConfig(const MapOptions& options) {
-  for (const auto& [name, p] : {std::pair{"map.hit_probability", options.hit_probability},
-                                std::pair{"map.miss_probability", options.miss_probability},
-                                std::pair{"map.occupied_threshold", options.occupied_threshold}}) {
+  for (const auto& [name, p] :
+       {std::pair{"map.hit_probability", options.hit_probability},
+        std::pair{"map.miss_probability", options.miss_probability},
+        std::pair{"map.occupied_threshold", options.occupied_threshold},
+        std::pair{"map.clamp_min_probability", options.clamp_min_probability},
+        std::pair{"map.clamp_max_probability", options.clamp_max_probability}}) {
     if (!(p > 0.0 && p < 1.0)) {
       char got[32];
       std::snprintf(got, sizeof(got), "%g", p);
@@ -197,8 +200,8 @@ Result<MapConfig> toMapConfig(const MapOptions& options) {
   config.voxel_mean = options.voxel_mean;
   config.occupancy.hit = logOdds(options.hit_probability);
   config.occupancy.miss = logOdds(options.miss_probability);
-  config.occupancy.clamp_min = options.clamp_min_log_odds;
-  config.occupancy.clamp_max = options.clamp_max_log_odds;
+  config.occupancy.clamp_min = logOdds(options.clamp_min_probability);
+  config.occupancy.clamp_max = logOdds(options.clamp_max_probability);
   config.occupancy.threshold = logOdds(options.occupied_threshold);
   config.memory_budget_bytes = options.max_memory_bytes;
   config.policy = StorePolicy::kGlobal;
@@ -226,8 +229,8 @@ MapOptions toMapOptions(const MapConfig& config) {
   options.voxel_mean = config.voxel_mean;
   options.hit_probability = probability(config.occupancy.hit);
   options.miss_probability = probability(config.occupancy.miss);
-  options.clamp_min_log_odds = config.occupancy.clamp_min;
-  options.clamp_max_log_odds = config.occupancy.clamp_max;
+  options.clamp_min_probability = probability(config.occupancy.clamp_min);
+  options.clamp_max_probability = probability(config.occupancy.clamp_max);
   options.occupied_threshold = probability(config.occupancy.threshold);
   options.max_memory_bytes = config.memory_budget_bytes;
   if (config.policy == StorePolicy::kRolling) {

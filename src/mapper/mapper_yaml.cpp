@@ -57,6 +57,21 @@ void readSemantics(Fields& f, Semantics& semantics, std::vector<std::string>& wa
   semantics = choice % 2 == 0 ? Semantics::kPerRay : Semantics::kPerScan;
 }
 
+/// map.clamp_min_probability / clamp_max_probability, probabilities as every other occupancy
+/// key; the older clamp_min / clamp_max (log-odds) are read with a warning naming the new key.
+void readClamp(Fields& f, const std::string& old_key, double& clamp,
+               std::vector<std::string>& warnings) {
+  const std::string key = old_key + "_probability";
+  if (f.has(old_key)) {
+    warnings.push_back(f.path(old_key) + " is the old key (log-odds): write map." + key +
+                       " with a probability (the old one is read until the next release)");
+    f.check(!f.has(key), old_key, "give map." + key + " or map." + old_key + ", not both");
+    clamp = probability(static_cast<float>(f.number(old_key, 0.0)));
+    return;
+  }
+  clamp = f.number(key, clamp);
+}
+
 /// backend.gpu_cache: "auto", a size ("512MiB") or a region count ("2000regions"), as
 /// `raymap populate --gpu-cache`; the older gpu_cache_mb (MiB, 0 = automatic) is read with a
 /// warning naming the new key.
@@ -96,8 +111,9 @@ void readMapOptions(Context& ctx, const YAML::Node& node, MapOptions& map,
                     std::vector<std::string>& warnings) {
   Fields f(ctx, node, "map");
   f.knownKeys({"resolution", "region_voxels", "window", "semantics", "voxel_mean",
-               "hit_probability", "miss_probability", "clamp_min", "clamp_max", "save_on_exit",
-               "mode", "ndt", "decay_rate"});
+               "hit_probability", "miss_probability", "clamp_min_probability",
+               "clamp_max_probability", "occupied_threshold", "clamp_min", "clamp_max",
+               "save_on_exit", "mode", "ndt", "decay_rate"});
   map.resolution = f.positive("resolution", map.resolution);
   map.region_voxels =
       f.integer<std::int32_t>("region_voxels", map.region_voxels, MapGeometry::kMinRegionVoxels,
@@ -114,10 +130,9 @@ void readMapOptions(Context& ctx, const YAML::Node& node, MapOptions& map,
   }
   map.hit_probability = f.number("hit_probability", map.hit_probability);
   map.miss_probability = f.number("miss_probability", map.miss_probability);
-  map.clamp_min_log_odds =
-      static_cast<float>(f.number("clamp_min", static_cast<double>(map.clamp_min_log_odds)));
-  map.clamp_max_log_odds =
-      static_cast<float>(f.number("clamp_max", static_cast<double>(map.clamp_max_log_odds)));
+  map.occupied_threshold = f.number("occupied_threshold", map.occupied_threshold);
+  readClamp(f, "clamp_min", map.clamp_min_probability, warnings);
+  readClamp(f, "clamp_max", map.clamp_max_probability, warnings);
 }
 
 void readBackendOptions(Context& ctx, const YAML::Node& node, BackendOptions& backend,

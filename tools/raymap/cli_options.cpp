@@ -356,18 +356,8 @@ Result<MapperConfig> toMapperConfig(const MappingFlags& f, std::vector<std::stri
   m.hit_probability = f.hit.value_or(m.hit_probability);
   m.miss_probability = f.miss.value_or(m.miss_probability);
   m.occupied_threshold = f.threshold.value_or(m.occupied_threshold);
-  for (const auto& [p, name, log_odds] :
-       {std::tuple{f.clamp_min, "--clamp-min", &m.clamp_min_log_odds},
-        std::tuple{f.clamp_max, "--clamp-max", &m.clamp_max_log_odds}}) {
-    if (!p) {
-      continue;
-    }
-    if (!(*p > 0.0 && *p < 1.0)) {
-      return fail(ErrorCode::kInvalidArgument,
-                  std::string(name) + ": a probability strictly between 0 and 1 is required");
-    }
-    *log_odds = logOdds(*p);
-  }
+  m.clamp_min_probability = f.clamp_min.value_or(m.clamp_min_probability);
+  m.clamp_max_probability = f.clamp_max.value_or(m.clamp_max_probability);
   auto budget = parseByteSize(f.max_memory);
   if (!budget) {
     return fail(ErrorCode::kInvalidArgument, "--max-memory: " + budget.error().message);

@@ -629,8 +629,9 @@ TEST(MapperDefaults, AreTheLibrarys) {
   EXPECT_EQ(map.region_voxels, MapGeometry::kDefaultRegionVoxels);
   EXPECT_EQ(map.hit_probability, OccupancyParams::kDefaultHitProbability);
   EXPECT_EQ(map.miss_probability, OccupancyParams::kDefaultMissProbability);
-  EXPECT_EQ(map.clamp_min_log_odds, OccupancyParams::kDefaultClampMin);
-  EXPECT_EQ(map.clamp_max_log_odds, OccupancyParams::kDefaultClampMax);
+  // The probabilities whose log-odds are exactly the defaults (-2 and 3.511 as floats).
+  EXPECT_EQ(logOdds(map.clamp_min_probability), OccupancyParams::kDefaultClampMin);
+  EXPECT_EQ(logOdds(map.clamp_max_probability), OccupancyParams::kDefaultClampMax);
   EXPECT_EQ(map.occupied_threshold, OccupancyParams::kDefaultThresholdProbability);
   EXPECT_EQ(map.max_memory_bytes, MapConfig::kDefaultMemoryBudget);
   EXPECT_EQ(map.tiers.compressed_memory_bytes, RegionTierConfig::kDefaultCompressedBytes);

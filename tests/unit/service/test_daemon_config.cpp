@@ -666,6 +666,38 @@ TEST(DaemonConfigNames, OldSpellingsAreReadWithAWarningNamingTheNewOnes) {
       << bad.error().message;
 }
 
+// The occupancy clamps are probabilities like every other occupancy key (and `--clamp-min`):
+// map.clamp_min_probability / clamp_max_probability. The older log-odds keys give the same map
+// parameters, with a warning naming the new key; both at once are refused.
+TEST(DaemonConfigNames, ClampsAreProbabilitiesAndTheOldLogOddsKeysStillWork) {
+  auto current = parseDaemonConfig(
+      "map:\n  clamp_min_probability: 0.2\n  clamp_max_probability: 0.95\n", "robot.yaml");
+  auto old = parseDaemonConfig("map:\n  clamp_min: -1.3862943611\n  clamp_max: 2.9444389792\n",
+                               "robot.yaml");
+  auto both =
+      parseDaemonConfig("map:\n  clamp_min: -1\n  clamp_min_probability: 0.2\n", "robot.yaml");
+  auto defaults = parseDaemonConfig("map:\n  resolution: 0.1\n", "robot.yaml");
+
+  ASSERT_TRUE(current) << current.error().message;
+  ASSERT_TRUE(old) << old.error().message;
+  ASSERT_TRUE(defaults) << defaults.error().message;
+  EXPECT_TRUE(current->warnings.empty());
+  EXPECT_FLOAT_EQ(current->map.occupancy.clamp_min, logOdds(0.2));
+  EXPECT_FLOAT_EQ(current->map.occupancy.clamp_max, logOdds(0.95));
+  EXPECT_FLOAT_EQ(old->map.occupancy.clamp_min, logOdds(0.2));
+  EXPECT_FLOAT_EQ(old->map.occupancy.clamp_max, logOdds(0.95));
+  ASSERT_EQ(old->warnings.size(), 2u);
+  EXPECT_NE(old->warnings[0].find("map.clamp_min is the old key (log-odds): write "
+                                  "map.clamp_min_probability"),
+            std::string::npos)
+      << old->warnings[0];
+  ASSERT_FALSE(both);
+  EXPECT_NE(both.error().message.find("not both"), std::string::npos) << both.error().message;
+  // The defaults stay OctoMap's log-odds to the bit: -2 and 3.511.
+  EXPECT_EQ(defaults->map.occupancy.clamp_min, -2.0f);
+  EXPECT_EQ(defaults->map.occupancy.clamp_max, 3.511f);
+}
+
 // The map section goes through the library's conversion (mapper::toMapConfig), the same as
 // raymap::Mapper and `raymap populate`: NDT parameters for a map that is not NDT are refused
 // there, naming the key, as the command line refuses --ndt-* without an NDT --mode.
