@@ -64,12 +64,190 @@ std::string threeDecimals(double value) {
   return text;
 }
 
-int runHeightmap(const HeightmapFlags& f) {
+/// The cells of a height map by kind, the surface's elevation range and (NDT maps) the surface
+/// cells with a valid normal.
+struct CellCounts {
+  std::uint64_t kinds[4] = {};
+  float lowest = INFINITY;
+  float highest = -INFINITY;
+  std::uint64_t normal_cells = 0;
+};
+
+CellCounts countCells(const heightmap::HeightMap& result) {
+  CellCounts c;
+  for (std::size_t n = 0; n < result.cellCount(); ++n) {
+    if (result.has_normals && !std::isnan(result.normal_z[n])) {
+      ++c.normal_cells;
+    }
+    c.kinds[std::min<std::uint32_t>(result.kind[n], 3)] += 1;
+    if (result.kind[n] == RM_HM_SURFACE) {
+      c.lowest = std::min(c.lowest, result.elevation[n]);
+      c.highest = std::max(c.highest, result.elevation[n]);
+    }
+  }
+  return c;
+}
+
+/// What one run made and how long it took (sorted generation times, seconds).
+struct HeightmapRun {
   heightmap::HeightmapOptions options;
-  if (f.mode == "planar" || f.mode == "fill") {
-    options.mode =
-        f.mode == "fill" ? heightmap::HeightmapMode::kFill : heightmap::HeightmapMode::kPlanar;
+  heightmap::HeightMap result;
+  std::vector<double> seconds;
+  std::string backend;
+  std::string device;
+};
+
+void printJson(const HeightmapFlags& f, const HeightmapRun& run) {
+  const heightmap::HeightMap& result = run.result;
+  const CellCounts c = countCells(result);
+  Json j = {
+      {"map", f.map},
+      {"backend", run.backend},
+      {"device", run.device},
+      {"mode", heightmap::toString(run.options.mode)},
+      {"cells_x", result.cells_x},
+      {"cells_y", result.cells_y},
+      {"resolution_m", result.resolution},
+      {"centre_x_m", result.centre_x},
+      {"centre_y_m", result.centre_y},
+      {"reference_z_m", result.reference_z},
+      {"min_clearance_m", run.options.min_clearance},
+      {"surface_cells", c.kinds[RM_HM_SURFACE]},
+      {"virtual_cells", c.kinds[RM_HM_VIRTUAL]},
+      {"vacant_cells", c.kinds[RM_HM_VACANT]},
+      {"unknown_cells", c.kinds[RM_HM_UNKNOWN]},
+      {"repeat", f.repeat},
+      {"seconds_min", run.seconds.front()},
+      {"seconds_median", run.seconds[run.seconds.size() / 2]},
+  };
+  if (c.kinds[RM_HM_SURFACE] > 0) {
+    j["elevation_min_m"] = c.lowest;
+    j["elevation_max_m"] = c.highest;
+  }
+  if (result.has_normals) {
+    j["normal_cells"] = c.normal_cells;
+  }
+  std::printf("%s\n", dumpJson(j).c_str());
+}
+
+void printText(const HeightmapFlags& f, const HeightmapRun& run) {
+  const heightmap::HeightMap& result = run.result;
+  const CellCounts c = countCells(result);
+  std::printf(
+      "height map %d x %d cells at %s m around (%s, %s), reference z %s m, %s mode: "
+      "%s surface, %s virtual, %s vacant, %s unknown",
+      result.cells_x, result.cells_y, threeDecimals(result.resolution).c_str(),
+      threeDecimals(result.centre_x).c_str(), threeDecimals(result.centre_y).c_str(),
+      threeDecimals(result.reference_z).c_str(),
+      std::string(heightmap::toString(run.options.mode)).c_str(),
+      withCommas(c.kinds[RM_HM_SURFACE]).c_str(), withCommas(c.kinds[RM_HM_VIRTUAL]).c_str(),
+      withCommas(c.kinds[RM_HM_VACANT]).c_str(), withCommas(c.kinds[RM_HM_UNKNOWN]).c_str());
+  if (c.kinds[RM_HM_SURFACE] > 0) {
+    std::printf("; elevation %s .. %s m", threeDecimals(static_cast<double>(c.lowest)).c_str(),
+                threeDecimals(static_cast<double>(c.highest)).c_str());
+  }
+  if (result.has_normals) {
+    std::printf("; %s with normals", withCommas(c.normal_cells).c_str());
+  }
+  std::printf("\ngenerated in %.2f ms on %s%s\n", 1e3 * run.seconds[run.seconds.size() / 2],
+              run.device.c_str(), f.repeat > 1 ? " (median)" : "");
+  for (const auto& [path, what] : {std::pair{f.png, "image"}, std::pair{f.csv, "cells"}}) {
+    if (!path.empty()) {
+      std::printf("wrote %s (%s)\n", path.c_str(), what);
+    }
+  }
+}
+
+/// The height-map options the flags ask for around the map (the default centre from it); prints
+/// why not.
+std::optional<heightmap::HeightmapOptions> toHeightmapOptions(const HeightmapFlags& f,
+                                                              const VoxelMap& map) {
+  heightmap::HeightmapOptions options;
+  options.mode =
+      f.mode == "fill" ? heightmap::HeightmapMode::kFill : heightmap::HeightmapMode::kPlanar;
+  if (f.centre.empty()) {
+    options.centre = defaultCentre(map);
   } else {
+    auto centre = parseVector(f.centre, "--center");
+    if (!centre) {
+      printError("heightmap", centre.error().message);
+      return std::nullopt;
+    }
+    options.centre = *centre;
+  }
+  options.size = f.size;
+  options.min_clearance = f.min_clearance;
+  options.floor_depth = f.floor_depth;
+  options.ceiling_height = f.ceiling_height;
+  options.virtual_surfaces = f.virtual_surfaces;
+  options.use_voxel_mean = !f.no_mean;
+  return options;
+}
+
+/// Makes the generator the flags ask for and generates `repeat` times, timing each; prints why
+/// not.
+bool generate(const HeightmapFlags& f, const VoxelMap& map, const heightmap::HeightmapPlan& plan,
+              HeightmapRun& run) {
+  BackendChoice choice;
+  choice.name = f.backend;
+  choice.opencl_platform = f.opencl_platform;
+  choice.opencl_device = f.opencl_device;
+  choice.cuda_device = f.cuda_device;
+  choice.fallback_cpu = f.fallback == "cpu";
+  auto created = createHeightmapGenerator(choice);
+  if (!created) {
+    printError("heightmap", created.error().message);
+    return false;
+  }
+  if (!created->fallback_warning.empty()) {
+    std::fprintf(stderr, "raymap heightmap: warning: %s\n",
+                 withCliFlags(created->fallback_warning).c_str());
+  }
+  heightmap::HeightmapGenerator& generator = *created->generator;
+  run.backend = generator.name();
+  run.device = generator.deviceName();
+  for (int r = 0; r < f.repeat; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    if (auto ok = generator.generate(map, plan, run.result); !ok) {
+      printError("heightmap", ok.error().message);
+      return false;
+    }
+    run.seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::sort(run.seconds.begin(), run.seconds.end());
+  return true;
+}
+
+/// Writes the staged outputs and puts them in place (a tiered map that lost a region on the way
+/// commits nothing); prints why not.
+bool writeOutputs(const HeightmapFlags& f, const VoxelMap& map, const heightmap::HeightMap& result,
+                  StagedOutputs& staged, const std::string& png_temp, const std::string& csv_temp) {
+  if (!f.png.empty()) {
+    if (auto ok = io::writeHeightmapPng(png_temp, result); !ok) {
+      printError("heightmap", "--png: " + ok.error().message);
+      return false;
+    }
+  }
+  if (!f.csv.empty()) {
+    if (auto ok = io::writeHeightmapCsv(csv_temp, result); !ok) {
+      printError("heightmap", "--csv: " + ok.error().message);
+      return false;
+    }
+  }
+  if (auto ok = checkTiers(map); !ok) {
+    printError("heightmap", ok.error().message);
+    return false;
+  }
+  if (auto ok = staged.commit(); !ok) {
+    printError("heightmap", ok.error().message);
+    return false;
+  }
+  return true;
+}
+
+int runHeightmap(const HeightmapFlags& f) {
+  if (f.mode != "planar" && f.mode != "fill") {
     printError("heightmap", "--mode " + f.mode + ": must be planar or fill");
     return kExitUsage;
   }
@@ -104,148 +282,25 @@ int runHeightmap(const HeightmapFlags& f) {
     printError("heightmap", map.error().message);
     return kExitFailure;
   }
-  if (f.centre.empty()) {
-    options.centre = defaultCentre(*map);
-  } else {
-    auto centre = parseVector(f.centre, "--center");
-    if (!centre) {
-      printError("heightmap", centre.error().message);
-      return kExitUsage;
-    }
-    options.centre = *centre;
+  HeightmapRun run;
+  const auto options = toHeightmapOptions(f, *map);
+  if (!options) {
+    return kExitUsage;
   }
-  options.size = f.size;
-  options.min_clearance = f.min_clearance;
-  options.floor_depth = f.floor_depth;
-  options.ceiling_height = f.ceiling_height;
-  options.virtual_surfaces = f.virtual_surfaces;
-  options.use_voxel_mean = !f.no_mean;
+  run.options = *options;
   heightmap::HeightmapPlan plan;
-  if (auto ok = heightmap::planHeightmap(*map, options, plan); !ok) {
+  if (auto ok = heightmap::planHeightmap(*map, run.options, plan); !ok) {
     printError("heightmap", f.map + ": " + ok.error().message);
     return kExitFailure;
   }
-
-  BackendChoice choice;
-  choice.name = f.backend;
-  choice.opencl_platform = f.opencl_platform;
-  choice.opencl_device = f.opencl_device;
-  choice.cuda_device = f.cuda_device;
-  choice.fallback_cpu = f.fallback == "cpu";
-  auto created = createHeightmapGenerator(choice);
-  if (!created) {
-    printError("heightmap", created.error().message);
+  if (!generate(f, *map, plan, run) ||
+      !writeOutputs(f, *map, run.result, staged, png_temp, csv_temp)) {
     return kExitFailure;
   }
-  if (!created->fallback_warning.empty()) {
-    std::fprintf(stderr, "raymap heightmap: warning: %s\n",
-                 withCliFlags(created->fallback_warning).c_str());
-  }
-  heightmap::HeightmapGenerator& generator = *created->generator;
-
-  heightmap::HeightMap result;
-  std::vector<double> seconds;
-  for (int r = 0; r < f.repeat; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    if (auto ok = generator.generate(*map, plan, result); !ok) {
-      printError("heightmap", ok.error().message);
-      return kExitFailure;
-    }
-    seconds.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::sort(seconds.begin(), seconds.end());
-
-  if (!f.png.empty()) {
-    if (auto ok = io::writeHeightmapPng(png_temp, result); !ok) {
-      printError("heightmap", "--png: " + ok.error().message);
-      return kExitFailure;
-    }
-  }
-  if (!f.csv.empty()) {
-    if (auto ok = io::writeHeightmapCsv(csv_temp, result); !ok) {
-      printError("heightmap", "--csv: " + ok.error().message);
-      return kExitFailure;
-    }
-  }
-  if (auto ok = checkTiers(*map); !ok) {
-    printError("heightmap", ok.error().message);
-    return kExitFailure;
-  }
-  if (auto ok = staged.commit(); !ok) {
-    printError("heightmap", ok.error().message);
-    return kExitFailure;
-  }
-
-  std::uint64_t counts[4] = {};
-  float lowest = INFINITY;
-  float highest = -INFINITY;
-  std::uint64_t normal_cells = 0;  // NDT maps only: surface cells with a valid normal
-  for (std::size_t n = 0; n < result.cellCount(); ++n) {
-    if (result.has_normals && !std::isnan(result.normal_z[n])) {
-      ++normal_cells;
-    }
-    counts[std::min<std::uint32_t>(result.kind[n], 3)] += 1;
-    if (result.kind[n] == RM_HM_SURFACE) {
-      lowest = std::min(lowest, result.elevation[n]);
-      highest = std::max(highest, result.elevation[n]);
-    }
-  }
-  const double first = seconds.front();
-  const double median = seconds[seconds.size() / 2];
   if (f.json) {
-    Json j = {
-        {"map", f.map},
-        {"backend", generator.name()},
-        {"device", generator.deviceName()},
-        {"mode", heightmap::toString(options.mode)},
-        {"cells_x", result.cells_x},
-        {"cells_y", result.cells_y},
-        {"resolution_m", result.resolution},
-        {"centre_x_m", result.centre_x},
-        {"centre_y_m", result.centre_y},
-        {"reference_z_m", result.reference_z},
-        {"min_clearance_m", options.min_clearance},
-        {"surface_cells", counts[RM_HM_SURFACE]},
-        {"virtual_cells", counts[RM_HM_VIRTUAL]},
-        {"vacant_cells", counts[RM_HM_VACANT]},
-        {"unknown_cells", counts[RM_HM_UNKNOWN]},
-        {"repeat", f.repeat},
-        {"seconds_min", first},
-        {"seconds_median", median},
-    };
-    if (counts[RM_HM_SURFACE] > 0) {
-      j["elevation_min_m"] = lowest;
-      j["elevation_max_m"] = highest;
-    }
-    if (result.has_normals) {
-      j["normal_cells"] = normal_cells;
-    }
-    std::printf("%s\n", dumpJson(j).c_str());
+    printJson(f, run);
   } else if (!f.quiet) {
-    std::printf(
-        "height map %d x %d cells at %s m around (%s, %s), reference z %s m, %s mode: "
-        "%s surface, %s virtual, %s vacant, %s unknown",
-        result.cells_x, result.cells_y, threeDecimals(result.resolution).c_str(),
-        threeDecimals(result.centre_x).c_str(), threeDecimals(result.centre_y).c_str(),
-        threeDecimals(result.reference_z).c_str(),
-        std::string(heightmap::toString(options.mode)).c_str(),
-        withCommas(counts[RM_HM_SURFACE]).c_str(), withCommas(counts[RM_HM_VIRTUAL]).c_str(),
-        withCommas(counts[RM_HM_VACANT]).c_str(), withCommas(counts[RM_HM_UNKNOWN]).c_str());
-    if (counts[RM_HM_SURFACE] > 0) {
-      std::printf("; elevation %s .. %s m", threeDecimals(static_cast<double>(lowest)).c_str(),
-                  threeDecimals(static_cast<double>(highest)).c_str());
-    }
-    if (result.has_normals) {
-      std::printf("; %s with normals", withCommas(normal_cells).c_str());
-    }
-    std::printf("\ngenerated in %.2f ms on %s%s\n", 1e3 * median, generator.deviceName().c_str(),
-                f.repeat > 1 ? " (median)" : "");
-    for (const auto& [path, what] : {std::pair{f.png, "image"}, std::pair{f.csv, "cells"}}) {
-      if (!path.empty()) {
-        std::printf("wrote %s (%s)\n", path.c_str(), what);
-      }
-    }
+    printText(f, run);
   }
   return kExitOk;
 }
