@@ -241,18 +241,123 @@ Expected<void, Error> record(const sim::SceneFile& file, const Sensors& sensors,
   return {};
 }
 
-int runSimulate(const SimulateFlags& f) {
-  const char* command = "simulate";
+/// Combinations of outputs the flags cannot make; prints why and returns false.
+bool checkOutputs(const SimulateFlags& f) {
   if (f.rays.empty() && f.points.empty() && f.truth.empty()) {
-    printError(command,
+    printError("simulate",
                "nothing to write: give --rays OUT.ply, --points OUT.ply --trajectory OUT.txt or "
                "--truth OUT.csv");
-    return kExitUsage;
+    return false;
   }
   if (f.points.empty() != f.trajectory.empty()) {
-    printError(command,
+    printError("simulate",
                "--points and --trajectory go together: a point cloud needs the sensor "
                "trajectory to be mapped");
+    return false;
+  }
+  return true;
+}
+
+/// The sensors the scene has, narrowed by --sensors; checks --scans and --points against them.
+/// Prints why not and returns nullopt.
+std::optional<Sensors> chooseSensors(const SimulateFlags& f, const sim::SceneFile& loaded) {
+  Sensors sensors{loaded.has_lidar, !loaded.depth_cameras.empty()};
+  if (!f.sensors.empty()) {
+    const auto named = [&f](const char* sensor) {
+      return std::find(f.sensors.begin(), f.sensors.end(), sensor) != f.sensors.end();
+    };
+    for (const auto& [name, has] : {std::pair{"lidar", sensors.lidar}, {"depth", sensors.depth}}) {
+      if (named(name) && !has) {
+        printError("simulate", std::string("--sensors ") + name + ": " + f.scene + " has no " +
+                                   (std::string(name) == "lidar" ? "lidar" : "depth_cameras"));
+        return std::nullopt;
+      }
+    }
+    sensors = {named("lidar"), named("depth")};
+  }
+  if (f.scans && !loaded.has_lidar) {
+    printError("simulate", "--scans counts lidar revolutions, and " + f.scene +
+                               " has no lidar (its duration sets the camera frames)");
+    return std::nullopt;
+  }
+  if (!f.points.empty() && sensors.depth) {
+    printError("simulate",
+               "--points holds the lidar's returns with its column trajectory: write depth "
+               "cameras with --rays, or give --sensors lidar");
+    return std::nullopt;
+  }
+  return sensors;
+}
+
+/// The staged names of the outputs (empty where not asked for).
+struct SimulateTemps {
+  std::string rays, points, trajectory, truth;
+};
+
+/// What a simulation made, for the files and the summary line.
+struct Simulated {
+  std::vector<Ray> rays;
+  std::uint64_t depth_frames = 0;
+  std::string truth_csv;
+  std::uint64_t truth_cells = 0;
+};
+
+/// Writes the outputs to their staged names; prints why not. `written` lists them for the
+/// summary.
+bool writeOutputs(const SimulateFlags& f, const sim::SimulationConfig& simulation, Simulated& made,
+                  const SimulateTemps& temps, std::vector<std::string>& written) {
+  if (!f.rays.empty()) {
+    if (auto ok = writeRays(made.rays, temps.rays, io::PlyLayout::kRayCloud); !ok) {
+      printError("simulate", "--rays: " + ok.error().message);
+      return false;
+    }
+    written.push_back(f.rays);
+  }
+  if (!f.points.empty()) {
+    auto points = writeRays(made.rays, temps.points, io::PlyLayout::kPointCloud);
+    if (!points) {
+      printError("simulate", "--points: " + points.error().message);
+      return false;
+    }
+    if (auto ok = writeTrajectory(simulation, temps.trajectory); !ok) {
+      printError("simulate", "--trajectory: " + ok.error().message);
+      return false;
+    }
+    written.push_back(f.points + " (" + withCommas(*points) + " points)");
+    written.push_back(f.trajectory);
+  }
+  if (!f.truth.empty()) {
+    made.truth_csv.pop_back();  // writeTextFile ends the last line
+    if (auto ok = writeTextFile(temps.truth, made.truth_csv); !ok) {
+      printError("simulate", "--truth: " + ok.error().message);
+      return false;
+    }
+    written.push_back(f.truth + " (" + withCommas(made.truth_cells) + " cells)");
+  }
+  return true;
+}
+
+void printSummary(const sim::SceneFile& loaded, const Simulated& made,
+                  const std::vector<std::string>& written) {
+  std::string files;
+  for (const std::string& w : written) {
+    files += (files.empty() ? "" : ", ") + w;
+  }
+  const auto no_returns = static_cast<std::uint64_t>(
+      std::count_if(made.rays.begin(), made.rays.end(),
+                    [](const Ray& r) { return (r.flags & kRayNoReturn) != 0; }));
+  const int scans = made.rays.empty() ? 0 : loaded.simulation.scans;
+  const std::string frames = made.depth_frames > 0
+                                 ? ", " + withCommas(made.depth_frames) + " depth frames"
+                                 : std::string();
+  std::printf("simulated %s: %d scans, %s rays, %s no-return%s -> %s\n", loaded.scene.name.c_str(),
+              scans, withCommas(made.rays.size()).c_str(), withCommas(no_returns).c_str(),
+              frames.c_str(), files.c_str());
+}
+
+int runSimulate(const SimulateFlags& f) {
+  const char* command = "simulate";
+  if (!checkOutputs(f)) {
     return kExitUsage;
   }
   std::optional<Rect> truth_box;
@@ -268,14 +373,12 @@ int runSimulate(const SimulateFlags& f) {
   // renamed together at the end.
   StagedOutputs staged(command);
   staged.input(f.scene, "the scene file");
-  std::string rays_temp;
-  std::string points_temp;
-  std::string trajectory_temp;
-  std::string truth_temp;
+  SimulateTemps temps;
   for (const auto& [path, name, temp] :
-       {std::tuple{&f.rays, "--rays", &rays_temp}, std::tuple{&f.points, "--points", &points_temp},
-        std::tuple{&f.trajectory, "--trajectory", &trajectory_temp},
-        std::tuple{&f.truth, "--truth", &truth_temp}}) {
+       {std::tuple{&f.rays, "--rays", &temps.rays},
+        std::tuple{&f.points, "--points", &temps.points},
+        std::tuple{&f.trajectory, "--trajectory", &temps.trajectory},
+        std::tuple{&f.truth, "--truth", &temps.truth}}) {
     if (!path->empty()) {
       auto staged_path = staged.add(*path, name);
       if (!staged_path) {
@@ -292,104 +395,42 @@ int runSimulate(const SimulateFlags& f) {
   }
   const sim::Scene& scene = loaded->scene;
   sim::SimulationConfig& simulation = loaded->simulation;
-  Sensors sensors{loaded->has_lidar, !loaded->depth_cameras.empty()};
-  if (!f.sensors.empty()) {
-    const auto named = [&f](const char* sensor) {
-      return std::find(f.sensors.begin(), f.sensors.end(), sensor) != f.sensors.end();
-    };
-    for (const auto& [name, has] : {std::pair{"lidar", sensors.lidar}, {"depth", sensors.depth}}) {
-      if (named(name) && !has) {
-        printError(command, std::string("--sensors ") + name + ": " + f.scene + " has no " +
-                                (std::string(name) == "lidar" ? "lidar" : "depth_cameras"));
-        return kExitUsage;
-      }
-    }
-    sensors = {named("lidar"), named("depth")};
-  }
-  if (f.scans && !loaded->has_lidar) {
-    printError(command, "--scans counts lidar revolutions, and " + f.scene +
-                            " has no lidar (its duration sets the camera frames)");
-    return kExitUsage;
-  }
-  if (!f.points.empty() && sensors.depth) {
-    printError(command,
-               "--points holds the lidar's returns with its column trajectory: write depth "
-               "cameras with --rays, or give --sensors lidar");
+  const auto sensors = chooseSensors(f, *loaded);
+  if (!sensors) {
     return kExitUsage;
   }
   simulation.seed = f.seed.value_or(simulation.seed);
-  simulation.scans = sensors.lidar ? f.scans.value_or(simulation.scans) : 0;
+  simulation.scans = sensors->lidar ? f.scans.value_or(simulation.scans) : 0;
 
-  std::string truth_csv;
-  std::uint64_t truth_cells = 0;
+  Simulated made;
   if (!f.truth.empty()) {
     if (!truth_box) {
       truth_box = sceneRect(scene, simulation.path);
     }
     const double reference =
         f.truth_reference.value_or(scene.has_ground ? scene.ground_height : 0.0);
-    truth_cells =
-        truthCsv(scene, *truth_box, f.truth_resolution, reference, f.min_clearance, truth_csv);
+    made.truth_cells =
+        truthCsv(scene, *truth_box, f.truth_resolution, reference, f.min_clearance, made.truth_csv);
   }
-
-  std::vector<Ray> rays;
-  std::uint64_t depth_frames = 0;
   if (!f.rays.empty() || !f.points.empty()) {
     const double duration_s =
         f.scans ? *f.scans * simulation.lidar.scan_period_s : loaded->duration_s;
-    auto recorded = record(*loaded, sensors, duration_s, rays, depth_frames);
+    auto recorded = record(*loaded, *sensors, duration_s, made.rays, made.depth_frames);
     if (!recorded) {
       printError(command, recorded.error().message);
       return kExitFailure;
     }
   }
-  const auto no_returns = static_cast<std::uint64_t>(std::count_if(
-      rays.begin(), rays.end(), [](const Ray& r) { return (r.flags & kRayNoReturn) != 0; }));
-
   std::vector<std::string> written;
-  if (!f.rays.empty()) {
-    if (auto ok = writeRays(rays, rays_temp, io::PlyLayout::kRayCloud); !ok) {
-      printError(command, "--rays: " + ok.error().message);
-      return kExitFailure;
-    }
-    written.push_back(f.rays);
-  }
-  if (!f.points.empty()) {
-    auto points = writeRays(rays, points_temp, io::PlyLayout::kPointCloud);
-    if (!points) {
-      printError(command, "--points: " + points.error().message);
-      return kExitFailure;
-    }
-    if (auto ok = writeTrajectory(simulation, trajectory_temp); !ok) {
-      printError(command, "--trajectory: " + ok.error().message);
-      return kExitFailure;
-    }
-    written.push_back(f.points + " (" + withCommas(*points) + " points)");
-    written.push_back(f.trajectory);
-  }
-  if (!f.truth.empty()) {
-    truth_csv.pop_back();  // writeTextFile ends the last line
-    if (auto ok = writeTextFile(truth_temp, truth_csv); !ok) {
-      printError(command, "--truth: " + ok.error().message);
-      return kExitFailure;
-    }
-    written.push_back(f.truth + " (" + withCommas(truth_cells) + " cells)");
+  if (!writeOutputs(f, simulation, made, temps, written)) {
+    return kExitFailure;
   }
   if (auto ok = staged.commit(); !ok) {
     printError(command, ok.error().message);
     return kExitFailure;
   }
   if (!f.quiet) {
-    std::string files;
-    for (const std::string& w : written) {
-      files += (files.empty() ? "" : ", ") + w;
-    }
-    const int scans = rays.empty() ? 0 : simulation.scans;
-    const std::string frames =
-        depth_frames > 0 ? ", " + withCommas(depth_frames) + " depth frames" : std::string();
-    std::printf("simulated %s: %d scans, %s rays, %s no-return%s -> %s\n", scene.name.c_str(),
-                scans, withCommas(rays.size()).c_str(), withCommas(no_returns).c_str(),
-                frames.c_str(), files.c_str());
+    printSummary(*loaded, made, written);
   }
   return kExitOk;
 }
