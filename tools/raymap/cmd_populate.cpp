@@ -11,10 +11,10 @@
 #include <utility>
 #include <vector>
 
-#include "platform/memory.hpp"
 #include "src/bag/bag_reader.hpp"
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
+#include "src/mapper/pool_fit.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_output.hpp"
@@ -124,40 +124,114 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
       withCommas(b.bytes_to_device >> 20).c_str(), withCommas(b.bytes_from_device >> 20).c_str());
 }
 
-/// Sizes a global map's region pool to what this machine can hold. The pool itself is address
-/// space, committed as regions are written, but every slot costs bookkeeping up front (the
-/// index, the free list, the CPU workers' tables: about 160 bytes) and a region commits at least
-/// its non-zero-clearing layers when it is created, so more slots than memory can fill would
-/// only cost memory (`--max-memory 64TiB` used to be killed by the OOM killer before the first
-/// ray). @return the note to print when the pool was limited, else empty.
-std::string limitPoolToMemory(MapConfig& map) {
-  if (map.policy != StorePolicy::kGlobal) {
-    return {};
+/// The staged names of populate's outputs (empty where not asked for, or "-").
+struct PopulateTemps {
+  std::string output, ply, stats;
+};
+
+/// Stages every output under a temporary name; prints why not and returns the exit code (0 when
+/// all were staged).
+int stageOutputs(const PopulateFlags& f, StagedOutputs& staged, PopulateTemps& temps) {
+  staged.input(f.input, "the input");
+  staged.input(f.mapping.trajectory, "--trajectory");
+  for (const auto& [path, name, temp] :
+       {std::tuple{&f.output, "--output", &temps.output}, std::tuple{&f.ply, "--ply", &temps.ply},
+        std::tuple{&f.stats_json, "--stats-json", &temps.stats}}) {
+    if (!path->empty() && *path != "-") {
+      auto staged_path = staged.add(*path, name);
+      if (!staged_path) {
+        printError("populate", staged_path.error().message);
+        return exitCodeFor(staged_path.error());
+      }
+      *temp = std::move(*staged_path);
+    }
   }
-  const std::uint32_t voxels = map.geometry.voxelsPerRegion();
-  const std::uint64_t per_region = map.schema().bytesPerRegion(voxels);
-  const std::uint64_t at_creation =
-      std::max<std::uint64_t>(map.schema().bytesWrittenAtCreation(voxels), 4096);
-  const platform::MemoryLimit limit = platform::availableMemory();
-  if (per_region == 0 || limit.bytes == UINT64_MAX) {
-    return {};
+  return kExitOk;
+}
+
+/// The run's warnings and a bag's notes, on stderr.
+void printWarnings(const PopulateReport& report, bool quiet) {
+  const auto warn = [](const std::string& text) {
+    std::fprintf(stderr, "raymap populate: warning: %s\n", withCliFlags(text).c_str());
+  };
+  for (const std::string* warning :
+       {&report.fallback_warning, &report.startup_warning, &report.input_warning}) {
+    if (!warning->empty()) {
+      warn(*warning);
+    }
   }
-  // Address space limits (RLIMIT_AS) count the whole pool, written or not, and everything else
-  // the process maps (a quarter is left for that).
-  const bool address_space = limit.source.find("RLIMIT_AS") != std::string::npos;
-  const std::uint64_t usable = std::max<std::uint64_t>(
-      address_space ? limit.bytes / 4 * 3 / per_region : limit.bytes / at_creation, 1);
-  if (map.capacityRegions() <= usable) {
-    return {};
+  if (!report.bag) {
+    return;
   }
-  const std::uint64_t asked = map.capacityRegions();
-  map.memory_budget_bytes = usable * per_region;
-  const auto mib = [](std::uint64_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
-  return "--max-memory asks for " + std::to_string(asked) + " regions; this machine can hold " +
-         std::to_string(usable) + " (" + mib(limit.bytes) + " available by " + limit.source +
-         ", each region takes " + std::to_string((address_space ? per_region : at_creation) >> 10) +
-         (address_space ? " KiB of address space" : " KiB when created") +
-         "): the map is sized for those";
+  const bag::BagRaysReport& b = *report.bag;
+  if (!b.pose_note.empty() && !quiet) {
+    std::fprintf(stderr, "raymap populate: note: %s\n", withCliFlags(b.pose_note).c_str());
+  }
+  for (const std::string& warning : b.read_warnings) {
+    warn(warning);
+  }
+  for (const std::string& damage : b.damage) {
+    warn("--skip-damaged: " + damage);
+  }
+  for (const std::string& skip : b.skips) {
+    warn(skip);
+  }
+}
+
+/// An empty map from a whole input is a failure, never a result: says why each cloud or ray
+/// went and returns false.
+bool somethingMapped(const PopulateReport& report, const PopulateOptions& options) {
+  if (report.bag && report.bag->scans_integrated == 0) {
+    const bag::BagRaysReport& b = *report.bag;
+    printError("populate", "no cloud of " + options.input +
+                               " could be mapped: " + std::to_string(b.clouds) + " clouds, " +
+                               std::to_string(b.scans_no_pose) + " without a pose (poses from " +
+                               b.pose_source + ": " + std::to_string(b.poses) + ")");
+    return false;
+  }
+  if (report.rays.rays_accepted == 0) {
+    char ranges[96];
+    std::snprintf(ranges, sizeof(ranges), "--min-range %g m, --max-range %g m",
+                  options.filter.min_range_m, options.filter.max_range_m);
+    printError("populate", "no ray of " + options.input + " was integrated: " +
+                               withCommas(report.rays.rays_in) + " in, all rejected (" +
+                               rejectionsText(report.rays) + "; " + ranges + "): nothing written");
+    return false;
+  }
+  return true;
+}
+
+/// Writes the map, the point cloud and the statistics to their staged names (a tiered map that
+/// lost a region on the way writes no statistics and commits nothing); prints why not.
+bool writeOutputs(const PopulateFlags& f, const VoxelMap& map, const PopulateReport& report,
+                  const PopulateOptions& options, const PopulateTemps& temps) {
+  if (!f.output.empty()) {
+    if (auto ok = io::saveMap(map, temps.output); !ok) {
+      printError("populate", "--output: " + ok.error().message);
+      return false;
+    }
+  }
+  if (!f.ply.empty()) {
+    auto count = io::exportPly(map, io::ExportMode::kOccupied, temps.ply);
+    if (!count) {
+      printError("populate", "--ply: " + count.error().message);
+      return false;
+    }
+  }
+  if (auto ok = checkTiers(map); !ok) {
+    printError("populate", ok.error().message);
+    return false;
+  }
+  if (!f.stats_json.empty()) {
+    const std::string json = dumpJson(statsJson(report, options));
+    if (f.stats_json == "-") {
+      std::printf("%s\n", json.c_str());
+    } else if (auto ok = writeTextFile(temps.stats, json); !ok) {
+      printError("populate", "--stats-json: " + ok.error().message);
+      return false;
+    }
+  }
+  return true;
 }
 
 int runPopulate(const PopulateFlags& f) {
@@ -168,8 +242,7 @@ int runPopulate(const PopulateFlags& f) {
     return kExitUsage;
   }
   options->progress = !f.quiet;
-  const std::string& output = f.output;
-  if (output.empty() && f.ply.empty() && f.stats_json.empty()) {
+  if (f.output.empty() && f.ply.empty() && f.stats_json.empty()) {
     printError(command,
                "nothing to write: give --output MAP, --ply CLOUD.ply or --stats-json FILE");
     return kExitUsage;
@@ -178,26 +251,13 @@ int runPopulate(const PopulateFlags& f) {
   // cannot be written fails before minutes are spent on the input, and all are renamed at the
   // end: a run that fails part-way leaves none of them and existing files untouched.
   StagedOutputs staged(command);
-  staged.input(f.input, "the input");
-  staged.input(f.mapping.trajectory, "--trajectory");
-  std::string output_temp;
-  std::string ply_temp;
-  std::string stats_temp;
-  for (const auto& [path, name, temp] :
-       {std::tuple{&output, "--output", &output_temp}, std::tuple{&f.ply, "--ply", &ply_temp},
-        std::tuple{&f.stats_json, "--stats-json", &stats_temp}}) {
-    if (!path->empty() && *path != "-") {
-      auto staged_path = staged.add(*path, name);
-      if (!staged_path) {
-        printError(command, staged_path.error().message);
-        return exitCodeFor(staged_path.error());
-      }
-      *temp = std::move(*staged_path);
-    }
+  PopulateTemps temps;
+  if (const int staged_code = stageOutputs(f, staged, temps); staged_code != kExitOk) {
+    return staged_code;
   }
   // The spill file goes next to the first output (the user chose that disk for the map).
   const std::string& first_output =
-      !output.empty() ? output : (!f.ply.empty() ? f.ply : f.stats_json);
+      !f.output.empty() ? f.output : (!f.ply.empty() ? f.ply : f.stats_json);
   auto tiers = toTierConfig(f.mapping.tiers, first_output);
   if (!tiers) {
     printError(command, tiers.error().message);
@@ -205,7 +265,7 @@ int runPopulate(const PopulateFlags& f) {
   }
   options->map.tiers = *tiers;
   options->map.device_scan_marks = options->backend.name != "cpu";  // the CPU keeps bits
-  const std::string pool_note = limitPoolToMemory(options->map);
+  const std::string pool_note = withCliFlags(mapper::fitPoolToMemory(options->map));
   if (!pool_note.empty() && !f.quiet) {
     std::fprintf(stderr, "raymap populate: note: %s\n", pool_note.c_str());
   }
@@ -223,70 +283,9 @@ int runPopulate(const PopulateFlags& f) {
     }
     return kExitFailure;
   }
-  for (const std::string* warning :
-       {&report->fallback_warning, &report->startup_warning, &report->input_warning}) {
-    if (!warning->empty()) {
-      std::fprintf(stderr, "raymap populate: warning: %s\n", withCliFlags(*warning).c_str());
-    }
-  }
-  if (report->bag) {
-    const bag::BagRaysReport& b = *report->bag;
-    if (!b.pose_note.empty() && !f.quiet) {
-      std::fprintf(stderr, "raymap populate: note: %s\n", withCliFlags(b.pose_note).c_str());
-    }
-    for (const std::string& warning : b.read_warnings) {
-      std::fprintf(stderr, "raymap populate: warning: %s\n", withCliFlags(warning).c_str());
-    }
-    for (const std::string& damage : b.damage) {
-      std::fprintf(stderr, "raymap populate: warning: --skip-damaged: %s\n",
-                   withCliFlags(damage).c_str());
-    }
-    for (const std::string& skip : b.skips) {
-      std::fprintf(stderr, "raymap populate: warning: %s\n", withCliFlags(skip).c_str());
-    }
-    if (b.scans_integrated == 0) {
-      printError(command, "no cloud of " + options->input +
-                              " could be mapped: " + std::to_string(b.clouds) + " clouds, " +
-                              std::to_string(b.scans_no_pose) + " without a pose (poses from " +
-                              b.pose_source + ": " + std::to_string(b.poses) + ")");
-      return kExitFailure;
-    }
-  }
-  if (report->rays.rays_accepted == 0) {
-    // An empty map from a whole input is a failure, never a result: say why each ray went.
-    char ranges[96];
-    std::snprintf(ranges, sizeof(ranges), "--min-range %g m, --max-range %g m",
-                  options->filter.min_range_m, options->filter.max_range_m);
-    printError(command, "no ray of " + options->input + " was integrated: " +
-                            withCommas(report->rays.rays_in) + " in, all rejected (" +
-                            rejectionsText(report->rays) + "; " + ranges + "): nothing written");
+  printWarnings(*report, f.quiet);
+  if (!somethingMapped(*report, *options) || !writeOutputs(f, *map, *report, *options, temps)) {
     return kExitFailure;
-  }
-  if (!output.empty()) {
-    if (auto ok = io::saveMap(*map, output_temp); !ok) {
-      printError(command, "--output: " + ok.error().message);
-      return kExitFailure;
-    }
-  }
-  if (!f.ply.empty()) {
-    auto count = io::exportPly(*map, io::ExportMode::kOccupied, ply_temp);
-    if (!count) {
-      printError(command, "--ply: " + count.error().message);
-      return kExitFailure;
-    }
-  }
-  if (auto ok = checkTiers(*map); !ok) {
-    printError(command, ok.error().message);
-    return kExitFailure;
-  }
-  if (!f.stats_json.empty()) {
-    const std::string json = dumpJson(statsJson(*report, *options));
-    if (f.stats_json == "-") {
-      std::printf("%s\n", json.c_str());
-    } else if (auto ok = writeTextFile(stats_temp, json); !ok) {
-      printError(command, "--stats-json: " + ok.error().message);
-      return kExitFailure;
-    }
   }
   if (auto ok = staged.commit(); !ok) {
     printError(command, ok.error().message);
@@ -294,8 +293,8 @@ int runPopulate(const PopulateFlags& f) {
   }
   if (!f.quiet) {
     printSummary(*report, *options);
-    if (!output.empty()) {
-      std::printf("map file       %s\n", output.c_str());
+    if (!f.output.empty()) {
+      std::printf("map file       %s\n", f.output.c_str());
     }
     if (!f.ply.empty()) {
       std::printf("point cloud    %s (occupied voxels at their voxel mean)\n", f.ply.c_str());
