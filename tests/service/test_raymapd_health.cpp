@@ -248,14 +248,18 @@ TEST(RaymapdHealth, CloudsLostInItsSocketAreCountedAndNamed) {
     return s.ros.diagnostics->number(std::string("raymapd: pipeline/") + key).value_or(-1.0);
   };
   std::vector<driver::ReceivedGridMap> maps;
-  s.ros.play(yardLidar(64, 1024, false), driver::PlaybackOptions{}, 1.0, maps);
+  // One playback of 4 s (its stamps one period apart throughout: two playbacks would leave a gap
+  // between them that raymapd rightly counts as missing clouds, as long as a slow machine, or
+  // ThreadSanitizer, takes to start the second); raymapd stopped from 1 s to 2.5 s into it.
+  const driver::SimulatedLidar lidar = yardLidar(64, 1024, false);
   const pid_t pid = s.daemon.process->pid();
   std::thread pause([pid] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000));
     ::kill(pid, SIGSTOP);
     std::this_thread::sleep_for(std::chrono::milliseconds(1500));
     ::kill(pid, SIGCONT);
   });
-  s.ros.play(yardLidar(64, 1024, false), driver::PlaybackOptions{}, 3.0, maps);
+  s.ros.play(lidar, driver::PlaybackOptions{}, 4.0, maps);
   pause.join();
   EXPECT_TRUE(s.ros.settleUntil(kStartWaitS, [&] {
     return number("socket_datagrams_dropped") > 0.0 && number("clouds_missing") > 0.0;
