@@ -28,6 +28,9 @@ enum class ExportColour : std::uint8_t {
   kPermeability,  ///< NDT-TM: miss / (hit + miss)
 };
 
+/// kTsdf, kTsdfMesh: ExportRequest::tsdf_min_weight when unset (rays of weight).
+inline constexpr double kDefaultTsdfMinWeight = 1.0;
+
 /// @brief One export. The optional fields belong to some kinds only: setting one for another
 /// kind is refused naming its key (export.threshold, export.sigmas, export.min_axis,
 /// export.colour, export.min_weight), as `raymap export` refuses the flag. Value type.

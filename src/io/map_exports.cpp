@@ -10,6 +10,24 @@
 #include "src/io/ndt_export.hpp"
 #include "src/io/tsdf_export.hpp"
 
+namespace raymap::io {
+namespace {
+
+NdtColour toNdtColour(ExportColour colour) noexcept {
+  switch (colour) {
+    case ExportColour::kIntensity:
+      return NdtColour::kIntensity;
+    case ExportColour::kPermeability:
+      return NdtColour::kPermeability;
+    case ExportColour::kHeight:
+      break;
+  }
+  return NdtColour::kHeight;
+}
+
+}  // namespace
+}  // namespace raymap::io
+
 namespace raymap {
 namespace {
 
@@ -45,15 +63,7 @@ std::optional<ExportKind> exportKindFromName(std::string_view name) noexcept {
 }
 
 std::string_view toString(ExportColour colour) noexcept {
-  switch (colour) {
-    case ExportColour::kIntensity:
-      return "intensity";
-    case ExportColour::kPermeability:
-      return "permeability";
-    case ExportColour::kHeight:
-      break;
-  }
-  return "height";
+  return io::toString(io::toNdtColour(colour));  // the names of `raymap export --colour`
 }
 
 std::optional<ExportColour> exportColourFromName(std::string_view name) noexcept {
@@ -70,9 +80,6 @@ std::optional<ExportColour> exportColourFromName(std::string_view name) noexcept
 
 namespace raymap::io {
 namespace {
-
-// tsdf, tsdf-mesh: crossings between voxels with at least this many rays' weight by default.
-constexpr double kDefaultTsdfMinWeight = 1.0;
 
 bool isNdt(ExportKind kind) { return kind == ExportKind::kNdt || kind == ExportKind::kNdtPoints; }
 bool isTsdf(ExportKind kind) { return kind == ExportKind::kTsdf || kind == ExportKind::kTsdfMesh; }
@@ -100,18 +107,6 @@ std::string_view optionNotFor(const ExportRequest& r) {
     return "export.min_weight";
   }
   return {};
-}
-
-NdtColour toNdtColour(ExportColour colour) {
-  switch (colour) {
-    case ExportColour::kIntensity:
-      return NdtColour::kIntensity;
-    case ExportColour::kPermeability:
-      return NdtColour::kPermeability;
-    case ExportColour::kHeight:
-      break;
-  }
-  return NdtColour::kHeight;
 }
 
 NdtExportOptions ndtOptions(const ExportRequest& r) {

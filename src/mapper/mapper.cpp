@@ -432,9 +432,6 @@ Result<Costmap> Mapper::costmap(const HeightmapRequest& request, const CostmapOp
 }
 
 Result<ExportCounts> Mapper::exportPly(const std::string& path, const ExportRequest& request) {
-  if (auto ok = io::validateExportRequest(request); !ok) {
-    return Unexpected(ok.error());
-  }
   if (auto ok = state_->synchronise(); !ok) {
     return Unexpected(ok.error());
   }

@@ -120,13 +120,14 @@ void printWritten(const ExportFlags& f, const ExportRequest& r, const ExportCoun
       return;
     case ExportKind::kTsdf:
       std::printf("wrote %s TSDF surface points (zero crossings, weight >= %g) to %s\n",
-                  items.c_str(), r.tsdf_min_weight.value_or(1.0), ply);
+                  items.c_str(), r.tsdf_min_weight.value_or(kDefaultTsdfMinWeight), ply);
       return;
     case ExportKind::kTsdfMesh:
       std::printf(
           "wrote a TSDF surface mesh of %s triangles, %s vertices (marching cubes, "
           "weight >= %g) to %s\n",
-          items.c_str(), withCommas(counts.vertices).c_str(), r.tsdf_min_weight.value_or(1.0), ply);
+          items.c_str(), withCommas(counts.vertices).c_str(),
+          r.tsdf_min_weight.value_or(kDefaultTsdfMinWeight), ply);
       return;
     case ExportKind::kOccupied:
     case ExportKind::kFree:
