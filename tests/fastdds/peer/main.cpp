@@ -100,6 +100,10 @@ int main(int argc, char** argv) {
                    "with --clouds-after-tf-static: wait for this many readers of "
                    "/tf_static and of the clouds")
       ->check(CLI::Range(1, 100));
+  publish_command
+      ->add_option("--odometry-tail-s", publish.odometry_tail_s,
+                   "go on publishing odometry this long after the last cloud")
+      ->check(CLI::NonNegativeNumber);
   publish_command->add_option("--beams", publish.lidar.beams)->check(CLI::Range(1, 1024));
   publish_command->add_option("--columns", publish.lidar.columns)->check(CLI::Range(1, 8192));
   publish_command->add_option("--points-topic", publish.points_topic);

@@ -151,25 +151,32 @@ bool runPublish(PeerParticipant& participant, const PublishOptions& options, Jso
   std::int64_t odometry = 0;
   Clock::time_point next_odometry = timeline.start();
   Clock::time_point scan_start = timeline.start();  // published once its revolution is over
-  const Clock::time_point end =
+  const Clock::time_point lidar_end =
       timeline.start() + std::chrono::nanoseconds(std::llround(options.seconds * 1e9));
+  const Clock::time_point end =
+      lidar_end + std::chrono::nanoseconds(std::llround(options.odometry_tail_s * 1e9));
   std::optional<Clock::time_point> tf_static_acknowledged;
+  std::optional<std::int64_t> odometry_when_matched;  // messages written before they all matched
   bool lidar_started = false;
   for (Clock::time_point now = Clock::now(); now < end && !stopRequested(); now = Clock::now()) {
     if (!tf_static_acknowledged && acknowledged(*writers.tf_static, options.readers)) {
       tf_static_acknowledged = now;
     }
+    if (!odometry_when_matched && matchedReaders(writers.odometry) >= options.readers) {
+      odometry_when_matched = odometry;
+    }
     // Once started, the lidar runs whoever comes and goes.
     lidar_started = lidar_started || !options.clouds_after_tf_static ||
-                    (tf_static_acknowledged && matchedReaders(writers.cloud) >= options.readers);
+                    (tf_static_acknowledged && matchedReaders(writers.cloud) >= options.readers &&
+                     odometry_when_matched && odometry > *odometry_when_matched);
     if (now >= next_odometry) {
       publishOdometry(*writers.odometry, options, timeline.base(next_odometry),
                       timeline.unixNs(next_odometry));
       ++odometry;
       next_odometry = nextDue(next_odometry, odometry_period, now);
     }
-    if (!lidar_started) {
-      scan_start = now;  // the lidar has not started yet
+    if (!lidar_started || now >= lidar_end) {
+      scan_start = now;  // the lidar has not started yet, or has stopped
     } else if (now >= scan_start + scan_period) {
       const Vec3 base = timeline.base(scan_start);
       const Vec3 origin{base.x + kLidarInBase.x, base.y + kLidarInBase.y, base.z + kLidarInBase.z};
@@ -179,7 +186,8 @@ bool runPublish(PeerParticipant& participant, const PublishOptions& options, Jso
       ++clouds;
       scan_start = nextDue(scan_start, scan_period, now - scan_period);
     }
-    std::this_thread::sleep_until(std::min({next_odometry, scan_start + scan_period, end}));
+    const Clock::time_point next_scan = now < lidar_end ? scan_start + scan_period : end;
+    std::this_thread::sleep_until(std::min({next_odometry, next_scan, end}));
   }
   const double elapsed_s = std::chrono::duration<double>(Clock::now() - timeline.start()).count();
   result["seconds"] = elapsed_s;

@@ -24,6 +24,9 @@ struct PublishOptions {
   /// matched the clouds, before the lidar starts (every one of a known set of subscribers gets
   /// every cloud).
   std::int64_t readers = 1;
+  /// Odometry goes on for this long after the last cloud (the lidar stops at `seconds`), so that
+  /// every cloud has a pose after its end: a reader that waits pose.max_wait_s for it gets it.
+  double odometry_tail_s = 0.0;
   std::string points_topic = "rt/points";
   std::string odom_topic = "rt/odom";
   std::string tf_static_topic = "rt/tf_static";
@@ -40,7 +43,10 @@ inline constexpr Vec3 kLidarInBase{0.1, 0.0, 0.3};
 /// @brief Publishes /tf_static base -> lidar once (reliable, transient local: latched), then
 /// odometry world -> base (reliable, keep last 10) at odometry_rate_hz and a PointCloud2 in the
 /// lidar's frame (best effort, keep last 5) at scan_rate_hz, stamped with the wall clock, each
-/// scan when its revolution has ended; until `seconds` have passed or SIGINT/SIGTERM.
+/// scan when its revolution has ended; until `seconds` have passed or SIGINT/SIGTERM, and the
+/// odometry `odometry_tail_s` longer. With clouds_after_tf_static the lidar waits too until the
+/// odometry's readers have matched and one odometry message was written to them, so that each
+/// reader has a pose from before the first scan.
 /// @param[out] result what was published, how many readers matched, and when /tf_static was
 /// first acknowledged by every matched reader (at least one), after the start
 /// @return false when an endpoint could not be created (result says which)
