@@ -17,6 +17,8 @@
 
 #include "platform/clock.hpp"
 #include "src/dds/entities.hpp"
+#include "src/driver/lidar_playback.hpp"
+#include "src/driver/ros_endpoints.hpp"
 #include "src/io/map_file.hpp"
 #include "src/security/enclave_check.hpp"
 #include "src/security/keystore/keystore_writer.hpp"
@@ -26,8 +28,6 @@
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/temp_dir.hpp"
 #include "tests/support/test_rays.hpp"
-#include "tools/dds_driver/lidar_playback.hpp"
-#include "tools/dds_driver/ros_endpoints.hpp"
 
 namespace raymap::test {
 namespace {

@@ -3,7 +3,8 @@
 # Checks that dependencies point one way: kernels/common <- src/core <- platform <- src/map <-
 # src/heightmap, src/sim <- src/io, src/device/staging <- src/device/opencl, src/device/cuda <-
 # src/device (the backend factory); src/msgs (ROS 2 messages, no transport) <- src/pipeline,
-# src/bag, src/dds <- src/service <- tools;
+# src/bag, src/dds <- src/service <- tools; src/dds, src/sim <- src/driver (ROS-like endpoints,
+# simulated sensors) <- src/replay (recordings played over DDS) <- tools;
 # src/config (YAML reading) and src/record (the record log format) depend on core only.
 # Includes are written relative to the repository root, so grep can tell.
 set -euo pipefail
@@ -32,7 +33,9 @@ check src/msgs 'src/map|src/io|src/sim|src/dds|src/pipeline|src/service|src/bag|
 check src/dds 'src/sim|src/device/|src/pipeline|src/service|tools/|tests/' 'DDS I/O knows messages, not the pipeline'
 check src/pipeline 'src/sim|src/device/|src/dds/|src/service|tools/|tests/' 'the pipeline runs any backend through src/map/backend.hpp, and needs no DDS'
 check src/bag 'src/sim|src/device/|src/dds/|src/service|tools/|tests/' 'bags are read without DDS'
-check src/service 'src/sim|tools/|tests/' 'the service does not know scenes or tools'
+check src/service 'src/sim|src/driver|src/replay|tools/|tests/' 'the service does not know scenes, its test drivers or tools'
+check src/driver 'src/pipeline|src/service|src/device/|src/replay|tools/|tests/' 'endpoints that act like ROS 2 nodes know messages and scenes, not the service'
+check src/replay 'src/sim|src/pipeline|src/service|src/device/|tools/|tests/' 'playing recordings needs files, bags and DDS, not the service or tools'
 check kernels/device 'src/|platform/|tools/|tests/' 'device code depends only on kernels/'
 check src/device 'src/sim|src/dds|src/pipeline|src/service|tools/|tests/' 'backends run maps; they know no messages, pipeline or tools'
 check src/device/staging 'src/io|src/sim|src/device/opencl|src/device/cuda|src/device/backend|tools/|tests/' 'shared device-backend logic is API-agnostic'

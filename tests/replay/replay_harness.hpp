@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "src/dds/entities.hpp"
+#include "src/driver/ros_endpoints.hpp"
 #include "tests/service/daemon_process.hpp"
 #include "tests/support/temp_dir.hpp"
-#include "tools/dds_driver/ros_endpoints.hpp"
 
 namespace raymap::test {
 

@@ -9,11 +9,11 @@
 #include <gtest/gtest.h>
 
 #include "src/core/eigen_conversions.hpp"
+#include "src/driver/simulated_lidar.hpp"
 #include "src/pipeline/deskew.hpp"
 #include "src/pipeline/pose_history.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tests/support/bag_spec.hpp"
-#include "tools/dds_driver/simulated_lidar.hpp"
 
 namespace raymap::test {
 namespace {

@@ -15,13 +15,13 @@
 
 #include "platform/clock.hpp"
 #include "src/dds/entities.hpp"
+#include "src/driver/lidar_playback.hpp"
+#include "src/driver/ros_endpoints.hpp"
+#include "src/driver/simulated_lidar.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tests/service/daemon_process.hpp"
 #include "tests/support/fake_notify_socket.hpp"
 #include "tests/support/temp_dir.hpp"
-#include "tools/dds_driver/lidar_playback.hpp"
-#include "tools/dds_driver/ros_endpoints.hpp"
-#include "tools/dds_driver/simulated_lidar.hpp"
 
 namespace raymap::test {
 

@@ -13,9 +13,9 @@
 #include "platform/clock.hpp"
 #include "src/dds/cdr_writer.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/driver/depth_playback.hpp"
 #include "src/msgs/depth_image_writer.hpp"
 #include "tests/service/service_fixture.hpp"
-#include "tools/dds_driver/depth_playback.hpp"
 
 namespace raymap::test {
 namespace {

@@ -5,11 +5,11 @@
 #include <gtest/gtest.h>
 
 #include "platform/clock.hpp"
+#include "src/driver/depth_playback.hpp"
 #include "src/service/daemon_config.hpp"
 #include "src/service/service.hpp"
 #include "tests/service/service_fixture.hpp"
 #include "tests/support/alloc_counter.hpp"
-#include "tools/dds_driver/depth_playback.hpp"
 
 namespace raymap::test {
 namespace {

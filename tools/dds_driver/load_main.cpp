@@ -16,13 +16,13 @@
 
 #include "platform/clock.hpp"
 #include "platform/rt.hpp"
+#include "src/driver/depth_playback.hpp"
+#include "src/driver/lidar_playback.hpp"
+#include "src/driver/ros_endpoints.hpp"
+#include "src/driver/simulated_lidar.hpp"
 #include "src/security/secure_participant.hpp"
 #include "src/sim/scene_file.hpp"
 #include "tools/dds_driver/default_scene.hpp"
-#include "tools/dds_driver/depth_playback.hpp"
-#include "tools/dds_driver/lidar_playback.hpp"
-#include "tools/dds_driver/ros_endpoints.hpp"
-#include "tools/dds_driver/simulated_lidar.hpp"
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/json_output.hpp"
 

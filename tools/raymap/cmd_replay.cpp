@@ -2,24 +2,34 @@
 // `raymap replay`: recorded data published over DDS as the sensors and localisation of a live
 // robot would (docs/cli.md).
 #include <algorithm>
+#include <cinttypes>
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <utility>
+#include <vector>
 
+#include <unistd.h>
+
+#include "platform/clock.hpp"
 #include "src/bag/bag_reader.hpp"
 #include "src/dds/topic_types.hpp"
 #include "src/msgs/ros_names.hpp"
+#include "src/replay/replay_session.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
-#include "tools/raymap/replay_session.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
+
+using replay::ReplayOptions;
+using replay::ReplayProgress;
+using replay::ReplaySession;
+using replay::ReplayStats;
 
 struct ReplayFlags {
   std::vector<std::string> inputs;
@@ -100,8 +110,55 @@ Result<ReplayOptions> toOptions(const ReplayFlags& f) {
   o.max_ahead = f.max_ahead;
   o.skip_damaged = f.skip_damaged;
   o.include_outputs = f.include_outputs;
-  o.progress = !f.quiet;
   return o;
+}
+
+/// The progress line on stderr: rewritten in place every 0.5 s on a terminal, a line every 10 s
+/// into a file or pipe (a log stays readable), and the summary at the end.
+class ProgressLine {
+ public:
+  void operator()(const ReplayProgress& p) {
+    const std::int64_t now = platform::monotonicNowNs();
+    const std::int64_t every = terminal_ ? 500'000'000 : 10'000'000'000;
+    if (!p.finished && now - last_ns_ < every) {
+      return;
+    }
+    last_ns_ = now;
+    const ReplayStats& s = p.stats;
+    if (p.finished) {
+      std::fprintf(stderr,
+                   "%sraymap replay: finished %" PRIu64 " pass%s: %" PRIu64
+                   " clouds, %.1f M points, %" PRIu64 " poses, %" PRIu64
+                   " log messages; %.1f s of data in %.1f s, late max %.0f ms\n",
+                   terminal_ ? "\r" : "", s.passes, s.passes == 1 ? "" : "es", s.scans,
+                   static_cast<double>(s.points) * 1e-6, s.poses, s.messages, s.data_seconds,
+                   p.elapsed_s, p.max_late_ms);
+    } else {
+      const std::string input(p.input);
+      std::fprintf(stderr,
+                   "%sraymap replay: %s %3.0f%% | pass %" PRIu64 " | %" PRIu64
+                   " clouds, %.1f M points, %" PRIu64 " poses, %" PRIu64
+                   " log messages | %.1f s of data in %.1f s | late max %.0f ms%s",
+                   terminal_ ? "\r" : "", input.c_str(), 100.0 * p.input_fraction, s.passes + 1,
+                   s.scans, static_cast<double>(s.points) * 1e-6, s.poses, s.messages,
+                   s.data_seconds, p.elapsed_s, p.max_late_ms, terminal_ ? "   " : "\n");
+    }
+    std::fflush(stderr);
+  }
+
+ private:
+  bool terminal_ = ::isatty(STDERR_FILENO) != 0;
+  std::int64_t last_ns_ = 0;
+};
+
+/// The library's warnings name its options by key (replay.rate); the user typed flags.
+std::vector<std::string> warningsWithFlags(const std::vector<std::string>& warnings) {
+  std::vector<std::string> shown;
+  shown.reserve(warnings.size());
+  for (const std::string& warning : warnings) {
+    shown.push_back(withCliFlags(warning));
+  }
+  return shown;
 }
 
 Json statsJson(const ReplayStats& s) {
@@ -119,7 +176,7 @@ Json statsJson(const ReplayStats& s) {
       {"wall_seconds", s.wall_seconds},
       {"max_late_ms", s.max_late_ms},
       {"stamp_zero_ns", s.stamp_zero_ns},
-      {"warnings", s.warnings},
+      {"warnings", warningsWithFlags(s.warnings)},
   };
 }
 
@@ -128,6 +185,13 @@ int runReplay(const ReplayFlags& flags) {
   if (!options) {
     printError("replay", options.error().message);
     return kExitUsage;
+  }
+  if (!flags.quiet) {
+    options->on_progress = ProgressLine();
+    options->on_waiting = [wait_s = options->wait_s](const std::string& topic) {
+      std::fprintf(stderr, "raymap replay: waiting up to %.0f s for a subscriber of %s\n", wait_s,
+                   topic.c_str());
+    };
   }
   StagedOutputs staged("replay");
   for (const std::string& input : flags.inputs) {
@@ -158,8 +222,8 @@ int runReplay(const ReplayFlags& flags) {
     printError("replay", stats.error().message + bagDamageHint(reads_bags, stats.error()));
     return kExitFailure;
   }
-  for (const std::string& warning : stats.value().warnings) {
-    std::fprintf(stderr, "raymap replay: warning: %s\n", withCliFlags(warning).c_str());
+  for (const std::string& warning : warningsWithFlags(stats.value().warnings)) {
+    std::fprintf(stderr, "raymap replay: warning: %s\n", warning.c_str());
   }
   if (!flags.stats_json.empty()) {
     const std::string json = dumpJson(statsJson(stats.value()));

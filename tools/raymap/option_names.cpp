@@ -69,6 +69,9 @@ constexpr std::array kOptionFlags{
     OptionFlag{"export.min_weight", "--min-weight", ""},
     OptionFlag{"export.threshold", "--threshold", ""},
     OptionFlag{"export.colour", "--colour", "height intensity permeability"},
+    OptionFlag{"replay.rate", "--rate", "max"},
+    OptionFlag{"replay.skip_damaged", "--skip-damaged", ""},
+    OptionFlag{"replay.include_outputs", "--include-outputs", ""},
 };
 
 bool isWordChar(char c) {

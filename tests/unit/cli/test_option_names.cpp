@@ -36,6 +36,18 @@ TEST(OptionNames, AKeyWithANumberBecomesTheFlagAndTheNumber) {
   EXPECT_EQ(withCliFlags("heightmap.size: .5"), "--size .5");
 }
 
+// The replay library's warnings (src/replay) read as they did when raymap replay wrote them.
+TEST(OptionNames, ReplayWarningsNameReplaysFlags) {
+  EXPECT_EQ(withCliFlags("replay.rate: max: no progress report on rt/diagnostics (is raymapd "
+                         "running?): publishing unpaced"),
+            "--rate max: no progress report on rt/diagnostics (is raymapd running?): publishing "
+            "unpaced");
+  EXPECT_EQ(withCliFlags("replay.skip_damaged: bag.mcap: 2 chunks skipped"),
+            "--skip-damaged: bag.mcap: 2 chunks skipped");
+  EXPECT_EQ(withCliFlags("is not replayed (replay.include_outputs replays it)"),
+            "is not replayed (--include-outputs replays it)");
+}
+
 TEST(OptionNames, AKeyWithOneOfItsValuesBecomesTheFlagAndTheValue) {
   EXPECT_EQ(withCliFlags("backend.name: cuda: no device (backend.fallback: cpu maps on the CPU "
                          "instead)"),

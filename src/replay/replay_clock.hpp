@@ -6,7 +6,7 @@
 
 #include "platform/signals.hpp"
 
-namespace raymap::cli {
+namespace raymap::replay {
 
 /// @brief Maps replay time (seconds of recorded data since the replay started, across files and
 /// loops) to the monotonic instant it is published and to the ROS stamp it carries.
@@ -44,4 +44,4 @@ class ReplayClock {
   bool stopped_ = false;
 };
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

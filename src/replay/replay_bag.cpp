@@ -7,9 +7,9 @@
 #include "src/bag/bag_reader.hpp"
 #include "src/dds/topic_types.hpp"
 #include "src/msgs/ros_names.hpp"
-#include "tools/raymap/replay_session.hpp"
+#include "src/replay/replay_session.hpp"
 
-namespace raymap::cli {
+namespace raymap::replay {
 namespace {
 
 /// The value of `key:` in the first profile of rosbag2's offered_qos_profiles YAML, or -1.
@@ -166,10 +166,10 @@ Result<void> ReplaySession::playBag(const std::string& path) {
     ++stats_.truncated_logs;
   }
   for (const std::string& damage : reader.pass().damage) {
-    stats_.warnings.push_back("--skip-damaged: " + damage);
+    stats_.warnings.push_back("replay.skip_damaged: " + damage);
   }
   pass_offset_s_ = played_until_s + kGapBetweenInputs_s;
   return {};
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

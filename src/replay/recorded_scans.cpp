@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // ScanReader and the conversion of recorded rays into driver-like scans and pose knots.
-#include "tools/raymap/replay_scans.hpp"
+#include "src/replay/recorded_scans.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 
-namespace raymap::cli {
+#include "src/core/eigen_conversions.hpp"
+#include "src/io/trajectory.hpp"
+
+namespace raymap::replay {
 namespace {
 
 constexpr std::size_t kChunkRays = 65536;
@@ -16,7 +19,8 @@ std::int64_t stampOf(double t_s, std::int64_t stamp_of_zero_ns, double t_zero_s)
   return stamp_of_zero_ns + std::llround((t_s - t_zero_s) * 1e9);
 }
 
-/// The knots' position at `stamp_ns` (linear between the bracketing knots, held outside).
+/// The knots' position at `stamp_ns`: between the bracketing knots as a subscriber deskewing with
+/// the odometry interpolates it (io::interpolate, the one definition), held outside.
 Vec3d positionAt(const std::vector<PoseKnot>& knots, std::int64_t stamp_ns) {
   if (stamp_ns <= knots.front().stamp_ns) {
     return knots.front().position;
@@ -31,10 +35,10 @@ Vec3d positionAt(const std::vector<PoseKnot>& knots, std::int64_t stamp_ns) {
   const PoseKnot& a = *(after - 1);
   const double f =
       static_cast<double>(stamp_ns - a.stamp_ns) / static_cast<double>(b.stamp_ns - a.stamp_ns);
-  if (f == 0.0) {
-    return a.position;
-  }
-  return a.position + (b.position - a.position) * f;
+  const io::Pose at =
+      io::interpolate(io::Pose{toEigen(a.position), Eigen::Quaterniond::Identity()},
+                      io::Pose{toEigen(b.position), Eigen::Quaterniond::Identity()}, f);
+  return toVec3(at.position);
 }
 
 }  // namespace
@@ -140,4 +144,4 @@ void toDriverScan(const RecordedScan& scan, std::int64_t stamp_of_zero_ns, doubl
   }
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

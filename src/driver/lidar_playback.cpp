@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // LidarPlayback: the real-time schedule of a simulated driver.
-#include "tools/dds_driver/lidar_playback.hpp"
+#include "src/driver/lidar_playback.hpp"
 
 #include <algorithm>
 #include <cmath>

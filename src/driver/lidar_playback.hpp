@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "tools/dds_driver/ros_endpoints.hpp"
-#include "tools/dds_driver/simulated_lidar.hpp"
+#include "src/driver/ros_endpoints.hpp"
+#include "src/driver/simulated_lidar.hpp"
 
 namespace raymap::driver {
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // DepthPlayback: simulated depth cameras published as a ROS camera driver publishes them.
-#include "tools/dds_driver/depth_playback.hpp"
+#include "src/driver/depth_playback.hpp"
 
 #include <algorithm>
 #include <cmath>

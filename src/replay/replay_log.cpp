@@ -5,9 +5,9 @@
 
 #include "src/dds/topic_types.hpp"
 #include "src/record/record_log_reader.hpp"
-#include "tools/raymap/replay_session.hpp"
+#include "src/replay/replay_session.hpp"
 
-namespace raymap::cli {
+namespace raymap::replay {
 namespace {
 
 constexpr std::int32_t kLogWriterDepth = 16;
@@ -26,9 +26,10 @@ bool ReplaySession::leavesOutServiceOutput(const std::string& path, const std::s
   if (!output || options_.include_outputs) {
     return false;
   }
-  stats_.warnings.push_back(path + ": topic " + topic + " (" + type +
-                            ") is not replayed: it is what a mapping service publishes, and "
-                            "would stand beside the live one's (--include-outputs replays it)");
+  stats_.warnings.push_back(
+      path + ": topic " + topic + " (" + type +
+      ") is not replayed: it is what a mapping service publishes, and "
+      "would stand beside the live one's (replay.include_outputs replays it)");
   return true;
 }
 
@@ -167,4 +168,4 @@ Result<void> ReplaySession::playLog(const std::string& path) {
   return {};
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

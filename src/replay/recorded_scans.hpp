@@ -14,7 +14,7 @@
 #include "src/map/ray.hpp"
 #include "src/msgs/point_cloud.hpp"
 
-namespace raymap::cli {
+namespace raymap::replay {
 
 /// @brief The rays of one scan (a run of equal scan index in the file), in file order.
 struct RecordedScan {
@@ -67,4 +67,4 @@ struct DriverScan {
 void toDriverScan(const RecordedScan& scan, std::int64_t stamp_of_zero_ns, double t_zero_s,
                   double knot_period_s, DriverScan& out);
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // ReplayClock: pacing on the monotonic clock, interruptible by the shutdown signals.
-#include "tools/raymap/replay_clock.hpp"
+#include "src/replay/replay_clock.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 #include "platform/clock.hpp"
 
-namespace raymap::cli {
+namespace raymap::replay {
 
 ReplayClock::ReplayClock(double rate, platform::ShutdownSignals signals)
     : rate_(rate), signals_(signals) {}
@@ -61,4 +61,4 @@ bool ReplayClock::sleepFor(double seconds) {
   return !stopped_;
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

@@ -1,22 +1,17 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // ReplaySession: passes over the inputs, ray files published as driver scans and poses, flow
-// control for --rate max, progress.
-#include "tools/raymap/replay_session.hpp"
+// control when unpaced (rate 0: as fast as the subscriber keeps up), progress.
+#include "src/replay/replay_session.hpp"
 
 #include <algorithm>
-#include <cinttypes>
-#include <cstdio>
-
-#include <unistd.h>
 
 #include "platform/clock.hpp"
 #include "src/bag/bag_reader.hpp"
 #include "src/core/eigen_conversions.hpp"
 #include "src/record/record_log_reader.hpp"
 #include "src/security/secure_participant.hpp"
-#include "tools/raymap/commands.hpp"
 
-namespace raymap::cli {
+namespace raymap::replay {
 namespace {
 
 /// A writer sees its subscriber before that subscriber has matched the writer, and a best-effort
@@ -25,7 +20,7 @@ namespace {
 /// skipping the pause when the match was already there at the first look).
 constexpr double kReaderSideMatch_s = 1.0;
 
-/// --rate max: a subscriber that reports no progress for this long is not waited for.
+/// Unpaced: a subscriber that reports no progress for this long is not waited for.
 constexpr double kFeedbackTimeout_s = 2.0;
 
 /// The counters of raymapd's "raymapd: pipeline" status that account for every received cloud.
@@ -105,9 +100,8 @@ bool ReplaySession::waitForSubscriber(const std::function<std::uint32_t()>& matc
       platform::monotonicNowNs() + static_cast<std::int64_t>(options_.wait_s * 1e9);
   bool waited = false;
   while (matched() == 0 && platform::monotonicNowNs() < end) {
-    if (!waited && options_.progress) {
-      std::fprintf(stderr, "raymap replay: waiting up to %.0f s for a subscriber of %s\n",
-                   options_.wait_s, topic.c_str());
+    if (!waited && options_.on_waiting) {
+      options_.on_waiting(topic);
     }
     waited = true;
     if (!clock_.sleepFor(0.02)) {
@@ -151,7 +145,7 @@ bool ReplaySession::waitForRoom() {
         (baseline ? kFeedbackTimeout_s : options_.wait_s)) {
       ++stats_.feedback_timeouts;
       if (!baseline) {
-        stats_.warnings.push_back("--rate max: no progress report on " +
+        stats_.warnings.push_back("replay.rate: max: no progress report on " +
                                   options_.diagnostics_topic +
                                   " (is raymapd running?): publishing unpaced");
         feedback_.reset();
@@ -164,40 +158,11 @@ bool ReplaySession::waitForRoom() {
   }
 }
 
-void ReplaySession::reportProgress(double file_fraction, const std::string& name, bool final_line) {
-  if (!options_.progress) {
-    return;
+void ReplaySession::reportProgress(double input_fraction, const std::string& input, bool finished) {
+  if (options_.on_progress) {
+    options_.on_progress(ReplayProgress{stats_, input, input_fraction, clock_.elapsed(),
+                                        clock_.maxLateMs(), finished});
   }
-  static const bool terminal = ::isatty(STDERR_FILENO) != 0;
-  const std::int64_t now = platform::monotonicNowNs();
-  const std::int64_t every = terminal ? 500'000'000 : 10'000'000'000;
-  if (!final_line && now - last_progress_ns_ < every) {
-    return;
-  }
-  last_progress_ns_ = now;
-  if (final_line) {
-    std::fprintf(stderr,
-                 "%sraymap replay: finished %" PRIu64 " pass%s: %" PRIu64
-                 " clouds, %.1f M points, "
-                 "%" PRIu64 " poses, %" PRIu64
-                 " log messages; %.1f s of data in %.1f s, late max "
-                 "%.0f ms\n",
-                 terminal ? "\r" : "", stats_.passes, stats_.passes == 1 ? "" : "es", stats_.scans,
-                 static_cast<double>(stats_.points) * 1e-6, stats_.poses, stats_.messages,
-                 stats_.data_seconds, clock_.elapsed(), clock_.maxLateMs());
-  } else {
-    std::fprintf(stderr,
-                 "%sraymap replay: %s %3.0f%% | pass %" PRIu64 " | %" PRIu64
-                 " clouds, %.1f M "
-                 "points, %" PRIu64 " poses, %" PRIu64
-                 " log messages | %.1f s of data in %.1f s "
-                 "| late max %.0f ms%s",
-                 terminal ? "\r" : "", name.c_str(), 100.0 * file_fraction, stats_.passes + 1,
-                 stats_.scans, static_cast<double>(stats_.points) * 1e-6, stats_.poses,
-                 stats_.messages, stats_.data_seconds, clock_.elapsed(), clock_.maxLateMs(),
-                 terminal ? "   " : "\n");
-  }
-  std::fflush(stderr);
 }
 
 Result<void> ReplaySession::playRayFile(const std::string& path) {
@@ -330,4 +295,4 @@ Result<ReplayStats> ReplaySession::run() {
   return stats_;
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

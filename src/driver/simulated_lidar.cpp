@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // SimulatedLidar: one scan of sim::simulateScans at a time, turned back into the sensor frame.
-#include "tools/dds_driver/simulated_lidar.hpp"
+#include "src/driver/simulated_lidar.hpp"
 
 #include <cmath>
 #include <limits>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // DriverPublisher and the GridMap / diagnostics listeners over Cyclone's C API.
-#include "tools/dds_driver/ros_endpoints.hpp"
+#include "src/driver/ros_endpoints.hpp"
 
 #include <cstdlib>
 #include <cstring>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `raymap replay`: recorded data published over DDS as a lidar driver and a localisation stack
-// would, from ray files (PLY) or raymap record logs.
+// Recorded data published over DDS as a lidar driver and a localisation stack would, from ray
+// files (PLY), raymap record logs and rosbag2 bags: the engine of `raymap replay`, usable from any
+// program that wants to feed a live mapper (raymapd, a ROS 2 node) from a recording.
 #pragma once
 
 #include <cstdint>
@@ -15,12 +16,12 @@
 
 #include "src/dds/cdr_writer.hpp"
 #include "src/dds/entities.hpp"
+#include "src/driver/ros_endpoints.hpp"
 #include "src/io/ray_source.hpp"
-#include "tools/dds_driver/ros_endpoints.hpp"
-#include "tools/raymap/replay_clock.hpp"
-#include "tools/raymap/replay_scans.hpp"
+#include "src/replay/recorded_scans.hpp"
+#include "src/replay/replay_clock.hpp"
 
-namespace raymap::cli {
+namespace raymap::replay {
 
 /// Between the end of one input (or pass) and the start of the next, in replay time, when the
 /// input's scan spacing is unknown (one scan) or logs: keeps stamps strictly increasing and reads
@@ -28,7 +29,20 @@ namespace raymap::cli {
 /// spacing after their last scan started instead.
 inline constexpr double kGapBetweenInputs_s = 0.1;
 
-/// @brief How to replay (options of `raymap replay`, documented in docs/cli.md).
+struct ReplayStats;
+
+/// @brief Where a replay is, for a progress display. Valid during the callback only.
+struct ReplayProgress {
+  const ReplayStats& stats;     ///< what was published so far
+  std::string_view input;       ///< the input being played (empty when finished)
+  double input_fraction = 0.0;  ///< how far into it, 0 to 1
+  double elapsed_s = 0.0;       ///< wall-clock seconds since publishing started
+  double max_late_ms = 0.0;     ///< the furthest the replay fell behind the recording so far
+  bool finished = false;        ///< the last call, after every pass
+};
+
+/// @brief How to replay (the options of `raymap replay`, documented in docs/cli.md; messages
+/// name them as `replay.<field>`).
 struct ReplayOptions {
   std::vector<std::string> inputs;
   double rate = 1.0;        ///< data seconds per second; 0 = as fast as the subscriber keeps up
@@ -56,7 +70,12 @@ struct ReplayOptions {
   /// grid_map_msgs topics). Off: a recording's /diagnostics would carry the recorded service's
   /// statuses beside the live one's (and --rate max would pace on them).
   bool include_outputs = false;
-  bool progress = true;
+  /// Called on run()'s thread after each published cloud, pose batch or log message, and once
+  /// more with `finished` at the end: a display throttles itself. Optional.
+  std::function<void(const ReplayProgress&)> on_progress;
+  /// Called once on run()'s thread when the replay starts to wait (up to wait_s) for a
+  /// subscriber of `topic`. Optional.
+  std::function<void(const std::string& topic)> on_waiting;
 };
 
 /// @brief What a replay did (the --stats-json keys, docs/cli.md).
@@ -79,7 +98,8 @@ struct ReplayStats {
   std::vector<std::string> warnings;
 };
 
-/// @brief One replay: the DDS endpoints, the clock and the statistics. Not thread-safe.
+/// @brief One replay: the DDS endpoints, the clock and the statistics. Not thread-safe: create
+/// and run it on one thread. Not real-time: it reads files and allocates as it plays.
 class ReplaySession {
  public:
   static Result<std::unique_ptr<ReplaySession>> create(const ReplayOptions& options,
@@ -110,7 +130,7 @@ class ReplaySession {
   bool waitForSubscriber(const std::function<std::uint32_t()>& matched, const std::string& topic);
   /// --rate max: blocks until the subscriber has processed all but max_ahead clouds.
   bool waitForRoom();
-  void reportProgress(double file_fraction, const std::string& name, bool final_line = false);
+  void reportProgress(double input_fraction, const std::string& input, bool finished = false);
 
   ReplayOptions options_;
   ReplayClock clock_;
@@ -123,9 +143,8 @@ class ReplaySession {
   bool waited_for_subscriber_ = false;
   /// --rate max: the subscriber's processed-cloud count minus our clouds, at the first report.
   std::optional<double> processed_baseline_;
-  std::int64_t last_progress_ns_ = 0;
   RecordedScan scan_;
   DriverScan driver_scan_;
 };
 
-}  // namespace raymap::cli
+}  // namespace raymap::replay

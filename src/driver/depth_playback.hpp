@@ -13,10 +13,10 @@
 #include "raymap/error.hpp"
 
 #include "src/dds/cdr_writer.hpp"
+#include "src/driver/ros_endpoints.hpp"
 #include "src/sim/depth_camera.hpp"
 #include "src/sim/lidar.hpp"
 #include "src/sim/scene.hpp"
-#include "tools/dds_driver/ros_endpoints.hpp"
 
 namespace raymap::driver {
 
