@@ -26,7 +26,7 @@ bool namesOption(const std::string& help, std::string_view flag) {
 
 TEST(CliOptionNames, EveryFlagShownForAKeyIsAnOptionOfRaymap) {
   std::string help;
-  for (const char* command : {"populate", "heightmap", "export", "replay"}) {
+  for (const char* command : {"populate", "heightmap", "export", "replay", "record"}) {
     const RunResult r = runRaymap({command, "--help"});
     ASSERT_EQ(r.exit_code, 0) << describe(r);
     help += r.out;

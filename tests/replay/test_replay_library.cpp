@@ -2,14 +2,21 @@
 // `raymap replay`'s engine as a library (src/replay): a program that feeds a mapper from a
 // recording gets the same session, its progress through callbacks and its warnings by
 // configuration key. The CLI tests (test_replay.cpp) follow the published data into raymapd.
+#include <array>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "platform/clock.hpp"
 #include "platform/signals.hpp"
+#include "src/driver/ros_endpoints.hpp"
+#include "src/msgs/pose.hpp"
+#include "src/record/record_log_reader.hpp"
 #include "src/replay/replay_session.hpp"
+#include "src/replay/topic_recorder.hpp"
 #include "tests/service/service_fixture.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -120,6 +127,74 @@ TEST(ReplayLibrary, AnInputThatIsNoRecordingIsAnErrorNamingIt) {
   ASSERT_FALSE(stats.has_value());
   EXPECT_NE(stats.error().message.find(input), std::string::npos) << stats.error().message;
   EXPECT_EQ(seen.clouds.size(), 0u);
+}
+
+// `raymap record`'s engine beside a program's own publisher: it finds the requested topic's
+// writer, reads it with the writer's QoS (reliable), writes every message's bytes, stops when
+// asked, and says which requested topic it never saw.
+TEST(ReplayLibrary, ARecorderWritesEveryMessageOfARequestedTopicUntilAskedToStop) {
+  TempDir dir;
+  const std::uint32_t domain = uniqueDomain();
+  replay::RecordOptions options;
+  options.output = dir.file("tf.rmlog");
+  options.topics = {"rt/nothing", "rt/tf"};
+  options.domain = domain;
+  std::vector<std::string> notices;
+  options.on_notice = [&notices](const std::string& line) { notices.push_back(line); };
+  auto recorder = replay::TopicRecorder::create(options);
+  ASSERT_TRUE(recorder.has_value()) << recorder.error().message;
+  Result<replay::RecordStats> stats = fail(ErrorCode::kUnsupported, "not run");
+  std::thread recording(
+      [&] { stats = recorder.value()->run(platform::ShutdownSignals::install()); });
+
+  auto participant = dds::Participant::create(domain);
+  ASSERT_TRUE(participant.has_value());
+  auto publisher = driver::DriverPublisher::create(*participant, "rt/points", "rt/odom", 1);
+  ASSERT_TRUE(publisher.has_value()) << publisher.error().message;
+  const std::int64_t give_up = platform::monotonicNowNs() + 30'000'000'000;
+  while (publisher.value()->matchedTfReaders() == 0 && platform::monotonicNowNs() < give_up) {
+    platform::sleepUntilMonotonicNs(platform::monotonicNowNs() + 10'000'000);
+  }
+  EXPECT_EQ(publisher.value()->matchedTfReaders(), 1u);
+  constexpr int kMessages = 20;
+  for (int i = 0; i < kMessages; ++i) {
+    io::Pose pose;
+    pose.position.x() = 0.5 * i;
+    publisher.value()->publishTf(1'000'000'000 + i, pose, "odom", "base_link");
+  }
+  EXPECT_TRUE(participant->waitForAcknowledgements(30'000'000'000));
+  recorder.value()->requestStop();
+  recording.join();
+  ASSERT_TRUE(stats.has_value()) << stats.error().message;
+
+  EXPECT_EQ(stats->messages, static_cast<std::uint64_t>(kMessages));
+  ASSERT_EQ(stats->topics.size(), 2u);
+  EXPECT_EQ(stats->topics[0].topic, "rt/nothing");
+  EXPECT_FALSE(stats->topics[0].seen);
+  EXPECT_EQ(stats->topics[1].topic, "rt/tf");
+  EXPECT_TRUE(stats->topics[1].seen);
+  EXPECT_EQ(stats->topics[1].messages, static_cast<std::uint64_t>(kMessages));
+  EXPECT_EQ(notices,
+            std::vector<std::string>{"recording rt/tf (tf2_msgs/msg/TFMessage, reliable)"});
+
+  // The log holds the messages in order, each the transform that was sent.
+  auto log = record::RecordLogReader::open(options.output);
+  ASSERT_TRUE(log.has_value()) << log.error().message;
+  int read = 0;
+  for (;;) {
+    auto message = log.value()->next();
+    ASSERT_TRUE(message.has_value()) << message.error().message;
+    if (!message.value()) {
+      break;
+    }
+    std::array<msgs::StampedTransform, 1> transform{};
+    const auto decoded = msgs::decodeTfMessage(message.value()->cdr, transform);
+    ASSERT_TRUE(decoded.has_value());
+    EXPECT_EQ(transform[0].stamp_ns, 1'000'000'000 + read);
+    EXPECT_EQ(transform[0].tx, 0.5 * read);
+    ++read;
+  }
+  EXPECT_EQ(read, kMessages);
 }
 
 }  // namespace

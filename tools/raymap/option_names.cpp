@@ -72,6 +72,8 @@ constexpr std::array kOptionFlags{
     OptionFlag{"replay.rate", "--rate", "max"},
     OptionFlag{"replay.skip_damaged", "--skip-damaged", ""},
     OptionFlag{"replay.include_outputs", "--include-outputs", ""},
+    OptionFlag{"record.format", "--format", "rmlog mcap"},
+    OptionFlag{"record.compression", "--compression", ""},
 };
 
 bool isWordChar(char c) {

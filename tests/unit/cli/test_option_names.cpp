@@ -36,8 +36,9 @@ TEST(OptionNames, AKeyWithANumberBecomesTheFlagAndTheNumber) {
   EXPECT_EQ(withCliFlags("heightmap.size: .5"), "--size .5");
 }
 
-// The replay library's warnings (src/replay) read as they did when raymap replay wrote them.
-TEST(OptionNames, ReplayWarningsNameReplaysFlags) {
+// The replay library's warnings and errors (src/replay) read as they did when raymap replay and
+// raymap record wrote them.
+TEST(OptionNames, ReplayAndRecordMessagesNameTheirFlags) {
   EXPECT_EQ(withCliFlags("replay.rate: max: no progress report on rt/diagnostics (is raymapd "
                          "running?): publishing unpaced"),
             "--rate max: no progress report on rt/diagnostics (is raymapd running?): publishing "
@@ -46,6 +47,11 @@ TEST(OptionNames, ReplayWarningsNameReplaysFlags) {
             "--skip-damaged: bag.mcap: 2 chunks skipped");
   EXPECT_EQ(withCliFlags("is not replayed (replay.include_outputs replays it)"),
             "is not replayed (--include-outputs replays it)");
+  EXPECT_EQ(withCliFlags("record.compression applies to record.format: mcap (a .rmlog is raw "
+                         "capture)"),
+            "--compression applies to --format mcap (a .rmlog is raw capture)");
+  EXPECT_EQ(withCliFlags("record.compression: 'brotli' is not none, zstd or lz4"),
+            "--compression: 'brotli' is not none, zstd or lz4");
 }
 
 TEST(OptionNames, AKeyWithOneOfItsValuesBecomesTheFlagAndTheValue) {
