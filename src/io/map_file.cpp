@@ -297,8 +297,15 @@ Expected<void, Error> readTsdf(ByteReader& body, MapConfig& config, const Malfor
   return {};
 }
 
-/// Parses and checks the header; on success the reader is at the first region block.
-Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
+/// The header's bytes once its magic, size, checksum and version have been checked.
+struct CheckedHeader {
+  std::vector<std::byte> bytes;  ///< prefix, body and checksum
+  std::uint32_t version = 0;
+  std::uint32_t body_bytes = 0;
+};
+
+/// Reads the fixed prefix (magic, version, body size) and checks the magic.
+Result<std::array<std::byte, kPrefixBytes>> readPrefix(FileReader& file, const std::string& path) {
   if (file.size() == 0) {
     return fail(ErrorCode::kFormat, path + " is empty (0 bytes): not a raymap map file");
   }
@@ -318,20 +325,51 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
     return fail(ErrorCode::kTruncated, path + ": truncated in the header (file is " +
                                            std::to_string(file.size()) + " bytes)");
   }
-  ByteReader prefix_reader{std::span(prefix).subspan(kMagic.size())};
-  std::uint32_t version = 0;
-  std::uint32_t body_bytes = 0;
-  (void)prefix_reader.u32(version);
-  (void)prefix_reader.u32(body_bytes);
+  return prefix;
+}
+
+std::string versionsRead() { return "versions 1 to " + std::to_string(kMapFormatVersion); }
+
+/// A header whose checksum matched: is its version one this raymap reads?
+Expected<void, Error> checkVersion(std::uint32_t version, const std::string& path) {
+  if (version > kMapFormatVersion + kPlausibleVersionsAhead) {
+    return fail(ErrorCode::kUnsupported,
+                path + ": unsupported map format version " + std::to_string(version) +
+                    " (this raymap reads " + versionsRead() +
+                    "); a version this far ahead is more likely a damaged or foreign file than "
+                    "a newer raymap's");
+  }
+  if (version > kMapFormatVersion) {
+    return fail(ErrorCode::kUnsupported, path + ": map format version " + std::to_string(version) +
+                                             " is newer than this raymap, which reads " +
+                                             versionsRead());
+  }
+  if (version == 0) {
+    return fail(ErrorCode::kCorrupt, path + ": invalid map format version 0");
+  }
+  return {};
+}
+
+/// Reads the whole header and checks its size, checksum and version; the body is not parsed.
+Result<CheckedHeader> readCheckedHeader(FileReader& file, const std::string& path) {
+  auto prefix = readPrefix(file, path);
+  if (!prefix) {
+    return Unexpected(prefix.error());
+  }
+  CheckedHeader checked;
+  ByteReader prefix_reader{std::span(*prefix).subspan(kMagic.size())};
+  (void)prefix_reader.u32(checked.version);
+  (void)prefix_reader.u32(checked.body_bytes);
+  const std::uint32_t version = checked.version;
+  const std::uint32_t body_bytes = checked.body_bytes;
   // The header checksum covers the version, so it is checked first: a damaged version field is
   // damage, not a newer format. Only a header too large or cut short to check is judged by its
   // version alone.
-  const std::string versions_read = "versions 1 to " + std::to_string(kMapFormatVersion);
   const bool newer = version > kMapFormatVersion;
   const auto unchecked_newer = [&] {
     return fail(ErrorCode::kUnsupported,
                 path + ": map format version " + std::to_string(version) +
-                    " is newer than this raymap, which reads " + versions_read +
+                    " is newer than this raymap, which reads " + versionsRead() +
                     " (or the file is damaged: its header cannot be checked)");
   };
   if (body_bytes > kMaxHeaderBodyBytes) {
@@ -350,53 +388,37 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
                                            std::to_string(file.size()) + " bytes, header needs " +
                                            std::to_string(kPrefixBytes + body_bytes + 4u) + ")");
   }
-  std::vector<std::byte> header(kPrefixBytes + body_bytes + 4u);
-  std::copy(prefix.begin(), prefix.end(), header.begin());
-  if (auto ok = file.read(std::span(header).subspan(kPrefixBytes)); !ok) {
+  checked.bytes.resize(kPrefixBytes + body_bytes + 4u);
+  std::copy(prefix->begin(), prefix->end(), checked.bytes.begin());
+  if (auto ok = file.read(std::span(checked.bytes).subspan(kPrefixBytes)); !ok) {
     return Unexpected(ok.error());
   }
   std::uint32_t stored_crc = 0;
-  (void)ByteReader(std::span(header).last(4)).u32(stored_crc);
-  if (crc32(0, std::span(header).first(kPrefixBytes + body_bytes)) != stored_crc) {
+  (void)ByteReader(std::span(checked.bytes).last(4)).u32(stored_crc);
+  if (crc32(0, std::span(checked.bytes).first(kPrefixBytes + body_bytes)) != stored_crc) {
     if (newer || version == 0) {
       return fail(ErrorCode::kCorrupt, path +
                                            ": damaged header: its checksum does not match, and "
                                            "its version field reads " +
                                            std::to_string(version) +
-                                           " (this raymap reads map format " + versions_read + ")");
+                                           " (this raymap reads map format " + versionsRead() +
+                                           ")");
     }
     return fail(ErrorCode::kCorrupt, path + ": header checksum mismatch");
   }
-  if (version > kMapFormatVersion + kPlausibleVersionsAhead) {
-    return fail(ErrorCode::kUnsupported,
-                path + ": unsupported map format version " + std::to_string(version) +
-                    " (this raymap reads " + versions_read +
-                    "); a version this far ahead is more likely a damaged or foreign file than "
-                    "a newer raymap's");
+  if (auto ok = checkVersion(version, path); !ok) {
+    return Unexpected(ok.error());
   }
-  if (newer) {
-    return fail(ErrorCode::kUnsupported, path + ": map format version " + std::to_string(version) +
-                                             " is newer than this raymap, which reads " +
-                                             versions_read);
-  }
-  if (version == 0) {
-    return fail(ErrorCode::kCorrupt, path + ": invalid map format version 0");
-  }
+  return checked;
+}
 
-  // The body is covered by the CRC, so a failed check below is a writer bug or a forged file;
-  // it still never reads out of bounds.
-  ByteReader body{std::span(header).subspan(kPrefixBytes, body_bytes)};
-  const auto malformed = [&](const std::string& what) {
-    return fail(ErrorCode::kCorrupt, path + ": malformed header: " + what + " (header offset " +
-                                         std::to_string(kPrefixBytes + body.position()) + ")");
-  };
-  ParsedHeader parsed;
-  MapFileHeader& out = parsed.header;
-  out.format_version = version;
-  MapConfig& config = out.config;
+/// The map parameters: geometry, occupancy, semantics, voxel mean. Leaves the layer count.
+template <class Malformed>
+Expected<void, Error> readMapParameters(ByteReader& body, MapConfig& config,
+                                        std::uint16_t& layer_count, const std::string& path,
+                                        const Malformed& malformed) {
   std::uint8_t semantics = 0;
   std::uint8_t voxel_mean = 0;
-  std::uint16_t layer_count = 0;
   if (!body.f64(config.geometry.resolution) || !body.i32(config.geometry.region_voxels) ||
       !body.f32(config.occupancy.hit) || !body.f32(config.occupancy.miss) ||
       !body.f32(config.occupancy.clamp_min) || !body.f32(config.occupancy.clamp_max) ||
@@ -419,58 +441,81 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   if (auto ok = config.occupancy.validate(); !ok) {
     return fail(ErrorCode::kCorrupt, path + ": bad map parameters: " + ok.error().message);
   }
+  return {};
+}
 
+/// One layer entry `index`: a layer this raymap knows, in its current encoding, as defined.
+template <class Malformed>
+Result<LayerSpec> readLayer(ByteReader& body, std::size_t index, const std::string& path,
+                            const Malformed& malformed) {
+  std::uint8_t kind = 0;
+  std::uint8_t reserved = 0;
+  std::uint16_t layer_version = 0;
+  std::uint32_t bytes_per_voxel = 0;
+  std::uint16_t name_bytes = 0;
+  std::string name;
+  if (!body.u8(kind) || !body.u8(reserved) || !body.u16(layer_version) ||
+      !body.u32(bytes_per_voxel) || !body.u16(name_bytes)) {
+    return malformed("layer " + std::to_string(index + 1) + " runs past the header");
+  }
+  if (name_bytes > kMaxLayerNameBytes || !body.text(name_bytes, name)) {
+    return malformed("layer " + std::to_string(index + 1) + " has a bad name length");
+  }
+  const std::optional<LayerSpec> spec = layerSpec(static_cast<LayerKind>(kind));
+  if (!spec) {
+    return fail(ErrorCode::kUnsupported,
+                path + ": " + describeLayer(index, kind, name) + " is unknown to this raymap");
+  }
+  if (layer_version > spec->version) {
+    return fail(ErrorCode::kUnsupported,
+                path + ": " + describeLayer(index, kind, name) + " has encoding version " +
+                    std::to_string(layer_version) + ", newer than this raymap (" +
+                    std::to_string(spec->version) + ")");
+  }
+  if (layer_version != spec->version) {
+    return fail(ErrorCode::kUnsupported,
+                path + ": " + describeLayer(index, kind, name) + " has old encoding version " +
+                    std::to_string(layer_version) + " that this raymap cannot convert");
+  }
+  if (!spec->saved || name != spec->name || bytes_per_voxel != spec->bytes_per_voxel ||
+      reserved != 0) {
+    return malformed(describeLayer(index, kind, name) + " does not match its definition ('" +
+                     std::string(spec->name) + "', " + std::to_string(spec->bytes_per_voxel) +
+                     " bytes per voxel)");
+  }
+  return *spec;
+}
+
+/// The layer list; a map saved without its occupancy layer, or with a traversal layer, says so
+/// by the list alone.
+template <class Malformed>
+Expected<void, Error> readLayers(ByteReader& body, std::uint16_t layer_count, ParsedHeader& parsed,
+                                 const std::string& path, const Malformed& malformed) {
   if (layer_count > LayerSchema::kMaxLayers) {
     return malformed(std::to_string(layer_count) + " layers (at most " +
                      std::to_string(LayerSchema::kMaxLayers) + ")");
   }
   for (std::size_t i = 0; i < layer_count; ++i) {
-    std::uint8_t kind = 0;
-    std::uint8_t reserved = 0;
-    std::uint16_t layer_version = 0;
-    std::uint32_t bytes_per_voxel = 0;
-    std::uint16_t name_bytes = 0;
-    std::string name;
-    if (!body.u8(kind) || !body.u8(reserved) || !body.u16(layer_version) ||
-        !body.u32(bytes_per_voxel) || !body.u16(name_bytes)) {
-      return malformed("layer " + std::to_string(i + 1) + " runs past the header");
-    }
-    if (name_bytes > kMaxLayerNameBytes || !body.text(name_bytes, name)) {
-      return malformed("layer " + std::to_string(i + 1) + " has a bad name length");
-    }
-    const std::optional<LayerSpec> spec = layerSpec(static_cast<LayerKind>(kind));
+    auto spec = readLayer(body, i, path, malformed);
     if (!spec) {
-      return fail(ErrorCode::kUnsupported,
-                  path + ": " + describeLayer(i, kind, name) + " is unknown to this raymap");
+      return Unexpected(spec.error());
     }
-    if (layer_version > spec->version) {
-      return fail(ErrorCode::kUnsupported,
-                  path + ": " + describeLayer(i, kind, name) + " has encoding version " +
-                      std::to_string(layer_version) + ", newer than this raymap (" +
-                      std::to_string(spec->version) + ")");
-    }
-    if (layer_version != spec->version) {
-      return fail(ErrorCode::kUnsupported,
-                  path + ": " + describeLayer(i, kind, name) + " has old encoding version " +
-                      std::to_string(layer_version) + " that this raymap cannot convert");
-    }
-    if (!spec->saved || name != spec->name || bytes_per_voxel != spec->bytes_per_voxel ||
-        reserved != 0) {
-      return malformed(describeLayer(i, kind, name) + " does not match its definition ('" +
-                       std::string(spec->name) + "', " + std::to_string(spec->bytes_per_voxel) +
-                       " bytes per voxel)");
-    }
-    out.saved_layers.push_back(spec->kind);
+    parsed.header.saved_layers.push_back(spec->kind);
     parsed.layers.push_back(*spec);
   }
-  // A map saved without its occupancy layer, or with a traversal layer, says so by the layer
-  // list alone.
   const auto has_layer = [&parsed](LayerKind kind) {
     return std::any_of(parsed.layers.begin(), parsed.layers.end(),
                        [kind](const LayerSpec& spec) { return spec.kind == kind; });
   };
-  config.occupancy_layer = has_layer(LayerKind::kOccupancy);
-  config.decay_rate = has_layer(LayerKind::kTraversal);
+  parsed.header.config.occupancy_layer = has_layer(LayerKind::kOccupancy);
+  parsed.header.config.decay_rate = has_layer(LayerKind::kTraversal);
+  return {};
+}
+
+/// The info items (provenance: key and value texts), then the region count.
+template <class Malformed>
+Expected<void, Error> readInfoAndRegionCount(ByteReader& body, MapFileHeader& out,
+                                             const Malformed& malformed) {
   std::uint32_t info_count = 0;
   if (!body.u32(info_count)) {
     return malformed("info count runs past the header");
@@ -494,6 +539,89 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
   if (!body.u64(out.region_count)) {
     return malformed("region count runs past the header");
   }
+  return {};
+}
+
+/// The mode's constraints, and the layers the parameters imply, in that order: the voxels are
+/// only meaningful with those.
+template <class Malformed>
+Expected<void, Error> checkModeAndLayers(const ParsedHeader& parsed, const Malformed& malformed) {
+  const MapConfig& config = parsed.header.config;
+  if (isNdt(config.mode) && config.semantics != Semantics::kPerRay) {
+    return malformed(std::string(toString(config.mode)) + " map with per-scan semantics");
+  }
+  if (isNdt(config.mode) && !config.occupancy_layer) {
+    return malformed(std::string(toString(config.mode)) + " map without an occupancy layer");
+  }
+  const std::vector<LayerSpec> expected = savedLayersOf(config.schema());
+  bool layers_match = expected.size() == parsed.layers.size();
+  for (std::size_t i = 0; layers_match && i < expected.size(); ++i) {
+    layers_match = expected[i].kind == parsed.layers[i].kind;
+  }
+  if (!layers_match) {
+    return malformed("the saved layers do not match the map parameters (" +
+                     std::string(toString(config.mode)) + " map)");
+  }
+  return {};
+}
+
+/// Before the pool is sized from the region count: the rest of the file must be able to hold
+/// that many regions. Then just enough pool for them (at least one: a map always holds a region).
+Expected<void, Error> sizeRegions(const FileReader& file, ParsedHeader& parsed,
+                                  const std::string& path) {
+  MapFileHeader& out = parsed.header;
+  if (out.region_count > kMaxRegions) {
+    return fail(ErrorCode::kCorrupt, path + ": header declares " +
+                                         std::to_string(out.region_count) + " regions (at most " +
+                                         std::to_string(kMaxRegions) + ")");
+  }
+  const std::uint32_t voxels = out.config.geometry.voxelsPerRegion();
+  parsed.raw_region_bytes = rawRegionBytes(parsed.layers, voxels);
+  if (parsed.raw_region_bytes > std::numeric_limits<std::uint32_t>::max()) {
+    return fail(
+        ErrorCode::kUnsupported,
+        path + ": regions of " + std::to_string(parsed.raw_region_bytes) + " bytes are too large");
+  }
+  const std::uint64_t needed = out.region_count * minBytesPerRegion(parsed.raw_region_bytes) +
+                               kIndexFixedBytes + kFooterBytes;
+  if (needed > file.remaining()) {
+    return fail(ErrorCode::kTruncated,
+                path + ": truncated: the header declares " + std::to_string(out.region_count) +
+                    " regions, which need at least " + std::to_string(needed) + " bytes, but " +
+                    std::to_string(file.remaining()) + " follow the header");
+  }
+  const std::uint64_t per_region = out.config.schema().bytesPerRegion(voxels);
+  out.config.memory_budget_bytes = std::max<std::uint64_t>(out.region_count, 1) * per_region;
+  return {};
+}
+
+/// Parses and checks the header; on success the reader is at the first region block.
+Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
+  auto checked = readCheckedHeader(file, path);
+  if (!checked) {
+    return Unexpected(checked.error());
+  }
+  const std::uint32_t version = checked->version;
+  // The body is covered by the CRC, so a failed check below is a writer bug or a forged file;
+  // it still never reads out of bounds.
+  ByteReader body{std::span(checked->bytes).subspan(kPrefixBytes, checked->body_bytes)};
+  const auto malformed = [&](const std::string& what) {
+    return fail(ErrorCode::kCorrupt, path + ": malformed header: " + what + " (header offset " +
+                                         std::to_string(kPrefixBytes + body.position()) + ")");
+  };
+  ParsedHeader parsed;
+  parsed.header.format_version = version;
+  MapConfig& config = parsed.header.config;
+  std::uint16_t layer_count = 0;
+  if (auto ok = readMapParameters(body, config, layer_count, path, malformed); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (auto ok = readLayers(body, layer_count, parsed, path, malformed); !ok) {
+    return Unexpected(ok.error());
+  }
+  if (auto ok = readInfoAndRegionCount(body, parsed.header, malformed); !ok) {
+    return Unexpected(ok.error());
+  }
   if (version >= kFirstVersionWithMode) {
     if (auto ok = readModeAndNdt(body, config, malformed); !ok) {
       return Unexpected(ok.error());
@@ -504,50 +632,15 @@ Result<ParsedHeader> readHeader(FileReader& file, const std::string& path) {
       return Unexpected(ok.error());
     }
   }  // else no TSDF map: its parameters stay at their defaults
-  if (isNdt(config.mode) && config.semantics != Semantics::kPerRay) {
-    return malformed(std::string(toString(config.mode)) + " map with per-scan semantics");
-  }
-  if (isNdt(config.mode) && !config.occupancy_layer) {
-    return malformed(std::string(toString(config.mode)) + " map without an occupancy layer");
-  }
-  // The voxels are only meaningful with the layers the parameters imply, in that order.
-  const std::vector<LayerSpec> expected = savedLayersOf(config.schema());
-  bool layers_match = expected.size() == parsed.layers.size();
-  for (std::size_t i = 0; layers_match && i < expected.size(); ++i) {
-    layers_match = expected[i].kind == parsed.layers[i].kind;
-  }
-  if (!layers_match) {
-    return malformed("the saved layers do not match the map parameters (" +
-                     std::string(toString(config.mode)) + " map)");
+  if (auto ok = checkModeAndLayers(parsed, malformed); !ok) {
+    return Unexpected(ok.error());
   }
   if (body.remaining() != 0) {
     return malformed(std::to_string(body.remaining()) + " unexpected bytes at the end");
   }
-  if (out.region_count > kMaxRegions) {
-    return fail(ErrorCode::kCorrupt, path + ": header declares " +
-                                         std::to_string(out.region_count) + " regions (at most " +
-                                         std::to_string(kMaxRegions) + ")");
+  if (auto ok = sizeRegions(file, parsed, path); !ok) {
+    return Unexpected(ok.error());
   }
-  const std::uint32_t voxels = config.geometry.voxelsPerRegion();
-  parsed.raw_region_bytes = rawRegionBytes(parsed.layers, voxels);
-  if (parsed.raw_region_bytes > std::numeric_limits<std::uint32_t>::max()) {
-    return fail(
-        ErrorCode::kUnsupported,
-        path + ": regions of " + std::to_string(parsed.raw_region_bytes) + " bytes are too large");
-  }
-  // Before the pool is sized from region_count: the rest of the file must be able to hold that
-  // many regions.
-  const std::uint64_t needed = out.region_count * minBytesPerRegion(parsed.raw_region_bytes) +
-                               kIndexFixedBytes + kFooterBytes;
-  if (needed > file.remaining()) {
-    return fail(ErrorCode::kTruncated,
-                path + ": truncated: the header declares " + std::to_string(out.region_count) +
-                    " regions, which need at least " + std::to_string(needed) + " bytes, but " +
-                    std::to_string(file.remaining()) + " follow the header");
-  }
-  // Just enough pool for the file's regions (at least one: a map always holds a region).
-  const std::uint64_t per_region = config.schema().bytesPerRegion(voxels);
-  config.memory_budget_bytes = std::max<std::uint64_t>(out.region_count, 1) * per_region;
   return parsed;
 }
 
