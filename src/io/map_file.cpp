@@ -737,11 +737,138 @@ Expected<void, Error> readTrailer(FileReader& file, const std::string& path,
   return {};
 }
 
+/// One region block's header, checked: its marker and checksum, sizes the file can hold, and a
+/// coordinate in range.
+struct BlockHeader {
+  Vec3i coord;
+  std::uint32_t packed_bytes = 0;
+  std::uint32_t payload_crc = 0;
+};
+
+/// Where a block is, for messages: "PATH: region R of N (offset X)".
+struct BlockPlace {
+  const std::string& path;
+  std::uint64_t index = 0;  ///< from 0
+  std::uint64_t count = 0;
+  std::uint64_t offset = 0;
+  std::string where() const {
+    return path + ": region " + std::to_string(index + 1) + " of " + std::to_string(count) +
+           " (offset " + std::to_string(offset) + ")";
+  }
+  Unexpected<Error> truncated() const {
+    return fail(ErrorCode::kTruncated, path + ": truncated in region " + std::to_string(index + 1) +
+                                           " of " + std::to_string(count) + " (offset " +
+                                           std::to_string(offset) + ")");
+  }
+};
+
+Result<BlockHeader> readBlockHeader(FileReader& file, const BlockPlace& place,
+                                    std::size_t raw_bytes, std::uint64_t max_packed) {
+  if (kBlockHeaderBytes > file.remaining()) {
+    return place.truncated();
+  }
+  std::array<std::byte, kBlockHeaderBytes> head{};
+  if (auto ok = file.read(head); !ok) {
+    return Unexpected(ok.error());
+  }
+  ByteReader reader(head);
+  BlockHeader block;
+  std::uint32_t tag = 0;
+  std::uint32_t stored_raw = 0;
+  std::uint32_t head_crc = 0;
+  (void)reader.u32(tag);
+  (void)reader.i32(block.coord.x);
+  (void)reader.i32(block.coord.y);
+  (void)reader.i32(block.coord.z);
+  (void)reader.u32(stored_raw);
+  (void)reader.u32(block.packed_bytes);
+  (void)reader.u32(block.payload_crc);
+  (void)reader.u32(head_crc);
+  if (tag != kRegionTag) {
+    return fail(ErrorCode::kCorrupt, place.where() + ": bad block marker");
+  }
+  if (crc32(0, std::span(head).first(kBlockHeaderBytes - 4)) != head_crc) {
+    return fail(ErrorCode::kCorrupt, place.where() + ": block header checksum mismatch");
+  }
+  if (stored_raw != raw_bytes) {
+    return fail(ErrorCode::kCorrupt, place.where() + ": holds " + std::to_string(stored_raw) +
+                                         " bytes of voxels, expected " + std::to_string(raw_bytes));
+  }
+  if (block.packed_bytes < kZlibOverheadBytes || block.packed_bytes > max_packed) {
+    return fail(ErrorCode::kCorrupt, place.where() + ": compressed size " +
+                                         std::to_string(block.packed_bytes) + " is impossible");
+  }
+  if (block.packed_bytes > file.remaining()) {
+    return place.truncated();
+  }
+  if (!RegionStore::inRange(block.coord)) {
+    return fail(ErrorCode::kCorrupt, place.where() + ": region coordinate " +
+                                         coordText(block.coord) + " is out of range");
+  }
+  return block;
+}
+
+/// The block's compressed voxels, checked against their checksum and unpacked into `raw`.
+Expected<void, Error> readBlockVoxels(FileReader& file, const BlockPlace& place,
+                                      const BlockHeader& block, std::vector<std::byte>& packed,
+                                      std::vector<std::byte>& raw) {
+  packed.resize(block.packed_bytes);
+  if (auto ok = file.read(packed); !ok) {
+    return ok;
+  }
+  if (crc32(0, packed) != block.payload_crc) {
+    return fail(ErrorCode::kCorrupt, place.where() + ": checksum mismatch");
+  }
+  uLongf out_bytes = static_cast<uLongf>(raw.size());
+  uLong in_bytes = static_cast<uLong>(packed.size());
+  const int z = ::uncompress2(reinterpret_cast<Bytef*>(raw.data()), &out_bytes,
+                              reinterpret_cast<const Bytef*>(packed.data()), &in_bytes);
+  if (z != Z_OK || out_bytes != raw.size() || in_bytes != packed.size()) {
+    return fail(ErrorCode::kCorrupt, place.where() + ": compressed voxels do not decode (zlib " +
+                                         std::to_string(z) + ")");
+  }
+  return {};
+}
+
+/// Puts the unpacked voxels `raw` of region `coord` into the map, layer by layer
+/// (`schema_layers`: each saved layer's index in the map's schema), checking their values.
+Expected<void, Error> storeRegion(VoxelMap& map, const ParsedHeader& parsed,
+                                  std::span<const int> schema_layers,
+                                  std::span<const std::byte> raw, Vec3i coord,
+                                  const BlockPlace& place) {
+  const std::uint32_t voxels = map.geometry().voxelsPerRegion();
+  // A tiered map streams the file through its pool: earlier regions move to the cold tiers.
+  map.beginEpoch();
+  const auto slot = map.tiered() ? map.acquireRegion(coord) : map.store().findOrCreate(coord);
+  if (!slot) {
+    // Untiered, the pool was sized for region_count regions: a bug, not a file problem.
+    return fail(ErrorCode::kCapacity,
+                place.where() + ": cannot store region: " + map.tierError(slot.error()).message);
+  }
+  std::size_t at = 0;
+  for (std::size_t l = 0; l < parsed.layers.size(); ++l) {
+    const LayerSpec& spec = parsed.layers[l];
+    std::byte* layer = map.store().layerBytes(*slot, schema_layers[l]);
+    decodeBytePlanes(raw.data() + at, voxels, spec.bytes_per_voxel / 4u, layer);
+    at += std::size_t{spec.bytes_per_voxel} * voxels;
+    // The checksums only say the bytes are those written; a forged or buggy writer's NaN
+    // would otherwise be taken for a value (a NaN occupancy compares as free).
+    if (const auto bad = findBadLayerValue(spec.kind, layer, voxels)) {
+      return fail(ErrorCode::kCorrupt,
+                  place.path + ": region " + coordText(coord) + " (block " +
+                      std::to_string(place.index + 1) + " of " + std::to_string(place.count) +
+                      "): layer '" + std::string(spec.name) + "' holds " + valueText(bad->value) +
+                      " at voxel " + coordText(map.voxelAt(coord, bad->voxel)) + ", where " +
+                      bad->rule + ": the file is damaged or was not written by raymap");
+    }
+  }
+  return {};
+}
+
 /// Reads every region block into `map`, then the index and footer.
 Expected<void, Error> readRegions(FileReader& file, const std::string& path,
                                   const ParsedHeader& parsed, VoxelMap& map) {
   const std::uint64_t count = parsed.header.region_count;
-  const std::uint32_t voxels = map.geometry().voxelsPerRegion();
   const auto raw_bytes = static_cast<std::size_t>(parsed.raw_region_bytes);
   const std::uint64_t max_packed = ::compressBound(static_cast<uLong>(raw_bytes));
   // Each saved layer's index in the map's schema (the file's layers are the schema's saved ones).
@@ -749,110 +876,30 @@ Expected<void, Error> readRegions(FileReader& file, const std::string& path,
   for (const LayerSpec& spec : parsed.layers) {
     schema_layers.push_back(map.store().schema().indexOf(spec.kind));
   }
-
   std::vector<IndexEntry> blocks;
   blocks.reserve(static_cast<std::size_t>(count));  // bounded by the file size (readHeader)
   std::unordered_set<std::uint64_t> seen;           // tiered maps: the regions read so far
   std::vector<std::byte> packed;
   std::vector<std::byte> raw(raw_bytes);
   for (std::uint64_t r = 0; r < count; ++r) {
-    const std::uint64_t offset = file.offset();
-    const std::string where = path + ": region " + std::to_string(r + 1) + " of " +
-                              std::to_string(count) + " (offset " + std::to_string(offset) + ")";
-    if (kBlockHeaderBytes > file.remaining()) {
-      return fail(ErrorCode::kTruncated, path + ": truncated in region " + std::to_string(r + 1) +
-                                             " of " + std::to_string(count) + " (offset " +
-                                             std::to_string(offset) + ")");
+    const BlockPlace place{path, r, count, file.offset()};
+    auto block = readBlockHeader(file, place, raw_bytes, max_packed);
+    if (!block) {
+      return Unexpected(block.error());
     }
-    std::array<std::byte, kBlockHeaderBytes> head{};
-    if (auto ok = file.read(head); !ok) {
-      return ok;
-    }
-    ByteReader reader(head);
-    std::uint32_t tag = 0;
-    Vec3i coord;
-    std::uint32_t stored_raw = 0;
-    std::uint32_t stored_packed = 0;
-    std::uint32_t payload_crc = 0;
-    std::uint32_t head_crc = 0;
-    (void)reader.u32(tag);
-    (void)reader.i32(coord.x);
-    (void)reader.i32(coord.y);
-    (void)reader.i32(coord.z);
-    (void)reader.u32(stored_raw);
-    (void)reader.u32(stored_packed);
-    (void)reader.u32(payload_crc);
-    (void)reader.u32(head_crc);
-    if (tag != kRegionTag) {
-      return fail(ErrorCode::kCorrupt, where + ": bad block marker");
-    }
-    if (crc32(0, std::span(head).first(kBlockHeaderBytes - 4)) != head_crc) {
-      return fail(ErrorCode::kCorrupt, where + ": block header checksum mismatch");
-    }
-    if (stored_raw != raw_bytes) {
-      return fail(ErrorCode::kCorrupt, where + ": holds " + std::to_string(stored_raw) +
-                                           " bytes of voxels, expected " +
-                                           std::to_string(raw_bytes));
-    }
-    if (stored_packed < kZlibOverheadBytes || stored_packed > max_packed) {
-      return fail(ErrorCode::kCorrupt,
-                  where + ": compressed size " + std::to_string(stored_packed) + " is impossible");
-    }
-    if (stored_packed > file.remaining()) {
-      return fail(ErrorCode::kTruncated, path + ": truncated in region " + std::to_string(r + 1) +
-                                             " of " + std::to_string(count) + " (offset " +
-                                             std::to_string(offset) + ")");
-    }
-    if (!RegionStore::inRange(coord)) {
-      return fail(ErrorCode::kCorrupt,
-                  where + ": region coordinate " + coordText(coord) + " is out of range");
-    }
-    const bool duplicate = map.tiered() ? !seen.insert(RegionStore::packCoord(coord)).second
-                                        : map.store().find(coord) != RegionStore::kNoSlot;
+    const bool duplicate = map.tiered() ? !seen.insert(RegionStore::packCoord(block->coord)).second
+                                        : map.store().find(block->coord) != RegionStore::kNoSlot;
     if (duplicate) {
-      return fail(ErrorCode::kCorrupt, where + ": duplicate region " + coordText(coord));
+      return fail(ErrorCode::kCorrupt,
+                  place.where() + ": duplicate region " + coordText(block->coord));
     }
-    packed.resize(stored_packed);
-    if (auto ok = file.read(packed); !ok) {
+    if (auto ok = readBlockVoxels(file, place, *block, packed, raw); !ok) {
       return ok;
     }
-    if (crc32(0, packed) != payload_crc) {
-      return fail(ErrorCode::kCorrupt, where + ": checksum mismatch");
+    if (auto ok = storeRegion(map, parsed, schema_layers, raw, block->coord, place); !ok) {
+      return ok;
     }
-    uLongf out_bytes = static_cast<uLongf>(raw.size());
-    uLong in_bytes = static_cast<uLong>(packed.size());
-    const int z = ::uncompress2(reinterpret_cast<Bytef*>(raw.data()), &out_bytes,
-                                reinterpret_cast<const Bytef*>(packed.data()), &in_bytes);
-    if (z != Z_OK || out_bytes != raw.size() || in_bytes != packed.size()) {
-      return fail(ErrorCode::kCorrupt,
-                  where + ": compressed voxels do not decode (zlib " + std::to_string(z) + ")");
-    }
-    // A tiered map streams the file through its pool: earlier regions move to the cold tiers.
-    map.beginEpoch();
-    const auto slot = map.tiered() ? map.acquireRegion(coord) : map.store().findOrCreate(coord);
-    if (!slot) {
-      // Untiered, the pool was sized for region_count regions: a bug, not a file problem.
-      return fail(ErrorCode::kCapacity,
-                  where + ": cannot store region: " + map.tierError(slot.error()).message);
-    }
-    std::size_t at = 0;
-    for (std::size_t l = 0; l < parsed.layers.size(); ++l) {
-      const LayerSpec& spec = parsed.layers[l];
-      std::byte* layer = map.store().layerBytes(*slot, schema_layers[l]);
-      decodeBytePlanes(raw.data() + at, voxels, spec.bytes_per_voxel / 4u, layer);
-      at += std::size_t{spec.bytes_per_voxel} * voxels;
-      // The checksums only say the bytes are those written; a forged or buggy writer's NaN
-      // would otherwise be taken for a value (a NaN occupancy compares as free).
-      if (const auto bad = findBadLayerValue(spec.kind, layer, voxels)) {
-        return fail(ErrorCode::kCorrupt,
-                    path + ": region " + coordText(coord) + " (block " + std::to_string(r + 1) +
-                        " of " + std::to_string(count) + "): layer '" + std::string(spec.name) +
-                        "' holds " + valueText(bad->value) + " at voxel " +
-                        coordText(map.voxelAt(coord, bad->voxel)) + ", where " + bad->rule +
-                        ": the file is damaged or was not written by raymap");
-      }
-    }
-    blocks.push_back(IndexEntry{coord, offset});
+    blocks.push_back(IndexEntry{block->coord, place.offset});
   }
   return readTrailer(file, path, blocks);
 }
