@@ -985,6 +985,62 @@ std::vector<std::byte> encodeHeader(const VoxelMap& map, std::span<const LayerSp
   return std::move(header.bytes());
 }
 
+/// Encodes one region's saved layers into `raw` and compresses them into `packed`.
+/// @return the compressed bytes (a prefix of `packed`)
+Result<std::span<const std::byte>> packRegion(const RegionStore& store, std::uint32_t slot,
+                                              Vec3i coord, std::span<const LayerSpec> layers,
+                                              std::span<const int> schema_layers,
+                                              std::vector<std::byte>& raw,
+                                              std::vector<std::byte>& packed,
+                                              const std::string& path) {
+  const std::uint32_t voxels = store.voxelsPerRegion();
+  std::size_t at = 0;
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    encodeBytePlanes(store.layerBytes(slot, schema_layers[l]), voxels,
+                     layers[l].bytes_per_voxel / 4u, raw.data() + at);
+    at += std::size_t{layers[l].bytes_per_voxel} * voxels;
+  }
+  uLongf packed_bytes = static_cast<uLongf>(packed.size());
+  const int z = ::compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_bytes,
+                            reinterpret_cast<const Bytef*>(raw.data()),
+                            static_cast<uLong>(raw.size()), Z_BEST_SPEED);
+  if (z != Z_OK) {
+    return fail(ErrorCode::kIo, path + ": compressing region " + coordText(coord) +
+                                    " failed (zlib " + std::to_string(z) + ")");
+  }
+  return std::span<const std::byte>(packed).first(packed_bytes);
+}
+
+/// A region block's header: marker, coordinate, sizes and checksums.
+LeWriter blockHeader(Vec3i coord, std::size_t raw_bytes, std::span<const std::byte> payload) {
+  LeWriter head;
+  head.u32(kRegionTag);
+  head.i32(coord.x);
+  head.i32(coord.y);
+  head.i32(coord.z);
+  head.u32(static_cast<std::uint32_t>(raw_bytes));
+  head.u32(static_cast<std::uint32_t>(payload.size()));
+  head.u32(crc32(0, payload));
+  head.u32(crc32(0, head.bytes()));
+  return head;
+}
+
+/// The region index (its entries already in `index`) and the footer.
+Expected<void, Error> writeTrailer(AtomicFileWriter& writer, LeWriter& index,
+                                   std::uint64_t regions) {
+  const std::uint64_t index_offset = writer.size();
+  index.u32(crc32(0, index.bytes()));
+  if (auto ok = writer.write(index.bytes()); !ok) {
+    return ok;
+  }
+  LeWriter footer;
+  footer.u32(kEndTag);
+  footer.u64(regions);
+  footer.u64(index_offset);
+  footer.u32(crc32(0, footer.bytes()));
+  return writer.write(footer.bytes());
+}
+
 }  // namespace
 
 Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
@@ -997,14 +1053,11 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
   for (const LayerSpec& spec : layers) {
     schema_layers.push_back(store.schema().indexOf(spec.kind));
   }
-  const std::uint32_t voxels = store.voxelsPerRegion();
-  const auto raw_bytes = static_cast<std::size_t>(rawRegionBytes(layers, voxels));
-
+  const auto raw_bytes = static_cast<std::size_t>(rawRegionBytes(layers, store.voxelsPerRegion()));
   // Regions in coordinate order (z, y, x), so that equal maps give equal files whatever order
   // their regions were created in (and whatever tier they are in: a tiered map streams them
   // through its pool).
   RegionCursor cursor(map);
-
   auto writer = AtomicFileWriter::open(path);
   if (!writer) {
     return Unexpected(writer.error());
@@ -1012,7 +1065,6 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
   if (auto ok = writer->write(encodeHeader(map, layers)); !ok) {
     return ok;
   }
-
   std::vector<std::byte> raw(raw_bytes);
   std::vector<std::byte> packed(::compressBound(static_cast<uLong>(raw_bytes)));
   LeWriter index;
@@ -1020,62 +1072,30 @@ Expected<void, Error> saveMap(const VoxelMap& map, const std::string& path) {
   std::uint64_t written = 0;
   while (cursor.next()) {
     const Vec3i coord = cursor.region();
-    const std::uint32_t slot = cursor.slot();
     ++written;
-    std::size_t at = 0;
-    for (std::size_t l = 0; l < layers.size(); ++l) {
-      encodeBytePlanes(store.layerBytes(slot, schema_layers[l]), voxels,
-                       layers[l].bytes_per_voxel / 4u, raw.data() + at);
-      at += std::size_t{layers[l].bytes_per_voxel} * voxels;
+    auto payload =
+        packRegion(store, cursor.slot(), coord, layers, schema_layers, raw, packed, path);
+    if (!payload) {
+      return Unexpected(payload.error());
     }
-    uLongf packed_bytes = static_cast<uLongf>(packed.size());
-    const int z = ::compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_bytes,
-                              reinterpret_cast<const Bytef*>(raw.data()),
-                              static_cast<uLong>(raw.size()), Z_BEST_SPEED);
-    if (z != Z_OK) {
-      return fail(ErrorCode::kIo, path + ": compressing region " + coordText(coord) +
-                                      " failed (zlib " + std::to_string(z) + ")");
-    }
-    const auto payload = std::span<const std::byte>(packed).first(packed_bytes);
-    LeWriter head;
-    head.u32(kRegionTag);
-    head.i32(coord.x);
-    head.i32(coord.y);
-    head.i32(coord.z);
-    head.u32(static_cast<std::uint32_t>(raw.size()));
-    head.u32(static_cast<std::uint32_t>(payload.size()));
-    head.u32(crc32(0, payload));
-    head.u32(crc32(0, head.bytes()));
-
     index.i32(coord.x);
     index.i32(coord.y);
     index.i32(coord.z);
     index.u64(writer->size());
-    if (auto ok = writer->write(head.bytes()); !ok) {
+    if (auto ok = writer->write(blockHeader(coord, raw.size(), *payload).bytes()); !ok) {
       return ok;
     }
-    if (auto ok = writer->write(payload); !ok) {
+    if (auto ok = writer->write(*payload); !ok) {
       return ok;
     }
   }
-
   if (auto ok = cursor.status(); !ok) {
     return Unexpected(Error{ok.error().code, path + ": " + ok.error().message});
   }
   if (written != cursor.size()) {
     return fail(ErrorCode::kCorrupt, path + ": the map's regions changed while it was saved");
   }
-  const std::uint64_t index_offset = writer->size();
-  index.u32(crc32(0, index.bytes()));
-  if (auto ok = writer->write(index.bytes()); !ok) {
-    return ok;
-  }
-  LeWriter footer;
-  footer.u32(kEndTag);
-  footer.u64(written);
-  footer.u64(index_offset);
-  footer.u32(crc32(0, footer.bytes()));
-  if (auto ok = writer->write(footer.bytes()); !ok) {
+  if (auto ok = writeTrailer(*writer, index, written); !ok) {
     return ok;
   }
   return writer->commit();
