@@ -187,6 +187,38 @@ class ParallelIntegrator {
   static bool walksInSurvey(const IntegrationContext& ctx) noexcept;
   /// Gives up a batch before its apply step: the regions it created get their clear values.
   void abandonBatch(VoxelMap& map) noexcept;
+
+  // The steps of integrate(), each run by every worker (pool_.run) or serially.
+  /// What a worker's survey counts, written to its statistics once.
+  struct SurveyTally {
+    std::size_t span_count = 0;
+    std::uint64_t voxels_visited = 0;
+    std::uint64_t outside_window = 0;
+  };
+  /// Step 1, one ray: its spans (or, walking in the survey, its misses) and the work per region.
+  /// @return false when the worker's table, list or planes cannot take more (scratch says which)
+  bool surveyRay(const IntegrationContext& ctx, const PreparedRay& ray, RayRecord& record,
+                 WorkerScratch& scratch, bool walk_in_survey, SurveyTally& tally) noexcept;
+  void surveyWorker(unsigned w, const IntegrationContext& ctx, std::span<const PreparedRay> rays,
+                    WorkerStats& stats, bool walk_in_survey) noexcept;
+  /// Step 2 (serial): the surveyed regions acquired in the map, their work summed.
+  Expected<void, IntegrateError> createRegions(VoxelMap& map) noexcept;
+  /// Step 3: order_ = the batch's regions, most work first.
+  void orderRegions() noexcept;
+  /// Step 4a: slots into the ray records; steps and hits counted per block and region.
+  void countWorker(const IntegrationContext& ctx, std::span<const PreparedRay> rays,
+                   RegionSlotCache& cache, WorkerStats& stats, bool hit_lists) noexcept;
+  /// Step 4b: each region's ranges in the flat lists; the cursors become places.
+  /// @return the steps and hits in all
+  std::pair<std::uint32_t, std::uint32_t> placeRegions() noexcept;
+  /// Step 4c: each block's steps and hits written at their places.
+  void placeWorker(const IntegrationContext& ctx, std::size_t ray_count, bool hit_lists) noexcept;
+  /// Step 5: regions taken one at a time; returns nothing, counts into `stats`.
+  void applyWorker(unsigned w, const IntegrationContext& ctx, std::span<const PreparedRay> rays,
+                   WorkerStats& stats, bool walk_in_survey) noexcept;
+  /// Step 5, one region: its hits, steps, survey misses and NDT hits. @return voxels visited
+  std::uint64_t applyRegion(const RegionWork& region, const IntegrationContext& ctx,
+                            std::span<const PreparedRay> rays, bool walk_in_survey) noexcept;
   /// Counts of block `b`'s steps (or hits) per slot, then its next place in the flat list.
   std::uint32_t& stepCursor(unsigned b, std::uint32_t slot) noexcept {
     return step_cursors_[static_cast<std::size_t>(b) * slots_ + slot];
