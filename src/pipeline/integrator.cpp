@@ -399,104 +399,196 @@ void Integrator::updateRayBudget(double load) noexcept {
                                 std::memory_order_relaxed);
 }
 
+bool Integrator::takeScan() noexcept {
+  scan_ = mailbox_.take();
+  if (scan_ == nullptr) {
+    return false;
+  }
+  drainPoses();  // what ingest queued before this scan (an extrinsic from its first cloud)
+  scan_first_wait_ns_ = 0;
+  window_points_taken_ += static_cast<double>(scan_->header.points);
+  ++window_scans_taken_;
+  deskewer_.reset();  // the cached pose belongs to the previous scan's sensor
+  // The poses must cover the scan's usable point times; a point with a corrupt time is left
+  // out (convertScan skips it), not allowed to stretch the scan.
+  const ScanTimes times =
+      scanTimes(scan_->points(), scan_->header.stamp_ns, sensors_[scan_->sensor].max_time_offset_s);
+  if (times.bad_time > 0) {
+    stats_.points_bad_time.add(times.bad_time);
+  }
+  scan_start_ns_ = times.start_ns;
+  scan_end_ns_ = times.end_ns;
+  return true;
+}
+
+void Integrator::dropScan(Counter& reason) noexcept {
+  reason.add();
+  mailbox_.release(scan_);
+  scan_ = nullptr;
+}
+
+Integrator::PoseCheck Integrator::checkPoses(std::int64_t now_ns, std::int64_t* wake_ns) noexcept {
+  io::Pose unused;
+  const PoseLookup end = history_.lookup(scan_end_ns_, settings_.pose_hold_ns, &unused);
+  const PoseLookup start = history_.lookup(scan_start_ns_, settings_.pose_hold_ns, &unused);
+  if (start == PoseLookup::kTooOld || end == PoseLookup::kTooOld) {
+    dropScan(stats_.scans_no_pose);
+    return PoseCheck::kDropped;
+  }
+  if (end == PoseLookup::kOk && start == PoseLookup::kOk) {
+    return PoseCheck::kCovered;
+  }
+  if (scan_first_wait_ns_ == 0) {
+    scan_first_wait_ns_ = now_ns;
+  }
+  const std::int64_t give_up = scan_first_wait_ns_ + settings_.pose_wait_ns;
+  if (now_ns >= give_up) {
+    dropScan(stats_.scans_no_pose);
+    return PoseCheck::kDropped;
+  }
+  *wake_ns = give_up;  // new poses wake the thread earlier
+  // Earlier scans already in the batch do not wait for this one's poses.
+  if (batch_size_ > 0 || completed_count_ > 0) {
+    const std::int64_t due = batchDue(now_ns);
+    if (now_ns >= due) {
+      integrateBatch(now_ns);
+    } else {
+      *wake_ns = std::min(give_up, due);
+    }
+  }
+  return PoseCheck::kWaiting;
+}
+
+bool Integrator::planIntake(std::int64_t now_ns, std::int64_t* deadline,
+                            std::uint32_t* stride) noexcept {
+  const double scan_rays =
+      static_cast<double>(scan_->header.points) - static_cast<double>(scan_->header.no_return);
+  PublishSchedule schedule;
+  schedule.next_publish_ns = stats_.next_publish_ns.load(std::memory_order_relaxed);
+  schedule.period_ns = settings_.publish_period_ns;
+  // The margin of one lock hold: the last slice may overrun the plan by about that much.
+  schedule.lead_ns =
+      stats_.publish_lead_us.load(std::memory_order_relaxed) * 1000 + settings_.max_lock_hold_ns;
+  // A scan that waited for its poses counts from when they came (about now): waiting for the
+  // pose source is not a backlog of the backend's.
+  const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
+  const ShedDecision decision =
+      planScan(now_ns, ready, static_cast<double>(batch_size_), scan_rays,
+               std::max(ns_per_ray_, scan_ns_per_point_), schedule, settings_.max_latency_ns,
+               settings_.max_stride, overloaded_ || budget_stride_ > 1 || settings_.shed_always);
+  if (decision.drop && scans_shed_in_a_row_ < 2) {
+    ++scans_shed_in_a_row_;
+    dropScan(stats_.scans_shed);
+    return false;
+  }
+  // After two scans shed whole, the third goes in at the largest stride whatever the
+  // prediction says: the map keeps moving, and the time per ray is measured again (a
+  // prediction inflated by one stalled slice must not shed everything for ever). Its deadline
+  // still holds.
+  scans_shed_in_a_row_ = 0;
+  *stride = decision.drop ? std::max(settings_.max_stride, 1u)
+                          : std::max(decision.stride, budget_stride_);
+  *deadline = kNever;
+  // The deadline holds whatever the load (only whole scans are shed with queues.shed: drop).
+  if (settings_.max_stride > 1) {
+    const std::int64_t generation =
+        latestGenerationWithin(ready, schedule, settings_.max_latency_ns);
+    *deadline = generation != 0 ? generation : kNever;
+  }
+  return true;
+}
+
+bool Integrator::convertBefore(std::int64_t now_ns, std::int64_t deadline) noexcept {
+  for (;;) {
+    const std::uint64_t own = visitsBefore(deadline);
+    if (own < kMinVisits) {
+      return true;  // out of time: what went in so far is spread over the scan
+    }
+    // Rays of earlier scans in the batch go in before their own deadline.
+    const std::uint64_t for_batch = visitsBefore(batch_due_ns_);
+    if (for_batch < kMinVisits && batch_size_ > 0) {
+      integrateBatch(now_ns);
+      batch_sensor_ = scan_->sensor;
+      batch_first_ns_ = scan_->arrival_ns;
+      continue;
+    }
+    if (convertScan(std::min(own, for_batch))) {
+      return false;
+    }
+    if (per_scan_ && batch_size_ < rays_.size()) {
+      return true;  // one backend call per scan: no time to convert the rest
+    }
+    integrateBatch(now_ns);  // full, or as much as fits before a deadline
+    batch_sensor_ = scan_->sensor;
+    batch_first_ns_ = scan_->arrival_ns;
+  }
+}
+
+void Integrator::finishScan(std::int64_t now_ns, std::int64_t deadline, bool cut_short,
+                            std::int64_t scan_started) noexcept {
+  const std::uint64_t visited = order_.visited();
+  const std::uint64_t left_out = order_.notVisited();
+  const std::int64_t arrival = scan_->arrival_ns;
+  const std::int64_t stamp = scan_->header.stamp_ns;
+  const std::uint32_t points = scan_->header.points;
+  const std::uint32_t sensor_index = scan_->sensor;
+  mailbox_.release(scan_);
+  scan_ = nullptr;
+  if (cut_short && visited == 0) {
+    stats_.scans_shed.add();  // its deadline passed before any of it could go in
+    return;
+  }
+  if (left_out > 0) {
+    stats_.points_shed.add(left_out);
+  }
+  if (cut_short) {
+    stats_.scans_cut_short.add();
+  }
+  window_points_accepted_ += static_cast<double>(points);
+  completed_sensor_[completed_count_] = sensor_index;
+  completed_[completed_count_++] = arrival;
+  scan_stamp_pending_ = std::max(scan_stamp_pending_, stamp);
+  batch_due_ns_ = std::min(batch_due_ns_, deadline);
+  if (per_scan_ || cut_short || completed_count_ == completed_.size() ||
+      batch_size_ == rays_.size() || visitsBefore(batch_due_ns_) < kMinVisits) {
+    integrateBatch(now_ns);
+  }
+  if (visited >= 1024) {
+    // What a point of a scan really costs, conversion (deskewing) and waits included: the
+    // latency bound predicts with this (integration alone under-predicts by the conversion).
+    const double sample =
+        static_cast<double>(settings_.clock_ns() - scan_started) / static_cast<double>(visited);
+    scan_ns_per_point_ =
+        scan_ns_per_point_ == 0.0
+            ? sample
+            : 0.75 * scan_ns_per_point_ + 0.25 * std::min(sample, 4.0 * scan_ns_per_point_);
+  }
+}
+
 std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
   for (;;) {
     accountLoad(settings_.clock_ns());
     // Poses that came while the last scan went in: a scan taken after a long one must not wait
     // for poses that are already queued.
     drainPoses();
-    if (scan_ == nullptr) {
-      scan_ = mailbox_.take();
-      if (scan_ == nullptr) {
-        break;
-      }
-      drainPoses();  // what ingest queued before this scan (an extrinsic from its first cloud)
-      scan_first_wait_ns_ = 0;
-      window_points_taken_ += static_cast<double>(scan_->header.points);
-      ++window_scans_taken_;
-      deskewer_.reset();  // the cached pose belongs to the previous scan's sensor
-      // The poses must cover the scan's usable point times; a point with a corrupt time is left
-      // out (convertScan skips it), not allowed to stretch the scan.
-      const ScanTimes times = scanTimes(scan_->points(), scan_->header.stamp_ns,
-                                        sensors_[scan_->sensor].max_time_offset_s);
-      if (times.bad_time > 0) {
-        stats_.points_bad_time.add(times.bad_time);
-      }
-      scan_start_ns_ = times.start_ns;
-      scan_end_ns_ = times.end_ns;
+    if (scan_ == nullptr && !takeScan()) {
+      break;
     }
     // Poses must cover the scan before any of it is converted.
-    io::Pose unused;
-    const PoseLookup end = history_.lookup(scan_end_ns_, settings_.pose_hold_ns, &unused);
-    const PoseLookup start = history_.lookup(scan_start_ns_, settings_.pose_hold_ns, &unused);
-    if (start == PoseLookup::kTooOld || end == PoseLookup::kTooOld) {
-      stats_.scans_no_pose.add();
-      mailbox_.release(scan_);
-      scan_ = nullptr;
+    std::int64_t wake_ns = kNever;
+    const PoseCheck poses = checkPoses(now_ns, &wake_ns);
+    if (poses == PoseCheck::kDropped) {
       continue;
     }
-    if (end != PoseLookup::kOk || start != PoseLookup::kOk) {
-      if (scan_first_wait_ns_ == 0) {
-        scan_first_wait_ns_ = now_ns;
-      }
-      const std::int64_t give_up = scan_first_wait_ns_ + settings_.pose_wait_ns;
-      if (now_ns < give_up) {
-        // Earlier scans already in the batch do not wait for this one's poses.
-        if (batch_size_ > 0 || completed_count_ > 0) {
-          const std::int64_t due = batchDue(now_ns);
-          if (now_ns >= due) {
-            integrateBatch(now_ns);
-          } else {
-            return std::min(give_up, due);
-          }
-        }
-        return give_up;  // new poses wake the thread earlier
-      }
-      stats_.scans_no_pose.add();
-      mailbox_.release(scan_);
-      scan_ = nullptr;
-      continue;
+    if (poses == PoseCheck::kWaiting) {
+      return wake_ns;
     }
     // The latency bound: take the scan whole, subsampled, or not at all, and by when its rays
     // must be in the map. (A scan gets here once: from here on it is converted in this pass.)
-    const double scan_rays =
-        static_cast<double>(scan_->header.points) - static_cast<double>(scan_->header.no_return);
     std::int64_t deadline = kNever;
     std::uint32_t stride = 1;
-    {
-      PublishSchedule schedule;
-      schedule.next_publish_ns = stats_.next_publish_ns.load(std::memory_order_relaxed);
-      schedule.period_ns = settings_.publish_period_ns;
-      // The margin of one lock hold: the last slice may overrun the plan by about that much.
-      schedule.lead_ns = stats_.publish_lead_us.load(std::memory_order_relaxed) * 1000 +
-                         settings_.max_lock_hold_ns;
-      // A scan that waited for its poses counts from when they came (about now): waiting for
-      // the pose source is not a backlog of the backend's.
-      const std::int64_t ready = scan_first_wait_ns_ != 0 ? now_ns : scan_->arrival_ns;
-      const ShedDecision decision = planScan(
-          now_ns, ready, static_cast<double>(batch_size_), scan_rays,
-          std::max(ns_per_ray_, scan_ns_per_point_), schedule, settings_.max_latency_ns,
-          settings_.max_stride, overloaded_ || budget_stride_ > 1 || settings_.shed_always);
-      if (decision.drop && scans_shed_in_a_row_ < 2) {
-        ++scans_shed_in_a_row_;
-        stats_.scans_shed.add();
-        mailbox_.release(scan_);
-        scan_ = nullptr;
-        continue;
-      }
-      // After two scans shed whole, the third goes in at the largest stride whatever the
-      // prediction says: the map keeps moving, and the time per ray is measured again (a
-      // prediction inflated by one stalled slice must not shed everything for ever). Its
-      // deadline still holds.
-      scans_shed_in_a_row_ = 0;
-      stride = decision.drop ? std::max(settings_.max_stride, 1u)
-                             : std::max(decision.stride, budget_stride_);
-      // The deadline holds whatever the load (only whole scans are shed with queues.shed: drop).
-      if (settings_.max_stride > 1) {
-        const std::int64_t generation =
-            latestGenerationWithin(ready, schedule, settings_.max_latency_ns);
-        deadline = generation != 0 ? generation : kNever;
-      }
+    if (!planIntake(now_ns, &deadline, &stride)) {
+      continue;
     }
     order_.reset(scan_->header.points, stride);
     if (batch_size_ > 0 && batch_sensor_ != scan_->sensor) {
@@ -507,69 +599,8 @@ std::int64_t Integrator::step_(std::int64_t now_ns) noexcept {
       batch_first_ns_ = scan_->arrival_ns;
     }
     const std::int64_t scan_started = settings_.clock_ns();
-    bool cut_short = false;
-    for (;;) {
-      const std::uint64_t own = visitsBefore(deadline);
-      if (own < kMinVisits) {
-        cut_short = true;  // out of time: what went in so far is spread over the scan
-        break;
-      }
-      // Rays of earlier scans in the batch go in before their own deadline.
-      const std::uint64_t for_batch = visitsBefore(batch_due_ns_);
-      if (for_batch < kMinVisits && batch_size_ > 0) {
-        integrateBatch(now_ns);
-        batch_sensor_ = scan_->sensor;
-        batch_first_ns_ = scan_->arrival_ns;
-        continue;
-      }
-      if (convertScan(std::min(own, for_batch))) {
-        break;
-      }
-      if (per_scan_ && batch_size_ < rays_.size()) {
-        cut_short = true;  // one backend call per scan: no time to convert the rest
-        break;
-      }
-      integrateBatch(now_ns);  // full, or as much as fits before a deadline
-      batch_sensor_ = scan_->sensor;
-      batch_first_ns_ = scan_->arrival_ns;
-    }
-    const std::uint64_t visited = order_.visited();
-    const std::uint64_t left_out = order_.notVisited();
-    const std::int64_t arrival = scan_->arrival_ns;
-    const std::int64_t stamp = scan_->header.stamp_ns;
-    const std::uint32_t points = scan_->header.points;
-    const std::uint32_t sensor_index = scan_->sensor;
-    mailbox_.release(scan_);
-    scan_ = nullptr;
-    if (cut_short && visited == 0) {
-      stats_.scans_shed.add();  // its deadline passed before any of it could go in
-      continue;
-    }
-    if (left_out > 0) {
-      stats_.points_shed.add(left_out);
-    }
-    if (cut_short) {
-      stats_.scans_cut_short.add();
-    }
-    window_points_accepted_ += static_cast<double>(points);
-    completed_sensor_[completed_count_] = sensor_index;
-    completed_[completed_count_++] = arrival;
-    scan_stamp_pending_ = std::max(scan_stamp_pending_, stamp);
-    batch_due_ns_ = std::min(batch_due_ns_, deadline);
-    if (per_scan_ || cut_short || completed_count_ == completed_.size() ||
-        batch_size_ == rays_.size() || visitsBefore(batch_due_ns_) < kMinVisits) {
-      integrateBatch(now_ns);
-    }
-    if (visited >= 1024) {
-      // What a point of a scan really costs, conversion (deskewing) and waits included: the
-      // latency bound predicts with this (integration alone under-predicts by the conversion).
-      const double sample =
-          static_cast<double>(settings_.clock_ns() - scan_started) / static_cast<double>(visited);
-      scan_ns_per_point_ =
-          scan_ns_per_point_ == 0.0
-              ? sample
-              : 0.75 * scan_ns_per_point_ + 0.25 * std::min(sample, 4.0 * scan_ns_per_point_);
-    }
+    const bool cut_short = convertBefore(now_ns, deadline);
+    finishScan(now_ns, deadline, cut_short, scan_started);
   }
   if (batch_size_ > 0 || completed_count_ > 0) {
     const std::int64_t due = batchDue(now_ns);

@@ -107,6 +107,24 @@ class Integrator {
 
  private:
   std::int64_t step_(std::int64_t now_ns) noexcept;  // step() without the load accounting
+  // The steps of step_() for one scan, in order.
+  /// Takes the next scan from the mailbox and finds the span of its point times. False: none.
+  bool takeScan() noexcept;
+  /// Gives the current scan back, counted in `reason`.
+  void dropScan(Counter& reason) noexcept;
+  enum class PoseCheck : std::uint8_t { kCovered, kDropped, kWaiting };
+  /// Whether poses cover the scan; kWaiting sets `*wake_ns` (and may integrate earlier scans'
+  /// batch meanwhile), kDropped gave the scan back (no pose in time).
+  PoseCheck checkPoses(std::int64_t now_ns, std::int64_t* wake_ns) noexcept;
+  /// The latency bound's decision: the stride and the deadline of the scan's rays. False: the
+  /// scan was shed whole (given back).
+  bool planIntake(std::int64_t now_ns, std::int64_t* deadline, std::uint32_t* stride) noexcept;
+  /// Converts the scan into the batch, integrating full or due batches on the way. @return true
+  /// when the scan was cut short (its deadline, or one backend call per scan)
+  bool convertBefore(std::int64_t now_ns, std::int64_t deadline) noexcept;
+  /// Counts the scan's outcome, gives it back and integrates the batch when it is due.
+  void finishScan(std::int64_t now_ns, std::int64_t deadline, bool cut_short,
+                  std::int64_t scan_started) noexcept;
   void drainPoses() noexcept;
   /// A base pose that went back in time or jumped: the history starts over (and with
   /// clear_on_jump the window is emptied). @return whether `update` began a new history.
