@@ -51,24 +51,13 @@ std::string kindName(std::uint32_t kind) {
 
 }  // namespace
 
-Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string& path) {
-  std::error_code status_error;
-  if (std::filesystem::is_directory(path, status_error)) {
-    return fail(ErrorCode::kIo, path + ": cannot open: it is a directory");
-  }
-  FilePtr file(std::fopen(path.c_str(), "rb"));
-  if (file == nullptr) {
-    return fail(ErrorCode::kIo, path + ": cannot open: " + systemReason(errno));
-  }
-  // setvbuf must come before the first read. Header-sized reads then cost no system call each.
-  std::unique_ptr<char[]> stdio_buffer(new char[kStdioBufferBytes]);
-  if (std::setvbuf(file.get(), stdio_buffer.get(), _IOFBF, kStdioBufferBytes) != 0) {
-    return fail(ErrorCode::kIo, path + ": cannot set up the read buffer");
-  }
+namespace {
 
+/// Reads the file header (as many bytes as it declares) and checks the magic and its size.
+Result<std::vector<std::byte>> readFileHeader(std::FILE* file, const std::string& path) {
   std::vector<std::byte> header(kFileHeaderBytes);
-  std::size_t got = std::fread(header.data(), 1, header.size(), file.get());
-  if (std::ferror(file.get()) != 0) {
+  std::size_t got = std::fread(header.data(), 1, header.size(), file);
+  if (std::ferror(file) != 0) {
     return fail(ErrorCode::kIo, path + ": read error in the file header: " + systemReason(errno));
   }
   if (got == 0) {
@@ -88,10 +77,6 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
   if (got < 16) {
     return truncated_header(kFileHeaderBytes);
   }
-  // Every version starts with magic, u32 version, u32 header size and ends its header with the
-  // CRC-32 of the bytes before it (docs/record-format.md), so the checksum is checked first and a
-  // damaged version field is reported as damage, not as a newer format.
-  const std::uint32_t version = loadLe<std::uint32_t>(header.data() + 8);
   const std::uint32_t header_bytes = loadLe<std::uint32_t>(header.data() + 12);
   if (header_bytes < kMinHeaderBytes || header_bytes > kMaxHeaderBytes) {
     return fail(ErrorCode::kCorrupt, path + ": impossible file header size " +
@@ -99,13 +84,24 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
   }
   if (header_bytes > got) {
     header.resize(header_bytes);
-    got += std::fread(header.data() + got, 1, header_bytes - got, file.get());
+    got += std::fread(header.data() + got, 1, header_bytes - got, file);
     if (got < header_bytes) {
       return truncated_header(header_bytes);
     }
   }
+  header.resize(header_bytes);
+  return header;
+}
+
+/// Every version starts with magic, u32 version, u32 header size and ends its header with the
+/// CRC-32 of the bytes before it (docs/record-format.md), so the checksum is checked first and a
+/// damaged version field is reported as damage, not as a newer format. Then the version, and
+/// the rest of a version-1 header.
+Expected<void, Error> checkFileHeader(std::span<const std::byte> header, const std::string& path) {
+  const std::uint32_t version = loadLe<std::uint32_t>(header.data() + 8);
+  const auto header_bytes = static_cast<std::uint32_t>(header.size());
   const std::uint32_t stored_crc = loadLe<std::uint32_t>(header.data() + header_bytes - 4);
-  const bool crc_ok = crc32(0, std::span(header).first(header_bytes - 4)) == stored_crc;
+  const bool crc_ok = crc32(0, header.first(header_bytes - 4)) == stored_crc;
   const std::string versions_read =
       "versions 1 to " + std::to_string(kRecordLogVersion);  // every version so far is read
   if (!crc_ok) {
@@ -143,9 +139,35 @@ Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string
     return fail(ErrorCode::kUnsupported, path + ": file header flags " + std::to_string(flags) +
                                              " are unknown to this raymap");
   }
-  const std::int64_t created = loadLe<std::int64_t>(header.data() + 16);
+  return {};
+}
+
+}  // namespace
+
+Result<std::unique_ptr<RecordLogReader>> RecordLogReader::open(const std::string& path) {
+  std::error_code status_error;
+  if (std::filesystem::is_directory(path, status_error)) {
+    return fail(ErrorCode::kIo, path + ": cannot open: it is a directory");
+  }
+  FilePtr file(std::fopen(path.c_str(), "rb"));
+  if (file == nullptr) {
+    return fail(ErrorCode::kIo, path + ": cannot open: " + systemReason(errno));
+  }
+  // setvbuf must come before the first read. Header-sized reads then cost no system call each.
+  std::unique_ptr<char[]> stdio_buffer(new char[kStdioBufferBytes]);
+  if (std::setvbuf(file.get(), stdio_buffer.get(), _IOFBF, kStdioBufferBytes) != 0) {
+    return fail(ErrorCode::kIo, path + ": cannot set up the read buffer");
+  }
+  auto header = readFileHeader(file.get(), path);
+  if (!header) {
+    return Unexpected(std::move(header).error());
+  }
+  if (auto ok = checkFileHeader(*header, path); !ok) {
+    return Unexpected(ok.error());
+  }
+  const std::int64_t created = loadLe<std::int64_t>(header->data() + 16);
   std::unique_ptr<RecordLogReader> reader(
-      new RecordLogReader(path, file.release(), std::move(stdio_buffer), header_bytes, created));
+      new RecordLogReader(path, file.release(), std::move(stdio_buffer), header->size(), created));
   reader->refreshFileSize();
   return reader;
 }
@@ -255,6 +277,158 @@ Result<bool> RecordLogReader::restIsZero() {
   }
 }
 
+Result<bool> RecordLogReader::zeroHeader(std::uint64_t at) {
+  // No record is all zeros (its CRC would not be 0). A zero-filled tail is what a file system
+  // leaves when the size reached the disk and the data did not (power loss).
+  auto zeros = restIsZero();
+  if (!zeros) {
+    return Unexpected(std::move(zeros).error());
+  }
+  if (*zeros) {
+    refreshFileSize();
+    truncateAt(at, "the file ends in " + std::to_string(file_bytes_ - at) +
+                       " zero bytes (data lost before it reached the disk)");
+    return false;
+  }
+  return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                "checksum mismatch (a zero record header before non-zero data: "
+                                "damaged file)"));
+}
+
+Result<bool> RecordLogReader::readRecord(std::uint64_t at, std::uint32_t& kind,
+                                         std::span<const std::byte>& payload) {
+  std::array<std::byte, kRecordHeaderBytes> head{};
+  std::size_t got = 0;
+  auto filled = readExactly(head.data(), head.size(), got);
+  if (!filled) {
+    return Unexpected(std::move(filled).error());
+  }
+  if (*filled == Fill::kNone) {
+    finished_ = true;  // a clean end between records: a recording without END, not a cut
+    return false;
+  }
+  if (*filled == Fill::kSome) {
+    truncateAt(at, "its header has " + std::to_string(got) + " of " +
+                       std::to_string(kRecordHeaderBytes) + " bytes");
+    return false;
+  }
+  kind = loadLe<std::uint32_t>(head.data());
+  const std::uint32_t length = loadLe<std::uint32_t>(head.data() + 4);
+  const std::uint32_t stored_crc = loadLe<std::uint32_t>(head.data() + 8);
+  if (kind == 0 && length == 0 && stored_crc == 0) {
+    return zeroHeader(at);
+  }
+  if (length > kMaxPayloadBytes) {
+    return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                  "impossible payload length " + std::to_string(length) +
+                                      " (the limit is " + std::to_string(kMaxPayloadBytes) +
+                                      " bytes; damaged record header)"));
+  }
+  // A length beyond the end of the file is a cut-off record: say so without allocating for it
+  // (the file may still be growing when it is a .partial being written).
+  const std::uint64_t payload_at = at + kRecordHeaderBytes;
+  if (payload_at + length > file_bytes_) {
+    refreshFileSize();
+  }
+  if (payload_at + length > file_bytes_) {
+    const std::uint64_t present = file_bytes_ > payload_at ? file_bytes_ - payload_at : 0;
+    truncateAt(at, "its payload has " + std::to_string(present) + " of " + std::to_string(length) +
+                       " bytes");
+    return false;
+  }
+  if (payload_.size() < length) {
+    payload_.resize(length);
+  }
+  filled = readExactly(payload_.data(), length, got);
+  if (!filled) {
+    return Unexpected(std::move(filled).error());
+  }
+  if (*filled != Fill::kAll) {  // the file shrank after fstat
+    truncateAt(
+        at, "its payload has " + std::to_string(got) + " of " + std::to_string(length) + " bytes");
+    return false;
+  }
+  payload = std::span<const std::byte>(payload_.data(), length);
+  if (crc32(detail::recordCrcSeed(kind, length), payload) != stored_crc) {
+    return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                  "checksum mismatch in a " + kindName(kind) + " record of " +
+                                      std::to_string(length) + " payload bytes (damaged file)"));
+  }
+  offset_ = payload_at + length;
+  return true;
+}
+
+Expected<void, Error> RecordLogReader::readTopic(std::uint64_t at,
+                                                 std::span<const std::byte> payload) {
+  auto topic = detail::decodeTopicPayload(payload);
+  if (!topic) {
+    return Unexpected(
+        recordError(ErrorCode::kCorrupt, at, "malformed TOPIC record: " + topic.error()));
+  }
+  if (topic->id != declared_in_pass_) {
+    return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                  "TOPIC record declares id " + std::to_string(topic->id) +
+                                      " where id " + std::to_string(declared_in_pass_) +
+                                      " comes next (ids are given in order)"));
+  }
+  if (topic->id < topics_.size()) {
+    // Read before a rewind(): the same file must declare the same topic again.
+    if (*topic != topics_[topic->id]) {
+      return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                    "TOPIC record for id " + std::to_string(topic->id) +
+                                        " differs from the one read before rewind() (was the "
+                                        "file replaced?)"));
+    }
+  } else {
+    topics_.push_back(std::move(*topic));
+  }
+  ++declared_in_pass_;
+  return {};
+}
+
+Result<LogMessage> RecordLogReader::readMessage(std::uint64_t at,
+                                                std::span<const std::byte> payload) {
+  if (payload.size() < kMessagePrefixBytes) {
+    return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                  "MESSAGE payload of " + std::to_string(payload.size()) +
+                                      " bytes is shorter than its " +
+                                      std::to_string(kMessagePrefixBytes) + "-byte prefix"));
+  }
+  LogMessage message;
+  message.topic_id = loadLe<std::uint32_t>(payload.data());
+  if (message.topic_id >= declared_in_pass_) {
+    return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                  "message on topic id " + std::to_string(message.topic_id) +
+                                      ", which no earlier TOPIC record declares"));
+  }
+  message.receive_unix_ns = loadLe<std::int64_t>(payload.data() + 4);
+  message.receive_monotonic_ns = loadLe<std::int64_t>(payload.data() + 12);
+  message.source_timestamp_ns = loadLe<std::int64_t>(payload.data() + 20);
+  message.cdr = payload.subspan(kMessagePrefixBytes);
+  return message;
+}
+
+Expected<void, Error> RecordLogReader::readEnd(std::uint64_t at,
+                                               std::span<const std::byte> payload) {
+  auto end = detail::decodeEndPayload(payload);
+  if (!end) {
+    return Unexpected(recordError(ErrorCode::kCorrupt, at, "malformed END record: " + end.error()));
+  }
+  if (end->message_count != messages_read_) {
+    return Unexpected(recordError(ErrorCode::kCorrupt, at,
+                                  "END record counts " + std::to_string(end->message_count) +
+                                      " messages, but the log holds " +
+                                      std::to_string(messages_read_)));
+  }
+  refreshFileSize();
+  if (file_bytes_ > offset_) {
+    return Unexpected(recordError(
+        ErrorCode::kCorrupt, at,
+        "the END record is followed by " + std::to_string(file_bytes_ - offset_) + " more bytes"));
+  }
+  return {};
+}
+
 Result<std::optional<LogMessage>> RecordLogReader::next() {
   if (failure_) {
     return Unexpected(*failure_);
@@ -264,152 +438,38 @@ Result<std::optional<LogMessage>> RecordLogReader::next() {
   }
   for (;;) {
     const std::uint64_t at = offset_;
-    std::array<std::byte, kRecordHeaderBytes> head{};
-    std::size_t got = 0;
-    auto filled = readExactly(head.data(), head.size(), got);
-    if (!filled) {
-      return Unexpected(std::move(filled).error());
+    std::uint32_t kind = 0;
+    std::span<const std::byte> payload;
+    auto record = readRecord(at, kind, payload);
+    if (!record) {
+      return Unexpected(std::move(record).error());
     }
-    if (*filled == Fill::kNone) {
-      finished_ = true;  // a clean end between records: a recording without END, not a cut
-      return std::optional<LogMessage>();
+    if (!*record) {
+      return std::optional<LogMessage>();  // the end, or a record cut off (truncation())
     }
-    if (*filled == Fill::kSome) {
-      truncateAt(at, "its header has " + std::to_string(got) + " of " +
-                         std::to_string(kRecordHeaderBytes) + " bytes");
-      return std::optional<LogMessage>();
-    }
-    const std::uint32_t kind = loadLe<std::uint32_t>(head.data());
-    const std::uint32_t length = loadLe<std::uint32_t>(head.data() + 4);
-    const std::uint32_t stored_crc = loadLe<std::uint32_t>(head.data() + 8);
-    if (kind == 0 && length == 0 && stored_crc == 0) {
-      // No record is all zeros (its CRC would not be 0). A zero-filled tail is what a file
-      // system leaves when the size reached the disk and the data did not (power loss).
-      auto zeros = restIsZero();
-      if (!zeros) {
-        return Unexpected(std::move(zeros).error());
-      }
-      if (*zeros) {
-        refreshFileSize();
-        truncateAt(at, "the file ends in " + std::to_string(file_bytes_ - at) +
-                           " zero bytes (data lost before it reached the disk)");
-        return std::optional<LogMessage>();
-      }
-      return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                    "checksum mismatch (a zero record header before non-zero "
-                                    "data: damaged file)"));
-    }
-    if (length > kMaxPayloadBytes) {
-      return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                    "impossible payload length " + std::to_string(length) +
-                                        " (the limit is " + std::to_string(kMaxPayloadBytes) +
-                                        " bytes; damaged record header)"));
-    }
-    // A length beyond the end of the file is a cut-off record: say so without allocating for it
-    // (the file may still be growing when it is a .partial being written).
-    const std::uint64_t payload_at = at + kRecordHeaderBytes;
-    if (payload_at + length > file_bytes_) {
-      refreshFileSize();
-    }
-    if (payload_at + length > file_bytes_) {
-      const std::uint64_t present = file_bytes_ > payload_at ? file_bytes_ - payload_at : 0;
-      truncateAt(at, "its payload has " + std::to_string(present) + " of " +
-                         std::to_string(length) + " bytes");
-      return std::optional<LogMessage>();
-    }
-    if (payload_.size() < length) {
-      payload_.resize(length);
-    }
-    filled = readExactly(payload_.data(), length, got);
-    if (!filled) {
-      return Unexpected(std::move(filled).error());
-    }
-    if (*filled != Fill::kAll) {  // the file shrank after fstat
-      truncateAt(at, "its payload has " + std::to_string(got) + " of " + std::to_string(length) +
-                         " bytes");
-      return std::optional<LogMessage>();
-    }
-    const std::span<const std::byte> payload(payload_.data(), length);
-    const std::uint32_t crc = crc32(detail::recordCrcSeed(kind, length), payload);
-    if (crc != stored_crc) {
-      return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                    "checksum mismatch in a " + kindName(kind) + " record of " +
-                                        std::to_string(length) + " payload bytes (damaged file)"));
-    }
-    offset_ = payload_at + length;
-
     switch (static_cast<RecordKind>(kind)) {
-      case RecordKind::kTopic: {
-        auto topic = detail::decodeTopicPayload(payload);
-        if (!topic) {
-          return Unexpected(
-              recordError(ErrorCode::kCorrupt, at, "malformed TOPIC record: " + topic.error()));
+      case RecordKind::kTopic:
+        if (auto ok = readTopic(at, payload); !ok) {
+          return Unexpected(ok.error());
         }
-        if (topic->id != declared_in_pass_) {
-          return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                        "TOPIC record declares id " + std::to_string(topic->id) +
-                                            " where id " + std::to_string(declared_in_pass_) +
-                                            " comes next (ids are given in order)"));
-        }
-        if (topic->id < topics_.size()) {
-          // Read before a rewind(): the same file must declare the same topic again.
-          if (*topic != topics_[topic->id]) {
-            return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                          "TOPIC record for id " + std::to_string(topic->id) +
-                                              " differs from the one read before rewind() (was "
-                                              "the file replaced?)"));
-          }
-        } else {
-          topics_.push_back(std::move(*topic));
-        }
-        ++declared_in_pass_;
         break;
-      }
       case RecordKind::kMessage: {
-        if (length < kMessagePrefixBytes) {
-          return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                        "MESSAGE payload of " + std::to_string(length) +
-                                            " bytes is shorter than its " +
-                                            std::to_string(kMessagePrefixBytes) + "-byte prefix"));
+        auto message = readMessage(at, payload);
+        if (!message) {
+          return Unexpected(std::move(message).error());
         }
-        LogMessage message;
-        message.topic_id = loadLe<std::uint32_t>(payload.data());
-        if (message.topic_id >= declared_in_pass_) {
-          return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                        "message on topic id " + std::to_string(message.topic_id) +
-                                            ", which no earlier TOPIC record declares"));
-        }
-        message.receive_unix_ns = loadLe<std::int64_t>(payload.data() + 4);
-        message.receive_monotonic_ns = loadLe<std::int64_t>(payload.data() + 12);
-        message.source_timestamp_ns = loadLe<std::int64_t>(payload.data() + 20);
-        message.cdr = payload.subspan(kMessagePrefixBytes);
         ++record_index_;
         ++messages_read_;
-        return std::optional<LogMessage>(message);
+        return std::optional<LogMessage>(*message);
       }
-      case RecordKind::kEnd: {
-        auto end = detail::decodeEndPayload(payload);
-        if (!end) {
-          return Unexpected(
-              recordError(ErrorCode::kCorrupt, at, "malformed END record: " + end.error()));
-        }
-        if (end->message_count != messages_read_) {
-          return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                        "END record counts " + std::to_string(end->message_count) +
-                                            " messages, but the log holds " +
-                                            std::to_string(messages_read_)));
-        }
-        refreshFileSize();
-        if (file_bytes_ > offset_) {
-          return Unexpected(recordError(ErrorCode::kCorrupt, at,
-                                        "the END record is followed by " +
-                                            std::to_string(file_bytes_ - offset_) + " more bytes"));
+      case RecordKind::kEnd:
+        if (auto ok = readEnd(at, payload); !ok) {
+          return Unexpected(ok.error());
         }
         ++record_index_;
         complete_ = true;
         finished_ = true;
         return std::optional<LogMessage>();
-      }
     }
     // A TOPIC record, or a kind this reader does not know (written by a newer raymap; its
     // checksum is good, so skipping it is safe): go on to the next record.

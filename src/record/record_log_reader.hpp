@@ -110,6 +110,16 @@ class RecordLogReader {
   void refreshFileSize() noexcept;
   /// True when every byte from the current position to the end of the file is zero.
   Result<bool> restIsZero();
+  // The steps of next().
+  /// Reads the record at `at` and checks its checksum: true with its kind and payload (valid
+  /// until the next read); false when the pass ended there (the end, or a record cut off).
+  Result<bool> readRecord(std::uint64_t at, std::uint32_t& kind,
+                          std::span<const std::byte>& payload);
+  /// An all-zero record header: a zero-filled tail (false: the pass ends) or damage.
+  Result<bool> zeroHeader(std::uint64_t at);
+  Expected<void, Error> readTopic(std::uint64_t at, std::span<const std::byte> payload);
+  Result<LogMessage> readMessage(std::uint64_t at, std::span<const std::byte> payload);
+  Expected<void, Error> readEnd(std::uint64_t at, std::span<const std::byte> payload);
 
   std::string path_;
   std::FILE* file_ = nullptr;
