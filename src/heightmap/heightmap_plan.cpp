@@ -57,44 +57,10 @@ void reservePlan(HeightmapPlan& plan, std::size_t regions) {
   plan.region_slots.reserve(regions);
 }
 
-Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions& o,
-                                    HeightmapPlan& plan) {
-  const double res = map.geometry().resolution;
-  if (map.occupancyLayer() < 0) {
-    return fail(ErrorCode::kUnsupported,
-                "the map has no occupancy layer: a height map needs occupied and free voxels");
-  }
-  if (!std::isfinite(o.centre.x) || !std::isfinite(o.centre.y) || !std::isfinite(o.centre.z)) {
-    return fail(ErrorCode::kInvalidArgument,
-                "heightmap.centre: must be three finite numbers (metres)");
-  }
-  if (!(o.size >= res) || !std::isfinite(o.size)) {
-    return fail(ErrorCode::kInvalidArgument, "heightmap.size: " + metres(o.size) +
-                                                 ": must be a finite size of at least the map "
-                                                 "resolution (" +
-                                                 metres(res) + " m)");
-  }
-  if (!(o.min_clearance >= 0.0) || !std::isfinite(o.min_clearance)) {
-    return fail(ErrorCode::kInvalidArgument,
-                "heightmap.min_clearance: " + metres(o.min_clearance) + ": must be >= 0 metres");
-  }
-  const double floor_depth = o.floor_depth.value_or(0.5 * o.size);
-  const double ceiling_height = o.ceiling_height.value_or(0.5 * o.size);
-  if (!(floor_depth >= 0.0) || !std::isfinite(floor_depth)) {
-    return fail(ErrorCode::kInvalidArgument,
-                "heightmap.floor_depth: " + metres(floor_depth) + ": must be >= 0");
-  }
-  if (!(ceiling_height >= 0.0) || !std::isfinite(ceiling_height)) {
-    return fail(ErrorCode::kInvalidArgument,
-                "heightmap.ceiling_height: " + metres(ceiling_height) + ": must be >= 0");
-  }
-  const long cells_long = std::lround(o.size / res);
-  if (cells_long > kMaxCellsPerSide) {
-    return fail(ErrorCode::kInvalidArgument, "heightmap.size: " + metres(o.size) + ": " +
-                                                 std::to_string(cells_long) +
-                                                 " cells per side at " + metres(res) +
-                                                 " m; at most " + std::to_string(kMaxCellsPerSide));
-  }
+namespace {
+
+/// A box the map can hold: within a rolling window, and its centre inside the map's bounds.
+Expected<void, Error> checkBoxInMap(const VoxelMap& map, const HeightmapOptions& o) {
   if (map.config().policy == StorePolicy::kRolling) {
     const auto [lo, hi] = map.windowBounds();
     const double window = std::min(hi.x - lo.x, hi.y - lo.y);
@@ -114,24 +80,83 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
                       metres(lo.z) + ".." + metres(hi.z) + " m)");
     }
   }
+  return {};
+}
 
-  // Grid: cells_x x cells_y voxel columns, the centre's column at the middle (rounded toward +x).
-  const int cells = static_cast<int>(std::max(1L, cells_long));
-  const Vec3i centre_voxel = map.voxelOf(o.centre);
-  const std::int32_t x_min = centre_voxel.x - cells / 2;
-  const std::int32_t y_min = centre_voxel.y - cells / 2;
-  const std::int32_t x_max = x_min + cells - 1;
-  const std::int32_t y_max = y_min + cells - 1;
+double floorDepthOf(const HeightmapOptions& o) { return o.floor_depth.value_or(0.5 * o.size); }
+double ceilingHeightOf(const HeightmapOptions& o) {
+  return o.ceiling_height.value_or(0.5 * o.size);
+}
+
+/// The options' values, each by its key: finite, in range, and a box the map can hold.
+Expected<void, Error> checkOptions(const VoxelMap& map, const HeightmapOptions& o) {
+  const double res = map.geometry().resolution;
+  if (!std::isfinite(o.centre.x) || !std::isfinite(o.centre.y) || !std::isfinite(o.centre.z)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "heightmap.centre: must be three finite numbers (metres)");
+  }
+  if (!(o.size >= res) || !std::isfinite(o.size)) {
+    return fail(ErrorCode::kInvalidArgument, "heightmap.size: " + metres(o.size) +
+                                                 ": must be a finite size of at least the map "
+                                                 "resolution (" +
+                                                 metres(res) + " m)");
+  }
+  if (!(o.min_clearance >= 0.0) || !std::isfinite(o.min_clearance)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "heightmap.min_clearance: " + metres(o.min_clearance) + ": must be >= 0 metres");
+  }
+  const double floor_depth = floorDepthOf(o);
+  const double ceiling_height = ceilingHeightOf(o);
+  if (!(floor_depth >= 0.0) || !std::isfinite(floor_depth)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "heightmap.floor_depth: " + metres(floor_depth) + ": must be >= 0");
+  }
+  if (!(ceiling_height >= 0.0) || !std::isfinite(ceiling_height)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "heightmap.ceiling_height: " + metres(ceiling_height) + ": must be >= 0");
+  }
+  const long cells_long = std::lround(o.size / res);
+  if (cells_long > kMaxCellsPerSide) {
+    return fail(ErrorCode::kInvalidArgument, "heightmap.size: " + metres(o.size) + ": " +
+                                                 std::to_string(cells_long) +
+                                                 " cells per side at " + metres(res) +
+                                                 " m; at most " + std::to_string(kMaxCellsPerSide));
+  }
+  return checkBoxInMap(map, o);
+}
+
+/// The grid's voxel box: cells x cells columns, the centre's column at the middle (rounded
+/// toward +x), and the height range searched.
+struct GridBox {
+  int cells = 1;
+  Vec3i centre_voxel;
+  std::int32_t x_min = 0, y_min = 0, x_max = 0, y_max = 0, z_min = 0, z_max = 0;
+};
+
+GridBox gridBox(const VoxelMap& map, const HeightmapOptions& o) {
+  const double res = map.geometry().resolution;
+  GridBox box;
+  box.cells = static_cast<int>(std::max(1L, std::lround(o.size / res)));
+  box.centre_voxel = map.voxelOf(o.centre);
+  box.x_min = box.centre_voxel.x - box.cells / 2;
+  box.y_min = box.centre_voxel.y - box.cells / 2;
+  box.x_max = box.x_min + box.cells - 1;
+  box.y_max = box.y_min + box.cells - 1;
   const auto half_cells = static_cast<std::int32_t>(std::lround(0.5 * o.size / res));
-  const std::int32_t z_min = centre_voxel.z - half_cells;
-  const std::int32_t z_max = centre_voxel.z + half_cells;
+  box.z_min = box.centre_voxel.z - half_cells;
+  box.z_max = box.centre_voxel.z + half_cells;
+  return box;
+}
 
-  rm_heightmap_params& p = plan.params;
-  p = rm_heightmap_params{};
-  p.cells_x = cells;
-  p.cells_y = cells;
-  p.voxel_x0 = x_max;
-  p.voxel_y0 = y_max;
+/// The kernel's parameters for the box (kernels/common/heightmap.h).
+rm_heightmap_params kernelParams(const VoxelMap& map, const HeightmapOptions& o,
+                                 const GridBox& box) {
+  const double res = map.geometry().resolution;
+  rm_heightmap_params p{};
+  p.cells_x = box.cells;
+  p.cells_y = box.cells;
+  p.voxel_x0 = box.x_max;
+  p.voxel_y0 = box.y_max;
   p.region_voxels = map.geometry().region_voxels;
   p.region_shift = -1;
   for (int shift = 0; shift < 31; ++shift) {
@@ -139,18 +164,18 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
       p.region_shift = shift;
     }
   }
-  const Vec3i region_lo = map.regionOfVoxel({x_min, y_min, z_min - 1});
-  const Vec3i region_hi = map.regionOfVoxel({x_max, y_max, z_max});
+  const Vec3i region_lo = map.regionOfVoxel({box.x_min, box.y_min, box.z_min - 1});
+  const Vec3i region_hi = map.regionOfVoxel({box.x_max, box.y_max, box.z_max});
   p.region_x0 = region_lo.x;
   p.region_y0 = region_lo.y;
   p.region_z0 = region_lo.z;
   p.regions_x = region_hi.x - region_lo.x + 1;
   p.regions_y = region_hi.y - region_lo.y + 1;
   p.regions_z = region_hi.z - region_lo.z + 1;
-  p.box_z_min = z_min;
-  p.box_z_max = z_max;
-  p.seed_i = x_max - centre_voxel.x;
-  p.seed_j = y_max - centre_voxel.y;
+  p.box_z_min = box.z_min;
+  p.box_z_max = box.z_max;
+  p.seed_i = box.x_max - box.centre_voxel.x;
+  p.seed_j = box.y_max - box.centre_voxel.y;
   p.flags = (o.virtual_surfaces ? RM_HM_FLAG_VIRTUAL : 0) |
             (map.meanLayer() >= 0 ? RM_HM_FLAG_SAMPLES : 0) |
             (o.use_voxel_mean && map.meanLayer() >= 0 ? RM_HM_FLAG_MEAN : 0) |
@@ -159,12 +184,18 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
   p.resolution = static_cast<float>(res);
   p.inverse_resolution = static_cast<float>(1.0 / res);
   p.reference_z = static_cast<float>(o.centre.z);
-  p.floor_depth = static_cast<float>(floor_depth);
-  p.ceiling_height = static_cast<float>(ceiling_height);
+  p.floor_depth = static_cast<float>(floorDepthOf(o));
+  p.ceiling_height = static_cast<float>(ceilingHeightOf(o));
   p.min_clearance = static_cast<float>(o.min_clearance);
   p.occupied_threshold = map.occupancy().threshold;
   p.normal_min_samples = map.config().ndt.sample_threshold;
+  return p;
+}
 
+/// The region table over the box: each region's index into region_slots, or RM_HM_NO_REGION.
+Expected<void, Error> tableRegions(const VoxelMap& map, const HeightmapOptions& o,
+                                   HeightmapPlan& plan) {
+  const rm_heightmap_params& p = plan.params;
   const auto table_size = static_cast<std::size_t>(p.regions_x) *
                           static_cast<std::size_t>(p.regions_y) *
                           static_cast<std::size_t>(p.regions_z);
@@ -199,13 +230,32 @@ Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions&
       }
     }
   }
+  return {};
+}
 
+}  // namespace
+
+Expected<void, Error> planHeightmap(const VoxelMap& map, const HeightmapOptions& o,
+                                    HeightmapPlan& plan) {
+  if (map.occupancyLayer() < 0) {
+    return fail(ErrorCode::kUnsupported,
+                "the map has no occupancy layer: a height map needs occupied and free voxels");
+  }
+  if (auto ok = checkOptions(map, o); !ok) {
+    return ok;
+  }
+  const GridBox box = gridBox(map, o);
+  plan.params = kernelParams(map, o, box);
+  if (auto ok = tableRegions(map, o, plan); !ok) {
+    return ok;
+  }
+  const double res = map.geometry().resolution;
   HeightMap& g = plan.grid;
   g.resolution = res;
-  g.cells_x = cells;
-  g.cells_y = cells;
-  g.centre_x = (x_min + 0.5 * cells) * res;
-  g.centre_y = (y_min + 0.5 * cells) * res;
+  g.cells_x = box.cells;
+  g.cells_y = box.cells;
+  g.centre_x = (box.x_min + 0.5 * box.cells) * res;
+  g.centre_y = (box.y_min + 0.5 * box.cells) * res;
   g.reference_z = o.centre.z;
   g.mode = o.mode;
   g.has_normals = map.ndtLayer() >= 0;
