@@ -39,7 +39,7 @@ io::Pose opticalInBody(const sim::CameraMount& mount) {
 
 Result<std::unique_ptr<DepthPlayback>> DepthPlayback::create(
     const dds::Participant& participant, DriverPublisher& publisher, const sim::Scene& scene,
-    std::vector<sim::DepthCameraModel> cameras, sim::SensorPath path, std::uint64_t seed,
+    const std::vector<sim::DepthCameraModel>& cameras, sim::SensorPath path, std::uint64_t seed,
     DepthPlaybackOptions options) {
   std::unique_ptr<DepthPlayback> p(
       new DepthPlayback(publisher, scene, std::move(path), seed, options));

@@ -47,12 +47,10 @@ class DepthPlayback {
  public:
   /// @brief Creates the cameras' writers and publishes their /tf_static edges through
   /// `publisher` (which also sends the odometry). Fails for an invalid camera model.
-  static Result<std::unique_ptr<DepthPlayback>> create(const dds::Participant& participant,
-                                                       DriverPublisher& publisher,
-                                                       const sim::Scene& scene,
-                                                       std::vector<sim::DepthCameraModel> cameras,
-                                                       sim::SensorPath path, std::uint64_t seed,
-                                                       DepthPlaybackOptions options);
+  static Result<std::unique_ptr<DepthPlayback>> create(
+      const dds::Participant& participant, DriverPublisher& publisher, const sim::Scene& scene,
+      const std::vector<sim::DepthCameraModel>& cameras, sim::SensorPath path, std::uint64_t seed,
+      DepthPlaybackOptions options);
 
   /// @brief Time zero of the recording: now (monotonic) and the wall clock now.
   void start(std::int64_t monotonic_ns, std::int64_t wall_ns);

@@ -46,8 +46,8 @@ class DriverPublisher {
   /// @brief One static edge of a TF tree (frames: NUL-terminated, alive during the call).
   struct StaticEdge {
     io::Pose pose;  ///< the child in the parent
-    const char* parent;
-    const char* child;
+    const char* parent = nullptr;
+    const char* child = nullptr;
   };
   /// @brief Several static transforms in one TFMessage on `rt/tf_static`, as
   /// robot_state_publisher sends them: the latched (keep last 1) sample holds them all.
@@ -93,6 +93,8 @@ class GridMapListener {
   static Result<std::unique_ptr<GridMapListener>> create(const dds::Participant& participant,
                                                          const std::string& topic);
   ~GridMapListener();
+  GridMapListener(const GridMapListener&) = delete;
+  GridMapListener& operator=(const GridMapListener&) = delete;
   /// @brief Takes what has arrived (waits up to timeout_ns for the first); returns how many.
   int poll(std::int64_t timeout_ns, std::vector<ReceivedGridMap>& out);
   std::uint32_t matchedWriters() const noexcept;
@@ -109,6 +111,8 @@ class DiagnosticsListener {
   static Result<std::unique_ptr<DiagnosticsListener>> create(const dds::Participant& participant,
                                                              const std::string& topic);
   ~DiagnosticsListener();
+  DiagnosticsListener(const DiagnosticsListener&) = delete;
+  DiagnosticsListener& operator=(const DiagnosticsListener&) = delete;
   /// @brief Takes what has arrived; returns how many arrays.
   int poll();
   const std::map<std::string, std::string>& values() const noexcept { return values_; }

@@ -133,7 +133,7 @@ void toDriverScan(const RecordedScan& scan, std::int64_t stamp_of_zero_ns, doubl
   for (const Ray& ray : scan.rays) {
     const std::int64_t stamp = stampOf(ray.time_s, stamp_of_zero_ns, t_zero_s);
     const Vec3d p = ray.sample - positionAt(out.knots, stamp);
-    msgs::ScanPoint point;
+    msgs::ScanPoint point{};
     point.x = static_cast<float>(p.x);
     point.y = static_cast<float>(p.y);
     point.z = static_cast<float>(p.z);

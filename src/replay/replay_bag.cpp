@@ -168,7 +168,7 @@ Result<void> ReplaySession::playBag(const std::string& path) {
   for (const std::string& damage : reader.pass().damage) {
     stats_.warnings.push_back("replay.skip_damaged: " + damage);
   }
-  pass_offset_s_ = played_until_s + kGapBetweenInputs_s;
+  pass_offset_s_ = played_until_s + kGapBetweenInputsSeconds;
   return {};
 }
 

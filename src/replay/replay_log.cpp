@@ -164,7 +164,7 @@ Result<void> ReplaySession::playLog(const std::string& path) {
         path + ": the recording was interrupted: " + reader.truncation()->what + "; replayed the " +
         std::to_string(reader.truncation()->complete_messages) + " complete messages before it");
   }
-  pass_offset_s_ = played_until_s + kGapBetweenInputs_s;
+  pass_offset_s_ = played_until_s + kGapBetweenInputsSeconds;
   return {};
 }
 

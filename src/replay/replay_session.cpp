@@ -18,10 +18,10 @@ namespace {
 /// reader drops what arrives before. The pause after the writer-side match covers the reader's
 /// side, with room for a loaded machine (0.2 s lost the first cloud under ASan in CI, and so did
 /// skipping the pause when the match was already there at the first look).
-constexpr double kReaderSideMatch_s = 1.0;
+constexpr double kReaderSideMatchSeconds = 1.0;
 
 /// Unpaced: a subscriber that reports no progress for this long is not waited for.
-constexpr double kFeedbackTimeout_s = 2.0;
+constexpr double kFeedbackTimeoutSeconds = 2.0;
 
 /// The counters of raymapd's "raymapd: pipeline" status that account for every received cloud.
 /// (Depth images count as clouds; those above a sensor's max_rate_hz or before its CameraInfo
@@ -111,7 +111,7 @@ bool ReplaySession::waitForSubscriber(const std::function<std::uint32_t()>& matc
   if (matched() == 0) {
     stats_.warnings.push_back("no subscriber of " + topic + " after " +
                               std::to_string(options_.wait_s) + " s: publishing anyway");
-  } else if (!clock_.sleepFor(kReaderSideMatch_s)) {
+  } else if (!clock_.sleepFor(kReaderSideMatchSeconds)) {
     // Also when the subscriber was matched at the first look: that says nothing of how long
     // ago, and the subscriber's side may still be behind (a cloud was lost so under ASan in CI).
     return false;
@@ -142,7 +142,7 @@ bool ReplaySession::waitForRoom() {
       return true;
     }
     if (static_cast<double>(platform::monotonicNowNs() - start) * 1e-9 >
-        (baseline ? kFeedbackTimeout_s : options_.wait_s)) {
+        (baseline ? kFeedbackTimeoutSeconds : options_.wait_s)) {
       ++stats_.feedback_timeouts;
       if (!baseline) {
         stats_.warnings.push_back("replay.rate: max: no progress report on " +
@@ -257,7 +257,7 @@ Result<void> ReplaySession::playRayFile(const std::string& path) {
       *last_scan_start_s + *scan_spacing_s > played_until_s) {
     pass_offset_s_ = *last_scan_start_s + *scan_spacing_s;
   } else {
-    pass_offset_s_ = std::max(pass_offset_s_, played_until_s) + kGapBetweenInputs_s;
+    pass_offset_s_ = std::max(pass_offset_s_, played_until_s) + kGapBetweenInputsSeconds;
   }
   return {};
 }
@@ -287,7 +287,7 @@ Result<ReplayStats> ReplaySession::run() {
   // 2 s (a reader that went away is no longer waited for).
   (void)clock_.sleepFor(0.2);
   if (!clock_.stopped() && !participant_->waitForAcknowledgements(2'000'000'000)) {
-    stats_.warnings.push_back("the last reliable messages were not acknowledged within 2 s");
+    stats_.warnings.emplace_back("the last reliable messages were not acknowledged within 2 s");
   }
   stats_.wall_seconds = clock_.elapsed();
   stats_.max_late_ms = clock_.maxLateMs();

@@ -27,7 +27,7 @@ namespace raymap::replay {
 /// input's scan spacing is unknown (one scan) or logs: keeps stamps strictly increasing and reads
 /// as a short pause of the sensor. Seconds. Ray files with several scans continue one scan
 /// spacing after their last scan started instead.
-inline constexpr double kGapBetweenInputs_s = 0.1;
+inline constexpr double kGapBetweenInputsSeconds = 0.1;
 
 struct ReplayStats;
 

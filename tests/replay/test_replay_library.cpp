@@ -26,7 +26,7 @@ namespace {
 
 /// The yard drive: `scans` scans of the simulated 32 x 1024 lidar as a ray-cloud PLY.
 std::string yardRays(const TempDir& dir, int scans) {
-  const std::string path = dir.file("yard.ply");
+  std::string path = dir.file("yard.ply");
   const RunResult r = runRaymap({"simulate", std::string(RAYMAP_SCENES_DIR) + "/yard.yaml",
                                  "--rays", path, "--scans", std::to_string(scans), "-q"});
   EXPECT_EQ(r.exit_code, 0) << describe(r);
