@@ -50,29 +50,17 @@ std::string unplayableTopics(const bag::BagReader& reader) {
 
 }  // namespace
 
-Result<void> ReplaySession::playBag(const std::string& path) {
-  bag::BagReadOptions read;
-  read.skip_damaged = options_.skip_damaged;
-  auto opened = bag::openBag(path, read);
-  if (!opened) {
-    return Unexpected(std::move(opened).error());
-  }
-  bag::BagReader& reader = *opened.value();
-  for (const std::string& warning : reader.openWarnings()) {
-    stats_.warnings.push_back(warning);
-  }
-  // Every topic's writer exists before the first message, so discovery is done when data
-  // starts. rmw's QoS enums: reliability 1 = reliable, 2 = best effort; durability 1 =
-  // transient local. A bag without profiles plays reliable and volatile (ros2 bag play's
-  // default), /tf_static transient local as its publishers latch it.
-  std::vector<dds::CdrWriter*> writers;
-  std::vector<bool> clouds;
-  dds::CdrWriter* first_cloud_writer = nullptr;
-  std::string first_cloud_topic;
+Result<ReplaySession::TopicWriters> ReplaySession::bagTopicWriters(const std::string& path,
+                                                                   const bag::BagReader& reader) {
+  // rmw's QoS enums: reliability 1 = reliable, 2 = best effort; durability 1 = transient local.
+  // A bag without profiles plays reliable and volatile (ros2 bag play's default), /tf_static
+  // transient local as its publishers latch it.
+  TopicWriters out;
+  std::size_t index = 0;
   for (const bag::BagTopic& topic : reader.topics()) {
+    const std::size_t at = index++;
     if (leavesOutServiceOutput(path, topic.name, topic.type)) {
-      writers.push_back(nullptr);
-      clouds.push_back(false);
+      out.add(at, nullptr, false, topic.name);
       continue;
     }
     const dds::KnownTopicType* known = dds::findTopicType(topic.type);
@@ -94,23 +82,36 @@ Result<void> ReplaySession::playBag(const std::string& path) {
                                 (cdr ? "" : " in " + topic.serialization_format) +
                                 ", which this raymap cannot publish: its messages are skipped");
     }
-    // Scans: point clouds and depth images (paced against raymapd's progress with --rate max).
-    const bool cloud =
+    // Scans: point clouds and depth images (paced against raymapd's progress when unpaced).
+    const bool scan =
         topic.type == "sensor_msgs/msg/PointCloud2" || topic.type == "sensor_msgs/msg/Image";
-    if (writer != nullptr && cloud && first_cloud_writer == nullptr) {
-      first_cloud_writer = writer;
-      first_cloud_topic = topic.name;
-    }
-    writers.push_back(writer);
-    clouds.push_back(cloud);
+    out.add(at, writer, scan, topic.name);
+  }
+  return out;
+}
+
+Result<void> ReplaySession::playBag(const std::string& path) {
+  bag::BagReadOptions read;
+  read.skip_damaged = options_.skip_damaged;
+  auto opened = bag::openBag(path, read);
+  if (!opened) {
+    return Unexpected(std::move(opened).error());
+  }
+  bag::BagReader& reader = *opened.value();
+  for (const std::string& warning : reader.openWarnings()) {
+    stats_.warnings.push_back(warning);
+  }
+  // Every topic's writer exists before the first message, so discovery is done when data starts.
+  auto topics = bagTopicWriters(path, reader);
+  if (!topics) {
+    return Unexpected(std::move(topics).error());
   }
   // A replay that can send nothing is a failure, never a quiet success.
-  if (std::none_of(writers.begin(), writers.end(), [](const dds::CdrWriter* w) { return w; })) {
+  if (std::none_of(topics->writers.begin(), topics->writers.end(),
+                   [](const dds::CdrWriter* w) { return w; })) {
     return fail(ErrorCode::kInvalidArgument, unplayableTopics(reader));
   }
-  if (first_cloud_writer != nullptr &&
-      !waitForSubscriber([first_cloud_writer] { return first_cloud_writer->matchedReaders(); },
-                         first_cloud_topic)) {
+  if (!waitForScanSubscriber(*topics)) {
     return {};
   }
   if (auto rewound = reader.rewind(); !rewound) {
@@ -118,7 +119,6 @@ Result<void> ReplaySession::playBag(const std::string& path) {
   }
   std::optional<std::int64_t> first_ns;
   double played_until_s = pass_offset_s_;
-  std::vector<bool> warned(writers.size(), false);
   std::uint64_t playable = 0;  // messages on topics that have a writer
   bag::BagMessage message;
   for (;;) {
@@ -129,7 +129,7 @@ Result<void> ReplaySession::playBag(const std::string& path) {
     if (!next.value()) {
       break;
     }
-    playable += message.topic < writers.size() && writers[message.topic] != nullptr ? 1u : 0u;
+    playable += topics->at(message.topic) != nullptr ? 1u : 0u;
     if (!first_ns) {
       first_ns = message.log_time_ns;
     }
@@ -141,20 +141,13 @@ Result<void> ReplaySession::playBag(const std::string& path) {
     if (options_.duration_s > 0.0 && t >= options_.start_s + options_.duration_s) {
       break;
     }
-    dds::CdrWriter* writer = message.topic < writers.size() ? writers[message.topic] : nullptr;
-    if (writer == nullptr) {
+    if (topics->at(message.topic) == nullptr) {
       continue;
     }
-    const Sent sent = sendRecorded(*writer, clouds[message.topic], t, message.data, played_until_s);
-    if (sent == Sent::kStopped) {
+    const bag::BagTopic& topic = reader.topics()[message.topic];
+    if (playRecorded(*topics, message.topic, t, message.data, played_until_s, path, message.index,
+                     topic.name, topic.type) == Sent::kStopped) {
       return {};
-    }
-    if (sent == Sent::kRefused && !warned[message.topic]) {
-      warned[message.topic] = true;
-      const bag::BagTopic& topic = reader.topics()[message.topic];
-      stats_.warnings.push_back(path + ": message " + std::to_string(message.index) + " on " +
-                                topic.name + " is not a valid " + topic.type +
-                                " or could not be sent: skipped (and any more like it)");
     }
     reportProgress(reader.progress(), path);
   }

@@ -73,21 +73,49 @@ ReplaySession::Sent ReplaySession::sendRecorded(dds::CdrWriter& writer, bool clo
   return Sent::kSent;
 }
 
-Result<void> ReplaySession::playLog(const std::string& path) {
-  // One pass over the file first: every topic's writer exists before the first message, so
-  // discovery is done when the data starts, and the summary gives the progress total.
-  auto summary = record::RecordLogReader::summarize(path);
-  if (!summary) {
-    return Unexpected(std::move(summary).error());
+void ReplaySession::TopicWriters::add(std::size_t index, dds::CdrWriter* writer, bool scan,
+                                      const std::string& topic) {
+  if (writers.size() <= index) {
+    writers.resize(index + 1, nullptr);
+    scans.resize(index + 1, false);
+    warned.resize(index + 1, false);
   }
-  std::map<std::uint32_t, dds::CdrWriter*> writers;  // log topic id -> writer, nullptr = skip
-  std::map<std::uint32_t, bool> clouds;              // log topic id -> carries PointCloud2
-  dds::CdrWriter* first_cloud_writer = nullptr;
-  std::string first_cloud_topic;
-  for (const record::LogTopic& topic : summary.value().topics) {
+  writers[index] = writer;
+  scans[index] = scan;
+  if (writer != nullptr && scan && first_scan == nullptr) {
+    first_scan = writer;
+    first_scan_topic = topic;
+  }
+}
+
+bool ReplaySession::waitForScanSubscriber(const TopicWriters& topics) {
+  dds::CdrWriter* first = topics.first_scan;
+  return first == nullptr ||
+         waitForSubscriber([first] { return first->matchedReaders(); }, topics.first_scan_topic);
+}
+
+ReplaySession::Sent ReplaySession::playRecorded(TopicWriters& topics, std::size_t index, double t,
+                                                std::span<const std::byte> cdr,
+                                                double& played_until_s, const std::string& path,
+                                                std::uint64_t number, const std::string& topic,
+                                                const std::string& type) {
+  const Sent sent =
+      sendRecorded(*topics.writers[index], topics.scans[index], t, cdr, played_until_s);
+  if (sent == Sent::kRefused && !topics.warned[index]) {
+    topics.warned[index] = true;
+    stats_.warnings.push_back(path + ": message " + std::to_string(number) + " on " + topic +
+                              " is not a valid " + type +
+                              " or could not be sent: skipped (and any more like it)");
+  }
+  return sent;
+}
+
+Result<ReplaySession::TopicWriters> ReplaySession::logTopicWriters(
+    const std::string& path, const std::vector<record::LogTopic>& topics) {
+  TopicWriters out;
+  for (const record::LogTopic& topic : topics) {
     if (leavesOutServiceOutput(path, topic.name, topic.type)) {
-      writers[topic.id] = nullptr;
-      clouds[topic.id] = false;
+      out.add(topic.id, nullptr, false, topic.name);
       continue;
     }
     auto writer =
@@ -96,22 +124,29 @@ Result<void> ReplaySession::playLog(const std::string& path) {
     if (!writer) {
       return Unexpected(std::move(writer).error());
     }
-    writers[topic.id] = writer.value();
-    clouds[topic.id] = isPointCloud(topic.type);
     if (writer.value() == nullptr) {
       stats_.warnings.push_back(path + ": topic " + topic.name + " has type " + topic.type +
                                 ", which this raymap cannot publish: its messages are skipped");
-    } else if (first_cloud_writer == nullptr && isPointCloud(topic.type)) {
-      first_cloud_writer = writer.value();
-      first_cloud_topic = topic.name;
     }
+    out.add(topic.id, writer.value(), isPointCloud(topic.type), topic.name);
   }
-  if (first_cloud_writer != nullptr &&
-      !waitForSubscriber([first_cloud_writer] { return first_cloud_writer->matchedReaders(); },
-                         first_cloud_topic)) {
+  return out;
+}
+
+Result<void> ReplaySession::playLog(const std::string& path) {
+  // One pass over the file first: every topic's writer exists before the first message, so
+  // discovery is done when the data starts, and the summary gives the progress total.
+  auto summary = record::RecordLogReader::summarize(path);
+  if (!summary) {
+    return Unexpected(std::move(summary).error());
+  }
+  auto topics = logTopicWriters(path, summary.value().topics);
+  if (!topics) {
+    return Unexpected(std::move(topics).error());
+  }
+  if (!waitForScanSubscriber(*topics)) {
     return {};
   }
-
   auto opened = record::RecordLogReader::open(path);
   if (!opened) {
     return Unexpected(std::move(opened).error());
@@ -119,7 +154,6 @@ Result<void> ReplaySession::playLog(const std::string& path) {
   record::RecordLogReader& reader = *opened.value();
   std::optional<std::int64_t> first_receive_ns;
   double played_until_s = pass_offset_s_;
-  std::map<std::uint32_t, bool> warned_undecodable;
   for (;;) {
     auto next = reader.next();
     if (!next) {
@@ -139,22 +173,14 @@ Result<void> ReplaySession::playLog(const std::string& path) {
     if (options_.duration_s > 0.0 && t >= options_.start_s + options_.duration_s) {
       break;
     }
-    dds::CdrWriter* writer = writers[message.topic_id];
-    if (writer == nullptr) {
+    if (topics->at(message.topic_id) == nullptr) {
       continue;
     }
     const record::LogTopic* topic = reader.topic(message.topic_id);
-    const Sent sent =
-        sendRecorded(*writer, clouds[message.topic_id], t, message.cdr, played_until_s);
-    if (sent == Sent::kStopped) {
+    if (playRecorded(*topics, message.topic_id, t, message.cdr, played_until_s, path,
+                     reader.messagesRead(), topic != nullptr ? topic->name : "?",
+                     topic != nullptr ? topic->type : "?") == Sent::kStopped) {
       return {};
-    }
-    if (sent == Sent::kRefused && !warned_undecodable[message.topic_id]) {
-      warned_undecodable[message.topic_id] = true;
-      stats_.warnings.push_back(path + ": message " + std::to_string(reader.messagesRead()) +
-                                " on " + (topic != nullptr ? topic->name : "?") +
-                                " is not a valid " + (topic != nullptr ? topic->type : "?") +
-                                " or could not be sent: skipped (and any more like it)");
     }
     reportProgress(reader.progress(), path);
   }

@@ -165,6 +165,55 @@ void ReplaySession::reportProgress(double input_fraction, const std::string& inp
   }
 }
 
+bool ReplaySession::publishDriverScan(std::int64_t stamp_of_zero, double& played_until_s) {
+  driver::DriverPublisher& driver = *driver_;
+  const auto replayTime = [&](std::int64_t stamp_ns) {
+    return pass_offset_s_ + static_cast<double>(stamp_ns - stamp_of_zero) * 1e-9;
+  };
+  // Poses first, each when it is due, then the cloud once its sweep is complete.
+  for (const PoseKnot& knot : driver_scan_.knots) {
+    if (!clock_.waitUntil(replayTime(knot.stamp_ns))) {
+      return false;
+    }
+    io::Pose pose;
+    pose.position = toEigen(knot.position);
+    if (options_.pose_odometry) {
+      driver.publishOdometry(knot.stamp_ns, pose, options_.world_frame.c_str(),
+                             options_.base_frame.c_str());
+    }
+    if (options_.pose_tf) {
+      driver.publishTf(knot.stamp_ns, pose, options_.world_frame.c_str(),
+                       options_.base_frame.c_str());
+    }
+    ++stats_.poses;
+  }
+  if (!waitForRoom()) {
+    return false;
+  }
+  const double cloud_time = replayTime(driver_scan_.knots.back().stamp_ns);
+  if (!clock_.waitUntil(cloud_time)) {
+    return false;
+  }
+  driver.reserveCloud(static_cast<std::uint32_t>(driver_scan_.points.size()));
+  driver.publishCloud(driver_scan_.points, {}, driver_scan_.stamp_ns, options_.frame.c_str());
+  ++stats_.scans;
+  stats_.points += driver_scan_.points.size();
+  stats_.data_seconds += cloud_time - played_until_s;
+  played_until_s = cloud_time;
+  return true;
+}
+
+void ReplaySession::advancePastRayFile(std::optional<double> last_scan_start_s,
+                                       std::optional<double> scan_spacing_s,
+                                       double played_until_s) {
+  if (last_scan_start_s && scan_spacing_s && *scan_spacing_s > 0.0 &&
+      *last_scan_start_s + *scan_spacing_s > played_until_s) {
+    pass_offset_s_ = *last_scan_start_s + *scan_spacing_s;
+  } else {
+    pass_offset_s_ = std::max(pass_offset_s_, played_until_s) + kGapBetweenInputsSeconds;
+  }
+}
+
 Result<void> ReplaySession::playRayFile(const std::string& path) {
   auto opened = io::openRaySource(path, options_.source);
   if (!opened) {
@@ -205,7 +254,7 @@ Result<void> ReplaySession::playRayFile(const std::string& path) {
       t_zero = scan_.t_first_s + options_.start_s;
     }
     if (scan_.t_first_s < *t_zero) {
-      continue;  // before --start
+      continue;  // before the start
     }
     if (options_.duration_s > 0.0 && scan_.t_first_s >= *t_zero + options_.duration_s) {
       break;
@@ -213,52 +262,18 @@ Result<void> ReplaySession::playRayFile(const std::string& path) {
     const std::int64_t stamp_of_zero = clock_.stampAt(pass_offset_s_);
     toDriverScan(scan_, stamp_of_zero, *t_zero, options_.pose_period_s, driver_scan_);
     stats_.origin_conflicts += driver_scan_.origin_conflicts;
-    const auto replayTime = [&](std::int64_t stamp_ns) {
-      return pass_offset_s_ + static_cast<double>(stamp_ns - stamp_of_zero) * 1e-9;
-    };
-    // Poses first, each when it is due, then the cloud once its sweep is complete.
-    for (const PoseKnot& knot : driver_scan_.knots) {
-      if (!clock_.waitUntil(replayTime(knot.stamp_ns))) {
-        return {};
-      }
-      io::Pose pose;
-      pose.position = toEigen(knot.position);
-      if (options_.pose_odometry) {
-        driver.publishOdometry(knot.stamp_ns, pose, options_.world_frame.c_str(),
-                               options_.base_frame.c_str());
-      }
-      if (options_.pose_tf) {
-        driver.publishTf(knot.stamp_ns, pose, options_.world_frame.c_str(),
-                         options_.base_frame.c_str());
-      }
-      ++stats_.poses;
-    }
-    if (!waitForRoom()) {
+    if (!publishDriverScan(stamp_of_zero, played_until_s)) {
       return {};
     }
-    const double cloud_time = replayTime(driver_scan_.knots.back().stamp_ns);
-    if (!clock_.waitUntil(cloud_time)) {
-      return {};
-    }
-    driver.reserveCloud(static_cast<std::uint32_t>(driver_scan_.points.size()));
-    driver.publishCloud(driver_scan_.points, {}, driver_scan_.stamp_ns, options_.frame.c_str());
-    ++stats_.scans;
-    stats_.points += driver_scan_.points.size();
-    stats_.data_seconds += cloud_time - played_until_s;
-    played_until_s = cloud_time;
-    const double scan_start = replayTime(driver_scan_.stamp_ns);
+    const double scan_start =
+        pass_offset_s_ + static_cast<double>(driver_scan_.stamp_ns - stamp_of_zero) * 1e-9;
     if (last_scan_start_s) {
       scan_spacing_s = scan_start - *last_scan_start_s;
     }
     last_scan_start_s = scan_start;
     reportProgress(reader.progress(), path);
   }
-  if (last_scan_start_s && scan_spacing_s && *scan_spacing_s > 0.0 &&
-      *last_scan_start_s + *scan_spacing_s > played_until_s) {
-    pass_offset_s_ = *last_scan_start_s + *scan_spacing_s;
-  } else {
-    pass_offset_s_ = std::max(pass_offset_s_, played_until_s) + kGapBetweenInputsSeconds;
-  }
+  advancePastRayFile(last_scan_start_s, scan_spacing_s, played_until_s);
   return {};
 }
 

@@ -14,10 +14,12 @@
 
 #include "raymap/error.hpp"
 
+#include "src/bag/bag_reader.hpp"
 #include "src/dds/cdr_writer.hpp"
 #include "src/dds/entities.hpp"
 #include "src/driver/ros_endpoints.hpp"
 #include "src/io/ray_source.hpp"
+#include "src/record/record_log.hpp"
 #include "src/replay/recorded_scans.hpp"
 #include "src/replay/replay_clock.hpp"
 
@@ -110,11 +112,42 @@ class ReplaySession {
  private:
   explicit ReplaySession(const ReplayOptions& options, platform::ShutdownSignals signals);
   Result<void> playRayFile(const std::string& path);
+  /// A ray file's scan `driver_scan_` with its pose knots, each when it is due. False: stopped.
+  bool publishDriverScan(std::int64_t stamp_of_zero, double& played_until_s);
+  /// Where the next input starts after a ray file whose last scan started at `last_scan_start_s`
+  /// with `scan_spacing_s` between scans (either unknown: a short gap after its last cloud).
+  void advancePastRayFile(std::optional<double> last_scan_start_s,
+                          std::optional<double> scan_spacing_s, double played_until_s);
   Result<void> playLog(const std::string& path);
   /// A rosbag2 bag (replay_bag.cpp): every message of a type raymap knows, on its topic
   /// (/x -> rt/x) with the QoS the bag recorded, at its recorded spacing (log time).
   Result<void> playBag(const std::string& path);
   enum class Sent : std::uint8_t { kSent, kRefused, kStopped };
+  /// The writers of a log's or a bag's topics, by topic index (nullptr: not played), which of
+  /// them carry scans (clouds or depth images: paced when unpaced), and the first such topic.
+  struct TopicWriters {
+    std::vector<dds::CdrWriter*> writers;
+    std::vector<bool> scans;
+    std::vector<bool> warned;  // a message of the topic was refused and said so
+    dds::CdrWriter* first_scan = nullptr;
+    std::string first_scan_topic;
+    void add(std::size_t index, dds::CdrWriter* writer, bool scan, const std::string& topic);
+    dds::CdrWriter* at(std::size_t index) const noexcept {
+      return index < writers.size() ? writers[index] : nullptr;
+    }
+  };
+  /// A log's writers, one per recorded topic with its recorded QoS.
+  Result<TopicWriters> logTopicWriters(const std::string& path,
+                                       const std::vector<record::LogTopic>& topics);
+  /// A bag's writers, with the QoS of its offered_qos_profiles.
+  Result<TopicWriters> bagTopicWriters(const std::string& path, const bag::BagReader& reader);
+  /// Waits for a subscriber of the first scan topic (none: no wait). False: stopped.
+  bool waitForScanSubscriber(const TopicWriters& topics);
+  /// Sends message `number` of topic `index` (on `topic`, of `type`) at `t` seconds after its
+  /// input's first message; a refused message is reported once per topic, naming `path`.
+  Sent playRecorded(TopicWriters& topics, std::size_t index, double t,
+                    std::span<const std::byte> cdr, double& played_until_s, const std::string& path,
+                    std::uint64_t number, const std::string& topic, const std::string& type);
   /// Sends one recorded message at `t` seconds after its input's first message (paced by the
   /// clock; --rate max waits for room first for clouds) and counts it.
   Sent sendRecorded(dds::CdrWriter& writer, bool cloud, double t, std::span<const std::byte> cdr,
