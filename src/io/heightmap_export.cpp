@@ -224,7 +224,8 @@ double scaleBarLength(double map_width_m, double pixels_per_m) {
   return length;
 }
 
-Result<Plan> makePlan(const HeightMap& map, const HeightmapImageOptions& options) {
+/// The map's layers and the options, each checked by name.
+Expected<void, Error> checkImageInput(const HeightMap& map, const HeightmapImageOptions& options) {
   const std::string what = "height-map image: ";
   if (map.cells_x < 1 || map.cells_y < 1) {
     return fail(ErrorCode::kInvalidArgument, what + "the map is " + std::to_string(map.cells_x) +
@@ -259,27 +260,15 @@ Result<Plan> makePlan(const HeightMap& map, const HeightmapImageOptions& options
                 what + "elevation_min_m " + std::to_string(*options.elevation_min_m) +
                     " is not below elevation_max_m " + std::to_string(*options.elevation_max_m));
   }
+  return {};
+}
 
-  Plan plan;
-  HeightmapImageLayout& layout = plan.layout;
-  const int longest = std::max(map.cells_x, map.cells_y);
-  if (options.cell_pixels > 0) {
-    layout.cell_pixels = options.cell_pixels;
-  } else {
-    const int grow = (kAutoMinMapPixels + map.cells_x - 1) / map.cells_x;
-    layout.cell_pixels = std::max(1, std::min(grow, kAutoMaxMapPixels / longest));
-  }
-  if (static_cast<long long>(longest) * layout.cell_pixels > kMaxMapPixels) {
-    return fail(ErrorCode::kInvalidArgument,
-                what + std::to_string(map.cells_x) + " x " + std::to_string(map.cells_y) +
-                    " cells at " + std::to_string(layout.cell_pixels) + " pixels each exceed " +
-                    std::to_string(kMaxMapPixels) + " pixels per side");
-  }
-  plan.map_width = map.cells_x * layout.cell_pixels;
-  plan.map_height = map.cells_y * layout.cell_pixels;
-
-  // Elevation range, unless fixed: the surface cells' heights (virtual cells are clamped into
-  // it: a deep drop seen from above would otherwise squash the scale), else the virtual cells'.
+/// The colour scale's range: fixed by the options, else the surface cells' heights (virtual
+/// cells are clamped into it: a deep drop seen from above would otherwise squash the scale),
+/// else the virtual cells'; a metre at least.
+std::pair<double, double> elevationRange(const HeightMap& map,
+                                         const HeightmapImageOptions& options) {
+  const std::size_t n = map.cellCount();
   double lo = std::numeric_limits<double>::infinity();
   double hi = -std::numeric_limits<double>::infinity();
   for (const CellKind ranged : {CellKind::kSurface, CellKind::kVirtualSurface}) {
@@ -313,34 +302,43 @@ Result<Plan> makePlan(const HeightMap& map, const HeightmapImageOptions& options
       hi = mid + 0.5;
     }
   }
-  layout.elevation_min_m = lo;
-  layout.elevation_max_m = hi;
+  return {lo, hi};
+}
 
-  const double step = (hi - lo) / (kTickCount - 1);
+/// The tick labels of the colour bar; returns the widest one's width in pixels.
+int labelTicks(Plan& plan) {
+  const double lo = plan.layout.elevation_min_m;
+  const double step = (plan.layout.elevation_max_m - lo) / (kTickCount - 1);
   const int decimals = std::clamp(static_cast<int>(std::ceil(-std::log10(step))) + 1, 2, 6);
   int tick_width = 0;
   for (int k = 0; k < kTickCount; ++k) {
     plan.tick_labels[static_cast<std::size_t>(k)] = formatTick(lo + k * step, decimals);
     tick_width = std::max(tick_width, textWidth(plan.tick_labels[static_cast<std::size_t>(k)]));
   }
+  return tick_width;
+}
 
-  const double pixels_per_m = layout.cell_pixels / map.resolution;
+/// The scale bar under the map: a round length and its label.
+void planScaleBar(const HeightMap& map, Plan& plan) {
+  const double pixels_per_m = plan.layout.cell_pixels / map.resolution;
   const double bar_m = scaleBarLength(map.cells_x * map.resolution, pixels_per_m);
   plan.scale_bar_pixels = std::max(1, static_cast<int>(std::lround(bar_m * pixels_per_m)));
   std::array<char, 48> text{};
   const int written = std::snprintf(text.data(), text.size(), "%g m", bar_m);
   plan.scale_label.assign(text.data(), static_cast<std::size_t>(std::clamp(
                                            written, 0, static_cast<int>(text.size()) - 1)));
+}
 
-  // Map column: the map, then the scale bar and its label under it.
+/// Where everything goes: the map column (the map, the scale bar and its label under it) and the
+/// legend beside it (title, colour bar with ticks, swatches, axis hint).
+void placeColumns(Plan& plan, int tick_width) {
+  HeightmapImageLayout& layout = plan.layout;
   layout.map_x = kMargin;
   layout.map_y = kMargin;
   const int column_width =
       std::max({plan.map_width, plan.scale_bar_pixels + 1, textWidth(plan.scale_label)});
   const int column_height =
       plan.map_height + kScaleBarGap + kScaleBarTick + kLabelGap + kTextHeight;
-
-  // Legend: title, colour bar with ticks, swatches, axis hint.
   plan.legend_x = kMargin + column_width + kLegendGap;
   plan.bar_y = kMargin + kTextHeight + kLabelGap + kTextHeight / 2;
   plan.swatch_y = plan.bar_y + kBarHeight + kTextHeight / 2 + kSectionGap;
@@ -352,9 +350,38 @@ Result<Plan> makePlan(const HeightMap& map, const HeightmapImageOptions& options
     legend_width = std::max(legend_width, kSwatch + kLabelGap + textWidth(label));
   }
   legend_width = std::max(legend_width, kArrowLength + kLabelGap + textWidth("x") + kArrowHead);
-
   layout.width = plan.legend_x + legend_width + kMargin;
   layout.height = std::max(kMargin + column_height, legend_bottom) + kMargin;
+}
+
+Result<Plan> makePlan(const HeightMap& map, const HeightmapImageOptions& options) {
+  if (auto ok = checkImageInput(map, options); !ok) {
+    return Unexpected(ok.error());
+  }
+  Plan plan;
+  HeightmapImageLayout& layout = plan.layout;
+  const int longest = std::max(map.cells_x, map.cells_y);
+  if (options.cell_pixels > 0) {
+    layout.cell_pixels = options.cell_pixels;
+  } else {
+    const int grow = (kAutoMinMapPixels + map.cells_x - 1) / map.cells_x;
+    layout.cell_pixels = std::max(1, std::min(grow, kAutoMaxMapPixels / longest));
+  }
+  if (static_cast<long long>(longest) * layout.cell_pixels > kMaxMapPixels) {
+    return fail(ErrorCode::kInvalidArgument,
+                "height-map image: " + std::to_string(map.cells_x) + " x " +
+                    std::to_string(map.cells_y) + " cells at " +
+                    std::to_string(layout.cell_pixels) + " pixels each exceed " +
+                    std::to_string(kMaxMapPixels) + " pixels per side");
+  }
+  plan.map_width = map.cells_x * layout.cell_pixels;
+  plan.map_height = map.cells_y * layout.cell_pixels;
+  const auto [lo, hi] = elevationRange(map, options);
+  layout.elevation_min_m = lo;
+  layout.elevation_max_m = hi;
+  const int tick_width = labelTicks(plan);
+  planScaleBar(map, plan);
+  placeColumns(plan, tick_width);
   return plan;
 }
 
