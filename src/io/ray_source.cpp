@@ -159,17 +159,13 @@ class PlyRaySource final : public RaySource {
   std::optional<Error> error_;  // a failed source keeps failing the same way
 };
 
-}  // namespace
+using FieldProperties = std::array<std::optional<std::size_t>, kFieldCount>;
 
-Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
-                                                 const RaySourceOptions& options) {
-  auto ply = PlyVertexReader::open(path);
-  if (!ply) {
-    return Unexpected(std::move(ply).error());
-  }
-  const PlyElement& vertex = ply->vertex();
-  std::array<std::optional<std::size_t>, kFieldCount> property{};
-
+/// Finds x, y, z (required), the per-point sensor vector, the time, intensity, alpha and scan
+/// properties. `vector_names`: the vector's names as the file spells them (for messages).
+Expected<void, Error> findProperties(const PlyElement& vertex, const std::string& path,
+                                     FieldProperties& property, std::string& vector_names,
+                                     std::string& time_name) {
   for (const auto& [field, name] : {std::pair{kX, "x"}, std::pair{kY, "y"}, std::pair{kZ, "z"}}) {
     property[field] = vertex.findProperty(name);
     if (!property[field]) {
@@ -177,9 +173,7 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
                   path + ": the vertex element has no '" + name + "' property (x, y, z needed)");
     }
   }
-
   // Per-point sensor vectors: raycloudtools' nx ny nz, or PCL's normal_x normal_y normal_z.
-  std::string vector_names;  // as the file spells them, for messages
   for (const auto& names : {std::array<const char*, 3>{"nx", "ny", "nz"},
                             std::array<const char*, 3>{"normal_x", "normal_y", "normal_z"}}) {
     std::optional<std::size_t> present;  // first axis the file has
@@ -200,8 +194,6 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
     }
     break;
   }
-
-  std::string time_name;
   for (const std::string_view name : kTimeNames) {
     if (const auto index = vertex.findProperty(name)) {
       property[kTime] = index;
@@ -212,7 +204,63 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
   property[kIntensity] = vertex.findProperty("intensity");
   property[kAlpha] = vertex.findProperty("alpha");
   property[kScan] = vertex.findProperty("scan");
+  return {};
+}
 
+/// A ray cloud holds its origins and takes no trajectory; a point cloud needs one, and times to
+/// look it up. @return the trajectory a point cloud's origins come from (none for a ray cloud)
+Result<std::optional<Trajectory>> originsSource(const RaySourceInfo& info,
+                                                const FieldProperties& property,
+                                                const std::string& vector_names,
+                                                const RaySourceOptions& options) {
+  const std::string& path = info.path;
+  // A trajectory with a ray cloud would be ignored (the file holds every origin): refused, so
+  // that a user who meant a point cloud, or a different trajectory, is told.
+  if (info.ray_cloud && !options.trajectory_path.empty()) {
+    return fail(ErrorCode::kInvalidArgument,
+                path + " is a ray cloud: its vertices hold the vector to the sensor (" +
+                    vector_names + "), so the trajectory " + options.trajectory_path +
+                    " would not be used: leave source.trajectory out (it is for point clouds)");
+  }
+  if (info.ray_cloud) {
+    return std::optional<Trajectory>();
+  }
+  if (options.trajectory_path.empty()) {
+    return fail(ErrorCode::kInvalidArgument,
+                path +
+                    " has no per-point sensor vector (nx ny nz); give a trajectory with "
+                    "source.trajectory");
+  }
+  if (!property[kTime]) {
+    return fail(ErrorCode::kFormat,
+                path +
+                    ": a point cloud needs a per-point time property (gps_time, gpstime, "
+                    "internal_time, internaltime, offset_time, offsettime, timestamp or "
+                    "time) to look up the trajectory " +
+                    options.trajectory_path);
+  }
+  auto loaded = Trajectory::load(options.trajectory_path);
+  if (!loaded) {
+    return Unexpected(std::move(loaded).error());
+  }
+  return std::optional<Trajectory>(std::move(*loaded));
+}
+
+}  // namespace
+
+Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
+                                                 const RaySourceOptions& options) {
+  auto ply = PlyVertexReader::open(path);
+  if (!ply) {
+    return Unexpected(std::move(ply).error());
+  }
+  const PlyElement& vertex = ply->vertex();
+  FieldProperties property{};
+  std::string vector_names;
+  std::string time_name;
+  if (auto found = findProperties(vertex, path, property, vector_names, time_name); !found) {
+    return Unexpected(found.error());
+  }
   RaySourceInfo info;
   info.path = path;
   info.format = toString(ply->header().format);
@@ -223,38 +271,10 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
   info.has_scan = property[kScan].has_value();
   info.has_intensity = property[kIntensity].has_value();
   info.has_alpha = property[kAlpha].has_value();
-
-  // A trajectory with a ray cloud would be ignored (the file holds every origin): refused, so
-  // that a user who meant a point cloud, or a different trajectory, is told.
-  if (info.ray_cloud && !options.trajectory_path.empty()) {
-    return fail(ErrorCode::kInvalidArgument,
-                path + " is a ray cloud: its vertices hold the vector to the sensor (" +
-                    vector_names + "), so the trajectory " + options.trajectory_path +
-                    " would not be used: leave source.trajectory out (it is for point clouds)");
+  auto trajectory = originsSource(info, property, vector_names, options);
+  if (!trajectory) {
+    return Unexpected(std::move(trajectory).error());
   }
-  std::optional<Trajectory> trajectory;
-  if (!info.ray_cloud) {
-    if (options.trajectory_path.empty()) {
-      return fail(ErrorCode::kInvalidArgument,
-                  path +
-                      " has no per-point sensor vector (nx ny nz); give a trajectory with "
-                      "source.trajectory");
-    }
-    if (!property[kTime]) {
-      return fail(ErrorCode::kFormat,
-                  path +
-                      ": a point cloud needs a per-point time property (gps_time, gpstime, "
-                      "internal_time, internaltime, offset_time, offsettime, timestamp or "
-                      "time) to look up the trajectory " +
-                      options.trajectory_path);
-    }
-    auto loaded = Trajectory::load(options.trajectory_path);
-    if (!loaded) {
-      return Unexpected(std::move(loaded).error());
-    }
-    trajectory = std::move(*loaded);
-  }
-
   std::array<int, kFieldCount> column{};
   std::vector<std::size_t> selected;
   for (std::size_t field = 0; field < kFieldCount; ++field) {
@@ -269,7 +289,7 @@ Result<std::unique_ptr<RaySource>> openRaySource(const std::string& path,
   std::vector<double> rows(kChunkRays * selected.size());
   return std::unique_ptr<RaySource>(
       std::make_unique<PlyRaySource>(std::move(*ply), std::move(info), column, selected.size(),
-                                     std::move(trajectory), options, std::move(rows)));
+                                     std::move(*trajectory), options, std::move(rows)));
 }
 
 }  // namespace raymap::io
