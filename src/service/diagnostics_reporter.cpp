@@ -175,19 +175,10 @@ void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& real
                                                      : "security OFF (Permissive)");
 }
 
-void DiagnosticsReporter::describeDrops() noexcept {
-  const Totals& c = ring_[head_].totals;
-  const Totals& b = base_->totals;
+void DiagnosticsReporter::describeFrameDrops(const Totals& c, const Totals& b,
+                                             const char*& sep) noexcept {
   char* out = drop_reasons_;
   const std::size_t size = sizeof(drop_reasons_);
-  out[0] = '\0';
-  const char* sep = "";
-  const auto reason = [&](std::uint64_t now, std::uint64_t before, const char* what) {
-    if (now > before) {
-      appendf(out, size, "%s%" PRIu64 " %s", sep, now - before, what);
-      sep = "; ";
-    }
-  };
   if (c.wrong_frame > b.wrong_frame) {
     const bool seen = stats_.wrong_frame_seen.load(std::memory_order_acquire);
     const std::uint32_t sensor = stats_.wrong_frame_sensor;
@@ -195,10 +186,11 @@ void DiagnosticsReporter::describeDrops() noexcept {
       appendf(out, size, "%s%" PRIu64 " clouds in frame '%s', not sensors[%u].frame '%s'", sep,
               c.wrong_frame - b.wrong_frame, stats_.wrong_frame, sensor,
               settings_.sensor_frames[sensor].c_str());
-      sep = "; ";
     } else {
-      reason(c.wrong_frame, b.wrong_frame, "clouds in a frame no sensor is configured for");
+      appendf(out, size, "%s%" PRIu64 " %s", sep, c.wrong_frame - b.wrong_frame,
+              "clouds in a frame no sensor is configured for");
     }
+    sep = "; ";
   }
   if (c.malformed > b.malformed) {
     appendf(out, size, "%s%" PRIu64 " malformed %s (", sep, c.malformed - b.malformed,
@@ -224,6 +216,12 @@ void DiagnosticsReporter::describeDrops() noexcept {
     appendf(out, size, ")");
     sep = "; ";
   }
+}
+
+void DiagnosticsReporter::describeCameraDrops(const Totals& c, const Totals& b,
+                                              const char*& sep) noexcept {
+  char* out = drop_reasons_;
+  const std::size_t size = sizeof(drop_reasons_);
   for (std::size_t i = 0; i < settings_.sensors.size() && i < c.sensor.size(); ++i) {
     const Totals::PerSensor& cs = c.sensor[i];
     const Totals::PerSensor& bs = b.sensor[i];
@@ -248,21 +246,12 @@ void DiagnosticsReporter::describeDrops() noexcept {
       sep = "; ";
     }
   }
-  reason(c.missing, b.missing,
-         "clouds missing by the gaps in their stamps (lost on the way or never sent)");
-  reason(c.socket_drops, b.socket_drops,
-         "datagrams dropped by raymapd's full socket receive buffers (clouds lost in fragments: "
-         "dds.receive_buffer_mb, net.core.rmem_max)");
-  reason(c.too_large, b.too_large, "clouds larger than max_points");
-  reason(c.no_pose, b.no_pose, "scans without a pose in time");
-  reason(c.overflow, b.overflow, "scans dropped, oldest first (input faster than the integrator)");
-  reason(c.bad_time, b.bad_time, "points with a per-point time out of range");
-  reason(c.scans_shed, b.scans_shed,
-         "scans shed (no map within queues.max_latency_s could hold them)");
-  reason(c.scans_cut_short, b.scans_cut_short,
-         "scans cut short at their deadline (queues.max_latency_s)");
-  reason(c.points_shed, b.points_shed, "points shed by subsampling (latency bound)");
-  reason(c.poses_dropped, b.poses_dropped, "poses dropped (pose queue full)");
+}
+
+void DiagnosticsReporter::describePoseResets(const Totals& c, const Totals& b,
+                                             const char*& sep) noexcept {
+  char* out = drop_reasons_;
+  const std::size_t size = sizeof(drop_reasons_);
   if (c.time_resets > b.time_resets) {
     appendf(out, size,
             "%sthe pose clock went back %.1f s (%" PRIu64
@@ -284,6 +273,39 @@ void DiagnosticsReporter::describeDrops() noexcept {
                                               : ", the map was kept");
     sep = "; ";
   }
+}
+
+void DiagnosticsReporter::describeDrops() noexcept {
+  const Totals& c = ring_[head_].totals;
+  const Totals& b = base_->totals;
+  char* out = drop_reasons_;
+  const std::size_t size = sizeof(drop_reasons_);
+  out[0] = '\0';
+  const char* sep = "";
+  const auto reason = [&](std::uint64_t now, std::uint64_t before, const char* what) {
+    if (now > before) {
+      appendf(out, size, "%s%" PRIu64 " %s", sep, now - before, what);
+      sep = "; ";
+    }
+  };
+  describeFrameDrops(c, b, sep);
+  describeCameraDrops(c, b, sep);
+  reason(c.missing, b.missing,
+         "clouds missing by the gaps in their stamps (lost on the way or never sent)");
+  reason(c.socket_drops, b.socket_drops,
+         "datagrams dropped by raymapd's full socket receive buffers (clouds lost in fragments: "
+         "dds.receive_buffer_mb, net.core.rmem_max)");
+  reason(c.too_large, b.too_large, "clouds larger than max_points");
+  reason(c.no_pose, b.no_pose, "scans without a pose in time");
+  reason(c.overflow, b.overflow, "scans dropped, oldest first (input faster than the integrator)");
+  reason(c.bad_time, b.bad_time, "points with a per-point time out of range");
+  reason(c.scans_shed, b.scans_shed,
+         "scans shed (no map within queues.max_latency_s could hold them)");
+  reason(c.scans_cut_short, b.scans_cut_short,
+         "scans cut short at their deadline (queues.max_latency_s)");
+  reason(c.points_shed, b.points_shed, "points shed by subsampling (latency bound)");
+  reason(c.poses_dropped, b.poses_dropped, "poses dropped (pose queue full)");
+  describePoseResets(c, b, sep);
 }
 
 DiagnosticsReporter::RaysInWindow DiagnosticsReporter::raysInWindow() const noexcept {
@@ -355,6 +377,65 @@ bool DiagnosticsReporter::describePublishers(char* out, std::size_t size,
   return two_poses;
 }
 
+void DiagnosticsReporter::describeStaleness(const Sample& now, std::int64_t last) noexcept {
+  const Totals& c = now.totals;
+  const Totals& b = base_->totals;
+  char* m = pipeline_message_;
+  const std::size_t size = sizeof(pipeline_message_);
+  if (waiting_first_) {
+    appendf(m, size,
+            "%swaiting for the first %s, %.1f s since start (ERROR after %.0f s: "
+            "health.startup_grace_s)",
+            m[0] == '\0' ? "" : "; ", has_depth_ ? "point cloud or depth image" : "point cloud",
+            seconds_since_scan_, settings_.startup_grace_s);
+  } else if (stale_) {
+    appendf(m, size, "%sno scan integrated %s %.1f s", m[0] == '\0' ? "" : "; ",
+            last != 0 ? "for" : "since start,", seconds_since_scan_);
+    // Whether input still arrives is decided by time, not by the window's counts: a window
+    // that still holds the last clouds before the input stopped would report them arriving.
+    const double dt = static_cast<double>(now.ns - base_->ns) * 1e-9;
+    const std::int64_t last_cloud = stats_.last_cloud_received_ns.load(std::memory_order_relaxed);
+    if (c.clouds == 0 || last_cloud <= (last != 0 ? last : started_ns_)) {
+      appendf(m, size, " (no %s arrives%s)",
+              has_depth_ ? "point cloud or depth image" : "point cloud",
+              c.clouds == 0 ? " at all" : " any more");
+    } else if (dt > 0.0 && c.clouds > b.clouds) {
+      appendf(m, size, " (%.1f clouds/s arrive)", static_cast<double>(c.clouds - b.clouds) / dt);
+    } else {
+      appendf(m, size, " (the last cloud arrived %.1f s ago)",
+              static_cast<double>(now.ns - last_cloud) * 1e-9);
+    }
+  }
+}
+
+void DiagnosticsReporter::decideHeightmap(const Sample& now) noexcept {
+  const Totals& c = now.totals;
+  const Totals& b = base_->totals;
+  heightmap_message_[0] = '\0';
+  if (waiting_first_) {
+    heightmap_level_ = msgs::kDiagnosticWarn;
+    appendf(heightmap_message_, sizeof(heightmap_message_), "no map yet: waiting for the first %s",
+            has_depth_ ? "cloud or image" : "cloud");
+  } else if (stale_) {
+    heightmap_level_ = msgs::kDiagnosticError;
+    appendf(heightmap_message_, sizeof(heightmap_message_),
+            "withheld: the map is stale (no scan integrated for %.1f s)", seconds_since_scan_);
+  } else if (c.withheld > b.withheld) {
+    heightmap_level_ = msgs::kDiagnosticError;
+    appendf(heightmap_message_, sizeof(heightmap_message_),
+            "%" PRIu64 " maps withheld in the last %.1f s: the map was stale",
+            c.withheld - b.withheld, static_cast<double>(now.ns - base_->ns) * 1e-9);
+  } else if (c.late > b.late || c.hm_errors > b.hm_errors) {
+    heightmap_level_ = msgs::kDiagnosticWarn;
+    appendf(heightmap_message_, sizeof(heightmap_message_),
+            "%" PRIu64 " late and %" PRIu64 " failed cycles", c.late - b.late,
+            c.hm_errors - b.hm_errors);
+  } else {
+    heightmap_level_ = msgs::kDiagnosticOk;
+    appendf(heightmap_message_, sizeof(heightmap_message_), "ok");
+  }
+}
+
 void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
   const Sample& now = ring_[head_];
   const Totals& c = now.totals;
@@ -381,30 +462,7 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
     appendf(m, size, "%u other publisher%s of %s on this domain (another raymapd?)",
             other_publishers_, other_publishers_ == 1 ? "" : "s", settings_.grid_map_topic.c_str());
   }
-  if (waiting_first_) {
-    appendf(m, size,
-            "%swaiting for the first %s, %.1f s since start (ERROR after %.0f s: "
-            "health.startup_grace_s)",
-            m[0] == '\0' ? "" : "; ", has_depth_ ? "point cloud or depth image" : "point cloud",
-            seconds_since_scan_, settings_.startup_grace_s);
-  } else if (stale_) {
-    appendf(m, size, "%sno scan integrated %s %.1f s", m[0] == '\0' ? "" : "; ",
-            last != 0 ? "for" : "since start,", seconds_since_scan_);
-    // Whether input still arrives is decided by time, not by the window's counts: a window
-    // that still holds the last clouds before the input stopped would report them arriving.
-    const double dt = static_cast<double>(now.ns - base_->ns) * 1e-9;
-    const std::int64_t last_cloud = stats_.last_cloud_received_ns.load(std::memory_order_relaxed);
-    if (c.clouds == 0 || last_cloud <= (last != 0 ? last : started_ns_)) {
-      appendf(m, size, " (no %s arrives%s)",
-              has_depth_ ? "point cloud or depth image" : "point cloud",
-              c.clouds == 0 ? " at all" : " any more");
-    } else if (dt > 0.0 && c.clouds > b.clouds) {
-      appendf(m, size, " (%.1f clouds/s arrive)", static_cast<double>(c.clouds - b.clouds) / dt);
-    } else {
-      appendf(m, size, " (the last cloud arrived %.1f s ago)",
-              static_cast<double>(now.ns - last_cloud) * 1e-9);
-    }
-  }
+  describeStaleness(now, last);
   if (failing) {
     appendf(m, size, "%s%" PRIu64 " backend failures", m[0] == '\0' ? "" : "; ",
             c.integrate_errors - b.integrate_errors);
@@ -434,29 +492,7 @@ void DiagnosticsReporter::decide(std::uint32_t other_map_publishers) noexcept {
     appendf(m, size, "ok");
   }
 
-  heightmap_message_[0] = '\0';
-  if (waiting_first_) {
-    heightmap_level_ = msgs::kDiagnosticWarn;
-    appendf(heightmap_message_, sizeof(heightmap_message_), "no map yet: waiting for the first %s",
-            has_depth_ ? "cloud or image" : "cloud");
-  } else if (stale_) {
-    heightmap_level_ = msgs::kDiagnosticError;
-    appendf(heightmap_message_, sizeof(heightmap_message_),
-            "withheld: the map is stale (no scan integrated for %.1f s)", seconds_since_scan_);
-  } else if (c.withheld > b.withheld) {
-    heightmap_level_ = msgs::kDiagnosticError;
-    appendf(heightmap_message_, sizeof(heightmap_message_),
-            "%" PRIu64 " maps withheld in the last %.1f s: the map was stale",
-            c.withheld - b.withheld, static_cast<double>(now.ns - base_->ns) * 1e-9);
-  } else if (c.late > b.late || c.hm_errors > b.hm_errors) {
-    heightmap_level_ = msgs::kDiagnosticWarn;
-    appendf(heightmap_message_, sizeof(heightmap_message_),
-            "%" PRIu64 " late and %" PRIu64 " failed cycles", c.late - b.late,
-            c.hm_errors - b.hm_errors);
-  } else {
-    heightmap_level_ = msgs::kDiagnosticOk;
-    appendf(heightmap_message_, sizeof(heightmap_message_), "ok");
-  }
+  decideHeightmap(now);
 }
 
 // The message, one status at a time. `w` is the rate window: the newest sample and the one a

@@ -153,12 +153,20 @@ class DiagnosticsReporter {
   /// The newest sample at least one window older than the current one (else the oldest).
   const Sample& windowBase() const noexcept;
   void decide(std::uint32_t other_map_publishers) noexcept;
+  /// decide()'s parts: the pipeline message's waiting or stale part (`last`: when the last scan
+  /// went in, 0 if none), and the height map's level and message.
+  void describeStaleness(const Sample& now, std::int64_t last) noexcept;
+  void decideHeightmap(const Sample& now) noexcept;
   /// Appends the inputs with more than one publisher to `out`. @return whether a pose source
   /// has more than one (ERROR) and, in `extra_sensor`, whether a sensor's topic has (WARN).
   bool describePublishers(char* out, std::size_t size, bool* extra_sensor) const noexcept;
   /// Writes every input dropped within the window, with its count, to drop_reasons_
   /// ("; "-separated; empty when nothing was dropped: that is what "dropping" means).
   void describeDrops() noexcept;
+  // describeDrops()'s parts, each appending to drop_reasons_ after `sep` and setting it to "; ".
+  void describeFrameDrops(const Totals& c, const Totals& b, const char*& sep) noexcept;
+  void describeCameraDrops(const Totals& c, const Totals& b, const char*& sep) noexcept;
+  void describePoseResets(const Totals& c, const Totals& b, const char*& sep) noexcept;
   /// Rays integrated within the window, and rays offered: those plus the rejected ones and the
   /// depth blocks nearer than min range (points without a return are not offered).
   struct RaysInWindow {
