@@ -98,6 +98,54 @@ pipeline::SensorDecodeSettings decodeSettings(const SensorConfig& s) {
   return d;
 }
 
+/// The publisher's timetable: publish instants t0 + k * period on the monotonic clock (absolute
+/// deadlines do not drift, whatever each cycle costs), and the lead before each instant that
+/// generation is given. The lead adapts to what generation has been taking (waiting for the map
+/// included), so the publish instant holds when the integrator is saturated or the machine busy.
+/// Publisher thread only; allocates nothing.
+class PublishTimetable {
+ public:
+  PublishTimetable(std::int64_t period, std::int64_t lead_min, std::int64_t lead_max) noexcept
+      : period_(period),
+        lead_min_(lead_min),
+        lead_max_(lead_max),
+        lead_(lead_min),
+        next_(platform::monotonicNowNs() + period) {}
+  std::int64_t period() const noexcept { return period_; }
+  std::int64_t next() const noexcept { return next_; }
+  std::int64_t lead() const noexcept { return lead_; }
+  /// Moves to the next publish instant; returns how many whole periods had already passed
+  /// (skipped, not published in a burst; the previous publish is then no longer a period ago).
+  std::int64_t advance() noexcept {
+    next_ += period_;
+    const std::int64_t now = platform::monotonicNowNs();
+    if (now <= next_) {
+      return 0;
+    }
+    const std::int64_t missed = (now - next_) / period_ + 1;
+    next_ += missed * period_;
+    previous_publish = 0;
+    return missed;
+  }
+  /// Takes how long one generation took; the lead covers the worst of the last 8 and a half.
+  void recordGenerate(std::int64_t ns) noexcept {
+    recent_generate_[recent_next_++ % recent_generate_.size()] = ns;
+    const std::int64_t worst = *std::max_element(recent_generate_.begin(), recent_generate_.end());
+    lead_ = std::clamp(worst + worst / 2 + 2000000, lead_min_, lead_max_);
+  }
+  /// When the last map went out (0: not a period ago: a gap, a skip or none yet).
+  std::int64_t previous_publish = 0;
+
+ private:
+  std::int64_t period_;
+  std::int64_t lead_min_;
+  std::int64_t lead_max_;
+  std::int64_t lead_;
+  std::int64_t next_;
+  std::array<std::int64_t, 8> recent_generate_{};  // ns, the last 8 cycles
+  std::size_t recent_next_ = 0;
+};
+
 }  // namespace
 
 struct Service::Impl {
@@ -195,6 +243,13 @@ struct Service::Impl {
   void ingestLoop();
   void integratorLoop();
   void publisherLoop();
+  // publisherLoop()'s steps for one cycle.
+  /// Generates the height map (and costmap) into their messages. @return whether there is a map
+  /// to publish; `healthy` false when generation failed for a reason other than no pose
+  bool generateMaps(PublishTimetable& timetable, bool& healthy);
+  /// Writes the messages at the publish instant and counts them. @return false when a write
+  /// failed
+  bool writeMaps(PublishTimetable& timetable, std::int64_t cycle_index, std::int64_t voxels_every);
   void diagnosticsLoop();
   void receiveCloud(std::uint32_t sensor, dds::HeldSample& sample);
   void decodePending();
@@ -888,38 +943,74 @@ void Service::Impl::publishVoxels(std::int64_t stamp_ns) {
   (void)voxels_writer->write(voxels_message->sample());
 }
 
+bool Service::Impl::generateMaps(PublishTimetable& timetable, bool& healthy) {
+  const std::int64_t generate_started = platform::monotonicNowNs();
+  auto generated = cycle->generate();
+  timetable.recordGenerate(platform::monotonicNowNs() - generate_started);
+  stats.publish_lead_us.store(timetable.lead() / 1000, std::memory_order_relaxed);
+  if (!generated) {
+    if (generated.error() != pipeline::CycleError::kNoPose) {
+      stats.heightmap_errors.add();
+      healthy = false;
+    }
+    return false;
+  }
+  // The stamp is the newest scan's (the data's own time, never the wall clock).
+  grid_map_message->fill(cycle->heightMap(), cycle->dataStampNs(), config.pose.world_frame.c_str());
+  if (costmap_message) {
+    const heightmap::HeightMap& hm = cycle->heightMap();
+    heightmap::computeCostmap(hm, config.costmap, costmap_message->cells());
+    costmap_message->fill(hm.resolution, heightmap::costmapOrigin(hm), cycle->dataStampNs(),
+                          config.pose.world_frame.c_str());
+  }
+  return true;
+}
+
+bool Service::Impl::writeMaps(PublishTimetable& timetable, std::int64_t cycle_index,
+                              std::int64_t voxels_every) {
+  const std::int64_t now = platform::monotonicNowNs();
+  bool healthy = true;
+  bool written = false;
+  bool costmap_written = true;
+  {
+    platform::ForeignScope dds;  // Cyclone serialises into its own buffer
+    written = grid_map_writer->write(grid_map_message->sample()).has_value();
+    if (costmap_writer) {
+      costmap_written = costmap_writer->write(costmap_message->sample()).has_value();
+    }
+  }
+  if (costmap_writer) {
+    (costmap_written ? stats.costmaps_published : stats.heightmap_errors).add();
+    healthy = costmap_written;
+  }
+  if (written) {
+    stats.maps_published.add();
+    if (timetable.previous_publish != 0) {
+      const std::int64_t error = std::llabs(now - timetable.previous_publish - timetable.period());
+      stats.period_error_us.record(static_cast<std::uint64_t>(error / 1000));
+    }
+    timetable.previous_publish = now;
+    last_publish_ns.store(now, std::memory_order_relaxed);
+    cycle->recordPublished(now);
+  } else {
+    healthy = false;
+  }
+  if (cycle_index % voxels_every == 0) {
+    publishVoxels(cycle->dataStampNs());
+  }
+  return healthy;
+}
+
 void Service::Impl::publisherLoop() {
   applyThreadSettings("raymap-publish", config.realtime.publisher);
-  const std::int64_t period = seconds(1.0 / config.heightmap.rate_hz);
-  // The lead adapts to what generation has been taking (waiting for the map included), so the
-  // publish instant holds when the integrator is saturated or the machine busy.
-  const std::int64_t lead_min = seconds(config.heightmap.publish_lead_s);
-  const std::int64_t lead_max = seconds(config.heightmap.publish_lead_max_s);
-  std::int64_t lead = lead_min;
-  std::array<std::int64_t, 8> recent_generate{};  // ns, the last 8 cycles
-  std::size_t recent_next = 0;
-  stats.publish_lead_us.store(lead / 1000, std::memory_order_relaxed);
+  PublishTimetable timetable(seconds(1.0 / config.heightmap.rate_hz),
+                             seconds(config.heightmap.publish_lead_s),
+                             seconds(config.heightmap.publish_lead_max_s));
+  stats.publish_lead_us.store(timetable.lead() / 1000, std::memory_order_relaxed);
   const std::int64_t stale_after = seconds(config.health.stale_after_s);
   const std::int64_t voxels_every =
       std::max<std::int64_t>(1, std::llround(config.heightmap.rate_hz / config.dds.voxels_rate_hz));
-  // Publish instants are t0 + k * period on the monotonic clock: absolute deadlines do not
-  // drift, whatever each cycle costs.
-  std::int64_t next = platform::monotonicNowNs() + period;
-  std::int64_t previous_publish = 0;
   std::int64_t cycle_index = 0;
-  // Moves `next` to the next publish instant; returns how many whole periods had already passed
-  // (skipped, not published in a burst; previous_publish is then no longer a period ago).
-  const auto advance = [&]() -> std::int64_t {
-    next += period;
-    const std::int64_t now = platform::monotonicNowNs();
-    if (now <= next) {
-      return 0;
-    }
-    const std::int64_t missed = (now - next) / period + 1;
-    next += missed * period;
-    previous_publish = 0;
-    return missed;
-  };
   bool first_cycle = true;
   while (!stopping.load(std::memory_order_acquire)) {
     // The first successful cycle sizes the plan and the layers; every later one allocates nothing.
@@ -927,8 +1018,9 @@ void Service::Impl::publisherLoop() {
     if (!first_cycle) {
       steady.emplace();
     }
-    stats.next_publish_ns.store(next, std::memory_order_relaxed);  // the latency bound's timetable
-    platform::sleepUntilMonotonicNs(next - lead);
+    // The latency bound's timetable.
+    stats.next_publish_ns.store(timetable.next(), std::memory_order_relaxed);
+    platform::sleepUntilMonotonicNs(timetable.next() - timetable.lead());
     if (stopping.load(std::memory_order_acquire)) {
       break;
     }
@@ -941,70 +1033,21 @@ void Service::Impl::publisherLoop() {
       // The loop is alive and doing its job: the watchdog hears from it (a restart cannot make a
       // lidar publish, and systemd's start limit would leave the robot without a mapper).
       notifier.watchdog();
-      previous_publish = 0;  // a gap is not a period
-      (void)advance();
+      timetable.previous_publish = 0;  // a gap is not a period
+      (void)timetable.advance();
       continue;
     }
-    const std::int64_t generate_started = platform::monotonicNowNs();
-    auto generated = cycle->generate();
-    recent_generate[recent_next++ % recent_generate.size()] =
-        platform::monotonicNowNs() - generate_started;
-    const std::int64_t worst = *std::max_element(recent_generate.begin(), recent_generate.end());
-    lead = std::clamp(worst + worst / 2 + 2000000, lead_min, lead_max);
-    stats.publish_lead_us.store(lead / 1000, std::memory_order_relaxed);
     bool healthy = true;
-    if (generated) {
-      first_cycle = false;
-      // The stamp is the newest scan's (the data's own time, never the wall clock).
-      grid_map_message->fill(cycle->heightMap(), cycle->dataStampNs(),
-                             config.pose.world_frame.c_str());
-      if (costmap_message) {
-        const heightmap::HeightMap& hm = cycle->heightMap();
-        heightmap::computeCostmap(hm, config.costmap, costmap_message->cells());
-        costmap_message->fill(hm.resolution, heightmap::costmapOrigin(hm), cycle->dataStampNs(),
-                              config.pose.world_frame.c_str());
-      }
-    } else if (generated.error() != pipeline::CycleError::kNoPose) {
-      stats.heightmap_errors.add();
-      healthy = false;
-    }
-    const std::int64_t before_publish = platform::monotonicNowNs();
-    if (before_publish > next) {
+    const bool generated = generateMaps(timetable, healthy);
+    first_cycle = first_cycle && !generated;
+    if (platform::monotonicNowNs() > timetable.next()) {
       stats.cycles_late.add();
     }
-    platform::sleepUntilMonotonicNs(next);
+    platform::sleepUntilMonotonicNs(timetable.next());
     if (generated) {
-      const std::int64_t now = platform::monotonicNowNs();
-      bool written = false;
-      bool costmap_written = true;
-      {
-        platform::ForeignScope dds;  // Cyclone serialises into its own buffer
-        written = grid_map_writer->write(grid_map_message->sample()).has_value();
-        if (costmap_writer) {
-          costmap_written = costmap_writer->write(costmap_message->sample()).has_value();
-        }
-      }
-      if (costmap_writer) {
-        (costmap_written ? stats.costmaps_published : stats.heightmap_errors).add();
-        healthy = healthy && costmap_written;
-      }
-      if (written) {
-        stats.maps_published.add();
-        if (previous_publish != 0) {
-          const std::int64_t error = std::llabs(now - previous_publish - period);
-          stats.period_error_us.record(static_cast<std::uint64_t>(error / 1000));
-        }
-        previous_publish = now;
-        last_publish_ns.store(now, std::memory_order_relaxed);
-        cycle->recordPublished(now);
-      } else {
-        healthy = false;
-      }
-      if (++cycle_index % voxels_every == 0) {
-        publishVoxels(cycle->dataStampNs());
-      }
+      healthy = writeMaps(timetable, ++cycle_index, voxels_every) && healthy;
     } else {
-      previous_publish = 0;  // a gap is not a period
+      timetable.previous_publish = 0;  // a gap is not a period
     }
     // The watchdog hears from the service only after a cycle that did its job on time, and not
     // while the backend fails (docs/raymapd.md, Health).
@@ -1012,7 +1055,7 @@ void Service::Impl::publisherLoop() {
       notifier.watchdog();
     }
     // Missed whole periods (the machine stalled) are skipped instead of published in a burst.
-    if (const std::int64_t missed = advance(); missed > 0) {
+    if (const std::int64_t missed = timetable.advance(); missed > 0) {
       stats.cycles_late.add(static_cast<std::uint64_t>(missed));
     }
   }
