@@ -70,13 +70,7 @@ std::uint64_t MapConfig::capacityRegions() const {
   return per_region == 0 ? 0 : memory_budget_bytes / per_region;
 }
 
-Expected<void, Error> MapConfig::validate() const {
-  if (auto ok = geometry.validate(); !ok) {
-    return ok;
-  }
-  if (auto ok = occupancy.validate(); !ok) {
-    return ok;
-  }
+Expected<void, Error> MapConfig::validateLayers() const {
   if (isNdt(mode)) {
     if (auto ok = ndt.validate(); !ok) {
       return ok;
@@ -121,6 +115,10 @@ Expected<void, Error> MapConfig::validate() const {
                 "a map without the occupancy layer needs the traversal layer (decay rate) or the "
                 "TSDF mode: it would have nothing to integrate into");
   }
+  return {};
+}
+
+Expected<void, Error> MapConfig::validateStore() const {
   if (policy == StorePolicy::kRolling && tiers.enabled) {
     return fail(ErrorCode::kInvalidArgument,
                 "a rolling map has no cold tiers: its window is its fixed memory");
@@ -155,6 +153,19 @@ Expected<void, Error> MapConfig::validate() const {
                     " are supported");
   }
   return {};
+}
+
+Expected<void, Error> MapConfig::validate() const {
+  if (auto ok = geometry.validate(); !ok) {
+    return ok;
+  }
+  if (auto ok = occupancy.validate(); !ok) {
+    return ok;
+  }
+  if (auto ok = validateLayers(); !ok) {
+    return ok;
+  }
+  return validateStore();
 }
 
 Result<VoxelMap> VoxelMap::create(const MapConfig& config) {

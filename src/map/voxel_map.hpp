@@ -76,6 +76,11 @@ struct MapConfig {
   bool device_scan_marks = true;
 
   Expected<void, Error> validate() const;
+  /// validate()'s parts: the mode's and layers' combinations (each mode with the layers and
+  /// semantics it needs), and the store (a rolling window's size, the tiers, a budget that holds
+  /// regions).
+  Expected<void, Error> validateLayers() const;
+  Expected<void, Error> validateStore() const;
   /// @brief This configuration as a TSDF-only map: mode kTsdf, no occupancy, mean or traversal.
   MapConfig forTsdf() const {
     MapConfig c = *this;
