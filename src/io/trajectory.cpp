@@ -89,6 +89,39 @@ Result<Trajectory> Trajectory::fromSamples(std::vector<TrajectorySample> samples
   return Trajectory(std::move(name), std::move(samples), has_orientation);
 }
 
+namespace {
+
+/// One sample line's values as a sample (`n`: 4 or 8 values), checked: finite, after the
+/// previous sample's time (`time_text` as the file spells it), a quaternion that is a rotation.
+Result<TrajectorySample> makeSample(const double* values, std::size_t n,
+                                    const std::vector<TrajectorySample>& samples,
+                                    const std::string& line_prefix, std::string_view time_text) {
+  TrajectorySample sample;
+  sample.time_s = values[0];
+  sample.position = {values[1], values[2], values[3]};
+  if (n == kOrientationColumns) {
+    sample.orientation = Eigen::Quaterniond(values[4], values[5], values[6], values[7]);  // w x y z
+  }
+  if (!std::isfinite(sample.time_s) || !sample.position.allFinite()) {
+    return fail(ErrorCode::kFormat, line_prefix + "time and position must be finite numbers");
+  }
+  if (!samples.empty() && !(sample.time_s > samples.back().time_s)) {
+    return fail(ErrorCode::kFormat, line_prefix + "time " + std::string(time_text) +
+                                        " does not come after the previous sample's time "
+                                        "(times must increase strictly)");
+  }
+  if (n == kOrientationColumns) {
+    const double norm = sample.orientation.norm();
+    if (!std::isfinite(norm) || norm < kMinQuaternionNorm) {
+      return fail(ErrorCode::kFormat,
+                  line_prefix + "the quaternion (qw qx qy qz) is not a rotation");
+    }
+  }
+  return sample;
+}
+
+}  // namespace
+
 Result<Trajectory> Trajectory::load(const std::string& path) {
   // Trajectories are small next to the clouds; a modest buffer is plenty.
   auto reader = ByteReader::open(path, std::size_t{64} << 10);
@@ -146,29 +179,11 @@ Result<Trajectory> Trajectory::load(const std::string& path) {
                                           " values like the first sample, found " +
                                           std::to_string(n));
     }
-    TrajectorySample sample;
-    sample.time_s = values[0];
-    sample.position = {values[1], values[2], values[3]};
-    if (n == kOrientationColumns) {
-      sample.orientation =
-          Eigen::Quaterniond(values[4], values[5], values[6], values[7]);  // w x y z
+    auto sample = makeSample(values, n, samples, line_prefix, fields[0]);
+    if (!sample) {
+      return Unexpected(std::move(sample).error());
     }
-    if (!std::isfinite(sample.time_s) || !sample.position.allFinite()) {
-      return fail(ErrorCode::kFormat, line_prefix + "time and position must be finite numbers");
-    }
-    if (!samples.empty() && !(sample.time_s > samples.back().time_s)) {
-      return fail(ErrorCode::kFormat, line_prefix + "time " + std::string(fields[0]) +
-                                          " does not come after the previous sample's time "
-                                          "(times must increase strictly)");
-    }
-    if (n == kOrientationColumns) {
-      const double norm = sample.orientation.norm();
-      if (!std::isfinite(norm) || norm < kMinQuaternionNorm) {
-        return fail(ErrorCode::kFormat,
-                    line_prefix + "the quaternion (qw qx qy qz) is not a rotation");
-      }
-    }
-    samples.push_back(sample);
+    samples.push_back(*sample);
   }
   if (samples.empty()) {
     return fail(ErrorCode::kFormat, path + ": the trajectory has no samples");
