@@ -8,7 +8,6 @@
 #include "raymap/assert.hpp"
 
 #include "kernels/common/span_walk.h"
-#include "src/map/ray_region_walk.hpp"
 
 namespace raymap::gpu {
 
@@ -149,6 +148,75 @@ rm_span_record spanRecord(const RaySpan& span, std::uint32_t ray, std::uint32_t 
 
 }  // namespace
 
+Expected<bool, IntegrateError> BatchPlanner::planSpans(RayRegionWalk& walk, std::uint32_t ray_index,
+                                                       BatchArrays& out) noexcept {
+  RaySpan span;
+  bool full = false;
+  while (walk.next(&span)) {
+    if (out.spans.size() == limits_.max_spans) {
+      full = true;
+      break;
+    }
+    const std::uint64_t key = RegionStore::packCoord(span.region);
+    if (const std::uint32_t* cached = batch_regions_.find(key)) {
+      if (*cached == DeviceRegionCache::kNoSlot) {
+        ++stats_.spans_outside_window;
+        continue;
+      }
+      if (cache_ != nullptr) {
+        cache_->noteHit();
+      } else {
+        ++stats_.region_hits;
+      }
+      out.spans.push_back(spanRecord(span, ray_index, *cached));
+      continue;
+    }
+    auto host = acquireHostRegion(span.region);
+    if (!host) {
+      if (const auto error = batchError(host.error())) {
+        return Unexpected(*error);
+      }
+      ++stats_.spans_outside_window;  // outside a rolling window (or the index's range)
+      batch_regions_.remember(DeviceRegionCache::kNoSlot);
+      continue;
+    }
+    auto slot = cache_ != nullptr ? placeRegion(span.region, *host, &full) : sharedRegion(*host);
+    if (!slot) {
+      return Unexpected(slot.error());
+    }
+    if (full) {
+      break;
+    }
+    batch_regions_.remember(*slot);
+    out.spans.push_back(spanRecord(span, ray_index, *slot));
+  }
+  return full;
+}
+
+void BatchPlanner::planHit(const RayRegionWalk& walk, std::uint32_t ray_index,
+                           BatchArrays& out) noexcept {
+  const auto [region, index] = walk.sampleCell();
+  const std::uint32_t* cached = batch_regions_.find(RegionStore::packCoord(region));
+  std::uint32_t slot = DeviceRegionCache::kNoSlot;
+  if (cached != nullptr) {
+    slot = *cached;
+  } else if (cache_ != nullptr) {
+    slot = cache_->find(region);
+  } else {
+    // RegionStore::kNoSlot == DeviceRegionCache::kNoSlot. A tiered map brings a cold region
+    // back (the device writes the hit into it).
+    auto found = map_->findForWrite(region);
+    slot = found ? *found : RegionStore::kNoSlot;
+  }
+  if (slot != DeviceRegionCache::kNoSlot) {
+    if (cache_ != nullptr) {
+      cache_->markSamplesWritten(slot);  // the hit writes its sample layers
+    }
+    const std::uint64_t voxel = std::uint64_t{slot} * voxels_per_region_ + index;
+    out.hit_keys.push_back((voxel << 32) | ray_index);
+  }
+}
+
 Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const PreparedRay> rays,
                                                          BatchArrays& out) noexcept {
   out.clear();
@@ -173,46 +241,11 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
       }
       break;
     }
-    RaySpan span;
-    bool full = false;
-    while (walk.next(&span)) {
-      if (out.spans.size() == limits_.max_spans) {
-        full = true;
-        break;
-      }
-      const std::uint64_t key = RegionStore::packCoord(span.region);
-      if (const std::uint32_t* cached = batch_regions_.find(key)) {
-        if (*cached == DeviceRegionCache::kNoSlot) {
-          ++stats_.spans_outside_window;
-          continue;
-        }
-        if (cache_ != nullptr) {
-          cache_->noteHit();
-        } else {
-          ++stats_.region_hits;
-        }
-        out.spans.push_back(spanRecord(span, ray_index, *cached));
-        continue;
-      }
-      auto host = acquireHostRegion(span.region);
-      if (!host) {
-        if (const auto error = batchError(host.error())) {
-          return Unexpected(*error);
-        }
-        ++stats_.spans_outside_window;  // outside a rolling window (or the index's range)
-        batch_regions_.remember(DeviceRegionCache::kNoSlot);
-        continue;
-      }
-      auto slot = cache_ != nullptr ? placeRegion(span.region, *host, &full) : sharedRegion(*host);
-      if (!slot) {
-        return Unexpected(slot.error());
-      }
-      if (full) {
-        break;
-      }
-      batch_regions_.remember(*slot);
-      out.spans.push_back(spanRecord(span, ray_index, *slot));
+    auto planned = planSpans(walk, ray_index, out);
+    if (!planned) {
+      return Unexpected(planned.error());
     }
+    const bool full = *planned;
     if (full) {
       out.spans.resize(spans_before);
       // The ray is planned again (next batch) or skipped: its spans are counted then, or never.
@@ -229,26 +262,7 @@ Expected<std::size_t, IntegrateError> BatchPlanner::plan(std::span<const Prepare
       break;  // the next batch starts with this ray
     }
     if ((ray.flags & RM_RAY_END_HIT) != 0u) {
-      const auto [region, index] = walk.sampleCell();
-      const std::uint32_t* cached = batch_regions_.find(RegionStore::packCoord(region));
-      std::uint32_t slot = DeviceRegionCache::kNoSlot;
-      if (cached != nullptr) {
-        slot = *cached;
-      } else if (cache_ != nullptr) {
-        slot = cache_->find(region);
-      } else {
-        // RegionStore::kNoSlot == DeviceRegionCache::kNoSlot. A tiered map brings a cold region
-        // back (the device writes the hit into it).
-        auto found = map_->findForWrite(region);
-        slot = found ? *found : RegionStore::kNoSlot;
-      }
-      if (slot != DeviceRegionCache::kNoSlot) {
-        if (cache_ != nullptr) {
-          cache_->markSamplesWritten(slot);  // the hit writes its sample layers
-        }
-        const std::uint64_t voxel = std::uint64_t{slot} * voxels_per_region_ + index;
-        out.hit_keys.push_back((voxel << 32) | ray_index);
-      }
+      planHit(walk, ray_index, out);
     }
     out.rays.push_back(ray);
   }

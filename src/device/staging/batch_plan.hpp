@@ -14,6 +14,7 @@
 #include "kernels/common/batch.h"
 #include "src/device/staging/device_region_cache.hpp"
 #include "src/map/backend.hpp"
+#include "src/map/ray_region_walk.hpp"
 #include "src/map/region_slot_cache.hpp"
 #include "src/map/voxel_map.hpp"
 
@@ -186,6 +187,11 @@ class BatchPlanner {
   Expected<std::uint32_t, IntegrateError> placeRegion(Vec3i region, std::uint32_t host_slot,
                                                       bool* full, bool write = true) noexcept;
   void buildHitGroups(BatchArrays& out) const;
+  /// plan()'s steps for one ray: its region spans into the batch (true: the batch's spans or
+  /// its region cache are full, and the ray's spans are not all placed), then its end hit.
+  Expected<bool, IntegrateError> planSpans(RayRegionWalk& walk, std::uint32_t ray_index,
+                                           BatchArrays& out) noexcept;
+  void planHit(const RayRegionWalk& walk, std::uint32_t ray_index, BatchArrays& out) noexcept;
 
   VoxelMap* map_;
   DeviceRegionCache* cache_;
