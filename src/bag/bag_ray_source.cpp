@@ -104,6 +104,34 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       : bag_(std::move(bag)), options_(options), history_(options.pose_history) {}
 
   Expected<void, Error> open() {
+    if (auto ok = chooseCloudTopics(); !ok) {
+      return ok;
+    }
+    if (auto ok = setUpDecoders(); !ok) {
+      return ok;
+    }
+    if (auto ok = choosePoseTopics(); !ok) {
+      return ok;
+    }
+    const BagReader& bag = *bag_;
+    const std::string& field = options_.time_field;
+    router_ = std::make_unique<pipeline::TfRouter>(options_.world_frame, options_.base_frame,
+                                                   std::vector<std::string>(cloud_topics_.size()),
+                                                   stats_);
+    extrinsics_.assign(cloud_topics_.size(), options_.extrinsic);
+    extrinsic_from_tf_.assign(cloud_topics_.size(), false);
+    decoded_.resize(kFirstPointCapacity);
+    report_.read_warnings = bag.openWarnings();
+    info_.path = bag.path();
+    info_.format = bag.storage();
+    info_.has_scan = true;
+    info_.time_property = field == "none" ? "" : "per-point time (" + field + ")";
+    return bag_->rewind();
+  }
+
+  /// The topics to map (bag.topic): those named, or the bag's only PointCloud2 topic (else its
+  /// only Image topic).
+  Expected<void, Error> chooseCloudTopics() {
     const BagReader& bag = *bag_;
     if (options_.cloud_topics.empty()) {
       bool has_clouds = false;
@@ -132,6 +160,13 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       }
       cloud_topics_.push_back(t.value());
     }
+    return {};
+  }
+
+  /// One decoder per mapped topic; a depth image topic's CameraInfo topic
+  /// (bag.camera_info_topic, in order, else the image's sibling camera_info).
+  Expected<void, Error> setUpDecoders() {
+    const BagReader& bag = *bag_;
     std::size_t images = 0;
     for (std::uint32_t t : cloud_topics_) {
       const BagTopic& topic = bag.topics()[t];
@@ -166,6 +201,12 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       return fail(ErrorCode::kInvalidArgument,
                   "bag.invalid_as_free needs bag.max_range (the length of the free rays)");
     }
+    return {};
+  }
+
+  /// Where poses come from (bag.pose_source, bag.pose_topic), and /tf_static when the bag has it.
+  Expected<void, Error> choosePoseTopics() {
+    const BagReader& bag = *bag_;
     using Source = BagRaysOptions::PoseSource;
     Source source = options_.pose_source;
     if (source == Source::kAuto) {
@@ -196,19 +237,7 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     if (tf_static >= 0 && bag.topics()[static_cast<std::size_t>(tf_static)].type == kTfMessage) {
       tf_static_topic_ = tf_static;
     }
-    const std::string& field = options_.time_field;
-    router_ = std::make_unique<pipeline::TfRouter>(options_.world_frame, options_.base_frame,
-                                                   std::vector<std::string>(cloud_topics_.size()),
-                                                   stats_);
-    extrinsics_.assign(cloud_topics_.size(), options_.extrinsic);
-    extrinsic_from_tf_.assign(cloud_topics_.size(), false);
-    decoded_.resize(kFirstPointCapacity);
-    report_.read_warnings = bag.openWarnings();
-    info_.path = bag.path();
-    info_.format = bag.storage();
-    info_.has_scan = true;
-    info_.time_property = field == "none" ? "" : "per-point time (" + field + ")";
-    return bag_->rewind();
+    return {};
   }
 
   /// bag.pose_source: auto: Odometry when bag.pose_topic names one or the bag has exactly one, else
