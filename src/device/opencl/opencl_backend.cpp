@@ -85,34 +85,8 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
                     "by region (queues.batch_rays smaller)");
       }
     }
-    // The program is built for the map's mode (kernels/common/map_mode.h): kernels without the
-    // branches of other modes. Each mode's binary has its own entry in the program cache.
-    const std::string options_text =
-        std::string("-cl-std=CL1.2 -DRM_MAP_MODE=") + std::to_string(mapMode()) + "u" +
-        (int64_counters_ ? " -DRM_HAVE_INT64_ATOMICS=1" : "") +
-        (by_region ? " -DRM_REGION_OWNED=1" : "") +
-        (options.extra_build_options.empty() ? "" : " " + options.extra_build_options);
-    // A map is integrated by one program: the occupancy kernels, or the NDT ones for NDT maps.
-    const bool ndt = isNdt(map().mode());
-    auto program = opencl::buildProgram(
-        ctx_, ndt ? kernels::kIntegrateNdtSource : kernels::kIntegrateOccupancySource, options_text,
-        options.program_cache);
-    if (!program) {
-      return Unexpected(program.error());
-    }
-    program_warning_ = program->warning;
-    program_ = std::move(program->program);
-    const char* span_name =
-        ndt ? (by_region ? "rm_ndt_integrate_region_spans" : "rm_ndt_integrate_spans")
-            : (by_region ? "rm_integrate_region_spans" : "rm_integrate_spans");
-    auto kernels_made =
-        ndt ? opencl::createKernels(
-                  program_, {{&span_kernel_, span_name}, {&hit_kernel_, "rm_ndt_apply_hit_groups"}})
-            : opencl::createKernels(program_, {{&span_kernel_, span_name},
-                                               {&hit_kernel_, "rm_apply_hit_groups"},
-                                               {&tag_kernel_, "rm_tag_hit_groups"}});
-    if (!kernels_made) {
-      return kernels_made;
+    if (auto ok = buildIntegrationProgram(options, by_region); !ok) {
+      return ok;
     }
     if (auto ok = allocateLayers(); !ok) {
       return ok;
@@ -122,27 +96,8 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
       return Unexpected(dummy.error());
     }
     dummy_ = std::move(*dummy);
-    const gpu::BatchLimits& limits = this->limits();
-    for (DeviceBatch& set : batches_) {
-      for (auto [handle, bytes, what] :
-           {std::tuple{&set.rays, limits.max_rays * sizeof(PreparedRay), "ray batch"},
-            std::tuple{&set.spans, limits.max_spans * sizeof(rm_span_record), "span batch"},
-            std::tuple{&set.span_runs,
-                       by_region ? std::min<std::size_t>(limits.max_spans, layerRegions()) *
-                                       sizeof(rm_span_run)
-                                 : sizeof(rm_span_run),
-                       "span runs"},
-            std::tuple{&set.next_run, sizeof(std::uint32_t), "span run cursor"},
-            std::tuple{&set.groups, limits.max_rays * sizeof(rm_hit_group), "hit groups"},
-            std::tuple{&set.hit_rays, limits.max_rays * sizeof(std::uint32_t), "hit list"},
-            std::tuple{&set.counters, counterBytes(), "counters"},
-            std::tuple{&set.scratch, scratchWords() * 4u, "batch scratch"}}) {
-        auto buffer = opencl::createBuffer(ctx_, bytes, what);
-        if (!buffer) {
-          return Unexpected(buffer.error());
-        }
-        *handle = std::move(*buffer);
-      }
+    if (auto ok = allocateBatches(by_region); !ok) {
+      return ok;
     }
     if (const cl_int status = clFinish(ctx_.queue.get()); status != CL_SUCCESS) {
       return fail(ErrorCode::kCapacity, std::string("OpenCL device region cache: ") +
@@ -171,6 +126,65 @@ class OpenClBackend final : public gpu::StagedBackend, public opencl::BackendDev
   gpu::StagedBackend& staged() noexcept override { return *this; }
 
  private:
+  /// The integration program for the map's mode and span work, and its kernels.
+  Expected<void, Error> buildIntegrationProgram(const OpenClBackendOptions& options,
+                                                bool by_region) {
+    // The program is built for the map's mode (kernels/common/map_mode.h): kernels without the
+    // branches of other modes. Each mode's binary has its own entry in the program cache.
+    const std::string options_text =
+        std::string("-cl-std=CL1.2 -DRM_MAP_MODE=") + std::to_string(mapMode()) + "u" +
+        (int64_counters_ ? " -DRM_HAVE_INT64_ATOMICS=1" : "") +
+        (by_region ? " -DRM_REGION_OWNED=1" : "") +
+        (options.extra_build_options.empty() ? "" : " " + options.extra_build_options);
+    // A map is integrated by one program: the occupancy kernels, or the NDT ones for NDT maps.
+    const bool ndt = isNdt(map().mode());
+    auto program = opencl::buildProgram(
+        ctx_, ndt ? kernels::kIntegrateNdtSource : kernels::kIntegrateOccupancySource, options_text,
+        options.program_cache);
+    if (!program) {
+      return Unexpected(program.error());
+    }
+    program_warning_ = program->warning;
+    program_ = std::move(program->program);
+    const char* span_name =
+        ndt ? (by_region ? "rm_ndt_integrate_region_spans" : "rm_ndt_integrate_spans")
+            : (by_region ? "rm_integrate_region_spans" : "rm_integrate_spans");
+    auto kernels_made =
+        ndt ? opencl::createKernels(
+                  program_, {{&span_kernel_, span_name}, {&hit_kernel_, "rm_ndt_apply_hit_groups"}})
+            : opencl::createKernels(program_, {{&span_kernel_, span_name},
+                                               {&hit_kernel_, "rm_apply_hit_groups"},
+                                               {&tag_kernel_, "rm_tag_hit_groups"}});
+    return kernels_made;
+  }
+
+  /// Each batch set's device buffers, sized by the batch limits.
+  Expected<void, Error> allocateBatches(bool by_region) {
+    const gpu::BatchLimits& limits = this->limits();
+    for (DeviceBatch& set : batches_) {
+      for (auto [handle, bytes, what] :
+           {std::tuple{&set.rays, limits.max_rays * sizeof(PreparedRay), "ray batch"},
+            std::tuple{&set.spans, limits.max_spans * sizeof(rm_span_record), "span batch"},
+            std::tuple{&set.span_runs,
+                       by_region ? std::min<std::size_t>(limits.max_spans, layerRegions()) *
+                                       sizeof(rm_span_run)
+                                 : sizeof(rm_span_run),
+                       "span runs"},
+            std::tuple{&set.next_run, sizeof(std::uint32_t), "span run cursor"},
+            std::tuple{&set.groups, limits.max_rays * sizeof(rm_hit_group), "hit groups"},
+            std::tuple{&set.hit_rays, limits.max_rays * sizeof(std::uint32_t), "hit list"},
+            std::tuple{&set.counters, counterBytes(), "counters"},
+            std::tuple{&set.scratch, scratchWords() * 4u, "batch scratch"}}) {
+        auto buffer = opencl::createBuffer(ctx_, bytes, what);
+        if (!buffer) {
+          return Unexpected(buffer.error());
+        }
+        *handle = std::move(*buffer);
+      }
+    }
+    return {};
+  }
+
   /// One buffer per map layer: the cache slots, or (shared memory) the host store's array.
   Expected<void, Error> allocateLayers() {
     const RegionStore& store = map().store();

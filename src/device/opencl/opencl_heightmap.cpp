@@ -64,8 +64,25 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
 
   Expected<void, Error> generate(const VoxelMap& map, const heightmap::HeightmapPlan& plan,
                                  heightmap::HeightMap& out) override {
+    heightmap::prepareOutput(plan, out);
+    if (auto ok = uploadRegions(map, plan); !ok) {
+      return ok;
+    }
+    if (auto ok = launchKernels(plan, out); !ok) {
+      return ok;
+    }
+    if (auto ok = readBack(out); !ok) {
+      return ok;
+    }
+    upload_.countGeneration(plan, out);
+    return {};
+  }
+
+ private:
+  /// The plan's regions where the kernels read them: the backend's resident layers, or copies
+  /// of the host store's regions in this generator's buffers.
+  Expected<void, Error> uploadRegions(const VoxelMap& map, const heightmap::HeightmapPlan& plan) {
     using namespace heightmap;
-    prepareOutput(plan, out);
     auto slots = resident_.prepare(backend_ == nullptr ? nullptr : &backend_->staged(), map,
                                    plan.region_slots, "OpenCL");
     if (!slots) {
@@ -78,20 +95,26 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
         return ok;
       }
     }
-    cl_command_queue q = ctx_->queue.get();
     cl_int status = CL_SUCCESS;
     upload_.forEachCopy(
         map, plan,
         [&](DeviceBuffer buffer, std::size_t offset, const void* data, std::size_t bytes) {
           if (status == CL_SUCCESS) {
-            status = clEnqueueWriteBuffer(q, buffers_[buffer].handle.get(), CL_FALSE, offset, bytes,
-                                          data, 0, nullptr, nullptr);
+            status = clEnqueueWriteBuffer(ctx_->queue.get(), buffers_[buffer].handle.get(),
+                                          CL_FALSE, offset, bytes, data, 0, nullptr, nullptr);
           }
         });
     if (status != CL_SUCCESS) {
       return deviceError("uploading the map regions", status);
     }
+    return {};
+  }
 
+  /// The occupancy masks, then the column search (planar, or ring by ring when filling).
+  Expected<void, Error> launchKernels(const heightmap::HeightmapPlan& plan,
+                                      const heightmap::HeightMap& out) {
+    using namespace heightmap;
+    cl_int status = CL_SUCCESS;
     const rm_heightmap_params& p = plan.params;
     const auto region_count = static_cast<cl_uint>(plan.region_slots.size());
     if (auto ok = setArguments(masks_kernel_.get(), p,
@@ -129,6 +152,14 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != CL_SUCCESS) {
       return deviceError("launching the height-map kernels", status);
     }
+    return {};
+  }
+
+  /// The output layers copied back; returns once the queue is idle.
+  Expected<void, Error> readBack(heightmap::HeightMap& out) {
+    using namespace heightmap;
+    cl_command_queue q = ctx_->queue.get();
+    cl_int status = CL_SUCCESS;
     DeviceUpload::forEachOutput(out, [&](DeviceBuffer buffer, void* target) {
       if (status == CL_SUCCESS) {
         status = clEnqueueReadBuffer(q, buffers_[buffer].handle.get(), CL_FALSE, 0,
@@ -141,11 +172,9 @@ class OpenClHeightmapGenerator final : public heightmap::HeightmapGenerator {
     if (status != CL_SUCCESS) {
       return deviceError("reading the height map back", status);
     }
-    upload_.countGeneration(plan, out);
     return {};
   }
 
- private:
   /// A device buffer that grows on demand (never shrinks).
   struct GrowingBuffer {
     opencl::BufferHandle handle;
