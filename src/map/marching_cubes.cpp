@@ -72,65 +72,83 @@ bool diagonalOnAFace(const std::array<CubeEdge, kCubeEdges>& edges,
   return false;
 }
 
-CubeCase makeCase(unsigned inside_mask, const std::array<CubeEdge, kCubeEdges>& edges) {
+/// next[e]: the crossed edge the surface's trace goes on to from edge e (a directed segment on
+/// one face of the cube); -1 for edges the surface does not cross.
+using EdgeLinks = std::array<int, kCubeEdges>;
+
+/// Links the segment between two crossed edges of a face, directed so that the inside is on its
+/// left seen from outside the face.
+void addSegment(const std::array<CubeEdge, kCubeEdges>& edges, EdgeLinks& next, int from, int to,
+                Vec3d face_normal, Vec3d inside_point) {
+  const Vec3d a = edgeMidpoint(edges[static_cast<std::size_t>(from)]);
+  const Vec3d b = edgeMidpoint(edges[static_cast<std::size_t>(to)]);
+  // Seen from outside (along -face_normal), face_normal x direction points to the left.
+  if (face_normal.cross(b - a).dot(inside_point - a) < 0.0) {
+    std::swap(from, to);
+  }
+  RAYMAP_ENSURES(next[static_cast<std::size_t>(from)] == -1);
+  next[static_cast<std::size_t>(from)] = to;
+}
+
+/// The surface's segments on the face of the cube normal to `axis` at `side` (0 or 1).
+void traceFace(unsigned inside_mask, const std::array<CubeEdge, kCubeEdges>& edges, unsigned axis,
+               unsigned side, EdgeLinks& next) {
   const auto inside = [&](unsigned corner) { return ((inside_mask >> corner) & 1u) != 0u; };
-  // next[e]: the crossed edge the surface's trace goes on to from edge e (a directed segment on
-  // one face of the cube); -1 for edges the surface does not cross.
-  std::array<int, kCubeEdges> next{};
-  next.fill(-1);
-  const auto add_segment = [&](int from, int to, Vec3d face_normal, Vec3d inside_point) {
-    const Vec3d a = edgeMidpoint(edges[static_cast<std::size_t>(from)]);
-    const Vec3d b = edgeMidpoint(edges[static_cast<std::size_t>(to)]);
-    // Seen from outside (along -face_normal), face_normal x direction points to the left.
-    if (face_normal.cross(b - a).dot(inside_point - a) < 0.0) {
-      std::swap(from, to);
-    }
-    RAYMAP_ENSURES(next[static_cast<std::size_t>(from)] == -1);
-    next[static_cast<std::size_t>(from)] = to;
+  const unsigned u = (axis + 1) % 3;
+  const unsigned v = (axis + 2) % 3;
+  // The face's corners in order round it; face edge k joins ring[k] and ring[k + 1].
+  std::array<unsigned, 4> ring{};
+  for (unsigned k = 0; k < 4; ++k) {
+    const unsigned bu = (k == 1 || k == 2) ? 1u : 0u;
+    const unsigned bv = k >= 2 ? 1u : 0u;
+    ring[k] = (side << axis) | (bu << u) | (bv << v);
+  }
+  Vec3d normal{};
+  normal[static_cast<int>(axis)] = side != 0u ? 1.0 : -1.0;
+  const auto face_edge = [&](unsigned k) {
+    return edgeBetween(edges, ring[k % 4], ring[(k + 1) % 4]);
   };
-  for (unsigned axis = 0; axis < 3; ++axis) {
-    const unsigned u = (axis + 1) % 3;
-    const unsigned v = (axis + 2) % 3;
-    for (unsigned side = 0; side < 2; ++side) {
-      // The face's corners in order round it; face edge k joins ring[k] and ring[k + 1].
-      std::array<unsigned, 4> ring{};
-      for (unsigned k = 0; k < 4; ++k) {
-        const unsigned bu = (k == 1 || k == 2) ? 1u : 0u;
-        const unsigned bv = k >= 2 ? 1u : 0u;
-        ring[k] = (side << axis) | (bu << u) | (bv << v);
-      }
-      Vec3d normal{};
-      normal[static_cast<int>(axis)] = side != 0u ? 1.0 : -1.0;
-      const auto face_edge = [&](unsigned k) {
-        return edgeBetween(edges, ring[k % 4], ring[(k + 1) % 4]);
-      };
-      std::array<unsigned, 4> crossed{};
-      unsigned crossed_count = 0;
-      Vec3d inside_sum{};
-      unsigned inside_count = 0;
-      for (unsigned k = 0; k < 4; ++k) {
-        if (inside(ring[k]) != inside(ring[(k + 1) % 4])) {
-          crossed[crossed_count++] = k;
-        }
-        if (inside(ring[k])) {
-          inside_sum = inside_sum + cornerPosition(ring[k]);
-          ++inside_count;
-        }
-      }
-      if (crossed_count == 2) {
-        add_segment(face_edge(crossed[0]), face_edge(crossed[1]), normal,
-                    inside_sum * (1.0 / inside_count));
-      } else if (crossed_count == 4) {
-        // Inside corners diagonal: cut each off on its own (the two face edges at corner k are
-        // k - 1 and k).
-        for (unsigned k = 0; k < 4; ++k) {
-          if (inside(ring[k])) {
-            add_segment(face_edge(k + 3), face_edge(k), normal, cornerPosition(ring[k]));
-          }
-        }
+  std::array<unsigned, 4> crossed{};
+  unsigned crossed_count = 0;
+  Vec3d inside_sum{};
+  unsigned inside_count = 0;
+  for (unsigned k = 0; k < 4; ++k) {
+    if (inside(ring[k]) != inside(ring[(k + 1) % 4])) {
+      crossed[crossed_count++] = k;
+    }
+    if (inside(ring[k])) {
+      inside_sum = inside_sum + cornerPosition(ring[k]);
+      ++inside_count;
+    }
+  }
+  if (crossed_count == 2) {
+    addSegment(edges, next, face_edge(crossed[0]), face_edge(crossed[1]), normal,
+               inside_sum * (1.0 / inside_count));
+  } else if (crossed_count == 4) {
+    // Inside corners diagonal: cut each off on its own (the two face edges at corner k are
+    // k - 1 and k).
+    for (unsigned k = 0; k < 4; ++k) {
+      if (inside(ring[k])) {
+        addSegment(edges, next, face_edge(k + 3), face_edge(k), normal, cornerPosition(ring[k]));
       }
     }
   }
+}
+
+/// The surface's trace round the cube's six faces.
+EdgeLinks traceSurface(unsigned inside_mask, const std::array<CubeEdge, kCubeEdges>& edges) {
+  EdgeLinks next{};
+  next.fill(-1);
+  for (unsigned axis = 0; axis < 3; ++axis) {
+    for (unsigned side = 0; side < 2; ++side) {
+      traceFace(inside_mask, edges, axis, side, next);
+    }
+  }
+  return next;
+}
+
+/// Each closed loop of the trace as a fan of triangles.
+CubeCase triangulateLoops(const std::array<CubeEdge, kCubeEdges>& edges, const EdgeLinks& next) {
   CubeCase result;
   std::array<bool, kCubeEdges> used{};
   for (int start = 0; start < kCubeEdges; ++start) {
@@ -162,6 +180,10 @@ CubeCase makeCase(unsigned inside_mask, const std::array<CubeEdge, kCubeEdges>& 
     }
   }
   return result;
+}
+
+CubeCase makeCase(unsigned inside_mask, const std::array<CubeEdge, kCubeEdges>& edges) {
+  return triangulateLoops(edges, traceSurface(inside_mask, edges));
 }
 
 struct CaseTable {
