@@ -72,6 +72,137 @@ std::optional<dds::DiscoveredEndpoint> waitForPublisher(dds::Discovery& discover
   }
 }
 
+/// The QoS that matches every publisher of `topic`. Best effort as soon as one writer is best
+/// effort: a reliable reader would not match it, and a best-effort reader matches reliable
+/// writers too. Transient-local only when every writer is (a latched /tf_static: its history
+/// arrives too); such a reader would not match a volatile writer. Warns of writers of another
+/// type.
+struct ReaderQos {
+  dds::Reliability reliability;
+  dds::Durability durability;
+};
+ReaderQos matchingQos(dds::Discovery& discovery, const std::string& topic,
+                      const dds::DiscoveredEndpoint& writer) {
+  ReaderQos qos{writer.reliability, dds::Durability::kTransientLocal};
+  for (const dds::DiscoveredEndpoint& other : discovery.endpoints()) {
+    if (other.is_writer && other.topic == topic) {
+      if (other.reliability == dds::Reliability::kBestEffort) {
+        qos.reliability = dds::Reliability::kBestEffort;
+      }
+      if (other.durability != dds::Durability::kTransientLocal) {
+        qos.durability = dds::Durability::kVolatile;
+      }
+      if (other.type != writer.type) {
+        std::fprintf(stderr,
+                     "raymap echo: warning: %s also has a publisher of type %s; reading it as "
+                     "%s (the other does not match)\n",
+                     topic.c_str(), other.type.c_str(), writer.type.c_str());
+      }
+    }
+  }
+  return qos;
+}
+
+/// The type to decode the writer's samples as; prints the error and returns nullptr when raymap
+/// cannot read them.
+const dds::KnownTopicType* decodableType(const std::string& topic,
+                                         const dds::DiscoveredEndpoint& writer) {
+  const dds::KnownTopicType* type = dds::findTopicType(writer.type);
+  if (type == nullptr) {
+    const std::string ros_type = msgs::rosTypeName(writer.type);
+    printError("echo", topic + " has type " + writer.type +
+                           (ros_type != writer.type ? " (" + ros_type + ")" : std::string()) +
+                           ", which raymap cannot decode; known types: " + knownTypeList());
+    return nullptr;
+  }
+  if (!writer.xcdr1) {
+    printError("echo", "the publisher of " + topic + " (" + type->ros_name +
+                           ") offers only XCDR2 data; raymap reads XCDR1, as ROS 2 does");
+    return nullptr;
+  }
+  return type;
+}
+
+/// Prints each message taken and counts them. Called inside the reader's noexcept take:
+/// nothing may escape.
+struct SamplePrinter {
+  const std::string& topic;
+  const dds::KnownTopicType* type;
+  EchoFormat format;
+  std::uint64_t received = 0;
+  std::uint64_t undecodable = 0;
+  bool output_failed = false;
+
+  void operator()(std::span<const std::byte> cdr, std::int64_t source_timestamp_ns) noexcept {
+    try {
+      ++received;
+      EchoSample sample{topic, type, cdr};
+      sample.index = received;
+      sample.arrival_unix_ns = platform::realtimeNowNs();
+      sample.arrival_monotonic_ns = platform::monotonicNowNs();
+      sample.source_timestamp_ns = source_timestamp_ns;
+      auto text = formatSample(sample, format);
+      if (!text) {
+        ++undecodable;
+        printError("echo", topic + " message #" + std::to_string(received) + " (" + type->ros_name +
+                               ", " + std::to_string(cdr.size()) +
+                               " bytes) does not decode: " + text.error().message);
+        return;
+      }
+      // Flushed per message: scripts read the stream live.
+      if (std::fputs(text->c_str(), stdout) < 0 || std::fflush(stdout) != 0) {
+        output_failed = true;
+      }
+    } catch (const std::exception& e) {
+      ++undecodable;
+      std::fprintf(stderr, "raymap echo: error: %s message #%llu: %s\n", topic.c_str(),
+                   static_cast<unsigned long long>(received), e.what());
+    }
+  }
+};
+
+/// Prints messages until --count, --duration, SIGINT/SIGTERM or a closed standard output.
+int printMessages(const EchoFlags& flags, const std::string& topic, const dds::KnownTopicType* type,
+                  dds::RawReader& reader, dds::Waitset& waitset,
+                  platform::ShutdownSignals& signals) {
+  SamplePrinter printer{topic, type, flags.json ? EchoFormat::kJsonLines : EchoFormat::kHuman};
+  const std::int64_t start_ns = platform::monotonicNowNs();
+  const std::int64_t end_ns =
+      flags.duration_s > 0.0
+          ? start_ns + static_cast<std::int64_t>(std::min(flags.duration_s, 1e7) * 1e9)
+          : INT64_MAX;
+  const auto done = [&] {
+    return (flags.count > 0 && printer.received >= flags.count) ||
+           platform::monotonicNowNs() >= end_ns || printer.output_failed;
+  };
+  while (!done()) {
+    std::intptr_t tokens[2];
+    const std::int64_t timeout_ns = std::min(kPollNs, end_ns - platform::monotonicNowNs());
+    static_cast<void>(waitset.wait(timeout_ns, tokens));
+    const std::uint64_t left = flags.count > 0 ? flags.count - printer.received : 16;
+    const int max_samples = static_cast<int>(std::min<std::uint64_t>(left, 16));
+    const int taken = reader.takeEach(printer, max_samples);
+    if (taken < 0) {
+      printError("echo", "reading " + topic + ": " + dds_strretcode(taken));
+      return kExitFailure;
+    }
+    if (signals.waitNs(0) != 0) {
+      break;
+    }
+  }
+  if (printer.output_failed) {
+    printError("echo", "standard output closed or unwritable; stopping");
+    return kExitFailure;
+  }
+  if (!flags.json || printer.undecodable > 0) {
+    std::fprintf(stderr, "raymap echo: %llu message%s from %s, %llu undecodable\n",
+                 static_cast<unsigned long long>(printer.received),
+                 printer.received == 1 ? "" : "s", topic.c_str(),
+                 static_cast<unsigned long long>(printer.undecodable));
+  }
+  return kExitOk;
+}
+
 int runEcho(const EchoFlags& flags) {
   const std::string topic = msgs::ddsTopicName(flags.topic);
   if (topic.empty()) {
@@ -109,43 +240,13 @@ int runEcho(const EchoFlags& flags) {
                            " (raymap topics lists the topics)");
     return kExitFailure;
   }
-  const dds::KnownTopicType* type = dds::findTopicType(writer->type);
+  const dds::KnownTopicType* type = decodableType(topic, *writer);
   if (type == nullptr) {
-    const std::string ros_type = msgs::rosTypeName(writer->type);
-    printError("echo", topic + " has type " + writer->type +
-                           (ros_type != writer->type ? " (" + ros_type + ")" : std::string()) +
-                           ", which raymap cannot decode; known types: " + knownTypeList());
     return kExitFailure;
   }
-  if (!writer->xcdr1) {
-    printError("echo", "the publisher of " + topic + " (" + type->ros_name +
-                           ") offers only XCDR2 data; raymap reads XCDR1, as ROS 2 does");
-    return kExitFailure;
-  }
-  // Best effort as soon as one writer is best effort: a reliable reader would not match it,
-  // and a best-effort reader matches reliable writers too.
-  // Transient-local only when every writer is (a latched /tf_static: its history arrives too);
-  // such a reader would not match a volatile writer.
-  dds::Reliability reliability = writer->reliability;
-  dds::Durability durability = dds::Durability::kTransientLocal;
-  for (const dds::DiscoveredEndpoint& other : discovery->endpoints()) {
-    if (other.is_writer && other.topic == topic) {
-      if (other.reliability == dds::Reliability::kBestEffort) {
-        reliability = dds::Reliability::kBestEffort;
-      }
-      if (other.durability != dds::Durability::kTransientLocal) {
-        durability = dds::Durability::kVolatile;
-      }
-      if (other.type != writer->type) {
-        std::fprintf(stderr,
-                     "raymap echo: warning: %s also has a publisher of type %s; reading it as "
-                     "%s (the other does not match)\n",
-                     topic.c_str(), other.type.c_str(), writer->type.c_str());
-      }
-    }
-  }
-  auto reader = dds::RawReader::create(*participant, topic.c_str(), type->descriptor, reliability,
-                                       kReaderDepth, durability);
+  const ReaderQos qos = matchingQos(*discovery, topic, *writer);
+  auto reader = dds::RawReader::create(*participant, topic.c_str(), type->descriptor,
+                                       qos.reliability, kReaderDepth, qos.durability);
   if (!reader) {
     printError("echo", reader.error().message);
     return kExitFailure;
@@ -162,75 +263,10 @@ int runEcho(const EchoFlags& flags) {
   }
   if (!flags.json) {
     std::fprintf(stderr, "raymap echo: %s (%s, %s) on domain %u\n", topic.c_str(), type->ros_name,
-                 reliability == dds::Reliability::kReliable ? "reliable" : "best effort", *domain);
+                 qos.reliability == dds::Reliability::kReliable ? "reliable" : "best effort",
+                 *domain);
   }
-
-  const EchoFormat format = flags.json ? EchoFormat::kJsonLines : EchoFormat::kHuman;
-  const std::int64_t start_ns = platform::monotonicNowNs();
-  const std::int64_t end_ns =
-      flags.duration_s > 0.0
-          ? start_ns + static_cast<std::int64_t>(std::min(flags.duration_s, 1e7) * 1e9)
-          : INT64_MAX;
-  std::uint64_t received = 0;
-  std::uint64_t undecodable = 0;
-  bool output_failed = false;
-  const auto done = [&] {
-    return (flags.count > 0 && received >= flags.count) || platform::monotonicNowNs() >= end_ns ||
-           output_failed;
-  };
-  while (!done()) {
-    std::intptr_t tokens[2];
-    const std::int64_t timeout_ns = std::min(kPollNs, end_ns - platform::monotonicNowNs());
-    static_cast<void>(waitset->wait(timeout_ns, tokens));
-    const std::uint64_t left = flags.count > 0 ? flags.count - received : 16;
-    const int max_samples = static_cast<int>(std::min<std::uint64_t>(left, 16));
-    const int taken = reader->takeEach(
-        [&](std::span<const std::byte> cdr, std::int64_t source_timestamp_ns) {
-          // Called inside a noexcept function: nothing may escape.
-          try {
-            ++received;
-            EchoSample sample{topic, type, cdr};
-            sample.index = received;
-            sample.arrival_unix_ns = platform::realtimeNowNs();
-            sample.arrival_monotonic_ns = platform::monotonicNowNs();
-            sample.source_timestamp_ns = source_timestamp_ns;
-            auto text = formatSample(sample, format);
-            if (!text) {
-              ++undecodable;
-              printError("echo", topic + " message #" + std::to_string(received) + " (" +
-                                     type->ros_name + ", " + std::to_string(cdr.size()) +
-                                     " bytes) does not decode: " + text.error().message);
-              return;
-            }
-            // Flushed per message: scripts read the stream live.
-            if (std::fputs(text->c_str(), stdout) < 0 || std::fflush(stdout) != 0) {
-              output_failed = true;
-            }
-          } catch (const std::exception& e) {
-            ++undecodable;
-            std::fprintf(stderr, "raymap echo: error: %s message #%llu: %s\n", topic.c_str(),
-                         static_cast<unsigned long long>(received), e.what());
-          }
-        },
-        max_samples);
-    if (taken < 0) {
-      printError("echo", "reading " + topic + ": " + dds_strretcode(taken));
-      return kExitFailure;
-    }
-    if (signals.waitNs(0) != 0) {
-      break;
-    }
-  }
-  if (output_failed) {
-    printError("echo", "standard output closed or unwritable; stopping");
-    return kExitFailure;
-  }
-  if (!flags.json || undecodable > 0) {
-    std::fprintf(stderr, "raymap echo: %llu message%s from %s, %llu undecodable\n",
-                 static_cast<unsigned long long>(received), received == 1 ? "" : "s", topic.c_str(),
-                 static_cast<unsigned long long>(undecodable));
-  }
-  return kExitOk;
+  return printMessages(flags, topic, type, *reader, *waitset, signals);
 }
 
 }  // namespace
