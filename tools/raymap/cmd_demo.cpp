@@ -6,7 +6,9 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include <sys/stat.h>
@@ -158,85 +160,141 @@ SceneCheck checkAgainstScene(const VoxelMap& map, const sim::YardScanConfig& sce
   return check;
 }
 
-/// The demo's work, its files staged in `staged` (renamed into place at the end, so a failure
-/// leaves none of them). @return the exit code.
-int demoInto(const DemoFlags& f, StagedOutputs& staged) {
-  const char* command = "demo";
-  const std::string cloud = f.output_dir + "/yard_raycloud.ply";
-  const std::string map_path = f.output_dir + "/yard.rmap";
-  const std::string ply = f.output_dir + "/yard_occupied.ply";
-  const std::string png = f.output_dir + "/yard_heightmap.png";
-  std::string temp[4];
-  int n = 0;
-  for (const auto& [path, what] : {std::pair{&cloud, "the ray cloud"},
-                                   {&map_path, "the map"},
-                                   {&ply, "the occupied voxels"},
-                                   {&png, "the height map"}}) {
+/// The demo's four files: where they go, and where they are staged until the end.
+struct DemoFiles {
+  std::string cloud, map, ply, png;
+  std::string cloud_temp, map_temp, ply_temp, png_temp;
+};
+
+/// Stages the four files in `f.output_dir`. Prints the error and returns nothing when one
+/// cannot be.
+std::optional<DemoFiles> stageFiles(const DemoFlags& f, StagedOutputs& staged) {
+  DemoFiles files;
+  files.cloud = f.output_dir + "/yard_raycloud.ply";
+  files.map = f.output_dir + "/yard.rmap";
+  files.ply = f.output_dir + "/yard_occupied.ply";
+  files.png = f.output_dir + "/yard_heightmap.png";
+  for (const auto& [path, temp, what] :
+       {std::tuple{&files.cloud, &files.cloud_temp, "the ray cloud"},
+        {&files.map, &files.map_temp, "the map"},
+        {&files.ply, &files.ply_temp, "the occupied voxels"},
+        {&files.png, &files.png_temp, "the height map"}}) {
     auto staged_path = staged.add(*path, what);
     if (!staged_path) {
-      printError(command, staged_path.error().message);
-      return kExitFailure;
+      printError("demo", staged_path.error().message);
+      return std::nullopt;
     }
-    temp[n++] = std::move(*staged_path);
+    *temp = std::move(*staged_path);
   }
-  const std::string& cloud_temp = temp[0];
-  const std::string& map_temp = temp[1];
+  return files;
+}
 
-  // 1. Simulate a lidar driving through the built-in yard and record it as a ray cloud.
-  sim::YardScanConfig scene;
-  scene.scans = f.scans;
-  const std::vector<Ray> rays = sim::simulateYardScans(scene);
-  auto writer = io::RayCloudWriter::open(cloud_temp);
+Expected<void, Error> writeRayCloud(const std::string& path, const std::vector<Ray>& rays) {
+  auto writer = io::RayCloudWriter::open(path);
   if (!writer) {
-    printError(command, writer.error().message);
-    return kExitFailure;
+    return Unexpected(writer.error());
   }
   if (auto ok = (*writer)->write(rays); !ok) {
-    printError(command, ok.error().message);
-    return kExitFailure;
+    return ok;
   }
-  if (auto ok = (*writer)->finish(); !ok) {
-    printError(command, ok.error().message);
-    return kExitFailure;
-  }
+  return (*writer)->finish();
+}
 
-  // 2. Map the recording exactly as `raymap populate` does (from the cloud's staged file).
+/// The recording mapped as `raymap populate` maps it, saved and exported.
+struct MappedYard {
+  PopulateReport report;
+  std::uint64_t exported_points = 0;
+};
+
+/// Maps the staged ray cloud exactly as `raymap populate` does, saves the map and exports its
+/// occupied voxels.
+Result<MappedYard> mapYard(const DemoFlags& f, const DemoFiles& files) {
   PopulateOptions options;
-  options.input = cloud_temp;
+  options.input = files.cloud_temp;
   options.backend.threads = f.threads;
   options.filter.max_range_m = 30.0;
   options.progress = !f.quiet;
   options.map.device_scan_marks = options.backend.name != "cpu";  // the CPU keeps bits
   auto map = VoxelMap::create(options.map);
   if (!map) {
-    printError(command, map.error().message);
-    return kExitFailure;
+    return Unexpected(map.error());
   }
   auto report = populateFromFile(*map, options);
   if (!report) {
-    printError(command, report.error().message);
+    return Unexpected(report.error());
+  }
+  map->setInfo("source", files.cloud);  // the name the cloud will have, not its temporary one
+  if (auto ok = io::saveMap(*map, files.map_temp); !ok) {
+    return Unexpected(ok.error());
+  }
+  auto exported = io::exportPly(*map, io::ExportMode::kOccupied, files.ply_temp);
+  if (!exported) {
+    return Unexpected(exported.error());
+  }
+  return MappedYard{std::move(*report), *exported};
+}
+
+void printDemoSummary(const DemoFlags& f, const DemoFiles& files, std::size_t rays,
+                      const MappedYard& mapped, const SceneCheck& check,
+                      const HeightmapCheck& heights) {
+  const PopulateReport& report = mapped.report;
+  std::printf("simulated      %s rays in %d scans -> %s\n", withCommas(rays).c_str(), f.scans,
+              files.cloud.c_str());
+  std::printf("mapped         %s free, %s occupied voxels in %.3f s (%.3g M rays/s, %u threads)\n",
+              withCommas(report.summary.voxels_free).c_str(),
+              withCommas(report.summary.voxels_occupied).c_str(), report.integrate_seconds,
+              static_cast<double>(report.rays.rays_accepted) / report.integrate_seconds / 1e6,
+              report.threads);
+  std::printf("wrote          %s, %s (%s points)\n", files.map.c_str(), files.ply.c_str(),
+              withCommas(mapped.exported_points).c_str());
+  std::printf(
+      "checked        surface recall %.1f %% (>= %.0f %%), precision %.1f %% (>= %.0f %%),"
+      " %d probe(s) wrong\n",
+      100.0 * check.recall, 100.0 * kMinRecall, 100.0 * check.precision, 100.0 * kMinPrecision,
+      check.probe_failures);
+  std::printf(
+      "height map     200 x 200 cells in %.1f ms, %s surface cells, %.1f %% within one voxel of "
+      "the true height (>= %.0f %%) -> %s\n",
+      heights.milliseconds, withCommas(heights.surface_cells).c_str(), 100.0 * heights.accuracy,
+      100.0 * kMinHeightAccuracy, files.png.c_str());
+  std::printf("next           raymap info %s\n", files.map.c_str());
+  std::printf("               raymap heightmap %s --center 0,0,0 --png my.png\n",
+              files.map.c_str());
+  std::printf("               raymap populate %s --max-range 30 --output my.rmap\n",
+              files.cloud.c_str());
+}
+
+/// The demo's work, its files staged in `staged` (renamed into place at the end, so a failure
+/// leaves none of them). @return the exit code.
+int demoInto(const DemoFlags& f, StagedOutputs& staged) {
+  const char* command = "demo";
+  const auto files = stageFiles(f, staged);
+  if (!files) {
     return kExitFailure;
   }
-  map->setInfo("source", cloud);  // the name the cloud will have, not its temporary one
-  if (auto ok = io::saveMap(*map, map_temp); !ok) {
+  // 1. Simulate a lidar driving through the built-in yard and record it as a ray cloud.
+  sim::YardScanConfig scene;
+  scene.scans = f.scans;
+  const std::vector<Ray> rays = sim::simulateYardScans(scene);
+  if (auto ok = writeRayCloud(files->cloud_temp, rays); !ok) {
     printError(command, ok.error().message);
     return kExitFailure;
   }
-  auto exported = io::exportPly(*map, io::ExportMode::kOccupied, temp[2]);
-  if (!exported) {
-    printError(command, exported.error().message);
+  // 2. Map the recording exactly as `raymap populate` does (from the cloud's staged file).
+  auto mapped = mapYard(f, *files);
+  if (!mapped) {
+    printError(command, mapped.error().message);
     return kExitFailure;
   }
-
   // 3. Check the map, read back from its file, against the scene it was made from.
-  auto loaded = io::loadMap(map_temp);
+  auto loaded = io::loadMap(files->map_temp);
   if (!loaded) {
     printError(command, loaded.error().message);
     return kExitFailure;
   }
   const SceneCheck check = checkAgainstScene(*loaded, scene);
   // 4. The height map a planner would get, against the scene's true height field.
-  auto heights = heightmapOfYard(*loaded, scene, temp[3]);
+  auto heights = heightmapOfYard(*loaded, scene, files->png_temp);
   if (!heights) {
     printError(command, heights.error().message);
     return kExitFailure;
@@ -247,35 +305,11 @@ int demoInto(const DemoFlags& f, StagedOutputs& staged) {
     printError(command, ok.error().message);
     return kExitFailure;
   }
+  if (!f.quiet) {
+    printDemoSummary(f, *files, rays.size(), *mapped, check, *heights);
+  }
   const bool passed = check.recall >= kMinRecall && check.precision >= kMinPrecision &&
                       check.probe_failures == 0 && heights->accuracy >= kMinHeightAccuracy;
-  if (!f.quiet) {
-    std::printf("simulated      %s rays in %d scans -> %s\n", withCommas(rays.size()).c_str(),
-                f.scans, cloud.c_str());
-    std::printf(
-        "mapped         %s free, %s occupied voxels in %.3f s (%.3g M rays/s, %u threads)\n",
-        withCommas(report->summary.voxels_free).c_str(),
-        withCommas(report->summary.voxels_occupied).c_str(), report->integrate_seconds,
-        static_cast<double>(report->rays.rays_accepted) / report->integrate_seconds / 1e6,
-        report->threads);
-    std::printf("wrote          %s, %s (%s points)\n", map_path.c_str(), ply.c_str(),
-                withCommas(*exported).c_str());
-    std::printf(
-        "checked        surface recall %.1f %% (>= %.0f %%), precision %.1f %% (>= %.0f %%),"
-        " %d probe(s) wrong\n",
-        100.0 * check.recall, 100.0 * kMinRecall, 100.0 * check.precision, 100.0 * kMinPrecision,
-        check.probe_failures);
-    std::printf(
-        "height map     200 x 200 cells in %.1f ms, %s surface cells, %.1f %% within one voxel of "
-        "the true height (>= %.0f %%) -> %s\n",
-        heights->milliseconds, withCommas(heights->surface_cells).c_str(),
-        100.0 * heights->accuracy, 100.0 * kMinHeightAccuracy, png.c_str());
-    std::printf("next           raymap info %s\n", map_path.c_str());
-    std::printf("               raymap heightmap %s --center 0,0,0 --png my.png\n",
-                map_path.c_str());
-    std::printf("               raymap populate %s --max-range 30 --output my.rmap\n",
-                cloud.c_str());
-  }
   if (!passed) {
     printError(command, "the map does not match the simulated scene (see the check line)");
     return kExitFailure;
