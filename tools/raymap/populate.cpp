@@ -64,11 +64,11 @@ Result<PopulateReport> populateFromFile(VoxelMap& map, const PopulateOptions& op
   return report;
 }
 
-Json statsJson(const PopulateReport& r, const PopulateOptions& options) {
-  const double rate = r.integrate_seconds > 0
-                          ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
-                          : 0.0;
-  Json j = {
+namespace {
+
+/// The map and filter settings of the run.
+Json settingsJson(const PopulateOptions& options) {
+  return {
       {"input", options.input},
       {"mapper", "raymap"},
       {"semantics", toString(options.map.semantics)},
@@ -80,6 +80,15 @@ Json statsJson(const PopulateReport& r, const PopulateOptions& options) {
       {"walk", options.filter.reverse ? "reverse" : "forward"},
       {"hit_probability", probability(options.map.occupancy.hit)},
       {"miss_probability", probability(options.map.occupancy.miss)},
+  };
+}
+
+/// The run's ray and scan counters, timings and map summary.
+Json countersJson(const PopulateReport& r) {
+  const double rate = r.integrate_seconds > 0
+                          ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
+                          : 0.0;
+  return {
       {"rays_in", r.rays.rays_in},
       {"rays_integrated", r.rays.rays_accepted},
       {"rays_rejected", r.rays.rejected()},
@@ -114,37 +123,53 @@ Json statsJson(const PopulateReport& r, const PopulateOptions& options) {
       {"threads", r.threads},
       {"updates_dropped", r.backend.updates_dropped},
   };
+}
+
+/// Where the parallel CPU integrator's time went; balance 1 = every worker walked as long.
+void addParallelCpuJson(Json& j, const PopulateReport& r) {
+  const BackendStats& b = r.backend;
+  const double capacity = b.apply_seconds * static_cast<double>(r.threads);
+  j["survey_seconds"] = b.survey_seconds;
+  j["serial_seconds"] = b.serial_seconds;
+  j["resolve_seconds"] = b.resolve_seconds;
+  j["apply_seconds"] = b.apply_seconds;
+  j["apply_balance"] = capacity > 0 ? b.apply_busy_seconds / capacity : 0.0;
+}
+
+/// A device backend's planning, transfers and region cache.
+void addDeviceJson(Json& j, const PopulateReport& r) {
+  const BackendStats& b = r.backend;
+  const std::uint64_t lookups = b.cache_hits + b.cache_misses;
+  j["planning"] = b.planned_on_device ? "device" : "host";
+  j["plans_on_host"] = b.plans_on_host;
+  j["rays_prepared_on_device"] = b.rays_prepared_on_device;
+  j["rays_skipped"] = b.rays_skipped;
+  j["bytes_to_device"] = b.bytes_to_device;
+  j["bytes_from_device"] = b.bytes_from_device;
+  j["region_bytes_to_device"] = b.region_bytes_to_device;
+  j["region_bytes_from_device"] = b.region_bytes_from_device;
+  j["cache_slots"] = b.cache_slots;
+  j["cache_hits"] = b.cache_hits;
+  j["cache_misses"] = b.cache_misses;
+  j["cache_evictions"] = b.cache_evictions;
+  j["transfer_stalls"] = b.transfer_stalls;
+  j["plan_seconds"] = b.plan_seconds;
+  j["wait_seconds"] = b.wait_seconds;
+  j["sync_seconds"] = b.sync_seconds;
+  j["cache_hit_rate"] =
+      lookups > 0 ? static_cast<double>(b.cache_hits) / static_cast<double>(lookups) : 0.0;
+}
+
+}  // namespace
+
+Json statsJson(const PopulateReport& r, const PopulateOptions& options) {
+  Json j = settingsJson(options);
+  j.update(countersJson(r));
   if (r.backend_name == "cpu" && r.threads > 1) {
-    // Where the parallel integrator's time went; balance 1 = every worker walked as long.
-    const BackendStats& b = r.backend;
-    const double capacity = b.apply_seconds * static_cast<double>(r.threads);
-    j["survey_seconds"] = b.survey_seconds;
-    j["serial_seconds"] = b.serial_seconds;
-    j["resolve_seconds"] = b.resolve_seconds;
-    j["apply_seconds"] = b.apply_seconds;
-    j["apply_balance"] = capacity > 0 ? b.apply_busy_seconds / capacity : 0.0;
+    addParallelCpuJson(j, r);
   }
   if (r.backend_name != "cpu") {
-    const BackendStats& b = r.backend;
-    const std::uint64_t lookups = b.cache_hits + b.cache_misses;
-    j["planning"] = b.planned_on_device ? "device" : "host";
-    j["plans_on_host"] = b.plans_on_host;
-    j["rays_prepared_on_device"] = b.rays_prepared_on_device;
-    j["rays_skipped"] = b.rays_skipped;
-    j["bytes_to_device"] = b.bytes_to_device;
-    j["bytes_from_device"] = b.bytes_from_device;
-    j["region_bytes_to_device"] = b.region_bytes_to_device;
-    j["region_bytes_from_device"] = b.region_bytes_from_device;
-    j["cache_slots"] = b.cache_slots;
-    j["cache_hits"] = b.cache_hits;
-    j["cache_misses"] = b.cache_misses;
-    j["cache_evictions"] = b.cache_evictions;
-    j["transfer_stalls"] = b.transfer_stalls;
-    j["plan_seconds"] = b.plan_seconds;
-    j["wait_seconds"] = b.wait_seconds;
-    j["sync_seconds"] = b.sync_seconds;
-    j["cache_hit_rate"] =
-        lookups > 0 ? static_cast<double>(b.cache_hits) / static_cast<double>(lookups) : 0.0;
+    addDeviceJson(j, r);
   }
   if (r.tiers) {
     j["memory_tiers"] = tierJson(*r.tiers);
