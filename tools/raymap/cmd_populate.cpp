@@ -42,47 +42,35 @@ std::string rejectionsText(const RayCounters& rays) {
          withCommas(rays.rays_out_of_bounds);
 }
 
-void printSummary(const PopulateReport& r, const PopulateOptions& o) {
-  const double rate = r.integrate_seconds > 0
-                          ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
-                          : 0.0;
-  std::printf("input          %s\n", o.input.c_str());
-  std::printf("rays           %s in, %s integrated, %s rejected",
-              withCommas(r.rays.rays_in).c_str(), withCommas(r.rays.rays_accepted).c_str(),
-              withCommas(r.rays.rejected()).c_str());
-  if (r.rays.rejected() > 0) {
-    std::printf(" (%s)", rejectionsText(r.rays).c_str());
+/// The bag's messages, clouds, poses, points and depth-image counters.
+void printBagLines(const bag::BagRaysReport& b) {
+  std::string topics;
+  for (const std::string& t : b.cloud_topics) {
+    topics += (topics.empty() ? "" : ", ") + t;
   }
-  std::printf("\n               %s clipped to max range, %s without return, %s scans\n",
-              withCommas(r.rays.rays_clipped).c_str(), withCommas(r.rays.rays_no_return).c_str(),
-              withCommas(r.scans).c_str());
-  if (r.bag) {
-    const bag::BagRaysReport& b = *r.bag;
-    std::string topics;
-    for (const std::string& t : b.cloud_topics) {
-      topics += (topics.empty() ? "" : ", ") + t;
-    }
+  std::printf(
+      "bag            %s messages; clouds on %s: %s, %s mapped, %s without a pose, %s "
+      "skipped; poses from %s: %s (%s out of order)\n",
+      withCommas(b.messages).c_str(), topics.c_str(), withCommas(b.clouds).c_str(),
+      withCommas(b.scans_integrated).c_str(), withCommas(b.scans_no_pose).c_str(),
+      withCommas(b.clouds_skipped).c_str(), b.pose_source.c_str(), withCommas(b.poses).c_str(),
+      withCommas(b.poses_out_of_order).c_str());
+  std::printf(
+      "               %s points without return, %s with a bad time; TF: %u extrinsics, %s "
+      "ignored, %s unresolved\n",
+      withCommas(b.points_no_return).c_str(), withCommas(b.points_bad_time).c_str(),
+      b.extrinsics_from_tf, withCommas(b.tf_ignored).c_str(), withCommas(b.tf_unresolved).c_str());
+  if (b.camera_infos + b.camera_infos_skipped + b.images_no_camera_info + b.rate_limited > 0) {
     std::printf(
-        "bag            %s messages; clouds on %s: %s, %s mapped, %s without a pose, %s "
-        "skipped; poses from %s: %s (%s out of order)\n",
-        withCommas(b.messages).c_str(), topics.c_str(), withCommas(b.clouds).c_str(),
-        withCommas(b.scans_integrated).c_str(), withCommas(b.scans_no_pose).c_str(),
-        withCommas(b.clouds_skipped).c_str(), b.pose_source.c_str(), withCommas(b.poses).c_str(),
-        withCommas(b.poses_out_of_order).c_str());
-    std::printf(
-        "               %s points without return, %s with a bad time; TF: %u extrinsics, %s "
-        "ignored, %s unresolved\n",
-        withCommas(b.points_no_return).c_str(), withCommas(b.points_bad_time).c_str(),
-        b.extrinsics_from_tf, withCommas(b.tf_ignored).c_str(),
-        withCommas(b.tf_unresolved).c_str());
-    if (b.camera_infos + b.camera_infos_skipped + b.images_no_camera_info + b.rate_limited > 0) {
-      std::printf(
-          "               depth: %s CameraInfo used, %s refused, %s images before their "
-          "CameraInfo; %s messages above --max-rate\n",
-          withCommas(b.camera_infos).c_str(), withCommas(b.camera_infos_skipped).c_str(),
-          withCommas(b.images_no_camera_info).c_str(), withCommas(b.rate_limited).c_str());
-    }
+        "               depth: %s CameraInfo used, %s refused, %s images before their "
+        "CameraInfo; %s messages above --max-rate\n",
+        withCommas(b.camera_infos).c_str(), withCommas(b.camera_infos_skipped).c_str(),
+        withCommas(b.images_no_camera_info).c_str(), withCommas(b.rate_limited).c_str());
   }
+}
+
+/// What the map holds, by kind of map.
+void printMapLine(const PopulateReport& r, const PopulateOptions& o) {
   if (o.map.mode == MapMode::kTsdf) {
     std::printf(
         "map            %s TSDF voxels updated (%s behind the surface) in %s regions (%.3g m, "
@@ -103,6 +91,26 @@ void printSummary(const PopulateReport& r, const PopulateOptions& o) {
         withCommas(r.summary.regions).c_str(), o.map.geometry.resolution, toString(o.map.semantics),
         mapModeName(o.map).c_str());
   }
+}
+
+void printSummary(const PopulateReport& r, const PopulateOptions& o) {
+  const double rate = r.integrate_seconds > 0
+                          ? static_cast<double>(r.rays.rays_accepted) / r.integrate_seconds
+                          : 0.0;
+  std::printf("input          %s\n", o.input.c_str());
+  std::printf("rays           %s in, %s integrated, %s rejected",
+              withCommas(r.rays.rays_in).c_str(), withCommas(r.rays.rays_accepted).c_str(),
+              withCommas(r.rays.rejected()).c_str());
+  if (r.rays.rejected() > 0) {
+    std::printf(" (%s)", rejectionsText(r.rays).c_str());
+  }
+  std::printf("\n               %s clipped to max range, %s without return, %s scans\n",
+              withCommas(r.rays.rays_clipped).c_str(), withCommas(r.rays.rays_no_return).c_str(),
+              withCommas(r.scans).c_str());
+  if (r.bag) {
+    printBagLines(*r.bag);
+  }
+  printMapLine(r, o);
   if (r.tiers && r.tiers->stats.evictions > 0) {
     std::printf("memory tiers   %s\n", tierSummaryLine(*r.tiers).c_str());
   }
