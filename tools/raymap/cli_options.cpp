@@ -149,15 +149,8 @@ void addInputOptions(CLI::App& c, MappingFlags& f) {
              "instead of failing, and say what was skipped");
 }
 
-}  // namespace
-
-void addMappingOptions(CLI::App& c, MappingFlags& f) {
-  f.command = &c;
-  c.add_option("--config", f.config_file,
-               "A YAML file whose map: and backend: sections (raymapd's keys, e.g. its own "
-               "configuration) set the map and backend options; flags given as well win")
-      ->check(CLI::ExistingFile);
-  addInputOptions(c, f);
+/// The map's geometry and the range filter.
+void addGeometryOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--resolution", f.resolution, "Voxel edge, metres")->capture_default_str();
   c.add_option("--region-voxels", f.region_voxels, "Voxels per region edge (4 to 128)")
       ->capture_default_str();
@@ -170,6 +163,10 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "Reject longer rays as outlier returns (counted as out of bounds), metres; "
                "0 = none")
       ->capture_default_str();
+}
+
+/// The update rules: probabilities, semantics, the map mode and its layers' parameters.
+void addUpdateOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--hit", f.hit, "Hit probability (default 0.9)");
   c.add_option("--miss", f.miss, "Miss probability (default 0.45)");
   c.add_option("--clamp-min", f.clamp_min,
@@ -197,6 +194,10 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
              "(--mode occupancy --decay-rate is occupancy with decay rates)");
   addNdtOptions(c, f);
   addTsdfOptions(c, f);
+}
+
+/// The integration backend and its device.
+void addBackendOptions(CLI::App& c, MappingFlags& f) {
   c.add_option("--backend", f.backend, "Integration backend: cpu, opencl or cuda")
       ->check(CLI::IsMember({"cpu", "opencl", "cuda"}))
       ->capture_default_str();
@@ -235,6 +236,20 @@ void addMappingOptions(CLI::App& c, MappingFlags& f) {
                "If the device backend cannot start: none (fail) or cpu (warn, map on the CPU)")
       ->check(CLI::IsMember({"none", "cpu"}))
       ->capture_default_str();
+}
+
+}  // namespace
+
+void addMappingOptions(CLI::App& c, MappingFlags& f) {
+  f.command = &c;
+  c.add_option("--config", f.config_file,
+               "A YAML file whose map: and backend: sections (raymapd's keys, e.g. its own "
+               "configuration) set the map and backend options; flags given as well win")
+      ->check(CLI::ExistingFile);
+  addInputOptions(c, f);
+  addGeometryOptions(c, f);
+  addUpdateOptions(c, f);
+  addBackendOptions(c, f);
   c.add_option("--segment-length", f.segment_length,
                "Split longer rays into equal pieces, metres; 0 = off")
       ->capture_default_str();
