@@ -150,6 +150,45 @@ cli::Json decodeRun(const char* encoding, const std::vector<std::byte>& bytes,
   };
 }
 
+/// Seconds one frame spent in each stage.
+struct FrameStages {
+  double decode_s = 0.0;
+  double convert_s = 0.0;
+  double integrate_s = 0.0;
+};
+
+/// Medians over the repetitions of kIntegrateFrames frames each.
+struct StageMedians {
+  double frame_s = 0.0;
+  double decode_ms = 0.0;
+  double convert_ms = 0.0;
+  double integrate_ms = 0.0;
+};
+
+/// Runs `frame` (returning its FrameStages) kIntegrateFrames times per repetition.
+template <typename Frame>
+StageMedians timeFrames(Frame& frame, int repetitions) {
+  std::vector<double> frame_s;
+  std::vector<double> decode_ms;
+  std::vector<double> convert_ms;
+  std::vector<double> integrate_ms;
+  for (int r = 0; r < repetitions; ++r) {
+    FrameStages sum;
+    const auto start = Clock::now();
+    for (int f = 0; f < kIntegrateFrames; ++f) {
+      const FrameStages one = frame();
+      sum.decode_s += one.decode_s;
+      sum.convert_s += one.convert_s;
+      sum.integrate_s += one.integrate_s;
+    }
+    frame_s.push_back(secondsSince(start) / kIntegrateFrames);
+    decode_ms.push_back(sum.decode_s * 1e3 / kIntegrateFrames);
+    convert_ms.push_back(sum.convert_s * 1e3 / kIntegrateFrames);
+    integrate_ms.push_back(sum.integrate_s * 1e3 / kIntegrateFrames);
+  }
+  return {median(frame_s), median(decode_ms), median(convert_ms), median(integrate_ms)};
+}
+
 cli::Json integrateRun(const std::vector<std::byte>& bytes, const PixelRayTable& rays,
                        std::uint32_t downsample, Semantics semantics, int repetitions,
                        const backends::BackendChoice& choice) {
@@ -182,11 +221,9 @@ cli::Json integrateRun(const std::vector<std::byte>& bytes, const PixelRayTable&
   options.max_range_m = kMaxRangeM;
 
   std::uint64_t scan = 0;
-  double decode_s = 0.0;
-  double convert_s = 0.0;
-  double integrate_s = 0.0;
   std::size_t rays_per_frame = 0;
   const auto frame = [&] {
+    FrameStages stages;
     auto t0 = Clock::now();
     const auto header = msgs::decodeDepthImage(bytes, rays, options, points);
     if (!header) {
@@ -203,39 +240,25 @@ cli::Json integrateRun(const std::vector<std::byte>& bytes, const PixelRayTable&
     }
     auto t3 = Clock::now();
     ++scan;
-    decode_s += std::chrono::duration<double>(t1 - t0).count();
-    convert_s += std::chrono::duration<double>(t2 - t1).count();
-    integrate_s += std::chrono::duration<double>(t3 - t2).count();
+    stages.decode_s = std::chrono::duration<double>(t1 - t0).count();
+    stages.convert_s = std::chrono::duration<double>(t2 - t1).count();
+    stages.integrate_s = std::chrono::duration<double>(t3 - t2).count();
     rays_per_frame = n;
+    return stages;
   };
   frame();  // untimed: the regions are created
-  std::vector<double> frame_s;
-  std::vector<double> decode_ms;
-  std::vector<double> convert_ms;
-  std::vector<double> integrate_ms;
-  for (int r = 0; r < repetitions; ++r) {
-    decode_s = convert_s = integrate_s = 0.0;
-    const auto start = Clock::now();
-    for (int f = 0; f < kIntegrateFrames; ++f) {
-      frame();
-    }
-    frame_s.push_back(secondsSince(start) / kIntegrateFrames);
-    decode_ms.push_back(decode_s * 1e3 / kIntegrateFrames);
-    convert_ms.push_back(convert_s * 1e3 / kIntegrateFrames);
-    integrate_ms.push_back(integrate_s * 1e3 / kIntegrateFrames);
-  }
-  const double per_frame = median(frame_s);
+  const StageMedians medians = timeFrames(frame, repetitions);
   return {
       {"encoding", "16UC1"},
       {"downsample", downsample},
       {"semantics", semantics == Semantics::kPerScan ? "scan" : "ray"},
       {"rays_per_frame", rays_per_frame},
-      {"frames_per_s", 1.0 / per_frame},
-      {"rays_per_s", static_cast<double>(rays_per_frame) / per_frame},
-      {"ms_per_frame", per_frame * 1e3},
-      {"decode_ms", median(decode_ms)},
-      {"to_world_ray_ms", median(convert_ms)},
-      {"prepare_and_integrate_ms", median(integrate_ms)},
+      {"frames_per_s", 1.0 / medians.frame_s},
+      {"rays_per_s", static_cast<double>(rays_per_frame) / medians.frame_s},
+      {"ms_per_frame", medians.frame_s * 1e3},
+      {"decode_ms", medians.decode_ms},
+      {"to_world_ray_ms", medians.convert_ms},
+      {"prepare_and_integrate_ms", medians.integrate_ms},
       {"rays_clipped_share",
        static_cast<double>(preparer.counters().rays_clipped) /
            static_cast<double>(std::max<std::uint64_t>(preparer.counters().rays_in, 1))},
