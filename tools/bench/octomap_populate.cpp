@@ -18,6 +18,39 @@ namespace {
 
 using namespace raymap;
 
+/// Feeds the input to `reference` whole scans at a time (insertPointCloud needs them); per-ray
+/// input is fed in the same chunks.
+Expected<void, Error> integrateInput(const std::string& input, const std::string& trajectory,
+                                     double scan_period, bench::OctomapReference& reference) {
+  io::RaySourceOptions source_options;
+  source_options.trajectory_path = trajectory;
+  source_options.scan_period_s = scan_period;
+  auto source = io::openRaySource(input, source_options);
+  if (!source) {
+    return Unexpected(source.error());
+  }
+  std::vector<Ray> chunk(1u << 16);
+  std::vector<Ray> scan;
+  for (;;) {
+    auto n = (*source)->read(chunk);
+    if (!n) {
+      return Unexpected(n.error());
+    }
+    for (std::size_t i = 0; i < *n; ++i) {
+      if (!scan.empty() && chunk[i].scan != scan.front().scan) {
+        reference.integrate(scan);
+        scan.clear();
+      }
+      scan.push_back(chunk[i]);
+    }
+    if (*n == 0) {
+      break;
+    }
+  }
+  reference.integrate(scan);
+  return {};
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"Integrate a ray file with OctoMap (reference for raymap benchmarks)",
                "raymap-octomap"};
@@ -50,36 +83,11 @@ int run(int argc, char** argv) {
   }
   options.semantics = semantics == "scan" ? Semantics::kPerScan : Semantics::kPerRay;
 
-  io::RaySourceOptions source_options;
-  source_options.trajectory_path = trajectory;
-  source_options.scan_period_s = scan_period;
-  auto source = io::openRaySource(input, source_options);
-  if (!source) {
-    std::fprintf(stderr, "raymap-octomap: error: %s\n", source.error().message.c_str());
+  bench::OctomapReference reference(options);
+  if (auto ok = integrateInput(input, trajectory, scan_period, reference); !ok) {
+    std::fprintf(stderr, "raymap-octomap: error: %s\n", ok.error().message.c_str());
     return 1;
   }
-  bench::OctomapReference reference(options);
-  // Whole scans at a time (insertPointCloud needs them); per-ray input is fed in the same chunks.
-  std::vector<Ray> chunk(1u << 16);
-  std::vector<Ray> scan;
-  for (;;) {
-    auto n = (*source)->read(chunk);
-    if (!n) {
-      std::fprintf(stderr, "raymap-octomap: error: %s\n", n.error().message.c_str());
-      return 1;
-    }
-    for (std::size_t i = 0; i < *n; ++i) {
-      if (!scan.empty() && chunk[i].scan != scan.front().scan) {
-        reference.integrate(scan);
-        scan.clear();
-      }
-      scan.push_back(chunk[i]);
-    }
-    if (*n == 0) {
-      break;
-    }
-  }
-  reference.integrate(scan);
   const bench::OctomapCounts c = reference.counts();
   cli::Json j = {
       {"input", input},

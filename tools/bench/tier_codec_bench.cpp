@@ -34,21 +34,9 @@ double seconds(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: raymap-tier-codecs MAP.rmap [REPEATS]\n");
-    return 2;
-  }
-  const int repeats = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
-  auto map = raymap::io::loadMap(argv[1]);
-  if (!map) {
-    std::fprintf(stderr, "raymap-tier-codecs: %s\n", map.error().message.c_str());
-    return 1;
-  }
-  // Every region as the tiers hold it: the layers' byte planes one after the other.
-  const raymap::RegionStore& store = map->store();
+/// Every region as the tiers hold it: the layers' byte planes one after the other.
+std::vector<Bytes> regionPlanes(const raymap::VoxelMap& map) {
+  const raymap::RegionStore& store = map.store();
   const std::uint32_t voxels = store.voxelsPerRegion();
   std::vector<Bytes> regions;
   store.forEachRegion([&](std::uint32_t slot, raymap::Vec3i) {
@@ -62,6 +50,11 @@ int main(int argc, char** argv) {
     }
     regions.push_back(std::move(planes));
   });
+  return regions;
+}
+
+/// LZ4, zstd at levels 1, 3 and -5, and zlib at level 1.
+std::vector<Codec> codecsToCompare() {
   const auto zstd_codec = [](int level) {
     return Codec{nullptr,
                  [level](const Bytes& in, Bytes& out) {
@@ -105,49 +98,74 @@ int main(int argc, char** argv) {
                           reinterpret_cast<const Bytef*>(in), static_cast<uLong>(n)) == Z_OK &&
                size == out.size();
       }});
+  return codecs;
+}
+
+/// Compresses and decompresses every region `repeats` times with `c` and prints its JSON line
+/// (medians). False when a region does not round-trip.
+bool measureCodec(const Codec& c, const std::vector<Bytes>& regions, int repeats) {
   std::uint64_t raw = 0;
   for (const Bytes& r : regions) {
     raw += r.size();
   }
-  for (const Codec& c : codecs) {
-    std::vector<double> compress_s;
-    std::vector<double> decompress_s;
-    std::uint64_t packed = 0;
-    for (int rep = 0; rep < repeats; ++rep) {
-      std::vector<Bytes> out(regions.size());
-      packed = 0;
-      Clock::time_point start = Clock::now();
-      for (std::size_t i = 0; i < regions.size(); ++i) {
-        const std::size_t n = c.compress(regions[i], out[i]);
-        out[i].resize(n);
-        packed += n;
-      }
-      compress_s.push_back(seconds(start));
-      Bytes back;
-      start = Clock::now();
-      for (std::size_t i = 0; i < regions.size(); ++i) {
-        back.resize(regions[i].size());
-        if (!c.decompress(out[i].data(), out[i].size(), back) || back != regions[i]) {
-          std::fprintf(stderr, "raymap-tier-codecs: %s did not round-trip\n", c.name);
-          return 1;
-        }
-      }
-      decompress_s.push_back(seconds(start));
+  std::vector<double> compress_s;
+  std::vector<double> decompress_s;
+  std::uint64_t packed = 0;
+  for (int rep = 0; rep < repeats; ++rep) {
+    std::vector<Bytes> out(regions.size());
+    packed = 0;
+    Clock::time_point start = Clock::now();
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+      const std::size_t n = c.compress(regions[i], out[i]);
+      out[i].resize(n);
+      packed += n;
     }
-    std::sort(compress_s.begin(), compress_s.end());
-    std::sort(decompress_s.begin(), decompress_s.end());
-    const double mb = static_cast<double>(raw) / 1e6;
-    const raymap::cli::Json line = {
-        {"codec", c.name},
-        {"regions", regions.size()},
-        {"raw_bytes", raw},
-        {"packed_bytes", packed},
-        {"ratio",
-         static_cast<double>(raw) / static_cast<double>(std::max<std::uint64_t>(packed, 1))},
-        {"compress_mb_s", mb / compress_s[compress_s.size() / 2]},
-        {"decompress_mb_s", mb / decompress_s[decompress_s.size() / 2]},
-    };
-    std::printf("%s\n", raymap::cli::dumpJson(line, raymap::cli::JsonStyle::kCompact).c_str());
+    compress_s.push_back(seconds(start));
+    Bytes back;
+    start = Clock::now();
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+      back.resize(regions[i].size());
+      if (!c.decompress(out[i].data(), out[i].size(), back) || back != regions[i]) {
+        std::fprintf(stderr, "raymap-tier-codecs: %s did not round-trip\n", c.name);
+        return false;
+      }
+    }
+    decompress_s.push_back(seconds(start));
+  }
+  std::sort(compress_s.begin(), compress_s.end());
+  std::sort(decompress_s.begin(), decompress_s.end());
+  const double mb = static_cast<double>(raw) / 1e6;
+  const raymap::cli::Json line = {
+      {"codec", c.name},
+      {"regions", regions.size()},
+      {"raw_bytes", raw},
+      {"packed_bytes", packed},
+      {"ratio", static_cast<double>(raw) / static_cast<double>(std::max<std::uint64_t>(packed, 1))},
+      {"compress_mb_s", mb / compress_s[compress_s.size() / 2]},
+      {"decompress_mb_s", mb / decompress_s[decompress_s.size() / 2]},
+  };
+  std::printf("%s\n", raymap::cli::dumpJson(line, raymap::cli::JsonStyle::kCompact).c_str());
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: raymap-tier-codecs MAP.rmap [REPEATS]\n");
+    return 2;
+  }
+  const int repeats = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
+  auto map = raymap::io::loadMap(argv[1]);
+  if (!map) {
+    std::fprintf(stderr, "raymap-tier-codecs: %s\n", map.error().message.c_str());
+    return 1;
+  }
+  const std::vector<Bytes> regions = regionPlanes(*map);
+  for (const Codec& c : codecsToCompare()) {
+    if (!measureCodec(c, regions, repeats)) {
+      return 1;
+    }
   }
   return 0;
 }
