@@ -106,7 +106,9 @@ class Mapper {
   /// lost, the map keeps what went in before.
   Expected<void, Error> integrate(std::span<const WorldRay> scan);
   /// @brief Integrates one scan of sensor-frame points taken at one pose: p_world =
-  /// sensor_to_world * p_sensor, and the sensor at sensor_to_world.translation().
+  /// sensor_to_world * p_sensor, and the sensor at sensor_to_world.translation(). The rotation is
+  /// applied as its unit quaternion, as a pose table's and raymapd's are, so the same scan gives
+  /// the same map through every overload.
   Expected<void, Error> integrate(std::span<const SensorPoint> scan,
                                   const Eigen::Isometry3d& sensor_to_world);
   /// @brief Integrates one scan of sensor-frame points with the sensor's pose at each point's

@@ -17,6 +17,7 @@
 #include "src/heightmap/heightmap_generator.hpp"
 #include "src/io/map_exports.hpp"
 #include "src/io/map_file.hpp"
+#include "src/io/sensor_ray.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/ray_batcher.hpp"
 #include "src/mapper/mapper_conversions.hpp"
@@ -102,7 +103,7 @@ struct Mapper::State {
   Expected<void, Error> integratePoints(std::span<const SensorPoint> scan, const PoseAt& pose_at) {
     Ray ray;
     ray.scan = next_scan;
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    io::Pose pose;
     bool have_pose = false;
     double pose_time = std::numeric_limits<double>::quiet_NaN();
     for (const SensorPoint& p : scan) {
@@ -111,15 +112,15 @@ struct Mapper::State {
         pose_time = p.time_s;
         have_pose = asked.has_value();
         if (have_pose) {
-          pose = *asked;
-          ray.origin = toVec3(pose.translation());
+          // As a pose (a unit quaternion), converted as a pose table's and raymapd's are.
+          pose = io::Pose::fromIsometry(*asked);
         }
       }
       if (!have_pose) {
         ++points_no_pose;
         continue;
       }
-      ray.sample = toVec3(pose * p.position);
+      io::aimRay(pose, p.position, ray);
       ray.time_s = p.time_s;
       ray.intensity = p.intensity;
       ray.flags = p.no_return ? kRayNoReturn : 0u;
@@ -156,11 +157,11 @@ struct Mapper::State {
     depth_no_depth += decoded.invalid - decoded.free_only;
     Ray ray;
     ray.scan = next_scan;
-    ray.origin = toVec3(camera_to_world.translation());
+    const io::Pose camera_pose = io::Pose::fromIsometry(camera_to_world);
     for (const msgs::ScanPoint& p : std::span(depth_points).first(decoded.points)) {
-      const Eigen::Vector3d point(static_cast<double>(p.x), static_cast<double>(p.y),
-                                  static_cast<double>(p.z));
-      ray.sample = toVec3(camera_to_world * point);
+      io::aimRay(camera_pose,
+                 {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)},
+                 ray);
       ray.flags = (p.flags & msgs::kPointFreeOnly) != 0u ? kRayNoReturn : 0u;
       if (auto ok = push(ray); !ok) {
         return ok;

@@ -11,6 +11,7 @@
 #include <span>
 
 #include "src/core/eigen_conversions.hpp"
+#include "src/io/sensor_ray.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/ray.hpp"
 #include "src/msgs/point_cloud.hpp"
@@ -78,9 +79,8 @@ class PointDeskewer {
       last_time_ns_ = t;
     }
     // The sensor's pose in the world frame maps the point (sensor frame, metres) into the world.
-    ray.origin = toVec3(sensor_pose_.position);
-    ray.sample = toVec3(sensor_pose_.transform(
-        {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}));
+    io::aimRay(sensor_pose_,
+               {static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)}, ray);
     ray.time_s = static_cast<double>(t) * 1e-9;
     ray.intensity = p.intensity;
     ray.flags = (p.flags & msgs::kPointFreeOnly) != 0u ? kRayNoReturn : 0u;

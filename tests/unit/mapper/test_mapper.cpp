@@ -563,6 +563,50 @@ TEST(Mapper, ABadPoseTableIsAnErrorNamingTheSample) {
   EXPECT_EQ(mapper->counters().rays_in, 0u);  // nothing went in
 }
 
+// One conversion of points into rays: a scan at one pose (and a depth pixel's point, and
+// raymapd's pipeline) is converted by io::aimRay, the devices' and the pose table's by
+// rm_deskew_point; both apply the pose as rm_pose_apply does, so the same scan at the same pose
+// gives the same map bit for bit whichever path takes it (a path with another rotation
+// convention, frame order or no-return rule would not). The points are floats, as a pose
+// table's points are.
+TEST(Mapper, OnePoseAndAOneSamplePoseTableGiveTheSameMap) {
+  TimedPose pose;
+  pose.time_s = 2.0;
+  pose.sensor_to_world.translation() = Eigen::Vector3d(1.3, -2.1, 0.45);
+  pose.sensor_to_world.linear() =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, -0.1, 1.0).normalized()).matrix();
+  std::vector<SensorPoint> points;
+  for (int i = 0; i < 4000; ++i) {
+    const double a = 6.283185307179586 * i / 4000.0;
+    const double r = 1.0 + 6.0 * ((i * 7919) % 1000) / 1000.0;
+    SensorPoint p;
+    p.time_s = pose.time_s;
+    p.position = Eigen::Vector3f(static_cast<float>(r * std::cos(a)),
+                                 static_cast<float>(r * std::sin(a)),
+                                 static_cast<float>(0.5 * std::sin(5.0 * a)))
+                     .cast<double>();
+    p.no_return = i % 31 == 0;
+    points.push_back(p);
+  }
+  auto at_pose = Mapper::create(smallMapper(Semantics::kPerRay));
+  auto by_table = Mapper::create(smallMapper(Semantics::kPerRay));
+  ASSERT_TRUE(at_pose && by_table);
+  ASSERT_TRUE(at_pose->integrate(std::span<const SensorPoint>(points), pose.sensor_to_world));
+  ASSERT_TRUE(by_table->integrate(std::span<const SensorPoint>(points),
+                                  std::span<const TimedPose>(&pose, 1)));
+  ASSERT_TRUE(at_pose->flush());
+  ASSERT_TRUE(by_table->flush());
+  EXPECT_EQ(by_table->counters().points_no_pose, 0u);
+  EXPECT_EQ(at_pose->counters().rays_integrated, points.size());
+  EXPECT_EQ(by_table->counters().rays_integrated, points.size());
+  test::TempDir dir;
+  const VoxelMap a = savedMap(*at_pose, dir);
+  const VoxelMap b = savedMap(*by_table, dir);
+  const test::MapComparison c = test::compareMaps(a, b);
+  EXPECT_GT(c.compared, 1000u);
+  EXPECT_EQ(c.exact_value, c.compared);
+}
+
 TEST(Mapper, APoseTableOnADeviceGivesTheCpuMap) {
   auto cpu = Mapper::create(smallMapper(Semantics::kPerRay));
   ASSERT_TRUE(cpu);
