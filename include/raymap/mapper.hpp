@@ -24,6 +24,43 @@ namespace raymap {
 /// [k * resolution, (k + 1) * resolution) metres on each axis of the world frame.
 using VoxelKey = Eigen::Vector3i;
 
+/// @brief An NDT voxel's Gaussian (MapMode::kNdtOm, kNdtTm), world frame. Plain value type.
+struct NdtVoxelInfo {
+  /// Samples in the Gaussian since it was last started afresh (the NDT rules restart it when a
+  /// voxel that turned free is hit again); saturates at 2^32 - 1.
+  std::uint32_t samples = 0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();  ///< of those samples, metres
+  /// Their covariance (the population covariance, divided by the count), metres squared;
+  /// symmetric positive semi-definite; zero for one sample.
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  /// NDT-TM only (nullopt for NDT-OM), since the Gaussian started: returns that fell on the
+  /// voxel's surfel (or while it was too young to judge), and rays that crossed the surfel and
+  /// ended elsewhere (OHM's rules, kernels/common/ndt.h); a return that is neither counts in
+  /// neither. Permeability = misses / (hits + misses).
+  std::optional<std::uint32_t> hits;
+  std::optional<std::uint32_t> misses;
+  /// NDT-TM only: running mean and variance of the returns' intensity (the sensor's units).
+  std::optional<float> intensity_mean;
+  std::optional<float> intensity_variance;
+};
+
+/// @brief A TSDF voxel (MapMode::kTsdf). Plain value type.
+struct TsdfVoxelInfo {
+  /// Signed distance to the surface along the rays, metres, truncated to +-truncation; positive
+  /// in front of the surface (towards the sensor).
+  float distance_m = 0.0f;
+  float weight = 0.0f;  ///< sum of the fused rays' weights (> 0), at most TsdfOptions::max_weight
+};
+
+/// @brief A voxel's decay rate (MapOptions::decay_rate). Plain value type.
+struct DecayVoxelInfo {
+  float traversal_m = 0.0f;   ///< metres of ray path inside the voxel
+  std::uint32_t samples = 0;  ///< returns that fell in it
+  /// Reflections per metre of ray path: samples / traversal_m; 0 for a voxel crossed but never
+  /// hit, +infinity for samples without path length (each on the face its ray entered by).
+  float rate_per_m = 0.0f;
+};
+
 /// @brief What the map holds for one voxel. Plain value type.
 struct VoxelInfo {
   VoxelKey key = VoxelKey::Zero();
@@ -36,6 +73,12 @@ struct VoxelInfo {
   /// without samples or without the voxel-mean layer.
   std::optional<Eigen::Vector3d> mean;
   std::uint32_t samples = 0;  ///< returns that fell in the voxel (0 without the voxel-mean layer)
+  /// NDT maps: the voxel's Gaussian; nullopt before its first sample (or in another mode).
+  std::optional<NdtVoxelInfo> ndt;
+  /// TSDF maps: distance and weight; nullopt where no ray updated it (or in another mode).
+  std::optional<TsdfVoxelInfo> tsdf;
+  /// Maps with decay rates: nullopt where no ray entered the voxel (its rate is unknown).
+  std::optional<DecayVoxelInfo> decay;
 };
 
 /// @brief What a Mapper did so far. Plain counters.

@@ -22,6 +22,7 @@
 #include "src/map/ray_batcher.hpp"
 #include "src/mapper/mapper_conversions.hpp"
 #include "src/mapper/tier_report.hpp"
+#include "src/mapper/voxel_layers.hpp"
 #include "src/msgs/depth_image.hpp"
 
 namespace raymap {
@@ -375,6 +376,9 @@ VoxelInfo Mapper::voxel(const VoxelKey& key) const noexcept {
                                   corner.z + static_cast<double>(local.z) * r);
     }
   }
+  info.ndt = mapper::ndtVoxel(map, v);
+  info.tsdf = mapper::tsdfVoxel(map, v);
+  info.decay = mapper::decayVoxel(map, v);
   return info;
 }
 

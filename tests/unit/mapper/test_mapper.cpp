@@ -581,10 +581,10 @@ TEST(Mapper, OnePoseAndAOneSamplePoseTableGiveTheSameMap) {
     const double r = 1.0 + 6.0 * ((i * 7919) % 1000) / 1000.0;
     SensorPoint p;
     p.time_s = pose.time_s;
-    p.position = Eigen::Vector3f(static_cast<float>(r * std::cos(a)),
-                                 static_cast<float>(r * std::sin(a)),
-                                 static_cast<float>(0.5 * std::sin(5.0 * a)))
-                     .cast<double>();
+    p.position =
+        Eigen::Vector3f(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)),
+                        static_cast<float>(0.5 * std::sin(5.0 * a)))
+            .cast<double>();
     p.no_return = i % 31 == 0;
     points.push_back(p);
   }
