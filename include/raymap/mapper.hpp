@@ -234,6 +234,10 @@ class Mapper {
   /// Why the CPU fallback replaced the requested backend (BackendOptions::fallback_cpu); empty
   /// when it did not.
   const std::string& fallbackWarning() const noexcept;
+  /// Why the map holds fewer regions than MapOptions::max_memory_bytes asked (create() sized a
+  /// global map's pool to what this machine can fill: its available memory, cgroup limit or
+  /// RLIMIT_AS, as `raymap populate` does); empty when the machine holds what was asked.
+  const std::string& memoryWarning() const noexcept;
 
  private:
   struct State;

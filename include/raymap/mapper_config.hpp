@@ -80,7 +80,8 @@ struct MapOptions {
   double clamp_max_probability = 0.9709991372435236;
   double occupied_threshold = 0.5;  ///< probability at and above which a voxel is occupied
   /// Memory for the map's regions (one preallocated pool); once the map needs more, integration
-  /// fails with a capacity error, or with tiers enabled the coldest regions move out.
+  /// fails with a capacity error, or with tiers enabled the coldest regions move out. A global
+  /// map's pool is never larger than the machine can fill (Mapper::memoryWarning() says so).
   std::uint64_t max_memory_bytes = std::uint64_t{4} << 30;
   TierOptions tiers;
   /// A robot-centric rolling window instead of a map that grows (raymapd's map, `map.window`):

@@ -21,6 +21,7 @@
 #include "src/io/trajectory.hpp"
 #include "src/map/ray_batcher.hpp"
 #include "src/mapper/mapper_conversions.hpp"
+#include "src/mapper/pool_fit.hpp"
 #include "src/mapper/tier_report.hpp"
 #include "src/mapper/voxel_layers.hpp"
 #include "src/msgs/depth_image.hpp"
@@ -60,6 +61,7 @@ struct Mapper::State {
   PixelRayTable depth_rays;                   // integrate(depth): the last camera's pixel rays
   std::vector<msgs::ScanPoint> depth_points;  // grows to the largest image's points
   std::uint64_t depth_no_depth = 0;
+  std::string memory_warning;  // why the pool is smaller than map.max_memory asked (create())
   std::unique_ptr<heightmap::HeightmapGenerator> generator;  // made on the first heightmap()
   heightmap::HeightmapPlan plan;
   heightmap::HeightMap grid;
@@ -242,6 +244,9 @@ Result<Mapper> Mapper::create(const MapperConfig& config) {
     return Unexpected(map_config.error());
   }
   map_config->device_scan_marks = config.backend.name != "cpu";  // the CPU keeps bits
+  // A global pool no larger than this machine can fill, as raymap populate sizes it: each slot
+  // costs bookkeeping up front, so a budget far beyond the memory would only cost memory.
+  std::string memory_warning = mapper::fitPoolToMemory(*map_config);
   auto map = VoxelMap::create(*map_config);
   if (!map) {
     return Unexpected(map.error());
@@ -252,6 +257,7 @@ Result<Mapper> Mapper::create(const MapperConfig& config) {
   }
   auto state = std::make_unique<State>(std::move(*map), *filter);
   state->options = config.map;
+  state->memory_warning = std::move(memory_warning);
   if (auto ok = state->startBackend(config.backend); !ok) {
     return Unexpected(ok.error());
   }
@@ -487,5 +493,7 @@ std::string Mapper::backendName() const { return state_->backend.backend->name()
 const std::string& Mapper::fallbackWarning() const noexcept {
   return state_->backend.fallback_warning;
 }
+
+const std::string& Mapper::memoryWarning() const noexcept { return state_->memory_warning; }
 
 }  // namespace raymap

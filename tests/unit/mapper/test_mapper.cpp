@@ -661,6 +661,29 @@ TEST(Mapper, AnUnknownDevicePlanningIsRefusedByName) {
       << mapper.error().message;
 }
 
+TEST(Mapper, MaxMemoryBeyondTheMachineIsSizedToWhatItCanHold) {
+  // 64 TiB of regions would be about 179 million slots, whose bookkeeping alone is committed up
+  // front (about 28 GB): Mapper::create sizes the pool to what this machine can fill, as
+  // `raymap populate` does, and says so.
+  MapperConfig config = smallMapper(Semantics::kPerRay);
+  config.map.region_voxels = 32;
+  config.map.max_memory_bytes = std::uint64_t{64} << 40;
+  auto mapper = Mapper::create(config);
+  ASSERT_TRUE(mapper) << mapper.error().message;
+  EXPECT_NE(mapper->memoryWarning().find("map.max_memory asks for"), std::string::npos)
+      << mapper->memoryWarning();
+  EXPECT_NE(mapper->memoryWarning().find("this machine can hold"), std::string::npos);
+  const std::vector<WorldRay> rays = {
+      WorldRay{Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Vector3d(4.05, 0.05, 0.05), 0.0f, false}};
+  ASSERT_TRUE(mapper->integrate(std::span<const WorldRay>(rays)));
+  ASSERT_TRUE(mapper->flush());
+  EXPECT_EQ(mapper->occupancy(VoxelKey(40, 0, 0)), VoxelState::kOccupied);
+  // A budget the machine holds: no warning.
+  auto small = Mapper::create(smallMapper(Semantics::kPerRay));
+  ASSERT_TRUE(small);
+  EXPECT_TRUE(small->memoryWarning().empty()) << small->memoryWarning();
+}
+
 TEST(Mapper, VersionHeaderMatchesTheProject) {
   EXPECT_GE(RAYMAP_VERSION_MAJOR, 0);
   EXPECT_STRNE(RAYMAP_VERSION_STRING, "");
