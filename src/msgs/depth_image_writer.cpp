@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// CameraInfo and Image written straight into a byte vector: the size is computed first, so the
-// vector is resized once (within its capacity once warm) and filled through a cursor.
+// CameraInfo and Image written straight into a byte vector (src/msgs/cdr_le_writer.hpp: sized
+// first, resized once, filled through a cursor).
 #include "src/msgs/depth_image_writer.hpp"
 
 #include <bit>
@@ -10,89 +10,15 @@
 #include "raymap/assert.hpp"
 
 #include "src/core/byte_order.hpp"
+#include "src/msgs/cdr_le_writer.hpp"
 
 namespace raymap::msgs {
 namespace {
 
-/// CDR_LE: the encapsulation header of little-endian XCDR1 (representation 00 01, options 0).
-constexpr std::byte kCdrLeHeader[4] = {std::byte{0x00}, std::byte{0x01}, std::byte{0x00},
-                                       std::byte{0x00}};
 constexpr std::size_t kHeaderBytes = sizeof(kCdrLeHeader);
 constexpr std::size_t kPlumbBobCoefficients = 5;
 constexpr double kMillimetresPerMetre = 1000.0;
 constexpr double kLargestMillimetres = 65535.0;
-
-/// Positions relative to the first byte after the encapsulation header, as XCDR1 aligns.
-class Sizer {
- public:
-  void align(std::size_t alignment) noexcept {
-    size_ = (size_ + alignment - 1) / alignment * alignment;
-  }
-  void add(std::size_t alignment, std::size_t bytes) noexcept {
-    align(alignment);
-    size_ += bytes;
-  }
-  void string(std::string_view text) noexcept { add(4, 4 + text.size() + 1); }
-  std::size_t size() const noexcept { return size_; }
-
- private:
-  std::size_t size_ = 0;
-};
-
-/// Writes little-endian primitives (CDR_LE) into bytes sized by a Sizer that took the same steps.
-class Cursor {
- public:
-  explicit Cursor(std::byte* payload) noexcept : payload_(payload) {}
-  void align(std::size_t alignment) noexcept {
-    const std::size_t aligned = (at_ + alignment - 1) / alignment * alignment;
-    std::memset(payload_ + at_, 0, aligned - at_);
-    at_ = aligned;
-  }
-  template <ByteValue T>
-  void put(T value) noexcept {
-    align(sizeof(T));
-    storeLe(payload_ + at_, value);
-    at_ += sizeof(T);
-  }
-  void string(std::string_view text) noexcept {
-    put(static_cast<std::uint32_t>(text.size() + 1));
-    if (!text.empty()) {
-      std::memcpy(payload_ + at_, text.data(), text.size());
-    }
-    at_ += text.size();
-    payload_[at_++] = std::byte{0};
-  }
-  std::byte* raw(std::size_t bytes) noexcept {
-    std::byte* p = payload_ + at_;
-    at_ += bytes;
-    return p;
-  }
-  std::size_t position() const noexcept { return at_; }
-
- private:
-  std::byte* payload_;
-  std::size_t at_ = 0;
-};
-
-/// std_msgs/Header: builtin_interfaces/Time (floor division: 0 <= nanosec < 1e9) and frame_id.
-void putHeader(Cursor& cursor, std::int64_t stamp_ns, std::string_view frame_id) noexcept {
-  constexpr std::int64_t kNsPerS = 1'000'000'000;
-  std::int64_t sec = stamp_ns / kNsPerS;
-  std::int64_t nanosec = stamp_ns % kNsPerS;
-  if (nanosec < 0) {
-    nanosec += kNsPerS;
-    sec -= 1;
-  }
-  cursor.put(static_cast<std::int32_t>(sec));
-  cursor.put(static_cast<std::uint32_t>(nanosec));
-  cursor.string(frame_id);
-}
-
-std::byte* startMessage(std::vector<std::byte>& out, std::size_t payload_bytes) {
-  out.resize(kHeaderBytes + payload_bytes);
-  std::memcpy(out.data(), kCdrLeHeader, kHeaderBytes);
-  return out.data() + kHeaderBytes;
-}
 
 std::uint16_t millimetresOf(float depth_m) noexcept {
   // NaN fails the comparison; +inf saturates below, which would turn "no return" into a far
@@ -122,9 +48,8 @@ void serializeCameraInfo(std::int64_t stamp_ns, std::string_view frame_id,
   const std::string_view model = distorted ? "plumb_bob" : "";
   const std::size_t d_count = distorted ? kPlumbBobCoefficients : 0;
 
-  Sizer size;
-  size.add(4, 8);  // stamp
-  size.string(frame_id);
+  CdrSizer size;
+  addStdHeader(size, frame_id);
   size.add(4, 8);  // height, width
   size.string(model);
   size.add(4, 4);
@@ -135,8 +60,8 @@ void serializeCameraInfo(std::int64_t stamp_ns, std::string_view frame_id,
   size.add(4, 4 * 6);             // binning_x, binning_y, roi offsets and size
   size.add(1, 1);                 // roi.do_rectify
 
-  Cursor cursor(startMessage(out, size.size()));
-  putHeader(cursor, stamp_ns, frame_id);
+  CdrCursor cursor(startCdrLeMessage(out, size.size()));
+  putStdHeader(cursor, stamp_ns, frame_id);
   cursor.put(camera.height);
   cursor.put(camera.width);
   cursor.string(model);
@@ -176,17 +101,16 @@ void serializeDepthImage(std::int64_t stamp_ns, std::string_view frame_id, std::
   const std::size_t data_bytes = pixels * pixel_bytes;
   const std::string_view name = toString(encoding);
 
-  Sizer size;
-  size.add(4, 8);
-  size.string(frame_id);
+  CdrSizer size;
+  addStdHeader(size, frame_id);
   size.add(4, 8);  // height, width
   size.string(name);
   size.add(1, 1);  // is_bigendian
   size.add(4, 4);  // step
   size.add(4, 4 + data_bytes);
 
-  Cursor cursor(startMessage(out, size.size()));
-  putHeader(cursor, stamp_ns, frame_id);
+  CdrCursor cursor(startCdrLeMessage(out, size.size()));
+  putStdHeader(cursor, stamp_ns, frame_id);
   cursor.put(height);
   cursor.put(width);
   cursor.string(name);
