@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "src/core/byte_order.hpp"
+#include "src/msgs/ros_time.hpp"
 
 namespace raymap::msgs {
 
@@ -73,19 +74,13 @@ class CdrCursor {
   std::size_t at_ = 0;
 };
 
-/// @brief std_msgs/Header: builtin_interfaces/Time (floor division: 0 <= nanosec < 1e9) and
-/// frame_id. Size it with addStdHeader.
+/// @brief std_msgs/Header: builtin_interfaces/Time (msgs::rosTimeOf) and frame_id. Size it with
+/// addStdHeader.
 inline void putStdHeader(CdrCursor& cursor, std::int64_t stamp_ns,
                          std::string_view frame_id) noexcept {
-  constexpr std::int64_t kNsPerS = 1'000'000'000;
-  std::int64_t sec = stamp_ns / kNsPerS;
-  std::int64_t nanosec = stamp_ns % kNsPerS;
-  if (nanosec < 0) {
-    nanosec += kNsPerS;
-    sec -= 1;
-  }
-  cursor.put(static_cast<std::int32_t>(sec));
-  cursor.put(static_cast<std::uint32_t>(nanosec));
+  const RosTime t = rosTimeOf(stamp_ns);
+  cursor.put(static_cast<std::int32_t>(t.sec));
+  cursor.put(t.nanosec);
   cursor.string(frame_id);
 }
 

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "src/msgs/ros_time.hpp"
+
 namespace raymap::cli {
 
 Result<std::uint32_t> domainFromOptionOrEnvironment(int option) {
@@ -35,15 +37,9 @@ std::string secondsText(double seconds) {
 }
 
 std::string stampText(std::int64_t stamp_ns) {
-  constexpr std::int64_t kNsPerSecond = 1'000'000'000;
-  std::int64_t sec = stamp_ns / kNsPerSecond;
-  std::int64_t nanosec = stamp_ns % kNsPerSecond;
-  if (nanosec < 0) {
-    nanosec += kNsPerSecond;
-    sec -= 1;
-  }
+  const msgs::RosTime t = msgs::rosTimeOf(stamp_ns);
   char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%" PRId64 ".%09" PRId64, sec, nanosec);
+  std::snprintf(buffer, sizeof(buffer), "%" PRId64 ".%09" PRIu32, t.sec, t.nanosec);
   return buffer;
 }
 

@@ -9,6 +9,7 @@
 
 #include "src/msgs/point_cloud.hpp"
 #include "src/msgs/point_cloud_writer.hpp"
+#include "src/msgs/ros_time.hpp"
 #include "tests/unit/dds/cdr_test_writer.hpp"
 
 namespace raymap::msgs {
@@ -131,6 +132,19 @@ TEST(PointCloudWriter, OddTimesAreClampedToTheFieldsRange) {
   EXPECT_EQ(back[0].time_s, 0.0f);
   EXPECT_EQ(back[1].time_s, 0.0f);
   EXPECT_NEAR(back[2].time_s, 4.294967295f, 1e-6f);
+}
+
+TEST(RosTime, SplitsStampsAsBuiltinInterfacesTimeBeforeAndAfterTheEpoch) {
+  const RosTime after = rosTimeOf(1'700'000'000'250'000'000);
+  EXPECT_EQ(after.sec, 1'700'000'000);
+  EXPECT_EQ(after.nanosec, 250'000'000u);
+  const RosTime before = rosTimeOf(-1'250'000'000);  // 1.25 s before: -2 s + 0.75 s
+  EXPECT_EQ(before.sec, -2);
+  EXPECT_EQ(before.nanosec, 750'000'000u);
+  const RosTime whole = rosTimeOf(-2'000'000'000);
+  EXPECT_EQ(whole.sec, -2);
+  EXPECT_EQ(whole.nanosec, 0u);
+  EXPECT_EQ(nanosecondsOf(static_cast<std::int32_t>(before.sec), before.nanosec), -1'250'000'000);
 }
 
 }  // namespace
