@@ -105,7 +105,7 @@ Expected<void, IntegrateError> RayBatcher::flushRaw() noexcept {
   if (raw_fill_ == 0) {
     return {};
   }
-  const std::span<const Ray> rays(raw_.data(), raw_fill_);
+  const std::span<const Ray> rays(rawData(), raw_fill_);
   raw_fill_ = 0;
   return integrateOnDevice(*raw_preparer_, raw_params_, rays);
 }
@@ -193,7 +193,7 @@ void RayBatcher::addForDevice(RayPreparer& preparer, std::span<const Ray> run,
       // The scan outgrew the batch: on the host's way it is integrated in parts cut where the
       // batch fills with prepared rays, which only preparing tells. So the host prepares it.
       scan_on_host_ = true;
-      const std::span<const Ray> held(raw_.data(), raw_fill_);
+      const std::span<const Ray> held(rawData(), raw_fill_);
       raw_fill_ = 0;
       addPrepared(preparer, held, first_error);  // the window cannot have moved: same params
       addPrepared(preparer, run, first_error);
@@ -204,7 +204,15 @@ void RayBatcher::addForDevice(RayPreparer& preparer, std::span<const Ray> run,
       continue;
     }
     const std::size_t n = std::min(room, run.size());
-    std::copy(run.begin(), run.begin() + static_cast<std::ptrdiff_t>(n), raw_.data() + raw_fill_);
+    if (in_place_) {
+      // Staged runs follow each other in the staging room: the batch grows over them.
+      if (raw_fill_ == 0) {
+        raw_view_ = run.data();
+      }
+      RAYMAP_ENSURES(run.data() == raw_view_ + raw_fill_);
+    } else {
+      std::copy(run.begin(), run.begin() + static_cast<std::ptrdiff_t>(n), raw_.data() + raw_fill_);
+    }
     raw_fill_ += n;
     run = run.subspan(n);
   }
@@ -247,6 +255,30 @@ void RayBatcher::addPrepared(RayPreparer& preparer, std::span<const Ray> run,
       keepFirst(first_error, flush());
     }
   }
+}
+
+std::span<Ray> RayBatcher::staging() {
+  if (staged_.capacity() < capacity_) {
+    if (!staged_.reserve(capacity_)) {
+      throw std::bad_alloc();  // as a std::vector of the batch would
+    }
+    // Touched now, at start-up: the integrator's real-time loop must not fault its pages in.
+    std::memset(static_cast<void*>(staged_.data()), 0, capacity_ * sizeof(Ray));
+  }
+  return {staged_.data(), capacity_};
+}
+
+Expected<void, IntegrateError> RayBatcher::integrateStaged(RayPreparer& preparer, std::size_t first,
+                                                           std::size_t count) noexcept {
+  RAYMAP_EXPECTS(staged_.capacity() >= capacity_ && first + count <= capacity_);
+  // What waits from add() for the device goes first (ray order), from raw_.
+  Expected<void, IntegrateError> first_error = flushRaw();
+  in_place_ = true;
+  keepFirst(first_error, add(preparer, std::span<const Ray>(staged_.data() + first, count)));
+  keepFirst(first_error, flush());  // the view must not outlive the call
+  in_place_ = false;
+  raw_view_ = nullptr;
+  return first_error;
 }
 
 Ray deskewedRay(const rm_scan_point& p, const DeskewTables& tables) noexcept {

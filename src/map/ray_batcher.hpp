@@ -84,6 +84,19 @@ class RayBatcher {
                                                  std::span<const rm_scan_point> points,
                                                  const DeskewTables& tables) noexcept;
 
+  /// @brief The room of a caller that gathers its batch itself, capacity() world rays long:
+  /// raymapd's integrator converts scans into it without the map lock and integrates it in
+  /// slices under the lock (integrateStaged()), so the rays are batched once, here. The first
+  /// call allocates and touches the whole room (start-up: no page faults later); later calls
+  /// return the same room. Not thread-safe.
+  std::span<Ray> staging();
+  /// @brief Integrates staged rays [first, first + count) now: what add() of them and flush()
+  /// do, the same maps and counters, except that rays the backend prepares on the device go to
+  /// it from the staging room in place, not copied into the batch first.
+  /// @pre staging() was called; first + count <= capacity().
+  Expected<void, IntegrateError> integrateStaged(RayPreparer& preparer, std::size_t first,
+                                                 std::size_t count) noexcept;
+
   /// @brief Forgets the scan the last rays belonged to: the next rays start a new scan even when
   /// they carry the same Ray::scan (a stream read again from its start with the same batcher).
   /// Call after flush().
@@ -140,6 +153,13 @@ class RayBatcher {
   // ---- preparation on the device ----
   platform::PageArray<Ray> raw_;  // rays waiting for the device to prepare them
   std::size_t raw_fill_ = 0;
+  /// integrateStaged(): the rays waiting for the device are a view of the staging room (from
+  /// raw_view_, raw_fill_ long), not copies in raw_.
+  bool in_place_ = false;
+  const Ray* raw_view_ = nullptr;
+  /// The rays waiting for the device: raw_'s, or the staging room's in place.
+  const Ray* rawData() const noexcept { return in_place_ ? raw_view_ : raw_.data(); }
+  platform::PageArray<Ray> staged_;      // staging(): a caller's batch of world rays
   RayPreparer* raw_preparer_ = nullptr;  // the preparer of the rays in raw_
   rm_prepare_params raw_params_{};       // and its parameters when the first of them came
   bool scan_on_host_ = false;            // per-scan: this scan outgrew the batch, host prepares

@@ -52,7 +52,7 @@ Integrator::Integrator(VoxelMap& map, Backend& backend, platform::PiMutex& map_m
   for (const SensorSettings& sensor : sensors_) {
     preparers_.emplace_back(map_, sensor.filter);
   }
-  rays_.resize(batcher_.capacity());
+  rays_ = batcher_.staging();  // the one batch of rays: the batcher's, filled here
   for (const SensorSettings& sensor : sensors_) {
     sensor_on_device_.push_back(backend.preparesOnDevice(sensor.filter));
   }
@@ -260,8 +260,7 @@ void Integrator::integrateBatch(std::int64_t now_ns) noexcept {
         (void)batcher_.integratePoints(
             preparer, std::span<const rm_scan_point>(points_.data() + done, slice), tables);
       } else {
-        (void)batcher_.add(preparer, std::span<const Ray>(rays_.data() + done, slice));
-        (void)batcher_.flush();
+        (void)batcher_.integrateStaged(preparer, done, slice);
       }
       done += slice;
       now = settings_.clock_ns();

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "platform/clock.hpp"
@@ -172,8 +173,11 @@ class Integrator {
   ScanOrder order_;         // which points, in which order (stride set by the latency bound)
   PointDeskewer deskewer_;  // caches the sensor's pose at the last point time
 
-  // The batch: rays of possibly several scans, all from one sensor (range limits differ).
-  std::vector<Ray> rays_;
+  // The batch: rays of possibly several scans, all from one sensor (range limits differ), in
+  // the batcher's staging room (RayBatcher::staging()): converted into it here without the map
+  // lock, integrated from it in slices under the lock (RayBatcher::integrateStaged()), so the
+  // rays are batched once. Set in the constructor, once batcher_ exists.
+  std::span<Ray> rays_;
   // Or, where the backend deskews on the device (Backend::preparesOnDevice for the sensor's
   // filter), the batch's points as they came with the tables that deskew them
   // (kernels/common/deskew.h): a segment per conversion step, with the poses as they were then.

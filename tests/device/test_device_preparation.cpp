@@ -6,6 +6,7 @@
 // batcher integrated and the maps must be the same; the device side must really have prepared
 // (RayBatcher's device batches, BackendStats::rays_prepared_on_device). Written once; linked into
 // one executable per GPU API.
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -157,6 +158,32 @@ TEST(DevicePreparation, HostileRaysAreCountedAndIntegratedAsTheHostDoes) {
     EXPECT_GT(c.rays_no_return, 0u);
     EXPECT_GT(pair.device.backend->stats().rays_prepared_on_device, 0u);
   }
+}
+
+// raymapd's integrator gathers its batch in the batcher's staging room and integrates it in
+// slices (RayBatcher::integrateStaged): the device takes the staged rays in place, and the map
+// and every counter are those of add() and flush() of the same slices on the host's side.
+TEST(DevicePreparation, StagedSlicesGoToTheDeviceInPlaceAsAddAndFlushWould) {
+  REQUIRE_DEVICE_PREPARATION();
+  PreparationPair pair(smallConfig(Semantics::kPerRay), preparationRangeFilter());
+  ASSERT_TRUE(pair.ready());
+  const std::vector<Ray> rays = hostilePreparationRays(23, 6);
+  const std::span<Ray> room = pair.device.batcher->staging();
+  ASSERT_EQ(room.size(), pair.device.batcher->capacity());
+  for (std::size_t begin = 0; begin < rays.size(); begin += room.size()) {
+    const std::size_t n = std::min(room.size(), rays.size() - begin);
+    std::copy_n(rays.begin() + static_cast<std::ptrdiff_t>(begin), n, room.begin());
+    for (std::size_t done = 0; done < n; done += 1000) {  // slices, as under the map lock
+      const std::size_t slice = std::min<std::size_t>(1000, n - done);
+      EXPECT_TRUE(pair.host.batcher->add(pair.host.preparer,
+                                         std::span<const Ray>(rays).subspan(begin + done, slice)));
+      EXPECT_TRUE(pair.host.batcher->flush());
+      EXPECT_TRUE(pair.device.batcher->integrateStaged(pair.device.preparer, done, slice));
+      EXPECT_EQ(pair.device.batcher->pending(), 0u);  // nothing kept: the room is the batch
+    }
+  }
+  EXPECT_GT(pair.expectSame("staged"), 0u);
+  EXPECT_GT(pair.device.backend->stats().rays_prepared_on_device, 0u);
 }
 
 TEST(DevicePreparation, EveryMapModeButNdtPreparesOnTheDeviceAlike) {

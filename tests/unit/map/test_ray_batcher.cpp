@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // RayBatcher: batches prepared on the CPU backend's threads are the batches one thread prepares
 // (same map bit for bit, same counters), rejected rays and all.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -189,6 +190,47 @@ TEST(RayBatcher, AStreamReadAgainWithTheSameBatcherStartsANewScan) {
   EXPECT_EQ(third.scans, 2u);
   EXPECT_EQ(third.batches, 3u);
   EXPECT_EQ(third.rays_integrated, 3u * rays.size());
+}
+
+// The staging room (raymapd's integrator's batch): integrating it in slices gives the map and
+// counters of add() and flush() of the same slices, on the backend's host threads too.
+TEST(RayBatcher, StagedSlicesMakeTheMapOfAddAndFlush) {
+  const std::vector<Ray> rays = raysWithRejects();
+  RayFilter filter;
+  filter.min_range_m = 0.3;
+  filter.max_range_m = 9.0;
+  for (const unsigned threads : {1u, 2u}) {
+    VoxelMap added = test::makeMap(test::smallConfig(Semantics::kPerRay));
+    VoxelMap staged = test::makeMap(test::smallConfig(Semantics::kPerRay));
+    auto added_backend = test::cpuBackend(added, threads);
+    auto staged_backend = test::cpuBackend(staged, threads);
+    RayPreparer added_preparer(added, filter);
+    RayPreparer staged_preparer(staged, filter);
+    RayBatcher add_batcher(added, *added_backend, 16384);
+    RayBatcher stage_batcher(staged, *staged_backend, 16384);
+    const std::span<Ray> room = stage_batcher.staging();
+    ASSERT_EQ(room.size(), 16384u);
+    for (std::size_t begin = 0; begin < rays.size(); begin += room.size()) {
+      const std::size_t n = std::min(room.size(), rays.size() - begin);
+      std::copy_n(rays.begin() + static_cast<std::ptrdiff_t>(begin), n, room.begin());
+      for (std::size_t done = 0; done < n; done += 5000) {
+        const std::size_t slice = std::min<std::size_t>(5000, n - done);
+        EXPECT_TRUE(add_batcher.add(added_preparer,
+                                    std::span<const Ray>(rays).subspan(begin + done, slice)));
+        EXPECT_TRUE(add_batcher.flush());
+        EXPECT_TRUE(stage_batcher.integrateStaged(staged_preparer, done, slice));
+        EXPECT_EQ(stage_batcher.pending(), 0u);
+      }
+    }
+    expectSameCounters(staged_preparer.counters(), added_preparer.counters());
+    EXPECT_EQ(stage_batcher.counters().batches, add_batcher.counters().batches);
+    EXPECT_EQ(stage_batcher.counters().scans, add_batcher.counters().scans);
+    EXPECT_EQ(stage_batcher.counters().rays_integrated, add_batcher.counters().rays_integrated);
+    EXPECT_GT(stage_batcher.counters().rays_integrated, 0u);
+    const test::MapComparison cmp = test::compareMaps(added, staged);
+    EXPECT_GT(cmp.compared, 100000u);
+    EXPECT_EQ(cmp.exact_value, cmp.compared) << threads << " threads";
+  }
 }
 
 }  // namespace
