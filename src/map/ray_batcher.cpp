@@ -258,19 +258,17 @@ void RayBatcher::addPrepared(RayPreparer& preparer, std::span<const Ray> run,
 }
 
 std::span<Ray> RayBatcher::staging() {
-  if (staged_.capacity() < capacity_) {
-    if (!staged_.reserve(capacity_)) {
-      throw std::bad_alloc();  // as a std::vector of the batch would
-    }
-    // Touched now, at start-up: the integrator's real-time loop must not fault its pages in.
-    std::memset(static_cast<void*>(staged_.data()), 0, capacity_ * sizeof(Ray));
+  if (staged_.size() < capacity_) {
+    // Zeroed, so touched now, at start-up: the integrator's real-time loop must not fault its
+    // pages in.
+    staged_.assign(capacity_, Ray{});
   }
   return {staged_.data(), capacity_};
 }
 
 Expected<void, IntegrateError> RayBatcher::integrateStaged(RayPreparer& preparer, std::size_t first,
                                                            std::size_t count) noexcept {
-  RAYMAP_EXPECTS(staged_.capacity() >= capacity_ && first + count <= capacity_);
+  RAYMAP_EXPECTS(staged_.size() >= capacity_ && first + count <= capacity_);
   // What waits from add() for the device goes first (ray order), from raw_.
   Expected<void, IntegrateError> first_error = flushRaw();
   in_place_ = true;
