@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Depth frames to rays for `raymap simulate`: each frame is serialised as sensor_msgs/Image +
+// Depth frames to rays for simulated recordings: each frame is serialised as sensor_msgs/Image +
 // CameraInfo and decoded by msgs::decodeCameraInfo and msgs::decodeDepthImage, exactly as raymapd
 // and `raymap populate` read a real camera, so the simulated recordings test that code.
-#include "tools/raymap/simulate_depth.hpp"
+#include "src/sim/depth_frame_rays.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -13,20 +13,18 @@
 #include "src/msgs/depth_image.hpp"
 #include "src/msgs/depth_image_writer.hpp"
 
-namespace raymap::cli {
+namespace raymap::sim {
 namespace {
 
 /// The frame through the wire format and raymapd's decoders into optical-frame points.
-Expected<void, Error> pointsViaDecoder(const sim::DepthCamera& camera, double time_s,
+Expected<void, Error> pointsViaDecoder(const DepthCamera& camera, double time_s,
                                        std::span<const float> depth_m, DepthRayScratch& s) {
-  const sim::DepthCameraModel& m = camera.model();
+  const DepthCameraModel& m = camera.model();
   const auto stamp_ns = static_cast<std::int64_t>(std::llround(time_s * 1e9));
   const std::string frame_id = m.name + "_optical_frame";
   msgs::serializeCameraInfo(stamp_ns, frame_id, camera.intrinsics(), s.camera_info_cdr);
-  msgs::serializeDepthImage(stamp_ns, frame_id, m.width, m.height,
-                            m.encoding == sim::DepthEncoding::k16UC1 ? msgs::DepthEncoding::k16UC1
-                                                                     : msgs::DepthEncoding::k32FC1,
-                            false, depth_m, s.image_cdr);
+  msgs::serializeDepthImage(stamp_ns, frame_id, m.width, m.height, m.encoding, false, depth_m,
+                            s.image_cdr);
   const auto info = msgs::decodeCameraInfo(s.camera_info_cdr);
   if (!info) {
     return fail(ErrorCode::kFormat,
@@ -52,10 +50,10 @@ Expected<void, Error> pointsViaDecoder(const sim::DepthCamera& camera, double ti
 
 }  // namespace
 
-Expected<void, Error> appendDepthFrameRays(const sim::DepthCamera& camera,
-                                           const sim::CameraPose& pose, double time_s,
-                                           std::uint64_t scan, std::span<const float> depth_m,
-                                           DepthRayScratch& scratch, std::vector<Ray>& out) {
+Expected<void, Error> appendDepthFrameRays(const DepthCamera& camera, const CameraPose& pose,
+                                           double time_s, std::uint64_t scan,
+                                           std::span<const float> depth_m, DepthRayScratch& scratch,
+                                           std::vector<Ray>& out) {
   auto points = pointsViaDecoder(camera, time_s, depth_m, scratch);
   if (!points) {
     return points;
@@ -73,4 +71,4 @@ Expected<void, Error> appendDepthFrameRays(const sim::DepthCamera& camera,
   return {};
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::sim

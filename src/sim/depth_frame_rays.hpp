@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `raymap simulate`'s depth cameras: a rendered depth frame turned into world-frame rays, the way
-// raymapd turns a camera's Image + CameraInfo into rays.
+// Simulated depth cameras' frames as world-frame rays, the way raymapd turns a camera's Image +
+// CameraInfo into rays (raymap simulate's recordings, sim::recordScene).
 #pragma once
 
 #include <cstdint>
@@ -14,7 +14,7 @@
 #include "src/msgs/point_cloud.hpp"
 #include "src/sim/depth_camera.hpp"
 
-namespace raymap::cli {
+namespace raymap::sim {
 
 /// @brief Buffers reused from frame to frame. Not thread-safe: one per thread.
 struct DepthRayScratch {
@@ -32,9 +32,9 @@ struct DepthRayScratch {
 /// Each ray gets `time_s` and `scan`.
 /// @return an error when the frame cannot be serialised or decoded (a bug: the camera was
 /// validated).
-Expected<void, Error> appendDepthFrameRays(const sim::DepthCamera& camera,
-                                           const sim::CameraPose& pose, double time_s,
-                                           std::uint64_t scan, std::span<const float> depth_m,
-                                           DepthRayScratch& scratch, std::vector<Ray>& out);
+Expected<void, Error> appendDepthFrameRays(const DepthCamera& camera, const CameraPose& pose,
+                                           double time_s, std::uint64_t scan,
+                                           std::span<const float> depth_m, DepthRayScratch& scratch,
+                                           std::vector<Ray>& out);
 
-}  // namespace raymap::cli
+}  // namespace raymap::sim

@@ -17,9 +17,9 @@
 #include "src/io/ray_cloud_writer.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/sim/scene_file.hpp"
+#include "src/sim/scene_recording.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
-#include "tools/raymap/simulate_depth.hpp"
 #include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
@@ -43,12 +43,6 @@ struct SimulateFlags {
   std::optional<int> scans;
   std::vector<std::string> sensors;  ///< lidar, depth; empty = every sensor the scene has
   bool quiet = false;
-};
-
-/// The sensors that run: those named by --sensors, or all the scene has.
-struct Sensors {
-  bool lidar = false;
-  bool depth = false;
 };
 
 /// The xy rectangle of the truth grid.
@@ -172,75 +166,6 @@ Expected<void, Error> writeTrajectory(const sim::SimulationConfig& simulation,
   return io::saveTrajectory(*trajectory, path);
 }
 
-/// One sweep of the recording: a lidar revolution or a camera frame, at its start time.
-struct Sweep {
-  double time_s = 0.0;
-  int camera = -1;  ///< -1: the lidar's scan `index`; else depth_cameras[camera]'s frame `index`
-  int index = 0;
-};
-
-/// The rays of every sensor that runs, sweep by sweep in time order (the lidar first on a tie,
-/// then the cameras in file order), each sweep its own scan index from 0.
-Expected<void, Error> record(const sim::SceneFile& file, const Sensors& sensors, double duration_s,
-                             std::vector<Ray>& rays, std::uint64_t& depth_frames) {
-  const sim::SimulationConfig& simulation = file.simulation;
-  const double start = simulation.path.startTime();
-  std::vector<Sweep> sweeps;
-  std::vector<Ray> lidar;
-  if (sensors.lidar) {
-    lidar = sim::simulateScans(file.scene, simulation);
-    for (int s = 0; s < simulation.scans; ++s) {
-      sweeps.push_back({start + s * simulation.lidar.scan_period_s, -1, s});
-    }
-  }
-  std::vector<sim::DepthCamera> cameras;
-  if (sensors.depth) {
-    for (std::size_t c = 0; c < file.depth_cameras.size(); ++c) {
-      auto camera = sim::DepthCamera::create(file.depth_cameras[c]);
-      if (!camera) {
-        return Unexpected(camera.error());
-      }
-      const double rate = camera->model().rate_hz;
-      for (int i = 0; i < sim::frameCount(duration_s, rate); ++i) {
-        sweeps.push_back({start + i / rate, static_cast<int>(c), i});
-      }
-      cameras.push_back(std::move(*camera));
-    }
-  }
-  std::stable_sort(sweeps.begin(), sweeps.end(),
-                   [](const Sweep& a, const Sweep& b) { return a.time_s < b.time_s; });
-
-  rays.reserve(lidar.size());
-  std::size_t next_lidar = 0;  // lidar rays come scan by scan
-  std::vector<float> depth;
-  DepthRayScratch scratch;
-  for (std::size_t i = 0; i < sweeps.size(); ++i) {
-    const Sweep& sweep = sweeps[i];
-    if (sweep.camera < 0) {
-      for (; next_lidar < lidar.size() &&
-             lidar[next_lidar].scan == static_cast<std::uint64_t>(sweep.index);
-           ++next_lidar) {
-        rays.push_back(lidar[next_lidar]);
-        rays.back().scan = i;
-      }
-      continue;
-    }
-    const sim::DepthCamera& camera = cameras[static_cast<std::size_t>(sweep.camera)];
-    depth.resize(camera.pixels());
-    const sim::CameraPose pose =
-        sim::cameraPose(camera.model().mount, simulation.path.at(sweep.time_s));
-    camera.render(file.scene, pose,
-                  sim::frameSeed(simulation.seed, static_cast<std::uint32_t>(sweep.camera),
-                                 static_cast<std::uint32_t>(sweep.index)),
-                  depth);
-    if (auto ok = appendDepthFrameRays(camera, pose, sweep.time_s, i, depth, scratch, rays); !ok) {
-      return ok;
-    }
-    ++depth_frames;
-  }
-  return {};
-}
-
 /// Combinations of outputs the flags cannot make; prints why and returns false.
 bool checkOutputs(const SimulateFlags& f) {
   if (f.rays.empty() && f.points.empty() && f.truth.empty()) {
@@ -260,8 +185,9 @@ bool checkOutputs(const SimulateFlags& f) {
 
 /// The sensors the scene has, narrowed by --sensors; checks --scans and --points against them.
 /// Prints why not and returns nullopt.
-std::optional<Sensors> chooseSensors(const SimulateFlags& f, const sim::SceneFile& loaded) {
-  Sensors sensors{loaded.has_lidar, !loaded.depth_cameras.empty()};
+std::optional<sim::RecordedSensors> chooseSensors(const SimulateFlags& f,
+                                                  const sim::SceneFile& loaded) {
+  sim::RecordedSensors sensors{loaded.has_lidar, !loaded.depth_cameras.empty()};
   if (!f.sensors.empty()) {
     const auto named = [&f](const char* sensor) {
       return std::find(f.sensors.begin(), f.sensors.end(), sensor) != f.sensors.end();
@@ -415,7 +341,7 @@ int runSimulate(const SimulateFlags& f) {
   if (!f.rays.empty() || !f.points.empty()) {
     const double duration_s =
         f.scans ? *f.scans * simulation.lidar.scan_period_s : loaded->duration_s;
-    auto recorded = record(*loaded, *sensors, duration_s, made.rays, made.depth_frames);
+    auto recorded = sim::recordScene(*loaded, *sensors, duration_s, made.rays, made.depth_frames);
     if (!recorded) {
       printError(command, recorded.error().message);
       return kExitFailure;
