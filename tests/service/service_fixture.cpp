@@ -6,8 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <string>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include "platform/clock.hpp"
@@ -62,8 +66,32 @@ std::uint32_t uniqueDomain() {
   // traffic would leave the machine and large clouds would meet the default socket buffer.
   EXPECT_NE(std::getenv("CYCLONEDDS_URI"), nullptr)
       << "CYCLONEDDS_URI is not set: run the tests through ctest";
+  // Domains are handed out in turn across the test processes (a counter in a file, under an
+  // flock): two tests in a row never share one, so a participant the previous test left behind
+  // (a killed process's lease outlives it, 10 s by default) is never matched by the next test's
+  // readers; a domain comes back after kDomains others. Without the file: by process id.
+  constexpr std::uint32_t kFirst = 200;
+  constexpr std::uint32_t kDomains = 30;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "raymap-test-dds-domain-counter").string();
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (fd >= 0 && ::flock(fd, LOCK_EX) == 0) {
+    char text[24] = {};
+    const ssize_t got = ::pread(fd, text, sizeof(text) - 1, 0);
+    const unsigned long n = got > 0 ? std::strtoul(text, nullptr, 10) : 0UL;
+    const std::string next = std::to_string((n + 1) % kDomains) + "\n";
+    const bool saved = ::ftruncate(fd, 0) == 0 && ::pwrite(fd, next.data(), next.size(), 0) ==
+                                                      static_cast<ssize_t>(next.size());
+    ::flock(fd, LOCK_UN);
+    ::close(fd);
+    if (saved) {
+      return kFirst + static_cast<std::uint32_t>(n % kDomains);
+    }
+  } else if (fd >= 0) {
+    ::close(fd);
+  }
   static std::uint32_t next = 0;
-  return 200 + (static_cast<std::uint32_t>(::getpid()) % 10) * 3 + (next++ % 3);
+  return kFirst + (static_cast<std::uint32_t>(::getpid()) * 3 + next++) % kDomains;
 }
 
 std::string serviceConfig(std::uint32_t domain, const std::string& extra,

@@ -62,8 +62,9 @@ std::size_t fewestMaps(double seconds, double startup_s = 1.0);
 /// one) republishes the same data.
 void expectInOrderAtAboutFiveHertz(const std::vector<driver::ReceivedGridMap>& maps);
 
-/// @brief A DDS domain no other test uses at the same time (tests of this folder run serially,
-/// other test executables use 100 + pid % 100).
+/// @brief A DDS domain in 200..229 that the tests before this one did not use: handed out in
+/// turn across test processes (the end-to-end tests run one at a time; the unit DDS tests use
+/// 100 + pid % 100, the CLI ones 20..99).
 std::uint32_t uniqueDomain();
 
 /// @brief raymapd configuration for the tests: CPU backend, 12 m height map at 5 Hz, one lidar on
