@@ -43,7 +43,6 @@ Expected<void, Error> forEachPoint(const VoxelMap& map, ExportMode mode,
   RegionCursor cursor(map);
 
   const std::int32_t n = map.geometry().region_voxels;
-  const double resolution = map.geometry().resolution;
   const float threshold = map.occupancy().threshold;
   const int mean_layer = map.meanLayer();
   const auto decay_threshold = static_cast<float>(options.decay_threshold);
@@ -93,10 +92,7 @@ Expected<void, Error> forEachPoint(const VoxelMap& map, ExportMode mode,
           // Voxel-local mean in voxel units (the centre when the voxel has no samples).
           const rm_vec3f local =
               at_mean ? rm_mean_decode(mean.packed, mean.count) : rm_vec3f_make(0.5f, 0.5f, 0.5f);
-          point.p_world = map.voxelMinCorner(voxel) + Vec3d{static_cast<double>(local.x),
-                                                            static_cast<double>(local.y),
-                                                            static_cast<double>(local.z)} *
-                                                          resolution;
+          point.p_world = map.pointInVoxel(voxel, local);
           point.probability =
               observed ? static_cast<float>(probability(value)) : kUnobservedProbability;
           point.count = mean.count;

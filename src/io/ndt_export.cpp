@@ -71,10 +71,7 @@ Result<std::vector<Gaussian>> collect(const VoxelMap& map, const NdtExportOption
           const Vec3i voxel{region.x * n + x, region.y * n + y, region.z * n + z};
           Gaussian g;
           g.count = v.count;
-          g.mean_m = map.voxelMinCorner(voxel) + Vec3d{static_cast<double>(v.mean_x),
-                                                       static_cast<double>(v.mean_y),
-                                                       static_cast<double>(v.mean_z)} *
-                                                     resolution;
+          g.mean_m = map.pointInVoxel(voxel, rm_ndt_mean(&v));
           float p[6];
           rm_ndt_covariance(v.s, p);
           std::array<double, 6> p_m2{};  // metres squared

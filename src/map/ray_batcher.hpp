@@ -159,11 +159,13 @@ class RayBatcher {
   const Ray* raw_view_ = nullptr;
   /// The rays waiting for the device: raw_'s, or the staging room's in place.
   const Ray* rawData() const noexcept { return in_place_ ? raw_view_ : raw_.data(); }
-  std::vector<Ray> staged_;              // staging(): a caller's batch of world rays (all touched)
   RayPreparer* raw_preparer_ = nullptr;  // the preparer of the rays in raw_
   rm_prepare_params raw_params_{};       // and its parameters when the first of them came
   bool scan_on_host_ = false;            // per-scan: this scan outgrew the batch, host prepares
   platform::PageArray<Ray> deskewed_;    // integratePoints(): points the host deskews
+
+  // ---- a caller's own batch (staging(), integrateStaged()) ----
+  std::vector<Ray> staged_;  // world rays, all touched at start-up
 };
 
 /// @brief The error a failed batch means for whoever integrates: a full store is kCapacity ("the

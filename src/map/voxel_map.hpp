@@ -184,6 +184,13 @@ class VoxelMap {
   }
   Vec3d voxelMinCorner(Vec3i voxel) const noexcept;
   Vec3d voxelCentre(Vec3i voxel) const noexcept;
+  /// @brief World position (metres) of a point the layers keep in voxel units from the voxel's
+  /// minimum corner (the voxel mean, an NDT Gaussian's mean).
+  Vec3d pointInVoxel(Vec3i voxel, rm_vec3f local) const noexcept {
+    return voxelMinCorner(voxel) + Vec3d{static_cast<double>(local.x), static_cast<double>(local.y),
+                                         static_cast<double>(local.z)} *
+                                       config_.geometry.resolution;
+  }
   Vec3i regionOfVoxel(Vec3i voxel) const noexcept;
   /// @brief Global voxel of the voxel at linear `index` of `region` (see
   /// kernels/common/key_math.h).

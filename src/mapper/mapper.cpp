@@ -374,12 +374,7 @@ VoxelInfo Mapper::voxel(const VoxelKey& key) const noexcept {
     const rm_voxel_mean mean = map.mean(v);
     info.samples = mean.count;
     if (mean.count > 0) {
-      const rm_vec3f local = rm_mean_decode(mean.packed, mean.count);
-      const Vec3d corner = map.voxelMinCorner(v);
-      const double r = map.geometry().resolution;
-      info.mean = Eigen::Vector3d(corner.x + static_cast<double>(local.x) * r,
-                                  corner.y + static_cast<double>(local.y) * r,
-                                  corner.z + static_cast<double>(local.z) * r);
+      info.mean = toEigen(map.pointInVoxel(v, rm_mean_decode(mean.packed, mean.count)));
     }
   }
   info.ndt = mapper::ndtVoxel(map, v);

@@ -3,9 +3,7 @@
 // points, poses and intrinsics as raymapd and the bag reader get.
 #include "raymap/ros_messages.hpp"
 
-#include <algorithm>
-#include <cstring>
-
+#include "src/io/trajectory.hpp"
 #include "src/msgs/camera_info.hpp"
 #include "src/msgs/point_cloud.hpp"
 #include "src/msgs/pose.hpp"
@@ -19,8 +17,8 @@ constexpr std::size_t kSmallestPointBytes = 12;
 /// TF messages carry a few hundred transforms at most; one takes at least this many bytes.
 constexpr std::size_t kSmallestTransformBytes = 64;
 
-Error decodeError(const char* type, const char* reason) {
-  return Error{ErrorCode::kInvalidArgument, std::string(type) + ": " + reason};
+Unexpected<Error> decodeError(const char* type, const char* reason) {
+  return fail(ErrorCode::kInvalidArgument, std::string(type) + ": " + reason);
 }
 
 StampedTransform toPublic(const msgs::StampedTransform& t) {
@@ -28,8 +26,7 @@ StampedTransform toPublic(const msgs::StampedTransform& t) {
   out.stamp_ns = t.stamp_ns;
   out.parent_frame = t.parent;
   out.child_frame = t.child;
-  out.transform.linear() = Eigen::Quaterniond(t.qw, t.qx, t.qy, t.qz).toRotationMatrix();
-  out.transform.translation() = Eigen::Vector3d(t.tx, t.ty, t.tz);
+  out.transform = io::Pose{{t.tx, t.ty, t.tz}, {t.qw, t.qx, t.qy, t.qz}}.toIsometry();
   return out;
 }
 
@@ -47,7 +44,7 @@ Result<PointCloud> decodePointCloud2(std::span<const std::byte> cdr,
   std::vector<msgs::ScanPoint> points(cdr.size() / kSmallestPointBytes + 1);
   const auto header = msgs::decodePointCloud2(cdr, points, settings);
   if (!header) {
-    return Unexpected(decodeError("sensor_msgs/PointCloud2", msgs::toString(header.error())));
+    return decodeError("sensor_msgs/PointCloud2", msgs::toString(header.error()));
   }
   PointCloud cloud;
   cloud.stamp_ns = header->stamp_ns;
@@ -74,7 +71,7 @@ Result<PointCloud> decodePointCloud2(std::span<const std::byte> cdr,
 Result<StampedTransform> decodeOdometry(std::span<const std::byte> cdr) {
   const auto t = msgs::decodeOdometry(cdr);
   if (!t) {
-    return Unexpected(decodeError("nav_msgs/Odometry", msgs::toString(t.error())));
+    return decodeError("nav_msgs/Odometry", msgs::toString(t.error()));
   }
   return toPublic(*t);
 }
@@ -83,7 +80,7 @@ Result<std::vector<StampedTransform>> decodeTfMessage(std::span<const std::byte>
   std::vector<msgs::StampedTransform> decoded(cdr.size() / kSmallestTransformBytes + 1);
   const auto n = msgs::decodeTfMessage(cdr, decoded);
   if (!n) {
-    return Unexpected(decodeError("tf2_msgs/TFMessage", msgs::toString(n.error())));
+    return decodeError("tf2_msgs/TFMessage", msgs::toString(n.error()));
   }
   std::vector<StampedTransform> out;
   out.reserve(*n);
@@ -96,7 +93,7 @@ Result<std::vector<StampedTransform>> decodeTfMessage(std::span<const std::byte>
 Result<CameraInfo> decodeCameraInfo(std::span<const std::byte> cdr) {
   const auto info = msgs::decodeCameraInfo(cdr);
   if (!info) {
-    return Unexpected(decodeError("sensor_msgs/CameraInfo", msgs::toString(info.error())));
+    return decodeError("sensor_msgs/CameraInfo", msgs::toString(info.error()));
   }
   return CameraInfo{info->stamp_ns, info->frame_id, info->camera};
 }

@@ -5,6 +5,7 @@
 
 #include "kernels/common/decay.h"
 #include "kernels/common/ndt.h"
+#include "src/core/eigen_conversions.hpp"
 
 namespace raymap::mapper {
 
@@ -19,12 +20,9 @@ std::optional<NdtVoxelInfo> ndtVoxel(const VoxelMap& map, Vec3i voxel) noexcept 
   // The layer keeps the mean from the voxel's minimum corner and the covariance's square-root
   // factor, both in voxel units (kernels/common/ndt.h).
   const double r = map.geometry().resolution;
-  const Vec3d corner = map.voxelMinCorner(voxel);
   NdtVoxelInfo info;
   info.samples = v.count;
-  info.mean = Eigen::Vector3d(corner.x + static_cast<double>(v.mean_x) * r,
-                              corner.y + static_cast<double>(v.mean_y) * r,
-                              corner.z + static_cast<double>(v.mean_z) * r);
+  info.mean = toEigen(map.pointInVoxel(voxel, rm_ndt_mean(&v)));
   float p[6];
   rm_ndt_covariance(v.s, p);  // packed lower triangle by rows: 00, 10, 11, 20, 21, 22
   const int row[6] = {0, 1, 1, 2, 2, 2};

@@ -29,13 +29,13 @@ constexpr Field kOusterFields[] = {
     {"range", 32, PointFieldType::kUInt32},
 };
 
-/// The point's time after the stamp in whole nanoseconds, within uint32 (about 4.3 s).
-std::uint32_t offsetNs(float time_s) noexcept {
-  const double ns = std::nearbyint(static_cast<double>(time_s) * 1e9);
-  if (!(ns > 0.0)) {
-    return 0;  // negative or NaN
+/// `value` rounded to a uint32 field: NaN and negatives 0, beyond the field its largest value.
+std::uint32_t roundedUInt32(double value) noexcept {
+  const double rounded = std::nearbyint(value);
+  if (!(rounded > 0.0)) {
+    return 0;
   }
-  return ns >= 4294967295.0 ? 0xFFFFFFFFu : static_cast<std::uint32_t>(ns);
+  return rounded >= 4294967295.0 ? 0xFFFFFFFFu : static_cast<std::uint32_t>(rounded);
 }
 
 /// One point in the layout, little-endian (is_bigendian false); padding zeroed.
@@ -49,13 +49,12 @@ void putPoint(std::byte* at, const ScanPoint& p, std::uint16_t ring) noexcept {
   storeLe(at + 4, y);
   storeLe(at + 8, z);
   storeLe(at + 16, p.intensity);
-  storeLe(at + 20, offsetNs(p.time_s));
+  storeLe(at + 20, roundedUInt32(static_cast<double>(p.time_s) * 1e9));  // ns after the stamp
   storeLe(at + 26, ring);
   const double dx = static_cast<double>(x);
   const double dy = static_cast<double>(y);
   const double dz = static_cast<double>(z);
-  const double range_mm = std::nearbyint(1000.0 * std::sqrt(dx * dx + dy * dy + dz * dz));
-  storeLe(at + 32, range_mm >= 4294967295.0 ? 0xFFFFFFFFu : static_cast<std::uint32_t>(range_mm));
+  storeLe(at + 32, roundedUInt32(1000.0 * std::sqrt(dx * dx + dy * dy + dz * dz)));  // mm
 }
 
 }  // namespace

@@ -10,7 +10,6 @@
 #include <limits>
 #include <span>
 
-#include "src/core/eigen_conversions.hpp"
 #include "src/io/sensor_ray.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/map/ray.hpp"
