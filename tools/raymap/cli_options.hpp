@@ -101,7 +101,7 @@ Result<PopulateOptions> toPopulateOptions(const std::string& input, const Mappin
 Result<Vec3d> parseVector(const std::string& text, const std::string& option);
 
 /// @brief Writes `text` and a newline to `path` (temporary file + rename; a staged temporary
-/// of StagedOutputs in place).
+/// of io::StagedOutputs in place).
 Expected<void, Error> writeTextFile(const std::string& path, const std::string& text);
 
 }  // namespace raymap::cli

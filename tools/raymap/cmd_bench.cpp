@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "platform/process.hpp"
+#include "src/io/staged_outputs.hpp"
 #include "src/mapper/recording.hpp"
 #include "tools/raymap/bench_heightmaps.hpp"
 #include "tools/raymap/cli_options.hpp"
@@ -17,7 +18,6 @@
 #include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/populate.hpp"
-#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -221,7 +221,7 @@ int runBench(const BenchFlags& f) {
     return kExitUsage;
   }
   base->progress = false;
-  StagedOutputs staged(command);
+  io::StagedOutputs staged(command);
   staged.input(f.input, "the input");
   staged.input(f.mapping.trajectory, "--trajectory");
   std::string json_temp;

@@ -21,11 +21,11 @@
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/ray_cloud_writer.hpp"
+#include "src/io/staged_outputs.hpp"
 #include "src/sim/scene.hpp"
 #include "src/sim/yard_scan.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/populate.hpp"
-#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -168,7 +168,7 @@ struct DemoFiles {
 
 /// Stages the four files in `f.output_dir`. Prints the error and returns nothing when one
 /// cannot be.
-std::optional<DemoFiles> stageFiles(const DemoFlags& f, StagedOutputs& staged) {
+std::optional<DemoFiles> stageFiles(const DemoFlags& f, io::StagedOutputs& staged) {
   DemoFiles files;
   files.cloud = f.output_dir + "/yard_raycloud.ply";
   files.map = f.output_dir + "/yard.rmap";
@@ -266,7 +266,7 @@ void printDemoSummary(const DemoFlags& f, const DemoFiles& files, std::size_t ra
 
 /// The demo's work, its files staged in `staged` (renamed into place at the end, so a failure
 /// leaves none of them). @return the exit code.
-int demoInto(const DemoFlags& f, StagedOutputs& staged) {
+int demoInto(const DemoFlags& f, io::StagedOutputs& staged) {
   const char* command = "demo";
   const auto files = stageFiles(f, staged);
   if (!files) {
@@ -325,7 +325,7 @@ int runDemo(const DemoFlags& f) {
   }
   int code = kExitFailure;
   {
-    StagedOutputs staged("demo");
+    io::StagedOutputs staged("demo");
     code = demoInto(f, staged);
   }
   if (code != kExitOk && created) {

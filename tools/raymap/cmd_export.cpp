@@ -11,10 +11,10 @@
 #include "src/io/map_exports.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/ndt_export.hpp"
+#include "src/io/staged_outputs.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/memory_tiers.hpp"
-#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -35,7 +35,7 @@ struct ExportFlags {
 
 /// Stages --ply (refused when it is the map, failing when it cannot be written), then loads the
 /// map; prints why not and returns nullopt. `*ply_temp` is the name to write the PLY to.
-std::optional<VoxelMap> openMapForExport(const ExportFlags& f, StagedOutputs& staged,
+std::optional<VoxelMap> openMapForExport(const ExportFlags& f, io::StagedOutputs& staged,
                                          std::string* ply_temp, int* exit_code) {
   staged.input(f.map, "the map");
   auto temp = staged.add(f.ply, "--ply");
@@ -62,7 +62,7 @@ std::optional<VoxelMap> openMapForExport(const ExportFlags& f, StagedOutputs& st
 
 /// Puts the written PLY in place; prints why not. A tiered map that could not read a region back
 /// (a damaged spill file) wrote an incomplete PLY: it is not committed. @return the exit code.
-int commitExport(StagedOutputs& staged, const VoxelMap& map) {
+int commitExport(io::StagedOutputs& staged, const VoxelMap& map) {
   if (auto ok = checkTiers(map); !ok) {
     printError("export", ok.error().message);
     return kExitFailure;
@@ -143,7 +143,7 @@ int runExport(const ExportFlags& f) {
   if (!request) {
     return kExitUsage;
   }
-  StagedOutputs staged("export");
+  io::StagedOutputs staged("export");
   std::string ply;
   int exit_code = kExitOk;
   auto map = openMapForExport(f, staged, &ply, &exit_code);

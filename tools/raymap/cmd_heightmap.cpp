@@ -16,12 +16,12 @@
 #include "src/heightmap/heightmap_plan.hpp"
 #include "src/io/heightmap_export.hpp"
 #include "src/io/map_file.hpp"
+#include "src/io/staged_outputs.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_output.hpp"
 #include "tools/raymap/memory_tiers.hpp"
 #include "tools/raymap/option_names.hpp"
-#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -222,7 +222,8 @@ bool generate(const HeightmapFlags& f, const VoxelMap& map, const heightmap::Hei
 /// Writes the staged outputs and puts them in place (a tiered map that lost a region on the way
 /// commits nothing); prints why not.
 bool writeOutputs(const HeightmapFlags& f, const VoxelMap& map, const heightmap::HeightMap& result,
-                  StagedOutputs& staged, const std::string& png_temp, const std::string& csv_temp) {
+                  io::StagedOutputs& staged, const std::string& png_temp,
+                  const std::string& csv_temp) {
   if (!f.png.empty()) {
     if (auto ok = io::writeHeightmapPng(png_temp, result); !ok) {
       printError("heightmap", "--png: " + ok.error().message);
@@ -257,7 +258,7 @@ int runHeightmap(const HeightmapFlags& f) {
   }
   // Both files are staged now (an unwritable one fails before the work) and renamed together
   // at the end: a failure leaves neither.
-  StagedOutputs staged("heightmap");
+  io::StagedOutputs staged("heightmap");
   staged.input(f.map, "the map");
   std::string png_temp;
   std::string csv_temp;

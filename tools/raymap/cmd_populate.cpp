@@ -14,13 +14,13 @@
 #include "src/bag/bag_reader.hpp"
 #include "src/io/map_export.hpp"
 #include "src/io/map_file.hpp"
+#include "src/io/staged_outputs.hpp"
 #include "src/mapper/pool_fit.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
 #include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
 #include "tools/raymap/populate.hpp"
-#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -139,7 +139,7 @@ struct PopulateTemps {
 
 /// Stages every output under a temporary name; prints why not and returns the exit code (0 when
 /// all were staged).
-int stageOutputs(const PopulateFlags& f, StagedOutputs& staged, PopulateTemps& temps) {
+int stageOutputs(const PopulateFlags& f, io::StagedOutputs& staged, PopulateTemps& temps) {
   staged.input(f.input, "the input");
   staged.input(f.mapping.trajectory, "--trajectory");
   for (const auto& [path, name, temp] :
@@ -258,7 +258,7 @@ int runPopulate(const PopulateFlags& f) {
   // Every output is staged under a temporary name now, so that an output that is an input or
   // cannot be written fails before minutes are spent on the input, and all are renamed at the
   // end: a run that fails part-way leaves none of them and existing files untouched.
-  StagedOutputs staged(command);
+  io::StagedOutputs staged(command);
   PopulateTemps temps;
   if (const int staged_code = stageOutputs(f, staged, temps); staged_code != kExitOk) {
     return staged_code;

@@ -14,6 +14,7 @@
 #include "platform/clock.hpp"
 #include "src/bag/bag_reader.hpp"
 #include "src/dds/topic_types.hpp"
+#include "src/io/staged_outputs.hpp"
 #include "src/msgs/ros_names.hpp"
 #include "src/replay/replay_session.hpp"
 #include "tools/raymap/cli_options.hpp"
@@ -21,7 +22,6 @@
 #include "tools/raymap/dds_cli.hpp"
 #include "tools/raymap/json_output.hpp"
 #include "tools/raymap/option_names.hpp"
-#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -193,7 +193,7 @@ int runReplay(const ReplayFlags& flags) {
                    topic.c_str());
     };
   }
-  StagedOutputs staged("replay");
+  io::StagedOutputs staged("replay");
   for (const std::string& input : flags.inputs) {
     staged.input(input, "the input");
   }

@@ -15,12 +15,12 @@
 
 #include "src/core/eigen_conversions.hpp"
 #include "src/io/ray_cloud_writer.hpp"
+#include "src/io/staged_outputs.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/sim/scene_file.hpp"
 #include "src/sim/scene_recording.hpp"
 #include "tools/raymap/cli_options.hpp"
 #include "tools/raymap/commands.hpp"
-#include "tools/raymap/staged_outputs.hpp"
 
 namespace raymap::cli {
 namespace {
@@ -297,7 +297,7 @@ int runSimulate(const SimulateFlags& f) {
   }
   // Staged before the work (an output that is the scene or cannot be written fails now) and
   // renamed together at the end.
-  StagedOutputs staged(command);
+  io::StagedOutputs staged(command);
   staged.input(f.scene, "the scene file");
   SimulateTemps temps;
   for (const auto& [path, name, temp] :

@@ -39,6 +39,12 @@ void addRecordCommand(CLI::App& app, int* exit_code);
 /// `raymap security`: SROS2 keystores, enclaves and permissions for DDS Security.
 void addSecurityCommand(CLI::App& app, int* exit_code);
 
+/// @brief The exit code for an error of io::StagedOutputs::add(): kExitUsage for a conflict
+/// between the arguments (an output that is an input), kExitFailure otherwise.
+inline int exitCodeFor(const Error& error) noexcept {
+  return error.code == ErrorCode::kInvalidArgument ? kExitUsage : kExitFailure;
+}
+
 /// @brief Prints "raymap <command>: error: <message>" on stderr.
 void printError(const std::string& command, const std::string& message);
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-namespace raymap::cli {
+namespace raymap::platform {
 
 /// @brief A process-wide list of temporary files that a handler of SIGINT, SIGTERM and SIGHUP
 /// removes before the process ends by that signal (so the shell sees the usual 128 + N), with a
@@ -37,4 +37,4 @@ class InterruptCleanup {
   };
 };
 
-}  // namespace raymap::cli
+}  // namespace raymap::platform

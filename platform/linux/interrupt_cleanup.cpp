@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // InterruptCleanup: fixed static slots that a signal handler unlinks, then the default action.
-#include "tools/raymap/interrupt_cleanup.hpp"
+#include "platform/interrupt_cleanup.hpp"
 
 #include <algorithm>
 #include <array>
@@ -11,7 +11,7 @@
 #include <signal.h>
 #include <unistd.h>
 
-namespace raymap::cli {
+namespace raymap::platform {
 namespace {
 
 constexpr int kSlots = 32;
@@ -153,4 +153,4 @@ InterruptCleanup::Deferral::~Deferral() {
   }
 }
 
-}  // namespace raymap::cli
+}  // namespace raymap::platform

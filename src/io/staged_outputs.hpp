@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// A command's output files: all of them appear, or none (docs/cli.md, "Output files").
+// A program's output files: all of them appear, or none (docs/cli.md, "Output files").
 #pragma once
 
 #include <string>
@@ -7,12 +7,13 @@
 
 #include "raymap/error.hpp"
 
-namespace raymap::cli {
+namespace raymap::io {
 
 /// @brief The output files of one command, staged under temporary names
 /// (io::temporaryPathFor(): "<path>.raymap-tmp-<pid>") and renamed into place together by
 /// commit(). Whatever was not committed is removed on destruction, on SIGINT, SIGTERM and SIGHUP
-/// (InterruptCleanup), and, after a SIGKILL, by the next command that writes the same output.
+/// (platform::InterruptCleanup), and, after a SIGKILL, by the next command that writes the same
+/// output.
 ///
 /// Declare the inputs first, then add() every output before the work starts: add() refuses an
 /// output that is an input or another output, and creates the temporary file, so an unwritable
@@ -60,8 +61,4 @@ class StagedOutputs {
   std::vector<Output> outputs_;
 };
 
-/// @brief The exit code for an error of StagedOutputs::add(): kExitUsage for a conflict between
-/// the arguments, kExitFailure otherwise.
-int exitCodeFor(const Error& error) noexcept;
-
-}  // namespace raymap::cli
+}  // namespace raymap::io

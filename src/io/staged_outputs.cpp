@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // StagedOutputs: refuse outputs that are inputs, create temporaries up front, rename together.
-#include "tools/raymap/staged_outputs.hpp"
+#include "src/io/staged_outputs.hpp"
 
 #include <cerrno>
 #include <cstdio>
@@ -15,11 +15,10 @@
 #include <unistd.h>
 
 #include "platform/errno_text.hpp"
+#include "platform/interrupt_cleanup.hpp"
 #include "src/io/temp_files.hpp"
-#include "tools/raymap/commands.hpp"
-#include "tools/raymap/interrupt_cleanup.hpp"
 
-namespace raymap::cli {
+namespace raymap::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -61,7 +60,8 @@ StagedOutputs::~StagedOutputs() { removeAll(); }
 void StagedOutputs::removeAll() noexcept {
   for (const Output& output : outputs_) {
     ::unlink(output.temp.c_str());
-    InterruptCleanup::remove(output.signal_slot);  // after the unlink: a signal still finds it
+    platform::InterruptCleanup::remove(
+        output.signal_slot);  // after the unlink: a signal still finds it
   }
   outputs_.clear();
 }
@@ -113,7 +113,7 @@ Result<std::string> StagedOutputs::add(const std::string& path, const std::strin
 
   Output output{path, option, io::temporaryPathFor(path), -1};
   // Registered before it exists, so that no moment has the file without its clean-up.
-  output.signal_slot = InterruptCleanup::add(command_, output.temp);
+  output.signal_slot = platform::InterruptCleanup::add(command_, output.temp);
   // A file of this name can only be a leftover of an earlier process with our pid.
   ::unlink(output.temp.c_str());
   // Creating the temporary is the writability check. O_NOFOLLOW: the name is predictable, so a
@@ -122,7 +122,7 @@ Result<std::string> StagedOutputs::add(const std::string& path, const std::strin
       ::open(output.temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
   if (fd < 0) {
     const std::string reason = platform::errnoText(errno);
-    InterruptCleanup::remove(output.signal_slot);
+    platform::InterruptCleanup::remove(output.signal_slot);
     return fail(ErrorCode::kIo, option + ": cannot write '" + path + "': " + reason);
   }
   ::close(fd);
@@ -132,7 +132,7 @@ Result<std::string> StagedOutputs::add(const std::string& path, const std::strin
 
 Expected<void, Error> StagedOutputs::commit() {
   // The renames are quick; a Ctrl-C among them waits, so the outputs are all there or none.
-  const InterruptCleanup::Deferral deferral;
+  const platform::InterruptCleanup::Deferral deferral;
   std::set<std::string> directories;
   for (std::size_t i = 0; i < outputs_.size(); ++i) {
     const Output& output = outputs_[i];
@@ -144,7 +144,7 @@ Expected<void, Error> StagedOutputs::commit() {
       removeAll();
       return fail(ErrorCode::kIo, option + ": cannot put '" + path + "' in place: " + reason);
     }
-    InterruptCleanup::remove(output.signal_slot);
+    platform::InterruptCleanup::remove(output.signal_slot);
     directories.insert(directoryOf(output.path));
   }
   outputs_.clear();
@@ -160,8 +160,4 @@ Expected<void, Error> StagedOutputs::commit() {
   return {};
 }
 
-int exitCodeFor(const Error& error) noexcept {
-  return error.code == ErrorCode::kInvalidArgument ? kExitUsage : kExitFailure;
-}
-
-}  // namespace raymap::cli
+}  // namespace raymap::io
