@@ -10,12 +10,60 @@
 #include "raymap/recording.hpp"
 #include <gtest/gtest.h>
 
+#include "src/bag/bag_summary.hpp"
 #include "tests/rosbag/bag_fixture.hpp"
 #include "tests/rosbag/depth_bag.hpp"
 #include "tests/support/same_map.hpp"
 
 namespace raymap::test {
 namespace {
+
+/// The messages bag::summariseBag counted on `topic`, or -1 when the summary lacks the topic.
+std::int64_t messagesOn(const bag::BagSummary& summary, const std::string& topic) {
+  for (const bag::TopicSummary& t : summary.topics) {
+    if (t.topic.name == topic) {
+      return static_cast<std::int64_t>(t.messages);
+    }
+  }
+  return -1;
+}
+
+TEST(LibraryBags, ASummaryCountsEachTopicFromTheMcapSummaryOrFromTheMessages) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const Drive drive = makeDrive(dir, DrivePoses::kOdometry, 4);
+  const std::string indexed = dir.file("indexed.mcap");
+  const std::string unindexed = dir.file("unindexed.mcap");
+  writeBag(drive.spec, indexed, {"--file-only", "--compression", "zstd"});
+  writeBag(drive.spec, unindexed, {"--file-only", "--unindexed"});
+
+  const Result<bag::BagSummary> stated = bag::summariseBag(indexed, false);
+  const Result<bag::BagSummary> counted = bag::summariseBag(indexed, true);
+  const Result<bag::BagSummary> linear = bag::summariseBag(unindexed, false);
+  const Result<bag::BagSummary> missing = bag::summariseBag(dir.file("none.mcap"), false);
+
+  for (const Result<bag::BagSummary>* s : {&stated, &counted, &linear}) {
+    ASSERT_TRUE(s->has_value()) << s->error().message;
+    EXPECT_EQ((*s)->storage, "mcap");
+    // 4 clouds, the odometry around them and one /tf_static.
+    EXPECT_EQ((*s)->messages, 4u + 1u + 51u);
+    EXPECT_EQ(messagesOn(**s, "/ouster/points"), 4);
+    EXPECT_EQ(messagesOn(**s, "/tf_static"), 1);
+    EXPECT_EQ((*s)->start_ns, counted->start_ns);
+    EXPECT_EQ((*s)->end_ns, counted->end_ns);
+    EXPECT_FALSE((*s)->truncated);
+  }
+  EXPECT_TRUE(stated->from_summary);
+  EXPECT_FALSE(counted->from_summary);
+  EXPECT_FALSE(linear->from_summary);
+  EXPECT_LT(counted->start_ns, counted->end_ns);
+  for (const bag::TopicSummary& topic : counted->topics) {
+    EXPECT_GT(topic.bytes, 0u) << topic.topic.name;  // counted: the bytes are known
+  }
+  ASSERT_FALSE(missing.has_value());
+  EXPECT_NE(missing.error().message.find("none.mcap"), std::string::npos)
+      << missing.error().message;
+}
 
 TEST(LibraryBags, LidarCloudsWithOdometryOrATfChainMapAsPopulateMapsThem) {
   REQUIRE_NODE_HARNESS();
