@@ -28,7 +28,8 @@ if find "$prefix/include" -name '*.hpp' -exec grep -lE '#include "(src|platform|
 fi
 
 cp -r examples "$work/examples"  # outside the source tree: only the installed package is there
-for example in map_ray_cloud heightmap_from_scans map_recording map_outputs depth_camera; do
+for example in map_ray_cloud heightmap_from_scans map_recording map_outputs depth_camera \
+  ros_messages; do
   echo "== example $example against the installed package"
   cmake -S "$work/examples/$example" -B "$work/build-$example" -G Ninja \
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >"$work/$example-configure.log" ||
@@ -127,4 +128,12 @@ for rolling in "" --rolling; do
   [ "$(wc -l <"$work/heightmap.csv")" -eq 10001 ] ||
     { echo "check-install: the height-map CSV does not have 100 x 100 cells" >&2; exit 1; }
 done
-echo "check-install: the installed package builds and runs the five examples"
+echo "== ros_messages: serialized Odometry and PointCloud2 decoded, the sweeps deskewed"
+"$work/build-ros_messages/ros_messages" | tee "$work/ros.txt" ||
+  { echo "check-install: ros_messages failed" >&2; exit 1; }
+for expected in "clouds 10" "points 14400" "points_no_pose 0" \
+  "voxel at (7.75, -0.05, 1.05): free" "damaged cloud: sensor_msgs/PointCloud2: truncated"; do
+  grep -qF "$expected" "$work/ros.txt" ||
+    { echo "check-install: ros_messages: not '$expected'" >&2; exit 1; }
+done
+echo "check-install: the installed package builds and runs the six examples"
