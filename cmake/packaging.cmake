@@ -23,7 +23,8 @@ set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
 set(CPACK_PACKAGE_DESCRIPTION "raymap integrates lidar rays into 3D occupancy maps on the CPU, \
 OpenCL or CUDA and publishes robot-centric height maps over DDS (raymapd, a systemd service). \
 The raymap command line builds maps from files and rosbag2 bags; the C++ library \
-(find_package(raymap), raymap::Mapper) embeds the mapper in other programs.")
+(find_package(raymap), raymap::Mapper) embeds the mapper in other programs, and the Python \
+module (import raymap, with NumPy) scripts it.")
 set(CPACK_GENERATOR DEB)
 # Install as `cmake --install --prefix /usr` would, into the package's staging tree (DESTDIR), so
 # that the install-time paths (/etc/raymapd, the unit's ExecStart) are the final ones.
@@ -34,6 +35,11 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")
+# The Python module (/usr/lib/python3/dist-packages/raymap, where built) needs Debian's python3
+# and NumPy; the service and the command line do not, so they are recommended, not required.
+if(RAYMAP_HAVE_PYTHON)
+  set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3 (>= 3.11), python3 (<< 3.12), python3-numpy")
+endif()
 # Building against the installed library needs Eigen, zlib, zstd and libpng headers (its static
 # libraries link them), for bags yaml-cpp's, lz4's, SQLite's and Boost's, and OpenCL's where the
 # package was built with OpenCL.

@@ -57,6 +57,19 @@ in_root apt-get install -y -qq --no-install-recommends /tmp/raymap.deb >"$build/
 in_root raymap --version
 in_root raymapd --check-config /etc/raymapd/raymapd.yaml
 in_root raymap-load --help >/dev/null
+if [ -d "$root/usr/lib/python3/dist-packages/raymap" ]; then
+  # The Python module with Debian's python3 and NumPy (Recommends:), mapping a ring of points
+  # (-B: no __pycache__ left for the removal below to find).
+  in_root apt-get install -y -qq --no-install-recommends python3-numpy >"$build/deb-python.log" 2>&1 ||
+    { tail -30 "$build/deb-python.log" >&2; exit 1; }
+  in_root python3 -B -c 'import numpy as np, raymap
+a = np.linspace(0, 2 * np.pi, 360, endpoint=False)
+m = raymap.Mapper()
+m.integrate(np.stack([5 * np.cos(a), 5 * np.sin(a), 0 * a], 1), np.eye(4))
+m.flush()
+assert m.counts()["voxels_occupied"] > 100, m.counts()
+print("import raymap", raymap.__version__, m.counts())'
+fi
 grep -q '^ExecStart=/usr/bin/raymapd --config /etc/raymapd/raymapd.yaml' \
   "$root/usr/lib/systemd/system/raymapd.service" ||
   { echo "check-deb: the installed unit does not start /usr/bin/raymapd" >&2; exit 1; }
@@ -64,7 +77,8 @@ in_root getent passwd raymapd >/dev/null || { echo "check-deb: no raymapd user" 
 
 echo "== apt-get remove, then purge"
 in_root apt-get remove -y -qq raymap >/dev/null
-for gone in usr/bin/raymap usr/bin/raymapd usr/include/raymap/mapper.hpp; do
+for gone in usr/bin/raymap usr/bin/raymapd usr/include/raymap/mapper.hpp \
+  usr/lib/python3/dist-packages/raymap; do
   [ ! -e "$root/$gone" ] || { echo "check-deb: /$gone survived removal" >&2; exit 1; }
 done
 [ -f "$root/etc/raymapd/raymapd.yaml" ] ||

@@ -136,4 +136,22 @@ for expected in "clouds 10" "points 14400" "points_no_pose 0" \
   grep -qF "$expected" "$work/ros.txt" ||
     { echo "check-install: ros_messages: not '$expected'" >&2; exit 1; }
 done
+if [ -d "$prefix/lib/python3/dist-packages/raymap" ]; then
+  echo "== the installed Python module maps the room as raymap populate does"
+  PYTHONPATH="$prefix/lib/python3/dist-packages" /usr/bin/python3 -B - "$work/room.ply" <<'PY' |
+import sys, raymap
+mapper = raymap.Mapper(semantics="ray")
+for scan in raymap.read_recording(sys.argv[1]):
+    mapper.integrate_rays(scan.origins, scan.ends, intensities=scan.intensities,
+                          no_return=scan.no_return)
+mapper.flush()
+print(f"voxels_occupied {mapper.counts()['voxels_occupied']}")
+print(f"voxels_free {mapper.counts()['voxels_free']}")
+PY
+    tee "$work/python.txt"
+  for key in voxels_occupied voxels_free; do
+    [ "$(count "$key" "$work/python.txt")" = "$(count "$key" "$work/populate-ray.json")" ] ||
+      { echo "check-install: the installed Python module's $key differs from populate's" >&2; exit 1; }
+  done
+fi
 echo "check-install: the installed package builds and runs the six examples"

@@ -24,6 +24,7 @@ packages=(
   clang libclang-rt-14-dev clang-tidy  # the asan/tsan/fuzz presets (libFuzzer), clang-tidy
   patchelf                # tools/device-kit.sh: the kit's executables find its own libraries
   dpkg-dev file           # cpack -G DEB: dpkg-shlibdeps computes Depends: (tools/check-deb.sh)
+  pybind11-dev python3-dev python3-numpy python3-pytest  # `import raymap` (python/) and its tests
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -178,6 +178,40 @@ Expected<void, Error> applyWindow(const MapOptions& options, MapConfig& config) 
 
 }  // namespace
 
+Expected<void, Error> applyModeName(std::string_view name, MapOptions& map) {
+  constexpr std::string_view kSuffix = "+decay";
+  std::string_view mode = name;
+  bool decay = false;
+  if (mode.size() > kSuffix.size() && mode.ends_with(kSuffix)) {
+    mode.remove_suffix(kSuffix.size());
+    decay = true;
+  }
+  if (mode == "decay" && !decay) {
+    map.mode = MapMode::kOccupancy;
+    map.occupancy = false;
+    map.decay_rate = true;
+    return {};
+  }
+  const std::optional<MapMode> parsed = mapModeFromName(mode);
+  if (!parsed || (decay && *parsed == MapMode::kTsdf)) {
+    return fail(ErrorCode::kInvalidArgument,
+                "map.mode: '" + std::string(name) +
+                    "' is not a mode: occupancy, ndt-om, ndt-tm, decay, tsdf, occupancy+decay, "
+                    "ndt-om+decay or ndt-tm+decay");
+  }
+  map.mode = *parsed;
+  map.occupancy = true;
+  map.decay_rate = map.decay_rate || decay;
+  return {};
+}
+
+std::string modeName(const MapOptions& map) {
+  if (map.mode == MapMode::kOccupancy && !map.occupancy && map.decay_rate) {
+    return "decay";
+  }
+  return std::string(toString(map.mode)) + (map.decay_rate ? "+decay" : "");
+}
+
 Result<MapConfig> toMapConfig(const MapOptions& options) {
   for (const auto& [name, p] :
        {std::pair{"map.hit_probability", options.hit_probability},

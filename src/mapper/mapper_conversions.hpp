@@ -3,6 +3,9 @@
 // options, height-map requests and results.
 #pragma once
 
+#include <string>
+#include <string_view>
+
 #include "raymap/error.hpp"
 #include "raymap/heightmap.hpp"
 #include "raymap/mapper_config.hpp"
@@ -19,6 +22,13 @@ namespace raymap::mapper {
 
 /// @brief The map configuration MapOptions describe (global store). Errors name the option.
 Result<MapConfig> toMapConfig(const MapOptions& options);
+/// @brief Sets the mode, occupancy and decay_rate of `map` as a mode name says: "occupancy",
+/// "ndt-om", "ndt-tm", "tsdf", "decay" (decay rates only, no occupancy), or "<mode>+decay" (that
+/// mode with decay rates, as `raymap info` names such maps). The names of `raymap populate
+/// --mode` and of the Python module. @return kInvalidArgument naming map.mode and the names.
+Expected<void, Error> applyModeName(std::string_view name, MapOptions& map);
+/// @brief The mode name of `map` (applyModeName's inverse).
+std::string modeName(const MapOptions& map);
 /// @brief The MapOptions that describe an existing map (e.g. one loaded from a file).
 MapOptions toMapOptions(const MapConfig& config);
 /// @brief The ray limits; `device` picks the walk direction RayOptions::Walk::kAuto means.

@@ -62,25 +62,6 @@ void addTsdfOptions(CLI::App& c, MappingFlags& f) {
                "truncation, metres; 0 = constant weight (default 1 voxel edge)");
 }
 
-/// --mode as MapOptions: "decay" is decay rates only (no occupancy), "<mode>+decay" (as `info`
-/// names such maps) is that mode with --decay-rate.
-void applyModeName(const MappingFlags& f, MapOptions& map) {
-  constexpr std::string_view kSuffix = "+decay";
-  std::string mode = f.mode;
-  map.decay_rate = map.decay_rate || f.decay_rate;
-  if (mode.size() > kSuffix.size() && mode.ends_with(kSuffix)) {
-    mode.resize(mode.size() - kSuffix.size());
-    map.decay_rate = true;
-  }
-  if (mode == "decay") {
-    map.mode = MapMode::kOccupancy;
-    map.occupancy = false;
-    map.decay_rate = true;
-    return;
-  }
-  map.mode = mapModeFromName(mode).value_or(MapMode::kOccupancy);  // CLI11 checked the name
-}
-
 /// The --ndt-* and --tsdf-* options given (those of a --config file stay unless given).
 void copyNdtAndTsdf(const MappingFlags& f, MapOptions& map) {
   const auto set = [](auto& field, const auto& flag) {
@@ -364,8 +345,12 @@ Result<MapperConfig> toMapperConfig(const MappingFlags& f, std::vector<std::stri
   if (given("--no-mean")) {
     m.voxel_mean = !f.no_mean;
   }
-  if (given("--mode") || f.decay_rate) {
-    applyModeName(f, m);
+  m.decay_rate = m.decay_rate || f.decay_rate;
+  if (given("--mode")) {
+    // CLI11 checked the name against the same list.
+    if (auto mode = mapper::applyModeName(f.mode, m); !mode) {
+      return Unexpected(mode.error());
+    }
   }
   copyNdtAndTsdf(f, m);
   m.hit_probability = f.hit.value_or(m.hit_probability);

@@ -1,0 +1,369 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""raymap: 3D occupancy mapping of lidar and depth-camera rays, from Python.
+
+The C++ library (raymap::Mapper) with NumPy arrays in and out::
+
+    import numpy as np
+    import raymap
+
+    mapper = raymap.Mapper(resolution=0.1, mode="occupancy", semantics="ray")
+    mapper.integrate(points, pose)            # (N, 3) sensor-frame points, a 4 x 4 pose
+    mapper.flush()
+    states = mapper.occupancy(queries)        # (M,) int8: UNOBSERVED, FREE, OCCUPIED
+    height = mapper.heightmap(centre=(0, 0, 0), size=20.0)
+    mapper.save("map.rmap")                   # what `raymap populate` writes
+
+Options carry the C++ configuration's names (raymap::MapperConfig: map, rays and backend
+fields, docs/library.md); errors are the library's messages, raised as the exceptions below.
+docs/python.md has the whole guide.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterator, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _raymap
+from ._raymap import (
+    BackendOptions,
+    BagOptions,
+    Costmap,
+    CostmapOptions,
+    HeightMap,
+    MapOptions,
+    MapperConfig,
+    NdtOptions,
+    RayOptions,
+    RecordingOptions,
+    TierOptions,
+    TsdfOptions,
+    parse_byte_size,
+)
+
+__version__ = _raymap.__version__
+
+__all__ = [
+    "Mapper", "read_recording", "Scan", "HeightMap", "Costmap", "CostmapOptions",
+    "MapperConfig", "MapOptions", "RayOptions", "BackendOptions", "NdtOptions", "TsdfOptions",
+    "TierOptions", "RecordingOptions", "BagOptions", "parse_byte_size", "RaymapError",
+    "InvalidArgument", "IoError", "FormatError", "CapacityError", "UnsupportedError",
+    "UNOBSERVED", "FREE", "OCCUPIED",
+]
+
+#: Voxel states as Mapper.occupancy() returns them.
+UNOBSERVED, FREE, OCCUPIED = 0, 1, 2
+
+
+class RaymapError(Exception):
+    """An error of the raymap library; str() is its message (the option, file or key and why)."""
+
+
+class InvalidArgument(RaymapError, ValueError):
+    """An option out of range or inconsistent, or an array of the wrong shape or type."""
+
+
+class IoError(RaymapError, OSError):
+    """The operating system refused to open, read, write or rename a file."""
+
+
+class FormatError(RaymapError, ValueError):
+    """A file is not in the expected format, ends early, or fails a checksum."""
+
+
+class CapacityError(RaymapError, MemoryError):
+    """A fixed-size store is full (raise max_memory, or turn the tiers on)."""
+
+
+class UnsupportedError(RaymapError, NotImplementedError):
+    """Valid input this build cannot handle (a backend it was built without)."""
+
+
+_raymap._set_error_types({
+    "invalid-argument": InvalidArgument,
+    "io": IoError,
+    "format": FormatError,
+    "truncated": FormatError,
+    "corrupt": FormatError,
+    "capacity": CapacityError,
+    "unsupported": UnsupportedError,
+})
+
+PoseLike = Union[np.ndarray, Sequence[Sequence[float]], Tuple[Sequence[float], Sequence[float]]]
+
+
+def _pose_matrix(pose: PoseLike, what: str = "pose") -> np.ndarray:
+    """A 4 x 4 float64 matrix from a 4 x 4 array or (translation, quaternion x y z w)."""
+    if isinstance(pose, tuple) and len(pose) == 2:
+        translation = np.asarray(pose[0], dtype=np.float64)
+        quaternion = np.asarray(pose[1], dtype=np.float64)
+        if translation.shape != (3,) or quaternion.shape != (4,):
+            raise InvalidArgument(
+                f"{what}: (translation, quaternion) must be 3 and 4 numbers (x y z w), "
+                f"not {translation.shape} and {quaternion.shape}")
+        norm = np.linalg.norm(quaternion)
+        if not np.isfinite(norm) or norm < 1e-9:
+            raise InvalidArgument(f"{what}: the quaternion has no direction")
+        x, y, z, w = quaternion / norm
+        matrix = np.eye(4)
+        matrix[:3, :3] = [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+        matrix[:3, 3] = translation
+        return matrix
+    return np.asarray(pose, dtype=np.float64)
+
+
+def _set_option(config: MapperConfig, name: str, value: Any) -> None:
+    """Sets one keyword option: a field of config.map, config.rays or config.backend by its
+    C++ name, or one of the short forms (backend, max_memory, compressed_memory, ndt, tsdf)."""
+    if name == "backend":
+        config.backend.name = value
+    elif name in ("max_memory", "compressed_memory"):
+        size = parse_byte_size(value) if isinstance(value, str) else int(value)
+        if name == "max_memory":
+            config.map.max_memory_bytes = size
+        else:
+            config.map.tiers.compressed_memory_bytes = size
+    elif name == "tiers" and isinstance(value, bool):
+        config.map.tiers.enabled = value
+    elif name == "spill_dir":
+        config.map.tiers.spill_dir = value
+    elif name in ("ndt", "tsdf") and isinstance(value, dict):
+        target = getattr(config.map, name)
+        for key, item in value.items():
+            if not hasattr(target, key):
+                raise InvalidArgument(f"map.{name}.{key}: not an option of map.{name}")
+            setattr(target, key, item)
+        setattr(config.map, name, target)
+    else:
+        for section in ("map", "rays", "backend"):
+            part = getattr(config, section)
+            if hasattr(part, name) and not name.startswith("_"):
+                setattr(part, name, value)
+                setattr(config, section, part)
+                return
+        raise InvalidArgument(
+            f"{name}: not an option (the fields of MapOptions, RayOptions and BackendOptions, "
+            "and backend, max_memory, compressed_memory, tiers, spill_dir)")
+
+
+def make_config(config: Union[None, str, MapperConfig] = None, **options: Any) -> MapperConfig:
+    """A MapperConfig: `config` (a MapperConfig, or a YAML file whose map: and backend: sections
+    are read as raymapd reads them), then each keyword option over it."""
+    if isinstance(config, MapperConfig):
+        result = config
+    else:
+        result = MapperConfig()
+        if config is not None:
+            result, warnings = _raymap.load_config(str(config), result)
+            for warning in warnings:
+                import warnings as _warnings
+                _warnings.warn(warning, DeprecationWarning, stacklevel=3)
+    for name, value in options.items():
+        try:
+            _set_option(result, name, value)
+        except TypeError as error:  # pybind11's message for a value of the wrong type
+            raise InvalidArgument(f"{name}: {error}") from None
+    return result
+
+
+class Mapper:
+    """A 3D map and its integration backend (raymap::Mapper).
+
+    Mapper(config=None, **options): `config` is a MapperConfig or the path of a YAML file with
+    raymapd's map: and backend: sections; the keyword options are the C++ configuration's
+    fields by name (resolution, region_voxels, semantics "ray"/"scan", mode "occupancy",
+    "ndt-om", "ndt-tm", "tsdf", "decay" or "<mode>+decay", hit_probability, miss_probability,
+    clamp_min_probability, clamp_max_probability, occupied_threshold, voxel_mean, decay_rate,
+    window, min_range, max_range, max_ray_length, segment_length, walk, threads, fallback_cpu,
+    gpu_memory, batch_rays …) plus backend="cpu"/"opencl"/"cuda", max_memory="4GiB",
+    tiers=True, compressed_memory="1GiB", spill_dir, ndt={...} and tsdf={...}.
+
+    Thread-safety: one mapper may be used from several Python threads; calls on it run one at
+    a time, with the GIL released while the map integrates or answers.
+    """
+
+    def __init__(self, config: Union[None, str, MapperConfig] = None, **options: Any) -> None:
+        self._mapper = _raymap._Mapper.create(make_config(config, **options))
+
+    @classmethod
+    def load(cls, path: str, rays: Optional[RayOptions] = None,
+             backend: Union[None, str, BackendOptions] = None) -> "Mapper":
+        """Loads a map saved by save() or `raymap populate` (its geometry and mode come from
+        the file); `rays` applies to what is integrated next; `backend` is a name or options."""
+        if isinstance(backend, str):
+            name, backend = backend, BackendOptions()
+            backend.name = name
+        self = cls.__new__(cls)
+        self._mapper = _raymap._Mapper.load(str(path), rays or RayOptions(),
+                                            backend or BackendOptions())
+        return self
+
+    def integrate(self, points: np.ndarray, pose: Optional[PoseLike] = None, *,
+                  times: Optional[np.ndarray] = None,
+                  pose_at: Optional[Tuple[np.ndarray, np.ndarray]] = None,
+                  intensities: Optional[np.ndarray] = None) -> None:
+        """Integrates one scan of sensor-frame points, (N, 3) float32 or float64, metres.
+
+        Either at one pose (`pose`: a 4 x 4 sensor-to-world matrix, or (translation,
+        quaternion x y z w)), or deskewed: `times` (N,) seconds per point and `pose_at` =
+        (pose_times (M,), poses (M, 4, 4)), a table of the sensor's poses whose times increase.
+        Points with NaN or infinite coordinates are counted (counters()["rays_invalid"]), not
+        errors. The arrays are read in place; the GIL is released while the scan integrates.
+        """
+        if (pose is None) == (pose_at is None):
+            raise InvalidArgument("integrate: give either pose or pose_at (with times)")
+        if pose is not None:
+            if times is not None:
+                raise InvalidArgument("integrate: times go with pose_at, not with one pose")
+            self._mapper.integrate_points(points, _pose_matrix(pose), intensities)
+            return
+        if times is None:
+            raise InvalidArgument("integrate: pose_at needs the points' times")
+        if not isinstance(pose_at, tuple) or len(pose_at) != 2:
+            raise InvalidArgument("pose_at must be (pose_times (M,), poses (M, 4, 4))")
+        pose_times, poses = pose_at
+        self._mapper.integrate_deskewed(points, times, np.asarray(pose_times),
+                                        np.asarray(poses), intensities)
+
+    def integrate_rays(self, origins: np.ndarray, ends: np.ndarray, *,
+                       intensities: Optional[np.ndarray] = None,
+                       no_return: Optional[np.ndarray] = None) -> None:
+        """Integrates world-frame rays: origins and ends (N, 3), metres; no_return (N,) bool
+        marks rays that only clear free space to their end."""
+        self._mapper.integrate_rays(origins, ends, intensities, no_return)
+
+    def flush(self) -> None:
+        """Integrates what waits in the batch, so that queries see every ray given so far."""
+        self._mapper.flush()
+
+    def move_window(self, centre: Sequence[float]) -> int:
+        """Centres a rolling window (window=(x, y, z) regions) on `centre`; regions recycled."""
+        return self._mapper.move_window(np.asarray(centre, dtype=np.float64))
+
+    def occupancy(self, points: np.ndarray) -> np.ndarray:
+        """The state of the voxel holding each point (N, 3): (N,) int8 of UNOBSERVED (0),
+        FREE (1), OCCUPIED (2). Sees what was integrated up to the last flush()."""
+        return self._mapper.occupancy(points)
+
+    def log_odds(self, points: np.ndarray) -> np.ndarray:
+        """Occupancy log-odds of the voxel holding each point: (N,) float32, NaN where
+        unobserved."""
+        return self._mapper.log_odds(points)
+
+    def counts(self) -> dict:
+        """Voxel counts: regions, voxels_free, voxels_occupied."""
+        return self._mapper.counts()
+
+    def counters(self) -> dict:
+        """What the mapper did: scans, rays_in, rays_integrated, rays_invalid, rays_too_short,
+        rays_out_of_bounds, rays_clipped, rays_no_return, points_no_pose, batches …"""
+        return self._mapper.counters()
+
+    def heightmap(self, centre: Sequence[float], size: float = 20.0, **options: Any) -> HeightMap:
+        """The 2.5D height map around centre (x, y, z), `size` metres square, as
+        `raymap heightmap` makes it. Options: follow_terrain, min_clearance, floor_depth,
+        ceiling_height, virtual_surfaces. Layers are (cells_x, cells_y) arrays in grid_map's
+        layout."""
+        return self._mapper.heightmap(np.asarray(centre, dtype=np.float64), size, **options)
+
+    def costmap(self, centre: Sequence[float], size: float = 20.0,
+                options: Optional[CostmapOptions] = None, **request: Any) -> Costmap:
+        """The Nav2 costmap of the height map around centre, as raymapd publishes it."""
+        return self._mapper.costmap(np.asarray(centre, dtype=np.float64), size,
+                                    options=options or CostmapOptions(), **request)
+
+    def save(self, path: str) -> None:
+        """Writes the map (.rmap, what `raymap populate` writes) via a temporary file."""
+        self._mapper.save(str(path))
+
+    @property
+    def map_options(self) -> MapOptions:
+        """The map's settings (as created, or as read from the file by load())."""
+        return self._mapper.map_options
+
+    @property
+    def backend(self) -> str:
+        """Where integration runs: cpu, opencl or cuda."""
+        return self._mapper.backend
+
+    @property
+    def fallback_warning(self) -> str:
+        """Why the CPU replaced the requested backend (fallback_cpu=True); empty if it did not."""
+        return self._mapper.fallback_warning
+
+    @property
+    def memory_warning(self) -> str:
+        """Why the map holds fewer regions than max_memory asked; empty if it holds them all."""
+        return self._mapper.memory_warning
+
+
+class Scan:
+    """One scan of a recording: world-frame rays as arrays (views of the scan's own buffer).
+
+    origins, ends: (N, 3) float64, metres; intensities: (N,) float32; no_return: (N,) bool.
+    """
+
+    __slots__ = ("origins", "ends", "intensities", "no_return")
+
+    def __init__(self, arrays: dict) -> None:
+        self.origins = arrays["origins"]
+        self.ends = arrays["ends"]
+        self.intensities = arrays["intensities"]
+        self.no_return = arrays["no_return"]
+
+    def __len__(self) -> int:
+        return len(self.ends)
+
+
+class Recording:
+    """The scans of a recording, in order (iterate it); report() and warnings() afterwards."""
+
+    def __init__(self, reader: Any) -> None:
+        self._reader = reader
+
+    def __iter__(self) -> Iterator[Scan]:
+        while True:
+            arrays = self._reader.next_scan()
+            if arrays is None:
+                return
+            yield Scan(arrays)
+
+    @property
+    def progress(self) -> float:
+        """Fraction of the recording read, 0 to 1."""
+        return self._reader.progress
+
+    @property
+    def is_bag(self) -> bool:
+        return self._reader.is_bag
+
+    def report(self) -> dict:
+        """A bag's counts so far: topics, messages, clouds, scans, scans_no_pose …"""
+        return self._reader.report()
+
+    def warnings(self) -> list:
+        """What the reader noticed: skipped messages, damage, the pose source chosen."""
+        return self._reader.warnings()
+
+
+def read_recording(path: str, **options: Any) -> Recording:
+    """Opens a recording as `raymap populate` reads it: a rosbag2 bag (a folder, .mcap or .db3)
+    or a ray-cloud / point-cloud PLY. Options: the fields of RecordingOptions (trajectory_path,
+    sensor_offset, scan_period_s) and of BagOptions (topics, pose_topic, pose_source, world_frame,
+    base_frame, time_field, camera_info_topics, downsample, invalid_as_free, max_rate_hz,
+    skip_damaged …)."""
+    recording = RecordingOptions()
+    bag = recording.bag
+    for name, value in options.items():
+        if hasattr(recording, name) and name != "bag":
+            setattr(recording, name, value)
+        elif hasattr(bag, name):
+            setattr(bag, name, value)
+        else:
+            raise InvalidArgument(f"{name}: not an option of RecordingOptions or BagOptions")
+    recording.bag = bag
+    return Recording(_raymap._RecordingReader.open(str(path), recording))

@@ -1,0 +1,21 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A raymap::Mapper owned by Python, with the lock that serialises the Python threads using it.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <utility>
+
+#include "raymap/mapper.hpp"
+
+namespace raymap::python {
+
+/// @brief What raymap._Mapper wraps. Every call that touches the map holds `mutex` (taken after
+/// the GIL is released, so a thread waiting for it never blocks the interpreter).
+struct MapperHandle {
+  explicit MapperHandle(Mapper m) : mapper(std::move(m)), mutex(std::make_unique<std::mutex>()) {}
+  Mapper mapper;
+  std::unique_ptr<std::mutex> mutex;
+};
+
+}  // namespace raymap::python

@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// raymap::RecordingReader for Python: a rosbag2 bag (lidar clouds with odometry or TF, depth
+// images with CameraInfo) or a ray-/point-cloud PLY, scan by scan as NumPy arrays. Each scan's
+// arrays are views of one buffer the scan owns (no copy per field).
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "errors.hpp"
+#include "raymap/recording.hpp"
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+namespace py = pybind11;
+
+namespace raymap::python {
+namespace {
+
+/// One scan's rays, owned by Python (the arrays are views of `rays`).
+struct ScanRays {
+  std::vector<WorldRay> rays;
+};
+
+py::dict scanArrays(std::vector<WorldRay> rays) {
+  auto owned = std::make_unique<ScanRays>();
+  owned->rays = std::move(rays);
+  const ScanRays* scan = owned.get();
+  const py::capsule owner(owned.release(), [](void* p) { delete static_cast<ScanRays*>(p); });
+  const auto rows = static_cast<py::ssize_t>(scan->rays.size());
+  const auto stride = static_cast<py::ssize_t>(sizeof(WorldRay));
+  static const WorldRay kEmpty;
+  const WorldRay* first = rows > 0 ? scan->rays.data() : &kEmpty;
+  py::dict d;
+  d["origins"] = arrayOver<double>(first->origin.data(), {rows, 3}, {stride, 8}, owner);
+  d["ends"] = arrayOver<double>(first->end.data(), {rows, 3}, {stride, 8}, owner);
+  d["intensities"] = arrayOver<float>(&first->intensity, {rows}, {stride}, owner);
+  d["no_return"] = arrayOver<bool>(&first->no_return, {rows}, {stride}, owner);
+  return d;
+}
+
+py::dict reportDict(const RecordingReport& r) {
+  py::dict d;
+  d["pose_source"] = r.pose_source;
+  d["topics"] = r.topics;
+  d["messages"] = r.messages;
+  d["clouds"] = r.clouds;
+  d["scans"] = r.scans;
+  d["scans_no_pose"] = r.scans_no_pose;
+  d["clouds_skipped"] = r.clouds_skipped;
+  d["rate_limited"] = r.rate_limited;
+  d["images_no_camera_info"] = r.images_no_camera_info;
+  return d;
+}
+
+std::array<double, 3> toArray(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+Eigen::Vector3d toVector(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+
+void bindOptions(py::module_& m) {
+  py::class_<BagOptions>(m, "BagOptions", "How a rosbag2 bag is read (as raymap populate).")
+      .def(py::init<>())
+      .def_readwrite("topics", &BagOptions::topics)
+      .def_readwrite("camera_info_topics", &BagOptions::camera_info_topics)
+      .def_readwrite("pose_topic", &BagOptions::pose_topic)
+      .def_property(
+          "pose_source",
+          [](const BagOptions& b) {
+            return b.pose_source == BagOptions::PoseSource::kOdometry ? "odometry"
+                   : b.pose_source == BagOptions::PoseSource::kTf     ? "tf"
+                                                                      : "auto";
+          },
+          [](BagOptions& b, const std::string& name) {
+            if (name != "auto" && name != "odometry" && name != "tf") {
+              raiseInvalid("bag.pose_source: '" + name + "' is not auto, odometry or tf");
+            }
+            b.pose_source = name == "odometry" ? BagOptions::PoseSource::kOdometry
+                            : name == "tf"     ? BagOptions::PoseSource::kTf
+                                               : BagOptions::PoseSource::kAuto;
+          })
+      .def_readwrite("world_frame", &BagOptions::world_frame)
+      .def_readwrite("base_frame", &BagOptions::base_frame)
+      .def_property(
+          "sensor_offset",
+          [](const BagOptions& b) -> std::optional<std::array<double, 3>> {
+            if (!b.sensor_offset) {
+              return std::nullopt;
+            }
+            return toArray(*b.sensor_offset);
+          },
+          [](BagOptions& b, const std::optional<std::array<double, 3>>& offset) {
+            b.sensor_offset.reset();
+            if (offset) {
+              b.sensor_offset = toVector(*offset);
+            }
+          },
+          "the sensor in base_frame (x, y, z metres) where /tf_static has no chain, or None")
+      .def_readwrite("time_field", &BagOptions::time_field)
+      .def_readwrite("downsample", &BagOptions::downsample)
+      .def_readwrite("depth_min_range", &BagOptions::depth_min_range)
+      .def_readwrite("depth_max_range", &BagOptions::depth_max_range)
+      .def_readwrite("invalid_as_free", &BagOptions::invalid_as_free)
+      .def_readwrite("max_rate_hz", &BagOptions::max_rate_hz)
+      .def_readwrite("skip_damaged", &BagOptions::skip_damaged);
+  py::class_<RecordingOptions>(m, "RecordingOptions", "How a recording is read.")
+      .def(py::init<>())
+      .def_readwrite("trajectory_path", &RecordingOptions::trajectory_path)
+      .def_property(
+          "sensor_offset", [](const RecordingOptions& r) { return toArray(r.sensor_offset); },
+          [](RecordingOptions& r, const std::array<double, 3>& offset) {
+            r.sensor_offset = toVector(offset);
+          },
+          "the sensor in the trajectory's body frame (x, y, z metres)")
+      .def_readwrite("scan_period_s", &RecordingOptions::scan_period_s)
+      .def_readwrite("bag", &RecordingOptions::bag);
+}
+
+}  // namespace
+
+void bindRecording(py::module_& m) {
+  bindOptions(m);
+  py::class_<RecordingReader>(m, "_RecordingReader", "raymap::RecordingReader.")
+      .def_static(
+          "open",
+          [](const std::string& path, const RecordingOptions& options) {
+            return valueOr(RecordingReader::open(path, options));
+          },
+          py::arg("path"), py::arg("options"))
+      .def(
+          "next_scan",
+          [](RecordingReader& reader) -> py::object {
+            std::vector<WorldRay> rays;
+            Result<bool> more = [&] {
+              py::gil_scoped_release release;
+              return reader.nextScan(rays);
+            }();
+            if (!valueOr(std::move(more))) {
+              return py::none();
+            }
+            return scanArrays(std::move(rays));
+          },
+          "The next scan as a dict of arrays (origins, ends, intensities, no_return), or None "
+          "at the end.")
+      .def_property_readonly("progress", &RecordingReader::progress)
+      .def_property_readonly("is_bag", &RecordingReader::isBag)
+      .def("report", [](const RecordingReader& r) { return reportDict(r.report()); })
+      .def("warnings", &RecordingReader::warnings);
+}
+
+}  // namespace raymap::python

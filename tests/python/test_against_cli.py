@@ -1,0 +1,154 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""The Python module against the command line of the same build: the same rays make the same
+map as `raymap populate` (its exported voxels byte for byte, its counts, every field of
+`raymap info` but the provenance the command line records), the height map's arrays are
+`raymap heightmap`'s CSV, and a bag's scans are what `raymap info` counts and `raymap populate`
+maps."""
+
+import base64
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import raymap
+from conftest import run
+
+# `raymap info` lines that describe how a file was made, not the map: the command line records
+# its input and filters; the library records none.
+PROVENANCE = ("map ", "source ", "created_by ", "rays_in ", "rays_integrated ", "min_range_m ",
+              "max_range_m ", "segment_length_m ", "walk ")
+
+
+def map_description(cli, path):
+    lines = run([cli, "info", path]).stdout.splitlines()
+    return [line for line in lines if not line.startswith(PROVENANCE)]
+
+
+def exported_voxels(cli, path, out):
+    run([cli, "export", path, "--ply", out, "--quiet"])
+    data = out.read_bytes()
+    assert len(data) > 1000, f"{out}: an export of {len(data)} bytes has no voxels"
+    return data
+
+
+def map_with_python(recording, out, **options):
+    mapper = raymap.Mapper(**options)
+    scans = 0
+    for scan in recording:
+        mapper.integrate_rays(scan.origins, scan.ends, intensities=scan.intensities,
+                              no_return=scan.no_return)
+        scans += 1
+    mapper.flush()
+    mapper.save(str(out))
+    return mapper, scans
+
+
+@pytest.mark.parametrize("semantics", ["ray", "scan"])
+def test_the_room_maps_as_raymap_populate_maps_it(cli, room_rays, tmp_path, semantics):
+    stats = tmp_path / "stats.json"
+    run([cli, "populate", room_rays, "-o", tmp_path / "cli.rmap", "--semantics", semantics,
+         "--stats-json", stats, "--quiet"])
+    mapper, scans = map_with_python(raymap.read_recording(str(room_rays)), tmp_path / "py.rmap",
+                                    semantics=semantics)
+    populate = json.loads(stats.read_text())
+    assert scans == 25
+    assert mapper.counts()["voxels_occupied"] == populate["voxels_occupied"]
+    assert mapper.counts()["voxels_free"] == populate["voxels_free"]
+    assert mapper.counters()["rays_integrated"] == populate["rays_integrated"]
+    assert exported_voxels(cli, tmp_path / "py.rmap", tmp_path / "py.ply") == \
+        exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
+    assert map_description(cli, tmp_path / "py.rmap") == map_description(cli, tmp_path / "cli.rmap")
+
+
+def test_the_height_map_arrays_are_raymap_heightmaps_csv(cli, room_rays, tmp_path):
+    run([cli, "populate", room_rays, "-o", tmp_path / "room.rmap", "--quiet"])
+    run([cli, "heightmap", tmp_path / "room.rmap", "--center", "0.3,-0.2,0", "--size", "6",
+         "--min-clearance", "0.4", "--csv", tmp_path / "hm.csv", "--quiet"])
+    height = raymap.Mapper.load(str(tmp_path / "room.rmap")).heightmap(
+        centre=(0.3, -0.2, 0.0), size=6.0, min_clearance=0.4)
+    kinds = {"unknown": 0, "surface": 1, "virtual": 2, "vacant": 3}
+    with open(tmp_path / "hm.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == height.cells_x * height.cells_y
+    surfaces = 0
+    for k, row in enumerate(rows):
+        i, j = k % height.cells_x, k // height.cells_x  # the CSV walks grid_map's index order
+        x, y = height.cell_centre(i, j)
+        assert (round(x, 4), round(y, 4)) == (float(row["x"]), float(row["y"]))
+        for layer in ("elevation", "clearance"):
+            ours = float(getattr(height, layer)[i, j])
+            theirs = float(row[layer])
+            assert (math.isnan(ours) and math.isnan(theirs)) or \
+                f"{ours:.4f}" == row[layer] or ours == theirs, (k, layer, ours, row[layer])
+        assert height.kind[i, j] == kinds[row["kind"].split("-")[0]], (k, row["kind"])
+        surfaces += row["kind"] == "surface"
+    assert surfaces > 1000
+
+
+def cloud_message(stamp_ns, points, frame="base_link"):
+    """A sensor_msgs/PointCloud2 (x y z float32, t uint32 ns after the stamp) for write_bag.mjs."""
+    n = len(points)
+    record = np.zeros(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("t", "<u4")])
+    record["x"], record["y"], record["z"] = points[:, 0], points[:, 1], points[:, 2]
+    record["t"] = (np.arange(n) * (100_000_000 // n)).astype(np.uint32)
+    fields = [{"name": name, "offset": 4 * k, "datatype": 7 if k < 3 else 6, "count": 1}
+              for k, name in enumerate("xyzt")]
+    return {
+        "header": {"stamp": {"sec": stamp_ns // 10**9, "nanosec": stamp_ns % 10**9},
+                   "frame_id": frame},
+        "height": 1, "width": n, "fields": fields, "is_bigendian": False, "point_step": 16,
+        "row_step": 16 * n, "data": {"base64": base64.b64encode(record.tobytes()).decode()},
+        "is_dense": True,
+    }
+
+
+def odometry_message(stamp_ns, x):
+    return {
+        "header": {"stamp": {"sec": stamp_ns // 10**9, "nanosec": stamp_ns % 10**9},
+                   "frame_id": "odom"},
+        "child_frame_id": "base_link",
+        "pose": {"pose": {"position": {"x": x, "y": 0.0, "z": 0.0}}},
+    }
+
+
+def drive_spec(scans):
+    """A robot driving along +x at 1 m/s in a 6 m ring of walls: odometry at 50 Hz, a 10 Hz
+    sweep of 720 points in base_link (each at its own time)."""
+    t0 = 1_700_000_000_000_000_000
+    lines = [json.dumps({"op": "channel", "topic": "/odom", "type": "nav_msgs/msg/Odometry"}),
+             json.dumps({"op": "channel", "topic": "/points",
+                         "type": "sensor_msgs/msg/PointCloud2"})]
+    angles = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    for k in range(5 * scans + 10):
+        stamp = t0 + k * 20_000_000
+        lines.append(json.dumps({"op": "message", "topic": "/odom", "log_time_ns": str(stamp),
+                                 "msg": odometry_message(stamp, (stamp - t0) * 1e-9)}))
+        if k % 5 == 0 and k // 5 < scans:
+            ring = np.stack([6 * np.cos(angles), 6 * np.sin(angles), np.zeros(720)], axis=1)
+            lines.append(json.dumps({"op": "message", "topic": "/points",
+                                     "log_time_ns": str(stamp + 1000),
+                                     "msg": cloud_message(stamp, ring)}))
+    return lines
+
+
+def test_a_bags_scans_are_what_raymap_info_counts_and_map_as_populate(cli, write_bag, tmp_path):
+    bag = write_bag(drive_spec(8), tmp_path / "drive")
+    info = json.loads(run([cli, "info", bag, "--json"]).stdout)
+    clouds = next(t["messages"] for t in info["topics"] if t["name"] == "/points")
+    run([cli, "populate", bag, "-o", tmp_path / "cli.rmap", "--quiet"])
+    recording = raymap.read_recording(str(bag))
+    mapper, scans = map_with_python(recording, tmp_path / "py.rmap")
+    report = recording.report()
+    assert recording.is_bag
+    assert clouds == 8
+    assert report["clouds"] == clouds
+    assert report["messages"] == info["messages"]
+    assert report["topics"] == ["/points"]
+    assert report["pose_source"] == "odometry /odom"
+    assert scans + report["scans_no_pose"] == clouds and scans >= 7
+    assert mapper.counters()["rays_integrated"] > 0
+    assert exported_voxels(cli, tmp_path / "py.rmap", tmp_path / "py.ply") == \
+        exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
