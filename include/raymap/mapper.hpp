@@ -8,6 +8,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "raymap/depth_image.hpp"
 #include "raymap/error.hpp"
@@ -205,6 +206,12 @@ class Mapper {
   VoxelInfo voxel(const VoxelKey& key) const noexcept;
   /// @brief Voxel counts over the map (walks every stored region: not for a tight loop).
   MapCounts counts() const noexcept;
+  /// @brief The keys of every voxel in `state` (kOccupied or kFree), in a fixed order (regions
+  /// by z, y, x; voxels by index); centre() gives each one's position. Walks every stored region
+  /// (a tiered map's cold regions stream through its pool) and allocates the list: not for a
+  /// tight loop. Sees what was integrated up to the last flush(). @return kInvalidArgument for
+  /// kUnobserved (the unobserved space has no end), kUnsupported for a map without occupancy.
+  Result<std::vector<VoxelKey>> voxels(VoxelState state) const;
 
   /// @brief A height map around `request.centre`, made where the map is (on the device for a
   /// device backend). Errors name the option and the reason (a map without occupancy, a size

@@ -254,6 +254,16 @@ class Mapper:
         unobserved."""
         return self._mapper.log_odds(points)
 
+    def voxels(self, state: str = "occupied") -> np.ndarray:
+        """The centres of every voxel in `state` ("occupied" or "free"): (N, 3) float64, metres,
+        in a fixed order. Counts match counts()."""
+        return self._mapper.voxels(state)
+
+    def voxel_keys(self, state: str = "occupied") -> np.ndarray:
+        """The integer keys of every voxel in `state`: (N, 3) int32 (centre = (key + 0.5) *
+        resolution)."""
+        return self._mapper.voxel_keys(state)
+
     def counts(self) -> dict:
         """Voxel counts: regions, voxels_free, voxels_occupied."""
         return self._mapper.counts()

@@ -198,7 +198,58 @@ void bindIntegration(py::class_<MapperHandle>& c) {
           py::arg("centre"), "Centres a rolling window on `centre`; returns the regions recycled.");
 }
 
+VoxelState stateNamed(const std::string& name) {
+  if (name == "occupied") {
+    return VoxelState::kOccupied;
+  }
+  if (name == "free") {
+    return VoxelState::kFree;
+  }
+  raiseInvalid("state: '" + name + "' is not occupied or free");
+}
+
+/// The voxels of a state as an (N, 3) array: their keys, or their centres (metres).
+template <class T>
+py::array_t<T> voxelsOf(MapperHandle& self, const std::string& state, bool centres) {
+  const VoxelState wanted = stateNamed(state);
+  std::vector<VoxelKey> keys;
+  Expected<void, Error> done;
+  {
+    py::gil_scoped_release release;
+    const std::lock_guard lock(*self.mutex);
+    auto listed = self.mapper.voxels(wanted);
+    if (listed) {
+      keys = std::move(*listed);
+    } else {
+      done = Unexpected(listed.error());
+    }
+  }
+  check(done);
+  py::array_t<T> out({static_cast<py::ssize_t>(keys.size()), py::ssize_t{3}});
+  auto view = out.template mutable_unchecked<2>();
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const Eigen::Vector3d at = centres ? self.mapper.centre(keys[i]) : keys[i].cast<double>();
+    for (py::ssize_t axis = 0; axis < 3; ++axis) {
+      view(static_cast<py::ssize_t>(i), axis) = static_cast<T>(at[axis]);
+    }
+  }
+  return out;
+}
+
 void bindQueries(py::class_<MapperHandle>& c) {
+  c.def(
+       "voxels",
+       [](MapperHandle& self, const std::string& state) {
+         return voxelsOf<double>(self, state, true);
+       },
+       py::arg("state") = "occupied",
+       "The centres (N, 3) float64 of every voxel in `state` (occupied or free), metres.")
+      .def(
+          "voxel_keys",
+          [](MapperHandle& self, const std::string& state) {
+            return voxelsOf<std::int32_t>(self, state, false);
+          },
+          py::arg("state") = "occupied", "The keys (N, 3) int32 of every voxel in `state`.");
   c.def(
        "occupancy",
        [](MapperHandle& self, const py::array& points) {

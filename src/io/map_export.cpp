@@ -26,6 +26,7 @@ constexpr std::size_t kPointsPerChunk = 16384;
 constexpr float kUnobservedProbability = 0.5f;
 
 struct Point {
+  Vec3i voxel;    ///< the voxel's key
   Vec3d p_world;  ///< metres
   float probability = 0.0f;
   std::uint32_t count = 0;
@@ -89,6 +90,7 @@ Expected<void, Error> forEachPoint(const VoxelMap& map, ExportMode mode,
           }
           const Vec3i voxel{region.x * n + x, region.y * n + y, region.z * n + z};
           Point point;
+          point.voxel = voxel;
           // Voxel-local mean in voxel units (the centre when the voxel has no samples).
           const rm_vec3f local =
               at_mean ? rm_mean_decode(mean.packed, mean.count) : rm_vec3f_make(0.5f, 0.5f, 0.5f);
@@ -105,6 +107,38 @@ Expected<void, Error> forEachPoint(const VoxelMap& map, ExportMode mode,
   }
   return cursor.status();
 }
+
+/// The layers every mode reads: occupied and free voxels need occupancy, the others occupancy or
+/// the voxel mean.
+Expected<void, Error> checkOccupancyLayer(const VoxelMap& map, ExportMode mode) {
+  const bool needs_occupancy = mode == ExportMode::kOccupied || mode == ExportMode::kFree;
+  if (map.occupancyLayer() < 0 && (needs_occupancy || map.meanLayer() < 0)) {
+    return fail(ErrorCode::kUnsupported,
+                std::string("the map has no occupancy layer: nothing to export as ") +
+                    (needs_occupancy ? "occupied or free voxels" : "voxels"));
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<std::vector<Vec3i>> selectedVoxels(const VoxelMap& map, ExportMode mode) {
+  if (mode == ExportMode::kDecay) {
+    return fail(ErrorCode::kInvalidArgument, "selectedVoxels: decay voxels need a threshold");
+  }
+  if (auto ok = checkOccupancyLayer(map, mode); !ok) {
+    return Unexpected(ok.error());
+  }
+  std::vector<Vec3i> keys;
+  if (auto ok = forEachPoint(map, mode, ExportOptions{},
+                             [&](const Point& point) { keys.push_back(point.voxel); });
+      !ok) {
+    return Unexpected(ok.error());
+  }
+  return keys;
+}
+
+namespace {
 
 std::string headerText(const VoxelMap& map, ExportMode mode, std::uint64_t count) {
   char resolution[64];
@@ -157,11 +191,8 @@ const char* toString(ExportMode mode) noexcept {
 
 Result<std::uint64_t> exportPly(const VoxelMap& map, ExportMode mode, const std::string& path,
                                 const ExportOptions& options) {
-  const bool needs_occupancy = mode == ExportMode::kOccupied || mode == ExportMode::kFree;
-  if (map.occupancyLayer() < 0 && (needs_occupancy || map.meanLayer() < 0)) {
-    return fail(ErrorCode::kUnsupported,
-                std::string("the map has no occupancy layer: nothing to export as ") +
-                    (needs_occupancy ? "occupied or free voxels" : "voxels"));
+  if (auto ok = checkOccupancyLayer(map, mode); !ok) {
+    return Unexpected(ok.error());
   }
   if (mode == ExportMode::kDecay) {
     if (map.traversalLayer() < 0 || map.meanLayer() < 0) {

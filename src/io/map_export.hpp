@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "raymap/error.hpp"
 
@@ -31,6 +32,12 @@ struct ExportOptions {
 /// @brief Parses "occupied", "free", "mean" or "decay".
 Result<ExportMode> exportModeFromString(const std::string& text);
 const char* toString(ExportMode mode) noexcept;
+
+/// @brief The key of every voxel `mode` selects (kOccupied, kFree or kMean), in the export's
+/// deterministic order (regions z, y, x; voxels by index). A tiered map's regions stream
+/// through its pool. @return kInvalidArgument for kDecay, kUnsupported for a map without the
+/// layer the mode reads (as exportPly); a cold region that cannot be read back fails it.
+Result<std::vector<Vec3i>> selectedVoxels(const VoxelMap& map, ExportMode mode);
 
 /// @brief Writes a binary little-endian PLY with float x, y, z (world frame, metres), float
 /// `probability` (occupancy probability of the voxel) and uint `count` (voxel-mean samples), and

@@ -15,6 +15,7 @@
 #include "src/core/eigen_conversions.hpp"
 #include "src/device/backend_choice.hpp"
 #include "src/heightmap/heightmap_generator.hpp"
+#include "src/io/map_export.hpp"
 #include "src/io/map_exports.hpp"
 #include "src/io/map_file.hpp"
 #include "src/io/sensor_ray.hpp"
@@ -386,6 +387,25 @@ VoxelInfo Mapper::voxel(const VoxelKey& key) const noexcept {
 MapCounts Mapper::counts() const noexcept {
   const MapSummary summary = state_->map.summarise();
   return MapCounts{summary.regions, summary.voxels_free, summary.voxels_occupied};
+}
+
+Result<std::vector<VoxelKey>> Mapper::voxels(VoxelState state) const {
+  if (state == VoxelState::kUnobserved) {
+    return fail(ErrorCode::kInvalidArgument,
+                "voxels: list occupied or free voxels; the unobserved space has no end");
+  }
+  auto keys =
+      io::selectedVoxels(state_->map, state == VoxelState::kOccupied ? io::ExportMode::kOccupied
+                                                                     : io::ExportMode::kFree);
+  if (!keys) {
+    return Unexpected(keys.error());
+  }
+  std::vector<VoxelKey> out;
+  out.reserve(keys->size());
+  for (const Vec3i& key : *keys) {
+    out.emplace_back(key.x, key.y, key.z);
+  }
+  return out;
 }
 
 Result<HeightMap> Mapper::heightmap(const HeightmapRequest& request) {

@@ -76,6 +76,25 @@ def test_a_translation_and_quaternion_pose_is_the_matrix_pose():
     np.testing.assert_array_equal(a.occupancy(queries), b.occupancy(queries))
 
 
+def test_the_voxels_of_a_state_are_listed_where_they_are():
+    mapper = raymap.Mapper(resolution=0.1)
+    mapper.integrate(ring(), np.eye(4))
+    mapper.flush()
+    occupied = mapper.voxels("occupied")
+    free = mapper.voxels("free")
+    keys = mapper.voxel_keys()
+    assert occupied.shape == (mapper.counts()["voxels_occupied"], 3)
+    assert free.shape == (mapper.counts()["voxels_free"], 3)
+    assert keys.dtype == np.int32
+    np.testing.assert_allclose(occupied, (keys + 0.5) * 0.1)
+    assert np.all(mapper.occupancy(occupied) == raymap.OCCUPIED)
+    assert np.all(mapper.occupancy(free) == raymap.FREE)
+    radius = np.hypot(occupied[:, 0], occupied[:, 1])
+    assert np.all(np.abs(radius - 5.0) < 0.15)  # on the ring
+    with pytest.raises(raymap.InvalidArgument, match="not occupied or free"):
+        mapper.voxels("unobserved")
+
+
 def test_a_pose_table_deskews_a_moving_sweep():
     # The sensor moves 1 m along +x during the sweep; each point was measured where it was then.
     n = 720

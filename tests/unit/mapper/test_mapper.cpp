@@ -143,6 +143,43 @@ TEST(Mapper, WallIsOccupiedTheSpaceBeforeItFreeAndBehindItUnobserved) {
   EXPECT_EQ(mapper->counters().rays_integrated, 3u * points.size());
 }
 
+TEST(Mapper, VoxelsListsEveryVoxelOfAStateAsCountsCountsThem) {
+  auto mapper = Mapper::create(smallMapper(Semantics::kPerRay));
+  ASSERT_TRUE(mapper) << mapper.error().message;
+  // A 5 x 5 patch of a wall at x = 4.05 m seen from the origin, twice.
+  std::vector<WorldRay> rays;
+  for (int j = 0; j < 5; ++j) {
+    for (int k = 0; k < 5; ++k) {
+      WorldRay ray;
+      ray.end = Eigen::Vector3d(4.05, 0.1 * j + 0.05, 0.1 * k + 0.05);
+      rays.push_back(ray);
+    }
+  }
+  ASSERT_TRUE(mapper->integrate(std::span<const WorldRay>(rays)));
+  ASSERT_TRUE(mapper->integrate(std::span<const WorldRay>(rays)));
+  ASSERT_TRUE(mapper->flush());
+
+  const Result<std::vector<VoxelKey>> occupied = mapper->voxels(VoxelState::kOccupied);
+  const Result<std::vector<VoxelKey>> free = mapper->voxels(VoxelState::kFree);
+  const Result<std::vector<VoxelKey>> unobserved = mapper->voxels(VoxelState::kUnobserved);
+
+  ASSERT_TRUE(occupied) << occupied.error().message;
+  ASSERT_TRUE(free) << free.error().message;
+  const MapCounts counts = mapper->counts();
+  ASSERT_EQ(occupied->size(), counts.voxels_occupied);
+  EXPECT_EQ(free->size(), counts.voxels_free);
+  EXPECT_EQ(occupied->size(), 25u);
+  for (const VoxelKey& key : *occupied) {
+    EXPECT_EQ(key.x(), 40);
+    EXPECT_EQ(mapper->occupancy(key), VoxelState::kOccupied);
+  }
+  for (const VoxelKey& key : *free) {
+    EXPECT_EQ(mapper->occupancy(key), VoxelState::kFree) << key.transpose();
+  }
+  ASSERT_FALSE(unobserved);
+  EXPECT_EQ(unobserved.error().code, ErrorCode::kInvalidArgument);
+}
+
 TEST(Mapper, OnePoseIsTheSameAsWorldRaysFromThatPose) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.translate(Eigen::Vector3d(1.0, -2.0, 0.5));
