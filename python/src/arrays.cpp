@@ -76,13 +76,7 @@ Eigen::Isometry3d toIsometry(const py::array& matrix, const char* what) {
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) {
       const char* at = base + r * matrix.strides(0) + c * matrix.strides(1);
-      if (f32) {
-        float v;
-        std::memcpy(&v, at, sizeof(v));
-        m(r, c) = static_cast<double>(v);
-      } else {
-        std::memcpy(&m(r, c), at, sizeof(double));
-      }
+      m(r, c) = readFloat(at, f32);
     }
   }
   if (!m.allFinite()) {

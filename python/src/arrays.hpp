@@ -16,6 +16,18 @@
 
 namespace raymap::python {
 
+/// @brief The float32 (f32) or float64 at `at`, which need not be aligned.
+inline double readFloat(const char* at, bool f32) noexcept {
+  if (f32) {
+    float v;
+    std::memcpy(&v, at, sizeof(v));
+    return static_cast<double>(v);
+  }
+  double v;
+  std::memcpy(&v, at, sizeof(v));
+  return v;
+}
+
 /// @brief A read-only view of an (N, 3) float32 or float64 array. Thread-safe to read without the
 /// GIL while the array lives.
 class Points3View {
@@ -26,20 +38,11 @@ class Points3View {
   std::size_t size() const noexcept { return rows_; }
   Eigen::Vector3d operator[](std::size_t i) const noexcept {
     const char* row = data_ + static_cast<std::ptrdiff_t>(i) * row_stride_;
-    return {value(row), value(row + column_stride_), value(row + 2 * column_stride_)};
+    return {readFloat(row, f32_), readFloat(row + column_stride_, f32_),
+            readFloat(row + 2 * column_stride_, f32_)};
   }
 
  private:
-  double value(const char* at) const noexcept {
-    if (f32_) {
-      float v;
-      std::memcpy(&v, at, sizeof(v));
-      return static_cast<double>(v);
-    }
-    double v;
-    std::memcpy(&v, at, sizeof(v));
-    return v;
-  }
   const char* data_ = nullptr;
   std::size_t rows_ = 0;
   std::ptrdiff_t row_stride_ = 0;
@@ -54,15 +57,7 @@ class ValuesView {
   ValuesView(const pybind11::array& array, const char* what, std::size_t rows);
   std::size_t size() const noexcept { return rows_; }
   double operator[](std::size_t i) const noexcept {
-    const char* at = data_ + static_cast<std::ptrdiff_t>(i) * stride_;
-    if (f32_) {
-      float v;
-      std::memcpy(&v, at, sizeof(v));
-      return static_cast<double>(v);
-    }
-    double v;
-    std::memcpy(&v, at, sizeof(v));
-    return v;
+    return readFloat(data_ + static_cast<std::ptrdiff_t>(i) * stride_, f32_);
   }
 
  private:

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include "arrays.hpp"
 #include "bindings.hpp"
@@ -21,11 +22,17 @@ namespace py = pybind11;
 namespace raymap::python {
 namespace {
 
-/// A height-map layer as a (cells_x, cells_y) column-major array over `self`'s vector.
-template <class T>
-py::array_t<T> gridLayer(const py::object& self, const HeightMap& map, const T* data) {
-  const auto item = static_cast<py::ssize_t>(sizeof(T));
-  return arrayOver<T>(data, {map.cells_x, map.cells_y}, {item, item * map.cells_x}, self);
+/// The getter of a height-map layer: a (cells_x, cells_y) column-major array of `T` over the
+/// result's own vector (HeightCell is one byte, read as uint8).
+template <class T, class Element>
+auto gridLayerOf(std::vector<Element> HeightMap::*layer) {
+  static_assert(sizeof(T) == sizeof(Element));
+  return [layer](const py::object& self) {
+    const auto& map = self.cast<const HeightMap&>();
+    const auto item = static_cast<py::ssize_t>(sizeof(T));
+    const auto* data = reinterpret_cast<const T*>((map.*layer).data());
+    return arrayOver<T>(data, {map.cells_x, map.cells_y}, {item, item * map.cells_x}, self);
+  };
 }
 
 void bindHeightMap(py::module_& m) {
@@ -39,35 +46,16 @@ void bindHeightMap(py::module_& m) {
       .def_property_readonly(
           "centre", [](const HeightMap& h) { return std::make_pair(h.centre.x(), h.centre.y()); },
           "world (x, y) of the grid's centre")
+      .def_property_readonly("elevation", gridLayerOf<float>(&HeightMap::elevation),
+                             "world z of the supporting surface, float32; NaN where none")
       .def_property_readonly(
-          "elevation",
-          [](const py::object& self) {
-            const auto& h = self.cast<const HeightMap&>();
-            return gridLayer<float>(self, h, h.elevation.data());
-          },
-          "world z of the supporting surface, float32; NaN where none")
-      .def_property_readonly(
-          "clearance",
-          [](const py::object& self) {
-            const auto& h = self.cast<const HeightMap&>();
-            return gridLayer<float>(self, h, h.clearance.data());
-          },
+          "clearance", gridLayerOf<float>(&HeightMap::clearance),
           "free height above the surface, float32; inf: open to the top; NaN: no surface")
-      .def_property_readonly(
-          "kind",
-          [](const py::object& self) {
-            const auto& h = self.cast<const HeightMap&>();
-            return gridLayer<std::uint8_t>(self, h,
-                                           reinterpret_cast<const std::uint8_t*>(h.kind.data()));
-          },
-          "uint8: 0 unknown, 1 surface, 2 virtual surface, 3 vacant")
-      .def_property_readonly(
-          "observed_count",
-          [](const py::object& self) {
-            const auto& h = self.cast<const HeightMap&>();
-            return gridLayer<std::uint32_t>(self, h, h.observed_count.data());
-          },
-          "samples in each surface voxel, uint32")
+      .def_property_readonly("kind", gridLayerOf<std::uint8_t>(&HeightMap::kind),
+                             "uint8: 0 unknown, 1 surface, 2 virtual surface, 3 vacant")
+      .def_property_readonly("observed_count",
+                             gridLayerOf<std::uint32_t>(&HeightMap::observed_count),
+                             "samples in each surface voxel, uint32")
       .def(
           "cell_centre",
           [](const HeightMap& h, int i, int j) {
