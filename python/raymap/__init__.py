@@ -31,6 +31,7 @@ from ._raymap import (
     Costmap,
     CostmapOptions,
     HeightMap,
+    HeightmapRequest,
     MapOptions,
     MapperConfig,
     NdtOptions,
@@ -44,7 +45,8 @@ from ._raymap import (
 __version__ = _raymap.__version__
 
 __all__ = [
-    "Mapper", "read_recording", "Scan", "HeightMap", "Costmap", "CostmapOptions",
+    "Mapper", "read_recording", "Scan", "HeightMap", "HeightmapRequest", "Costmap",
+    "CostmapOptions",
     "MapperConfig", "MapOptions", "RayOptions", "BackendOptions", "NdtOptions", "TsdfOptions",
     "TierOptions", "RecordingOptions", "BagOptions", "parse_byte_size", "RaymapError",
     "InvalidArgument", "IoError", "FormatError", "CapacityError", "UnsupportedError",
@@ -170,6 +172,17 @@ def make_config(config: Union[None, str, MapperConfig] = None, **options: Any) -
     return result
 
 
+def _heightmap_request(centre: Sequence[float], size: float, options: dict) -> HeightmapRequest:
+    request = HeightmapRequest()
+    request.centre = tuple(float(v) for v in centre)
+    request.size = size
+    for name, value in options.items():
+        if name.startswith("_") or not hasattr(request, name):
+            raise InvalidArgument(f"{name}: not an option of a height map (HeightmapRequest)")
+        setattr(request, name, value)
+    return request
+
+
 class Mapper:
     """A 3D map and its integration backend (raymap::Mapper).
 
@@ -275,16 +288,17 @@ class Mapper:
 
     def heightmap(self, centre: Sequence[float], size: float = 20.0, **options: Any) -> HeightMap:
         """The 2.5D height map around centre (x, y, z), `size` metres square, as
-        `raymap heightmap` makes it. Options: follow_terrain, min_clearance, floor_depth,
-        ceiling_height, virtual_surfaces. Layers are (cells_x, cells_y) arrays in grid_map's
-        layout."""
-        return self._mapper.heightmap(np.asarray(centre, dtype=np.float64), size, **options)
+        `raymap heightmap` makes it. Options (HeightmapRequest's fields): follow_terrain,
+        min_clearance, floor_depth, ceiling_height, virtual_surfaces. Layers are
+        (cells_x, cells_y) arrays in grid_map's layout."""
+        return self._mapper.heightmap(_heightmap_request(centre, size, options))
 
     def costmap(self, centre: Sequence[float], size: float = 20.0,
                 options: Optional[CostmapOptions] = None, **request: Any) -> Costmap:
-        """The Nav2 costmap of the height map around centre, as raymapd publishes it."""
-        return self._mapper.costmap(np.asarray(centre, dtype=np.float64), size,
-                                    options=options or CostmapOptions(), **request)
+        """The Nav2 costmap of the height map around centre, as raymapd publishes it; `request`
+        as heightmap()'s options, `options` the costmap's (max_step, max_slope_deg …)."""
+        return self._mapper.costmap(_heightmap_request(centre, size, request),
+                                    options or CostmapOptions())
 
     def save(self, path: str) -> None:
         """Writes the map (.rmap, what `raymap populate` writes) via a temporary file."""

@@ -90,72 +90,51 @@ void bindCostmap(py::module_& m) {
       .def_readwrite("max_free_cost", &CostmapOptions::max_free_cost);
 }
 
-HeightmapRequest toRequest(const std::array<double, 3>& centre, double size, bool follow_terrain,
-                           double min_clearance, std::optional<double> floor_depth,
-                           std::optional<double> ceiling_height, bool virtual_surfaces) {
-  HeightmapRequest r;
-  r.centre = Eigen::Vector3d(centre[0], centre[1], centre[2]);
-  r.size = size;
-  r.follow_terrain = follow_terrain;
-  r.min_clearance = min_clearance;
-  r.floor_depth = floor_depth;
-  r.ceiling_height = ceiling_height;
-  r.virtual_surfaces = virtual_surfaces;
-  return r;
+void bindRequest(py::module_& m) {
+  py::class_<HeightmapRequest>(m, "HeightmapRequest",
+                               "What height map to make (world frame, metres).")
+      .def(py::init<>())
+      .def_property(
+          "centre",
+          [](const HeightmapRequest& r) {
+            return std::array<double, 3>{r.centre.x(), r.centre.y(), r.centre.z()};
+          },
+          [](HeightmapRequest& r, const std::array<double, 3>& c) {
+            r.centre = Eigen::Vector3d(c[0], c[1], c[2]);
+          },
+          "x, y: the column the map is centred on; z: the height the surface is searched around")
+      .def_readwrite("size", &HeightmapRequest::size, "side of the square map, metres")
+      .def_readwrite("follow_terrain", &HeightmapRequest::follow_terrain)
+      .def_readwrite("min_clearance", &HeightmapRequest::min_clearance)
+      .def_readwrite("floor_depth", &HeightmapRequest::floor_depth)
+      .def_readwrite("ceiling_height", &HeightmapRequest::ceiling_height)
+      .def_readwrite("virtual_surfaces", &HeightmapRequest::virtual_surfaces);
 }
 
 }  // namespace
 
 void bindGrids(py::module_& m) {
+  bindRequest(m);
   bindHeightMap(m);
   bindCostmap(m);
 }
 
 void addGridQueries(py::class_<MapperHandle>& c) {
-  const HeightmapRequest defaults;
   c.def(
        "heightmap",
-       [](MapperHandle& self, const std::array<double, 3>& centre, double size, bool follow_terrain,
-          double min_clearance, std::optional<double> floor_depth,
-          std::optional<double> ceiling_height, bool virtual_surfaces) {
-         const HeightmapRequest request = toRequest(centre, size, follow_terrain, min_clearance,
-                                                    floor_depth, ceiling_height, virtual_surfaces);
-         Result<HeightMap> made = [&] {
-           py::gil_scoped_release release;
-           const std::lock_guard lock(*self.mutex);
-           return self.mapper.heightmap(request);
-         }();
-         return valueOr(std::move(made));
+       [](MapperHandle& self, const HeightmapRequest& request) {
+         return valueOr(
+             withMapper(self, [&](Mapper& mapper) { return mapper.heightmap(request); }));
        },
-       py::arg("centre"), py::arg("size") = defaults.size,
-       py::arg("follow_terrain") = defaults.follow_terrain,
-       py::arg("min_clearance") = defaults.min_clearance, py::arg("floor_depth") = py::none(),
-       py::arg("ceiling_height") = py::none(),
-       py::arg("virtual_surfaces") = defaults.virtual_surfaces,
-       "The height map around centre (x, y, z), size metres square (as raymap heightmap).")
+       py::arg("request"), "The height map `request` asks for (as raymap heightmap makes it).")
       .def(
           "costmap",
-          [](MapperHandle& self, const std::array<double, 3>& centre, double size,
-             bool follow_terrain, double min_clearance, std::optional<double> floor_depth,
-             std::optional<double> ceiling_height, bool virtual_surfaces,
-             const CostmapOptions& options) {
-            const HeightmapRequest request =
-                toRequest(centre, size, follow_terrain, min_clearance, floor_depth, ceiling_height,
-                          virtual_surfaces);
-            Result<Costmap> made = [&] {
-              py::gil_scoped_release release;
-              const std::lock_guard lock(*self.mutex);
-              return self.mapper.costmap(request, options);
-            }();
-            return valueOr(std::move(made));
+          [](MapperHandle& self, const HeightmapRequest& request, const CostmapOptions& options) {
+            return valueOr(
+                withMapper(self, [&](Mapper& mapper) { return mapper.costmap(request, options); }));
           },
-          py::arg("centre"), py::arg("size") = defaults.size,
-          py::arg("follow_terrain") = defaults.follow_terrain,
-          py::arg("min_clearance") = defaults.min_clearance, py::arg("floor_depth") = py::none(),
-          py::arg("ceiling_height") = py::none(),
-          py::arg("virtual_surfaces") = defaults.virtual_surfaces,
-          py::arg("options") = CostmapOptions{},
-          "The Nav2 costmap of the height map (as raymapd publishes it).");
+          py::arg("request"), py::arg("options"),
+          "The Nav2 costmap of the height map `request` asks for (as raymapd publishes it).");
 }
 
 }  // namespace raymap::python

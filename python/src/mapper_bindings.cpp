@@ -54,14 +54,10 @@ void integratePoints(MapperHandle& self, const py::array& points, const py::arra
   const Eigen::Isometry3d sensor_to_world = toIsometry(pose, "pose");
   const std::optional<ValuesView> intensity =
       optionalValues(intensities, "intensities", view.size());
-  Expected<void, Error> done;
-  {
-    py::gil_scoped_release release;
-    const std::lock_guard lock(*self.mutex);
+  check(withMapper(self, [&](Mapper& mapper) {
     const std::vector<SensorPoint> scan = sensorPoints(view, std::nullopt, intensity);
-    done = self.mapper.integrate(scan, sensor_to_world);
-  }
-  check(done);
+    return mapper.integrate(scan, sensor_to_world);
+  }));
 }
 
 std::vector<TimedPose> poseTable(const py::array& pose_times, const py::array& poses) {
@@ -87,14 +83,10 @@ void integrateDeskewed(MapperHandle& self, const py::array& points, const py::ar
   const std::optional<ValuesView> intensity =
       optionalValues(intensities, "intensities", view.size());
   const std::vector<TimedPose> table = poseTable(pose_times, poses);
-  Expected<void, Error> done;
-  {
-    py::gil_scoped_release release;
-    const std::lock_guard lock(*self.mutex);
+  check(withMapper(self, [&](Mapper& mapper) {
     const std::vector<SensorPoint> scan = sensorPoints(view, time, intensity);
-    done = self.mapper.integrate(scan, table);
-  }
-  check(done);
+    return mapper.integrate(scan, table);
+  }));
 }
 
 void integrateRays(MapperHandle& self, const py::array& origins, const py::array& ends,
@@ -111,10 +103,7 @@ void integrateRays(MapperHandle& self, const py::array& origins, const py::array
   if (no_return) {
     flags.emplace(*no_return, "no_return", to.size());
   }
-  Expected<void, Error> done;
-  {
-    py::gil_scoped_release release;
-    const std::lock_guard lock(*self.mutex);
+  check(withMapper(self, [&](Mapper& mapper) {
     std::vector<WorldRay> scan(to.size());
     for (std::size_t i = 0; i < scan.size(); ++i) {
       scan[i].origin = from[i];
@@ -122,9 +111,8 @@ void integrateRays(MapperHandle& self, const py::array& origins, const py::array
       scan[i].intensity = intensity ? static_cast<float>((*intensity)[i]) : 0.0f;
       scan[i].no_return = flags ? (*flags)[i] : false;
     }
-    done = self.mapper.integrate(scan);
-  }
-  check(done);
+    return mapper.integrate(scan);
+  }));
 }
 
 /// One value per point of an (N, 3) array, computed with the GIL released.
@@ -133,13 +121,11 @@ py::array_t<T> perPoint(MapperHandle& self, const py::array& points, Fn&& fn) {
   const Points3View view(points, "points");
   py::array_t<T> out(static_cast<py::ssize_t>(view.size()));
   T* values = out.mutable_data();
-  {
-    py::gil_scoped_release release;
-    const std::lock_guard lock(*self.mutex);
+  withMapper(self, [&](const Mapper& mapper) {
     for (std::size_t i = 0; i < view.size(); ++i) {
-      values[i] = fn(self.mapper, view[i]);
+      values[i] = fn(mapper, view[i]);
     }
-  }
+  });
   return out;
 }
 
@@ -162,14 +148,6 @@ py::dict countersDict(const MapperCounters& c) {
   return d;
 }
 
-/// flush() and the other calls that wait for the backend, without the GIL.
-template <class Fn>
-auto unlocked(MapperHandle& self, Fn&& fn) {
-  py::gil_scoped_release release;
-  const std::lock_guard lock(*self.mutex);
-  return fn(self.mapper);
-}
-
 void bindIntegration(py::class_<MapperHandle>& c) {
   c.def("integrate_points", &integratePoints, py::arg("points"), py::arg("pose"),
         py::arg("intensities") = py::none(),
@@ -185,13 +163,13 @@ void bindIntegration(py::class_<MapperHandle>& c) {
       .def(
           "flush",
           [](MapperHandle& self) {
-            check(unlocked(self, [](Mapper& mapper) { return mapper.flush(); }));
+            check(withMapper(self, [](Mapper& mapper) { return mapper.flush(); }));
           },
           "Integrates what waits in the batch; queries then see every ray given so far.")
       .def(
           "move_window",
           [](MapperHandle& self, const std::array<double, 3>& centre) {
-            return valueOr(unlocked(self, [&](Mapper& mapper) {
+            return valueOr(withMapper(self, [&](Mapper& mapper) {
               return mapper.moveWindow(Eigen::Vector3d(centre[0], centre[1], centre[2]));
             }));
           },
@@ -212,19 +190,8 @@ VoxelState stateNamed(const std::string& name) {
 template <class T>
 py::array_t<T> voxelsOf(MapperHandle& self, const std::string& state, bool centres) {
   const VoxelState wanted = stateNamed(state);
-  std::vector<VoxelKey> keys;
-  Expected<void, Error> done;
-  {
-    py::gil_scoped_release release;
-    const std::lock_guard lock(*self.mutex);
-    auto listed = self.mapper.voxels(wanted);
-    if (listed) {
-      keys = std::move(*listed);
-    } else {
-      done = Unexpected(listed.error());
-    }
-  }
-  check(done);
+  const std::vector<VoxelKey> keys =
+      valueOr(withMapper(self, [&](const Mapper& mapper) { return mapper.voxels(wanted); }));
   py::array_t<T> out({static_cast<py::ssize_t>(keys.size()), py::ssize_t{3}});
   auto view = out.template mutable_unchecked<2>();
   for (std::size_t i = 0; i < keys.size(); ++i) {
@@ -275,7 +242,8 @@ void bindQueries(py::class_<MapperHandle>& c) {
       .def(
           "counts",
           [](MapperHandle& self) {
-            const MapCounts counts = unlocked(self, [](Mapper& mapper) { return mapper.counts(); });
+            const MapCounts counts =
+                withMapper(self, [](Mapper& mapper) { return mapper.counts(); });
             py::dict d;
             d["regions"] = counts.regions;
             d["voxels_free"] = counts.voxels_free;
@@ -313,7 +281,7 @@ void bindMapper(py::module_& m) {
       .def(
           "save",
           [](MapperHandle& self, const std::string& path) {
-            check(unlocked(self, [&](Mapper& mapper) { return mapper.save(path); }));
+            check(withMapper(self, [&](Mapper& mapper) { return mapper.save(path); }));
           },
           py::arg("path"), "Writes the map (.rmap, as raymap populate), via a temporary file.");
   bindIntegration(c);

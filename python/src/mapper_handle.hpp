@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "raymap/mapper.hpp"
+#include <pybind11/pybind11.h>
 
 namespace raymap::python {
 
@@ -17,5 +18,14 @@ struct MapperHandle {
   Mapper mapper;
   std::unique_ptr<std::mutex> mutex;
 };
+
+/// @brief fn(mapper) with the GIL released and the mapper's lock held: the calls that integrate,
+/// flush, query, make grids or write files.
+template <class Fn>
+auto withMapper(MapperHandle& self, Fn&& fn) {
+  const pybind11::gil_scoped_release release;
+  const std::lock_guard lock(*self.mutex);
+  return fn(self.mapper);
+}
 
 }  // namespace raymap::python
