@@ -249,6 +249,14 @@ class Mapper:
         marks rays that only clear free space to their end."""
         self._mapper.integrate_rays(origins, ends, intensities, no_return)
 
+    def integrate_scan(self, scan: "Scan") -> None:
+        """Integrates a scan of read_recording() as it is: its buffer is already the library's
+        ray layout, so nothing is converted or copied (integrate_rays() of its arrays gives the
+        same map)."""
+        if not isinstance(scan, Scan):
+            raise InvalidArgument("integrate_scan: expected a raymap.Scan from read_recording()")
+        self._mapper.integrate_scan(scan._rays)
+
     def flush(self) -> None:
         """Integrates what waits in the batch, so that queries see every ray given so far."""
         self._mapper.flush()
@@ -331,13 +339,14 @@ class Scan:
     origins, ends: (N, 3) float64, metres; intensities: (N,) float32; no_return: (N,) bool.
     """
 
-    __slots__ = ("origins", "ends", "intensities", "no_return")
+    __slots__ = ("origins", "ends", "intensities", "no_return", "_rays")
 
     def __init__(self, arrays: dict) -> None:
         self.origins = arrays["origins"]
         self.ends = arrays["ends"]
         self.intensities = arrays["intensities"]
         self.no_return = arrays["no_return"]
+        self._rays = arrays["rays"]  # the buffer the arrays view (Mapper.integrate_scan)
 
     def __len__(self) -> int:
         return len(self.ends)

@@ -17,6 +17,7 @@
 #include "errors.hpp"
 #include "mapper_handle.hpp"
 #include "raymap/mapper.hpp"
+#include "scan_rays.hpp"
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -28,14 +29,17 @@ namespace py = pybind11;
 namespace raymap::python {
 namespace {
 
-std::vector<SensorPoint> sensorPoints(const Points3View& points,
-                                      const std::optional<ValuesView>& times,
-                                      const std::optional<ValuesView>& intensities) {
-  std::vector<SensorPoint> scan(points.size());
+/// The points of the arrays in the handle's staging vector (every field set).
+std::span<const SensorPoint> sensorPoints(const Points3View& points,
+                                          const std::optional<ValuesView>& times,
+                                          const std::optional<ValuesView>& intensities,
+                                          std::vector<SensorPoint>& scan) {
+  scan.resize(points.size());
   for (std::size_t i = 0; i < scan.size(); ++i) {
     scan[i].position = points[i];
     scan[i].time_s = times ? (*times)[i] : 0.0;
     scan[i].intensity = intensities ? static_cast<float>((*intensities)[i]) : 0.0f;
+    scan[i].no_return = false;
   }
   return scan;
 }
@@ -55,8 +59,8 @@ void integratePoints(MapperHandle& self, const py::array& points, const py::arra
   const std::optional<ValuesView> intensity =
       optionalValues(intensities, "intensities", view.size());
   check(withMapper(self, [&](Mapper& mapper) {
-    const std::vector<SensorPoint> scan = sensorPoints(view, std::nullopt, intensity);
-    return mapper.integrate(scan, sensor_to_world);
+    return mapper.integrate(sensorPoints(view, std::nullopt, intensity, self.point_staging),
+                            sensor_to_world);
   }));
 }
 
@@ -84,8 +88,7 @@ void integrateDeskewed(MapperHandle& self, const py::array& points, const py::ar
       optionalValues(intensities, "intensities", view.size());
   const std::vector<TimedPose> table = poseTable(pose_times, poses);
   check(withMapper(self, [&](Mapper& mapper) {
-    const std::vector<SensorPoint> scan = sensorPoints(view, time, intensity);
-    return mapper.integrate(scan, table);
+    return mapper.integrate(sensorPoints(view, time, intensity, self.point_staging), table);
   }));
 }
 
@@ -104,7 +107,8 @@ void integrateRays(MapperHandle& self, const py::array& origins, const py::array
     flags.emplace(*no_return, "no_return", to.size());
   }
   check(withMapper(self, [&](Mapper& mapper) {
-    std::vector<WorldRay> scan(to.size());
+    std::vector<WorldRay>& scan = self.ray_staging;
+    scan.resize(to.size());
     for (std::size_t i = 0; i < scan.size(); ++i) {
       scan[i].origin = from[i];
       scan[i].end = to[i];
@@ -148,6 +152,14 @@ py::dict countersDict(const MapperCounters& c) {
   return d;
 }
 
+/// A recording's scan in the library's own layout: integrated as it is.
+void integrateScan(MapperHandle& self, const py::object& rays) {
+  const ScanRays& scan = scanRaysOf(rays);
+  check(withMapper(self, [&](Mapper& mapper) {
+    return mapper.integrate(std::span<const WorldRay>(scan.rays));
+  }));
+}
+
 void bindIntegration(py::class_<MapperHandle>& c) {
   c.def("integrate_points", &integratePoints, py::arg("points"), py::arg("pose"),
         py::arg("intensities") = py::none(),
@@ -156,6 +168,8 @@ void bindIntegration(py::class_<MapperHandle>& c) {
            py::arg("pose_times"), py::arg("poses"), py::arg("intensities") = py::none(),
            "Sensor-frame points (N, 3) with their times (N,), deskewed by a pose table: times "
            "(M,) increasing and sensor-to-world poses (M, 4, 4).")
+      .def("integrate_scan", &integrateScan, py::arg("rays"),
+           "The rays of a read_recording() scan (Scan.rays), integrated in place.")
       .def("integrate_rays", &integrateRays, py::arg("origins"), py::arg("ends"),
            py::arg("intensities") = py::none(), py::arg("no_return") = py::none(),
            "World-frame rays: origins (N, 3), ends (N, 3); no_return (N,) bool marks rays that "

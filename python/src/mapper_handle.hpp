@@ -5,6 +5,7 @@
 #include <memory>
 #include <mutex>
 #include <utility>
+#include <vector>
 
 #include "raymap/mapper.hpp"
 #include <pybind11/pybind11.h>
@@ -17,6 +18,10 @@ struct MapperHandle {
   explicit MapperHandle(Mapper m) : mapper(std::move(m)), mutex(std::make_unique<std::mutex>()) {}
   Mapper mapper;
   std::unique_ptr<std::mutex> mutex;
+  /// The library's rays and points built from a scan's arrays, kept between calls (under the
+  /// lock): once grown to the largest scan, a scan costs no allocation and no page faults.
+  std::vector<WorldRay> ray_staging;
+  std::vector<SensorPoint> point_staging;
 };
 
 /// @brief fn(mapper) with the GIL released and the mapper's lock held: the calls that integrate,

@@ -13,6 +13,7 @@
 #include "bindings.hpp"
 #include "errors.hpp"
 #include "raymap/recording.hpp"
+#include "scan_rays.hpp"
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -20,18 +21,27 @@
 namespace py = pybind11;
 
 namespace raymap::python {
-namespace {
 
-/// One scan's rays, owned by Python (the arrays are views of `rays`).
-struct ScanRays {
-  std::vector<WorldRay> rays;
-};
-
-py::dict scanArrays(std::vector<WorldRay> rays) {
+py::capsule ownScanRays(std::vector<WorldRay> rays) {
   auto owned = std::make_unique<ScanRays>();
   owned->rays = std::move(rays);
-  const ScanRays* scan = owned.get();
-  const py::capsule owner(owned.release(), [](void* p) { delete static_cast<ScanRays*>(p); });
+  return py::capsule(owned.release(), kScanRaysCapsule, [](PyObject* capsule) {
+    delete static_cast<ScanRays*>(PyCapsule_GetPointer(capsule, kScanRaysCapsule));
+  });
+}
+
+const ScanRays& scanRaysOf(const py::object& object) {
+  if (!PyCapsule_IsValid(object.ptr(), kScanRaysCapsule)) {
+    raiseInvalid("not the rays of a scan from raymap.read_recording()");
+  }
+  return *static_cast<const ScanRays*>(PyCapsule_GetPointer(object.ptr(), kScanRaysCapsule));
+}
+
+namespace {
+
+py::dict scanArrays(std::vector<WorldRay> rays) {
+  const py::capsule owner = ownScanRays(std::move(rays));
+  const ScanRays* scan = &scanRaysOf(owner);
   const auto rows = static_cast<py::ssize_t>(scan->rays.size());
   const auto stride = static_cast<py::ssize_t>(sizeof(WorldRay));
   static const WorldRay kEmpty;
@@ -41,6 +51,7 @@ py::dict scanArrays(std::vector<WorldRay> rays) {
   d["ends"] = arrayOver<double>(first->end.data(), {rows, 3}, {stride, 8}, owner);
   d["intensities"] = arrayOver<float>(&first->intensity, {rows}, {stride}, owner);
   d["no_return"] = arrayOver<bool>(&first->no_return, {rows}, {stride}, owner);
+  d["rays"] = owner;
   return d;
 }
 

@@ -46,6 +46,25 @@ def map_with_python(recording, out, **options):
     return mapper, scans
 
 
+def test_a_scan_integrated_in_place_is_the_scan_integrated_from_its_arrays(room_rays, tmp_path):
+    by_arrays = raymap.Mapper()
+    in_place = raymap.Mapper()
+    for scan in raymap.read_recording(str(room_rays)):
+        by_arrays.integrate_rays(scan.origins, scan.ends, intensities=scan.intensities,
+                                 no_return=scan.no_return)
+        in_place.integrate_scan(scan)
+    by_arrays.flush()
+    in_place.flush()
+    by_arrays.save(str(tmp_path / "arrays.rmap"))
+    in_place.save(str(tmp_path / "in_place.rmap"))
+    assert (tmp_path / "arrays.rmap").read_bytes() == (tmp_path / "in_place.rmap").read_bytes()
+    assert in_place.counters() == by_arrays.counters()
+    with pytest.raises(raymap.InvalidArgument, match="read_recording"):
+        in_place.integrate_scan("not a scan")
+    with pytest.raises(raymap.InvalidArgument, match="read_recording"):
+        in_place._mapper.integrate_scan(np.zeros(3))
+
+
 @pytest.mark.parametrize("semantics", ["ray", "scan"])
 def test_the_room_maps_as_raymap_populate_maps_it(cli, room_rays, tmp_path, semantics):
     stats = tmp_path / "stats.json"
