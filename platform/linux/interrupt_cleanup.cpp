@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <csignal>  // sigaction, sigprocmask and raise (POSIX, declared through <signal.h>)
 #include <cstddef>
 #include <cstring>
 
-#include <signal.h>
 #include <unistd.h>
 
 namespace raymap::platform {
