@@ -2,6 +2,7 @@
 // Decay-rate maps through the raymap program: populate --mode decay (decay rates only) and
 // --decay-rate with occupancy or an NDT mode, info, export --mode decay --threshold, and the
 // errors for maps without the layer.
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,25 @@ TEST(CliDecay, DecayRateCombinesWithOccupancyAndNdt) {
       runRaymap({"populate", rays, "--output", map, "--mode", "occupancy+decay", "--quiet"});
   ASSERT_EQ(named.exit_code, 0) << describe(named);
   EXPECT_TRUE(contains(runRaymap({"info", map}).out, "mode           occupancy+decay\n"));
+}
+
+TEST(CliDecay, DecayRateKeepsTheModeOfAConfigFile) {
+  // --decay-rate adds decay rates to the mode a --config file names; it used to reset the mode
+  // to occupancy (the flag re-applied --mode's default).
+  TempDir dir;
+  const std::string rays = dir.file("rays.ply");
+  writeRays(rays);
+  const std::string yaml = dir.file("robot.yaml");
+  {
+    std::ofstream out(yaml);
+    out << "map:\n  mode: ndt-om\n";
+  }
+  const std::string map = dir.file("ndt.rmap");
+  const RunResult populated =
+      runRaymap({"populate", rays, "--config", yaml, "--decay-rate", "--output", map, "--quiet"});
+  ASSERT_EQ(populated.exit_code, 0) << describe(populated);
+  const RunResult info = runRaymap({"info", map});
+  EXPECT_TRUE(contains(info.out, "mode           ndt-om+decay\n")) << info.out;
 }
 
 TEST(CliDecay, ErrorsNameTheMapAndTheReason) {
