@@ -18,13 +18,13 @@ namespace {
 namespace fs = std::filesystem;
 using test::TempDir;
 
-void writeFile(const std::string& path, const std::string& text) {
+void writeOutput(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
   ASSERT_TRUE(out.good()) << path;
 }
 
-std::string fileText(const std::string& path) {
+std::string outputText(const std::string& path) {
   const test::Bytes bytes = test::readFileBytes(path);
   return std::string(bytes.begin(), bytes.end());
 }
@@ -41,16 +41,16 @@ TEST(StagedOutputs, NothingAppearsUntilCommitThenEveryOutputDoes) {
   ASSERT_TRUE(png_temp.has_value()) << png_temp.error().message;
 
   // Act
-  writeFile(*map_temp, "map");
-  writeFile(*png_temp, "png");
+  writeOutput(*map_temp, "map");
+  writeOutput(*png_temp, "png");
   const bool before_commit = fs::exists(map) || fs::exists(png);
   const Expected<void, Error> committed = staged.commit();
 
   // Assert
   EXPECT_FALSE(before_commit);
   ASSERT_TRUE(committed.has_value()) << committed.error().message;
-  EXPECT_EQ(fileText(map), "map");
-  EXPECT_EQ(fileText(png), "png");
+  EXPECT_EQ(outputText(map), "map");
+  EXPECT_EQ(outputText(png), "png");
   EXPECT_FALSE(fs::exists(*map_temp));
   EXPECT_FALSE(fs::exists(*png_temp));
 }
@@ -59,7 +59,7 @@ TEST(StagedOutputs, WithoutACommitTheTemporariesGoAndAnOldOutputStays) {
   // Arrange
   TempDir dir;
   const std::string old_output = dir.file("old.csv");
-  writeFile(old_output, "previous run");
+  writeOutput(old_output, "previous run");
   std::string temp;
 
   // Act: a run that fails after staging its output.
@@ -68,19 +68,19 @@ TEST(StagedOutputs, WithoutACommitTheTemporariesGoAndAnOldOutputStays) {
     const Result<std::string> staged_path = staged.add(old_output, "--csv");
     ASSERT_TRUE(staged_path.has_value()) << staged_path.error().message;
     temp = *staged_path;
-    writeFile(temp, "half a new file");
+    writeOutput(temp, "half a new file");
   }
 
   // Assert
   EXPECT_FALSE(fs::exists(temp));
-  EXPECT_EQ(fileText(old_output), "previous run");
+  EXPECT_EQ(outputText(old_output), "previous run");
 }
 
 TEST(StagedOutputs, AnOutputThatIsAnInputOrAnotherOutputIsAUsageError) {
   // Arrange
   TempDir dir;
   const std::string input = dir.file("rays.ply");
-  writeFile(input, "ply");
+  writeOutput(input, "ply");
   fs::create_directories(dir.file("sub"));
   StagedOutputs staged("test");
   staged.input(input, "input");
@@ -95,7 +95,7 @@ TEST(StagedOutputs, AnOutputThatIsAnInputOrAnotherOutputIsAUsageError) {
   EXPECT_EQ(same_as_input.error().code, ErrorCode::kInvalidArgument);
   EXPECT_NE(same_as_input.error().message.find("--output"), std::string::npos);
   EXPECT_NE(same_as_input.error().message.find("same file as input"), std::string::npos);
-  EXPECT_EQ(fileText(input), "ply");
+  EXPECT_EQ(outputText(input), "ply");
   ASSERT_TRUE(first.has_value()) << first.error().message;
   ASSERT_FALSE(twice.has_value());
   EXPECT_EQ(twice.error().code, ErrorCode::kInvalidArgument);
