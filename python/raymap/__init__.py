@@ -308,6 +308,13 @@ class Mapper:
         return self._mapper.costmap(_heightmap_request(centre, size, request),
                                     options or CostmapOptions())
 
+    def export_ply(self, path: str, kind: str = "occupied", **options: Any) -> dict:
+        """Writes the PLY `raymap export` writes: kind "occupied", "free", "mean", "decay",
+        "ndt", "ndt-points", "tsdf" or "tsdf-mesh"; options decay_threshold, ndt_sigmas,
+        ndt_min_axis, ndt_colour ("height", "intensity", "permeability"), tsdf_min_weight (one
+        that does not fit the kind is refused, naming it). Returns {"items", "vertices"}."""
+        return self._mapper.export_ply(str(path), kind, **options)
+
     def save(self, path: str) -> None:
         """Writes the map (.rmap, what `raymap populate` writes) via a temporary file."""
         self._mapper.save(str(path))

@@ -16,6 +16,7 @@
 #include "bindings.hpp"
 #include "errors.hpp"
 #include "mapper_handle.hpp"
+#include "raymap/export.hpp"
 #include "raymap/mapper.hpp"
 #include "scan_rays.hpp"
 #include <pybind11/numpy.h>
@@ -278,6 +279,38 @@ void bindQueries(py::class_<MapperHandle>& c) {
                              [](MapperHandle& self) { return self.mapper.memoryWarning(); });
 }
 
+/// Mapper.export_ply(path, kind, …): the options a kind does not take stay unset (the library
+/// refuses one that is set for another kind, naming its key).
+py::dict exportPly(MapperHandle& self, const std::string& path, const std::string& kind,
+                   std::optional<double> decay_threshold, std::optional<double> ndt_sigmas,
+                   std::optional<double> ndt_min_axis, const std::optional<std::string>& ndt_colour,
+                   std::optional<double> tsdf_min_weight) {
+  ExportRequest request;
+  const std::optional<ExportKind> parsed = exportKindFromName(kind);
+  if (!parsed) {
+    raiseInvalid("export.mode: '" + kind + "' is not an export kind");
+  }
+  request.kind = *parsed;
+  request.decay_threshold = decay_threshold;
+  request.ndt_sigmas = ndt_sigmas;
+  request.ndt_min_axis = ndt_min_axis;
+  request.tsdf_min_weight = tsdf_min_weight;
+  if (ndt_colour) {
+    request.ndt_colour = exportColourFromName(*ndt_colour);
+    if (!request.ndt_colour) {
+      raiseInvalid("export.ndt_colour: '" + *ndt_colour +
+                   "' is not height, intensity or "
+                   "permeability");
+    }
+  }
+  const ExportCounts counts =
+      valueOr(withMapper(self, [&](Mapper& mapper) { return mapper.exportPly(path, request); }));
+  py::dict d;
+  d["items"] = counts.items;
+  d["vertices"] = counts.vertices;
+  return d;
+}
+
 }  // namespace
 
 void bindMapper(py::module_& m) {
@@ -297,7 +330,12 @@ void bindMapper(py::module_& m) {
           [](MapperHandle& self, const std::string& path) {
             check(withMapper(self, [&](Mapper& mapper) { return mapper.save(path); }));
           },
-          py::arg("path"), "Writes the map (.rmap, as raymap populate), via a temporary file.");
+          py::arg("path"), "Writes the map (.rmap, as raymap populate), via a temporary file.")
+      .def("export_ply", &exportPly, py::arg("path"), py::arg("kind") = "occupied",
+           py::arg("decay_threshold") = py::none(), py::arg("ndt_sigmas") = py::none(),
+           py::arg("ndt_min_axis") = py::none(), py::arg("ndt_colour") = py::none(),
+           py::arg("tsdf_min_weight") = py::none(),
+           "Writes the PLY raymap export writes (points, NDT ellipsoids, a TSDF surface or mesh).");
   bindIntegration(c);
   bindQueries(c);
   addGridQueries(c);

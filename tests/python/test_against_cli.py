@@ -82,6 +82,32 @@ def test_the_room_maps_as_raymap_populate_maps_it(cli, room_rays, tmp_path, sema
     assert map_description(cli, tmp_path / "py.rmap") == map_description(cli, tmp_path / "cli.rmap")
 
 
+@pytest.mark.parametrize("mode, kind, options", [
+    ("occupancy", "occupied", []),
+    ("occupancy", "free", []),
+    ("ndt-om", "ndt", ["--sigmas", "3"]),
+    ("tsdf", "tsdf-mesh", []),
+])
+def test_an_export_is_raymap_exports_byte_for_byte(cli, room_rays, tmp_path, mode, kind, options):
+    run([cli, "populate", room_rays, "-o", tmp_path / "room.rmap", "--mode", mode, "--quiet"])
+    run([cli, "export", tmp_path / "room.rmap", "--mode", kind, *options, "--ply",
+         tmp_path / "cli.ply", "--quiet"])
+    keywords = {"ndt_sigmas": 3.0} if options else {}
+    counts = raymap.Mapper.load(str(tmp_path / "room.rmap")).export_ply(
+        str(tmp_path / "py.ply"), kind, **keywords)
+    assert counts["items"] > 0
+    assert (tmp_path / "py.ply").read_bytes() == (tmp_path / "cli.ply").read_bytes()
+
+
+def test_an_export_option_of_another_kind_is_refused_naming_it(tmp_path):
+    mapper = raymap.Mapper()
+    with pytest.raises(raymap.InvalidArgument, match="export.mode: 'cloud'"):
+        mapper.export_ply(str(tmp_path / "a.ply"), "cloud")
+    with pytest.raises(raymap.InvalidArgument, match="export.sigmas applies only to"):
+        mapper.export_ply(str(tmp_path / "a.ply"), "occupied", ndt_sigmas=2.0)
+    assert not (tmp_path / "a.ply").exists()
+
+
 def test_the_height_map_arrays_are_raymap_heightmaps_csv(cli, room_rays, tmp_path):
     run([cli, "populate", room_rays, "-o", tmp_path / "room.rmap", "--quiet"])
     run([cli, "heightmap", tmp_path / "room.rmap", "--center", "0.3,-0.2,0", "--size", "6",
