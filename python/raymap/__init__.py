@@ -103,18 +103,7 @@ def _pose_matrix(pose: PoseLike, what: str = "pose") -> np.ndarray:
             raise InvalidArgument(
                 f"{what}: (translation, quaternion) must be 3 and 4 numbers (x y z w), "
                 f"not {translation.shape} and {quaternion.shape}")
-        norm = np.linalg.norm(quaternion)
-        if not np.isfinite(norm) or norm < 1e-9:
-            raise InvalidArgument(f"{what}: the quaternion has no direction")
-        x, y, z, w = quaternion / norm
-        matrix = np.eye(4)
-        matrix[:3, :3] = [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-        matrix[:3, 3] = translation
-        return matrix
+        return _raymap._pose_matrix(translation, quaternion)
     return np.asarray(pose, dtype=np.float64)
 
 

@@ -9,6 +9,8 @@
 #include "errors.hpp"
 #include <Eigen/Geometry>
 
+#include "src/io/trajectory.hpp"
+
 namespace py = pybind11;
 
 namespace raymap::python {
@@ -64,6 +66,27 @@ FlagsView::FlagsView(const py::array& array, const char* what, std::size_t rows)
   }
   data_ = static_cast<const char*>(array.data());
   stride_ = array.strides(0);
+}
+
+py::array_t<double> poseMatrix(const std::array<double, 3>& translation,
+                               const std::array<double, 4>& quaternion_xyzw, const char* what) {
+  const Eigen::Vector3d position(translation[0], translation[1], translation[2]);
+  const Eigen::Quaterniond q(quaternion_xyzw[3], quaternion_xyzw[0], quaternion_xyzw[1],
+                             quaternion_xyzw[2]);
+  if (!position.allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-9) {
+    raiseInvalid(std::string(what) +
+                 ": the translation and quaternion must be finite, and the "
+                 "quaternion must have a direction");
+  }
+  const Eigen::Matrix4d m = io::Pose{position, q.normalized()}.toIsometry().matrix();
+  py::array_t<double> out({py::ssize_t{4}, py::ssize_t{4}});
+  auto view = out.mutable_unchecked<2>();
+  for (py::ssize_t r = 0; r < 4; ++r) {
+    for (py::ssize_t c = 0; c < 4; ++c) {
+      view(r, c) = m(r, c);
+    }
+  }
+  return out;
 }
 
 Eigen::Isometry3d toIsometry(const py::array& matrix, const char* what) {

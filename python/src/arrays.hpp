@@ -4,6 +4,7 @@
 // function's arguments are for the whole call, with or without the GIL.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -84,6 +85,13 @@ class FlagsView {
 /// as its unit quaternion). Raises naming `what` for another shape, a non-finite
 /// entry, a bottom row other than 0 0 0 1 or a block that is not a rotation (1e-6).
 Eigen::Isometry3d toIsometry(const pybind11::array& matrix, const char* what);
+
+/// @brief A translation (metres) and a quaternion in ROS's order (x, y, z, w) as a 4 x 4
+/// sensor-to-world matrix, through the library's own pose (io::Pose; the quaternion normalised).
+/// Raises naming `what` for a non-finite entry or a quaternion without direction.
+pybind11::array_t<double> poseMatrix(const std::array<double, 3>& translation,
+                                     const std::array<double, 4>& quaternion_xyzw,
+                                     const char* what);
 
 /// @brief A NumPy array over `data` (no copy) that keeps `owner` alive: the layers of a height
 /// map or costmap returned to Python. `strides` in bytes.

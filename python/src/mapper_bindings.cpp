@@ -267,7 +267,11 @@ void bindQueries(py::class_<MapperHandle>& c) {
           },
           "Voxel counts over the map: regions, voxels_free, voxels_occupied.")
       .def(
-          "counters", [](MapperHandle& self) { return countersDict(self.mapper.counters()); },
+          "counters",
+          [](MapperHandle& self) {
+            return countersDict(
+                withMapper(self, [](const Mapper& mapper) { return mapper.counters(); }));
+          },
           "What the mapper did so far: rays in, integrated, rejected by reason, batches …")
       .def_property_readonly("map_options",
                              [](MapperHandle& self) { return self.mapper.mapOptions(); })
@@ -299,8 +303,7 @@ py::dict exportPly(MapperHandle& self, const std::string& path, const std::strin
     request.ndt_colour = exportColourFromName(*ndt_colour);
     if (!request.ndt_colour) {
       raiseInvalid("export.ndt_colour: '" + *ndt_colour +
-                   "' is not height, intensity or "
-                   "permeability");
+                   "' is not height, intensity or permeability");
     }
   }
   const ExportCounts counts =
@@ -339,6 +342,13 @@ void bindMapper(py::module_& m) {
   bindIntegration(c);
   bindQueries(c);
   addGridQueries(c);
+  m.def(
+      "_pose_matrix",
+      [](const std::array<double, 3>& translation, const std::array<double, 4>& quaternion) {
+        return poseMatrix(translation, quaternion, "pose");
+      },
+      py::arg("translation"), py::arg("quaternion_xyzw"),
+      "Internal: (translation, quaternion x y z w) as a 4 x 4 matrix, by the library's pose.");
   m.def(
       "load_config",
       [](const std::string& path, const MapperConfig& base) {

@@ -60,8 +60,8 @@ StagedOutputs::~StagedOutputs() { removeAll(); }
 void StagedOutputs::removeAll() noexcept {
   for (const Output& output : outputs_) {
     ::unlink(output.temp.c_str());
-    platform::InterruptCleanup::remove(
-        output.signal_slot);  // after the unlink: a signal still finds it
+    // After the unlink: a signal meanwhile still finds the file to remove.
+    platform::InterruptCleanup::remove(output.signal_slot);
   }
   outputs_.clear();
 }
