@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -131,6 +132,17 @@ RunningDaemon::RunningDaemon(const std::string& config_text, bool watchdog,
 }
 
 std::string RunningDaemon::log() const { return readFile(dir.file("raymapd.log")); }
+
+std::string RunningDaemon::logOnceItHas(const std::string& text, double max_seconds) const {
+  const std::int64_t until =
+      platform::monotonicNowNs() + static_cast<std::int64_t>(max_seconds * 1e9);
+  std::string text_now = log();
+  while (text_now.find(text) == std::string::npos && platform::monotonicNowNs() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    text_now = log();
+  }
+  return text_now;
+}
 
 driver::SimulatedLidar yardLidar(int beams, int columns, bool moving) {
   auto file = sim::loadSceneFile(std::string(RAYMAP_SCENES_DIR) + "/yard.yaml");

@@ -91,6 +91,10 @@ struct RunningDaemon {
                 const std::vector<std::string>& launcher = {},
                 const std::vector<std::string>& environment = {});
   std::string log() const;
+  /// @brief The log once it contains `text`, polled until then or for at most `max_seconds`
+  /// (then as it is). raymapd publishes a report before it logs the report's line, so a test
+  /// that has just received the report may read the log a moment too early.
+  std::string logOnceItHas(const std::string& text, double max_seconds = kStartWaitS) const;
 
   TempDir dir;
   FakeNotifySocket notify;

@@ -73,9 +73,10 @@ TEST(RaymapdHealth, CloudsInAFrameNoSensorIsConfiguredForAreAnErrorNamingBothFra
   EXPECT_EQ(s.ros.diagnostics->number("raymapd: pipeline/clouds_wrong_frame").value_or(0),
             received);
   EXPECT_TRUE(maps.empty()) << "a map of nothing is withheld, not published as all unknown";
-  EXPECT_NE(s.daemon.log().find("sensors[0].frame 'lidar_typo'"), std::string::npos)
+  const std::string log = s.daemon.logOnceItHas("sensors[0].frame 'lidar_typo'");
+  EXPECT_NE(log.find("sensors[0].frame 'lidar_typo'"), std::string::npos)
       << "one log line per report names the reason:\n"
-      << s.daemon.log();
+      << log;
   expectCleanStop(s.daemon);
 }
 
@@ -137,8 +138,8 @@ TEST(RaymapdHealth, ReturnsAllNearerThanMinRangeAreAnErrorWithCountsAndNoMapIsPu
             0.0);
   EXPECT_EQ(s.ros.diagnostics->values().at("raymapd: height map/level"), "2");
   EXPECT_TRUE(maps.empty()) << "a map of nothing is withheld, not published as all unknown";
-  EXPECT_NE(s.daemon.log().find("shorter than the sensor's min_range"), std::string::npos)
-      << s.daemon.log();
+  const std::string log = s.daemon.logOnceItHas("shorter than the sensor's min_range");
+  EXPECT_NE(log.find("shorter than the sensor's min_range"), std::string::npos) << log;
   expectCleanStop(s.daemon);
 }
 
@@ -171,7 +172,8 @@ TEST(RaymapdHealth, ASecondPublisherOfTheCloudsAndTheOdometryIsReportedUntilItLe
       << "the writers are named by their participants: " << message();
   EXPECT_EQ(pipelineValue(s.ros, "pose_publishers"), "2");
   EXPECT_EQ(s.ros.diagnostics->values().at("raymapd: sensor lidar/publishers"), "2");
-  EXPECT_NE(s.daemon.log().find("2 publishers of rt/odom"), std::string::npos) << s.daemon.log();
+  const std::string log = s.daemon.logOnceItHas("2 publishers of rt/odom");
+  EXPECT_NE(log.find("2 publishers of rt/odom"), std::string::npos) << log;
 
   // It leaves: the report says so (its writers are gone from discovery at once).
   intruder.value().reset();
@@ -269,7 +271,9 @@ TEST(RaymapdHealth, CloudsLostInItsSocketAreCountedAndNamed) {
   EXPECT_LE(number("clouds_received") + number("clouds_missing"), 40.0);
   EXPECT_EQ(s.ros.diagnostics->values().at("raymapd: sensor lidar/missing"),
             pipelineValue(s.ros, "clouds_missing"));
-  const std::string log = s.daemon.log();
+  // Each report is published before its line is logged: wait for the line.
+  const std::string log =
+      s.daemon.logOnceItHas("datagrams dropped by raymapd's full socket receive buffers");
   EXPECT_NE(log.find("clouds missing by the gaps in their stamps"), std::string::npos) << log;
   EXPECT_NE(log.find("datagrams dropped by raymapd's full socket receive buffers"),
             std::string::npos)
@@ -321,7 +325,8 @@ TEST(RaymapdHealth, APoseClockThatGoesBackStartsOverWithAWarningAndTheMapsKeepCo
   EXPECT_GE(maps.size() - maps_before, fewestMaps(4.0, 2.0)) << s.daemon.log();
   // The WARN of the report after it is in the log (a report a second: the status itself has
   // moved on to OK by now on a fast machine).
-  EXPECT_NE(s.daemon.log().find("the pose clock went back"), std::string::npos) << s.daemon.log();
+  const std::string log = s.daemon.logOnceItHas("the pose clock went back");
+  EXPECT_NE(log.find("the pose clock went back"), std::string::npos) << log;
   expectCleanStop(s.daemon);
 }
 
