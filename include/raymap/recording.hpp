@@ -77,6 +77,26 @@ struct RecordingReport {
   std::uint64_t images_no_camera_info = 0;  ///< depth images before their first CameraInfo
 };
 
+/// @brief One point cloud (or depth image) of a bag as its sensor took it: the points in the
+/// sensor's frame with the sensor's poses in the world. Plain value type.
+struct RecordedCloud {
+  std::string topic;          ///< the sensor's topic
+  std::string frame_id;       ///< header.frame_id: the sensor's frame
+  std::int64_t stamp_ns = 0;  ///< header.stamp, nanoseconds since the epoch of the bag's clock
+  /// The points that `raymap populate` maps (returns; for a depth image with invalid_as_free,
+  /// the free-space points too, no_return set), sensor frame, metres; time_s is the point's
+  /// time in seconds after stamp_ns. Points without a return, with a time out of range or
+  /// without a pose are left out (counted in the report).
+  std::vector<SensorPoint> points;
+  /// The sensor's pose in the world (the base's pose from the odometry or TF, composed with
+  /// sensor_to_base) at each distinct point time, times in seconds after stamp_ns, increasing:
+  /// the poses populate makes this cloud's rays with. Mapper::integrate(points, sensor_poses)
+  /// deskews with them.
+  std::vector<TimedPose> sensor_poses;
+  /// The sensor in the base frame (from /tf_static or BagOptions::sensor_offset).
+  Eigen::Isometry3d sensor_to_base = Eigen::Isometry3d::Identity();
+};
+
 /// @brief Reads a recording scan by scan as world rays (what `raymap populate` maps).
 /// Thread-safety: one thread. Not real-time (file I/O).
 class RecordingReader {
@@ -94,6 +114,12 @@ class RecordingReader {
   /// into `scan`, replacing what it held. @return false once the recording is exhausted (then
   /// `scan` is empty); an error names the file and what is wrong.
   Result<bool> nextScan(std::vector<WorldRay>& scan);
+  /// @brief Reads a bag's next cloud (or depth image) into `cloud`, in its sensor's frame with
+  /// the sensor's poses, counted in report() as nextScan() counts its scans. A reader reads
+  /// scans or clouds, not both. @return false once the bag is exhausted; kUnsupported for a
+  /// file (its rays are in the world frame already: nextScan()), kInvalidArgument after
+  /// nextScan(); else an error naming the file and what is wrong.
+  Result<bool> nextCloud(RecordedCloud& cloud);
   /// Fraction of the recording read so far, 0…1.
   double progress() const noexcept;
   /// True for a bag.

@@ -45,8 +45,8 @@ from ._raymap import (
 __version__ = _raymap.__version__
 
 __all__ = [
-    "Mapper", "read_recording", "Scan", "HeightMap", "HeightmapRequest", "Costmap",
-    "CostmapOptions",
+    "Mapper", "read_recording", "read_clouds", "Scan", "Cloud", "Recording", "HeightMap",
+    "HeightmapRequest", "Costmap", "CostmapOptions",
     "MapperConfig", "MapOptions", "RayOptions", "BackendOptions", "NdtOptions", "TsdfOptions",
     "TierOptions", "RecordingOptions", "BagOptions", "parse_byte_size", "RaymapError",
     "InvalidArgument", "IoError", "FormatError", "CapacityError", "UnsupportedError",
@@ -246,6 +246,13 @@ class Mapper:
             raise InvalidArgument("integrate_scan: expected a raymap.Scan from read_recording()")
         self._mapper.integrate_scan(scan._rays)
 
+    def integrate_cloud(self, cloud: "Cloud") -> None:
+        """Integrates a cloud of read_clouds() as it is, deskewed by its own poses (its points
+        and pose table are already the library's layout: nothing is converted or copied)."""
+        if not isinstance(cloud, Cloud):
+            raise InvalidArgument("integrate_cloud: expected a raymap.Cloud from read_clouds()")
+        self._mapper.integrate_cloud(cloud._cloud)
+
     def flush(self) -> None:
         """Integrates what waits in the batch, so that queries see every ray given so far."""
         self._mapper.flush()
@@ -348,18 +355,54 @@ class Scan:
         return len(self.ends)
 
 
+class Cloud:
+    """One point cloud (or depth image) of a bag as its sensor took it (views of the cloud's own
+    buffer).
+
+    topic, frame_id: the sensor's topic and header.frame_id; stamp_ns: header.stamp (int,
+    nanoseconds). points: (N, 3) float64, the sensor's frame, metres; times: (N,) float64, each
+    point's time in seconds after stamp_ns; intensities: (N,) float32; no_return: (N,) bool
+    (free-space points of a depth image read with invalid_as_free). pose_times (M,) and poses
+    (M, 4, 4): the sensor's pose in the world (sensor-to-world) at each distinct point time,
+    seconds after stamp_ns — the poses `raymap populate` maps the cloud with. sensor_to_base
+    (4, 4): the sensor on the robot (from /tf_static or sensor_offset).
+
+    Mapper.integrate_cloud(cloud) maps it as it is; Mapper.integrate(cloud.points,
+    times=cloud.times, pose_at=(cloud.pose_times, cloud.poses)) does the same from the arrays.
+    """
+
+    __slots__ = ("topic", "frame_id", "stamp_ns", "points", "times", "intensities", "no_return",
+                 "pose_times", "poses", "sensor_to_base", "_cloud")
+
+    def __init__(self, fields: dict) -> None:
+        for name in self.__slots__[:-1]:
+            setattr(self, name, fields[name])
+        self._cloud = fields["cloud"]  # the buffer the arrays view (Mapper.integrate_cloud)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+
 class Recording:
-    """The scans of a recording, in order (iterate it); report() and warnings() afterwards."""
+    """The scans of a recording (read_recording) or the clouds of a bag (read_clouds), in
+    order (iterate it); report() and warnings() afterwards."""
 
-    def __init__(self, reader: Any) -> None:
+    def __init__(self, reader: Any, clouds: bool = False) -> None:
         self._reader = reader
+        self._clouds = clouds
 
-    def __iter__(self) -> Iterator[Scan]:
+    def __iter__(self) -> Iterator[Any]:
         while True:
-            arrays = self._reader.next_scan()
-            if arrays is None:
-                return
-            yield Scan(arrays)
+            if self._clouds:
+                fields = self._reader.next_cloud()
+                if fields is None:
+                    return
+                yield Cloud(fields)
+            else:
+                arrays = self._reader.next_scan()
+                if arrays is None:
+                    return
+                yield Scan(arrays)
 
     @property
     def progress(self) -> float:
@@ -381,10 +424,23 @@ class Recording:
 
 def read_recording(path: str, **options: Any) -> Recording:
     """Opens a recording as `raymap populate` reads it: a rosbag2 bag (a folder, .mcap or .db3)
-    or a ray-cloud / point-cloud PLY. Options: the fields of RecordingOptions (trajectory_path,
-    sensor_offset, scan_period_s) and of BagOptions (topics, pose_topic, pose_source, world_frame,
-    base_frame, time_field, camera_info_topics, downsample, invalid_as_free, max_rate_hz,
-    skip_damaged …)."""
+    or a ray-cloud / point-cloud PLY; iterating it gives Scans of world rays. Options: the fields
+    of RecordingOptions (trajectory_path, sensor_offset, scan_period_s) and of BagOptions (topics,
+    pose_topic, pose_source, world_frame, base_frame, time_field, camera_info_topics, downsample,
+    invalid_as_free, max_rate_hz, skip_damaged …)."""
+    return Recording(_raymap._RecordingReader.open(str(path), _recording_options(options)))
+
+
+def read_clouds(path: str, **options: Any) -> Recording:
+    """Opens a rosbag2 bag whose iteration gives its point clouds (or depth images) as Clouds:
+    points in the sensor's frame with the sensor's poses from the bag's odometry or TF. The
+    options are read_recording()'s. A PLY file raises UnsupportedError when read (its rays are in
+    the world frame already: read_recording)."""
+    return Recording(_raymap._RecordingReader.open(str(path), _recording_options(options)),
+                     clouds=True)
+
+
+def _recording_options(options: dict) -> RecordingOptions:
     recording = RecordingOptions()
     bag = recording.bag
     for name, value in options.items():
@@ -395,4 +451,4 @@ def read_recording(path: str, **options: Any) -> Recording:
         else:
             raise InvalidArgument(f"{name}: not an option of RecordingOptions or BagOptions")
     recording.bag = bag
-    return Recording(_raymap._RecordingReader.open(str(path), recording))
+    return recording

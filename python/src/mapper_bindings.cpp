@@ -161,6 +161,18 @@ void integrateScan(MapperHandle& self, const py::object& rays) {
   }));
 }
 
+/// A bag's cloud in the library's own layout: deskewed by its own pose table, as it is.
+void integrateCloud(MapperHandle& self, const py::object& cloud) {
+  const RecordedCloud& c = cloudOf(cloud);
+  check(withMapper(self, [&](Mapper& mapper) -> Expected<void, Error> {
+    if (c.sensor_poses.empty()) {
+      return {};  // a cloud without points has no poses either
+    }
+    return mapper.integrate(std::span<const SensorPoint>(c.points),
+                            std::span<const TimedPose>(c.sensor_poses));
+  }));
+}
+
 void bindIntegration(py::class_<MapperHandle>& c) {
   c.def("integrate_points", &integratePoints, py::arg("points"), py::arg("pose"),
         py::arg("intensities") = py::none(),
@@ -171,6 +183,8 @@ void bindIntegration(py::class_<MapperHandle>& c) {
            "(M,) increasing and sensor-to-world poses (M, 4, 4).")
       .def("integrate_scan", &integrateScan, py::arg("rays"),
            "The rays of a read_recording() scan (Scan.rays), integrated in place.")
+      .def("integrate_cloud", &integrateCloud, py::arg("cloud"),
+           "The points of a read_clouds() cloud (Cloud.cloud) deskewed by its poses, in place.")
       .def("integrate_rays", &integrateRays, py::arg("origins"), py::arg("ends"),
            py::arg("intensities") = py::none(), py::arg("no_return") = py::none(),
            "World-frame rays: origins (N, 3), ends (N, 3); no_return (N,) bool marks rays that "

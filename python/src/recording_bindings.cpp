@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // raymap::RecordingReader for Python: a rosbag2 bag (lidar clouds with odometry or TF, depth
-// images with CameraInfo) or a ray-/point-cloud PLY, scan by scan as NumPy arrays. Each scan's
-// arrays are views of one buffer the scan owns (no copy per field).
+// images with CameraInfo) or a ray-/point-cloud PLY, scan by scan as NumPy arrays of world rays,
+// or a bag cloud by cloud in the sensor's frame with its poses. Each scan's (cloud's) arrays are
+// views of one buffer it owns (no copy per field).
 #include <array>
 #include <memory>
 #include <optional>
@@ -37,7 +38,52 @@ const ScanRays& scanRaysOf(const py::object& object) {
   return *static_cast<const ScanRays*>(PyCapsule_GetPointer(object.ptr(), kScanRaysCapsule));
 }
 
+py::capsule ownCloud(RecordedCloud cloud) {
+  auto owned = std::make_unique<RecordedCloud>(std::move(cloud));
+  return py::capsule(owned.release(), kRecordedCloudCapsule, [](PyObject* capsule) {
+    delete static_cast<RecordedCloud*>(PyCapsule_GetPointer(capsule, kRecordedCloudCapsule));
+  });
+}
+
+const RecordedCloud& cloudOf(const py::object& object) {
+  if (!PyCapsule_IsValid(object.ptr(), kRecordedCloudCapsule)) {
+    raiseInvalid("not the points of a cloud from raymap.read_clouds()");
+  }
+  return *static_cast<const RecordedCloud*>(
+      PyCapsule_GetPointer(object.ptr(), kRecordedCloudCapsule));
+}
+
 namespace {
+
+/// A cloud's fields; its arrays view the cloud's own vectors (an Isometry3d is a column-major
+/// 4 x 4 of doubles: element (r, c) at 8 r + 32 c bytes).
+py::dict cloudArrays(RecordedCloud cloud) {
+  const py::capsule owner = ownCloud(std::move(cloud));
+  const RecordedCloud* c = &cloudOf(owner);
+  const auto rows = static_cast<py::ssize_t>(c->points.size());
+  const auto stride = static_cast<py::ssize_t>(sizeof(SensorPoint));
+  static const SensorPoint kNoPoint;
+  const SensorPoint* first = rows > 0 ? c->points.data() : &kNoPoint;
+  const auto samples = static_cast<py::ssize_t>(c->sensor_poses.size());
+  const auto pose_stride = static_cast<py::ssize_t>(sizeof(TimedPose));
+  static const TimedPose kNoPose;
+  const TimedPose* pose = samples > 0 ? c->sensor_poses.data() : &kNoPose;
+  py::dict d;
+  d["topic"] = c->topic;
+  d["frame_id"] = c->frame_id;
+  d["stamp_ns"] = c->stamp_ns;
+  d["points"] = arrayOver<double>(first->position.data(), {rows, 3}, {stride, 8}, owner);
+  d["times"] = arrayOver<double>(&first->time_s, {rows}, {stride}, owner);
+  d["intensities"] = arrayOver<float>(&first->intensity, {rows}, {stride}, owner);
+  d["no_return"] = arrayOver<bool>(&first->no_return, {rows}, {stride}, owner);
+  d["pose_times"] = arrayOver<double>(&pose->time_s, {samples}, {pose_stride}, owner);
+  d["poses"] = arrayOver<double>(pose->sensor_to_world.matrix().data(), {samples, 4, 4},
+                                 {pose_stride, 8, 32}, owner);
+  d["sensor_to_base"] =
+      arrayOver<double>(c->sensor_to_base.matrix().data(), {4, 4}, {8, 32}, owner);
+  d["cloud"] = owner;
+  return d;
+}
 
 py::dict scanArrays(std::vector<WorldRay> rays) {
   const py::capsule owner = ownScanRays(std::move(rays));
@@ -156,6 +202,21 @@ void bindRecording(py::module_& m) {
           },
           "The next scan as a dict of arrays (origins, ends, intensities, no_return), or None "
           "at the end.")
+      .def(
+          "next_cloud",
+          [](RecordingReader& reader) -> py::object {
+            RecordedCloud cloud;
+            Result<bool> more = [&] {
+              py::gil_scoped_release release;
+              return reader.nextCloud(cloud);
+            }();
+            if (!valueOr(std::move(more))) {
+              return py::none();
+            }
+            return cloudArrays(std::move(cloud));
+          },
+          "A bag's next cloud or depth image in its sensor's frame, with the sensor's poses, as "
+          "a dict of arrays, or None at the end.")
       .def_property_readonly("progress", &RecordingReader::progress)
       .def_property_readonly("is_bag", &RecordingReader::isBag)
       .def("report", [](const RecordingReader& r) { return reportDict(r.report()); })

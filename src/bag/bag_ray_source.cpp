@@ -3,6 +3,7 @@
 // cover them, as raymapd's integrator does, and are then deskewed point by point.
 #include "src/bag/bag_ray_source.hpp"
 
+#include <algorithm>
 #include <deque>
 #include <optional>
 #include <set>
@@ -327,6 +328,29 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
     return n;
   }
 
+  Result<bool> nextCloud(SensorCloud& cloud) override {
+    if (current_) {
+      return fail(ErrorCode::kInvalidArgument,
+                  bag_->path() + ": this reader is reading rays; open another for clouds");
+    }
+    auto ready = nextReadyScan();
+    if (!ready) {
+      return Unexpected(ready.error());
+    }
+    if (!ready.value()) {
+      if (!finished_) {
+        finish();
+      }
+      return false;
+    }
+    takeCloud(cloud);
+    ++report_.scans_integrated;
+    ++scan_sequence_;
+    recycle(std::move(*current_));
+    current_.reset();
+    return true;
+  }
+
   const io::RaySourceInfo& info() const noexcept override { return info_; }
   double progress() const noexcept override { return bag_->progress(); }
   const BagRaysReport& report() const noexcept override { return report_; }
@@ -366,6 +390,59 @@ class BagRays final : public BagRaySource, private pipeline::PoseSink {
       current_.reset();
     }
     return n;
+  }
+
+  /// Moves the current scan's usable points into `cloud` with the sensor's pose at each of
+  /// their distinct times, the poses convert() gives its rays (PointDeskewer::toRay).
+  void takeCloud(SensorCloud& cloud) {
+    const Scan& scan = *current_;
+    const io::Pose& extrinsic = extrinsics_[scan.sensor];
+    const std::int64_t stamp = scan.header.stamp_ns;
+    cloud.sensor = scan.sensor;
+    cloud.frame_id = scan.header.frame_id;
+    cloud.stamp_ns = stamp;
+    cloud.extrinsic = extrinsic;
+    cloud.points.clear();
+    cloud.point_offsets_ns.clear();
+    cloud.pose_offsets_ns.clear();
+    cloud.poses.clear();
+    for (const msgs::ScanPoint& p : scan.points) {
+      if ((p.flags & msgs::kPointNoReturn) != 0u) {
+        ++report_.points_no_return;
+      } else if (pipeline::usableTime(p.time_s, options_.max_time_offset_s)) {
+        cloud.point_offsets_ns.push_back(pipeline::pointTimeNs(stamp, p.time_s) - stamp);
+        cloud.points.push_back(p);
+      }
+    }
+    // One pose per distinct time, looked up as the deskewer looks it up.
+    cloud.pose_offsets_ns = cloud.point_offsets_ns;
+    std::sort(cloud.pose_offsets_ns.begin(), cloud.pose_offsets_ns.end());
+    cloud.pose_offsets_ns.erase(
+        std::unique(cloud.pose_offsets_ns.begin(), cloud.pose_offsets_ns.end()),
+        cloud.pose_offsets_ns.end());
+    const std::size_t distinct = cloud.pose_offsets_ns.size();
+    std::size_t kept = 0;
+    for (const std::int64_t offset : cloud.pose_offsets_ns) {
+      io::Pose base;
+      if (history_.lookup(stamp + offset, options_.pose_hold_ns, &base) ==
+          pipeline::PoseLookup::kOk) {
+        cloud.pose_offsets_ns[kept++] = offset;
+        cloud.poses.push_back(io::compose(base, extrinsic));
+      }
+    }
+    cloud.pose_offsets_ns.resize(kept);
+    if (kept != distinct) {  // a time without a pose: its points are left out
+      std::size_t out = 0;
+      for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+        if (std::binary_search(cloud.pose_offsets_ns.begin(), cloud.pose_offsets_ns.end(),
+                               cloud.point_offsets_ns[i])) {
+          cloud.points[out] = cloud.points[i];
+          cloud.point_offsets_ns[out++] = cloud.point_offsets_ns[i];
+        }
+      }
+      cloud.points.resize(out);
+      cloud.point_offsets_ns.resize(out);
+    }
   }
 
   /// Reads until the oldest waiting scan has its poses (or is given up). @return false at the

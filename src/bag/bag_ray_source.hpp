@@ -14,6 +14,7 @@
 #include "src/io/ray_source.hpp"
 #include "src/io/trajectory.hpp"
 #include "src/msgs/depth_image.hpp"
+#include "src/msgs/point_cloud.hpp"
 
 namespace raymap::bag {
 
@@ -88,11 +89,36 @@ struct BagRaysReport {
   bool truncated = false;  ///< skip_damaged: a file was cut off (read up to its last message)
 };
 
+/// @brief One cloud (or depth image) of a sensor as recorded, in the sensor's frame, with the
+/// sensor's poses in the world: what read() would have turned into one scan's rays.
+struct SensorCloud {
+  std::uint32_t sensor = 0;   ///< index into BagRaysReport::cloud_topics
+  std::string frame_id;       ///< header.frame_id
+  std::int64_t stamp_ns = 0;  ///< header.stamp
+  /// The points that become rays (a return, or a free-only point of a depth image), sensor
+  /// frame, metres; time_s is the point's time relative to stamp_ns.
+  std::vector<msgs::ScanPoint> points;
+  /// Each point's time, nanoseconds relative to stamp_ns (its time_s rounded as the deskewer
+  /// rounds it).
+  std::vector<std::int64_t> point_offsets_ns;
+  /// The sensor's pose in the world at each distinct point time (increasing, nanoseconds
+  /// relative to stamp_ns): the poses the rays are made with (the base's pose from the
+  /// odometry or TF history, composed with `extrinsic`).
+  std::vector<std::int64_t> pose_offsets_ns;
+  std::vector<io::Pose> poses;
+  io::Pose extrinsic;  ///< the sensor in base_frame
+};
+
 /// @brief A RaySource over a bag (rays in recording order, one scan per cloud).
 class BagRaySource : public io::RaySource {
  public:
   /// @brief What the rays were made of, once read() has returned 0.
   virtual const BagRaysReport& report() const noexcept = 0;
+  /// @brief Reads the next cloud whose poses are known into `cloud` (its buffers reused),
+  /// counted in report() as read() counts it; points without a return, with an unusable time
+  /// or without a pose are left out (counted). A source is read either with read() or with
+  /// this. @return false at the end of the bag.
+  virtual Result<bool> nextCloud(SensorCloud& cloud) = 0;
 };
 
 /// @brief Opens `path` (see openBag) and checks the chosen topics and their types.

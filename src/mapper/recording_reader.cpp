@@ -5,9 +5,11 @@
 
 #include "raymap/recording.hpp"
 
+#include "src/bag/bag_ray_source.hpp"
 #include "src/bag/bag_reader.hpp"
 #include "src/core/eigen_conversions.hpp"
 #include "src/mapper/recording.hpp"
+#include "src/msgs/point_cloud.hpp"
 #include "src/record/record_log.hpp"
 
 namespace raymap {
@@ -75,8 +77,10 @@ Result<OpenedRecording> openRecording(const std::string& path, const RecordingOp
 struct RecordingReader::State {
   mapper::OpenedRecording recording;
   std::vector<Ray> buffer = std::vector<Ray>(std::size_t{1} << 16);
-  std::size_t next = 0;  // first unread ray in buffer
-  std::size_t fill = 0;  // rays in buffer
+  std::size_t next = 0;    // first unread ray in buffer
+  std::size_t fill = 0;    // rays in buffer
+  bag::SensorCloud cloud;  // nextCloud()'s, its buffers reused
+  bool reading_clouds = false;
 };
 
 RecordingReader::RecordingReader(std::unique_ptr<State> state) noexcept
@@ -99,6 +103,11 @@ Result<RecordingReader> RecordingReader::open(const std::string& path,
 Result<bool> RecordingReader::nextScan(std::vector<WorldRay>& scan) {
   State& s = *state_;
   scan.clear();
+  if (s.reading_clouds) {
+    return fail(ErrorCode::kInvalidArgument,
+                s.recording.source->info().path +
+                    ": this reader has read clouds; open another to read scans");
+  }
   bool have_scan = false;
   std::uint64_t scan_number = 0;
   for (;;) {
@@ -127,6 +136,48 @@ Result<bool> RecordingReader::nextScan(std::vector<WorldRay>& scan) {
     scan.push_back(out);
     ++s.next;
   }
+}
+
+Result<bool> RecordingReader::nextCloud(RecordedCloud& cloud) {
+  State& s = *state_;
+  bag::BagRaySource* bag = s.recording.bag;
+  if (bag == nullptr) {
+    return fail(ErrorCode::kUnsupported,
+                s.recording.source->info().path +
+                    ": a file's rays are in the world frame already; read it scan by scan");
+  }
+  if (s.fill != 0) {
+    return fail(ErrorCode::kInvalidArgument,
+                s.recording.source->info().path +
+                    ": this reader has read scans; open another to read clouds");
+  }
+  s.reading_clouds = true;
+  auto more = bag->nextCloud(s.cloud);
+  if (!more || !more.value()) {
+    cloud.points.clear();
+    cloud.sensor_poses.clear();
+    return more;
+  }
+  const bag::SensorCloud& in = s.cloud;
+  cloud.topic = bag->report().cloud_topics.at(in.sensor);
+  cloud.frame_id = in.frame_id;
+  cloud.stamp_ns = in.stamp_ns;
+  cloud.sensor_to_base = in.extrinsic.toIsometry();
+  cloud.points.resize(in.points.size());
+  for (std::size_t i = 0; i < in.points.size(); ++i) {
+    const msgs::ScanPoint& p = in.points[i];
+    SensorPoint& out = cloud.points[i];
+    out.position = Eigen::Vector3d(p.x, p.y, p.z);
+    out.time_s = static_cast<double>(in.point_offsets_ns[i]) * 1e-9;
+    out.intensity = p.intensity;
+    out.no_return = (p.flags & msgs::kPointFreeOnly) != 0u;
+  }
+  cloud.sensor_poses.resize(in.poses.size());
+  for (std::size_t i = 0; i < in.poses.size(); ++i) {
+    cloud.sensor_poses[i] =
+        TimedPose{static_cast<double>(in.pose_offsets_ns[i]) * 1e-9, in.poses[i].toIsometry()};
+  }
+  return true;
 }
 
 double RecordingReader::progress() const noexcept { return state_->recording.source->progress(); }

@@ -197,3 +197,56 @@ def test_a_bags_scans_are_what_raymap_info_counts_and_map_as_populate(cli, write
     assert mapper.counters()["rays_integrated"] > 0
     assert exported_voxels(cli, tmp_path / "py.rmap", tmp_path / "py.ply") == \
         exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
+
+
+def test_a_bags_clouds_come_in_the_sensor_frame_with_the_poses_populate_maps_them_with(
+        cli, write_bag, tmp_path):
+    bag = write_bag(drive_spec(8), tmp_path / "drive")
+    run([cli, "populate", bag, "-o", tmp_path / "cli.rmap", "--quiet"])
+    scans = list(raymap.read_recording(str(bag)))
+    recording = raymap.read_clouds(str(bag))
+    clouds = list(recording)
+    assert len(clouds) == len(scans) >= 7
+    assert recording.report()["scans"] == len(clouds)
+    angles = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    ring = np.stack([6 * np.cos(angles), 6 * np.sin(angles), np.zeros(720)], axis=1)
+    t0 = 1_700_000_000_000_000_000
+    for cloud, scan in zip(clouds, scans):
+        assert (cloud.topic, cloud.frame_id) == ("/points", "base_link")
+        # The points as the message holds them (float32), in the sensor's frame.
+        np.testing.assert_array_equal(cloud.points, ring.astype(np.float32).astype(np.float64))
+        # Times as the decoder keeps them (float32 seconds: within a few nanoseconds).
+        np.testing.assert_allclose(cloud.times, np.arange(720) * (100_000_000 // 720) * 1e-9,
+                                   rtol=0, atol=1e-8)
+        np.testing.assert_array_equal(cloud.sensor_to_base, np.eye(4))
+        # One pose per point time: the odometry's (x = 1 m/s since t0) at that time, where the
+        # odometry read so far covers it (the last 20 ms may hold its newest pose, as raymapd).
+        np.testing.assert_array_equal(cloud.pose_times, cloud.times)
+        assert cloud.poses.shape == (720, 4, 4)
+        covered = cloud.pose_times <= 0.08
+        np.testing.assert_allclose(cloud.poses[covered, 0, 3],
+                                   (cloud.stamp_ns - t0) * 1e-9 + cloud.pose_times[covered],
+                                   rtol=0, atol=1e-7)
+        # Each point through its pose is the end of populate's ray, the pose its origin.
+        ends = np.einsum("kij,kj->ki", cloud.poses[:, :3, :3], cloud.points) + cloud.poses[:, :3, 3]
+        np.testing.assert_allclose(ends, scan.ends, atol=1e-9)
+        np.testing.assert_allclose(cloud.poses[:, :3, 3], scan.origins, atol=1e-9)
+    # Mapped as they are, or from their arrays: populate's map.
+    in_place = raymap.Mapper()
+    by_arrays = raymap.Mapper()
+    for cloud in clouds:
+        in_place.integrate_cloud(cloud)
+        by_arrays.integrate(cloud.points, times=cloud.times, pose_at=(cloud.pose_times, cloud.poses))
+    for mapper, name in ((in_place, "in_place"), (by_arrays, "arrays")):
+        mapper.flush()
+        mapper.save(str(tmp_path / f"{name}.rmap"))
+    assert (tmp_path / "in_place.rmap").read_bytes() == (tmp_path / "arrays.rmap").read_bytes()
+    assert exported_voxels(cli, tmp_path / "in_place.rmap", tmp_path / "py.ply") == \
+        exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
+
+
+def test_clouds_are_read_from_bags_only(room_rays):
+    with pytest.raises(raymap.UnsupportedError, match="world frame"):
+        next(iter(raymap.read_clouds(str(room_rays))))
+    with pytest.raises(raymap.InvalidArgument, match="read_clouds"):
+        raymap.Mapper().integrate_cloud(next(iter(raymap.read_recording(str(room_rays)))))

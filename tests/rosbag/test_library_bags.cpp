@@ -87,15 +87,21 @@ TEST(LibraryBags, LidarCloudsWithOdometryOrATfChainMapAsPopulateMapsThem) {
 
     MapperConfig config;
     config.map.semantics = Semantics::kPerScan;
-    LibraryRun run;
-    ASSERT_NO_FATAL_FAILURE(mapWithLibrary(bag, read, config, dir.file("library.rmap"), &run));
-    EXPECT_TRUE(run.bag);
-    const RecordingReport& report = run.report;
-    EXPECT_EQ(report.scans, drive.scans);
-    EXPECT_EQ(report.scans_no_pose, 0u);
-    EXPECT_EQ(report.topics, std::vector<std::string>{"/ouster/points"});
-    EXPECT_EQ(report.pose_source, odometry ? "odometry /odom" : "tf map -> base_link");
-    expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
+    // As world rays, and as the clouds in the lidar's frame with their poses (the sensor on the
+    // base from /tf_static, the base's pose interpolated per point time).
+    for (const ReadAs read_as : {ReadAs::kScans, ReadAs::kClouds}) {
+      SCOPED_TRACE(read_as == ReadAs::kScans ? "scans" : "clouds");
+      LibraryRun run;
+      ASSERT_NO_FATAL_FAILURE(
+          mapWithLibrary(bag, read, config, dir.file("library.rmap"), &run, read_as));
+      EXPECT_TRUE(run.bag);
+      const RecordingReport& report = run.report;
+      EXPECT_EQ(report.scans, drive.scans);
+      EXPECT_EQ(report.scans_no_pose, 0u);
+      EXPECT_EQ(report.topics, std::vector<std::string>{"/ouster/points"});
+      EXPECT_EQ(report.pose_source, odometry ? "odometry /odom" : "tf map -> base_link");
+      expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
+    }
   }
 }
 
@@ -115,12 +121,18 @@ TEST(LibraryBags, DepthImagesWithTheirCameraInfoMapAsPopulateMapsThem) {
   read.bag.invalid_as_free = true;
   MapperConfig config;
   config.rays.max_range = 3.0;
-  LibraryRun run;
-  ASSERT_NO_FATAL_FAILURE(mapWithLibrary(bag, read, config, dir.file("library.rmap"), &run));
-  EXPECT_TRUE(run.bag);
-  EXPECT_EQ(run.report.scans, 6u);
-  EXPECT_EQ(run.report.images_no_camera_info, 0u);
-  expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
+  // As world rays, and as the images' points in the camera's frame with its pose (the
+  // free-space points of invalid pixels marked no_return).
+  for (const ReadAs read_as : {ReadAs::kScans, ReadAs::kClouds}) {
+    SCOPED_TRACE(read_as == ReadAs::kScans ? "scans" : "clouds");
+    LibraryRun run;
+    ASSERT_NO_FATAL_FAILURE(
+        mapWithLibrary(bag, read, config, dir.file("library.rmap"), &run, read_as));
+    EXPECT_TRUE(run.bag);
+    EXPECT_EQ(run.report.scans, 6u);
+    EXPECT_EQ(run.report.images_no_camera_info, 0u);
+    expectSameMap(dir.file("cli.rmap"), dir.file("library.rmap"));
+  }
 }
 
 // The same images given to Mapper::integrate(DepthImageView, CameraIntrinsics, pose) directly,
@@ -171,6 +183,41 @@ TEST(LibraryBags, AMissingTopicIsNamedWithTheBagsTopicsOfThatType) {
       << reader.error().message;
   EXPECT_NE(reader.error().message.find("/ouster/points"), std::string::npos)
       << reader.error().message;
+}
+
+TEST(LibraryBags, AReaderReadsScansOrCloudsNotBoth) {
+  REQUIRE_NODE_HARNESS();
+  TempDir dir;
+  const Drive drive = makeDrive(dir, DrivePoses::kOdometry, 3);
+  const std::string bag = dir.file("drive_bag");
+  writeBag(drive.spec, bag, {});
+  std::vector<WorldRay> scan;
+  RecordedCloud cloud;
+
+  auto by_scan = RecordingReader::open(bag);
+  ASSERT_TRUE(by_scan);
+  ASSERT_TRUE(by_scan->nextScan(scan).value_or(false));
+  const auto mixed_cloud = by_scan->nextCloud(cloud);
+  ASSERT_FALSE(mixed_cloud);
+  EXPECT_EQ(mixed_cloud.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(mixed_cloud.error().message.find("drive_bag"), std::string::npos)
+      << mixed_cloud.error().message;
+
+  auto by_cloud = RecordingReader::open(bag);
+  ASSERT_TRUE(by_cloud);
+  std::uint64_t clouds = 0;
+  while (by_cloud->nextCloud(cloud).value_or(false)) {
+    ++clouds;
+    EXPECT_EQ(cloud.topic, "/ouster/points");
+    EXPECT_FALSE(cloud.points.empty());
+    EXPECT_FALSE(cloud.sensor_poses.empty());
+  }
+  EXPECT_EQ(clouds, drive.scans);
+  EXPECT_EQ(by_cloud->report().scans, drive.scans);
+  EXPECT_TRUE(cloud.points.empty()) << "the end leaves the cloud empty";
+  const auto mixed_scan = by_cloud->nextScan(scan);
+  ASSERT_FALSE(mixed_scan);
+  EXPECT_EQ(mixed_scan.error().code, ErrorCode::kInvalidArgument);
 }
 
 }  // namespace

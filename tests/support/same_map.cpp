@@ -48,19 +48,27 @@ void expectSameMap(const std::string& cli, const std::string& library) {
 }
 
 void mapWithLibrary(const std::string& input, const RecordingOptions& read,
-                    const MapperConfig& config, const std::string& out, LibraryRun* run) {
+                    const MapperConfig& config, const std::string& out, LibraryRun* run,
+                    ReadAs read_as) {
   auto mapper = Mapper::create(config);
   ASSERT_TRUE(mapper) << mapper.error().message;
   auto reader = RecordingReader::open(input, read);
   ASSERT_TRUE(reader) << reader.error().message;
   std::vector<WorldRay> scan;
+  RecordedCloud cloud;
   for (;;) {
-    auto more = reader->nextScan(scan);
+    auto more = read_as == ReadAs::kScans ? reader->nextScan(scan) : reader->nextCloud(cloud);
     ASSERT_TRUE(more) << more.error().message;
     if (!*more) {
       break;
     }
-    ASSERT_TRUE(mapper->integrate(scan));
+    if (read_as == ReadAs::kScans) {
+      ASSERT_TRUE(mapper->integrate(scan));
+    } else {
+      ASSERT_FALSE(cloud.sensor_poses.empty());
+      auto integrated = mapper->integrate(cloud.points, cloud.sensor_poses);
+      ASSERT_TRUE(integrated) << integrated.error().message;
+    }
   }
   auto saved = mapper->save(out);
   ASSERT_TRUE(saved) << saved.error().message;

@@ -20,9 +20,17 @@ struct LibraryRun {
   bool bag = false;        ///< the input was read as a bag
 };
 
-/// @brief Maps `input` scan by scan with raymap::RecordingReader and raymap::Mapper (`config`)
-/// and saves the map to `out`; a failure is a fatal gtest failure (ASSERT_NO_FATAL_FAILURE).
+/// How mapWithLibrary reads a recording.
+enum class ReadAs : bool {
+  kScans,   ///< RecordingReader::nextScan: world rays, Mapper::integrate(rays)
+  kClouds,  ///< RecordingReader::nextCloud: sensor-frame points, integrate(points, poses)
+};
+
+/// @brief Maps `input` scan by scan (or cloud by cloud) with raymap::RecordingReader and
+/// raymap::Mapper (`config`) and saves the map to `out`; a failure is a fatal gtest failure
+/// (ASSERT_NO_FATAL_FAILURE).
 void mapWithLibrary(const std::string& input, const RecordingOptions& read,
-                    const MapperConfig& config, const std::string& out, LibraryRun* run = nullptr);
+                    const MapperConfig& config, const std::string& out, LibraryRun* run = nullptr,
+                    ReadAs read_as = ReadAs::kScans);
 
 }  // namespace raymap::test
