@@ -28,8 +28,10 @@ from . import _raymap
 from ._raymap import (
     BackendOptions,
     BagOptions,
+    CameraIntrinsics,
     Costmap,
     CostmapOptions,
+    DepthOptions,
     HeightMap,
     HeightmapRequest,
     MapOptions,
@@ -46,7 +48,7 @@ __version__ = _raymap.__version__
 
 __all__ = [
     "Mapper", "read_recording", "read_clouds", "Scan", "Cloud", "Recording", "HeightMap",
-    "HeightmapRequest", "Costmap", "CostmapOptions",
+    "HeightmapRequest", "Costmap", "CostmapOptions", "CameraIntrinsics", "DepthOptions",
     "MapperConfig", "MapOptions", "RayOptions", "BackendOptions", "NdtOptions", "TsdfOptions",
     "TierOptions", "RecordingOptions", "BagOptions", "parse_byte_size", "RaymapError",
     "InvalidArgument", "IoError", "FormatError", "CapacityError", "UnsupportedError",
@@ -230,6 +232,28 @@ class Mapper:
         pose_times, poses = pose_at
         self._mapper.integrate_deskewed(points, times, np.asarray(pose_times),
                                         np.asarray(poses), intensities)
+
+    def integrate_depth(self, image: np.ndarray, camera: Any, pose: PoseLike, *,
+                        downsample: int = 1, min_range: float = 0.0, max_range: float = 0.0,
+                        invalid_as_free: bool = False) -> None:
+        """Integrates one depth image as one scan, as raymapd and `raymap populate` do.
+
+        image: (height, width) uint16 millimetres (16UC1; 0 = no depth) or float32 metres
+        (32FC1; 0, NaN, +inf = no depth), either byte order, rows of adjacent pixels (a crop of
+        rows is read in place). camera: a CameraIntrinsics, or a dict of its fields (width,
+        height, fx, fy, cx, cy, distortion "none"/"plumb_bob", k1 k2 p1 p2 k3). pose: the
+        camera's optical frame (x right, y down, z forward) in the world, as for integrate().
+        downsample N: each N x N block gives its nearest depth; min_range: nearer depths are the
+        robot itself; invalid_as_free: a block without depth clears max_range metres of free
+        space along its ray (needs max_range). Errors name the field (an image whose size is not
+        the camera's, a camera that cannot be used).
+        """
+        options = _raymap.DepthOptions()
+        options.downsample = downsample
+        options.min_range = min_range
+        options.max_range = max_range
+        options.invalid_as_free = invalid_as_free
+        self._mapper.integrate_depth(image, _camera(camera), _pose_matrix(pose), options)
 
     def integrate_rays(self, origins: np.ndarray, ends: np.ndarray, *,
                        intensities: Optional[np.ndarray] = None,
@@ -438,6 +462,19 @@ def read_clouds(path: str, **options: Any) -> Recording:
     the world frame already: read_recording)."""
     return Recording(_raymap._RecordingReader.open(str(path), _recording_options(options)),
                      clouds=True)
+
+
+def _camera(camera: Any) -> "CameraIntrinsics":
+    if isinstance(camera, CameraIntrinsics):
+        return camera
+    if not isinstance(camera, dict):
+        raise InvalidArgument("camera must be a raymap.CameraIntrinsics or a dict of its fields")
+    out = CameraIntrinsics()
+    for name, value in camera.items():
+        if not hasattr(out, name) or name.startswith("_") or name == "validate":
+            raise InvalidArgument(f"camera.{name}: not a field of CameraIntrinsics")
+        setattr(out, name, value)
+    return out
 
 
 def _recording_options(options: dict) -> RecordingOptions:

@@ -153,6 +153,8 @@ class _Mapper:
                            poses: np.ndarray, intensities: Optional[np.ndarray] = ...) -> None: ...
     def integrate_scan(self, rays: Any) -> None: ...
     def integrate_cloud(self, cloud: Any) -> None: ...
+    def integrate_depth(self, image: np.ndarray, camera: CameraIntrinsics, pose: np.ndarray,
+                        options: DepthOptions) -> None: ...
     def integrate_rays(self, origins: np.ndarray, ends: np.ndarray,
                        intensities: Optional[np.ndarray] = ...,
                        no_return: Optional[np.ndarray] = ...) -> None: ...
@@ -170,6 +172,29 @@ class _Mapper:
     backend: str
     fallback_warning: str
     memory_warning: str
+
+class CameraIntrinsics:
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    distortion: str
+    k1: float
+    k2: float
+    p1: float
+    p2: float
+    k3: float
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+
+class DepthOptions:
+    downsample: int
+    min_range: float
+    max_range: float
+    invalid_as_free: bool
+    def __init__(self) -> None: ...
 
 class _RecordingReader:
     @staticmethod

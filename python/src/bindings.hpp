@@ -17,6 +17,8 @@ void bindMapper(pybind11::module_& m);
 void bindGrids(pybind11::module_& m);
 /// Mapper.heightmap() and Mapper.costmap() (bindGrids first).
 void addGridQueries(pybind11::class_<MapperHandle>& c);
+/// CameraIntrinsics, DepthOptions and Mapper.integrate_depth() (on the class bindMapper makes).
+void bindDepth(pybind11::module_& m, pybind11::class_<MapperHandle>& c);
 /// raymap::RecordingReader: the scans of a bag or a ray/point-cloud file as NumPy arrays.
 void bindRecording(pybind11::module_& m);
 

@@ -356,6 +356,7 @@ void bindMapper(py::module_& m) {
   bindIntegration(c);
   bindQueries(c);
   addGridQueries(c);
+  bindDepth(m, c);
   m.def(
       "_pose_matrix",
       [](const std::array<double, 3>& translation, const std::array<double, 4>& quaternion) {

@@ -1,9 +1,10 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """The Python module against the command line of the same build: the same rays make the same
-map as `raymap populate` (its exported voxels byte for byte, its counts, every field of
-`raymap info` but the provenance the command line records), the height map's arrays are
-`raymap heightmap`'s CSV, and a bag's scans are what `raymap info` counts and `raymap populate`
-maps."""
+map as `raymap populate` (the saved region blocks and the exported voxels byte for byte, its
+counts, every field of `raymap info` but the provenance the command line records), the height
+map's arrays are `raymap heightmap`'s CSV, a bag's scans are what `raymap info` counts and
+`raymap populate` maps, its clouds come in the sensor's frame with the poses populate maps them
+with, and depth images map as populate maps their bag."""
 
 import base64
 import csv
@@ -32,6 +33,19 @@ def exported_voxels(cli, path, out):
     data = out.read_bytes()
     assert len(data) > 1000, f"{out}: an export of {len(data)} bytes has no voxels"
     return data
+
+
+def region_blocks(path):
+    """The bytes of a saved map's region blocks (docs/map-format.md): every region's block
+    header and compressed layers, from the end of the header to the region index. They do not
+    depend on the header's info strings (the provenance), which only move them in the file."""
+    data = path.read_bytes()
+    assert data[:8] == b"RMAP\r\n\x1a\n" and data[-24:-20] == b"REND"
+    header_body = int.from_bytes(data[12:16], "little")
+    index_offset = int.from_bytes(data[-12:-4], "little")
+    blocks = data[16 + header_body + 4:index_offset]
+    assert blocks[:4] == b"RREG" and data[index_offset:index_offset + 4] == b"RIDX"
+    return blocks
 
 
 def map_with_python(recording, out, **options):
@@ -80,6 +94,8 @@ def test_the_room_maps_as_raymap_populate_maps_it(cli, room_rays, tmp_path, sema
     assert exported_voxels(cli, tmp_path / "py.rmap", tmp_path / "py.ply") == \
         exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
     assert map_description(cli, tmp_path / "py.rmap") == map_description(cli, tmp_path / "cli.rmap")
+    # The saved maps byte for byte, all but the provenance the command line records.
+    assert region_blocks(tmp_path / "py.rmap") == region_blocks(tmp_path / "cli.rmap")
 
 
 @pytest.mark.parametrize("mode, kind, options", [
@@ -197,6 +213,7 @@ def test_a_bags_scans_are_what_raymap_info_counts_and_map_as_populate(cli, write
     assert mapper.counters()["rays_integrated"] > 0
     assert exported_voxels(cli, tmp_path / "py.rmap", tmp_path / "py.ply") == \
         exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
+    assert region_blocks(tmp_path / "py.rmap") == region_blocks(tmp_path / "cli.rmap")
 
 
 def test_a_bags_clouds_come_in_the_sensor_frame_with_the_poses_populate_maps_them_with(
@@ -243,6 +260,7 @@ def test_a_bags_clouds_come_in_the_sensor_frame_with_the_poses_populate_maps_the
     assert (tmp_path / "in_place.rmap").read_bytes() == (tmp_path / "arrays.rmap").read_bytes()
     assert exported_voxels(cli, tmp_path / "in_place.rmap", tmp_path / "py.ply") == \
         exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
+    assert region_blocks(tmp_path / "in_place.rmap") == region_blocks(tmp_path / "cli.rmap")
 
 
 def test_clouds_are_read_from_bags_only(room_rays):
@@ -250,3 +268,100 @@ def test_clouds_are_read_from_bags_only(room_rays):
         next(iter(raymap.read_clouds(str(room_rays))))
     with pytest.raises(raymap.InvalidArgument, match="read_clouds"):
         raymap.Mapper().integrate_cloud(next(iter(raymap.read_recording(str(room_rays)))))
+
+
+def depth_frames(count):
+    """A 64 x 48 depth camera (its optical frame is base_link) 0.5 m up at (1, 2): a wall 2.5 m
+    ahead with a 1.2 m box in front of it and a band of pixels without depth (NaN), in uint16
+    millimetres; the robot still (odometry at 50 Hz, frames at 5 Hz on odometry stamps)."""
+    v, u = np.mgrid[0:48, 0:64]
+    depth = np.full((48, 64), 2.5, dtype=np.float32)
+    depth[(abs(u - 20) < 8) & (abs(v - 30) < 10)] = 1.2
+    depth[:, 50:54] = np.nan
+    millimetres = np.nan_to_num(np.round(depth * 1000), nan=0).astype(np.uint16)
+    camera = {"width": 64, "height": 48, "fx": 40.0, "fy": 40.0, "cx": 31.5, "cy": 23.5}
+    return [(1_700_000_000_000_000_000 + k * 200_000_000, millimetres) for k in range(count)], \
+        camera
+
+
+def depth_spec(frames, camera):
+    def header(stamp, frame):
+        return {"stamp": {"sec": stamp // 10**9, "nanosec": stamp % 10**9}, "frame_id": frame}
+    lines = [json.dumps({"op": "channel", "topic": t, "type": ty}) for t, ty in (
+        ("/odom", "nav_msgs/msg/Odometry"), ("/cam/depth", "sensor_msgs/msg/Image"),
+        ("/cam/camera_info", "sensor_msgs/msg/CameraInfo"))]
+    t0, end = frames[0][0], frames[-1][0] + 200_000_000
+    for stamp in range(t0 - 100_000_000, end, 20_000_000):
+        odom = {"header": header(stamp, "odom"), "child_frame_id": "base_link",
+                "pose": {"pose": {"position": {"x": 1.0, "y": 2.0, "z": 0.5}}}}
+        lines.append(json.dumps({"op": "message", "topic": "/odom", "log_time_ns": str(stamp),
+                                 "msg": odom}))
+    fx, fy, cx, cy = camera["fx"], camera["fy"], camera["cx"], camera["cy"]
+    for stamp, image in frames:
+        info = {"header": header(stamp, "base_link"), "height": 48, "width": 64,
+                "distortion_model": "", "d": [0.0] * 5,
+                "k": [fx, 0, cx, 0, fy, cy, 0, 0, 1], "r": [1, 0, 0, 0, 1, 0, 0, 0, 1],
+                "p": [fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0]}
+        msg = {"header": header(stamp, "base_link"), "height": 48, "width": 64,
+               "encoding": "16UC1", "is_bigendian": 0, "step": 128,
+               "data": {"base64": base64.b64encode(image.astype("<u2").tobytes()).decode()}}
+        for topic, m in (("/cam/camera_info", info), ("/cam/depth", msg)):
+            lines.append(json.dumps({"op": "message", "topic": topic,
+                                     "log_time_ns": str(stamp + 1000), "msg": m}))
+    return lines
+
+
+def test_depth_images_map_as_populate_maps_their_bag(cli, write_bag, tmp_path):
+    frames, camera = depth_frames(4)
+    bag = write_bag(depth_spec(frames, camera), tmp_path / "depth")
+    run([cli, "populate", bag, "-o", tmp_path / "cli.rmap", "--quiet", "--downsample", "2",
+         "--max-range", "3", "--invalid-as-free"])
+    pose = np.eye(4)
+    pose[:3, 3] = (1.0, 2.0, 0.5)
+    images = raymap.Mapper(max_range=3.0)
+    for _, image in frames:
+        images.integrate_depth(image, camera, pose, downsample=2, max_range=3.0,
+                               invalid_as_free=True)
+    clouds = raymap.Mapper(max_range=3.0)
+    for cloud in raymap.read_clouds(str(bag), downsample=2, depth_max_range=3.0,
+                                    invalid_as_free=True):
+        assert cloud.no_return.sum() == 24 * 2  # the band's blocks: free space only
+        clouds.integrate_cloud(cloud)
+    assert images.counters()["scans"] == clouds.counters()["scans"] == 4
+    for mapper, name in ((images, "images"), (clouds, "clouds")):
+        mapper.flush()
+        mapper.save(str(tmp_path / f"{name}.rmap"))
+        assert exported_voxels(cli, tmp_path / f"{name}.rmap", tmp_path / f"{name}.ply") == \
+            exported_voxels(cli, tmp_path / "cli.rmap", tmp_path / "cli.ply")
+        assert map_description(cli, tmp_path / f"{name}.rmap") == \
+            map_description(cli, tmp_path / "cli.rmap")
+        assert region_blocks(tmp_path / f"{name}.rmap") == region_blocks(tmp_path / "cli.rmap")
+    # The same image in float32 metres, big-endian, or a crop of rows read in place.
+    metres = np.where(frames[0][1] == 0, np.nan, frames[0][1] / 1000).astype(np.float32)
+    one = raymap.Mapper(max_range=3.0)
+    one.integrate_depth(metres.astype(">f4"), camera, pose)
+    assert one.counters()["rays_integrated"] == 64 * 48 - 4 * 48
+    padded = np.zeros((48, 80), dtype=np.uint16)
+    padded[:, :64] = frames[0][1]
+    two = raymap.Mapper(max_range=3.0)
+    two.integrate_depth(padded[:, :64], camera, pose)
+    assert two.counters()["rays_integrated"] == one.counters()["rays_integrated"]
+
+
+def test_a_bad_depth_image_or_camera_is_named(tmp_path):
+    frames, camera = depth_frames(1)
+    image = frames[0][1]
+    mapper = raymap.Mapper()
+    with pytest.raises(raymap.InvalidArgument, match="uint16 .* or float32"):
+        mapper.integrate_depth(image.astype(np.int32), camera, np.eye(4))
+    with pytest.raises(raymap.InvalidArgument, match="next to each other"):
+        mapper.integrate_depth(image[:, ::2], dict(camera, width=32), np.eye(4))
+    with pytest.raises(raymap.InvalidArgument, match="width"):
+        mapper.integrate_depth(image, dict(camera, width=65), np.eye(4))
+    with pytest.raises(raymap.InvalidArgument, match="fx"):
+        mapper.integrate_depth(image, dict(camera, fx=-1.0), np.eye(4))
+    with pytest.raises(raymap.InvalidArgument, match="camera.focal"):
+        mapper.integrate_depth(image, dict(camera, focal=1.0), np.eye(4))
+    with pytest.raises(raymap.InvalidArgument, match="max_range"):
+        mapper.integrate_depth(image, camera, np.eye(4), invalid_as_free=True)
+    assert mapper.counters()["scans"] == 0
