@@ -37,8 +37,9 @@ DepthImageView depthView(const py::array& image) {
   }
   const py::ssize_t item = type.itemsize();
   if (image.strides(1) != item || image.strides(0) < item * image.shape(1)) {
-    raiseInvalid("depth: each row's pixels must be next to each other in memory, rows in order "
-                 "(numpy.ascontiguousarray(depth) makes such a copy)");
+    raiseInvalid(
+        "depth: each row's pixels must be next to each other in memory, rows in order "
+        "(numpy.ascontiguousarray(depth) makes such a copy)");
   }
   view.big_endian = type.byteorder() == '>';
   view.data = image.data();
