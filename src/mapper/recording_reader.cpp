@@ -167,7 +167,8 @@ Result<bool> RecordingReader::nextCloud(RecordedCloud& cloud) {
   for (std::size_t i = 0; i < in.points.size(); ++i) {
     const msgs::ScanPoint& p = in.points[i];
     SensorPoint& out = cloud.points[i];
-    out.position = Eigen::Vector3d(p.x, p.y, p.z);
+    out.position = Eigen::Vector3d(static_cast<double>(p.x), static_cast<double>(p.y),
+                                   static_cast<double>(p.z));
     out.time_s = static_cast<double>(in.point_offsets_ns[i]) * 1e-9;
     out.intensity = p.intensity;
     out.no_return = (p.flags & msgs::kPointFreeOnly) != 0u;
