@@ -70,7 +70,8 @@ RayPreparer::Progress RayPreparer::prepareWith(const rm_prepare_params& params,
                                                RayCounters& counters) const noexcept {
   Progress progress;
   for (const Ray& ray : in) {
-    rm_prepared_ends ends;
+    // Zeroed: rm_prepare_ray fills it on every path that is read, which GCC at -O1 cannot see.
+    rm_prepared_ends ends{};
     const rm_u32 outcome =
         rm_prepare_ray(&params, rm_vec3d{ray.origin.x, ray.origin.y, ray.origin.z},
                        rm_vec3d{ray.sample.x, ray.sample.y, ray.sample.z},
