@@ -33,6 +33,7 @@
 #include "tests/rosbag/depth_bag.hpp"
 #include "tests/support/cli_runner.hpp"
 #include "tests/support/decoded_png.hpp"
+#include "tests/support/golden_manifest.hpp"
 #include "tests/support/shared_data.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -41,25 +42,15 @@ namespace {
 
 /// name -> SHA-256 (hex) from the manifest.
 std::map<std::string, std::string> manifest() {
-  std::map<std::string, std::string> out;
-  std::ifstream in(RAYMAP_GOLDEN_MANIFEST);
-  EXPECT_TRUE(in.good()) << "cannot read " << RAYMAP_GOLDEN_MANIFEST;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream words(line);
-    std::string sha;
-    std::string name;
-    if (words >> sha >> name) {
-      out[name] = sha;
-    }
-  }
+  std::map<std::string, std::string> out = readSha256Manifest(RAYMAP_GOLDEN_MANIFEST);
+  EXPECT_FALSE(out.empty()) << "cannot read " << RAYMAP_GOLDEN_MANIFEST;
   return out;
 }
 
 std::string sha256(const std::string& path) {
-  const RunResult r = runProgram({"sha256sum", "--", path});
-  EXPECT_EQ(r.exit_code, 0) << describe(r);
-  return r.out.substr(0, r.out.find(' '));
+  const std::string sha = sha256OfFile(path);
+  EXPECT_EQ(sha.size(), 64u) << "sha256sum failed on " << path;
+  return sha;
 }
 
 bool endsWith(const std::string& text, const std::string& suffix) {

@@ -12,9 +12,7 @@
 // A deliberate change of the maths or the file format: run the test with
 // RAYMAP_GOLDEN_UPDATE=FILE, which writes the sums to FILE instead of comparing, copy FILE over
 // the manifest, and say in the commit why the bytes changed.
-#include <array>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -25,6 +23,7 @@
 #include "raymap/mapper.hpp"
 #include <gtest/gtest.h>
 
+#include "tests/support/golden_manifest.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace raymap::test {
@@ -76,35 +75,6 @@ std::vector<std::vector<WorldRay>> roomScansForBytes() {
   return scans;
 }
 
-/// The SHA-256 (hex) of the file at `path`, by sha256sum (coreutils); empty if it fails. A
-/// program, not a library: the map library's own build has none for SHA-256.
-std::string sha256OfFile(const std::string& path) {
-  const std::string command = "sha256sum -- '" + path + "'";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) {
-    return {};
-  }
-  std::array<char, 65> hex{};
-  const std::size_t read = std::fread(hex.data(), 1, 64, pipe);
-  const int status = ::pclose(pipe);
-  return read == 64 && status == 0 ? std::string(hex.data(), 64) : std::string();
-}
-
-std::map<std::string, std::string> bytesManifest() {
-  std::ifstream in(std::string(RAYMAP_SOURCE_DIR) + "/tests/golden/library_maps.sha256");
-  std::map<std::string, std::string> out;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream words(line);
-    std::string sha;
-    std::string name;
-    if (words >> sha >> name) {
-      out[name] = sha;
-    }
-  }
-  return out;
-}
-
 TEST(MapperBytes, TheSameRaysGiveTheSameMapFileOnEveryArchitecture) {
   TempDir dir;
   const std::vector<std::vector<WorldRay>> scans = roomScansForBytes();
@@ -117,7 +87,8 @@ TEST(MapperBytes, TheSameRaysGiveTheSameMapFileOnEveryArchitecture) {
                         {"room_scan.rmap", Semantics::kPerScan, MapMode::kOccupancy},
                         {"room_ndt_om.rmap", Semantics::kPerRay, MapMode::kNdtOm}};
   const char* update = std::getenv("RAYMAP_GOLDEN_UPDATE");
-  const std::map<std::string, std::string> manifest = bytesManifest();
+  const std::map<std::string, std::string> manifest =
+      readSha256Manifest(std::string(RAYMAP_SOURCE_DIR) + "/tests/golden/library_maps.sha256");
   std::ostringstream sums;
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
