@@ -103,6 +103,9 @@ chmod +x "$stage/run.sh"
 cp config/cyclonedds-loopback.xml config/cpu.yaml "$stage/config/"
 mkdir -p "$stage/config/scenes"
 cp config/scenes/*.yaml "$stage/config/scenes/"
+# MapperBytes (test_unit_mapper) compares its maps with the sums recorded here.
+mkdir -p "$stage/tests/golden"
+cp tests/golden/library_maps.sha256 "$stage/tests/golden/"
 
 size_mib() { du -sm "$1" | cut -f1; }
 echo "== data"

@@ -80,6 +80,7 @@ trap 'log "stopped by a signal"; publish_results; exit 1' TERM INT
 export CYCLONEDDS_URI="file://$kit/config/cyclonedds-loopback.xml"
 export RAYMAP_SHARED_DATA=$kit/data
 export RAYMAP_SCENE_DIR=$kit/config/scenes
+export RAYMAP_GOLDEN_DIR=$kit/tests/golden
 export TMPDIR=$work/tmp
 cpu_model=$(grep -m1 'model name' /proc/cpuinfo 2>/dev/null | cut -d: -f2 | sed 's/^ *//')
 cpu_model=${cpu_model:-unknown CPU}
