@@ -23,34 +23,20 @@ namespace py = pybind11;
 
 namespace raymap::python {
 
-py::capsule ownScanRays(std::vector<WorldRay> rays) {
-  auto owned = std::make_unique<ScanRays>();
-  owned->rays = std::move(rays);
-  return py::capsule(owned.release(), kScanRaysCapsule, [](PyObject* capsule) {
-    delete static_cast<ScanRays*>(PyCapsule_GetPointer(capsule, kScanRaysCapsule));
-  });
-}
-
 const ScanRays& scanRaysOf(const py::object& object) {
-  if (!PyCapsule_IsValid(object.ptr(), kScanRaysCapsule)) {
+  const ScanRays* scan = inCapsule<ScanRays>(object, kScanRaysCapsule);
+  if (scan == nullptr) {
     raiseInvalid("not the rays of a scan from raymap.read_recording()");
   }
-  return *static_cast<const ScanRays*>(PyCapsule_GetPointer(object.ptr(), kScanRaysCapsule));
-}
-
-py::capsule ownCloud(RecordedCloud cloud) {
-  auto owned = std::make_unique<RecordedCloud>(std::move(cloud));
-  return py::capsule(owned.release(), kRecordedCloudCapsule, [](PyObject* capsule) {
-    delete static_cast<RecordedCloud*>(PyCapsule_GetPointer(capsule, kRecordedCloudCapsule));
-  });
+  return *scan;
 }
 
 const RecordedCloud& cloudOf(const py::object& object) {
-  if (!PyCapsule_IsValid(object.ptr(), kRecordedCloudCapsule)) {
+  const RecordedCloud* cloud = inCapsule<RecordedCloud>(object, kRecordedCloudCapsule);
+  if (cloud == nullptr) {
     raiseInvalid("not the points of a cloud from raymap.read_clouds()");
   }
-  return *static_cast<const RecordedCloud*>(
-      PyCapsule_GetPointer(object.ptr(), kRecordedCloudCapsule));
+  return *cloud;
 }
 
 namespace {
@@ -58,7 +44,7 @@ namespace {
 /// A cloud's fields; its arrays view the cloud's own vectors (an Isometry3d is a column-major
 /// 4 x 4 of doubles: element (r, c) at 8 r + 32 c bytes).
 py::dict cloudArrays(RecordedCloud cloud) {
-  const py::capsule owner = ownCloud(std::move(cloud));
+  const py::capsule owner = ownInCapsule(std::move(cloud), kRecordedCloudCapsule);
   const RecordedCloud* c = &cloudOf(owner);
   const auto rows = static_cast<py::ssize_t>(c->points.size());
   const auto stride = static_cast<py::ssize_t>(sizeof(SensorPoint));
@@ -86,7 +72,7 @@ py::dict cloudArrays(RecordedCloud cloud) {
 }
 
 py::dict scanArrays(std::vector<WorldRay> rays) {
-  const py::capsule owner = ownScanRays(std::move(rays));
+  const py::capsule owner = ownInCapsule(ScanRays{std::move(rays)}, kScanRaysCapsule);
   const ScanRays* scan = &scanRaysOf(owner);
   const auto rows = static_cast<py::ssize_t>(scan->rays.size());
   const auto stride = static_cast<py::ssize_t>(sizeof(WorldRay));
@@ -99,6 +85,22 @@ py::dict scanArrays(std::vector<WorldRay> rays) {
   d["no_return"] = arrayOver<bool>(&first->no_return, {rows}, {stride}, owner);
   d["rays"] = owner;
   return d;
+}
+
+/// The reader's next item (`next`: nextScan or nextCloud) read with the GIL released, as
+/// `arrays` makes it; None at the end.
+template <class Item, class Arrays>
+py::object nextAsArrays(RecordingReader& reader, Result<bool> (RecordingReader::*next)(Item&),
+                        Arrays arrays) {
+  Item item;
+  Result<bool> more = [&] {
+    py::gil_scoped_release release;
+    return (reader.*next)(item);
+  }();
+  if (!valueOr(std::move(more))) {
+    return py::none();
+  }
+  return arrays(std::move(item));
 }
 
 py::dict reportDict(const RecordingReport& r) {
@@ -189,31 +191,15 @@ void bindRecording(py::module_& m) {
           py::arg("path"), py::arg("options"))
       .def(
           "next_scan",
-          [](RecordingReader& reader) -> py::object {
-            std::vector<WorldRay> rays;
-            Result<bool> more = [&] {
-              py::gil_scoped_release release;
-              return reader.nextScan(rays);
-            }();
-            if (!valueOr(std::move(more))) {
-              return py::none();
-            }
-            return scanArrays(std::move(rays));
+          [](RecordingReader& reader) {
+            return nextAsArrays(reader, &RecordingReader::nextScan, scanArrays);
           },
           "The next scan as a dict of arrays (origins, ends, intensities, no_return), or None "
           "at the end.")
       .def(
           "next_cloud",
-          [](RecordingReader& reader) -> py::object {
-            RecordedCloud cloud;
-            Result<bool> more = [&] {
-              py::gil_scoped_release release;
-              return reader.nextCloud(cloud);
-            }();
-            if (!valueOr(std::move(more))) {
-              return py::none();
-            }
-            return cloudArrays(std::move(cloud));
+          [](RecordingReader& reader) {
+            return nextAsArrays(reader, &RecordingReader::nextCloud, cloudArrays);
           },
           "A bag's next cloud or depth image in its sensor's frame, with the sensor's poses, as "
           "a dict of arrays, or None at the end.")
