@@ -64,6 +64,11 @@ DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
   window_ns_ = static_cast<std::int64_t>(std::llround(window_s * 1e9));
   // Enough samples that one of them is a whole window older than the newest.
   ring_.resize(static_cast<std::size_t>(std::ceil(window_s * settings_.report_rate_hz)) + 2);
+  // The first sample is the start: what was dropped before the first report (raymapd stopped
+  // or starved right after it started, its socket overflowing meanwhile) is then that report's
+  // news, not part of a base it is never compared against.
+  take(ring_[0], started_ns_);
+  filled_ = 1;
 }
 
 DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {
@@ -136,18 +141,11 @@ const DiagnosticsReporter::Sample& DiagnosticsReporter::windowBase() const noexc
       return s;
     }
   }
-  return ring_[(head_ + n - (filled_ - 1)) % n];  // the oldest (the newest itself at first)
+  return ring_[(head_ + n - (filled_ - 1)) % n];  // the oldest (at first the start)
 }
 
-void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& realtime,
-                                 std::uint32_t other_map_publishers,
-                                 const InputPublishers* inputs) noexcept {
-  realtime_ = &realtime;
-  inputs_ = inputs;
-  head_ = filled_ == 0 ? 0 : (head_ + 1) % ring_.size();
-  filled_ = std::min(filled_ + 1, ring_.size());
-  Sample& s = ring_[head_];
-  s.ns = now_ns;
+void DiagnosticsReporter::take(Sample& s, std::int64_t ns) const noexcept {
+  s.ns = ns;
   s.totals = read();
   stats_.latency_us.snapshot(&s.latency);
   stats_.period_error_us.snapshot(&s.period);
@@ -158,6 +156,17 @@ void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& real
   stats_.sync_copy_bytes.snapshot(&s.sync_bytes);
   stats_.heightmap_copy_bytes.snapshot(&s.heightmap_bytes);
   stats_.heightmap_transfer_bytes.snapshot(&s.transfer_bytes);
+}
+
+void DiagnosticsReporter::update(std::int64_t now_ns, const RealtimeReport& realtime,
+                                 std::uint32_t other_map_publishers,
+                                 const InputPublishers* inputs) noexcept {
+  realtime_ = &realtime;
+  inputs_ = inputs;
+  head_ = (head_ + 1) % ring_.size();
+  filled_ = std::min(filled_ + 1, ring_.size());
+  Sample& s = ring_[head_];
+  take(s, now_ns);
   base_ = &windowBase();
   decide(other_map_publishers);
   const double dt = static_cast<double>(s.ns - base_->ns) * 1e-9;

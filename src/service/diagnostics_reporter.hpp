@@ -150,6 +150,8 @@ class DiagnosticsReporter {
     pipeline::DurationHistogram::Snapshot cycle_hold, sync_bytes, heightmap_bytes, transfer_bytes;
   };
   Totals read() const noexcept;
+  /// Fills `s` with the counters and histograms now, stamped `ns`.
+  void take(Sample& s, std::int64_t ns) const noexcept;
   /// The newest sample at least one window older than the current one (else the oldest).
   const Sample& windowBase() const noexcept;
   void decide(std::uint32_t other_map_publishers) noexcept;
