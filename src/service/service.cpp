@@ -51,6 +51,7 @@
 #include "src/service/diagnostics_reporter.hpp"
 #include "src/service/log.hpp"
 #include "src/service/pending_scans.hpp"
+#include "src/service/scan_handoff.hpp"
 #include "src/service/startup_checks.hpp"
 
 namespace raymap::service {
@@ -691,7 +692,7 @@ void Service::Impl::receiveCloud(std::uint32_t sensor, dds::HeldSample& sample) 
     stats.sensors[sensor].rate_limited.add();  // by configuration: not an input fault
     return;
   }
-  if (pending->size() > 0 || mailbox->waiting() > 0 || mailbox->consumerHolds()) {
+  if (integratorBusy(*pending, *mailbox)) {
     // The integrator is busy: this scan waits as received, and is decoded only if it is still
     // among the newest scan_slots when the integrator is ready for it (decodePending).
     platform::ForeignScope dds;  // a full ring gives its oldest buffer back to Cyclone
@@ -705,8 +706,7 @@ void Service::Impl::receiveCloud(std::uint32_t sensor, dds::HeldSample& sample) 
 
 void Service::Impl::decodePending() {
   while (pending->size() > 0) {
-    std::atomic_thread_fence(std::memory_order_seq_cst);  // pairs with ScanMailbox::release
-    if (mailbox->waiting() > 0 || mailbox->consumerHolds()) {
+    if (!integratorReadyForHeld(*mailbox)) {
       return;  // the integrator's next release wakes this thread again (onScanReleased)
     }
     PendingScans::Entry next = pending->pop();
@@ -718,7 +718,7 @@ void Service::Impl::decodePending() {
 
 void Service::Impl::onScanReleased(void* context) noexcept {
   auto* impl = static_cast<Impl*>(context);
-  if (impl->pending->size() > 0) {
+  if (heldScansWait(*impl->pending)) {
     platform::ForeignScope dds;
     impl->waitset->wake();
   }
