@@ -34,6 +34,11 @@ set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+# CPack asks the build host's dpkg for the architecture: a cross build names its target's
+# (docs/arm64.md: raymap_<version>_arm64.deb, its Depends: from the arm64 libraries it links).
+if(CMAKE_CROSSCOMPILING AND CMAKE_SYSTEM_PROCESSOR MATCHES "^(aarch64|arm64)$")
+  set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE arm64)
+endif()
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")
 # The Python module (/usr/lib/python3/dist-packages/raymap, where built) needs Debian's python3
 # and NumPy; the service and the command line do not, so they are recommended, not required.

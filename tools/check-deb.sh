@@ -4,7 +4,9 @@
 # Debian 12: a fresh minimal root file system (tools/debian-chroot.sh) where apt-get installs the
 # package and the Depends: dpkg-shlibdeps computed; there `raymap --version` and
 # `raymapd --check-config /etc/raymapd/raymapd.yaml` must run, the unit, headers and CMake package
-# must be in place, and removing and purging the package must take its files away.
+# must be in place, and removing and purging the package must take its files away. A package
+# for another architecture (an arm64 cross build, docs/arm64.md) is proven the same way on a bare
+# Debian 12 of its own architecture, its programs run under qemu-user-static.
 #   tools/check-deb.sh BUILD_DIR      (needs root, network access to the Debian archive)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,11 +20,26 @@ if [ "$(id -u)" -ne 0 ]; then
   exit 1
 fi
 
+# A cross build's Depends: dpkg-shlibdeps names the packages of the libraries the programs link
+# from the build host's dpkg database, so the arm64 builds of those libraries are installed here
+# beside the host's own (Debian multiarch; nothing of the host's changes).
+if grep -q '^RAYMAP_ARM64_ROOT:' "$build/CMakeCache.txt"; then
+  arm64_runtime=(libc6 libstdc++6 libgcc-s1 libssl3 libddsc0debian liblz4-1 libpng16-16
+    libsqlite3-0 libyaml-cpp0.7 zlib1g libzstd1)
+  dpkg --add-architecture arm64
+  if ! dpkg-query -W "${arm64_runtime[@]/%/:arm64}" >/dev/null 2>&1; then
+    echo "== the arm64 runtime libraries for dpkg-shlibdeps (multiarch)"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${arm64_runtime[@]/%/:arm64}" >/dev/null
+  fi
+fi
+
 echo "== cpack -G DEB in $build"
 rm -f "$build"/raymap_*.deb
 (cd "$build" && cpack -G DEB >"$build/cpack.log" 2>&1) || { tail -30 "$build/cpack.log" >&2; exit 1; }
 deb=$(ls "$build"/raymap_*.deb)
-echo "package: $deb ($(du -h "$deb" | cut -f1))"
+arch=$(dpkg-deb -f "$deb" Architecture)
+echo "package: $deb ($(du -h "$deb" | cut -f1), $arch)"
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
 for needed in adduser libddsc libyaml-cpp libzstd1 libpng16-16 libsqlite3 libstdc++6 libc6; do
@@ -42,7 +59,14 @@ done
 
 # shellcheck source=tools/debian-chroot.sh
 . tools/debian-chroot.sh
-debian_chroot_create
+if [ "$arch" = "$(dpkg --print-architecture)" ]; then
+  debian_chroot_create
+elif [ "$arch" = arm64 ]; then
+  debian_chroot_create arm64
+else
+  echo "check-deb: no bare Debian 12 for a $arch package here (amd64 and arm64 only)" >&2
+  exit 1
+fi
 root=$chroot_root
 cp /etc/resolv.conf "$root/etc/resolv.conf"
 cp "$deb" "$root/tmp/raymap.deb"
@@ -50,7 +74,7 @@ in_root() {
   chroot "$root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root \
     DEBIAN_FRONTEND=noninteractive "$@"
 }
-echo "== apt-get install ./raymap.deb on a minimal Debian 12"
+echo "== apt-get install ./raymap.deb on a minimal Debian 12 ($arch)"
 in_root apt-get update -qq
 in_root apt-get install -y -qq --no-install-recommends /tmp/raymap.deb >"$build/deb-install.log" 2>&1 ||
   { tail -30 "$build/deb-install.log" >&2; exit 1; }

@@ -5,10 +5,13 @@
 # (debootstrap --variant=minbase bookworm, cached as a tarball in $RAYMAP_CHROOT_CACHE, default
 # ~/.cache/raymap; $RAYMAP_DEBIAN_MIRROR overrides http://deb.debian.org/debian) into a new
 # directory, sets $chroot_root to it and arranges for it to be unmounted and removed on exit.
-# Needs root (chroot, mount) and debootstrap (installed with apt-get when missing).
+# `debian_chroot_create arm64` makes an arm64 one instead (tools/arm64-root.sh --bare: its
+# programs run under qemu-user-static through binfmt_misc). Needs root (chroot, mount) and
+# debootstrap (installed with apt-get when missing).
 
 debian_chroot_cleanup() {
   [ -n "${chroot_root:-}" ] || return 0
+  umount "$chroot_root/dev/pts" 2>/dev/null || true
   umount "$chroot_root/dev/shm" 2>/dev/null || true
   umount "$chroot_root/proc" 2>/dev/null || true
   # Only once nothing is mounted inside is the tree removed.
@@ -18,6 +21,13 @@ debian_chroot_cleanup() {
 }
 
 debian_chroot_create() {
+  if [ "${1:-}" = arm64 ]; then
+    chroot_root=$(mktemp -d /var/tmp/raymap-chroot.XXXXXX)
+    trap debian_chroot_cleanup EXIT
+    "$(dirname "${BASH_SOURCE[0]}")/arm64-root.sh" --bare "$chroot_root" >/dev/null
+    debian_chroot_mount
+    return 0
+  fi
   local cache_dir=${RAYMAP_CHROOT_CACHE:-$HOME/.cache/raymap}
   local cache=$cache_dir/debian12-minbase.tar.gz
   local mirror=${RAYMAP_DEBIAN_MIRROR:-http://deb.debian.org/debian}
@@ -43,7 +53,14 @@ debian_chroot_create() {
   chroot_root=$(mktemp -d /var/tmp/raymap-chroot.XXXXXX)
   trap debian_chroot_cleanup EXIT
   tar -C "$chroot_root" -xzf "$cache"
+  debian_chroot_mount
+}
+
+debian_chroot_mount() {
   mount -t proc proc "$chroot_root/proc"
   mkdir -p "$chroot_root/dev/shm"
   mount -t tmpfs -o size=256m tmpfs "$chroot_root/dev/shm"
+  # apt-get logs through a pseudo-terminal.
+  mkdir -p "$chroot_root/dev/pts"
+  mount -t devpts -o newinstance,ptmxmode=0666 devpts "$chroot_root/dev/pts" 2>/dev/null || true
 }
