@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PoseHistory: lookups inside, before and after the history, interpolation, the ring's overflow
-// and lookups in any order; LatestPosition's sequence lock.
+// and lookups in any order (LatestPosition: tests/unit/concurrency/test_pose_update.cpp).
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -11,7 +11,6 @@
 #include <gtest/gtest.h>
 
 #include "src/pipeline/pose_history.hpp"
-#include "src/pipeline/pose_update.hpp"
 #include "tests/support/nanoseconds.hpp"
 
 namespace raymap::pipeline {
@@ -155,60 +154,6 @@ TEST(PoseHistory, LookupNamesAreStable) {
   EXPECT_STREQ(toString(PoseLookup::kNotYet), "not yet");
   EXPECT_STREQ(toString(PoseLookup::kTooOld), "too old");
   EXPECT_STREQ(toString(PoseLookup::kEmpty), "no pose");
-}
-
-TEST(PipelineLatestPosition, EmptyUntilTheFirstStore) {
-  LatestPosition latest;
-  std::int64_t stamp = -1;
-  Vec3d position{9.0, 9.0, 9.0};
-
-  EXPECT_FALSE(latest.load(&stamp, &position));
-
-  latest.store(77, {1.0, 2.0, 3.0});
-  ASSERT_TRUE(latest.load(&stamp, &position));
-  EXPECT_EQ(stamp, 77);
-  EXPECT_EQ(position, (Vec3d{1.0, 2.0, 3.0}));
-  latest.store(78, {4.0, 5.0, 6.0});
-  ASSERT_TRUE(latest.load(&stamp, &position));
-  EXPECT_EQ(stamp, 78);
-  EXPECT_EQ(position, (Vec3d{4.0, 5.0, 6.0}));
-}
-
-// A reader never sees fields of two different stores (bounded by a count, not by time).
-TEST(PipelineLatestPosition, ReaderNeverSeesATornPosition) {
-  LatestPosition latest;
-  std::atomic<bool> done{false};
-  std::thread writer([&] {
-    for (std::int64_t i = 1; i <= 200000; ++i) {
-      const double v = static_cast<double>(i);
-      latest.store(i, {v, 2.0 * v, -v});
-    }
-    done.store(true);
-  });
-  std::uint64_t torn = 0;
-  std::uint64_t reads = 0;
-  std::int64_t previous = 0;
-  std::uint64_t backwards = 0;
-  while (!done.load()) {
-    std::int64_t stamp = 0;
-    Vec3d p;
-    if (!latest.load(&stamp, &p)) {
-      continue;
-    }
-    ++reads;
-    const double v = static_cast<double>(stamp);
-    torn += (p.x != v || p.y != 2.0 * v || p.z != -v) ? 1u : 0u;
-    backwards += stamp < previous ? 1u : 0u;
-    previous = stamp;
-  }
-  writer.join();
-
-  EXPECT_EQ(torn, 0u) << "of " << reads << " reads";
-  EXPECT_EQ(backwards, 0u);
-  std::int64_t stamp = 0;
-  Vec3d p;
-  ASSERT_TRUE(latest.load(&stamp, &p));
-  EXPECT_EQ(stamp, 200000);
 }
 
 }  // namespace

@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// DurationHistogram: bucket arithmetic, quantiles, maxima and differences of snapshots.
+// DurationHistogram: bucket arithmetic, quantiles, maxima and differences of snapshots; a
+// snapshot taken while the writer records.
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -106,6 +109,40 @@ TEST(DurationHistogram, SinceCountsOnlyTheNewValues) {
   EXPECT_EQ(d.quantileUs(0.5), 40.0);
   EXPECT_EQ(d.quantileUs(1.0), 41.0);
   EXPECT_EQ(d.max_us, 41u);
+}
+
+TEST(DurationHistogramStress, ASnapshotsMaximumIsNeverBelowAValueItCounted) {
+  // The writer records 1, 2, 3 ... (each a new maximum) while the reader snapshots: the highest
+  // bucket a snapshot counts must not start above the maximum it read with it.
+  constexpr std::uint64_t kValues = 300000;
+  Histogram histogram;
+  std::atomic<bool> recorded_all{false};
+  std::thread writer([&] {
+    for (std::uint64_t v = 1; v <= kValues; ++v) {
+      histogram.record(v);
+    }
+    recorded_all.store(true, std::memory_order_release);
+  });
+  auto snapshot = std::make_unique<Histogram::Snapshot>();
+  std::uint64_t snapshots = 0;
+  std::uint64_t below = 0;
+  bool last_round = false;
+  while (!last_round) {
+    last_round = recorded_all.load(std::memory_order_acquire);
+    histogram.snapshot(snapshot.get());
+    ++snapshots;
+    int highest = -1;
+    for (int b = Histogram::kBuckets - 1; b >= 0 && highest < 0; --b) {
+      highest = snapshot->counts[static_cast<std::size_t>(b)] > 0 ? b : -1;
+    }
+    // The bucket's lowest value: one above the previous bucket's highest.
+    const std::uint64_t lowest = highest <= 0 ? 0U : Histogram::bucketUpper(highest - 1) + 1U;
+    below += highest >= 0 && snapshot->max_us < lowest ? 1U : 0U;
+  }
+  writer.join();
+  EXPECT_EQ(below, 0U) << "of " << snapshots << " snapshots";
+  EXPECT_EQ(snapshot->total, kValues);
+  EXPECT_EQ(snapshot->max_us, kValues);
 }
 
 }  // namespace
