@@ -31,20 +31,24 @@ std::uint64_t DurationHistogram::bucketUpper(int b) noexcept {
 }
 
 void DurationHistogram::record(std::uint64_t value_us) noexcept {
-  counts_[static_cast<std::size_t>(bucketOf(value_us))].fetch_add(1, std::memory_order_relaxed);
-  total_.fetch_add(1, std::memory_order_relaxed);
+  // The maximum first, then the count with release order: a snapshot that sees the count (an
+  // acquire load) sees a maximum at least this value. Counted first, a snapshot could see the
+  // value counted and an older, smaller maximum, and clamp a quantile below a value it counted
+  // (any architecture: the two are separate locations).
   if (value_us > max_us_.load(std::memory_order_relaxed)) {
     max_us_.store(value_us, std::memory_order_relaxed);  // one writer: no CAS needed
   }
+  counts_[static_cast<std::size_t>(bucketOf(value_us))].fetch_add(1, std::memory_order_release);
 }
 
 void DurationHistogram::snapshot(Snapshot* out) const noexcept {
   std::uint64_t total = 0;
   for (std::size_t b = 0; b < counts_.size(); ++b) {
-    out->counts[b] = counts_[b].load(std::memory_order_relaxed);
+    out->counts[b] = counts_[b].load(std::memory_order_acquire);  // pairs with record()
     total += out->counts[b];
   }
   out->total = total;
+  // After the counts: at least the maximum of every value counted above.
   out->max_us = max_us_.load(std::memory_order_relaxed);
 }
 
