@@ -219,6 +219,9 @@ class VoxelMap {
   /// @rt allocates: no.
   class IntegrationScope {
    public:
+    // acq_rel on the count, acquire in integrating(): a query that sees no batch integrating
+    // also sees the writes of the batches that ended (the count is a guard for a contract
+    // check, not the map's synchronisation: that is the caller's lock).
     explicit IntegrationScope(const VoxelMap& map) noexcept : count_(map.integrating_.get()) {
       if (count_ != nullptr) {
         count_->fetch_add(1, std::memory_order_acq_rel);

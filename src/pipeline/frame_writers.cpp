@@ -4,6 +4,10 @@
 
 namespace raymap::pipeline {
 
+// Relaxed throughout: writers() may read a slot's writer from one update and its time from
+// another (a new writer with the old one's time, for one report), which a count for diagnostics
+// tolerates; nothing else is published through the slots. seen() has one writer thread, so its
+// own loads see its own stores. Stress test: FrameWritersStress.* (tests/unit/concurrency).
 void FrameWriters::seen(std::uint64_t writer, std::int64_t now_ns) noexcept {
   Slot* oldest = &slots_[0];
   for (Slot& slot : slots_) {

@@ -38,6 +38,10 @@ static_assert(std::is_trivially_destructible_v<PoseUpdate>);
 
 /// @brief Bounded wait-free SPSC queue of pose updates (ingest -> integrator); the capacity is set
 /// at construction (start-up). Full: the ingest thread drops the update and counts it.
+/// Orderings are Boost.Lockfree's: push() copies the element in, then stores the write index with
+/// release; pop() loads it with acquire before copying the element out (and the read index
+/// likewise the other way), so an update crosses whole on any architecture. Stress test:
+/// PoseQueueStress.* (tests/unit/concurrency).
 using PoseQueue = boost::lockfree::spsc_queue<PoseUpdate>;
 
 /// @brief The newest position of the base in the world, published by the integrator for the
@@ -49,8 +53,14 @@ using PoseQueue = boost::lockfree::spsc_queue<PoseUpdate>;
 /// @rt store: wait-free; load: lock-free (retries only while a store is in progress).
 class LatestPosition {
  public:
+  // Orderings (Boehm's seqlock, "Can Seqlocks Get Along with Programming Language Memory
+  // Models?", 2012): the release fence after the odd store keeps the field stores after it; a
+  // reader that sees any of them sees the sequence odd or changed after its acquire fence. The
+  // even store's release pairs with the reader's first, acquire, load. arm64 reorders plain
+  // stores freely, so neither may be relaxed. Stress test:
+  // PipelineLatestPosition.ReaderNeverSeesATornPosition (tests/unit/concurrency).
   void store(std::int64_t stamp_ns, Vec3d position) noexcept {
-    const std::uint64_t s = sequence_.load(std::memory_order_relaxed);
+    const std::uint64_t s = sequence_.load(std::memory_order_relaxed);  // one writer
     sequence_.store(s + 1, std::memory_order_relaxed);
     std::atomic_thread_fence(std::memory_order_release);
     stamp_ns_.store(stamp_ns, std::memory_order_relaxed);

@@ -32,6 +32,9 @@ std::uint32_t ScanMailbox::oldestReady(std::uint64_t* sequence_out) const noexce
   std::uint32_t best = slot_count_;
   std::uint64_t best_sequence = 0;
   for (std::uint32_t i = 0; i < slot_count_; ++i) {
+    // Acquire, pairing with publish()'s release: a slot seen ready shows the sequence stored
+    // before it. A stale view of another slot (still writing, on any architecture) is caught
+    // by take()'s second look, which comes after this acquire.
     if (entries_[i].state.load(std::memory_order_acquire) != kReady) {
       continue;
     }
@@ -53,6 +56,8 @@ ScanSlot* ScanMailbox::acquire() noexcept {
   for (std::uint32_t attempt = 0; attempt < 4 * slot_count_ + 4; ++attempt) {
     for (std::uint32_t i = 0; i < slot_count_; ++i) {
       std::uint32_t expected = kFree;
+      // Acquire, pairing with release()'s release store: the consumer's reads of the scan it
+      // gave back are done before the producer writes the next one into the slot.
       if (entries_[i].state.compare_exchange_strong(expected, kWriting,
                                                     std::memory_order_acquire)) {
         return &entries_[i].slot;
@@ -63,8 +68,11 @@ ScanSlot* ScanMailbox::acquire() noexcept {
       continue;  // nothing ready either: the consumer is releasing one right now
     }
     std::uint32_t expected = kReady;
+    // Acquire: the slot may be one take() claimed and handed back (its release store), whose
+    // reads must be done before the overwrite.
     if (entries_[oldest].state.compare_exchange_strong(expected, kWriting,
                                                        std::memory_order_acquire)) {
+      // Relaxed: a count for reports; nothing is published through it.
       dropped_oldest_.fetch_add(1, std::memory_order_relaxed);
       return &entries_[oldest].slot;
     }
@@ -75,6 +83,9 @@ ScanSlot* ScanMailbox::acquire() noexcept {
 void ScanMailbox::publish(ScanSlot* slot) noexcept {
   Entry& entry = entryOf(slot);
   RAYMAP_EXPECTS(entry.state.load(std::memory_order_relaxed) == kWriting);
+  // next_sequence_ has one writer (this thread): relaxed. The scan, the slot's sequence and the
+  // entry's sequence are published together by the release store of the state (the consumer's
+  // acquire in oldestReady() or take()'s CAS pairs with it), on arm64 as on x86-64.
   const std::uint64_t sequence = next_sequence_.load(std::memory_order_relaxed);
   slot->sequence = sequence;
   entry.sequence.store(sequence, std::memory_order_relaxed);
@@ -85,6 +96,7 @@ void ScanMailbox::publish(ScanSlot* slot) noexcept {
 void ScanMailbox::abandon(ScanSlot* slot) noexcept {
   Entry& entry = entryOf(slot);
   RAYMAP_EXPECTS(entry.state.load(std::memory_order_relaxed) == kWriting);
+  // Release: the partly written scan is ordered before whoever acquires the free slot next.
   entry.state.store(kFree, std::memory_order_release);
 }
 
@@ -100,6 +112,8 @@ ScanSlot* ScanMailbox::take() noexcept {
       return nullptr;
     }
     Entry& entry = entries_[oldest];
+    // Relaxed: only compared after the CAS, which (acquire, pairing with publish()'s release)
+    // makes the sequence of the scan it claimed visible to the re-read below.
     const std::uint64_t sequence = entry.sequence.load(std::memory_order_relaxed);
     std::uint32_t expected = kReady;
     if (entry.state.compare_exchange_strong(expected, kReading, std::memory_order_acquire)) {
@@ -115,6 +129,7 @@ ScanSlot* ScanMailbox::take() noexcept {
       if (entry.sequence.load(std::memory_order_relaxed) == sequence && still_oldest) {
         return &entry.slot;
       }
+      // Release, pairing with acquire()'s CAS when the producer drops this scan next.
       entry.state.store(kReady, std::memory_order_release);
     }
     // Otherwise the producer took it back as the oldest: look again.
@@ -125,15 +140,20 @@ ScanSlot* ScanMailbox::take() noexcept {
 void ScanMailbox::release(ScanSlot* slot) noexcept {
   Entry& entry = entryOf(slot);
   RAYMAP_EXPECTS(entry.state.load(std::memory_order_relaxed) == kReading);
+  // Release, pairing with acquire()'s CAS: the consumer's reads of the scan happen before the
+  // producer's next writes into the slot.
   entry.state.store(kFree, std::memory_order_release);
   if (release_listener_ != nullptr) {
-    // Pairs with PendingScans' sequentially consistent size: the released state is visible to
-    // an ingest thread that looks after pushing, or the listener reads the size it pushed.
+    // Pairs with the ingest thread's fence after it pushed a held scan (a store-buffering pair:
+    // src/service/scan_handoff.hpp): the released state is visible to it, or the listener reads
+    // the size it pushed.
     std::atomic_thread_fence(std::memory_order_seq_cst);
     release_listener_(release_listener_context_);
   }
 }
 
+// consumerHolds() and waiting(): relaxed snapshots. A caller that decides on them against
+// another thread's store fences first (service/scan_handoff.hpp: integratorReadyForHeld).
 bool ScanMailbox::consumerHolds() const noexcept {
   for (std::uint32_t i = 0; i < slot_count_; ++i) {
     if (entries_[i].state.load(std::memory_order_relaxed) == kReading) {

@@ -26,9 +26,11 @@ bool PendingScans::push(std::uint32_t sensor, std::int64_t arrival_ns,
   entry.sensor = sensor;
   entry.arrival_ns = arrival_ns;
   entry.sample = std::move(sample);
-  // Sequentially consistent: the ingest thread then looks at the mailbox, and the integrator
-  // takes from the mailbox and then reads this size; one of the two sees the other (no wake-up
-  // is lost between a push and a take).
+  // Sequentially consistent: the first store of a store-buffering pair with the integrator's
+  // release (src/service/scan_handoff.hpp, where the fences and the argument are): the ingest
+  // thread then looks at the mailbox, the integrator releases a slot and then reads this size;
+  // one of the two sees the other (no wake-up is lost between a push and a release). The ring's
+  // entries themselves are the ingest thread's alone.
   size_.store(size + 1, std::memory_order_seq_cst);
   return dropped;
 }
@@ -38,6 +40,7 @@ PendingScans::Entry PendingScans::pop() noexcept {
   RAYMAP_EXPECTS(size > 0);
   Entry out = std::move(ring_[head_]);
   head_ = (head_ + 1) % capacity_;
+  // A smaller size only spares the integrator a wake-up; seq_cst as push() for simplicity.
   size_.store(size - 1, std::memory_order_seq_cst);
   return out;
 }

@@ -205,6 +205,13 @@ struct Service::Impl {
   platform::SystemdNotifier notifier;
   platform::Wakeup integrator_wakeup;
   platform::Wakeup diagnostics_wakeup;  // stop() cuts the diagnostics period short
+  // Orderings of the flags between the service's threads: `stopping` is stored with release by
+  // stop() and loaded with acquire by each loop (it publishes nothing else; the threads are then
+  // joined, which orders the rest). threads_set_up: each thread's release increment after its
+  // set-up (its rt_refusals increment among it) pairs with start()'s acquire wait, after which
+  // start() reads rt_refusals. last_publish_ns and backend_failing are values read for reports
+  // and the watchdog (relaxed: nothing is published through them). Stop and start-up under
+  // TSan: tests/service.
   std::atomic<bool> stopping{false};
   std::vector<std::thread> threads;
   RealtimeReport realtime;
