@@ -67,8 +67,7 @@ DiagnosticsReporter::DiagnosticsReporter(const pipeline::PipelineStats& stats,
   // The first sample is the start: what was dropped before the first report (raymapd stopped
   // or starved right after it started, its socket overflowing meanwhile) is then that report's
   // news, not part of a base it is never compared against.
-  take(ring_[0], started_ns_);
-  filled_ = 1;
+  take(ring_[0], started_ns_);  // filled_ starts at 1: this sample
 }
 
 DiagnosticsReporter::Totals DiagnosticsReporter::read() const noexcept {

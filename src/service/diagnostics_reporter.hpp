@@ -201,7 +201,7 @@ class DiagnosticsReporter {
   bool has_depth_;  ///< a depth camera is configured: its reasons and counters are reported
   std::vector<Sample> ring_;  // fixed size; ring_[head_] is the newest
   std::size_t head_ = 0;
-  std::size_t filled_ = 0;
+  std::size_t filled_ = 1;  // samples in ring_; the first, the start, taken by the constructor
   const Sample* base_ = nullptr;  // windowBase() of the last update
   const RealtimeReport* realtime_ = nullptr;
   const InputPublishers* inputs_ = nullptr;
