@@ -47,6 +47,7 @@ export RAYMAP_ARM64_ROOT=$root
 # binfmt_misc and finds its loader and libraries in the root.
 export QEMU_LD_PREFIX=$root
 emulated_out='WriteIntent.APageReadThenWrittenFaultsOnceWhenFirstTouchedForWrite'
+ci_left_out='DecayMap.AMapOfDecayRatesOnlyMatchesTheOccupancyMapsDecayRates'
 emulated_slow='^SecureRaymapd\.OnlyAuthorisedEnclavesReadAndWriteAndNothingIsReadableOnTheWire$'
 
 if [ $ci -eq 1 ]; then
@@ -69,7 +70,12 @@ if [ $ci -eq 1 ]; then
     exit 1
   }
   echo "== unit tests under qemu-aarch64 ($(date +%T))"
-  ctest --test-dir "$lib" -L unit -E "$emulated_out" --timeout 900 -j2 --output-on-failure
+  # CI's time budget: also without one of the slowest tests under emulation (22 s: a map of decay
+  # rates only against a combined map's, voxel by voxel, for 9,000 rays at 1 and 3 threads; the
+  # rest of DecayMap.* runs), as the ThreadSanitizer run leaves it out. The whole subset runs by
+  # hand with tools/check-arm64.sh X86_BUILD_DIR.
+  ctest --test-dir "$lib" -L unit -E "$emulated_out|$ci_left_out" --timeout 900 -j2 \
+    --output-on-failure
   exit 0
 fi
 
