@@ -11,12 +11,17 @@
 
 namespace raymap::service {
 
+/// @brief No decoded scan waits for the integrator and it holds none (relaxed snapshots).
+inline bool mailboxIdle(const pipeline::ScanMailbox& mailbox) noexcept {
+  return mailbox.waiting() == 0 && !mailbox.consumerHolds();
+}
+
 /// @brief Whether a scan arriving now must wait as received: the integrator holds a scan or has
 /// one waiting, or older scans already wait (first in, first out). Ingest thread.
 /// @rt wait-free; allocates: no.
 inline bool integratorBusy(const PendingScans& pending,
                            const pipeline::ScanMailbox& mailbox) noexcept {
-  return pending.size() > 0 || mailbox.waiting() > 0 || mailbox.consumerHolds();
+  return pending.size() > 0 || !mailboxIdle(mailbox);
 }
 
 /// @brief Whether the ingest thread, holding scans (pending.size() > 0, the push already made),
@@ -39,7 +44,19 @@ inline bool integratorBusy(const PendingScans& pending,
 /// @rt wait-free; allocates: no.
 inline bool integratorReadyForHeld(const pipeline::ScanMailbox& mailbox) noexcept {
   std::atomic_thread_fence(std::memory_order_seq_cst);
-  return mailbox.waiting() == 0 && !mailbox.consumerHolds();
+  return mailboxIdle(mailbox);
+}
+
+/// @brief Decodes held scans, oldest first, while the integrator is ready for them: `decode`
+/// takes each PendingScans::Entry popped. Returns when none is held, or when the integrator is
+/// busy (its next release wakes the ingest thread: heldScansWait). Ingest thread.
+/// @rt as `decode`; allocates: no.
+template <class Decode>
+void decodeHeldWhileReady(PendingScans& pending, const pipeline::ScanMailbox& mailbox,
+                          Decode&& decode) {
+  while (pending.size() > 0 && integratorReadyForHeld(mailbox)) {
+    decode(pending.pop());
+  }
 }
 
 /// @brief Asked by the integrator after each release (ScanMailbox's release listener, after its

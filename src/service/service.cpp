@@ -712,15 +712,12 @@ void Service::Impl::receiveCloud(std::uint32_t sensor, dds::HeldSample& sample) 
 }
 
 void Service::Impl::decodePending() {
-  while (pending->size() > 0) {
-    if (!integratorReadyForHeld(*mailbox)) {
-      return;  // the integrator's next release wakes this thread again (onScanReleased)
-    }
-    PendingScans::Entry next = pending->pop();
+  // When the integrator is busy, its next release wakes this thread again (onScanReleased).
+  decodeHeldWhileReady(*pending, *mailbox, [this](PendingScans::Entry next) {
     decodeCloud(next.sensor, next.sample.bytes(), next.arrival_ns);
     platform::ForeignScope dds;
     next.sample.reset();
-  }
+  });
 }
 
 void Service::Impl::onScanReleased(void* context) noexcept {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // raymapd's hand-over of held scans between its ingest thread and its integrator
 // (src/service/scan_handoff.hpp) under stress: its own pieces (ScanMailbox, PendingScans,
-// Wakeup, the three hand-over functions) on two threads that do nothing else, so that the race
+// Wakeup, the hand-over functions) on two threads that do nothing else, so that the race
 // between a push and a release recurs thousands of times a second. No DDS: it is here, beside
 // raymapd's end-to-end tests, because it needs the service library and runs in the
 // ThreadSanitizer build with them (docs/arm64.md, "Memory ordering").
@@ -86,13 +86,8 @@ TEST(ScanHandOff, AHeldScanIsNeverStrandedWhileTheIntegratorIdles) {
     mailbox.publish(slot);
   };
   const auto decode_pending = [&] {  // Service::Impl::decodePending
-    while (pending.size() > 0) {
-      if (!integratorReadyForHeld(mailbox)) {
-        return;
-      }
-      PendingScans::Entry next = pending.pop();
-      decode(next.arrival_ns);
-    }
+    decodeHeldWhileReady(pending, mailbox,
+                         [&](PendingScans::Entry next) { decode(next.arrival_ns); });
   };
   for (std::int64_t scan = 0; scan < kScans && counts.stranded == 0; ++scan) {
     if (integratorBusy(pending, mailbox)) {  // Service::Impl::receiveCloud
