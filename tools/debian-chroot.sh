@@ -21,17 +21,11 @@ debian_chroot_cleanup() {
 }
 
 debian_chroot_create() {
-  if [ "${1:-}" = arm64 ]; then
-    chroot_root=$(mktemp -d /var/tmp/raymap-chroot.XXXXXX)
-    trap debian_chroot_cleanup EXIT
-    "$(dirname "${BASH_SOURCE[0]}")/arm64-root.sh" --bare "$chroot_root" >/dev/null
-    debian_chroot_mount
-    return 0
-  fi
+  local arch=${1:-}
   local cache_dir=${RAYMAP_CHROOT_CACHE:-$HOME/.cache/raymap}
   local cache=$cache_dir/debian12-minbase.tar.gz
   local mirror=${RAYMAP_DEBIAN_MIRROR:-http://deb.debian.org/debian}
-  if [ ! -f "$cache" ]; then
+  if [ "$arch" != arm64 ] && [ ! -f "$cache" ]; then
     if ! command -v debootstrap >/dev/null; then
       apt-get update -qq
       DEBIAN_FRONTEND=noninteractive apt-get install -y -qq debootstrap >/dev/null
@@ -52,11 +46,11 @@ debian_chroot_create() {
   fi
   chroot_root=$(mktemp -d /var/tmp/raymap-chroot.XXXXXX)
   trap debian_chroot_cleanup EXIT
-  tar -C "$chroot_root" -xzf "$cache"
-  debian_chroot_mount
-}
-
-debian_chroot_mount() {
+  if [ "$arch" = arm64 ]; then
+    "$(dirname "${BASH_SOURCE[0]}")/arm64-root.sh" --bare "$chroot_root" >/dev/null
+  else
+    tar -C "$chroot_root" -xzf "$cache"
+  fi
   mount -t proc proc "$chroot_root/proc"
   mkdir -p "$chroot_root/dev/shm"
   mount -t tmpfs -o size=256m tmpfs "$chroot_root/dev/shm"
